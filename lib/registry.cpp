@@ -1,0 +1,18 @@
+// The method registry: every built-in method by its DESIGN section 4 name. A new method
+// adds one line to each function.
+#include "lib/raycast/brute.h"
+#include "lib/raycast/embree_solver.h"
+#include "lib/solver.h"
+
+namespace visgate {
+
+std::vector<std::string> solver_names() { return {"embree", "embree-robust", "brute"}; }
+
+std::unique_ptr<Solver> make_solver(const std::string& name) {
+  if (name == "embree") return std::make_unique<raycast::EmbreeSolver>(false);
+  if (name == "embree-robust") return std::make_unique<raycast::EmbreeSolver>(true);
+  if (name == "brute") return std::make_unique<raycast::BruteSolver>();
+  return nullptr;
+}
+
+}  // namespace visgate

@@ -1,0 +1,136 @@
+// Solver interface helpers: option checking, result allocation, the result JSON and
+// the TBB thread limit.
+#include "lib/solver.h"
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+
+namespace visgate {
+
+long SolveOptions::get_int(const std::string& k, long fallback) const {
+  auto it = opts.find(k);
+  if (it == opts.end()) return fallback;
+  try {
+    return std::stol(it->second);
+  } catch (...) {
+    return fallback;
+  }
+}
+
+bool SolveOptions::get_bool(const std::string& k, bool fallback) const {
+  auto it = opts.find(k);
+  if (it == opts.end()) return fallback;
+  const std::string& v = it->second;
+  if (v == "on" || v == "true" || v == "1") return true;
+  if (v == "off" || v == "false" || v == "0") return false;
+  return fallback;
+}
+
+Status Solver::check_options(const SolveOptions& opt) const {
+  auto specs = options();
+  for (const auto& [k, v] : opt.opts) {
+    const OptionSpec* spec = nullptr;
+    for (const auto& s : specs)
+      if (s.name == k) spec = &s;
+    if (!spec) {
+      std::string known;
+      for (const auto& s : specs) known += (known.empty() ? "" : ", ") + s.name;
+      return Error{"--opt " + k + ": unknown option for method " + name() + (known.empty() ? " (it has none)" : " (known: " + known + ")")};
+    }
+    if (spec->values.empty()) {
+      size_t pos = 0;
+      long x = 0;
+      try {
+        x = std::stol(v, &pos);
+      } catch (...) {
+        pos = 0;
+      }
+      if (pos != v.size() || v.empty() || x < 0) return Error{"--opt " + k + "=" + v + ": expected a non-negative integer"};
+    } else {
+      bool found = false;
+      for (const auto& a : spec->values) found |= (a == v);
+      if (!found) {
+        std::string allowed;
+        for (const auto& a : spec->values) allowed += (allowed.empty() ? "" : "|") + a;
+        return Error{"--opt " + k + "=" + v + ": expected " + allowed};
+      }
+    }
+  }
+  return {};
+}
+
+SolveResult make_empty_result(const Scene& scene) {
+  SolveResult r;
+  size_t bits = scene.samples_per_receiver();
+  r.receivers.resize(scene.receivers.size());
+  for (auto& rr : r.receivers) {
+    rr.visible_bits.assign((bits + 63) / 64, 0);
+    rr.visible_fraction.assign(scene.lights.size(), 0.0f);
+  }
+  return r;
+}
+
+void fractions_from_bits(const Scene& scene, SolveResult& result) {
+  for (auto& rr : result.receivers) {
+    size_t off = 0;
+    for (size_t l = 0; l < scene.lights.size(); ++l) {
+      size_t n = size_t(scene.lights[l].samples), vis = 0;
+      for (size_t j = 0; j < n; ++j) vis += rr.visible(off + j);
+      rr.visible_fraction[l] = float(double(vis) / double(n));
+      off += n;
+    }
+  }
+}
+
+std::string write_result_json(const Scene& scene, const std::string& method, const SolveOptions& opt,
+                              const SolveResult& result) {
+  using json = nlohmann::ordered_json;
+  json doc;
+  doc["format"] = "visgate-result";
+  doc["version"] = 1;
+  doc["method"] = method;
+  json o = json::object();
+  for (const auto& [k, v] : opt.opts) o[k] = v;
+  doc["options"] = o;
+  doc["seed"] = opt.seed;
+  json recs = json::array();
+  size_t bits = scene.samples_per_receiver();
+  for (const auto& rr : result.receivers) {
+    json r;
+    std::string vis(bits, '0');
+    for (size_t b = 0; b < bits; ++b)
+      if (rr.visible(b)) vis[b] = '1';
+    r["visible"] = vis;
+    json fr = json::array();
+    for (float f : rr.visible_fraction) fr.push_back(double(f));
+    r["visible_fraction"] = fr;
+    if (!rr.fragments.empty()) {
+      json frags = json::array();
+      for (const auto& per_light : rr.fragments) {
+        json pl = json::array();
+        for (const auto& poly : per_light) {
+          json pj = json::array();
+          for (const auto& p : poly) pj.push_back({double(p.x), double(p.y), double(p.z)});
+          pl.push_back(pj);
+        }
+        frags.push_back(pl);
+      }
+      r["fragments"] = frags;
+    }
+    recs.push_back(std::move(r));
+  }
+  doc["receivers"] = std::move(recs);
+  json st = json::object();
+  for (const auto& [k, v] : result.stats.values) st[k] = v;
+  doc["stats"] = st;
+  doc["seconds"] = result.seconds;
+  return doc.dump() + "\n";
+}
+
+ThreadLimit::ThreadLimit(int threads) : impl_(nullptr) {
+  if (threads > 0) impl_ = new tbb::global_control(tbb::global_control::max_allowed_parallelism, size_t(threads));
+}
+ThreadLimit::~ThreadLimit() { delete static_cast<tbb::global_control*>(impl_); }
+
+}  // namespace visgate

@@ -1,0 +1,109 @@
+// The one interface every visibility method implements (DESIGN section 4), the method
+// registry, and the result JSON (format "visgate-result").
+//
+// A method answers every relation (receiver i, sample j of light l) of a scene, where
+// the light point is sample_position(light, j, i). Bits are light-major: relation
+// (l, j) of a receiver is bit light_offset(l) + j. A method measures its own `seconds`:
+// the solve including its acceleration structures, excluding file loading and mesh
+// preparation (which it reports in stats as "prepare_seconds" when it has any).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lib/scene/error.h"
+#include "lib/scene/scene.h"
+
+namespace visgate {
+
+using Polygon3f = std::vector<Vec3f>;
+
+struct Stats {
+  std::map<std::string, double> values;
+  void set(const std::string& k, double v) { values[k] = v; }
+  void add(const std::string& k, double v) { values[k] += v; }
+  double get(const std::string& k, double fallback = 0.0) const {
+    auto it = values.find(k);
+    return it == values.end() ? fallback : it->second;
+  }
+};
+
+struct SolveOptions {
+  std::map<std::string, std::string> opts;
+  uint64_t seed = 1;
+  int threads = 0;  // 0: all hardware threads
+
+  std::string get(const std::string& k, const std::string& fallback) const {
+    auto it = opts.find(k);
+    return it == opts.end() ? fallback : it->second;
+  }
+  // Integer option; throws nothing: returns fallback when absent (validated earlier).
+  long get_int(const std::string& k, long fallback) const;
+  bool get_bool(const std::string& k, bool fallback) const;  // on/off, true/false, 1/0
+};
+
+struct ReceiverResult {
+  std::vector<uint64_t> visible_bits;           // one bit per (light, sample), light-major
+  std::vector<float> visible_fraction;          // per light
+  std::vector<std::vector<Polygon3f>> fragments;  // per light; exact methods only
+
+  bool visible(size_t bit) const { return (visible_bits[bit >> 6] >> (bit & 63)) & 1u; }
+  void set_visible(size_t bit, bool v) {
+    if (v) visible_bits[bit >> 6] |= uint64_t(1) << (bit & 63);
+    else visible_bits[bit >> 6] &= ~(uint64_t(1) << (bit & 63));
+  }
+};
+
+struct SolveResult {
+  std::vector<ReceiverResult> receivers;
+  Stats stats;
+  double seconds = 0.0;
+};
+
+// Allocates one ReceiverResult per receiver with all bits clear.
+SolveResult make_empty_result(const Scene& scene);
+// visible_fraction[l] = visible samples of light l / samples of light l, for bit methods.
+void fractions_from_bits(const Scene& scene, SolveResult& result);
+
+struct OptionSpec {
+  std::string name;
+  std::string help;
+  std::vector<std::string> values;  // allowed values; empty: any integer
+};
+
+class Solver {
+ public:
+  virtual ~Solver() = default;
+  virtual std::string name() const = 0;
+  virtual std::vector<OptionSpec> options() const { return {}; }
+  virtual bool reports_fragments() const { return false; }
+  virtual SolveResult solve(const Scene& scene, const SolveOptions& opt) = 0;
+
+  // Rejects unknown options and values outside the spec; messages name the option.
+  Status check_options(const SolveOptions& opt) const;
+};
+
+// Registry: every method name of DESIGN section 4 that is built in.
+std::vector<std::string> solver_names();
+std::unique_ptr<Solver> make_solver(const std::string& name);  // nullptr when unknown
+
+// Result JSON (DESIGN section 4).
+std::string write_result_json(const Scene& scene, const std::string& method, const SolveOptions& opt,
+                              const SolveResult& result);
+
+// Sets TBB's thread count for the lifetime of the returned object (0: all threads).
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads);
+  ~ThreadLimit();
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+ private:
+  void* impl_;
+};
+
+}  // namespace visgate
