@@ -1,12 +1,15 @@
 #include "lib/scene/float_text.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
 namespace visgate {
 
 std::string float_to_decimal(float f) {
+  // JSON readers take "-0" for the integer 0 and drop the sign: write "-0.0".
+  if (f == 0.0f && std::signbit(f)) return "-0.0";
   char buf[48];
   std::snprintf(buf, sizeof buf, "%.9g", double(f));
   return buf;

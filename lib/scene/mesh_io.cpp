@@ -7,7 +7,10 @@
 #include <OpenMesh/Core/System/omstream.hh>
 #include <cmath>
 #include <filesystem>
+#include <cstring>
+#include <fstream>
 #include <mutex>
+#include <sstream>
 
 namespace visgate {
 
@@ -95,6 +98,168 @@ class SoupImporter : public OIO::BaseImporter {
   size_t n_edges() const override { return 0; }
 };
 
+// Strict pre-scan of what OpenMesh's readers do not check. Its OFF and ASCII readers
+// ignore stream failures (a "nan" token or a truncated file leaves uninitialised values
+// that may pass as coordinates or in-range indices), and its binary STL reader trusts
+// the triangle count. Returns an empty string when the file may be handed to OpenMesh,
+// else a message naming the line and element.
+bool finite_number(const std::string& tok, double& out) {
+  const char* b = tok.c_str();
+  char* e = nullptr;
+  out = std::strtod(b, &e);
+  return e != b && *e == '\0' && std::isfinite(out);
+}
+
+std::string number_error(const std::string& tok, size_t line, const std::string& what) {
+  double v = 0;
+  const char* b = tok.c_str();
+  char* e = nullptr;
+  v = std::strtod(b, &e);
+  if (e != b && *e == '\0' && !std::isfinite(v)) return "line " + std::to_string(line) + ": " + what + ": coordinate is NaN or infinite";
+  return "line " + std::to_string(line) + ": " + what + ": not a number: '" + tok.substr(0, 32) + "'";
+}
+
+std::string prescan_off(std::istream& in) {
+  std::string line;
+  size_t lineno = 0;
+  std::vector<std::string> toks;
+  auto next_line = [&]() -> bool {
+    while (std::getline(in, line)) {
+      ++lineno;
+      auto hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      std::istringstream ss(line);
+      toks.clear();
+      for (std::string t; ss >> t;) toks.push_back(t);
+      if (!toks.empty()) return true;
+    }
+    return false;
+  };
+  if (!next_line()) return "empty file";
+  std::string magic = toks[0];
+  if (magic.find("OFF") == std::string::npos) return "line 1: missing OFF header";
+  if (magic.find("BINARY") != std::string::npos || (toks.size() > 1 && toks[1] == "BINARY")) return {};
+  if (magic != "OFF" && magic != "COFF" && magic != "NOFF" && magic != "CNOFF" && magic != "STOFF" && magic != "NCOFF")
+    return {};  // variants (4OFF, nOFF) left to OpenMesh
+  toks.erase(toks.begin());
+  if (toks.empty() && !next_line()) return "line " + std::to_string(lineno) + ": missing vertex and face counts";
+  double nv = 0, nf = 0;
+  if (toks.size() < 2 || !finite_number(toks[0], nv) || !finite_number(toks[1], nf) || nv < 0 || nf < 0 ||
+      nv != std::floor(nv) || nf != std::floor(nf))
+    return "line " + std::to_string(lineno) + ": bad vertex and face counts";
+  if (nv > 1e8 || nf > 1e8) return "line " + std::to_string(lineno) + ": counts exceed the limit 100000000";
+  for (size_t v = 0; v < size_t(nv); ++v) {
+    if (!next_line()) return "vertex " + std::to_string(v) + ": file ends early (" + std::to_string(size_t(nv)) + " vertices announced)";
+    if (toks.size() < 3) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(v) + ": needs 3 coordinates";
+    for (int k = 0; k < 3; ++k) {
+      double x;
+      if (!finite_number(toks[k], x)) return number_error(toks[k], lineno, "vertex " + std::to_string(v));
+    }
+  }
+  for (size_t f = 0; f < size_t(nf); ++f) {
+    if (!next_line()) return "face " + std::to_string(f) + ": file ends early (" + std::to_string(size_t(nf)) + " faces announced)";
+    double k = 0;
+    if (!finite_number(toks[0], k) || k < 0 || k != std::floor(k) || toks.size() < size_t(k) + 1)
+      return "line " + std::to_string(lineno) + ": face " + std::to_string(f) + ": bad vertex count";
+    for (size_t q = 1; q <= size_t(k); ++q) {
+      double idx;
+      if (!finite_number(toks[q], idx) || idx < 0 || idx >= nv || idx != std::floor(idx))
+        return "line " + std::to_string(lineno) + ": face " + std::to_string(f) + ": vertex index '" + toks[q].substr(0, 32) + "' out of range";
+    }
+  }
+  return {};
+}
+
+std::string prescan_obj(std::istream& in) {
+  std::string line;
+  size_t lineno = 0, vertices = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    std::istringstream ss(line);
+    std::string kw;
+    if (!(ss >> kw)) continue;
+    if (kw == "v") {
+      for (int k = 0; k < 3; ++k) {
+        std::string t;
+        if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
+        double x;
+        if (!finite_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
+      }
+      ++vertices;
+    }
+  }
+  return {};
+}
+
+std::string prescan_ascii_stl(std::istream& in) {
+  std::string line;
+  size_t lineno = 0, vertices = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    std::istringstream ss(line);
+    std::string kw;
+    if (!(ss >> kw) || kw != "vertex") continue;
+    for (int k = 0; k < 3; ++k) {
+      std::string t;
+      if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
+      double x;
+      if (!finite_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
+    }
+    ++vertices;
+  }
+  return {};
+}
+
+std::string prescan_ascii_ply(std::istream& in) {
+  std::string line;
+  size_t lineno = 0;
+  bool ascii = false, body = false;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (!body) {
+      if (line.rfind("format ascii", 0) == 0) ascii = true;
+      if (line.rfind("end_header", 0) == 0) {
+        if (!ascii) return {};
+        body = true;
+      }
+      continue;
+    }
+    std::istringstream ss(line);
+    for (std::string t; ss >> t;) {
+      double x;
+      if (!finite_number(t, x)) return number_error(t, lineno, "element data");
+    }
+  }
+  if (!body) return "missing end_header";
+  return {};
+}
+
+std::string prescan_mesh_file(const std::string& path, const std::string& ext) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot open file";
+  if (ext == ".off") return prescan_off(in);
+  if (ext == ".obj") return prescan_obj(in);
+  if (ext == ".ply") return prescan_ascii_ply(in);
+  // STL: binary iff the size matches 84 + 50 n for the stored count n.
+  std::error_code ec;
+  uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return "cannot stat file";
+  char head[84] = {};
+  in.read(head, 84);
+  bool binary = false;
+  if (in.gcount() == 84) {
+    uint32_t n;
+    std::memcpy(&n, head + 80, 4);
+    binary = size == 84 + 50ull * n;
+  }
+  if (binary) return {};
+  if (std::string(head, head + std::min<size_t>(5, size_t(in.gcount()))) != "solid")
+    return "neither ASCII STL ('solid' header) nor binary STL (size " + std::to_string(size) + " does not match the triangle count)";
+  in.clear();
+  in.seekg(0);
+  return prescan_ascii_stl(in);
+}
+
 std::mutex& io_mutex() {
   static std::mutex m;  // OpenMesh's IOManager and log streams are process-global
   return m;
@@ -111,6 +276,8 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
     return Error{path + ": unsupported mesh format '" + ext + "' (OBJ, OFF, PLY, STL)"};
+
+  if (auto pre = prescan_mesh_file(path, ext); !pre.empty()) return Error{path + ": " + pre};
 
   SoupImporter imp;
   bool ok = false;
