@@ -2,10 +2,13 @@
 // an analogue of a thesis scene (COLUMNS, TREE, SODA).
 #include "lib/scene/families.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <map>
+#include <numbers>
 
+#include "lib/scene/mesh_io.h"
 #include "lib/scene/rng.h"
 #include "lib/scene/shapes.h"
 
@@ -206,6 +209,370 @@ Result<Scene> gen_rooms(const FamilyParams& p) {
   return s;
 }
 
+// ---------------------------------------------------------------------------------------
+// Adversarial families. Common frame unless stated: blockers in the slab 0.3 < z < 1.7,
+// a square light at z = 2 emitting down, receivers on or near z = 0.
+
+int samples_or(const FamilyParams& p, int fallback) { return p.samples > 0 ? int(p.samples) : fallback; }
+
+Vec3d random_unit(Rng& rng) {
+  for (;;) {
+    Vec3d v(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    double l = length(v);
+    if (l > 0.1 && l <= 1.0) return v / l;
+  }
+}
+
+Result<Scene> finished(Scene& s) {
+  Status st = finish_scene(s);
+  if (!st) return st.error();
+  return std::move(s);
+}
+
+// Explicit samples: `n` points on the square light of half-size `half` centred at
+// (0, 0, z) on a dyadic grid of step half/32 (exact floats), so aimed segments start
+// from exactly known points. The light's polygon is the square itself.
+Light explicit_square_light(double z, double half, int n, Rng& rng, uint64_t seed) {
+  Light l = make_square_light_down(Vec3d(0, 0, z), half, n, seed);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  for (int j = 0; j < n; ++j) {
+    double x = std::round(rng.uniform(-31, 31)) * half / 32, y = std::round(rng.uniform(-31, 31)) * half / 32;
+    l.explicit_samples.push_back(Vec3f(Vec3d(x, y, z)));
+  }
+  return l;
+}
+
+// A receiver on the line from sample `l` through target `q`, mirrored: r = 2q - l in
+// double, rounded once; the open segment (r, l) has q as its midpoint up to one rounding
+// of r (exactly when 2q - l is a float).
+Receiver aimed_receiver(const Vec3d& q, const Vec3f& l) {
+  Receiver r;
+  r.p = Vec3f(q * 2.0 - to_double(l));
+  r.n = Vec3f(0, 0, 1);
+  return r;
+}
+
+// torus: a torus (paper 000 Fig. 4.16) between the light and the receivers, slightly
+// tilted, with shafts through its hole onto the receiver grid.
+Result<Scene> gen_torus(const FamilyParams& p) {
+  Scene s;
+  s.name = "torus-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long target = p.triangles > 0 ? p.triangles : 1024;
+  int nv = std::max(3, int(std::lround(std::sqrt(double(target) / 8.0))));  // minor segments
+  int nu = std::max(3, int(target / (2 * nv)));                               // major segments
+  double R = rng.uniform(0.45, 0.7), r = R * rng.uniform(0.2, 0.45);
+  shapes::add_torus(s.mesh, Vec3d(rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(0.8, 1.2)), R, r, nu, nv);
+  shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1), normalize(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), 0.0) + Vec3d(1e-3, 0, 0)),
+                 rng.uniform(0.0, 0.4));
+  s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.4 * p.light_scale, samples_or(p, 16), p.seed));
+  int side = grid_side(p.receivers, 16);
+  s.grid = make_floor_grid(-1.2, 1.2, -1.2, 1.2, 0.0, side, side, 0.0f);
+  return finished(s);
+}
+
+// pouch: an open sack (paper 000 Fig. 4.15). Even seeds: the body wraps around the light
+// and the opening faces the receivers; odd seeds: the reverse, the body wraps around the
+// receivers and the opening faces the light. Surfaces bend behind the shaft's nodes.
+Result<Scene> gen_pouch(const FamilyParams& p) {
+  Scene s;
+  s.name = "pouch-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long target = p.triangles > 0 ? p.triangles : 1024;
+  int slices = std::max(6, int(std::lround(std::sqrt(double(target)))));
+  int stacks = std::max(2, int(target / (2 * slices)));
+  double opening = rng.uniform(0.5, 1.1);  // radians from the open pole
+  bool around_light = p.seed % 2 == 0;
+  int side = grid_side(p.receivers, 16);
+  if (around_light) {
+    double rad = rng.uniform(0.6, 0.8);
+    shapes::add_open_sphere(s.mesh, Vec3d(0, 0, 2), rad, slices, stacks, opening, /*open_top=*/false);
+    s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.25 * p.light_scale, samples_or(p, 16), p.seed));
+    s.grid = make_floor_grid(-1.5, 1.5, -1.5, 1.5, 0.0, side, side, 0.0f);
+  } else {
+    double rad = rng.uniform(0.6, 0.8);
+    shapes::add_open_sphere(s.mesh, Vec3d(0, 0, 0.1), rad, slices, stacks, opening, /*open_top=*/true);
+    s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.5 * p.light_scale, samples_or(p, 16), p.seed));
+    s.grid = make_floor_grid(-0.4, 0.4, -0.4, 0.4, 0.0, side, side, 0.0f);
+  }
+  shapes::rotate(s.mesh, 0, around_light ? Vec3d(0, 0, 2) : Vec3d(0, 0, 0.1), Vec3d(1, 0, 0), rng.uniform(-0.3, 0.3));
+  return finished(s);
+}
+
+// double-surface: the double cover of a disc (paper 000 Fig. 4.17), a self-intersecting
+// two-sheeted surface with consistent orientation whose one boundary loop winds twice
+// around the shaft from the receivers to the light.
+Result<Scene> gen_double_surface(const FamilyParams& p) {
+  Scene s;
+  s.name = "double-surface-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long target = p.triangles > 0 ? p.triangles : 1024;
+  // Triangles: 2 spokes (centre fan) + (rings - 1) * 4 spokes.
+  int rings = std::max(1, int(std::lround(std::sqrt(double(target) / 8.0))));
+  int spokes = std::max(3, int(target / (4 * rings)));
+  double R = rng.uniform(0.5, 0.8), h = rng.uniform(0.2, 0.6);
+  shapes::add_double_cover_disc(s.mesh, Vec3d(0, 0, rng.uniform(0.8, 1.2)), R, h, rings, spokes);
+  shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1), Vec3d(0, 0, 1), rng.uniform(0, 2 * std::numbers::pi));
+  s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.3 * p.light_scale, samples_or(p, 16), p.seed));
+  int side = grid_side(p.receivers, 16);
+  s.grid = make_floor_grid(-1.0, 1.0, -1.0, 1.0, 0.0, side, side, 0.0f);
+  return finished(s);
+}
+
+// grid-snapped: every coordinate on the grid of step 1/4 (receivers at z = 0, samples at
+// z = 2, blockers on the planes z = 1/2, 1, 3/2 or spanning them), so the midpoint of a
+// receiver and a sample (step 1/8) and the quarter points lie on blocker vertices, edges
+// and planes exactly.
+Result<Scene> gen_grid_snapped(const FamilyParams& p) {
+  Scene s;
+  s.name = "grid-snapped-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long n = p.triangles > 0 ? p.triangles : 200;
+  const double g = 0.25;
+  auto gi = [&](int lo, int hi) { return double(lo + long(rng.below(uint64_t(hi - lo + 1)))) * g; };
+  for (long t = 0; t < n; ++t) {
+    uint32_t base = uint32_t(s.mesh.vertices.size());
+    int kind = int(rng.below(3));
+    Vec3d a(gi(-4, 4), gi(-4, 4), gi(2, 6));
+    Vec3d b, c;
+    if (kind == 0) {  // horizontal: in a grid plane z = const
+      b = Vec3d(a.x + gi(-3, 3), a.y + gi(-3, 3), a.z);
+      c = Vec3d(a.x + gi(-3, 3), a.y + gi(-3, 3), a.z);
+    } else if (kind == 1) {  // vertical: in a plane x = const, holding vertical segments
+      b = Vec3d(a.x, a.y + gi(-3, 3), a.z + gi(-2, 2));
+      c = Vec3d(a.x, a.y + gi(-3, 3), a.z + gi(-2, 2));
+    } else {  // general, every vertex on the grid
+      b = Vec3d(gi(-4, 4), gi(-4, 4), gi(2, 6));
+      c = Vec3d(gi(-4, 4), gi(-4, 4), gi(2, 6));
+    }
+    s.mesh.vertices.push_back(Vec3f(a));
+    s.mesh.vertices.push_back(Vec3f(b));
+    s.mesh.vertices.push_back(Vec3f(c));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  int ns = samples_or(p, 16);
+  double half = std::max(g, std::round(0.5 * p.light_scale / g) * g);
+  Light l = make_square_light_down(Vec3d(0, 0, 2), half, ns, p.seed);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  int hk = int(std::lround(half / g));
+  for (int j = 0; j < ns; ++j) l.explicit_samples.push_back(Vec3f(Vec3d(gi(-hk, hk), gi(-hk, hk), 2.0)));
+  s.lights.push_back(l);
+  long nr = p.receivers > 0 ? p.receivers : 64;
+  for (long i = 0; i < nr; ++i) s.receivers.push_back(Receiver{Vec3f(Vec3d(gi(-6, 6), gi(-6, 6), 0.0)), Vec3f(0, 0, 1)});
+  return finished(s);
+}
+
+// shared-edge-fan: tessellated planar patches and closed fans (all tilted, vertices
+// rounded to float), and receivers aimed so that the open segment to one sample passes
+// through a shared vertex or through a point of a shared interior edge (its midpoint, a
+// third, or a random point): exactly where the arithmetic allows, else within one
+// rounding. The crack test for ray casters: a segment through a shared edge must not
+// slip between the two triangles.
+Result<Scene> gen_shared_edge_fan(const FamilyParams& p) {
+  Scene s;
+  s.name = "shared-edge-fan-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long target = p.triangles > 0 ? p.triangles : 400;
+  struct Edge { uint32_t a, b; };
+  std::vector<uint32_t> shared_vertices;
+  std::vector<Edge> shared_edges;
+  long made = 0;
+  int piece = 0;
+  while (made < target) {
+    size_t v0 = s.mesh.vertices.size(), t0 = s.mesh.triangles.size();
+    Vec3d c(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(0.7, 1.3));
+    if (piece++ % 2 == 0) {
+      int m = int(std::clamp(target - made, 2L, 32L) / 2);
+      int nu = std::max(1, int(std::sqrt(double(m)))), nv = std::max(1, m / nu);
+      double size = rng.uniform(0.3, 0.7);
+      shapes::add_patch(s.mesh, c - Vec3d(size / 2, size / 2, 0), Vec3d(size, 0, 0), Vec3d(0, size, 0), nu, nv);
+      for (int b = 1; b < nv; ++b)
+        for (int a = 1; a < nu; ++a) shared_vertices.push_back(uint32_t(v0 + size_t(b * (nu + 1) + a)));
+    } else {
+      int k = int(std::clamp(target - made, 3L, 24L));
+      std::vector<Vec3d> rim;
+      double rad = rng.uniform(0.15, 0.35);
+      for (int i = 0; i < k; ++i) {
+        double a = 2 * std::numbers::pi * (i + rng.uniform(-0.3, 0.3)) / k;
+        rim.push_back(c + Vec3d(rad * std::cos(a), rad * std::sin(a), 0));
+      }
+      shapes::add_fan(s.mesh, c, rim, true);
+      shared_vertices.push_back(uint32_t(v0));
+    }
+    shapes::rotate(s.mesh, v0, c, random_unit(rng), rng.uniform(0.1, 0.9));
+    // Interior edges: edges used by two triangles of this piece.
+    std::map<std::pair<uint32_t, uint32_t>, int> uses;
+    for (size_t t = t0; t < s.mesh.triangles.size(); ++t)
+      for (int e = 0; e < 3; ++e) {
+        uint32_t a = s.mesh.triangles[t][e], b = s.mesh.triangles[t][(e + 1) % 3];
+        ++uses[{std::min(a, b), std::max(a, b)}];
+      }
+    for (const auto& [e, cnt] : uses)
+      if (cnt == 2) shared_edges.push_back({e.first, e.second});
+    made += long(s.mesh.triangles.size() - t0);
+  }
+  int ns = samples_or(p, 16);
+  s.lights.push_back(explicit_square_light(2.0, 0.5 * p.light_scale, ns, rng, p.seed));
+  const Light& L = s.lights[0];
+  long nr = p.receivers > 0 ? p.receivers : 64;
+  for (long i = 0; i < nr; ++i) {
+    const Vec3f& l = L.explicit_samples[size_t(i) % L.explicit_samples.size()];
+    Vec3d q;
+    if (!shared_vertices.empty() && (shared_edges.empty() || rng.below(3) == 0)) {
+      q = to_double(s.mesh.vertices[shared_vertices[rng.below(shared_vertices.size())]]);
+    } else {
+      const Edge& e = shared_edges[rng.below(shared_edges.size())];
+      uint64_t kind = rng.below(3);
+      double t = kind == 0 ? 0.5 : kind == 1 ? 1.0 / 3.0 : rng.uniform(0.05, 0.95);
+      q = to_double(s.mesh.vertices[e.a]) * (1 - t) + to_double(s.mesh.vertices[e.b]) * t;
+    }
+    s.receivers.push_back(aimed_receiver(q, l));
+  }
+  return finished(s);
+}
+
+// sliver-soup: long thin near-degenerate triangles (length 0.5-2, width 1e-2 to 1e-7 of
+// the length, some exactly collinear after rounding), with receivers aimed at points
+// inside the slivers so the segments cross them within a sliver's width of its edges.
+Result<Scene> gen_sliver_soup(const FamilyParams& p) {
+  Scene s;
+  s.name = "sliver-soup-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long n = p.triangles > 0 ? p.triangles : 200;
+  for (long t = 0; t < n; ++t) {
+    Vec3d c(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(0.5, 1.5));
+    Vec3d d = random_unit(rng) * (rng.uniform(0.5, 2.0) / 2);
+    Vec3d side = normalize(cross(d, random_unit(rng)));
+    double width = length(d) * 2 * std::pow(10.0, -rng.uniform(2.0, 7.0));
+    uint32_t base = uint32_t(s.mesh.vertices.size());
+    s.mesh.vertices.push_back(Vec3f(c - d));
+    s.mesh.vertices.push_back(Vec3f(c + d));
+    s.mesh.vertices.push_back(Vec3f(c + d * rng.uniform(-0.9, 0.9) + side * width));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  int ns = samples_or(p, 16);
+  s.lights.push_back(explicit_square_light(2.0, 0.5 * p.light_scale, ns, rng, p.seed));
+  const Light& L = s.lights[0];
+  long nr = p.receivers > 0 ? p.receivers : 64;
+  for (long i = 0; i < nr; ++i) {
+    const Vec3f& l = L.explicit_samples[size_t(i) % L.explicit_samples.size()];
+    size_t t = rng.below(s.mesh.size());
+    double a = rng.uniform(0.05, 0.9), b = rng.uniform(0.05, 0.95 - a);
+    Vec3d q = to_double(s.mesh.corner(t, 0)) * (1 - a - b) + to_double(s.mesh.corner(t, 1)) * a +
+              to_double(s.mesh.corner(t, 2)) * b;
+    s.receivers.push_back(aimed_receiver(q, l));
+  }
+  return finished(s);
+}
+
+// on-surface: receivers exactly on blocker faces (offset 0): on a tessellated floor (at
+// random points, on its shared vertices and on its shared edges), on the top faces of
+// boxes standing on it, and on tilted quads (points rounded onto the face's
+// neighbourhood, within one rounding of the plane); a few boxes above cast shadows.
+Result<Scene> gen_on_surface(const FamilyParams& p) {
+  Scene s;
+  s.name = "on-surface-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long target = p.triangles > 0 ? p.triangles : 300;
+  int cells = std::max(1, int(std::sqrt(double(std::max(2L, target / 2)) / 2.0)));
+  const double F = 1.5;
+  shapes::add_patch(s.mesh, Vec3d(-F, -F, 0), Vec3d(2 * F, 0, 0), Vec3d(0, 2 * F, 0), cells, cells);
+  struct Face { Vec3d o, u, v, n; };
+  std::vector<Face> faces;
+  faces.push_back({Vec3d(-F, -F, 0), Vec3d(2 * F, 0, 0), Vec3d(0, 2 * F, 0), Vec3d(0, 0, 1)});
+  while (long(s.mesh.size()) + 12 <= target) {
+    uint64_t kind = rng.below(3);
+    Vec3d c(rng.uniform(-1.2, 1.2), rng.uniform(-1.2, 1.2), 0);
+    double w = rng.uniform(0.05, 0.3);
+    if (kind == 0) {  // box on the floor, receivers on its top face
+      double h = std::ldexp(std::round(rng.uniform(1, 8)), -3);  // dyadic height: top face exact
+      shapes::add_box(s.mesh, c - Vec3d(w, w, 0), c + Vec3d(w, w, h));
+      faces.push_back({c + Vec3d(-w, -w, h), Vec3d(2 * w, 0, 0), Vec3d(0, 2 * w, 0), Vec3d(0, 0, 1)});
+    } else if (kind == 1) {  // tilted quad
+      Vec3d o = c + Vec3d(0, 0, rng.uniform(0.2, 0.8));
+      Vec3d u = random_unit(rng) * w * 2, v = normalize(cross(Vec3d(0, 0, 1), u)) * w * 2;
+      if (cross(u, v).z < 0) v = -v;
+      shapes::add_quad(s.mesh, o, o + u, o + u + v, o + v);
+      faces.push_back({o, u, v, normalize(cross(u, v))});
+    } else {  // occluder above
+      Vec3d lo = c + Vec3d(-w, -w, rng.uniform(1.0, 1.6));
+      shapes::add_box(s.mesh, lo, lo + Vec3d(2 * w, 2 * w, 0.1));
+    }
+  }
+  s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.5 * p.light_scale, samples_or(p, 16), p.seed));
+  long nr = p.receivers > 0 ? p.receivers : 64;
+  const double cell = 2 * F / cells;
+  for (long i = 0; i < nr; ++i) {
+    uint64_t kind = rng.below(4);
+    Vec3d q;
+    Vec3d n(0, 0, 1);
+    if (kind == 0) {  // floor vertex
+      q = Vec3d(-F + cell * double(rng.below(uint64_t(cells) + 1)), -F + cell * double(rng.below(uint64_t(cells) + 1)), 0);
+    } else if (kind == 1) {  // floor edge
+      q = Vec3d(-F + cell * double(rng.below(uint64_t(cells) + 1)), rng.uniform(-F, F), 0);
+    } else {
+      const Face& f = faces[rng.below(faces.size())];
+      q = f.o + f.u * rng.uniform(0.02, 0.98) + f.v * rng.uniform(0.02, 0.98);
+      n = f.n;
+    }
+    s.receivers.push_back(Receiver{Vec3f(q), Vec3f(n)});
+  }
+  return finished(s);
+}
+
+// foliage: the TREE analogue of paper 000: thousands of small disjoint leaf triangles in
+// a crown above a trunk, under a square light; receivers on the ground.
+Result<Scene> gen_foliage(const FamilyParams& p) {
+  Scene s;
+  s.name = "foliage-" + std::to_string(p.seed);
+  Rng rng(p.seed);
+  long target = p.triangles > 0 ? p.triangles : 4000;
+  shapes::add_cylinder(s.mesh, Vec3d(0, 0, 0), 0.06, 0.9, 12);
+  long leaves = std::max(1L, target - long(s.mesh.size()));
+  // Leaf size shrinks with the count so the crown's density stays about constant.
+  double leaf = 0.06 * std::sqrt(4000.0 / double(std::max(leaves, 100L)));
+  for (long t = 0; t < leaves; ++t) {
+    Vec3d c = Vec3d(0, 0, 1.3) + random_unit(rng) * (0.7 * std::cbrt(rng.uniform()));
+    Vec3d a = random_unit(rng), b = normalize(cross(a, random_unit(rng)));
+    double sz = leaf * rng.uniform(0.5, 1.0);
+    uint32_t base = uint32_t(s.mesh.vertices.size());
+    s.mesh.vertices.push_back(Vec3f(c + a * sz));
+    s.mesh.vertices.push_back(Vec3f(c + (b * 0.866 - a * 0.5) * sz));
+    s.mesh.vertices.push_back(Vec3f(c - (b * 0.866 + a * 0.5) * sz));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  s.lights.push_back(make_square_light_down(Vec3d(0.3, 0.2, 3.0), 0.5 * p.light_scale, samples_or(p, 64), p.seed));
+  int side = grid_side(p.receivers, 32);
+  s.grid = make_floor_grid(-1.5, 1.5, -1.5, 1.5, 0.0, side, side, 1e-3f);
+  return finished(s);
+}
+
+// file:PATH: the mesh of a file, unchanged (its float coordinates kept exactly), between a
+// square light above its bounding box and a receiver grid below it.
+Result<Scene> gen_file(const std::string& path, const FamilyParams& p) {
+  auto soup = read_polygon_file(path);
+  if (!soup) return soup.error();
+  auto tris = triangulate(*soup, path);
+  if (!tris) return tris.error();
+  Scene s;
+  s.name = "file-" + path.substr(path.find_last_of('/') + 1);
+  s.mesh = std::move(*tris);
+  if (s.mesh.size() == 0) return Error{path + ": no triangles"};
+  AABB b = s.mesh.bounds();
+  Vec3d lo = to_double(b.lo), hi = to_double(b.hi), c = (lo + hi) * 0.5;
+  double d = std::max(b.diagonal(), 1e-30);
+  s.lights.push_back(make_square_light_down(Vec3d(c.x, c.y, hi.z + 0.5 * d), 0.25 * d * p.light_scale,
+                                            samples_or(p, 16), p.seed));
+  int side = grid_side(p.receivers, 16);
+  double ex = 0.5 * (hi.x - lo.x) + 0.25 * d, ey = 0.5 * (hi.y - lo.y) + 0.25 * d;
+  s.grid = make_floor_grid(c.x - ex, c.x + ex, c.y - ey, c.y + ey, lo.z - 0.25 * d, side, side, 0.0f);
+  return finished(s);
+}
+
+Result<Scene> gen_far_origin(const FamilyParams& p);
+
 using Generator = std::function<Result<Scene>(const FamilyParams&)>;
 
 const std::map<std::string, Generator>& generators() {
@@ -213,8 +580,46 @@ const std::map<std::string, Generator>& generators() {
       {"random-soup", gen_random_soup},
       {"columns", gen_columns},
       {"rooms", gen_rooms},
+      {"torus", gen_torus},
+      {"pouch", gen_pouch},
+      {"double-surface", gen_double_surface},
+      {"grid-snapped", gen_grid_snapped},
+      {"far-origin", gen_far_origin},
+      {"shared-edge-fan", gen_shared_edge_fan},
+      {"sliver-soup", gen_sliver_soup},
+      {"on-surface", gen_on_surface},
+      {"foliage", gen_foliage},
   };
   return g;
+}
+
+// far-origin: a base family chosen by seed (one whose lights are axis-aligned squares, so
+// they stay planar and convex after rounding) translated by an offset whose components
+// have magnitudes from 1e5 to 1e6: float32 spacing there is 1/128 to 1/16, so every
+// coordinate is rounded coarsely and near-degenerate configurations abound.
+Result<Scene> gen_far_origin(const FamilyParams& p) {
+  static const char* bases[] = {"random-soup", "torus", "pouch", "double-surface", "shared-edge-fan",
+                                "sliver-soup", "grid-snapped", "on-surface", "foliage"};
+  Rng rng(p.seed ^ 0xFA20F1F1ull);
+  std::string base = bases[rng.below(std::size(bases))];
+  FamilyParams bp = p;
+  if (base == "foliage" && bp.triangles <= 0) bp.triangles = 1000;
+  auto r = generators().at(base)(bp);
+  if (!r) return r;
+  Scene s = std::move(*r);
+  Vec3d off;
+  for (int k = 0; k < 3; ++k) off[k] = std::round(std::pow(10.0, rng.uniform(5.0, 6.0))) * (rng.below(2) ? 1.0 : -1.0);
+  auto move = [&](Vec3f& v) { v = Vec3f(to_double(v) + off); };
+  for (auto& v : s.mesh.vertices) move(v);
+  for (auto& l : s.lights) {
+    for (auto& v : l.polygon) move(v);
+    for (auto& v : l.explicit_samples) move(v);
+  }
+  if (s.grid) move(s.grid->origin);
+  else
+    for (auto& rc : s.receivers) move(rc.p);
+  s.name = "far-origin-" + std::to_string(p.seed) + "-" + base;
+  return finished(s);
 }
 
 }  // namespace
@@ -232,6 +637,7 @@ Result<Scene> generate_family(const std::string& name, const FamilyParams& p) {
   if (p.receivers > 50'000'000) return Error{"--receivers: " + std::to_string(p.receivers) + " exceeds the limit 50000000"};
   if (p.samples > (1 << 20)) return Error{"--samples: " + std::to_string(p.samples) + " exceeds the limit 1048576"};
   if (!(p.light_scale > 0) || !std::isfinite(p.light_scale)) return Error{"--light-scale: must be a positive number"};
+  if (name.rfind("file:", 0) == 0) return gen_file(name.substr(5), p);
   auto it = generators().find(name);
   if (it == generators().end()) {
     std::string known;
