@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   Action run;
   add_gen(app, run);
   add_solve(app, run);
+  add_oracle(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,80 @@
+// The comparator (DESIGN section 5): turns a method's SolveResult and the oracles'
+// answers into mismatches, a histogram of disagreements per margin decade and counts by
+// class and direction.
+//
+// A mismatch is a relation where the method's bit disagrees with a non-degenerate exact
+// class and margin >= tau, or, for fragment methods, a receiver/light whose visible
+// fraction differs from the exact one by more than 1e-4, or a reported fragment whose
+// interior holds a point the relation oracle calls blocked with margin >= tau.
+// Disagreements below tau are not mismatches; they are counted per margin decade.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lib/solver.h"
+#include "oracle/relation_oracle.h"
+
+namespace visgate::oracle {
+
+enum class Direction { FalseVisible, FalseBlocked, FractionError, FragmentBlocked };
+const char* direction_name(Direction d);  // "false-visible", "false-blocked", "fraction", "fragment-blocked"
+
+struct Mismatch {
+  size_t receiver = 0, light = 0;
+  long sample = -1;            // -1 for fraction and fragment mismatches
+  RelationClass exact = RelationClass::Visible;
+  bool method_visible = false;
+  double margin = 0.0;
+  Direction direction = Direction::FalseVisible;
+  double exact_fraction = 0.0, method_fraction = 0.0;  // fraction mismatches
+};
+
+// Disagreement histogram: bucket k holds margins in [10^(k-12), 10^(k-11)) for k = 0..11
+// (1e-12 .. 1), bucket 12 margins >= 1, and `below` margins < 1e-12 (including 0).
+struct DecadeHistogram {
+  std::array<size_t, 13> buckets{};
+  size_t below = 0;
+  void add(double margin);
+};
+
+struct Comparison {
+  size_t relations = 0, degenerate = 0;
+  size_t agree = 0, disagree = 0;
+  size_t false_visible = 0, false_blocked = 0;   // mismatches (margin >= tau)
+  size_t fraction_mismatches = 0, fragment_mismatches = 0;
+  DecadeHistogram disagreement_margins;           // every disagreement, any margin
+  std::vector<Mismatch> mismatches;
+  size_t mismatch_count() const { return false_visible + false_blocked + fraction_mismatches + fragment_mismatches; }
+};
+
+// Relation by relation: receivers whose oracle row is empty (not computed) are skipped.
+// Degenerate relations count in `degenerate` and nowhere else; every other relation is
+// an agreement or a disagreement; a disagreement with margin >= tau is a mismatch
+// (false-visible: method says visible, exact class blocked; false-blocked: the reverse).
+// The method result must have one row per receiver with enough bits (VG_CHECK).
+Comparison compare_relations(const Scene& scene, const SolveResult& method, const RelationOracleResult& exact,
+                             double tau);
+
+// Fragment methods (DESIGN section 5): for each listed receiver and each light, a
+// fraction mismatch when |method visible_fraction - exact fraction| > kFractionTolerance
+// (region oracle; receivers exactly on a light's plane are skipped), and a fragment
+// mismatch for every reported fragment whose interior point (the centroid of its largest
+// fan triangle, rounded to float; fragments are convex) the relation oracle calls blocked
+// with margin >= tau. Only the fraction/fragment fields of the result are filled.
+inline constexpr double kFractionTolerance = 1e-4;
+Comparison compare_regions(const Scene& scene, const SolveResult& method, const std::vector<size_t>& receivers,
+                           double tau);
+
+// Adds the counts, histogram and mismatches of `other` to `into`.
+void merge(Comparison& into, const Comparison& other);
+
+// JSON report: every count, the histogram as {"below_1e-12": n, "decades": [{"from": 1e-12,
+// "to": 1e-11, "count": n}, ...], "at_least_1": n}, and at most `max_records` mismatch
+// records (receiver, light, sample, exact, method, margin, direction, fractions).
+nlohmann::ordered_json comparison_json(const Comparison& c, size_t max_records = 1000);
+
+}  // namespace visgate::oracle

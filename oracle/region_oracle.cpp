@@ -1,0 +1,356 @@
+// The region oracle (DESIGN section 5): exact visible region of a light polygon from a
+// receiver with Epeck and CGAL's 2D Boolean set operations. This is the only translation
+// unit of visgate that instantiates the Boolean-operation code (DESIGN section 9). The
+// exact frame, the blocker cases and the irradiance formula are documented in
+// region_oracle.h.
+#include "oracle/region_oracle.h"
+
+#include <CGAL/Boolean_set_operations_2.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_2.h>
+#include <CGAL/Polygon_set_2.h>
+#include <CGAL/Polygon_with_holes_2.h>
+#include <CGAL/convex_hull_2.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace visgate::oracle {
+
+namespace {
+
+using EK = CGAL::Epeck;
+using FT = EK::FT;
+using Pt2 = EK::Point_2;
+using Poly = CGAL::Polygon_2<EK>;
+using PolyH = CGAL::Polygon_with_holes_2<EK>;
+using PolySet = CGAL::Polygon_set_2<EK>;
+using V3 = Vec3<FT>;
+using IK = CGAL::Epick;
+
+V3 exact3(const Vec3f& v) { return V3(FT(double(v.x)), FT(double(v.y)), FT(double(v.z))); }
+IK::Point_3 ipt(const Vec3f& v) { return IK::Point_3(double(v.x), double(v.y), double(v.z)); }
+// Double nearest (within one ulp) to an exact value. CGAL::to_double on a lazy number
+// may return its interval's midpoint with a relative error up to 1e-5
+// (Lazy_exact_nt's default relative precision of to_double), which is far too coarse
+// for the culling bounds and the reported fraction: always go through the exact value.
+double to_double_exact(const FT& x) { return CGAL::to_double(x.exact()); }
+Vec3d approx(const V3& v) { return Vec3d(to_double_exact(v.x), to_double_exact(v.y), to_double_exact(v.z)); }
+
+// Collapses the lazy-evaluation DAG behind a value: computes it exactly once and keeps
+// only the result, so the Boolean operations do not re-walk clipping expressions.
+FT squash(const FT& x) {
+  x.exact();
+  return x;
+}
+
+// The exact light frame of region_oracle.h.
+struct LightFrame {
+  V3 n;                    // exact Newell normal (emitting side)
+  FT d0;                   // plane: n . x = d0
+  int k = 2, i1 = 0, i2 = 1;  // dropped axis and the two kept ones
+  Poly polygon;            // light polygon in the frame, counter-clockwise
+  bool reversed = false;   // the frame's CCW runs against the light's own order
+  std::vector<V3> lifted;  // vertices of the convex hull of `polygon`, lifted to the plane
+  double scale = 1.0;      // 3D area = frame area * scale (|n| / |n_k|)
+
+  V3 lift(const Pt2& p) const {
+    V3 x;
+    x[i1] = p.x();
+    x[i2] = p.y();
+    x[k] = (d0 - n[i1] * p.x() - n[i2] * p.y()) / n[k];
+    return x;
+  }
+  FT height(const V3& x) const { return dot(n, x) - d0; }
+};
+
+// Removes repeated consecutive vertices and vertices collinear with their neighbours.
+void simplify(std::vector<Pt2>& pts) {
+  bool changed = true;
+  while (changed && pts.size() >= 3) {
+    changed = false;
+    for (size_t i = 0; i < pts.size() && pts.size() >= 3; ++i) {
+      const Pt2& a = pts[(i + pts.size() - 1) % pts.size()];
+      const Pt2& b = pts[i];
+      const Pt2& c = pts[(i + 1) % pts.size()];
+      if (a == b || CGAL::collinear(a, b, c)) {
+        pts.erase(pts.begin() + long(i));
+        changed = true;
+        --i;
+      }
+    }
+  }
+}
+
+LightFrame make_frame(const Light& light) {
+  LightFrame f;
+  const auto& v = light.polygon;
+  size_t m = v.size();
+  V3 c;
+  for (size_t j = 0; j < m; ++j) {
+    V3 a = exact3(v[j]), b = exact3(v[(j + 1) % m]);
+    f.n += cross(a, b);
+    c += a;
+  }
+  c = c / FT(double(m));
+  for (int j = 0; j < 3; ++j) f.n[j] = squash(f.n[j]);
+  f.d0 = squash(dot(f.n, c));
+  f.k = 0;
+  for (int j = 1; j < 3; ++j)
+    if (CGAL::abs(f.n[j]) > CGAL::abs(f.n[f.k])) f.k = j;
+  f.i1 = (f.k + 1) % 3;
+  f.i2 = (f.k + 2) % 3;
+  VG_CHECK(!CGAL::is_zero(f.n[f.k]));
+  std::vector<Pt2> pts;
+  for (const Vec3f& p : v) pts.emplace_back(FT(double(p[f.i1])), FT(double(p[f.i2])));
+  simplify(pts);
+  VG_CHECK(pts.size() >= 3);
+  f.polygon = Poly(pts.begin(), pts.end());
+  VG_CHECK(f.polygon.is_simple());
+  if (f.polygon.orientation() == CGAL::CLOCKWISE) {
+    f.polygon.reverse_orientation();
+    f.reversed = true;
+  }
+  std::vector<Pt2> hull;
+  CGAL::convex_hull_2(pts.begin(), pts.end(), std::back_inserter(hull));
+  for (const Pt2& p : hull) {
+    V3 x = f.lift(p);
+    x[f.k] = squash(x[f.k]);
+    f.lifted.push_back(x);
+  }
+  Vec3d nd = approx(f.n);
+  f.scale = length(nd) / std::abs(nd[f.k]);
+  return f;
+}
+
+// Sutherland-Hodgman step, exact: keeps the part of the convex polygon with
+// dot(m, x) - e >= 0.
+std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e) {
+  std::vector<V3> out;
+  size_t n = poly.size();
+  if (n == 0) return out;
+  std::vector<FT> val(n);
+  std::vector<CGAL::Sign> sg(n);
+  for (size_t i = 0; i < n; ++i) {
+    val[i] = dot(m, poly[i]) - e;
+    sg[i] = CGAL::sign(val[i]);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    size_t j = (i + 1) % n;
+    if (sg[i] != CGAL::NEGATIVE) out.push_back(poly[i]);
+    if ((sg[i] == CGAL::POSITIVE && sg[j] == CGAL::NEGATIVE) || (sg[i] == CGAL::NEGATIVE && sg[j] == CGAL::POSITIVE)) {
+      FT t = val[i] / (val[i] - val[j]);
+      V3 x = poly[i] + (poly[j] - poly[i]) * t;
+      for (int a = 0; a < 3; ++a) x[a] = squash(x[a]);
+      out.push_back(x);
+    }
+  }
+  return out;
+}
+
+// Double-precision culling data for one receiver and light: the pyramid's box and side
+// planes (outward normals). Inputs are exact doubles (floats) or within one ulp of the
+// exact lifted light vertices. With M the largest coordinate magnitude, |x - r| <= 2
+// sqrt(3) M < 4 M, so for a side normal m = a x b (a, b the edge's hull vertices minus r)
+// the rounding of dot(m, x - r) is below ~8e-16 |a| |b| 4M; a triangle is culled only when
+// all its vertices are outside one side by more than eps = 1e-9 |a| |b| 4M, or outside the
+// box by more than 1e-9 M: six orders of magnitude above the rounding, so no triangle
+// meeting the exact pyramid is ever culled (whatever the pyramid's shape).
+struct Cull {
+  Vec3d r, lo, hi;
+  std::vector<Vec3d> normals;
+  std::vector<double> eps;
+
+  bool outside(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+    Vec3d tlo = vmin(a, vmin(b, c)), thi = vmax(a, vmax(b, c));
+    for (int k = 0; k < 3; ++k)
+      if (thi[k] < lo[k] || tlo[k] > hi[k]) return true;
+    for (size_t f = 0; f < normals.size(); ++f) {
+      const Vec3d& m = normals[f];
+      if (dot(m, a - r) > eps[f] && dot(m, b - r) > eps[f] && dot(m, c - r) > eps[f]) return true;
+    }
+    return false;
+  }
+};
+
+Cull make_cull(const LightFrame& f, const Vec3f& rf, double coord_scale) {
+  Cull c;
+  c.r = to_double(rf);
+  double e = 1e-9 * coord_scale;
+  c.lo = c.r;
+  c.hi = c.r;
+  std::vector<Vec3d> L;
+  for (const V3& x : f.lifted) L.push_back(approx(x));
+  Vec3d centre{};
+  for (const Vec3d& x : L) {
+    c.lo = vmin(c.lo, x);
+    c.hi = vmax(c.hi, x);
+    centre += x;
+  }
+  centre = centre / double(L.size());
+  for (int k = 0; k < 3; ++k) {
+    c.lo[k] -= e;
+    c.hi[k] += e;
+  }
+  for (size_t j = 0; j < L.size(); ++j) {
+    Vec3d m = cross(L[j] - c.r, L[(j + 1) % L.size()] - c.r);
+    if (dot(m, centre - c.r) > 0) m = -m;  // outward
+    c.normals.push_back(m);
+    c.eps.push_back(length(L[j] - c.r) * length(L[(j + 1) % L.size()] - c.r) * 4.0 * e);
+  }
+  return c;
+}
+
+// Lambert's polygon formula (region_oracle.h) for one polygon seen from r with normal nr,
+// after clipping to the receiver's upper half-space; double precision.
+double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d& nr) {
+  std::vector<Vec3d> kept;
+  size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3d &a = poly[i], &b = poly[(i + 1) % n];
+    double da = dot(nr, a - r), db = dot(nr, b - r);
+    if (da >= 0) kept.push_back(a);
+    if ((da > 0 && db < 0) || (da < 0 && db > 0)) kept.push_back(a + (b - a) * (da / (da - db)));
+  }
+  double sum = 0.0;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    Vec3d u = kept[i] - r, v = kept[(i + 1) % kept.size()] - r;
+    Vec3d w = cross(u, v);
+    double lw = length(w);
+    if (lw == 0.0) continue;
+    double theta = std::atan2(lw, dot(u, v));
+    sum += theta * dot(nr, w) / lw;
+  }
+  return -sum / (2.0 * std::numbers::pi);
+}
+
+}  // namespace
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index) {
+  VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  const Light& light = scene.lights[light_index];
+  const Receiver& rec = scene.receivers[receiver];
+  RegionAnswer ans;
+  LightFrame f = make_frame(light);
+  FT light_area2 = f.polygon.area();
+  ans.light_area = to_double_exact(light_area2) * f.scale;
+
+  const V3 r = exact3(rec.p);
+  const FT h_r = f.height(r);
+  const CGAL::Sign side = CGAL::sign(h_r);
+  if (side == CGAL::ZERO) {
+    ans.edge_on = true;
+    return ans;
+  }
+  // g = side * height: positive on the receiver's side; g_r = |h_r|.
+  const FT g_r = CGAL::abs(h_r);
+  auto g_of = [&](const V3& x) { return side == CGAL::POSITIVE ? f.height(x) : -f.height(x); };
+
+  // Pyramid side planes through r and consecutive hull vertices, oriented inwards.
+  std::vector<std::pair<V3, FT>> sides;
+  size_t hn = f.lifted.size();
+  for (size_t j = 0; j < hn; ++j) {
+    V3 m = cross(f.lifted[j] - r, f.lifted[(j + 1) % hn] - r);
+    if (CGAL::sign(dot(m, f.lifted[(j + 2) % hn] - r)) == CGAL::NEGATIVE) m = -m;
+    for (int a = 0; a < 3; ++a) m[a] = squash(m[a]);
+    sides.emplace_back(m, squash(dot(m, r)));
+  }
+  // The light plane as the half-space g >= 0.
+  V3 gn = side == CGAL::POSITIVE ? f.n : -f.n;
+  FT ge = side == CGAL::POSITIVE ? f.d0 : -f.d0;
+
+  AABB sb = scene.bounds();
+  double coord_scale = std::max(max_component(vabs(to_double(sb.lo))), max_component(vabs(to_double(sb.hi))));
+  coord_scale = std::max(coord_scale, max_component(vabs(to_double(rec.p))));
+  for (const Vec3f& v : light.polygon) coord_scale = std::max(coord_scale, max_component(vabs(to_double(v))));
+  Cull cull = make_cull(f, rec.p, std::max(coord_scale, 1e-30));
+  const IK::Point_3 rp = ipt(rec.p);
+
+  std::vector<Poly> shadows;
+  const TriangleSoup& mesh = scene.mesh;
+  for (size_t t = 0; t < mesh.size(); ++t) {
+    const Vec3f &af = mesh.corner(t, 0), &bf = mesh.corner(t, 1), &cf = mesh.corner(t, 2);
+    // Cull: outside the pyramid (double, conservative).
+    if (cull.outside(to_double(af), to_double(bf), to_double(cf))) continue;
+    // Zero-area projections: collinear triangles, planes through the receiver (exact).
+    IK::Point_3 ai = ipt(af), bi = ipt(bf), ci = ipt(cf);
+    if (CGAL::collinear(ai, bi, ci) || CGAL::orientation(ai, bi, ci, rp) == CGAL::COPLANAR) continue;
+    std::vector<V3> poly = {exact3(af), exact3(bf), exact3(cf)};
+    FT g[3] = {g_of(poly[0]), g_of(poly[1]), g_of(poly[2])};
+    bool all_beyond = true, all_behind = true, reaches_receiver = false;
+    for (const FT& gi : g) {
+      if (CGAL::is_positive(gi)) all_beyond = false;
+      if (gi < g_r) all_behind = false;
+      if (gi >= g_r) reaches_receiver = true;
+    }
+    if (all_beyond || all_behind) continue;
+    if (reaches_receiver)
+      for (const auto& [m, e] : sides) poly = clip(poly, m, e);
+    poly = clip(poly, gn, ge);
+    if (poly.size() < 3) continue;
+    // Central projection from r onto the light plane: x -> r + (x - r) g_r / (g_r - g(x)).
+    std::vector<Pt2> pts;
+    pts.reserve(poly.size());
+    for (const V3& x : poly) {
+      FT gx = g_of(x);
+      VG_CHECK(gx < g_r);
+      FT s = g_r / (g_r - gx);
+      pts.emplace_back(squash(r[f.i1] + (x[f.i1] - r[f.i1]) * s), squash(r[f.i2] + (x[f.i2] - r[f.i2]) * s));
+    }
+    simplify(pts);
+    if (pts.size() < 3) continue;
+    Poly sp(pts.begin(), pts.end());
+    if (sp.orientation() == CGAL::CLOCKWISE) sp.reverse_orientation();
+    // Cheap exact prefilter: skip projections that miss the light's frame box.
+    if (CGAL::do_overlap(sp.bbox(), f.polygon.bbox()) == false) continue;
+    shadows.push_back(std::move(sp));
+  }
+  ans.blockers_projected = shadows.size();
+
+  // Visible region = light minus the union of the shadows.
+  PolySet vis(f.polygon);
+  if (!shadows.empty()) {
+    PolySet blocked;
+    blocked.join(shadows.begin(), shadows.end());
+    vis.difference(blocked);
+  }
+  std::vector<PolyH> parts;
+  vis.polygons_with_holes(std::back_inserter(parts));
+  FT area2 = 0;
+  for (const PolyH& p : parts) {
+    area2 += p.outer_boundary().area();
+    for (auto h = p.holes_begin(); h != p.holes_end(); ++h) area2 += h->area();
+  }
+  ans.visible_fraction = to_double_exact(area2 / light_area2);
+  ans.visible_area = to_double_exact(area2) * f.scale;
+
+  // Output polygons (floats) and the irradiance (double, from the exact vertices).
+  const Vec3d rd = to_double(rec.p), nr = to_double(rec.n);
+  double ff = 0.0;
+  auto emit = [&](const Poly& p, bool hole) {
+    Polygon3f out;
+    std::vector<Vec3d> dpoly;
+    for (auto v = p.vertices_begin(); v != p.vertices_end(); ++v) {
+      Vec3d x = approx(f.lift(*v));
+      dpoly.push_back(x);
+      out.push_back(Vec3f(x));
+    }
+    if (f.reversed) {
+      std::reverse(out.begin(), out.end());
+      std::reverse(dpoly.begin(), dpoly.end());
+    }
+    ff += polygon_form_factor(std::move(dpoly), rd, nr);
+    ans.polygons.push_back(std::move(out));
+    ans.hole.push_back(hole);
+  };
+  for (const PolyH& p : parts) {
+    emit(p.outer_boundary(), false);
+    for (auto h = p.holes_begin(); h != p.holes_end(); ++h) emit(*h, true);
+  }
+  // The light emits only to the side its Newell normal points to.
+  ans.irradiance = side == CGAL::POSITIVE ? ff : 0.0;
+  return ans;
+}
+
+}  // namespace visgate::oracle

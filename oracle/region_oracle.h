@@ -1,0 +1,63 @@
+// The region oracle (DESIGN section 5): the exact visible region of a light polygon from
+// a receiver. Each blocker is clipped exactly to the open slab between the receiver and
+// the light plane, projected centrally from the receiver onto the light plane, the
+// projections are unioned and subtracted from the light polygon, all with exact rational
+// arithmetic (Epeck, CGAL 2D Boolean set operations). Blockers outside the
+// receiver-light pyramid are culled before any exact work.
+//
+// Exact frame. The float32 light vertices are planar only within rounding, so the oracle
+// fixes one exact light: its plane has the exact Newell normal n = sum v_i x v_(i+1) of
+// the float vertices and passes through their exact centroid; the 2D frame drops the
+// axis k of the largest |n_k| (coordinates (k+1)%3, (k+2)%3); the light region is the
+// polygon of the float vertices with coordinate k dropped, lifted back onto the plane
+// (an affine bijection). Areas in the frame are 3D areas times |n_k| / |n|, so the
+// fraction is a ratio of exact frame areas; visible_area applies the scale in double.
+// Lights in an axis plane (the usual case) are exactly their float polygon.
+//
+// Blockers, exactly (g = signed height over the light plane, positive on the receiver's
+// side, g_r = g(receiver) > 0; the open slab is 0 < g < g_r):
+//   - zero-area triangles and triangles whose plane contains the receiver project to a
+//     segment or a point: zero area, skipped (this covers a receiver on a face, edge or
+//     vertex of a blocker: such a triangle cannot meet an open segment leaving its plane);
+//   - all g <= 0 (beyond or in the light plane) or all g >= g_r: outside the open slab,
+//     skipped; a triangle touching the light plane keeps its part with g >= 0 (points with
+//     g = 0 project onto themselves, a measure-zero boundary);
+//   - max g < g_r: clipped to g >= 0 and projected;
+//   - otherwise (reaching the receiver's level): first clipped to the receiver-light
+//     pyramid (planes through the receiver and the lifted light edges), which leaves only
+//     points with g > 0 apart from the receiver itself, then clipped to g >= 0.
+// Receiver on the light plane (g_r = 0): edge_on = true, no region is computed
+// (fraction 0, no polygons, irradiance 0); the comparator skips such pairs.
+//
+// Irradiance: the visible polygons, lifted to 3D in double and clipped to the receiver's
+// upper half-space n_r . (x - r) >= 0, give F = -sum_edges theta_e (n_r . unit(v_e x
+// v_e+1)) / (2 pi) with v = vertex - r and theta_e the angle between v_e and v_e+1
+// (Lambert's polygon formula; outer boundaries in the light's orientation, holes
+// reversed). F is the irradiance of a light of unit radiant exitance (radiance 1/pi);
+// multiply by pi for unit radiance. 0 when the receiver is behind the emitting side.
+// Double precision, not exact.
+#pragma once
+
+#include <vector>
+
+#include "lib/scene/scene.h"
+#include "lib/solver.h"
+
+namespace visgate::oracle {
+
+struct RegionAnswer {
+  double visible_fraction = 0.0;   // exact area ratio, rounded to double at the end
+  std::vector<Polygon3f> polygons;  // visible part of the light, rounded to float for output
+  double irradiance = 0.0;          // Lambert irradiance at the receiver, unit exitance (see above)
+  // Added fields.
+  std::vector<bool> hole;           // parallel to polygons: true for a hole boundary
+                                    // (outer boundaries run like the light polygon, holes reversed)
+  double visible_area = 0.0;        // 3D area of the visible region (double)
+  double light_area = 0.0;          // 3D area of the exact light polygon (double)
+  size_t blockers_projected = 0;    // triangles that survived culling and were projected
+  bool edge_on = false;             // receiver exactly on the light plane: nothing computed
+};
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light);
+
+}  // namespace visgate::oracle
