@@ -23,5 +23,6 @@ bool stderr_is_tty();
 void add_gen(CLI::App& app, Action& run);
 void add_solve(CLI::App& app, Action& run);
 void add_oracle(CLI::App& app, Action& run);
+void add_repair(CLI::App& app, Action& run);
 
 }  // namespace visgate::cli

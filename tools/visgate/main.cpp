@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   add_gen(app, run);
   add_solve(app, run);
   add_oracle(app, run);
+  add_repair(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,739 @@
+// lib/mesh repair (issue 9, DESIGN section 7): a zoo of broken meshes built here, each with
+// its hand-derived expected report; writer round trips that lose nothing; SHA-256 against
+// the FIPS 180-4 vectors; and the `visgate repair` CLI on malformed input (exit 2, no
+// output file), on a clean and a repaired mesh, and on the refusal to overwrite its input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+#include "lib/mesh/mesh_write.h"
+#include "lib/mesh/repair.h"
+#include "lib/mesh/sha256.h"
+#include "lib/scene/mesh_io.h"
+#include "lib/scene/rng.h"
+#include "lib/scene/shapes.h"
+#include "oracle/exact_predicates.h"
+
+using namespace visgate;
+using namespace visgate::mesh;
+
+namespace {
+
+const oracle::CgalExactPredicates kEx;
+
+PolygonSoup make_soup(std::vector<Vec3d> v, std::vector<std::vector<uint32_t>> f) {
+  PolygonSoup s;
+  s.vertices = std::move(v);
+  s.faces = std::move(f);
+  return s;
+}
+
+RepairResult run(const PolygonSoup& s, RepairOptions o = {}) {
+  auto r = repair_mesh(s, o, kEx);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
+  return std::move(*r);
+}
+
+// Expected defect counts: every field not named is zero.
+void expect_defects(const DefectCounts& got, const std::vector<std::pair<std::string, size_t>>& nonzero,
+                    const char* when) {
+  for (const auto& [name, n] : got.items()) {
+    size_t want = 0;
+    for (const auto& [k, v] : nonzero)
+      if (k == name) want = v;
+    EXPECT_EQ(n, want) << when << ": " << name;
+  }
+}
+
+size_t step_change(const RepairResult& r, const std::string& step, const std::string& key) {
+  for (const auto& s : r.steps)
+    if (s.name == step)
+      for (const auto& [k, v] : s.changes)
+        if (k == key) return v;
+  ADD_FAILURE() << "no step " << step << " / " << key;
+  return 0;
+}
+
+// Tetrahedron A(0,0,0) B(1,0,0) C(0,1,0) D(0,0,1) with outward faces (normals -z, -y, -x
+// and (1,1,1)).
+const Vec3d kA(0, 0, 0), kB(1, 0, 0), kC(0, 1, 0), kD(0, 0, 1);
+std::vector<std::vector<uint32_t>> tet_faces() { return {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}; }
+PolygonSoup tet() { return make_soup({kA, kB, kC, kD}, tet_faces()); }
+
+// Unit cube, outward, as shapes::add_box builds it (8 corners, 12 triangles).
+PolygonSoup cube() {
+  TriangleSoup t;
+  shapes::add_box(t, Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+  PolygonSoup s;
+  for (const auto& v : t.vertices) s.vertices.push_back(Vec3d(v));
+  for (const auto& f : t.triangles) s.faces.push_back({f[0], f[1], f[2]});
+  return s;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------
+// Reference: the intact meshes are clean.
+
+TEST(RepairZoo, CleanTetAndCubeAreUntouched) {
+  for (const PolygonSoup& s : {tet(), cube()}) {
+    RepairResult r = run(s);
+    expect_defects(r.before.defects, {}, "before");
+    expect_defects(r.after.defects, {}, "after");
+    EXPECT_EQ(r.output.triangles.size(), s.faces.size());
+    for (size_t t = 0; t < s.faces.size(); ++t)
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(r.output.vertices[r.output.triangles[t][size_t(k)]], s.vertices[s.faces[t][size_t(k)]]);
+    EXPECT_EQ(r.before.closed_components, 1u);
+    ASSERT_EQ(r.after.components.size(), 1u);
+    EXPECT_EQ(r.after.components[0].genus, 0);
+    EXPECT_EQ(r.after.components[0].volume_sign, 1);
+  }
+}
+
+// ------------------------------------------------------------------------------------
+// Near-duplicate vertices on both sides of a rounding boundary: B is stored twice, at
+// x = 1 + 0.49e-6 (faces ACB, ABD) and x = 1 + 0.51e-6 (face BCD). Rounding to multiples
+// of T = 1e-6 (welding by rounding) sends them to 1.000000 and 1.000001, never merging
+// them; their true distance is 2e-8 <= T.
+TEST(RepairZoo, NearDuplicatesAcrossARoundingBoundaryWeld) {
+  const double T = 1e-6;
+  Vec3d b1(1 + 0.49e-6, 0, 0), b2(1 + 0.51e-6, 0, 0);
+  ASSERT_NE(std::round(b1.x / T), std::round(b2.x / T));  // rounding would keep them apart
+  PolygonSoup s = make_soup({kA, b1, kC, kD, b2}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {4, 2, 3}});
+  RepairOptions o;
+  o.weld_tolerance = T;
+  RepairResult r = run(s, o);
+  // Before (exact positions): B1 and B2 apart, so edges B1C, B1D, B2C, B2D bound one hole.
+  expect_defects(r.before.defects, {{"near_duplicate_vertices", 1}, {"boundary_loops", 1}}, "before");
+  ASSERT_EQ(r.before.boundary_loops.size(), 1u);
+  EXPECT_EQ(r.before.boundary_loops[0].size(), 4u);
+  EXPECT_EQ(r.weld.merged, 1u);
+  EXPECT_EQ(r.weld.clusters, 1u);
+  EXPECT_TRUE(r.weld.chained.empty());
+  expect_defects(r.after.defects, {}, "after");
+  // The welded vertex keeps the lowest-index position bit for bit.
+  EXPECT_EQ(r.output.vertices.size(), 4u);
+  EXPECT_EQ(r.output.vertices[1], b1);
+
+  // A tolerance below the gap merges nothing and leaves the hole.
+  o.weld_tolerance = 1e-8;
+  RepairResult r2 = run(s, o);
+  EXPECT_EQ(r2.weld.merged, 0u);
+  expect_defects(r2.after.defects, {{"boundary_loops", 1}}, "after, small T");
+}
+
+// The weld decides |p - q| <= T exactly: a pair at exactly T merges, the next double
+// above does not.
+TEST(RepairWeld, ToleranceBoundaryIsExact) {
+  std::vector<Vec3d> p = {{0, 0, 0}, {0.375, 0, 0}};
+  std::vector<uint8_t> used(2, 1);
+  EXPECT_EQ(weld_vertices_exact(p, used, 0.375, WeldMode::Chain, kEx).merged, 1u);
+  EXPECT_EQ(weld_vertices_exact(p, used, std::nextafter(0.375, 0.0), WeldMode::Chain, kEx).merged, 0u);
+  // 3-4-5 triangle far from the origin: distance exactly 5e-3 * 2^-? is not a double, so
+  // use a dyadic one: (3, 4) * 2^-10 has length 5 * 2^-10 exactly.
+  std::vector<Vec3d> q = {{1e6, -1e6, 7}, {1e6 + 3 * 0x1p-10, -1e6 + 4 * 0x1p-10, 7}};
+  EXPECT_EQ(weld_vertices_exact(q, used, 5 * 0x1p-10, WeldMode::Chain, kEx).merged, 1u);
+  EXPECT_EQ(weld_vertices_exact(q, used, std::nextafter(5 * 0x1p-10, 0.0), WeldMode::Chain, kEx).merged, 0u);
+  // Exact mode: -0 equals +0.
+  std::vector<Vec3d> z = {{0.0, 1, 2}, {-0.0, 1, 2}};
+  EXPECT_EQ(weld_vertices_exact(z, used, 0.0, WeldMode::Chain, kEx).merged, 1u);
+}
+
+// Chaining: v0, v1, v2 on a line 0.6 T apart. Chain mode merges all three (diameter
+// 1.2 T, reported); strict mode refuses, merging {v0, v1} and keeping v2.
+TEST(RepairWeld, ChainingIsReportedAndStrictModeRefusesIt) {
+  const double T = 1.0;
+  std::vector<Vec3d> p = {{0, 0, 0}, {0.625, 0, 0}, {1.25, 0, 0}, {10, 0, 0}};
+  std::vector<uint8_t> used(4, 1);
+  WeldResult c = weld_vertices_exact(p, used, T, WeldMode::Chain, kEx);
+  EXPECT_EQ(c.merged, 2u);
+  EXPECT_EQ(c.clusters, 1u);
+  ASSERT_EQ(c.chained.size(), 1u);
+  EXPECT_EQ(c.chained[0].vertices, (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_DOUBLE_EQ(c.chained[0].diameter, 1.25);
+  EXPECT_EQ(c.rep, (std::vector<uint32_t>{0, 0, 0, 3}));
+  WeldResult s = weld_vertices_exact(p, used, T, WeldMode::Strict, kEx);
+  EXPECT_EQ(s.merged, 1u);
+  EXPECT_EQ(s.strict_splits, 1u);
+  EXPECT_EQ(s.rep, (std::vector<uint32_t>{0, 0, 2, 3}));
+
+  // Through repair_mesh: three triangles hanging off w0 = 0, w1 = 0.9, w2 = -0.5 (on x).
+  // Chain: w2-w0-w1 is one cluster of diameter 1.4 > T. Strict: w2 is 1.4 from w1, so
+  // it keeps its own vertex, still 0.5 (<= T) from the merged w0: one near-duplicate
+  // vertex remains and is reported.
+  PolygonSoup soup = make_soup({{0, 0, 0}, {0.9, 0, 0}, {-0.5, 0, 0}, {0, 5, 0}, {0, 0, 5}, {0, -5, 0}, {0, 0, -5}, {5, 5, 5}, {5, -5, 5}},
+                               {{0, 3, 4}, {1, 5, 6}, {2, 7, 8}});
+  RepairOptions o;
+  o.weld_tolerance = T;
+  o.weld_mode = WeldMode::Strict;
+  RepairResult r = run(soup, o);
+  EXPECT_EQ(r.before.defects.near_duplicate_vertices, 2u);
+  EXPECT_EQ(r.after.defects.near_duplicate_vertices, 1u);
+}
+
+// ------------------------------------------------------------------------------------
+// T-junction: triangle ABC above edge AB; below it ADM and MDB with M the midpoint of AB.
+// Vertex indices A0 B1 C2 M3 D4. Boundary edges AB BC CA AD MA DB BM (DM is shared):
+// the walk gives loops A-B-C and A-M-B-D. M lies strictly inside boundary edge AB. ABC
+// touches ADM along AM and MDB along MB beyond their shared corner: 2 intersecting pairs.
+// A (faces ABC, ADM) and B (ABC, MDB) each join two faces sharing no edge: two fans, so
+// both are non-manifold vertices until the split.
+// Repair splits ABC into AMC, MBC: one loop B-C-A-D is left, nothing else.
+TEST(RepairZoo, TJunctionIsSplit) {
+  PolygonSoup s = make_soup({{0, 0, 0}, {2, 0, 0}, {1, 1, 0}, {1, 0, 0}, {1, -1, 0}}, {{0, 1, 2}, {0, 4, 3}, {3, 4, 1}});
+  RepairResult r = run(s);
+  expect_defects(r.before.defects,
+                 {{"t_junctions", 1}, {"boundary_loops", 2}, {"self_intersections", 2}, {"nonmanifold_vertices", 2}},
+                 "before");
+  EXPECT_EQ(r.before.nonmanifold_vertices, (std::vector<uint32_t>{0, 1}));
+  ASSERT_EQ(r.before.t_junctions.size(), 1u);
+  EXPECT_EQ(r.before.t_junctions[0], (std::array<uint32_t, 3>{3, 0, 1}));
+  EXPECT_EQ(step_change(r, "clean", "t_junctions_split"), 1u);
+  EXPECT_EQ(step_change(r, "clean", "triangles_added_by_splits"), 1u);
+  expect_defects(r.after.defects, {{"boundary_loops", 1}}, "after");
+  EXPECT_EQ(r.after.boundary_loops[0].size(), 4u);
+  EXPECT_EQ(r.output.triangles.size(), 4u);
+  // Both halves come from input face 0.
+  EXPECT_EQ(std::count(r.output_source.begin(), r.output_source.end(), 0u), 2);
+}
+
+// ------------------------------------------------------------------------------------
+// A flipped face: BCD reversed. Its three edges are traversed twice in one direction.
+TEST(RepairZoo, FlippedFaceIsTurnedBack) {
+  PolygonSoup s = tet();
+  s.faces[3] = {1, 3, 2};
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"inconsistent_edges", 3}}, "before");
+  EXPECT_EQ(step_change(r, "orient", "faces_flipped_for_consistency"), 1u);
+  EXPECT_EQ(step_change(r, "orient", "components_turned_outward"), 0u);
+  expect_defects(r.after.defects, {}, "after");
+  EXPECT_EQ(r.output.triangles[3], (std::array<uint32_t, 3>{1, 2, 3}));
+}
+
+// Inside-out tetrahedron: consistent, exact volume negative; all four faces turn.
+TEST(RepairZoo, InsideOutClosedComponentTurnsOutward) {
+  PolygonSoup s = tet();
+  for (auto& f : s.faces) std::swap(f[1], f[2]);
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"inward_components", 1}}, "before");
+  EXPECT_EQ(r.before.components[0].volume_sign, -1);
+  EXPECT_EQ(step_change(r, "orient", "faces_flipped_outward"), 4u);
+  expect_defects(r.after.defects, {}, "after");
+  EXPECT_EQ(r.after.components[0].volume_sign, 1);
+}
+
+// ------------------------------------------------------------------------------------
+// Möbius strip of 8 quads (16 triangles, 16 vertices): every diagonal and every edge
+// between quads is consistent except the seam edge t0-b0, traversed t0 -> b0 by both of
+// its faces. One boundary curve of 16 edges. Non-orientable: repair must leave it alone.
+TEST(RepairZoo, MobiusStripIsReportedNotForced) {
+  const int n = 8;
+  std::vector<Vec3d> v;
+  for (int i = 0; i < n; ++i) {
+    double th = 2 * std::numbers::pi * i / n, ph = th / 2;
+    Vec3d radial(std::cos(th), std::sin(th), 0), c = radial * 2.0;
+    Vec3d off = (radial * std::cos(ph) + Vec3d(0, 0, 1) * std::sin(ph)) * 0.5;
+    v.push_back(c + off);  // t_i = 2i
+    v.push_back(c - off);  // b_i = 2i + 1
+  }
+  auto t = [&](int i) { return i == n ? 1u : uint32_t(2 * i); };      // t_n = b_0
+  auto b = [&](int i) { return i == n ? 0u : uint32_t(2 * i + 1); };  // b_n = t_0
+  std::vector<std::vector<uint32_t>> f;
+  for (int i = 0; i < n; ++i) {
+    f.push_back({t(i), b(i), t(i + 1)});
+    f.push_back({b(i), b(i + 1), t(i + 1)});
+  }
+  PolygonSoup s = make_soup(v, f);
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"inconsistent_edges", 1}, {"nonorientable_components", 1}, {"boundary_loops", 1}},
+                 "before");
+  EXPECT_EQ(r.before.boundary_loops[0].size(), 16u);
+  EXPECT_EQ(r.before.components[0].genus, -1);
+  EXPECT_EQ(step_change(r, "orient", "faces_flipped_for_consistency"), 0u);
+  EXPECT_EQ(step_change(r, "orient", "nonorientable_patches_left"), 1u);
+  expect_defects(r.after.defects, {{"inconsistent_edges", 1}, {"nonorientable_components", 1}, {"boundary_loops", 1}},
+                 "after");
+  for (size_t i = 0; i < f.size(); ++i)
+    EXPECT_EQ(r.output.triangles[i], (std::array<uint32_t, 3>{f[i][0], f[i][1], f[i][2]}));
+}
+
+// ------------------------------------------------------------------------------------
+// An edge with three faces: fins (A,B,C1) (B,A,C2) (A,B,C3) around AB in three planes.
+// Boundary edges AC1 AC2 AC3 BC1 BC2 BC3; A and B have odd boundary degree, so the walk
+// gives the loop A-C1-B-C2 and the chain A-C3-B. Ends of the non-manifold edge are not
+// counted again as non-manifold vertices. --split-nonmanifold gives each fin its own A
+// and B (4 copies): three separate triangles, three loops.
+TEST(RepairZoo, EdgeWithThreeFaces) {
+  PolygonSoup s = make_soup({{0, 0, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {-1, -1, 0}}, {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}});
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"nonmanifold_edges", 1}, {"boundary_loops", 2}}, "before");
+  EXPECT_EQ(r.before.nonmanifold_edges[0], (std::array<uint32_t, 2>{0, 1}));
+  expect_defects(r.after.defects, {{"nonmanifold_edges", 1}, {"boundary_loops", 2}}, "after");
+  RepairOptions o;
+  o.split_nonmanifold = true;
+  RepairResult rs = run(s, o);
+  EXPECT_EQ(step_change(rs, "split_nonmanifold", "vertex_copies_added"), 4u);
+  expect_defects(rs.after.defects, {{"boundary_loops", 3}}, "after split");
+  EXPECT_EQ(rs.after.components.size(), 3u);
+  EXPECT_EQ(rs.output.vertices.size(), 9u);
+  // Copies sit exactly on their originals.
+  for (size_t i = 0; i < rs.output.vertices.size(); ++i)
+    EXPECT_EQ(rs.output.vertices[i], rs.output.vertices[rs.output_vertex_class[i]]);
+}
+
+// A bowtie vertex: two closed tetrahedra touching at A (the second is the first mirrored
+// through A, faces reversed to stay outward). Coplanar faces at A lie in opposite
+// quadrants: no intersection. Splitting A makes it clean.
+TEST(RepairZoo, BowtieVertex) {
+  std::vector<Vec3d> v = {kA, kB, kC, kD, -kB, -kC, -kD};
+  auto f = tet_faces();
+  for (const auto& g : tet_faces()) {
+    auto m = [](uint32_t x) { return x == 0 ? 0u : x + 3; };
+    f.push_back({m(g[0]), m(g[2]), m(g[1])});
+  }
+  PolygonSoup s = make_soup(v, f);
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"nonmanifold_vertices", 1}}, "before");
+  EXPECT_EQ(r.before.nonmanifold_vertices, (std::vector<uint32_t>{0}));
+  EXPECT_EQ(r.before.closed_components, 2u);
+  expect_defects(r.after.defects, {{"nonmanifold_vertices", 1}}, "after");
+  RepairOptions o;
+  o.split_nonmanifold = true;
+  RepairResult rs = run(s, o);
+  EXPECT_EQ(step_change(rs, "split_nonmanifold", "vertex_copies_added"), 1u);
+  expect_defects(rs.after.defects, {}, "after split");
+  for (const auto& c : rs.after.components) {
+    EXPECT_EQ(c.genus, 0);
+    EXPECT_EQ(c.volume_sign, 1);
+  }
+}
+
+// ------------------------------------------------------------------------------------
+// Zero-area and repeated-vertex faces: the tetrahedron plus (A, A', B) with A' an exact
+// copy of A (a repeated vertex once A and A' weld) and a collinear sliver E F G away from
+// it (F strictly inside EG: its own T-junction; its three edges: its own loop).
+TEST(RepairZoo, ZeroAreaAndRepeatedVertexFaces) {
+  PolygonSoup s = tet();
+  s.vertices.push_back(kA);  // 4: A'
+  s.vertices.push_back({5, 5, 5});
+  s.vertices.push_back({6, 6, 6});
+  s.vertices.push_back({7, 7, 7});
+  s.faces.push_back({0, 4, 1});
+  s.faces.push_back({5, 6, 7});
+  RepairResult r = run(s);
+  expect_defects(r.before.defects,
+                 {{"near_duplicate_vertices", 1}, {"repeated_vertex_faces", 1}, {"zero_area_faces", 1},
+                  {"t_junctions", 1}, {"boundary_loops", 1}},
+                 "before");
+  EXPECT_EQ(step_change(r, "clean", "repeated_vertex_faces_removed"), 1u);
+  EXPECT_EQ(step_change(r, "clean", "zero_area_faces_removed"), 1u);
+  expect_defects(r.after.defects, {}, "after");
+  EXPECT_EQ(r.faces_in_output, 4u);
+  EXPECT_EQ(r.faces_removed, 2u);
+  ASSERT_EQ(r.removed.size(), 2u);
+  EXPECT_EQ(r.removed[0].face, 4u);
+  EXPECT_STREQ(r.removed[0].reason, "repeated_vertex");
+  EXPECT_EQ(r.removed[1].face, 5u);
+  EXPECT_STREQ(r.removed[1].reason, "zero_area");
+}
+
+// Duplicate faces: a copy of BCD (same orientation) and ABC (ACB reversed). Edges AB,
+// AC, BC, BD, CD then carry 3 or 4 faces: five non-manifold edges; every vertex is an end
+// of one, so no non-manifold vertex is counted.
+TEST(RepairZoo, DuplicateFacesBothOrientations) {
+  PolygonSoup s = tet();
+  s.faces.push_back({2, 3, 1});  // BCD rotated: same orientation
+  s.faces.push_back({0, 1, 2});  // ACB reversed
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"duplicate_faces", 1}, {"opposite_duplicate_faces", 1}, {"nonmanifold_edges", 5}},
+                 "before");
+  expect_defects(r.after.defects, {}, "after");
+  ASSERT_EQ(r.removed.size(), 2u);
+  EXPECT_EQ(r.removed[0].face, 4u);
+  EXPECT_STREQ(r.removed[0].reason, "duplicate");
+  EXPECT_EQ(r.removed[1].face, 5u);
+  EXPECT_STREQ(r.removed[1].reason, "opposite_duplicate");
+}
+
+// ------------------------------------------------------------------------------------
+// An intersecting pair: a vertical triangle pierces a horizontal one. Reported with face
+// indices, never "fixed". A control pair folded over a shared edge (coplanar, apexes on
+// the same side) intersects too; the same pair unfolded does not.
+TEST(RepairZoo, IntersectingPairIsReportedNotFixed) {
+  PolygonSoup s = make_soup({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0}},
+                            {{0, 1, 2}, {3, 4, 5}});
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {{"self_intersections", 1}, {"boundary_loops", 2}}, "before");
+  expect_defects(r.after.defects, {{"self_intersections", 1}, {"boundary_loops", 2}}, "after");
+  EXPECT_EQ(r.after.self_intersections[0], (std::array<uint32_t, 2>{0, 1}));
+  EXPECT_EQ(r.output.triangles.size(), 2u);
+
+  // Folded over edge AB: apexes (0,1,0) and (0.5,0.5,0) both above AB, coplanar.
+  PolygonSoup fold = make_soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 0.5, 0}}, {{0, 1, 2}, {1, 0, 3}});
+  EXPECT_EQ(run(fold).before.defects.self_intersections, 1u);
+  PolygonSoup flat = make_soup({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, -0.5, 0}}, {{0, 1, 2}, {1, 0, 3}});
+  EXPECT_EQ(run(flat).before.defects.self_intersections, 0u);
+  // Sharing one vertex, the second lying along the first's edge (coplanar): intersect.
+  PolygonSoup along = make_soup({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 0, 0}, {1, -1, 0}}, {{0, 1, 2}, {0, 4, 3}});
+  EXPECT_EQ(run(along).before.defects.self_intersections, 1u);
+  // Sharing one vertex, crossing through the other's opposite edge.
+  PolygonSoup cross = make_soup({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {1, 1, -1}, {1, 1, 1}}, {{0, 1, 2}, {0, 3, 4}});
+  EXPECT_EQ(run(cross).before.defects.self_intersections, 1u);
+}
+
+// ------------------------------------------------------------------------------------
+// Holes: a cube missing one triangle (a 3-edge loop) and missing a whole square side
+// (a 4-edge loop). --fill-holes N fills loops of at most N edges, oriented with their
+// neighbours: the cube closes, outward, genus 0.
+TEST(RepairZoo, HolesAreFilledUpToN) {
+  PolygonSoup one = cube();
+  one.faces.erase(one.faces.begin() + 5);
+  RepairResult r = run(one);
+  expect_defects(r.before.defects, {{"boundary_loops", 1}}, "before");
+  EXPECT_EQ(r.before.boundary_loops[0].size(), 3u);
+  EXPECT_EQ(r.before.components[0].genus, 0);  // a disc: chi = 8 - 17 + 11 = 2 - 0 - 1
+  expect_defects(r.after.defects, {{"boundary_loops", 1}}, "after, no filling");
+  RepairOptions o;
+  o.fill_holes = 3;
+  RepairResult f = run(one, o);
+  EXPECT_EQ(step_change(f, "fill_holes", "loops_filled"), 1u);
+  EXPECT_EQ(step_change(f, "fill_holes", "triangles_added"), 1u);
+  expect_defects(f.after.defects, {}, "after filling");
+  EXPECT_EQ(f.after.components[0].volume_sign, 1);
+  EXPECT_EQ(f.output_source.back(), kFilledHole);
+
+  // Remove both triangles of the side holding face 5 (shapes::add_box keeps a side's two
+  // triangles adjacent: faces 4 and 5).
+  PolygonSoup side = cube();
+  side.faces.erase(side.faces.begin() + 4, side.faces.begin() + 6);
+  o.fill_holes = 3;
+  RepairResult s3 = run(side, o);
+  EXPECT_EQ(s3.before.boundary_loops[0].size(), 4u);
+  EXPECT_EQ(step_change(s3, "fill_holes", "loops_filled"), 0u);
+  expect_defects(s3.after.defects, {{"boundary_loops", 1}}, "after, N=3");
+  o.fill_holes = 4;
+  RepairResult s4 = run(side, o);
+  EXPECT_EQ(step_change(s4, "fill_holes", "triangles_added"), 2u);
+  expect_defects(s4.after.defects, {}, "after, N=4");
+}
+
+// Polygons are triangulated by ear clipping (an L-shaped, non-convex hexagon: a fan from
+// vertex 0 would cover the notch) and keep their orientation.
+TEST(RepairTriangulate, NonConvexPolygonByEars) {
+  std::vector<Vec3d> p = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 2, 0}, {0, 2, 0}};
+  std::vector<std::array<uint32_t, 3>> tris;
+  EXPECT_TRUE(triangulate_polygon(p, {0, 1, 2, 3, 4, 5}, tris));
+  ASSERT_EQ(tris.size(), 4u);
+  double area = 0;
+  for (const auto& t : tris) {
+    Vec3d n = cross(p[t[1]] - p[t[0]], p[t[2]] - p[t[0]]);
+    EXPECT_GT(n.z, 0);  // counter-clockwise like the polygon
+    area += n.z / 2;
+  }
+  EXPECT_DOUBLE_EQ(area, 3.0);
+  // Through repair: a quad face becomes two triangles of face 0; a 2-vertex face is
+  // accounted as a short face.
+  PolygonSoup s = make_soup({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2, 3}, {0, 1}});
+  RepairResult r = run(s);
+  EXPECT_EQ(r.polygons_triangulated, 1u);
+  EXPECT_EQ(r.output.triangles.size(), 2u);
+  EXPECT_EQ(r.faces_in_output, 1u);
+  ASSERT_EQ(r.removed.size(), 1u);
+  EXPECT_STREQ(r.removed[0].reason, "short_face");
+}
+
+// Far from the origin and with slivers: a tetrahedron scaled to a sliver at 1e7; the
+// exact predicates still see it closed, outward and non-degenerate.
+TEST(RepairZoo, FarFromOriginSliverTet) {
+  Vec3d o(1e7, -3e7, 5e6);
+  PolygonSoup s = make_soup({o, o + Vec3d(1, 0, 0), o + Vec3d(0, 1e-3, 0), o + Vec3d(0, 0, 1e-3)}, tet_faces());
+  RepairResult r = run(s);
+  expect_defects(r.before.defects, {}, "before");
+  expect_defects(r.after.defects, {}, "after");
+}
+
+// NaN / overflow are rejected by the reader; a bad tolerance by repair_mesh.
+TEST(RepairZoo, BadToleranceIsAnError) {
+  RepairOptions o;
+  o.weld_tolerance = -1;
+  EXPECT_FALSE(repair_mesh(tet(), o, kEx).ok());
+  o.weld_tolerance = std::nan("");
+  EXPECT_FALSE(repair_mesh(tet(), o, kEx).ok());
+}
+
+// ------------------------------------------------------------------------------------
+// Round trips: write each format, read back with the importer, compare bit for bit.
+
+namespace {
+std::filesystem::path temp_dir() {
+  auto d = std::filesystem::temp_directory_path() / ("visgate_repair_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+IndexedMesh random_float_mesh(uint64_t seed) {
+  IndexedMesh m;
+  Rng rng(seed);
+  for (int i = 0; i < 200; ++i) {
+    auto coord = [&]() {
+      double scale = std::ldexp(1.0, int(rng.below(80)) - 40);
+      float f = float((rng.uniform() - 0.5) * scale);
+      return double(f);
+    };
+    m.vertices.push_back({coord(), coord(), coord()});
+  }
+  m.vertices[0] = {-0.0, double(1e-38f), double(3.4e38f)};  // negative zero, tiny and huge floats
+  m.vertices[1] = {double(0x1p-149f), -double(0x1.fffffep+127f), 0.1f};
+  for (uint32_t i = 0; i + 2 < 200; ++i) m.triangles.push_back({i, i + 1, i + 2});
+  return m;
+}
+
+void expect_same_triangles(const IndexedMesh& m, const PolygonSoup& back, bool by_index) {
+  ASSERT_EQ(back.faces.size(), m.triangles.size());
+  if (by_index) {
+    ASSERT_EQ(back.vertices.size(), m.vertices.size());
+  }
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    ASSERT_EQ(back.faces[t].size(), 3u);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d& want = m.vertices[m.triangles[t][size_t(k)]];
+      const Vec3d& got = back.vertices[back.faces[t][size_t(k)]];
+      for (int a = 0; a < 3; ++a) {
+        uint64_t wb, gb;
+        std::memcpy(&wb, &want[a], 8);
+        std::memcpy(&gb, &got[a], 8);
+        EXPECT_EQ(wb, gb) << "triangle " << t << " corner " << k << " axis " << a;
+      }
+      if (by_index) {
+        EXPECT_EQ(back.faces[t][size_t(k)], m.triangles[t][size_t(k)]);
+      }
+    }
+  }
+}
+}  // namespace
+
+TEST(RepairRoundTrip, FloatCoordinatesBitExactInEveryFormat) {
+  auto dir = temp_dir();
+  IndexedMesh m = random_float_mesh(7);
+  struct Case { const char* name; MeshFormat f; bool by_index; };
+  for (const Case& c : {Case{"m.obj", MeshFormat::Obj, true}, Case{"m.off", MeshFormat::Off, true},
+                        Case{"m.ply", MeshFormat::Ply, true}, Case{"m.stl", MeshFormat::StlBinary, false},
+                        Case{"a.stl", MeshFormat::StlAscii, false}}) {
+    std::string path = (dir / c.name).string();
+    ASSERT_TRUE(write_mesh_file(m, c.f, path).ok()) << c.name;
+    auto back = read_polygon_file(path);
+    ASSERT_TRUE(back.ok()) << c.name << ": " << back.error().message;
+    SCOPED_TRACE(c.name);
+    expect_same_triangles(m, *back, c.by_index);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// Double data is written with 17 digits and a "double" PLY property. The importer
+// (OpenMesh's PLY reader) hands PLY coordinates over as float, so this test reads the
+// text back with strtod itself.
+TEST(RepairRoundTrip, DoubleCoordinatesBitExactInPlyText) {
+  auto dir = temp_dir();
+  IndexedMesh m = random_float_mesh(9);
+  Rng rng(3);
+  for (auto& v : m.vertices) v = v + Vec3d(rng.uniform() * 1e-9, 0.1, 1.0 / 3.0);  // not floats any more
+  m.double_precision = true;
+  std::string path = (dir / "d.ply").string();
+  ASSERT_TRUE(write_mesh_file(m, MeshFormat::Ply, path).ok());
+  std::ifstream in(path);
+  std::string line;
+  PolygonSoup back;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (header) {
+      if (line == "property double x") back.double_precision = true;
+      header = line != "end_header";
+      continue;
+    }
+    std::istringstream ls(line);
+    if (back.vertices.size() < m.vertices.size()) {
+      std::string a, b, c;
+      ls >> a >> b >> c;
+      back.vertices.push_back({std::strtod(a.c_str(), nullptr), std::strtod(b.c_str(), nullptr),
+                               std::strtod(c.c_str(), nullptr)});
+    } else {
+      uint32_t n, x, y, z;
+      ls >> n >> x >> y >> z;
+      EXPECT_EQ(n, 3u);
+      back.faces.push_back({x, y, z});
+    }
+  }
+  EXPECT_TRUE(back.double_precision);
+  expect_same_triangles(m, back, true);
+  // Binary STL cannot hold them: refused, nothing written.
+  std::string stl = (dir / "d.stl").string();
+  EXPECT_FALSE(write_mesh_file(m, MeshFormat::StlBinary, stl).ok());
+  EXPECT_FALSE(std::filesystem::exists(stl));
+  std::filesystem::remove_all(dir);
+}
+
+// Repair output written and read back, then repaired again: nothing changes (idempotent).
+TEST(RepairRoundTrip, RepairedMeshReadsBackAndIsAFixedPoint) {
+  auto dir = temp_dir();
+  PolygonSoup s = tet();
+  for (auto& f : s.faces) std::swap(f[1], f[2]);
+  RepairResult r = run(s);
+  std::string path = (dir / "t.obj").string();
+  ASSERT_TRUE(write_mesh_file(r.output, MeshFormat::Obj, path).ok());
+  auto back = read_polygon_file(path);
+  ASSERT_TRUE(back.ok());
+  RepairResult again = run(*back);
+  expect_defects(again.before.defects, {}, "re-read");
+  EXPECT_EQ(again.output.triangles, r.output.triangles);
+  EXPECT_EQ(again.output.vertices, r.output.vertices);
+  std::filesystem::remove_all(dir);
+}
+
+// ------------------------------------------------------------------------------------
+
+TEST(RepairSha256, Fips180Vectors) {
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(sha256_hex(std::string(1000000, 'a')), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  // Padding boundaries: 55, 56 and 64 bytes (one or two final blocks).
+  EXPECT_EQ(sha256_hex(std::string(55, 'a')), "9f4390f8d30c2dd92ec9f095b65e2b9ae9b0a925a5258e241c9f1e910f734318");
+  EXPECT_EQ(sha256_hex(std::string(56, 'a')), "b35439a4ac6f0948b6d6f9e3c6af0f5f590ce20f1bde7090ef7970686ec6738a");
+  EXPECT_EQ(sha256_hex(std::string(64, 'a')), "ffe054fe7ae0cb6dc65c3af9b61d5209f439851db43d0ba5997337df154668eb");
+}
+
+// ------------------------------------------------------------------------------------
+// The CLI, run as a process (VISGATE_BIN is the built binary).
+
+#ifdef VISGATE_BIN
+namespace {
+int run_cli(const std::string& args, std::string* err = nullptr) {
+  std::string cmd = std::string(VISGATE_BIN) + " " + args + " 2>" + (temp_dir() / "stderr.txt").string();
+  int rc = std::system(cmd.c_str());
+  if (err) {
+    std::ifstream in(temp_dir() / "stderr.txt");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    *err = ss.str();
+  }
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+void write_text(const std::filesystem::path& p, const std::string& s) {
+  std::ofstream out(p, std::ios::binary);
+  out << s;
+}
+std::string read_all(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+}  // namespace
+
+TEST(RepairCli, MalformedInputExitsTwoAndWritesNothing) {
+  auto dir = temp_dir();
+  struct Bad { const char* name; std::string text; const char* names; };
+  std::vector<Bad> bad = {
+      {"idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "face 0"},
+      {"nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "vertex 1"},
+      {"inf.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", "vertex 1"},
+      {"short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n", "short.off"},
+      {"trunc.stl", std::string(80, ' ') + std::string("\x05\x00\x00\x00", 4) + std::string(20, '\0'), "trunc.stl"},
+      {"mesh.xyz", "1 2 3\n", "xyz"},
+  };
+  for (const Bad& b : bad) {
+    write_text(dir / b.name, b.text);
+    auto out = dir / "out.obj";
+    std::string err;
+    EXPECT_EQ(run_cli("repair " + (dir / b.name).string() + " -o " + out.string(), &err), 2) << b.name << ": " << err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << b.name;
+    EXPECT_NE(err.find(b.names), std::string::npos) << b.name << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << b.name << ": one line: " << err;
+  }
+  std::string err;
+  EXPECT_EQ(run_cli("repair " + (dir / "missing.obj").string() + " -o " + (dir / "o.obj").string(), &err), 2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.obj"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RepairCli, NeverOverwritesTheInputWithoutInPlace) {
+  auto dir = temp_dir();
+  auto in = dir / "t.obj";
+  std::string text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 3 4\n";  // inside out
+  write_text(in, text);
+  EXPECT_EQ(run_cli("repair " + in.string() + " -o " + in.string()), 2);
+  EXPECT_EQ(read_all(in), text);
+  EXPECT_EQ(run_cli("repair " + in.string()), 2);  // no -o, no --in-place
+  EXPECT_EQ(read_all(in), text);
+  EXPECT_EQ(run_cli("repair " + in.string() + " -o " + (dir / "x.obj").string() + " --weld-mode=loose"), 2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.obj"));
+  // --check writes nothing and reports the inward component: exit 1.
+  EXPECT_EQ(run_cli("repair --check " + in.string()), 1);
+  EXPECT_EQ(read_all(in), text);
+  // --in-place repairs it: exit 0, and a re-check is clean.
+  EXPECT_EQ(run_cli("repair " + in.string() + " --in-place"), 0);
+  EXPECT_NE(read_all(in), text);
+  EXPECT_EQ(run_cli("repair --check " + in.string()), 0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RepairCli, ReportHasHashesCountsAndExitCodes) {
+  auto dir = temp_dir();
+  auto in = dir / "m.obj";
+  // Tetrahedron with a flipped face plus a separate pierced pair (cannot be fixed).
+  write_text(in,
+             "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+             "v 5 0 0\nv 7 0 0\nv 5 2 0\nv 5.5 0.5 -1\nv 5.5 0.5 1\nv 8 3 0\n"
+             "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 4 3\n"
+             "f 5 6 7\nf 8 9 10\n");
+  auto out = dir / "r.ply";
+  auto rep = dir / "r.json";
+  std::string err;
+  EXPECT_EQ(run_cli("repair " + in.string() + " -o " + out.string() + " --report " + rep.string(), &err), 1) << err;
+  EXPECT_NE(err.find("self_intersections"), std::string::npos) << err;
+  ASSERT_TRUE(std::filesystem::exists(out));
+  auto j = nlohmann::json::parse(read_all(rep));
+  EXPECT_EQ(j["format"], "visgate-repair-report");
+  EXPECT_EQ(j["exit_code"], 1);
+  EXPECT_EQ(j["input"]["sha256"], sha256_hex(read_all(in)));
+  EXPECT_EQ(j["output"]["sha256"], sha256_hex(read_all(out)));
+  // Independent check of the hash where the system has sha256sum.
+  std::string cmd = "sha256sum " + in.string() + " > " + (dir / "sum.txt").string() + " 2>/dev/null";
+  if (std::system(cmd.c_str()) == 0) {
+    EXPECT_EQ(read_all(dir / "sum.txt").substr(0, 64), j["input"]["sha256"]);
+  }
+  EXPECT_EQ(j["defects"]["before"]["inconsistent_edges"], 3);
+  EXPECT_EQ(j["defects"]["after"]["inconsistent_edges"], 0);
+  EXPECT_EQ(j["defects"]["before"]["self_intersections"], 1);
+  EXPECT_EQ(j["defects"]["after"]["self_intersections"], 1);
+  EXPECT_EQ(j["topology"]["after"]["self_intersections"][0]["input_faces"], nlohmann::json({4, 5}));
+  EXPECT_EQ(j["remaining"], nlohmann::json({"boundary_loops", "self_intersections"}));
+  EXPECT_EQ(j["faces"]["input"], 6);
+  EXPECT_EQ(j["faces"]["in_output"], 6);
+  EXPECT_EQ(j["options"]["weld_mode"], "chain");
+  bool saw_orient = false;
+  for (const auto& s : j["steps"])
+    if (s["name"] == "orient") {
+      saw_orient = true;
+      EXPECT_EQ(s["changes"]["faces_flipped_for_consistency"], 1);
+      EXPECT_GE(s["seconds"].get<double>(), 0.0);
+    }
+  EXPECT_TRUE(saw_orient);
+  // The output reads back with every coordinate intact.
+  auto back = read_polygon_file(out.string());
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->faces.size(), 6u);
+  EXPECT_EQ(back->vertices[7], Vec3d(5.5, 0.5, -1));
+  std::filesystem::remove_all(dir);
+}
+#endif

@@ -1,0 +1,140 @@
+// visgate repair IN -o OUT [--weld-tolerance T] [--weld-mode=chain|strict] [--report r.json]
+//                [--in-place] [--split-nonmanifold] [--fill-holes N] [--stl-ascii]
+// visgate repair --check IN [--weld-tolerance T] [--report r.json]
+// (DESIGN section 7, issue 9.) Exit codes: 0 clean after repair (or clean input with
+// --check), 1 defects left (listed), 2 bad input or usage (nothing written), 3 internal.
+// The input is never modified unless --in-place; files are written through a temporary
+// file and a rename.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "lib/mesh/repair.h"
+#include "lib/mesh/repair_report.h"
+#include "lib/mesh/sha256.h"
+#include "lib/scene/json_exact.h"
+#include "lib/scene/mesh_io.h"
+#include "oracle/exact_predicates.h"
+#include "tools/visgate/cli.h"
+
+namespace visgate::cli {
+
+namespace {
+
+struct RepairOpts {
+  std::string in, out, report, weld_mode = "chain";
+  double tolerance = 0.0;
+  size_t fill_holes = 0;
+  bool in_place = false, split = false, check = false, stl_ascii = false;
+};
+
+// Same file (existing or not), by canonical path.
+bool same_path(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+int run_repair(const RepairOpts& o) {
+  auto t0 = std::chrono::steady_clock::now();
+  mesh::RepairOptions ro;
+  ro.weld_tolerance = o.tolerance;
+  ro.split_nonmanifold = o.split;
+  ro.fill_holes = o.fill_holes;
+  ro.check_only = o.check;
+  if (o.weld_mode == "chain") ro.weld_mode = mesh::WeldMode::Chain;
+  else if (o.weld_mode == "strict") ro.weld_mode = mesh::WeldMode::Strict;
+  else return bad_input("--weld-mode " + o.weld_mode + ": expected chain or strict");
+  if (!(o.tolerance >= 0.0) || !std::isfinite(o.tolerance))
+    return bad_input("--weld-tolerance: must be a finite number >= 0");
+
+  // Usage: where the output goes.
+  std::string out = o.out;
+  if (o.check) {
+    if (!out.empty() || o.in_place) return bad_input("--check writes no mesh: drop -o and --in-place");
+  } else {
+    if (out.empty() && !o.in_place) return bad_input("repair: give -o OUT (or --in-place to overwrite " + o.in + ")");
+    if (o.in_place && out.empty()) out = o.in;
+    if (o.in_place && !same_path(out, o.in)) return bad_input("--in-place: -o " + out + " differs from the input " + o.in);
+    if (!o.in_place && same_path(out, o.in))
+      return bad_input("-o " + out + ": is the input file; refusing to overwrite it without --in-place");
+  }
+  if (!o.report.empty() && (same_path(o.report, o.in) || (!out.empty() && same_path(o.report, out))))
+    return bad_input("--report " + o.report + ": must differ from the input and output meshes");
+  mesh::MeshFormat fmt = mesh::MeshFormat::Obj;
+  if (!o.check) {
+    auto f = mesh::format_from_path(out, o.stl_ascii);
+    if (!f) return bad_input(f.error().message);
+    fmt = *f;
+    std::error_code ec;
+    auto dir = std::filesystem::path(out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir, ec)) return bad_input(out + ": folder does not exist");
+  }
+  if (!o.report.empty()) {
+    std::error_code ec;
+    auto dir = std::filesystem::path(o.report).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir, ec)) return bad_input(o.report + ": folder does not exist");
+  }
+
+  // Read.
+  auto bytes = read_text_file(o.in);
+  if (!bytes) return bad_input(bytes.error().message);
+  auto soup = read_polygon_file(o.in);
+  if (!soup) return bad_input(soup.error().message);
+
+  // Repair.
+  oracle::CgalExactPredicates ex;
+  auto res = mesh::repair_mesh(*soup, ro, ex);
+  if (!res) return bad_input(o.in + ": " + res.error().message);
+  const mesh::RepairResult& r = *res;
+
+  mesh::ReportContext ctx;
+  ctx.input_path = o.in;
+  ctx.input_sha256 = mesh::sha256_hex(*bytes);
+  ctx.options = ro;
+  std::string encoded;
+  if (!o.check) {
+    auto enc = mesh::encode_mesh(r.output, fmt, out);
+    if (!enc) return bad_input(enc.error().message);
+    encoded = std::move(*enc);
+    ctx.output_path = out;
+    ctx.output_sha256 = mesh::sha256_hex(encoded);
+  }
+  ctx.exit_code = mesh::remaining_defects(r, o.check).empty() ? kOk : kFound;
+  ctx.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Write: the mesh, then the report (both atomic).
+  if (!o.check) {
+    Status st = write_file_atomic(out, encoded);
+    if (!st) return bad_input(st.error().message);
+  }
+  if (!o.report.empty()) {
+    Status st = write_file_atomic(o.report, mesh::repair_report_json(r, *soup, ctx).dump(2) + "\n");
+    if (!st) return bad_input(st.error().message);
+  }
+  std::string table = mesh::repair_report_table(r, ctx);
+  std::fwrite(table.data(), 1, table.size(), stderr);
+  return ctx.exit_code;
+}
+
+}  // namespace
+
+void add_repair(CLI::App& app, Action& run) {
+  auto o = std::make_shared<RepairOpts>();
+  auto* sub = app.add_subcommand("repair", "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report");
+  sub->add_option("input", o->in, "Input mesh")->required();
+  sub->add_option("-o,--output", o->out, "Output mesh (.obj .off .ply .stl)");
+  sub->add_option("--weld-tolerance", o->tolerance, "Merge vertices within this Euclidean distance (default 0: equal positions)");
+  sub->add_option("--weld-mode", o->weld_mode, "chain (merge whole chains) or strict (no cluster wider than T)");
+  sub->add_option("--report", o->report, "Write the JSON report here");
+  sub->add_flag("--in-place", o->in_place, "Overwrite the input file");
+  sub->add_flag("--split-nonmanifold", o->split, "Duplicate non-manifold vertices and edges");
+  sub->add_option("--fill-holes", o->fill_holes, "Fill boundary loops of at most N edges");
+  sub->add_flag("--check", o->check, "Only analyse and report; write no mesh");
+  sub->add_flag("--stl-ascii", o->stl_ascii, "Write ASCII STL instead of binary");
+  sub->callback([o, &run] { run = [o] { return run_repair(*o); }; });
+}
+
+}  // namespace visgate::cli
