@@ -32,6 +32,10 @@ int main(int argc, char** argv) {
   add_gen(app, run);
   add_solve(app, run);
   add_oracle(app, run);
+  add_check(app, run);
+  add_minimize(app, run);
+  add_gate(app, run);
+  add_merge_reports(app, run);
   add_repair(app, run);
   try {
     app.parse(argc, argv);

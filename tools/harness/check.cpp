@@ -1,0 +1,552 @@
+// The differential check (see check.h).
+#include "tools/harness/check.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+
+#include "lib/scene/json_exact.h"
+
+namespace visgate::harness {
+
+void add_histogram(DecadeCounts& into, const oracle::DecadeHistogram& h) {
+  into[0] += h.below;
+  for (size_t k = 0; k < h.buckets.size(); ++k) into[k + 1] += h.buckets[k];
+}
+
+std::string decade_label(size_t d) {
+  if (d == 0) return "<1e-12";
+  if (d == kDecades - 1) return ">=1";
+  return "1e" + std::to_string(int(d) - 13);
+}
+
+void Row::merge(const Row& o) {
+  scenes += o.scenes;
+  relations += o.relations;
+  degenerate += o.degenerate;
+  agree += o.agree;
+  disagree += o.disagree;
+  false_visible += o.false_visible;
+  false_blocked += o.false_blocked;
+  fraction += o.fraction;
+  fragment += o.fragment;
+  metamorphic += o.metamorphic;
+  for (size_t d = 0; d < kDecades; ++d) {
+    disagreements[d] += o.disagreements[d];
+    relations_per_decade[d] += o.relations_per_decade[d];
+  }
+  seconds += o.seconds;
+}
+
+size_t CheckReport::mismatch_count() const {
+  size_t n = 0;
+  for (const auto& [k, row] : rows) n += row.mismatches();
+  return n;
+}
+
+size_t CheckReport::mismatch_count(const std::string& method) const {
+  size_t n = 0;
+  for (const auto& [k, row] : rows)
+    if (k.second == method) n += row.mismatches();
+  return n;
+}
+
+namespace {
+
+template <class F>
+void for_each_point(Scene& s, F&& f) {
+  for (auto& v : s.mesh.vertices) f(v);
+  for (auto& l : s.lights) {
+    for (auto& v : l.polygon) f(v);
+    for (auto& v : l.jitter_points) f(v);
+    for (auto& v : l.explicit_samples) f(v);
+  }
+  for (auto& r : s.receivers) f(r.p);
+  if (s.grid) f(s.grid->origin);
+}
+
+void rebuild_boxes(Light& l) {
+  for (int j = 0; j < l.samples; ++j) {
+    AABB b;
+    for (int k = 0; k < l.jitter; ++k) b.extend(l.jitter_point(j, k));
+    l.jitter_boxes[size_t(j)] = b;
+  }
+}
+
+// True when c + t is exactly a float for every coordinate c on axis k.
+bool exact_on_axis(Scene& s, int k, double t) {
+  bool ok = true;
+  for_each_point(s, [&](Vec3f& v) {
+    if (!ok) return;
+    double x = double(v[k]) + t;  // exact in double: |t| is a power of two within 2^60 of v
+    ok = double(float(x)) == x;
+  });
+  return ok;
+}
+
+MismatchRecord base_record(const std::string& method, const SolveOptions& so, const Scene& scene,
+                           const SceneOrigin& origin) {
+  MismatchRecord m;
+  m.method = method;
+  m.options = so.opts;
+  m.family = origin.family;
+  m.scene = scene.name;
+  m.scene_file = origin.file;
+  m.seed = origin.seed;
+  m.params = origin.params;
+  return m;
+}
+
+// Bits of relation (receiver i, bit b) of two results differ.
+template <class F>
+void for_each_changed_bit(const Scene& scene, const SolveResult& a, const SolveResult& b, F&& f) {
+  size_t bits = scene.samples_per_receiver();
+  for (size_t i = 0; i < scene.receivers.size(); ++i) {
+    const auto& wa = a.receivers[i].visible_bits;
+    const auto& wb = b.receivers[i].visible_bits;
+    for (size_t w = 0; w < wa.size(); ++w) {
+      uint64_t x = wa[w] ^ wb[w];
+      while (x) {
+        size_t bit = w * 64 + size_t(__builtin_ctzll(x));
+        x &= x - 1;
+        if (bit < bits) f(i, bit);
+      }
+    }
+  }
+}
+
+// Light index and sample of relation bit `bit`.
+std::pair<size_t, long> light_and_sample(const Scene& scene, size_t bit) {
+  size_t l = 0;
+  while (l + 1 < scene.lights.size() && bit >= scene.light_offset(l + 1)) ++l;
+  return {l, long(bit - scene.light_offset(l))};
+}
+
+}  // namespace
+
+Scene scaled_scene(const Scene& src, int exponent) {
+  Scene s = src;
+  for_each_point(s, [&](Vec3f& v) { v = Vec3f(std::ldexp(v.x, exponent), std::ldexp(v.y, exponent), std::ldexp(v.z, exponent)); });
+  for (auto& l : s.lights) {
+    l.area = std::ldexp(l.area, 2 * exponent);
+    rebuild_boxes(l);
+  }
+  if (s.grid) {
+    auto sc = [&](Vec3f& v) { v = Vec3f(std::ldexp(v.x, exponent), std::ldexp(v.y, exponent), std::ldexp(v.z, exponent)); };
+    sc(s.grid->u);
+    sc(s.grid->v);
+    s.grid->offset = std::ldexp(s.grid->offset, exponent);
+  }
+  s.name = src.name + "-scaled";
+  return s;
+}
+
+Scene translated_scene(const Scene& src, Vec3d* offset) {
+  Scene s = src;
+  AABB b = s.bounds();
+  Vec3d off(0, 0, 0);
+  for (int k = 0; k < 3; ++k) {
+    double extent = std::max({double(b.hi[k]) - double(b.lo[k]), std::abs(double(b.lo[k])), std::abs(double(b.hi[k])), 1e-30});
+    int top = int(std::floor(std::log2(extent)));
+    // Largest power-of-two offset (either sign) that keeps every coordinate exact,
+    // trying 40 binades below the extent.
+    for (int e = top; e > top - 40 && off[k] == 0.0; --e)
+      for (double sign : {1.0, -1.0})
+        if (off[k] == 0.0 && exact_on_axis(s, k, sign * std::ldexp(1.0, e))) off[k] = sign * std::ldexp(1.0, e);
+  }
+  for_each_point(s, [&](Vec3f& v) { v = Vec3f(to_double(v) + off); });
+  for (auto& l : s.lights) rebuild_boxes(l);
+  s.name = src.name + "-translated";
+  if (offset) *offset = off;
+  return s;
+}
+
+void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfig& cfg, CheckReport& report) {
+  const std::string family = origin.family;
+  oracle::RelationOracleResult exact = oracle::run_relation_oracle(scene, cfg.threads);
+  SceneSummary sum;
+  sum.name = scene.name;
+  sum.family = family;
+  sum.file = origin.file;
+  sum.seed = origin.seed;
+  sum.triangles = scene.mesh.size();
+  sum.relations = scene.relation_count();
+  sum.oracle_seconds = exact.seconds;
+  report.scenes.push_back(sum);
+
+  DecadeCounts rel_hist{};
+  {
+    oracle::DecadeHistogram h;
+    for (size_t i = 0; i < exact.classes.size(); ++i)
+      for (size_t b = 0; b < exact.classes[i].size(); ++b)
+        if (exact.classes[i][b] != 'd') h.add(exact.margins[i][b]);
+    add_histogram(rel_hist, h);
+  }
+
+  std::optional<Scene> scaled, translated;
+  std::optional<oracle::RelationOracleResult> exact_t;
+  if (cfg.metamorphic) {
+    scaled = scaled_scene(scene, 5);
+    translated = translated_scene(scene, nullptr);
+    exact_t = oracle::run_relation_oracle(*translated, cfg.threads);
+    size_t changed = 0;
+    MismatchRecord rec = base_record("oracle", SolveOptions{}, scene, origin);
+    for (size_t i = 0; i < exact.classes.size(); ++i)
+      for (size_t b = 0; b < exact.classes[i].size(); ++b)
+        if (exact.classes[i][b] != exact_t->classes[i][b]) {
+          if (++changed <= kMaxRecords) {
+            auto [l, j] = light_and_sample(scene, b);
+            rec.receiver = i, rec.light = l, rec.sample = j;
+            rec.exact = exact.classes[i][b];
+            rec.method_visible = exact_t->classes[i][b] == 'v';
+            rec.margin = exact.margins[i][b];
+            rec.direction = "translate";
+            rec.kind = "metamorphic";
+            report.mismatches.push_back(rec);
+          }
+        }
+    Row& orow = report.rows[{family, "oracle"}];
+    orow.scenes += 1;
+    orow.relations += scene.relation_count();
+    orow.metamorphic += changed;
+    orow.seconds += exact.seconds;
+  }
+
+  for (const auto& m : cfg.methods) {
+    auto solver = make_solver(m.name);
+    Row& row = report.rows[{family, m.name}];
+    if (!solver) {
+      report.errors.push_back(scene.name + ": unknown method " + m.name);
+      continue;
+    }
+    SolveResult res;
+    try {
+      res = solver->solve(scene, m.options);
+    } catch (const std::exception& e) {
+      report.errors.push_back(scene.name + ": method " + m.name + " threw: " + e.what());
+      continue;
+    }
+    oracle::Comparison cmp = oracle::compare_relations(scene, res, exact, cfg.tau);
+    row.scenes += 1;
+    row.relations += cmp.relations;
+    row.degenerate += cmp.degenerate;
+    row.agree += cmp.agree;
+    row.disagree += cmp.disagree;
+    row.false_visible += cmp.false_visible;
+    row.false_blocked += cmp.false_blocked;
+    row.fraction += cmp.fraction_mismatches;
+    row.fragment += cmp.fragment_mismatches;
+    add_histogram(row.disagreements, cmp.disagreement_margins);
+    for (size_t d = 0; d < kDecades; ++d) row.relations_per_decade[d] += rel_hist[d];
+    row.seconds += res.seconds;
+    size_t kept = 0;
+    for (const auto& mm : cmp.mismatches) {
+      if (++kept > kMaxRecords) break;
+      MismatchRecord rec = base_record(m.name, m.options, scene, origin);
+      rec.receiver = mm.receiver;
+      rec.light = mm.light;
+      rec.sample = mm.sample;
+      rec.exact = char(mm.exact);
+      rec.method_visible = mm.method_visible;
+      rec.margin = mm.margin;
+      rec.direction = oracle::direction_name(mm.direction);
+      rec.kind = "oracle";
+      report.mismatches.push_back(rec);
+    }
+    if (!cfg.metamorphic) continue;
+
+    // Metamorphic: scale (every bit unchanged) and exact translation (bits may change only
+    // below tau).
+    auto metamorphic = [&](const Scene& variant, const char* what, bool only_above_tau) {
+      SolveResult vr;
+      try {
+        vr = solver->solve(variant, m.options);
+      } catch (const std::exception& e) {
+        report.errors.push_back(variant.name + ": method " + m.name + " threw: " + e.what());
+        return;
+      }
+      size_t changed = 0;
+      for_each_changed_bit(scene, res, vr, [&](size_t i, size_t bit) {
+        double margin = exact.margins[i][bit];
+        char cls = exact.classes[i][bit];
+        if (only_above_tau && (cls == 'd' || margin < cfg.tau)) return;
+        if (++changed > kMaxRecords) return;
+        MismatchRecord rec = base_record(m.name, m.options, scene, origin);
+        auto [l, j] = light_and_sample(scene, bit);
+        rec.receiver = i, rec.light = l, rec.sample = j;
+        rec.exact = cls;
+        rec.method_visible = vr.receivers[i].visible(bit);
+        rec.margin = margin;
+        rec.direction = what;
+        rec.kind = "metamorphic";
+        report.mismatches.push_back(rec);
+      });
+      row.metamorphic += changed;
+    };
+    metamorphic(*scaled, "scale", false);
+    metamorphic(*translated, "translate", true);
+  }
+}
+
+Result<std::pair<int, int>> parse_shard(const std::string& text) {
+  auto slash = text.find('/');
+  int k = 0, n = 0;
+  try {
+    size_t p1 = 0, p2 = 0;
+    if (slash == std::string::npos) throw 0;
+    k = std::stoi(text.substr(0, slash), &p1);
+    n = std::stoi(text.substr(slash + 1), &p2);
+    if (p1 != slash || p2 != text.size() - slash - 1) throw 0;
+  } catch (...) {
+    return Error{"--shard " + text + ": expected k/N with integers 1 <= k <= N"};
+  }
+  if (n < 1 || k < 1 || k > n) return Error{"--shard " + text + ": expected k/N with integers 1 <= k <= N"};
+  return std::make_pair(k, n);
+}
+
+// ---- JSON --------------------------------------------------------------------------
+
+namespace {
+using ojson = nlohmann::ordered_json;
+
+ojson decades_json(const DecadeCounts& d) {
+  ojson a = ojson::array();
+  for (size_t x : d) a.push_back(x);
+  return a;
+}
+
+ojson record_json(const MismatchRecord& m) {
+  ojson o;
+  o["method"] = m.method;
+  ojson opts = ojson::object();
+  for (const auto& [k, v] : m.options) opts[k] = v;
+  o["options"] = opts;
+  o["family"] = m.family;
+  o["scene"] = m.scene;
+  if (!m.scene_file.empty()) o["scene_file"] = m.scene_file;
+  o["seed"] = m.seed;
+  o["params"] = {{"triangles", m.params.triangles}, {"receivers", m.params.receivers},
+                 {"samples", m.params.samples}, {"light_scale", m.params.light_scale}};
+  o["receiver"] = m.receiver;
+  o["light"] = m.light;
+  o["sample"] = m.sample;
+  o["exact"] = std::string(1, m.exact);
+  o["method_answer"] = m.method_visible ? "visible" : "blocked";
+  o["margin"] = m.margin;
+  o["direction"] = m.direction;
+  o["kind"] = m.kind;
+  if (!m.stored.empty()) o["stored"] = m.stored;
+  return o;
+}
+}  // namespace
+
+std::string report_to_json(const CheckReport& r) {
+  ojson doc;
+  doc["format"] = "visgate-check-report";
+  doc["version"] = 1;
+  doc["tau"] = r.tau;
+  doc["methods"] = r.methods;
+  doc["shards"] = r.shards;
+  doc["decades"] = [] {
+    ojson a = ojson::array();
+    for (size_t d = 0; d < kDecades; ++d) a.push_back(decade_label(d));
+    return a;
+  }();
+  ojson rows = ojson::array();
+  for (const auto& [key, row] : r.rows) {
+    ojson o;
+    o["family"] = key.first;
+    o["method"] = key.second;
+    o["scenes"] = row.scenes;
+    o["relations"] = row.relations;
+    o["degenerate"] = row.degenerate;
+    o["agree"] = row.agree;
+    o["disagree"] = row.disagree;
+    o["mismatches"] = row.mismatches();
+    o["false_visible"] = row.false_visible;
+    o["false_blocked"] = row.false_blocked;
+    o["fraction"] = row.fraction;
+    o["fragment"] = row.fragment;
+    o["metamorphic"] = row.metamorphic;
+    o["disagreements_per_decade"] = decades_json(row.disagreements);
+    o["relations_per_decade"] = decades_json(row.relations_per_decade);
+    o["seconds"] = row.seconds;
+    rows.push_back(o);
+  }
+  doc["rows"] = rows;
+  ojson scenes = ojson::array();
+  for (const auto& s : r.scenes) {
+    ojson o;
+    o["name"] = s.name;
+    o["family"] = s.family;
+    if (!s.file.empty()) o["file"] = s.file;
+    o["seed"] = s.seed;
+    o["triangles"] = s.triangles;
+    o["relations"] = s.relations;
+    o["oracle_seconds"] = s.oracle_seconds;
+    scenes.push_back(o);
+  }
+  doc["scenes"] = scenes;
+  ojson mm = ojson::array();
+  for (const auto& m : r.mismatches) mm.push_back(record_json(m));
+  doc["mismatches"] = mm;
+  doc["errors"] = r.errors;
+  doc["total_mismatches"] = r.mismatch_count();
+  return doc.dump(1) + "\n";
+}
+
+Result<CheckReport> report_from_json(const std::string& text, const std::string& origin) {
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(text);
+  } catch (const std::exception& e) {
+    return Error{origin + ": JSON parse error: " + e.what()};
+  }
+  if (!doc.is_object() || doc.value("format", "") != "visgate-check-report")
+    return Error{origin + ": format: expected \"visgate-check-report\""};
+  if (doc.value("version", 0) != 1) return Error{origin + ": version: expected 1"};
+  CheckReport r;
+  std::string where = "";
+  try {
+    where = "tau";
+    r.tau = doc.at("tau").get<double>();
+    where = "methods";
+    r.methods = doc.at("methods").get<std::vector<std::string>>();
+    where = "shards";
+    r.shards = doc.at("shards").get<std::vector<std::string>>();
+    auto decades = [](const nlohmann::json& a) {
+      DecadeCounts d{};
+      if (!a.is_array() || a.size() != kDecades) throw std::runtime_error("expected 14 decade counts");
+      for (size_t k = 0; k < kDecades; ++k) d[k] = a[k].get<size_t>();
+      return d;
+    };
+    const auto& rows = doc.at("rows");
+    for (size_t i = 0; i < rows.size(); ++i) {
+      where = "rows[" + std::to_string(i) + "]";
+      const auto& o = rows[i];
+      Row row;
+      row.scenes = o.at("scenes").get<size_t>();
+      row.relations = o.at("relations").get<size_t>();
+      row.degenerate = o.at("degenerate").get<size_t>();
+      row.agree = o.at("agree").get<size_t>();
+      row.disagree = o.at("disagree").get<size_t>();
+      row.false_visible = o.at("false_visible").get<size_t>();
+      row.false_blocked = o.at("false_blocked").get<size_t>();
+      row.fraction = o.at("fraction").get<size_t>();
+      row.fragment = o.at("fragment").get<size_t>();
+      row.metamorphic = o.at("metamorphic").get<size_t>();
+      row.disagreements = decades(o.at("disagreements_per_decade"));
+      row.relations_per_decade = decades(o.at("relations_per_decade"));
+      row.seconds = o.at("seconds").get<double>();
+      r.rows[{o.at("family").get<std::string>(), o.at("method").get<std::string>()}].merge(row);
+    }
+    const auto& scenes = doc.at("scenes");
+    for (size_t i = 0; i < scenes.size(); ++i) {
+      where = "scenes[" + std::to_string(i) + "]";
+      const auto& o = scenes[i];
+      SceneSummary s;
+      s.name = o.at("name").get<std::string>();
+      s.family = o.at("family").get<std::string>();
+      s.file = o.value("file", "");
+      s.seed = o.at("seed").get<uint64_t>();
+      s.triangles = o.at("triangles").get<size_t>();
+      s.relations = o.at("relations").get<size_t>();
+      s.oracle_seconds = o.at("oracle_seconds").get<double>();
+      r.scenes.push_back(s);
+    }
+    const auto& mm = doc.at("mismatches");
+    for (size_t i = 0; i < mm.size(); ++i) {
+      where = "mismatches[" + std::to_string(i) + "]";
+      const auto& o = mm[i];
+      MismatchRecord m;
+      m.method = o.at("method").get<std::string>();
+      for (const auto& [k, v] : o.at("options").items()) m.options[k] = v.get<std::string>();
+      m.family = o.at("family").get<std::string>();
+      m.scene = o.at("scene").get<std::string>();
+      m.scene_file = o.value("scene_file", "");
+      m.seed = o.at("seed").get<uint64_t>();
+      const auto& p = o.at("params");
+      m.params.seed = m.seed;
+      m.params.triangles = p.at("triangles").get<long>();
+      m.params.receivers = p.at("receivers").get<long>();
+      m.params.samples = p.at("samples").get<long>();
+      m.params.light_scale = p.at("light_scale").get<double>();
+      m.receiver = o.at("receiver").get<size_t>();
+      m.light = o.at("light").get<size_t>();
+      m.sample = o.at("sample").get<long>();
+      m.exact = o.at("exact").get<std::string>().at(0);
+      m.method_visible = o.at("method_answer").get<std::string>() == "visible";
+      m.margin = o.at("margin").get<double>();
+      m.direction = o.at("direction").get<std::string>();
+      m.kind = o.at("kind").get<std::string>();
+      m.stored = o.value("stored", "");
+      r.mismatches.push_back(m);
+    }
+    where = "errors";
+    r.errors = doc.at("errors").get<std::vector<std::string>>();
+  } catch (const std::exception& e) {
+    return Error{origin + ": " + where + ": " + e.what()};
+  }
+  return r;
+}
+
+Status merge_report(CheckReport& into, const CheckReport& other) {
+  if (into.shards.empty() && into.rows.empty() && into.scenes.empty()) {
+    into = other;
+    return {};
+  }
+  if (into.tau != other.tau)
+    return Error{"tau differs between reports (" + std::to_string(into.tau) + " vs " + std::to_string(other.tau) + ")"};
+  if (into.methods != other.methods) return Error{"the reports checked different methods"};
+  for (const auto& s : other.shards)
+    if (std::find(into.shards.begin(), into.shards.end(), s) != into.shards.end() && s.find('/') != std::string::npos &&
+        s != "1/1")
+      return Error{"shard " + s + " appears in two reports"};
+  into.shards.insert(into.shards.end(), other.shards.begin(), other.shards.end());
+  for (const auto& [k, row] : other.rows) into.rows[k].merge(row);
+  into.scenes.insert(into.scenes.end(), other.scenes.begin(), other.scenes.end());
+  into.mismatches.insert(into.mismatches.end(), other.mismatches.begin(), other.mismatches.end());
+  into.errors.insert(into.errors.end(), other.errors.begin(), other.errors.end());
+  return {};
+}
+
+std::string format_table(const CheckReport& r) {
+  std::string out;
+  char buf[512];
+  // Decades shown: those below tau (the disagreements that do not fail).
+  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s  %-40s %9s\n", "family", "method", "scenes",
+                "relations", "degen", "mismatch", "f-vis", "f-blk", "meta", "disagreements below tau per decade", "seconds");
+  out += buf;
+  std::string hdr;
+  for (size_t d = 0; d < kDecades; ++d) {
+    double lo = d == 0 ? 0.0 : std::pow(10.0, double(d) - 13.0);
+    if (d > 0 && lo >= r.tau) break;
+    if (!hdr.empty()) hdr += ' ';
+    hdr += decade_label(d);
+  }
+  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s  %-40s\n", "", "", "", "", "", "", "", "", "",
+                ("[" + hdr + "]").c_str());
+  out += buf;
+  for (const auto& [key, row] : r.rows) {
+    std::string dec;
+    for (size_t d = 0; d < kDecades; ++d) {
+      double lo = d == 0 ? 0.0 : std::pow(10.0, double(d) - 13.0);
+      if (d > 0 && lo >= r.tau) break;
+      if (!dec.empty()) dec += ' ';
+      dec += std::to_string(row.disagreements[d]);
+    }
+    std::snprintf(buf, sizeof buf, "%-18s %-14s %6zu %10zu %8zu %9zu %6zu %6zu %6zu  %-40s %9.3f\n", key.first.c_str(),
+                  key.second.c_str(), row.scenes, row.relations, row.degenerate, row.mismatches(), row.false_visible,
+                  row.false_blocked, row.metamorphic, ("[" + dec + "]").c_str(), row.seconds);
+    out += buf;
+  }
+  std::snprintf(buf, sizeof buf, "total: %zu scenes, %zu mismatches, %zu errors\n", r.scenes.size(), r.mismatch_count(),
+                r.errors.size());
+  out += buf;
+  return out;
+}
+
+}  // namespace visgate::harness

@@ -1,0 +1,131 @@
+// The differential check (DESIGN sections 5 and 7, `visgate check`): runs methods and
+// the exact relation oracle on scenes, compares them with oracle::compare_relations,
+// runs the metamorphic checks, and accumulates a report per (family, method) with a
+// disagreement histogram per margin decade. Reports are JSON (format
+// "visgate-check-report") so that shards of one campaign can be merged.
+//
+// Metamorphic checks (issue 4):
+//   scale      every coordinate multiplied by 2^5: float arithmetic commutes with a
+//              power-of-two scale away from overflow and underflow, so every method's
+//              bits must be unchanged; any changed bit is a violation.
+//   translate  an offset per axis chosen so that every coordinate (blockers, light
+//              polygons, light points, receivers) translates exactly in float32: the
+//              oracle's classes must be unchanged (a violation is reported for the
+//              method "oracle"), and a method's bit may change only on relations whose
+//              margin is below tau.
+// Violations are mismatches of class "metamorphic".
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lib/scene/families.h"
+#include "lib/solver.h"
+#include "oracle/comparator.h"
+
+namespace visgate::harness {
+
+struct MethodSpec {
+  std::string name;
+  SolveOptions options;
+};
+
+// Margin decades as in oracle::DecadeHistogram: index 0 is "below 1e-12" (and 0),
+// index k + 1 the bucket k = [10^(k-12), 10^(k-11)), index 13 margins >= 1.
+inline constexpr size_t kDecades = 14;
+using DecadeCounts = std::array<size_t, kDecades>;
+void add_histogram(DecadeCounts& into, const oracle::DecadeHistogram& h);
+// Label of decade index d ("<1e-12", "1e-12", ..., "1e-1", ">=1").
+std::string decade_label(size_t d);
+
+struct MismatchRecord {
+  std::string method;
+  std::map<std::string, std::string> options;
+  std::string family, scene, scene_file;  // scene_file empty for generated scenes
+  uint64_t seed = 0;
+  FamilyParams params;                    // generation parameters (generated scenes)
+  size_t receiver = 0, light = 0;
+  long sample = -1;
+  char exact = 'v';                        // 'v', 'b' or 'd'
+  bool method_visible = false;
+  double margin = 0.0;
+  std::string direction;  // false-visible, false-blocked, fraction, fragment-blocked, or for
+                          // metamorphic records: scale, translate
+  std::string kind;       // "oracle" (against the exact answer) or "metamorphic"
+  std::string stored;     // corpus path when --store kept a case for it
+};
+
+// One row of the table: a (family, method) pair over every scene of the family.
+struct Row {
+  size_t scenes = 0, relations = 0, degenerate = 0, agree = 0, disagree = 0;
+  size_t false_visible = 0, false_blocked = 0, fraction = 0, fragment = 0, metamorphic = 0;
+  DecadeCounts disagreements{};  // every disagreement (any margin) per margin decade
+  DecadeCounts relations_per_decade{};  // non-degenerate relations per margin decade
+  double seconds = 0.0;
+  size_t mismatches() const { return false_visible + false_blocked + fraction + fragment + metamorphic; }
+  void merge(const Row& o);
+};
+
+struct SceneSummary {
+  std::string name, family, file;
+  uint64_t seed = 0;
+  size_t triangles = 0, relations = 0;
+  double oracle_seconds = 0.0;
+};
+
+struct CheckReport {
+  double tau = 1e-5;
+  std::vector<std::string> methods;
+  std::vector<std::string> shards;  // "k/N" of every merged part ("1/1" for a whole run)
+  std::map<std::pair<std::string, std::string>, Row> rows;  // (family, method)
+  std::vector<SceneSummary> scenes;
+  std::vector<MismatchRecord> mismatches;  // at most kMaxRecords per (scene, method, kind)
+  std::vector<std::string> errors;         // methods that threw, minimisations that failed
+  size_t mismatch_count() const;           // over every row
+  size_t mismatch_count(const std::string& method) const;
+};
+
+inline constexpr size_t kMaxRecords = 64;
+
+struct CheckConfig {
+  std::vector<MethodSpec> methods;
+  double tau = 1e-5;
+  int threads = 0;
+  bool metamorphic = true;
+};
+
+// Where a scene came from (for records and minimisation provenance).
+struct SceneOrigin {
+  std::string family;  // family name, or "file" for scene files
+  uint64_t seed = 0;
+  FamilyParams params;
+  std::string file;
+};
+
+// Checks one scene and adds its rows, summary and mismatch records to `report`.
+void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfig& cfg, CheckReport& report);
+
+// Metamorphic transforms (exposed for tests).
+Scene scaled_scene(const Scene& s, int exponent);
+// An exact translation: per axis the largest power-of-two offset (either sign, at most
+// the scene's extent, trying 40 binades down) that keeps every coordinate exact in
+// float32; 0 on an axis where none does. The offset is returned in `offset`.
+Scene translated_scene(const Scene& s, Vec3d* offset);
+
+// Shards: "k/N" with 1 <= k <= N; job i belongs to shard k iff i mod N == k - 1.
+Result<std::pair<int, int>> parse_shard(const std::string& text);
+
+// Report JSON and merging.
+std::string report_to_json(const CheckReport& r);
+Result<CheckReport> report_from_json(const std::string& text, const std::string& origin);
+// Merges `other` into `into`; tau and methods must agree.
+Status merge_report(CheckReport& into, const CheckReport& other);
+// The human table (per family and method: relations, mismatches, disagreements below
+// tau per margin decade, seconds).
+std::string format_table(const CheckReport& r);
+
+}  // namespace visgate::harness
