@@ -1,0 +1,142 @@
+// Blocker representation inside a shaft and the operations on it (paper 000 sections
+// 4.4.2, 4.5, 4.6 and 4.7): RawEdge / Edge / Patch / Surface (Figures 4.7 and 4.9),
+// CONSTRUCT-TRIANGLE-SURFACE with clipping (Figure 4.20), CLASSIFY-EDGES (4.21),
+// UPDATE-PATCH-FACINGS (4.22, Table 4.1), MERGE-PATCHES (4.23), SIMPLIFY-PATCHES (4.7.5),
+// SPLIT-SURFACE (4.25), COMPUTE-LOOSE-EDGES (4.26), COMBINE-SURFACES with glue edges
+// (4.27-4.29), the blocking test BLOCKS-SHAFT (4.18) and its ray variant (4.10), and
+// validate() (4.13).
+//
+// Storage (section 4.13, "avoid copying, in place"): a surface owns three flat arrays.
+// Raw edges refer to patches by index, a patch owns a contiguous range of the edge
+// array, and an Edge is a raw-edge index plus a flip bit; so DUPLICATE-SURFACE is three
+// vector copies with no pointer remapping, and every operation rebuilds the arrays in
+// place from reusable scratch buffers.
+//
+// Orientation: a triangle patch lists its edges in the mesh triangle's vertex order; a
+// non-flipped Edge is traversed by its owner neighbors[1] from vertices[0] to
+// vertices[1] (GET-OWNER of Figure 4.7), a flipped one by neighbors[0] the other way.
+// A surface is therefore an oriented 2-chain whose boundary is the set of raw edges
+// with one neighbour, directed as their single owner traverses them.
+//
+// Guarantee of BLOCKS-SHAFT (see also iss_solver.h): a true answer means every open
+// segment from a point of the receiver box to a point of the light box meets a blocker
+// triangle. Reasoning: every blocker piece is a clipped mesh triangle that does not meet
+// either node box (membership in the nodes' conservative inside lists), collapsed
+// simplification triangles lie outside the extended shaft E (shaft.h), glue edges add
+// only zero-area pieces, and merging or splitting does not change the chain. The
+// intersection number of a segment with the chain is constant over all segments from
+// box to box when no boundary edge meets the shaft (checked conservatively), and the
+// winding number computed for the test segment between the outer node faces equals it
+// because clamping never projects chain parts onto a node face (E invariant). A nonzero
+// intersection number implies an actual intersection. Evaluation is in double on float32
+// input and double clip vertices; the test segment stays at least the plane tolerance of
+// shaft.h away from every boundary edge, far above the rounding of the winding test.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lib/iss/shaft.h"
+#include "lib/iss/tree.h"
+#include "lib/mesh/prepare.h"
+
+namespace visgate::iss {
+
+enum class Facing : uint8_t { TowardsReceiver, TowardsLight, Inconsistent };
+
+constexpr int32_t kNoPatch = -1;
+constexpr int32_t kClipEdge = -1;  // mesh_edge of clip, glue and collapsed edges
+
+struct RawEdge {
+  Vec3d v[2];
+  int32_t nb[2] = {kNoPatch, kNoPatch};  // neighbour patches (indices in the surface)
+  int32_t mesh_edge = kClipEdge;          // mesh edge label or kClipEdge
+  uint8_t inside = 1;                     // at least partially inside the shaft
+  uint8_t fresh = 0;  // left the shaft since the last SIMPLIFY-PATCHES (section 4.13:
+                      // only patches with such an edge are simplified again)
+};
+
+struct Edge {
+  uint32_t raw = 0;
+  uint8_t flipped = 0;
+};
+
+struct Patch {
+  uint32_t first = 0, count = 0;  // range in Surface::edges
+  Facing facing = Facing::Inconsistent;
+  int32_t tri = -1;  // mesh triangle if facing == Inconsistent
+};
+
+struct Surface {
+  std::vector<RawEdge> raw;
+  std::vector<Edge> edges;
+  std::vector<Patch> patches;
+  std::vector<int32_t> loose;  // loose edge labels (section 4.4.2)
+  AABBd box;
+  Vec3d vsum{0, 0, 0};  // vertex centre data (section 4.7.9): sum and count of the
+  double vcount = 0;    // endpoints of edges inside the shaft
+  bool refined = true;  // false when postponed in the last construction
+
+  size_t bytes() const {
+    return raw.capacity() * sizeof(RawEdge) + edges.capacity() * sizeof(Edge) + patches.capacity() * sizeof(Patch) +
+           loose.capacity() * sizeof(int32_t) + sizeof(Surface);
+  }
+};
+
+inline const Vec3d& edge_vertex(const Surface& s, const Edge& e, int k) {
+  return s.raw[e.raw].v[e.flipped ? k ^ 1 : k];
+}
+inline int32_t edge_neighbor(const Surface& s, const Edge& e) { return s.raw[e.raw].nb[e.flipped ? 1 : 0]; }
+inline int32_t edge_owner(const Surface& s, const Edge& e) { return s.raw[e.raw].nb[e.flipped ? 0 : 1]; }
+
+// Read-only context shared by the operations.
+struct BlockerContext {
+  const mesh::PreparedMesh* mesh = nullptr;
+  double scale = 1.0;  // S of shaft.h
+};
+
+// Reusable scratch storage (section 4.13: no allocation in the inner loops).
+struct Workspace {
+  std::vector<int32_t> label_slot;
+  std::vector<uint32_t> label_stamp;
+  uint32_t stamp = 0;
+  std::vector<int32_t> uf, remap, remap2;
+  std::vector<RawEdge> raw_tmp;
+  std::vector<Edge> edge_tmp;
+  std::vector<Patch> patch_tmp;
+  std::vector<uint32_t> order;
+  std::vector<int32_t> next;
+  std::vector<uint8_t> used, fail;
+  void reset_labels(size_t n);
+};
+
+// Section 4.7.1 / Figure 4.20: one clipped patch per triangle of `tris` that may
+// intersect the shaft and is in neither node's inside list; neighbours by edge label.
+Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
+                                   const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws);
+void classify_edges(Surface& s, const ShaftGeometry& g);                       // Figure 4.21
+void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);  // Figure 4.22
+void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23
+void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws);     // section 4.7.5
+void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws);    // Figure 4.25
+void compute_loose_edges(const BlockerContext& ctx, Surface& s);              // Figure 4.26
+void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::vector<Surface>& out,
+                      const ShaftGeometry& g, Workspace& ws);                  // Figure 4.27-4.29
+void compute_bounds(Surface& s, const ShaftGeometry& g);  // box and vertex centre
+bool all_edges_outside(const Surface& s);
+
+// CAN-BLOCK-SHAFT (line 1 of Figure 4.18): false when a surface with this box cannot
+// meet every segment between the node boxes (it misses one of three such segments).
+bool can_block_shaft(const AABBd& box, const ShaftGeometry& g);
+// BLOCKS-SHAFT, Figure 4.18.
+bool blocks_shaft(const Surface& s, const ShaftGeometry& g);
+// Section 4.10: BLOCKS-RAY, per patch (a consistent patch is crossed by every ray in the
+// same direction, so its winding number is nonzero iff the ray crosses it; an
+// inconsistent patch is its single triangle, tested directly).
+bool blocks_ray(const BlockerContext& ctx, const Surface& s, int main_axis, const Vec3d& r, const Vec3d& l);
+
+// Section 4.13: every index, loop and neighbour relation. Empty string when valid.
+std::string validate(const Surface& s, const mesh::PreparedMesh* mesh);
+
+}  // namespace visgate::iss

@@ -1,0 +1,530 @@
+// The ISS traversal (paper 000 sections 4.7-4.12, Figures 4.19, 4.31-4.33) and the
+// `iss` Solver (see iss_solver.h for the guarantee).
+#include "lib/iss/iss_solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+
+#include "lib/geom/check.h"
+#include "lib/iss/blockers.h"
+#include "lib/iss/shaft.h"
+#include "lib/iss/tree.h"
+#include "lib/mesh/prepare.h"
+#include "lib/raycast/embree_solver.h"
+
+namespace visgate::iss {
+
+namespace {
+
+#ifdef NDEBUG
+bool g_validate = false;
+#else
+bool g_validate = true;
+#endif
+
+using Clock = std::chrono::steady_clock;
+
+// Time breakdown of Table 5.4 (plus the steps the table folds elsewhere).
+enum TimerId {
+  kTree, kShaftGeometry, kTriangleSurface, kCopy, kClassify, kFacings, kMerge, kSimplify, kSplit,
+  kLooseCombine, kBlocking, kRays, kTimerCount
+};
+const char* const kTimerNames[kTimerCount] = {
+    "time_tree_construction", "time_shaft_geometry", "time_triangle_surface", "time_copying_surfaces",
+    "time_classifying_edges", "time_updating_facings", "time_merging_patches", "time_simplifying_patches",
+    "time_splitting_surfaces", "time_loose_and_combine", "time_blocking_tests", "time_ray_casting"};
+
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double& acc) : acc_(acc), t0_(Clock::now()) {}
+  ~ScopedTimer() { acc_ += std::chrono::duration<double>(Clock::now() - t0_).count(); }
+  ScopedTimer(const ScopedTimer&) = delete;
+  ScopedTimer& operator=(const ScopedTimer&) = delete;
+
+ private:
+  double& acc_;
+  Clock::time_point t0_;
+};
+
+struct Shaft {
+  int r = 0, l = 0;
+  ShaftGeometry g;
+  std::vector<Surface> surfaces;
+  std::vector<AABBd> ghosts;  // boxes of removed redundant surfaces (section 4.7.8)
+  size_t bytes = 0;
+};
+
+enum class SplitMode { Receiver, Light };
+
+struct Params {
+  int leaf_receivers = 64;
+  int leaf_samples = 16;
+  bool custom_rays = false;
+  bool postpone = true;
+};
+
+class Traversal {
+ public:
+  Traversal(const Scene& scene, const mesh::PreparedMesh& m, const Params& p, SolveResult& result)
+      : scene_(scene), mesh_(m), p_(p), result_(result) {
+    AABB b = scene.bounds();
+    double s = 0;
+    for (int k = 0; k < 3; ++k) s = std::max({s, std::abs(double(b.lo[k])), std::abs(double(b.hi[k]))});
+    scale_ = std::max(s, 1e-30);
+    ctx_.mesh = &mesh_;
+    ctx_.scale = scale_;
+    ScopedTimer t(times_[kTree]);
+    tri_boxes_.resize(m.triangles.size());
+    for (size_t t2 = 0; t2 < m.triangles.size(); ++t2) {
+      AABB tb;
+      for (int k = 0; k < 3; ++k) tb.extend(m.corner(t2, k));
+      tri_boxes_[t2] = tb;
+    }
+    std::vector<AABB> boxes;
+    std::vector<Vec3f> centers;
+    for (const Receiver& r : scene.receivers) {
+      boxes.emplace_back(r.p, r.p);
+      centers.push_back(r.p);
+    }
+    rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_);
+  }
+
+  void run_light(size_t li) {
+    if (scene_.receivers.empty()) return;
+    light_ = &scene_.lights[li];
+    light_offset_ = scene_.light_offset(li);
+    {
+      ScopedTimer t(times_[kTree]);
+      std::vector<AABB> boxes(light_->jitter_boxes);
+      std::vector<Vec3f> centers;
+      for (const AABB& b : boxes) centers.push_back(b.center());
+      ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p_.leaf_samples, mesh_, tri_boxes_);
+    }
+    // COMPUTE-SHADOWS (Figure 4.32).
+    std::vector<uint32_t> tris(mesh_.triangles.size());
+    for (uint32_t t = 0; t < tris.size(); ++t) tris[t] = t;
+    pre_traverse(rtree_->root(), ltree_->root(), tris);
+    light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
+    ltree_.reset();
+  }
+
+  void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
+  void finish_stats(Stats& st) const {
+    double rel = double(scene_.relation_count());
+    st.set("relations", rel);
+    st.set("relations_blocked_by_shaft", n_blocked_shaft_);
+    st.set("relations_visible_by_empty_shaft", n_empty_);
+    st.set("relations_ray_cast", n_rays_);
+    st.set("rays_blocked", n_rays_blocked_);
+    double blocked = n_blocked_shaft_ + n_rays_blocked_;
+    st.set("percent_blocked", rel > 0 ? 100.0 * blocked / rel : 0.0);
+    st.set("percent_ray_cast", rel > 0 ? 100.0 * n_rays_ / rel : 0.0);
+    st.set("percent_decided_by_shafts", rel > 0 ? 100.0 * (n_blocked_shaft_ + n_empty_) / rel : 0.0);
+    st.set("shafts_built", n_shafts_);
+    st.set("blocking_tests", n_blocking_tests_);
+    st.set("surfaces_removed", n_removed_);
+    st.set("surfaces_postponed", n_postponed_);
+    st.set("surfaces_combined", n_combined_);
+    st.set("embree_fallback_rays", n_fallback_);
+    double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_);
+    st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
+    st.set("receiver_tree_nodes", double(rtree_->node_count()));
+    for (int i = 0; i < kTimerCount; ++i) st.set(kTimerNames[i], times_[i]);
+  }
+
+ private:
+  // ---- helpers -------------------------------------------------------------------------
+  TreeNode& rn(int i) { return rtree_->node(i); }
+  TreeNode& ln(int i) { return ltree_->node(i); }
+
+  void check(const Surface& s, const char* after) {
+    if (!g_validate) return;
+    std::string err = validate(s, &mesh_);
+    if (!err.empty()) throw InternalError(err + " (after " + after + ")");
+  }
+
+  ShaftGeometry geometry(int r, int l, MainAxis ax) {
+    ScopedTimer t(times_[kShaftGeometry]);
+    return ShaftGeometry(rn(r).box, ln(l).box, ax, scale_);
+  }
+
+  void account(Shaft& sh) {
+    sh.bytes = sizeof(Shaft) + sh.ghosts.capacity() * sizeof(AABBd);
+    for (const Surface& s : sh.surfaces) sh.bytes += s.bytes();
+    live_bytes_ += sh.bytes;
+    peak_bytes_ = std::max(peak_bytes_, live_bytes_);
+    ++n_shafts_;
+  }
+  void release(Shaft& sh) { live_bytes_ -= sh.bytes; }
+
+  void record_blocked(int r, int l) { n_blocked_shaft_ += double(rn(r).size()) * double(ln(l).size()); }
+
+  void record_visible(int r, int l) {
+    const TreeNode& R = rn(r);
+    const TreeNode& L = ln(l);
+    const auto& ro = rtree_->order();
+    const auto& lo = ltree_->order();
+    for (uint32_t a = R.begin; a < R.end; ++a) {
+      ReceiverResult& rr = result_.receivers[ro[a]];
+      for (uint32_t b = L.begin; b < L.end; ++b) rr.set_visible(light_offset_ + lo[b], true);
+    }
+    n_empty_ += double(R.size()) * double(L.size());
+  }
+
+  // CAST-SHADOW-RAYS. With the custom caster (section 4.10) the shaft's blockers, the
+  // leaf nodes' inside triangles (Figure 4.35) and, in pre-traversal, the pruned
+  // triangle list decide the ray.
+  void cast_rays(int r, int l, const Shaft* sh, const std::vector<uint32_t>* tris) {
+    ScopedTimer t(times_[kRays]);
+    const TreeNode& R = rn(r);
+    const TreeNode& L = ln(l);
+    const auto& ro = rtree_->order();
+    const auto& lo = ltree_->order();
+    for (uint32_t a = R.begin; a < R.end; ++a) {
+      uint32_t i = ro[a];
+      ReceiverResult& rr = result_.receivers[i];
+      const Vec3f& rp = scene_.receivers[i].p;
+      for (uint32_t b = L.begin; b < L.end; ++b) {
+        int j = int(lo[b]);
+        const Vec3f& lp = sample_position(*light_, j, i);
+        bool occ = p_.custom_rays ? custom_occluded(rp, lp, R, L, sh, tris) : embree_->occluded(rp, lp);
+        rr.set_visible(light_offset_ + size_t(j), !occ);
+        n_rays_ += 1;
+        if (occ) n_rays_blocked_ += 1;
+      }
+    }
+  }
+
+  bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
+                       const std::vector<uint32_t>* tris) {
+    Vec3d rp = to_double(rpf), lp = to_double(lpf);
+    auto hits = [&](uint32_t t) {
+      return segment_hits_triangle_d(rp, lp, to_double(mesh_.corner(t, 0)), to_double(mesh_.corner(t, 1)),
+                                     to_double(mesh_.corner(t, 2)));
+    };
+    if (!sh) {
+      for (uint32_t t : *tris)
+        if (hits(t)) return true;
+      return false;
+    }
+    for (uint32_t t : R.inside)
+      if (hits(t)) return true;
+    for (uint32_t t : L.inside)
+      if (hits(t)) return true;
+    for (const Surface& s : sh->surfaces)
+      if (blocks_ray(ctx_, s, sh->g.main_axis(), rp, lp)) return true;
+    for (const AABBd& gb : sh->ghosts) {
+      if (segment_may_hit_box(rp, lp, gb, 0x1p-40 * scale_)) {
+        ++n_fallback_;
+        return embree_->occluded(rpf, lpf);
+      }
+    }
+    return false;
+  }
+
+  // ---- section 4.7: sub-shaft construction ---------------------------------------------
+  void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out) {
+    { ScopedTimer t(times_[kClassify]); classify_edges(s, g); }
+    check(s, "classify_edges");
+    { ScopedTimer t(times_[kFacings]); update_patch_facings(ctx_, s, g); }
+    check(s, "update_patch_facings");
+    { ScopedTimer t(times_[kMerge]); merge_patches(s, ws_); }
+    check(s, "merge_patches");
+    { ScopedTimer t(times_[kSimplify]); simplify_patches(s, g, ws_); }
+    check(s, "simplify_patches");
+    size_t before = out.size();
+    { ScopedTimer t(times_[kSplit]); split_surface(std::move(s), out, ws_); }
+    for (size_t k = before; k < out.size(); ++k) {
+      out[k].refined = true;
+      check(out[k], "split_surface");
+    }
+  }
+
+  void finish_surfaces(Shaft& sh, std::vector<Surface>& temp) {
+    {
+      ScopedTimer t(times_[kLooseCombine]);
+      for (Surface& s : temp) compute_loose_edges(ctx_, s);
+      size_t before = temp.size();
+      combine_surfaces(ctx_, temp, sh.surfaces, sh.g, ws_);
+      if (sh.surfaces.size() < before) n_combined_ += double(before - sh.surfaces.size());
+      for (Surface& s : sh.surfaces) compute_bounds(s, sh.g);
+    }
+    for (const Surface& s : sh.surfaces) check(s, "combine_surfaces");
+  }
+
+  // CONSTRUCT-SUB-SHAFT (Figure 4.19). The parent's surfaces are copied for the first
+  // child and moved into the second (section 4.13: no needless copies).
+  Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent) {
+    Shaft sub;
+    sub.r = r;
+    sub.l = l;
+    MainAxis ax{parent.g.main_axis(), parent.g.dir()};
+    sub.g = geometry(r, l, ax);
+    for (const AABBd& gb : parent.ghosts)
+      if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
+    std::vector<Surface> temp;
+    temp.reserve(parent.surfaces.size() + 4);
+    for (Surface& ps : parent.surfaces) {
+      Surface s;
+      {
+        ScopedTimer t(times_[kCopy]);
+        if (move_parent) s = std::move(ps);
+        else s = ps;
+      }
+      // Section 4.7.9: postpone the refinement when the vertex centre stays inside and
+      // the surface cannot block the shaft yet.
+      if (p_.postpone && s.vcount > 0 && sub.g.may_contain_point(s.vsum * (1.0 / s.vcount)) &&
+          !can_block_shaft(s.box, sub.g)) {
+        s.refined = false;
+        ++n_postponed_;
+        temp.push_back(std::move(s));
+        continue;
+      }
+      refine(std::move(s), sub.g, temp);
+    }
+    Surface nt;
+    {
+      ScopedTimer t(times_[kTriangleSurface]);
+      nt = construct_triangle_surface(ctx_, split_node.gone, sub.g, rn(r), ln(l), ws_);
+    }
+    check(nt, "construct_triangle_surface");
+    if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp);
+    finish_surfaces(sub, temp);
+    account(sub);
+    return sub;
+  }
+
+  // CONSTRUCT-INITIAL-SHAFT (Figure 4.31).
+  Shaft construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris) {
+    Shaft sh;
+    sh.r = r;
+    sh.l = l;
+    sh.g = geometry(r, l, ax);
+    Surface s;
+    {
+      ScopedTimer t(times_[kTriangleSurface]);
+      s = construct_triangle_surface(ctx_, tris, sh.g, rn(r), ln(l), ws_);
+    }
+    check(s, "construct_triangle_surface");
+    std::vector<Surface> temp;
+    if (!s.patches.empty()) refine(std::move(s), sh.g, temp);
+    finish_surfaces(sh, temp);
+    account(sh);
+    return sh;
+  }
+
+  // CHOOSE-SPLIT (section 4.9): the strategy whose two sub-shafts bring the combined
+  // vertex centre closer to their boundaries on average.
+  SplitMode choose_split(const Shaft& sh) {
+    TreeNode& R = rn(sh.r);
+    TreeNode& L = ln(sh.l);
+    Vec3d sum(0, 0, 0);
+    double cnt = 0;
+    for (const Surface& s : sh.surfaces) {
+      sum += s.vsum;
+      cnt += s.vcount;
+    }
+    double rd = R.box.diagonal(), ld = L.box.diagonal();
+    if (cnt == 0) return rd > ld ? SplitMode::Receiver : SplitMode::Light;
+    Vec3d c = sum * (1.0 / cnt);
+    {
+      ScopedTimer t(times_[kTree]);
+      rtree_->split(sh.r);
+      ltree_->split(sh.l);
+    }
+    if (!R.split_done()) return SplitMode::Light;
+    if (!L.split_done()) return SplitMode::Receiver;
+    MainAxis ax{sh.g.main_axis(), sh.g.dir()};
+    double dr = 0.5 * (geometry(R.left, sh.l, ax).boundary_distance(c) + geometry(R.right, sh.l, ax).boundary_distance(c));
+    double dl = 0.5 * (geometry(sh.r, L.left, ax).boundary_distance(c) + geometry(sh.r, L.right, ax).boundary_distance(c));
+    return dr <= dl ? SplitMode::Receiver : SplitMode::Light;
+  }
+
+  // ---- section 4.9: traversal ------------------------------------------------------------
+  // SHAFT-TRAVERSE (Figure 4.33).
+  void shaft_traverse(Shaft& sh) {
+    // Lines 1-4: blocked? drop redundant surfaces (section 4.7.8).
+    for (size_t k = 0; k < sh.surfaces.size();) {
+      Surface& s = sh.surfaces[k];
+      bool blocked;
+      {
+        ScopedTimer t(times_[kBlocking]);
+        ++n_blocking_tests_;
+        blocked = blocks_shaft(s, sh.g);
+      }
+      if (blocked) {
+        record_blocked(sh.r, sh.l);
+        return;
+      }
+      if (all_edges_outside(s)) {
+        sh.ghosts.push_back(s.box);
+        ++n_removed_;
+        if (k + 1 != sh.surfaces.size()) sh.surfaces[k] = std::move(sh.surfaces.back());
+        sh.surfaces.pop_back();
+        continue;
+      }
+      ++k;
+    }
+    TreeNode& R = rn(sh.r);
+    TreeNode& L = ln(sh.l);
+    // Section 4.12: an empty shaft between nodes free of triangles is all visible.
+    if (sh.surfaces.empty() && sh.ghosts.empty() && !R.had_triangles && !L.had_triangles) {
+      record_visible(sh.r, sh.l);
+      return;
+    }
+    // Lines 5-8.
+    if (R.is_leaf && L.is_leaf) {
+      cast_rays(sh.r, sh.l, &sh, nullptr);
+      return;
+    }
+    SplitMode mode;
+    if (R.is_leaf) mode = SplitMode::Light;
+    else if (L.is_leaf) mode = SplitMode::Receiver;
+    else mode = choose_split(sh);
+    if (mode == SplitMode::Receiver) {
+      { ScopedTimer t(times_[kTree]); rtree_->split(sh.r); }
+      if (!rn(sh.r).split_done()) {  // could not be split after all (identical points)
+        if (ln(sh.l).is_leaf) { cast_rays(sh.r, sh.l, &sh, nullptr); return; }
+        mode = SplitMode::Light;
+      }
+    }
+    if (mode == SplitMode::Light) {
+      { ScopedTimer t(times_[kTree]); ltree_->split(sh.l); }
+      if (!ln(sh.l).split_done()) {
+        if (rn(sh.r).is_leaf || !(rtree_->split(sh.r), rn(sh.r).split_done())) {
+          cast_rays(sh.r, sh.l, &sh, nullptr);
+          return;
+        }
+        mode = SplitMode::Receiver;
+      }
+    }
+    for (int side = 0; side < 2; ++side) {
+      int r = sh.r, l = sh.l, split;
+      if (mode == SplitMode::Receiver) split = r = side == 0 ? rn(sh.r).left : rn(sh.r).right;
+      else split = l = side == 0 ? ln(sh.l).left : ln(sh.l).right;
+      const TreeNode& sn = mode == SplitMode::Receiver ? rn(split) : ln(split);
+      Shaft sub = construct_sub_shaft(r, l, sn, sh, side == 1);
+      shaft_traverse(sub);
+      release(sub);
+    }
+  }
+
+  // PRE-TRAVERSE (Figure 4.32).
+  void pre_traverse(int r, int l, const std::vector<uint32_t>& tris) {
+    TreeNode& R = rn(r);
+    TreeNode& L = ln(l);
+    if (!R.box.overlaps(L.box)) {
+      MainAxis ax = choose_main_axis(R.box, L.box);
+      if (ax.axis >= 0) {
+        Shaft sh = construct_initial_shaft(r, l, ax, tris);
+        shaft_traverse(sh);
+        release(sh);
+        return;
+      }
+    }
+    std::vector<uint32_t> new_tris;
+    {
+      ShaftGeometry g = geometry(r, l, MainAxis{});
+      for (uint32_t t : tris)
+        if (g.may_intersect_triangle(to_double(mesh_.corner(t, 0)), to_double(mesh_.corner(t, 1)),
+                                     to_double(mesh_.corner(t, 2))))
+          new_tris.push_back(t);
+    }
+    double rd = R.box.diagonal(), ld = L.box.diagonal();
+    if (!R.is_leaf && (rd > ld || L.is_leaf)) {
+      { ScopedTimer t(times_[kTree]); rtree_->split(r); }
+      if (rn(r).split_done()) {
+        int a = rn(r).left, b = rn(r).right;
+        pre_traverse(a, l, new_tris);
+        pre_traverse(b, l, new_tris);
+        return;
+      }
+    }
+    if (!ln(l).is_leaf) {
+      { ScopedTimer t(times_[kTree]); ltree_->split(l); }
+      if (ln(l).split_done()) {
+        int a = ln(l).left, b = ln(l).right;
+        pre_traverse(r, a, new_tris);
+        pre_traverse(r, b, new_tris);
+        return;
+      }
+    }
+    if (!rn(r).is_leaf) {
+      { ScopedTimer t(times_[kTree]); rtree_->split(r); }
+      if (rn(r).split_done()) {
+        int a = rn(r).left, b = rn(r).right;
+        pre_traverse(a, l, new_tris);
+        pre_traverse(b, l, new_tris);
+        return;
+      }
+    }
+    // Both nodes are leaves: cannot continue (line 26).
+    cast_rays(r, l, nullptr, &new_tris);
+  }
+
+  const Scene& scene_;
+  const mesh::PreparedMesh& mesh_;
+  Params p_;
+  SolveResult& result_;
+  BlockerContext ctx_;
+  double scale_ = 1.0;
+  std::vector<AABB> tri_boxes_;
+  std::unique_ptr<PointTree> rtree_, ltree_;
+  const Light* light_ = nullptr;
+  size_t light_offset_ = 0;
+  const raycast::EmbreeScene* embree_ = nullptr;
+  Workspace ws_;
+  double times_[kTimerCount] = {};
+  double n_blocked_shaft_ = 0, n_empty_ = 0, n_rays_ = 0, n_rays_blocked_ = 0, n_shafts_ = 0, n_blocking_tests_ = 0;
+  double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0;
+  size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
+};
+
+}  // namespace
+
+void set_validate_all(bool on) { g_validate = on; }
+bool validate_all() { return g_validate; }
+
+std::vector<OptionSpec> IssSolver::options() const {
+  return {
+      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 64)", {}},
+      {"leaf_samples", "maximum light samples in a light-tree leaf (default 16)", {}},
+      {"ray_caster", "leaf relations by Embree rays or the custom shaft ray caster of section 4.10", {"embree", "custom"}},
+      {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
+  };
+}
+
+SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
+  ThreadLimit limit(opt.threads);
+  Params p;
+  p.leaf_receivers = int(std::max(1L, opt.get_int("leaf_receivers", p.leaf_receivers)));
+  p.leaf_samples = int(std::max(1L, opt.get_int("leaf_samples", p.leaf_samples)));
+  p.custom_rays = opt.get("ray_caster", "embree") == "custom";
+  p.postpone = opt.get_bool("postpone", true);
+
+  auto tp0 = Clock::now();
+  mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);
+  auto t0 = Clock::now();
+  SolveResult result = make_empty_result(scene);
+  // The Embree scene (robust flags) is needed for leaf rays, and by the custom caster
+  // only as a fallback next to removed surfaces.
+  double embree_build = 0;
+  auto tb = Clock::now();
+  raycast::EmbreeScene es(scene.mesh, true);
+  embree_build = std::chrono::duration<double>(Clock::now() - tb).count();
+  Traversal tr(scene, m, p, result);
+  tr.set_embree(&es);
+  for (size_t l = 0; l < scene.lights.size(); ++l) tr.run_light(l);
+  auto t1 = Clock::now();
+  fractions_from_bits(scene, result);
+  result.seconds = std::chrono::duration<double>(t1 - t0).count();
+  tr.finish_stats(result.stats);
+  result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
+  result.stats.set("time_embree_build", embree_build);
+  result.stats.set("leaf_receivers", p.leaf_receivers);
+  result.stats.set("leaf_samples", p.leaf_samples);
+  return result;
+}
+
+}  // namespace visgate::iss

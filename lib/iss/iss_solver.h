@@ -1,0 +1,48 @@
+// `iss`: the Incremental Shaft Subdivision algorithm, paper 000 chapter 4 (DESIGN
+// section 4). Lazy receiver and light-sample trees (4.3, one light tree per light, the
+// receiver tree shared), shafts between tree nodes (4.4.1), blockers as patches and
+// surfaces (4.4.2), clipping and clamping (4.5), the winding-number blocking test (4.6),
+// incremental sub-shaft construction (4.7, with postponing 4.7.9 as an option), the two
+// traversal stages with CHOOSE-SPLIT (4.8, 4.9), leaf relations by Embree rays or by the
+// custom ray caster (4.10), jitter boxes (4.11) and empty shafts (4.12).
+//
+// Options: leaf_receivers, leaf_samples (maximum points in a leaf), ray_caster =
+// embree | custom, postpone = on | off.
+//
+// Guarantee. A relation is reported blocked without a ray only when a shaft containing
+// it passed BLOCKS-SHAFT, which is conservative (blockers.h): every open segment between
+// the two node boxes then meets a blocker triangle (touching counts, as in DESIGN 3). A
+// relation is reported visible without a ray only by the empty-shaft rule: no surface in
+// the shaft, no removed (redundant) surface whose box meets the shaft, and no triangle in
+// either node's conservative inside list; every triangle that can meet the shaft is
+// represented (gone lists, conservative shaft tests), so no triangle meets the segment.
+// Every geometric predicate is evaluated in double with the outward margins of shaft.h,
+// so float rounding only ever sends a relation down to a ray. The remaining relations
+// are answered by the leaf ray caster and carry its guarantee: Embree with
+// RTC_SCENE_FLAG_ROBUST (float32, endpoint behaviour as embree_solver.h), or the custom
+// caster (double-precision orientation tests and winding numbers, falling back to the
+// Embree ray where a removed surface's box meets the ray). Both can misjudge only
+// relations within float rounding of a degenerate configuration (oracle margin ~1e-7
+// relative), i.e. below the gate's tau.
+//
+// Threads: the traversal is single-threaded (the thesis measures one thread); the
+// Embree BVH build uses TBB within opt.threads.
+#pragma once
+
+#include "lib/solver.h"
+
+namespace visgate::iss {
+
+// Runs validate() after every operation on every surface when set (tests switch it
+// on; debug builds start with it on). Not thread-safe to toggle during a solve.
+void set_validate_all(bool on);
+bool validate_all();
+
+class IssSolver : public Solver {
+ public:
+  std::string name() const override { return "iss"; }
+  std::vector<OptionSpec> options() const override;
+  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+};
+
+}  // namespace visgate::iss

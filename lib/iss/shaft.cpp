@@ -1,0 +1,274 @@
+// Shaft geometry and conservative predicates (paper 000 sections 4.4.1, 4.5; see shaft.h).
+#include "lib/iss/shaft.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace visgate::iss {
+
+namespace {
+
+constexpr double kTolFactor = 0x1p-40;  // derivation in shaft.h
+
+double l1(const Vec3d& n) { return std::abs(n.x) + std::abs(n.y) + std::abs(n.z); }
+
+}  // namespace
+
+MainAxis choose_main_axis(const AABB& receiver, const AABB& light) {
+  MainAxis m;
+  double best = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    double up = double(light.lo[k]) - double(receiver.hi[k]);    // receiver below light
+    double down = double(receiver.lo[k]) - double(light.hi[k]);  // receiver above light
+    if (up > best) { best = up; m.axis = k; m.dir = 1; }
+    if (down > best) { best = down; m.axis = k; m.dir = -1; }
+  }
+  return m;
+}
+
+Plane4d plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double scale) {
+  Plane4d p;
+  p.n = cross(b - a, c - a);
+  p.d = dot(p.n, a);
+  p.tol = kTolFactor * l1(p.n) * scale;
+  return p;
+}
+
+void ShaftGeometry::add_plane(const Vec3d& n, double d) {
+  Plane4d p;
+  p.n = n;
+  p.d = d;
+  p.tol = kTolFactor * l1(n) * scale_;
+  planes_[size_t(count_++)] = p;
+}
+
+ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis axis, double scale)
+    : r_(to_aabbd(receiver)), l_(to_aabbd(light)), axis_(axis), scale_(scale) {
+  for (int i = 0; i < 8; ++i) {
+    corners_[size_t(i)] = Vec3d(i & 1 ? r_.hi.x : r_.lo.x, i & 2 ? r_.hi.y : r_.lo.y, i & 4 ? r_.hi.z : r_.lo.z);
+    corners_[size_t(8 + i)] = Vec3d(i & 1 ? l_.hi.x : l_.lo.x, i & 2 ? l_.hi.y : l_.lo.y, i & 4 ? l_.hi.z : l_.lo.z);
+  }
+  // Axis-aligned planes: the common bounding box.
+  AABBd all = r_;
+  all.extend(l_);
+  for (int k = 0; k < 3; ++k) {
+    Vec3d n(0, 0, 0);
+    n[k] = 1.0;
+    add_plane(n, all.hi[k]);
+    n[k] = -1.0;
+    add_plane(n, -all.lo[k]);
+  }
+  // Oblique planes: supporting lines of the 2D hull of the two projected rectangles
+  // that pass through one corner of each (Figure 4.3b). Differences of float
+  // coordinates are exact in double, so the support test is exact up to one rounding
+  // per product; a plane that fails it only makes the shaft larger (conservative).
+  for (int i = 0; i < 3; ++i) {
+    for (int j = i + 1; j < 3; ++j) {
+      double rx[2] = {r_.lo[i], r_.hi[i]}, ry[2] = {r_.lo[j], r_.hi[j]};
+      double lx[2] = {l_.lo[i], l_.hi[i]}, ly[2] = {l_.lo[j], l_.hi[j]};
+      // The support point of either rectangle in an oblique outward direction is the
+      // corner picked by the direction's signs, the same corner type for both, so only
+      // corresponding corners can span an oblique hull edge.
+      for (int a = 0; a < 4; ++a) {
+        for (int b = a; b == a; ++b) {
+          double px = rx[a & 1], py = ry[a >> 1], qx = lx[b & 1], qy = ly[b >> 1];
+          double dx = qx - px, dy = qy - py;
+          if (dx == 0.0 || dy == 0.0) continue;  // axis-aligned: covered by the box
+          // Line normal (dy, -dx); pick the sign that puts every corner on the <= side.
+          for (double s : {1.0, -1.0}) {
+            double nx = s * dy, ny = -s * dx;
+            double d = nx * px + ny * py;
+            bool support = true;
+            for (int c = 0; c < 4 && support; ++c) {
+              if (nx * rx[c & 1] + ny * ry[c >> 1] > d) support = false;
+              if (nx * lx[c & 1] + ny * ly[c >> 1] > d) support = false;
+            }
+            if (!support) continue;
+            Vec3d n(0, 0, 0);
+            n[i] = nx;
+            n[j] = ny;
+            bool dup = false;
+            for (int k = 6; k < count_; ++k) {
+              const Plane4d& o = planes_[size_t(k)];
+              if (cross(o.n, n) == Vec3d(0, 0, 0) && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
+            }
+            if (!dup && count_ < int(planes_.size())) add_plane(n, d);
+          }
+        }
+      }
+    }
+  }
+  if (axis_.axis >= 0) {
+    int a = axis_.axis;
+    if (axis_.dir > 0) {
+      clip_lo_ = r_.lo[a];
+      clip_hi_ = l_.hi[a];
+    } else {
+      clip_lo_ = l_.lo[a];
+      clip_hi_ = r_.hi[a];
+    }
+  }
+}
+
+bool ShaftGeometry::may_contain_point(const Vec3d& p) const {
+  for (int i = 0; i < count_; ++i)
+    if (planes_[size_t(i)].eval(p) > planes_[size_t(i)].tol) return false;
+  return true;
+}
+
+bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const {
+  // Cyrus-Beck clipping of the parameter interval against every plane, each plane
+  // moved outwards by its tolerance.
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < count_; ++i) {
+    const Plane4d& p = planes_[size_t(i)];
+    double ea = p.eval(a) - p.tol, eb = p.eval(b) - p.tol;
+    if (ea > 0 && eb > 0) return false;
+    if (ea <= 0 && eb <= 0) continue;
+    double t = ea / (ea - eb);
+    if (ea > 0) t0 = std::max(t0, t);
+    else t1 = std::min(t1, t);
+    // Interval test with slack for the division's rounding (relative 2^-50).
+    if (t0 > t1 + 0x1p-40) return false;
+  }
+  return true;
+}
+
+bool ShaftGeometry::may_intersect_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+  // Separated by a shaft plane.
+  for (int i = 0; i < count_; ++i) {
+    const Plane4d& p = planes_[size_t(i)];
+    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return false;
+  }
+  // Separated by the triangle's plane: every box corner strictly on one side.
+  Plane4d tp = plane_through(a, b, c, scale_);
+  if (tp.n == Vec3d(0, 0, 0)) return true;
+  bool all_pos = true, all_neg = true;
+  for (const Vec3d& q : corners_) {
+    double e = tp.eval(q);
+    if (!(e > tp.tol)) all_pos = false;
+    if (!(e < -tp.tol)) all_neg = false;
+  }
+  return !(all_pos || all_neg);
+}
+
+bool ShaftGeometry::may_intersect_box(const AABBd& b) const {
+  for (int i = 0; i < count_; ++i) {
+    const Plane4d& p = planes_[size_t(i)];
+    // Box corner nearest to the plane's inside.
+    Vec3d q(p.n.x > 0 ? b.lo.x : b.hi.x, p.n.y > 0 ? b.lo.y : b.hi.y, p.n.z > 0 ? b.lo.z : b.hi.z);
+    if (p.eval(q) > p.tol) return false;
+  }
+  return true;
+}
+
+bool ShaftGeometry::prism_may_intersect(const AABBd& face_box, int away_sign, const Vec3d& a, const Vec3d& b,
+                                        const Vec3d& c) const {
+  // Prism = face rectangle (face_box flattened on the main axis) swept along
+  // away_sign * e_axis to infinity. Separated by one of its five planes?
+  int ax = axis_.axis;
+  for (int k = 0; k < 3; ++k) {
+    if (k == ax) {
+      double f = face_box.lo[k];  // the face coordinate (lo == hi on this axis)
+      double tol = kTolFactor * scale_;
+      // Inside the prism means away_sign * (x - f) >= 0.
+      if (away_sign * (a[k] - f) < -tol && away_sign * (b[k] - f) < -tol && away_sign * (c[k] - f) < -tol)
+        return false;
+      continue;
+    }
+    double tol = kTolFactor * scale_;
+    if (a[k] > face_box.hi[k] + tol && b[k] > face_box.hi[k] + tol && c[k] > face_box.hi[k] + tol) return false;
+    if (a[k] < face_box.lo[k] - tol && b[k] < face_box.lo[k] - tol && c[k] < face_box.lo[k] - tol) return false;
+  }
+  // Separated by the triangle's plane: the face corners strictly on one side and the
+  // sweep direction not leading back towards the plane.
+  Plane4d tp = plane_through(a, b, c, scale_);
+  if (tp.n == Vec3d(0, 0, 0)) return true;
+  int i1 = (ax + 1) % 3, i2 = (ax + 2) % 3;
+  bool all_pos = true, all_neg = true;
+  for (int q = 0; q < 4; ++q) {
+    Vec3d p;
+    p[ax] = face_box.lo[ax];
+    p[i1] = q & 1 ? face_box.hi[i1] : face_box.lo[i1];
+    p[i2] = q & 2 ? face_box.hi[i2] : face_box.lo[i2];
+    double e = tp.eval(p);
+    if (!(e > tp.tol)) all_pos = false;
+    if (!(e < -tp.tol)) all_neg = false;
+  }
+  double sweep = away_sign * tp.n[ax];
+  if (all_pos && sweep >= 0) return false;
+  if (all_neg && sweep <= 0) return false;
+  return true;
+}
+
+bool ShaftGeometry::may_intersect_extended(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+  if (may_intersect_triangle(a, b, c)) return true;
+  int ax = axis_.axis;
+  // Receiver's outer face, extruded away from the light; light's outer face likewise.
+  AABBd rf = r_, lf = l_;
+  if (axis_.dir > 0) {
+    rf.hi[ax] = rf.lo[ax];
+    lf.lo[ax] = lf.hi[ax];
+  } else {
+    rf.lo[ax] = rf.hi[ax];
+    lf.hi[ax] = lf.lo[ax];
+  }
+  if (prism_may_intersect(rf, -axis_.dir, a, b, c)) return true;
+  if (prism_may_intersect(lf, axis_.dir, a, b, c)) return true;
+  return false;
+}
+
+double ShaftGeometry::boundary_distance(const Vec3d& p) const {
+  double inside = 1e300, outside = 0.0;
+  bool is_out = false;
+  for (int i = 0; i < count_; ++i) {
+    const Plane4d& pl = planes_[size_t(i)];
+    double e = pl.eval(p) / length(pl.n);
+    if (e > 0) {
+      is_out = true;
+      outside = std::max(outside, e);
+    } else {
+      inside = std::min(inside, -e);
+    }
+  }
+  return is_out ? outside : inside;
+}
+
+void ShaftGeometry::test_segment(Vec3d& q_receiver, Vec3d& q_light) const {
+  int ax = axis_.axis;
+  q_receiver = (r_.lo + r_.hi) * 0.5;
+  q_light = (l_.lo + l_.hi) * 0.5;
+  q_receiver[ax] = axis_.dir > 0 ? r_.lo[ax] : r_.hi[ax];
+  q_light[ax] = axis_.dir > 0 ? l_.hi[ax] : l_.lo[ax];
+}
+
+bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  auto orient = [](const Vec3d& u, const Vec3d& v, const Vec3d& w, const Vec3d& x) {
+    return dot(cross(v - u, w - u), x - u);
+  };
+  double s1 = orient(a, b, c, p), s2 = orient(a, b, c, q);
+  // The plane must be crossed strictly inside the open segment.
+  if (!((s1 > 0 && s2 < 0) || (s1 < 0 && s2 > 0))) return false;
+  double o1 = orient(p, q, a, b), o2 = orient(p, q, b, c), o3 = orient(p, q, c, a);
+  return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
+}
+
+bool segment_may_hit_box(const Vec3d& p, const Vec3d& q, const AABBd& box, double grow) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int k = 0; k < 3; ++k) {
+    double lo = box.lo[k] - grow, hi = box.hi[k] + grow;
+    double d = q[k] - p[k];
+    if (d == 0.0) {
+      if (p[k] < lo || p[k] > hi) return false;
+      continue;
+    }
+    double ta = (lo - p[k]) / d, tb = (hi - p[k]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1 + 0x1p-40) return false;
+  }
+  return true;
+}
+
+}  // namespace visgate::iss

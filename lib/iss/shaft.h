@@ -1,0 +1,107 @@
+// Shaft geometry of the ISS algorithm (paper 000 section 4.4.1): the convex hull of a
+// receiver-node box and a light-node box as an intersection of half-spaces, built from
+// the three 2D projections (Figure 4.3), its main axis and clip planes (section 4.5),
+// and the conservative geometric predicates every other ISS routine relies on.
+//
+// Guarantee (conservative): every predicate named `may_*` answers true whenever the
+// exact answer on the stored inputs is true. Planes are evaluated in double on float32
+// (or double clip-vertex) inputs and a point counts as outside a plane only when it is
+// beyond it by more than `tolerance(plane)` = 2^-40 * |n|_1 * S, S the largest absolute
+// coordinate of the scene. Derivation: n.p - d over coordinates bounded by S has a
+// rounding error below 8 * 2^-53 * |n|_1 * S (three products, two sums, d itself rounded
+// once), so 2^-40 leaves a factor 2^10 of slack, which also covers clip vertices that are
+// off their exact position by a few double ulps. The price is that touching or nearly
+// touching geometry counts as intersecting, which only ever makes ISS subdivide more.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "lib/geom/aabb.h"
+#include "lib/geom/vec.h"
+
+namespace visgate::iss {
+
+struct Plane4d {
+  Vec3d n{};
+  double d = 0.0;
+  double tol = 0.0;  // conservative evaluation margin, see the file comment
+  double eval(const Vec3d& p) const { return dot(n, p) - d; }
+};
+
+struct AABBd {
+  Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  void extend(const Vec3d& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
+  void extend(const AABBd& b) { lo = vmin(lo, b.lo); hi = vmax(hi, b.hi); }
+  bool empty() const { return lo.x > hi.x; }
+};
+
+inline AABBd to_aabbd(const AABB& b) { return AABBd{to_double(b.lo), to_double(b.hi)}; }
+
+// Main axis of a pair of disjoint boxes: the axis with the widest gap; dir = +1 when the
+// receiver box lies below the light box on it, -1 otherwise; -1 axis when they overlap.
+struct MainAxis {
+  int axis = -1;
+  int dir = 1;
+};
+MainAxis choose_main_axis(const AABB& receiver, const AABB& light);
+
+class ShaftGeometry {
+ public:
+  // Hull of the two boxes. `scale` is S of the file comment. `axis` may be -1 for
+  // overlapping boxes (pre-traversal): then clip planes and extrusions are undefined.
+  ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis axis, double scale);
+  ShaftGeometry() : scale_(1.0) {}
+
+  const AABBd& receiver() const { return r_; }
+  const AABBd& light() const { return l_; }
+  int main_axis() const { return axis_.axis; }
+  int dir() const { return axis_.dir; }
+  // Clip planes (section 4.5): the outer faces of the two boxes along the main axis, so
+  // the slab [clip_lo, clip_hi] only shrinks when a node is split.
+  double clip_lo() const { return clip_lo_; }
+  double clip_hi() const { return clip_hi_; }
+  double scale() const { return scale_; }
+  int plane_count() const { return count_; }
+  const Plane4d& plane(int i) const { return planes_[size_t(i)]; }
+
+  bool may_contain_point(const Vec3d& p) const;
+  bool may_intersect_segment(const Vec3d& a, const Vec3d& b) const;
+  bool may_intersect_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
+  bool may_intersect_box(const AABBd& b) const;
+  // The extended region E = hull + the receiver box's outer face extruded away from
+  // the light + the light box's outer face extruded away from the receiver. E shrinks
+  // with every sub-shaft; patch simplification (4.7.5) keeps every collapsed triangle
+  // outside E so that clamping (4.5) never projects blocker parts onto a node face.
+  bool may_intersect_extended(const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
+  // Distance from p to the shaft boundary (positive inside and outside), for CHOOSE-SPLIT.
+  double boundary_distance(const Vec3d& p) const;
+  // The test segment of section 4.6.2: centre of the receiver box's outer face to the
+  // centre of the light box's outer face.
+  void test_segment(Vec3d& q_receiver, Vec3d& q_light) const;
+
+ private:
+  void add_plane(const Vec3d& n, double d);
+  bool prism_may_intersect(const AABBd& face_box, int away_sign, const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
+
+  AABBd r_, l_;
+  MainAxis axis_;
+  double scale_;
+  double clip_lo_ = 0, clip_hi_ = 0;
+  std::array<Plane4d, 18> planes_{};  // 6 box planes + at most 4 oblique per projection
+  std::array<Vec3d, 16> corners_{};   // both boxes' corners
+  int count_ = 0;
+};
+
+// Plane through three points in double with its tolerance for coordinates up to `scale`.
+Plane4d plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double scale);
+
+// Open-segment / triangle test in double (touching the interior of the segment counts
+// as a hit, an endpoint on the triangle does not), used by the custom ray caster for
+// node triangles and inconsistent patches. Float-exact inputs, double evaluation:
+// wrong only for relations within double rounding of a degenerate configuration.
+bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c);
+// Segment / box overlap (slab test) with the box grown by `grow`.
+bool segment_may_hit_box(const Vec3d& p, const Vec3d& q, const AABBd& box, double grow);
+
+}  // namespace visgate::iss

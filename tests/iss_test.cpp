@@ -1,0 +1,361 @@
+// lib/iss: Incremental Shaft Subdivision (paper 000 chapter 4) against hand-worked
+// scenes (Figs. 4.15-4.17: torus, pouch, double surface), an independent double
+// reference away from degeneracy, and the exact relation oracle on the scene families.
+// validate() runs after every operation in every test (set_validate_all).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "lib/iss/blockers.h"
+#include "lib/iss/iss_solver.h"
+#include "lib/iss/shaft.h"
+#include "lib/scene/families.h"
+#include "lib/scene/shapes.h"
+#include "lib/solver.h"
+#include "oracle/relation_oracle.h"
+
+using namespace visgate;
+
+namespace {
+
+struct ValidateOn : ::testing::Environment {
+  void SetUp() override { iss::set_validate_all(true); }
+};
+const auto* const kEnv = ::testing::AddGlobalTestEnvironment(new ValidateOn);
+
+const std::vector<std::map<std::string, std::string>> kOptionSets = {
+    {},
+    {{"ray_caster", "custom"}},
+    {{"postpone", "off"}, {"leaf_receivers", "4"}, {"leaf_samples", "1"}},
+    {{"ray_caster", "custom"}, {"postpone", "off"}, {"leaf_receivers", "64"}, {"leaf_samples", "16"}},
+};
+
+SolveResult run_iss(const Scene& s, const std::map<std::string, std::string>& o) {
+  iss::IssSolver solver;
+  SolveOptions so;
+  so.opts = o;
+  so.threads = 1;
+  EXPECT_TRUE(solver.check_options(so).ok());
+  return solver.solve(s, so);
+}
+
+std::string describe(const std::map<std::string, std::string>& o) {
+  std::string d;
+  for (const auto& [k, v] : o) d += k + "=" + v + " ";
+  return d.empty() ? "defaults" : d;
+}
+
+// Independent reference: orientation tests in double; -1 when some triangle is within
+// `eps` (relative to the scene extent cubed) of changing the answer, else 1 blocked /
+// 0 visible. Touching never counts here because such relations are skipped.
+int reference(const Scene& s, const Vec3f& pf, const Vec3f& qf, double eps) {
+  AABB b = s.bounds();
+  double ext = length(to_double(b.hi) - to_double(b.lo));
+  double tol = eps * ext * ext * ext;
+  Vec3d p = to_double(pf), q = to_double(qf);
+  auto orient = [](const Vec3d& a, const Vec3d& b2, const Vec3d& c, const Vec3d& d) {
+    return dot(cross(b2 - a, c - a), d - a);
+  };
+  int result = 0;
+  for (size_t t = 0; t < s.mesh.size(); ++t) {
+    Vec3d a = to_double(s.mesh.corner(t, 0)), b2 = to_double(s.mesh.corner(t, 1)), c = to_double(s.mesh.corner(t, 2));
+    double s1 = orient(a, b2, c, p), s2 = orient(a, b2, c, q);
+    if ((s1 > tol && s2 > tol) || (s1 < -tol && s2 < -tol)) continue;
+    double o1 = orient(p, q, a, b2), o2 = orient(p, q, b2, c), o3 = orient(p, q, c, a);
+    if ((o1 > tol && o2 > tol && o3 > tol) || (o1 < -tol && o2 < -tol && o3 < -tol)) {
+      if (std::abs(s1) <= tol || std::abs(s2) <= tol) return -1;
+      result = 1;
+      continue;
+    }
+    bool miss = (o1 > tol || o2 > tol || o3 > tol) && (o1 < -tol || o2 < -tol || o3 < -tol);
+    if (!miss) return -1;
+  }
+  return result;
+}
+
+struct Compare {
+  size_t checked = 0, mismatches = 0;
+};
+
+Compare compare_to_reference(const Scene& s, const SolveResult& r, double eps = 1e-9) {
+  Compare c;
+  for (size_t i = 0; i < s.receivers.size(); ++i) {
+    for (size_t l = 0; l < s.lights.size(); ++l) {
+      for (int j = 0; j < s.lights[l].samples; ++j) {
+        int ref = reference(s, s.receivers[i].p, sample_position(s.lights[l], j, i), eps);
+        if (ref < 0) continue;
+        ++c.checked;
+        bool vis = r.receivers[i].visible(s.light_offset(l) + size_t(j));
+        if (vis != (ref == 0)) ++c.mismatches;
+      }
+    }
+  }
+  return c;
+}
+
+// A square light of half-size `half` at height z (emitting down), `n` x `n` samples.
+Light square_light(double cx, double cy, double z, double half, int samples, uint64_t seed = 3) {
+  return make_square_light_down(Vec3d(cx, cy, z), half, samples, seed);
+}
+
+void add_receiver_grid(Scene& s, double x0, double x1, double y0, double y1, double z, int n) {
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a) {
+      float x = float(x0 + (x1 - x0) * (a + 0.5) / n), y = float(y0 + (y1 - y0) * (b + 0.5) / n);
+      s.receivers.push_back({Vec3f(x, y, float(z)), Vec3f(0, 0, 1)});
+    }
+}
+
+double count_visible(const Scene& s, const SolveResult& r) {
+  double v = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < s.samples_per_receiver(); ++k) v += r.receivers[i].visible(k);
+  return v;
+}
+
+}  // namespace
+
+// ---- shaft geometry (section 4.4.1) ----------------------------------------------------
+
+TEST(IssShaft, HullContainsEveryBoxToBoxSegment) {
+  std::mt19937 rng(7);
+  for (double offset : {0.0, 1e5}) {  // near and far from the origin
+    std::uniform_real_distribution<float> u(-5, 5);
+    for (int it = 0; it < 200; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      AABB r(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      AABB l(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
+      for (int k = 0; k < 20; ++k) {
+        std::uniform_real_distribution<double> t(0, 1);
+        Vec3d p, q;
+        for (int a = 0; a < 3; ++a) {
+          p[a] = r.lo[a] + (double(r.hi[a]) - r.lo[a]) * t(rng);
+          q[a] = l.lo[a] + (double(l.hi[a]) - l.lo[a]) * t(rng);
+        }
+        Vec3d x = p + (q - p) * t(rng);
+        ASSERT_TRUE(g.may_contain_point(x));
+        ASSERT_TRUE(g.may_intersect_segment(p, q));
+      }
+      // A point beyond the common bounding box is outside.
+      Vec3d far = to_double(vmax(r.hi, l.hi)) + Vec3d(1, 1, 1);
+      EXPECT_FALSE(g.may_contain_point(far));
+    }
+  }
+}
+
+TEST(IssShaft, ObliquePlanesCutTheCommonBox) {
+  // Unit box at the origin, unit box at (10, 10, 0): the hull excludes (0, 10, 0.5).
+  AABB r(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), l(Vec3f(10, 10, 0), Vec3f(11, 11, 1));
+  iss::MainAxis ax = iss::choose_main_axis(r, l);
+  EXPECT_GE(ax.axis, 0);
+  iss::ShaftGeometry g(r, l, ax, 11);
+  EXPECT_FALSE(g.may_contain_point(Vec3d(0.5, 10, 0.5)));
+  EXPECT_TRUE(g.may_contain_point(Vec3d(5.5, 5.5, 0.5)));
+  // Exactly on the hull boundary counts as inside (conservative).
+  EXPECT_TRUE(g.may_contain_point(Vec3d(1, 0, 0)));
+  EXPECT_GT(g.plane_count(), 6);
+}
+
+TEST(IssShaft, SegmentTriangleTestExcludesEndpoints) {
+  Vec3d a(-1, -1, 0), b(1, -1, 0), c(0, 1, 0);
+  EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, 0, -1), Vec3d(0, 0, 1), a, b, c));
+  EXPECT_FALSE(iss::segment_hits_triangle_d(Vec3d(0, 0, 0), Vec3d(0, 0, 1), a, b, c));  // endpoint on it
+  EXPECT_FALSE(iss::segment_hits_triangle_d(Vec3d(5, 0, -1), Vec3d(5, 0, 1), a, b, c));
+  // Through an edge: touching counts as intersecting (DESIGN 3).
+  EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, -1, -1), Vec3d(0, -1, 1), a, b, c));
+}
+
+// ---- blocker representation and validate() (sections 4.4.2, 4.13) -----------------------
+
+TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
+  iss::Surface s;
+  Vec3d v[3] = {Vec3d(0, 0, 1), Vec3d(1, 0, 1), Vec3d(0, 1, 1)};
+  for (int k = 0; k < 3; ++k) {
+    iss::RawEdge re;
+    re.v[0] = v[k];
+    re.v[1] = v[(k + 1) % 3];
+    re.nb[1] = 0;
+    s.raw.push_back(re);
+    s.edges.push_back({uint32_t(k), 0});
+  }
+  s.patches.push_back({0, 3, iss::Facing::TowardsReceiver, -1});
+  EXPECT_EQ(iss::validate(s, nullptr), "");
+  iss::Surface broken = s;
+  broken.raw[1].v[1] = Vec3d(5, 5, 5);  // the loop no longer closes
+  EXPECT_NE(iss::validate(broken, nullptr), "");
+  broken = s;
+  broken.raw[2].nb[0] = 0;  // claims a neighbour that does not reference it
+  EXPECT_NE(iss::validate(broken, nullptr), "");
+  broken = s;
+  broken.patches[0].facing = iss::Facing::Inconsistent;  // inconsistent needs its triangle
+  EXPECT_NE(iss::validate(broken, nullptr), "");
+}
+
+// ---- hand-worked scenes -------------------------------------------------------------------
+
+TEST(Iss, TriangleBetweenPointAndLightQuad) {
+  // Same geometry as the raycast test: light quad at z = 2 with explicit 4 x 4 samples,
+  // receiver at the origin, right triangle at z = 1 with legs 1 from (0.05, 0.05).
+  // Blocked exactly for the four samples with x, y in {0.25, 0.75}.
+  Scene s;
+  Light l = square_light(0, 0, 2, 1.0, 16);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  for (int b = 0; b < 4; ++b)
+    for (int a = 0; a < 4; ++a) l.explicit_samples.push_back(Vec3f(-0.75f + 0.5f * a, -0.75f + 0.5f * b, 2.0f));
+  s.lights.push_back(l);
+  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  s.mesh.vertices = {Vec3f(0.05f, 0.05f, 1), Vec3f(1.05f, 0.05f, 1), Vec3f(0.05f, 1.05f, 1)};
+  s.mesh.triangles = {{0, 1, 2}};
+  for (const auto& o : kOptionSets) {
+    SolveResult r = run_iss(s, o);
+    for (int b = 0; b < 4; ++b)
+      for (int a = 0; a < 4; ++a)
+        EXPECT_EQ(r.receivers[0].visible(size_t(b * 4 + a)), !(a >= 2 && b >= 2)) << describe(o) << a << "," << b;
+  }
+}
+
+TEST(Iss, PointsBehindAClosedBoxAreBlockedByShafts) {
+  Scene s;
+  s.lights.push_back(square_light(0, 0, 4, 0.5, 16));
+  add_receiver_grid(s, -0.5, 0.5, -0.5, 0.5, 0, 8);
+  ASSERT_TRUE(finish_scene(s).ok());
+  shapes::add_box(s.mesh, Vec3d(-2, -2, 1.5), Vec3d(2, 2, 2.5));
+  for (const auto& o : kOptionSets) {
+    SolveResult r = run_iss(s, o);
+    EXPECT_EQ(count_visible(s, r), 0.0) << describe(o);
+    // The closed box decides the relations through shafts, not rays.
+    EXPECT_GT(r.stats.get("relations_blocked_by_shaft"), 0.5 * double(s.relation_count())) << describe(o);
+  }
+}
+
+TEST(Iss, TorusHoleLetsLightThrough) {
+  // Torus around the z axis (R = 2, r = 0.5) at z = 2; a small light above the hole.
+  // Receivers under the hole see the light through it (Fig. 4.16: the two boundary
+  // loops cancel); receivers under the body are blocked.
+  Scene s;
+  s.lights.push_back(square_light(0, 0, 4, 0.1, 16));
+  add_receiver_grid(s, -0.3, 0.3, -0.3, 0.3, 0, 6);  // under the hole
+  add_receiver_grid(s, 3.5, 4.5, -0.5, 0.5, 0, 6);   // segments to (0,0,4) cross z=2 at x~2
+  ASSERT_TRUE(finish_scene(s).ok());
+  shapes::add_torus(s.mesh, Vec3d(0, 0, 2), 2.0, 0.5, 32, 16);
+  for (const auto& o : kOptionSets) {
+    SolveResult r = run_iss(s, o);
+    for (size_t i = 0; i < 36; ++i)
+      for (size_t j = 0; j < 16; ++j) EXPECT_TRUE(r.receivers[i].visible(j)) << describe(o) << " hole " << i;
+    for (size_t i = 36; i < 72; ++i)
+      for (size_t j = 0; j < 16; ++j) EXPECT_FALSE(r.receivers[i].visible(j)) << describe(o) << " body " << i;
+    Compare c = compare_to_reference(s, r);
+    EXPECT_EQ(c.mismatches, 0u) << describe(o);
+  }
+}
+
+TEST(Iss, PouchAroundReceiversOpenTowardsTheLight) {
+  // An open sack around the receivers (Fig. 4.15): open towards the light it blocks
+  // nothing seen through the opening; open away from the light it blocks everything.
+  for (bool open_top : {true, false}) {
+    Scene s;
+    s.lights.push_back(square_light(0, 0, 6, 0.2, 16));
+    add_receiver_grid(s, -0.2, 0.2, -0.2, 0.2, -0.5, 5);
+    ASSERT_TRUE(finish_scene(s).ok());
+    shapes::add_open_sphere(s.mesh, Vec3d(0, 0, 0), 1.0, 24, 12, 0.8, open_top);
+    for (const auto& o : kOptionSets) {
+      SolveResult r = run_iss(s, o);
+      double vis = count_visible(s, r);
+      EXPECT_EQ(vis, open_top ? double(s.relation_count()) : 0.0) << describe(o) << " open_top " << open_top;
+      Compare c = compare_to_reference(s, r);
+      EXPECT_EQ(c.mismatches, 0u) << describe(o);
+    }
+  }
+}
+
+TEST(Iss, DoubleSurfaceBlocksByWindingNumberTwo) {
+  // Fig. 4.17: the double cover of a disc, one boundary loop winding twice. Every
+  // segment through the disc crosses both sheets in the same direction: winding 2.
+  Scene s;
+  s.lights.push_back(square_light(0.3, 0.2, 4, 0.1, 16));
+  add_receiver_grid(s, 0.1, 0.5, 0.0, 0.4, 0, 6);
+  ASSERT_TRUE(finish_scene(s).ok());
+  shapes::add_double_cover_disc(s.mesh, Vec3d(0, 0, 2), 3.0, 0.2, 6, 24);
+  for (const auto& o : kOptionSets) {
+    SolveResult r = run_iss(s, o);
+    Compare c = compare_to_reference(s, r);
+    EXPECT_EQ(c.mismatches, 0u) << describe(o);
+    EXPECT_GT(c.checked, s.relation_count() / 2);
+    EXPECT_EQ(count_visible(s, r), 0.0) << describe(o);
+    EXPECT_GT(r.stats.get("relations_blocked_by_shaft"), 0.0) << describe(o);
+  }
+}
+
+TEST(Iss, EmptySceneIsAllVisibleWithoutRays) {
+  Scene s;
+  s.lights.push_back(square_light(0, 0, 4, 0.5, 16));
+  add_receiver_grid(s, -1, 1, -1, 1, 0, 8);
+  ASSERT_TRUE(finish_scene(s).ok());
+  SolveResult r = run_iss(s, {});
+  EXPECT_EQ(count_visible(s, r), double(s.relation_count()));
+  EXPECT_EQ(r.stats.get("relations_ray_cast"), 0.0);
+}
+
+// ---- properties against the double reference ----------------------------------------------
+
+TEST(Iss, RandomSoupsMatchTheReference) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    std::mt19937 rng{uint32_t(seed)};
+    std::uniform_real_distribution<float> u(-2, 2), z(0.5f, 3.5f), e(-0.6f, 0.6f);
+    Scene s;
+    s.lights.push_back(square_light(0, 0, 4, 1.0, 16, seed));
+    s.lights.push_back(square_light(1, -1, 4.5, 0.3, 8, seed + 7));
+    add_receiver_grid(s, -2, 2, -2, 2, 0, 10);
+    ASSERT_TRUE(finish_scene(s).ok());
+    for (int t = 0; t < 40; ++t) {
+      Vec3f c(u(rng), u(rng), z(rng));
+      uint32_t base = uint32_t(s.mesh.vertices.size());
+      for (int k = 0; k < 3; ++k) s.mesh.vertices.push_back(c + Vec3f(e(rng), e(rng), e(rng) * 0.3f));
+      s.mesh.triangles.push_back({base, base + 1, base + 2});
+    }
+    shapes::add_box(s.mesh, Vec3d(-0.5, -0.5, 1.8), Vec3d(0.5, 0.5, 2.2));
+    for (const auto& o : kOptionSets) {
+      SolveResult r = run_iss(s, o);
+      Compare c = compare_to_reference(s, r);
+      EXPECT_EQ(c.mismatches, 0u) << "seed " << seed << " " << describe(o);
+      EXPECT_GT(c.checked, s.relation_count() * 9 / 10);
+    }
+  }
+}
+
+// ---- the exact oracle on the scene families ------------------------------------------------
+
+TEST(IssOracle, FamiliesHaveNoMismatchAboveTau) {
+  const double tau = 1e-5;
+  for (const std::string fam : {"random-soup", "columns", "rooms", "torus", "pouch", "double-surface",
+                                "grid-snapped", "far-origin", "shared-edge-fan", "sliver-soup", "on-surface"}) {
+    if (!is_family(fam)) continue;
+    for (uint64_t seed = 1; seed <= 2; ++seed) {
+      FamilyParams fp;
+      fp.seed = seed;
+      fp.receivers = 256;
+      fp.samples = 16;
+      if (fam == "rooms" || fam == "columns") fp.triangles = 3000;
+      auto gen = generate_family(fam, fp);
+      ASSERT_TRUE(gen.ok()) << fam;
+      Scene& s = gen.value();
+      oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+      for (const auto& o : kOptionSets) {
+        SolveResult r = run_iss(s, o);
+        size_t bad = 0, checked = 0;
+        for (size_t i = 0; i < s.receivers.size(); ++i)
+          for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+            char cls = ex.classes[i][k];
+            if (cls == 'd' || ex.margins[i][k] < tau) continue;
+            ++checked;
+            if (r.receivers[i].visible(k) != (cls == 'v')) ++bad;
+          }
+        EXPECT_EQ(bad, 0u) << fam << " seed " << seed << " " << describe(o) << " checked " << checked;
+      }
+    }
+  }
+}
