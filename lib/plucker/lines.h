@@ -1,0 +1,69 @@
+// Plücker geometry for the lazy BSP (paper 002 sections 3.1-3.3): oriented lines, the
+// side operator in its Plücker and determinant forms, the line/polygon stabbing test by
+// consistent orientation (section 3.2), and the orientation of the lines stabbing an
+// occluder and the light against a hyperplane from the occluder's vvset (Theorem 1).
+//
+// Orientation convention used everywhere in lib/plucker: every line is oriented from the
+// receiver side towards the light. A line stabs a convex polygon v0..vn-1 whose normal
+// (v1 - v0) x (v2 - v0) points towards the light side iff side(line, line(vk, vk+1)) > 0
+// for every edge k (section 3.2, Figure 2).
+//
+// Precision: float32 throughout (as the paper). Every sign is decided with a forward
+// error bound (kDetErr below): a value within the bound is classified Zero, never given a
+// sign it may not have. Signs outside the bound are exact for the float inputs; Zero means
+// "undecided in float" and callers treat it conservatively (Theorem 1 insertion: mixed).
+#pragma once
+
+#include <cstdint>
+
+#include "lib/geom/plucker.h"
+#include "lib/geom/vec.h"
+
+namespace visgate::plucker {
+
+// Unit roundoff of float32 (round to nearest): 2^-24.
+constexpr float kUnitRoundoff = 0x1p-24f;
+
+// Error bound of det[d, a, b] = d . (a x b) where d = x - p, a = a' - p, b = b' - p are
+// float differences of float inputs: 3 roundings in the differences, 2 in each cross
+// component (product, difference), 1 in the product with d, 2 in the sum of three terms:
+// 8 roundings, (1 + u)^8 - 1 < 8.01 u, relative to the permanent sum |d_i a_j b_k| over
+// the six terms, which is at most |d|_1 |a|_1 |b|_1. The bound itself is evaluated in
+// float with at most 9 more roundings of non-negative terms (factor >= 1 - 9.1u), so
+// 12 u |d|_1 |a|_1 |b|_1 (Shewchuk's orient3d errboundA is (7 + 56u) u) is safe.
+constexpr float kDetErr = 12.0f * kUnitRoundoff;
+// Error bound of one component of a x b (a, b float differences): 2 difference
+// roundings per factor pair, 1 product, 1 subtraction: < 4.01 u of |a|_1 |b|_1; doubled.
+constexpr float kCrossErr = 8.0f * kUnitRoundoff;
+
+inline float norm1(const Vec3f& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); }
+
+enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
+
+// side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
+// sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
+// their relative precision.
+inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3f& b) {
+  Vec3f d = x - p, pa = a - p, pb = b - p;
+  float s = dot(d, cross(pa, pb));
+  float bound = kDetErr * norm1(d) * norm1(pa) * norm1(pb);
+  return s > bound ? Sign::Positive : (s < -bound ? Sign::Negative : Sign::Zero);
+}
+
+// Section 3.2: the line stabs the convex polygon (its interior, properly) iff its
+// orientation against every edge line is the same strict sign. Plücker form with
+// precomputed edge coordinates; float, no error bound (used for checks and tests; the
+// BSP uses side_sign).
+bool line_stabs_polygon(const Plucker& line, const Vec3f* poly, int n);
+
+// Theorem 1 (section 3.3). The vvset of an occluder O (vertices o_i, i < n) and the light
+// L (vertices l_j, j < m) is the set of lines o_i -> l_j; it is stored as the directions
+// dir[i * m + j] = l_j - o_i. The orientation of all lines stabbing O and L against the
+// line a -> b is Positive if every vvset line is strictly positive, Negative if every one
+// is strictly negative, Mixed otherwise (including any value within the error bound):
+// conservative, never Positive or Negative for a set that has a line of the other sign.
+enum class Orientation : uint8_t { Positive, Negative, Mixed };
+
+Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, const Vec3f& a, const Vec3f& b);
+
+}  // namespace visgate::plucker

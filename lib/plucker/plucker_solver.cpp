@@ -1,0 +1,534 @@
+// `plucker-bsp`: paper 002 Algorithm 2 around the lazy BSP; see plucker_solver.h.
+#include "lib/plucker/plucker_solver.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <limits>
+#include <mutex>
+
+#include "lib/geom/check.h"
+#include "lib/geom/predicates.h"
+#include "lib/plucker/bsp.h"
+#include "lib/plucker/fragment.h"
+#include "lib/plucker/lines.h"
+#include "lib/plucker/shaft.h"
+#include "lib/scene/rng.h"
+
+namespace visgate::plucker {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Error bound of h(x) = n . (x - p0) in float: 1 rounding in the difference, 1 per
+// product, 2 in the sum: (1 + u)^4 - 1 < 4.01 u of |n|_1 |x - p0|_1; doubled.
+constexpr float kDotErr = 8.0f * kUnitRoundoff;
+
+struct LightFrame {
+  const Light* light = nullptr;
+  std::vector<Vec3f> poly;
+  Vec3f n{}, p0{}, centroid{};
+  float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
+  AABB box;
+  PlaneFrame frame;
+};
+
+LightFrame make_frame(const Light& light) {
+  LightFrame f;
+  f.light = &light;
+  f.poly = light.polygon;
+  f.n = light.normal;
+  f.p0 = light.polygon[0];
+  for (const Vec3f& v : light.polygon) {
+    f.box.extend(v);
+    Vec3f d = v - f.p0;
+    float h = std::abs(dot(f.n, d)) + kDotErr * norm1(f.n) * norm1(d);
+    f.plane_tol = std::max(f.plane_tol, h);
+  }
+  f.frame = PlaneFrame::from_normal(f.n);
+  Vec3d c(0, 0, 0);
+  for (const Vec3f& v : light.polygon) c += to_double(v);
+  f.centroid = Vec3f(c / double(light.polygon.size()));
+  return f;
+}
+
+// A triangle part handled per receiver (plucker_solver.h "near" polygons).
+struct NearPoly {
+  Vec3f v0, e1, e2;  // the triangle's plane: v0 and its edge vectors
+  uint32_t begin, count;
+};
+
+struct Totals {
+  double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
+  uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0;
+  uint64_t bsp_nodes_max = 0;
+  BspCounters bsp;
+  void merge(const Totals& o) {
+    select_s += o.select_s; init_s += o.init_s; query_s += o.query_s; bsp_query_s += o.bsp_query_s;
+    irradiance += o.irradiance;
+    trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
+    fragments += o.fragments; fallback += o.fallback;
+    bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
+    bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
+    bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
+    bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area;
+  }
+};
+
+// Live bytes of the trees shaded at the same time, and their maximum (Figure 8 "MS").
+struct MemoryMeter {
+  std::atomic<int64_t> current{0};
+  std::atomic<int64_t> peak{0};
+  void change(int64_t delta) {
+    int64_t now = current.fetch_add(delta) + delta;
+    int64_t p = peak.load();
+    while (now > p && !peak.compare_exchange_weak(p, now)) {
+    }
+  }
+};
+
+struct Context {
+  const Scene* scene;
+  SolveResult* result;
+  std::vector<double>* irradiance;
+  bool coherence;
+  uint64_t seed;
+  MemoryMeter* memory;
+};
+
+// Subtracts the near polygon q (oriented: the receiver on its negative side) from the
+// fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
+void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const FragmentList& in, FragmentList& out,
+                      std::vector<Vec3f>& cur, std::vector<Vec3f>& pos, std::vector<Vec3f>& neg, BspCounters& c) {
+  out.clear();
+  for (size_t f = 0; f < in.size(); ++f) {
+    // A fragment entirely on the negative side of one edge plane misses q: kept whole,
+    // without the splits the walk below would make before reaching that edge.
+    bool misses = false;
+    for (int m = 0; m < nq && !misses; ++m) {
+      SplitResult s = classify_fragment(r, q[m], q[(m + 1) % nq], in.data(f), in.count(f));
+      misses = s == SplitResult::Negative || s == SplitResult::OnLine;
+    }
+    if (misses) {
+      out.add(in.data(f), size_t(in.count(f)));
+      continue;
+    }
+    cur.assign(in.data(f), in.data(f) + in.count(f));
+    bool alive = true;
+    for (int m = 0; m < nq && alive; ++m) {
+      SplitResult s = split_fragment(r, q[m], q[(m + 1) % nq], cur.data(), int(cur.size()), pos, neg);
+      switch (s) {
+        case SplitResult::Positive: break;
+        case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
+        case SplitResult::Negative: out.add(cur.data(), cur.size()); alive = false; break;
+        case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
+        case SplitResult::Both:
+          ++c.splits;
+          if (!neg.empty()) out.add(neg.data(), neg.size());
+          if (pos.empty()) alive = false;
+          else cur.swap(pos);
+          break;
+      }
+    }
+    // A piece positive against every edge stabs q: blocked, dropped.
+  }
+}
+
+// One receiver on the light plane: float segment tests (plucker_solver.h, degenerate).
+void shade_fallback(const Context& ctx, size_t li, size_t i, Totals& tot) {
+  const Scene& scene = *ctx.scene;
+  const Light& light = scene.lights[li];
+  ReceiverResult& rr = ctx.result->receivers[i];
+  size_t off = scene.light_offset(li);
+  const Vec3f& r = scene.receivers[i].p;
+  int vis = 0;
+  for (int j = 0; j < light.samples; ++j) {
+    Vec3f l = sample_position(light, j, i);
+    bool blocked = false;
+    for (size_t t = 0; t < scene.mesh.size() && !blocked; ++t)
+      blocked = segment_hits_triangle_mt(r, l - r, scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2));
+    rr.set_visible(off + size_t(j), !blocked);
+    vis += !blocked;
+  }
+  rr.visible_fraction[li] = float(double(vis) / double(light.samples));
+  rr.fragments[li].clear();
+  ++tot.fallback;
+}
+
+// Algorithm 2 for one group of receivers (all strictly on the side `sigma` of the light
+// plane) and one light.
+//
+// Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
+// light point x and receiver r. A point p on the line r -> x lies strictly between r
+// and x iff g . p > g . r and h(p) > 0 (h: distance from the light plane, positive on
+// the receivers' side): along the line g grows from r to x and h falls to 0 at x. With
+// gmax the largest g . r of the group, a triangle part with g . p >= gmax + delta and
+// h >= 0 is between every receiver of the group and the light (tree occluders); the
+// band g . p <= gmax + delta is clipped per receiver (near polygons). g is the receiver
+// grid's normal when the light lies beyond the group's grid plane (flat tiles: a band
+// of rounding width), else the light's normal (the band spans the group's depth).
+void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std::vector<uint32_t>& group, float sigma,
+                 uint64_t tree_seed, Totals& tot) {
+  const Scene& scene = *ctx.scene;
+  const Light& light = scene.lights[li];
+  auto height = [&](const Vec3f& x) { return sigma * dot(lf.n, x - lf.p0); };
+
+  // --- Occluder selection (Figure 8 "SC") ---
+  Clock::time_point t0 = Clock::now();
+  AABB rbox;
+  for (uint32_t i : group) rbox.extend(scene.receivers[i].p);
+  // g-values are taken relative to a reference receiver (translation invariant: far
+  // from the origin, g . p in absolute coordinates would lose every digit).
+  const Vec3f ref = scene.receivers[group[0]].p;
+  AABB both = rbox;
+  both.extend(lf.box);
+  float coord_max = max_component(vmax(vabs(both.lo - ref), vabs(both.hi - ref)));
+  auto gval = [&](const Vec3f& g, const Vec3f& p) { return dot(g, p - ref); };
+  auto group_plane = [&](const Vec3f& g, float& gmin, float& gmax) {
+    gmin = std::numeric_limits<float>::infinity();
+    gmax = -gmin;
+    for (uint32_t i : group) {
+      float v = gval(g, scene.receivers[i].p);
+      gmin = std::min(gmin, v);
+      gmax = std::max(gmax, v);
+    }
+  };
+  // delta: g . (p - ref) in float has error < 5.01 u |g|_1 |p - ref|_1 (difference, 3
+  // products, 2 sums); with |p - ref|_inf <= coord_max inside the shaft,
+  // 16 u |g|_1 3 coord_max separates the tree occluders from every receiver plane by
+  // more than the rounding of both sides.
+  Vec3f g = lf.n * (-sigma);
+  float gmin = 0, gmax = 0;
+  group_plane(g, gmin, gmax);
+  if (scene.grid) {
+    Vec3f gn = normalize(scene.grid->normal);
+    float nmin = 0, nmax = 0;
+    group_plane(gn, nmin, nmax);
+    float dlt = 16.0f * kUnitRoundoff * norm1(gn) * 3.0f * coord_max;
+    bool beyond = true, below = true;
+    for (const Vec3f& v : lf.poly) {
+      float gv = gval(gn, v);
+      beyond &= gv > nmax + 2 * dlt;
+      below &= gv < nmin - 2 * dlt;
+    }
+    if (below) {
+      gn = -gn;
+      group_plane(gn, nmin, nmax);
+    }
+    if (beyond || below) {
+      g = gn;
+      gmin = nmin;
+      gmax = nmax;
+    }
+  }
+  const float delta = 16.0f * kUnitRoundoff * norm1(g) * 3.0f * coord_max;
+  Vec3f corners[8];
+  for (int c = 0; c < 8; ++c)
+    corners[c] = Vec3f((c & 1) ? rbox.hi.x : rbox.lo.x, (c & 2) ? rbox.hi.y : rbox.lo.y, (c & 4) ? rbox.hi.z : rbox.lo.z);
+  Shaft shaft(rbox, lf.box);
+  std::vector<Occluder> occluders;
+  std::vector<NearPoly> near;
+  std::vector<Vec3f> near_verts;
+  std::vector<Vec3f> poly0, lower, upper;
+  std::vector<float> vals;
+  for (size_t t = 0; t < scene.mesh.size(); ++t) {
+    Vec3f tri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
+    if (shaft.culls(tri[0], tri[1], tri[2])) continue;
+    float h[3] = {height(tri[0]), height(tri[1]), height(tri[2])};
+    // Beyond, or lying in, the light plane: it never meets an open segment (occluders
+    // touching the light plane with a vertex or an edge are kept).
+    if (std::max(h[0], std::max(h[1], h[2])) <= lf.plane_tol) continue;
+    // Behind every receiver's g-plane.
+    float gv[3] = {gval(g, tri[0]), gval(g, tri[1]), gval(g, tri[2])};
+    if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
+    // Clip to the light side h >= 0.
+    clip_by_values(tri, h, 3, true, poly0);
+    if (poly0.empty()) continue;
+    // Split at gmax + delta: beyond it, between every receiver and the light (tree);
+    // the rest per receiver.
+    vals.resize(poly0.size());
+    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = gval(g, poly0[k]) - (gmax + delta);
+    clip_by_values(poly0.data(), vals.data(), int(poly0.size()), true, lower);
+    clip_by_values(poly0.data(), vals.data(), int(poly0.size()), false, upper);
+    Vec3f e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
+    if (!lower.empty()) {
+      // Orientation (bsp.h Occluder): receivers strictly on one side of the triangle's
+      // plane (decided on the corners of their box) give a one-sided occluder, else
+      // two-sided.
+      Vec3f nrm = cross(e1, e2);
+      float scale = kDetErr * norm1(e1) * norm1(e2);
+      int npos = 0, nneg = 0;
+      for (const Vec3f& c : corners) {
+        Vec3f d = c - tri[0];
+        float sd = dot(nrm, d), bound = scale * norm1(d);
+        npos += sd > bound;
+        nneg += sd < -bound;
+      }
+      VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
+      Occluder o;
+      o.n = int(lower.size());
+      o.two_sided = !(nneg == 8 || npos == 8);
+      for (int k = 0; k < o.n; ++k) o.v[k] = lower[size_t(npos == 8 ? o.n - 1 - k : k)];
+      if (o.two_sided) {
+        // Measured on columns (1024 receivers, 64 samples): two-sided occluders in the
+        // tree are mixed against most hyperplanes and multiply the developments by ~25;
+        // per receiver they cost one subtraction. So they go to the near list.
+        near.push_back(NearPoly{tri[0], e1, e2, uint32_t(near_verts.size()), uint32_t(lower.size())});
+        near_verts.insert(near_verts.end(), lower.begin(), lower.end());
+      } else {
+        occluders.push_back(o);
+      }
+    }
+    if (!upper.empty()) {
+      near.push_back(NearPoly{tri[0], e1, e2, uint32_t(near_verts.size()), uint32_t(upper.size())});
+      near_verts.insert(near_verts.end(), upper.begin(), upper.end());
+    }
+  }
+  tot.select_s += seconds_since(t0);
+
+  // --- Tree initialisation (Figure 8 "I"): vvsets and the root leaf ---
+  t0 = Clock::now();
+  tot.occluders += occluders.size();
+  tot.near += near.size();
+  // The receiver region for the second vvset (bsp.h): the distinct corners of the box.
+  std::vector<Vec3f> region;
+  for (const Vec3f& c : corners)
+    if (std::find(region.begin(), region.end(), c) == region.end()) region.push_back(c);
+  LazyBsp bsp(lf.poly.data(), int(lf.poly.size()), std::move(occluders), tree_seed, region.data(), int(region.size()));
+  ++tot.trees;
+  tot.init_s += seconds_since(t0);
+  int64_t reported = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
+  ctx.memory->change(reported);
+
+  // --- Queries (Figure 8 "Q"): every receiver of the group, in grid order ---
+  FragmentList frags, tmp;
+  std::vector<Vec3f> pyramid;
+  std::vector<Vec3f> cur, pos, neg, q;
+  BspCounters near_counters;
+  size_t off = scene.light_offset(li);
+  size_t nlights = scene.lights.size();
+  for (uint32_t i : group) {
+    const Receiver& rec = scene.receivers[i];
+    const Vec3f& r = rec.p;
+    Clock::time_point tq = Clock::now();
+    bsp.query(r, frags);
+    tot.bsp_query_s += seconds_since(tq);
+    // Side planes of the pyramid (r, light), oriented so the light's centroid is
+    // positive: a near polygon entirely on the negative side of one misses every
+    // segment from r to the light. The margin (a relative 2^-16 of |N| |d|, far above
+    // the float evaluation error of 4.01 u) keeps the rejection conservative.
+    size_t m = lf.poly.size();
+    pyramid.resize(m);
+    for (size_t j = 0; j < m; ++j) {
+      Vec3f nrm = cross(lf.poly[j] - r, lf.poly[(j + 1) % m] - r);
+      if (dot(nrm, lf.centroid - r) < 0.0f) nrm = -nrm;
+      pyramid[j] = nrm;
+    }
+    for (const NearPoly& np : near) {
+      if (frags.size() == 0) break;
+      const Vec3f* pv = near_verts.data() + np.begin;
+      bool outside = false;
+      for (size_t j = 0; j < m && !outside; ++j) {
+        outside = true;
+        float nn = norm1(pyramid[j]);
+        for (uint32_t k = 0; k < np.count && outside; ++k) {
+          Vec3f d = pv[k] - r;
+          outside = dot(pyramid[j], d) < -0x1p-16f * nn * norm1(d);
+        }
+      }
+      if (outside) continue;
+      // Clip to this receiver's slab: g . p > g . r.
+      vals.resize(np.count);
+      float maxv = -1.0f;
+      for (uint32_t k = 0; k < np.count; ++k) {
+        vals[k] = dot(g, pv[k] - r);
+        maxv = std::max(maxv, vals[k]);
+      }
+      if (maxv <= 0.0f) continue;  // at or behind the receiver's g-plane
+      clip_by_values(pv, vals.data(), int(np.count), true, q);
+      if (q.empty()) continue;
+      // Side of r against the triangle's plane: on it, the triangle cannot meet an open
+      // segment from r properly (it only touches it or contains it): skipped.
+      Vec3f nrm = cross(np.e1, np.e2), d = r - np.v0;
+      float s = dot(nrm, d), bound = kDetErr * norm1(np.e1) * norm1(np.e2) * norm1(d);
+      if (std::abs(s) <= bound) continue;
+      if (s > 0.0f) std::reverse(q.begin(), q.end());
+      subtract_polygon(r, q.data(), int(q.size()), frags, tmp, cur, pos, neg, near_counters);
+      std::swap(frags, tmp);
+    }
+    // Fragments, fraction, bits by point-in-fragment, irradiance.
+    ReceiverResult& rr = ctx.result->receivers[i];
+    auto& out = rr.fragments[li];
+    out.clear();
+    out.reserve(frags.size());
+    double area = 0.0, irr = 0.0;
+    for (size_t f = 0; f < frags.size(); ++f) {
+      out.emplace_back(frags.data(f), frags.data(f) + frags.count(f));
+      area += polygon_area(frags.data(f), frags.count(f));
+      irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
+    }
+    rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
+    for (int j = 0; j < light.samples; ++j) {
+      bool vis = false;
+      if (!frags.polys.empty()) {
+        const Vec3f& sp = sample_position(light, j, i);
+        for (size_t f = 0; f < frags.size() && !vis; ++f) vis = point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp);
+      }
+      rr.set_visible(off + size_t(j), vis);
+    }
+    if (ctx.irradiance) (*ctx.irradiance)[size_t(i) * nlights + li] = irr;
+    tot.irradiance += irr;
+    tot.fragments += frags.size();
+    ++tot.queries;
+    tot.query_s += seconds_since(tq);
+    int64_t now = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
+    ctx.memory->change(now - reported);
+    reported = now;
+    // The paper's modified version: reset between queries, excluded from the timings.
+    if (!ctx.coherence) bsp.reset();
+  }
+  ctx.memory->change(-reported);
+  tot.bsp_nodes_max = std::max<uint64_t>(tot.bsp_nodes_max, bsp.node_count());
+  const BspCounters& c = bsp.counters();
+  tot.bsp.nodes_created += c.nodes_created;
+  tot.bsp.developments += c.developments;
+  tot.bsp.insert_tests += c.insert_tests;
+  tot.bsp.splits += c.splits + near_counters.splits;
+  tot.bsp.on_line += c.on_line + near_counters.on_line;
+  tot.bsp.zero_area += c.zero_area + near_counters.zero_area;
+}
+
+uint64_t morton_spread(uint32_t x) {
+  uint64_t v = x & 0x3FF;
+  v = (v | (v << 16)) & 0x030000FF;
+  v = (v | (v << 8)) & 0x0300F00F;
+  v = (v | (v << 4)) & 0x030C30C3;
+  v = (v | (v << 2)) & 0x09249249;
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile) {
+  tile = std::max(1, tile);
+  std::vector<std::vector<uint32_t>> groups;
+  size_t n = scene.receivers.size();
+  if (scene.grid && size_t(scene.grid->nu) * size_t(scene.grid->nv) == n) {
+    // Tiles of the receiver grid, row-major inside each tile (scanline order).
+    int nu = scene.grid->nu, nv = scene.grid->nv;
+    for (int tb = 0; tb < nv; tb += tile)
+      for (int ta = 0; ta < nu; ta += tile) {
+        std::vector<uint32_t> g;
+        for (int b = tb; b < std::min(nv, tb + tile); ++b)
+          for (int a = ta; a < std::min(nu, ta + tile); ++a) g.push_back(uint32_t(size_t(b) * size_t(nu) + size_t(a)));
+        groups.push_back(std::move(g));
+      }
+    return groups;
+  }
+  // Spatial clustering: Morton order of the receivers, runs of tile^2.
+  AABB box;
+  for (const auto& r : scene.receivers) box.extend(r.p);
+  Vec3d lo = to_double(box.lo), ext = to_double(box.hi) - lo;
+  std::vector<std::pair<uint64_t, uint32_t>> keys(n);
+  for (size_t i = 0; i < n; ++i) {
+    Vec3d p = to_double(scene.receivers[i].p) - lo;
+    uint32_t c[3];
+    for (int a = 0; a < 3; ++a) c[a] = ext[a] > 0 ? uint32_t(std::min(1023.0, std::max(0.0, p[a] / ext[a] * 1023.0))) : 0u;
+    keys[i] = {morton_spread(c[0]) | (morton_spread(c[1]) << 1) | (morton_spread(c[2]) << 2), uint32_t(i)};
+  }
+  std::sort(keys.begin(), keys.end());
+  size_t run = size_t(tile) * size_t(tile);
+  for (size_t k = 0; k < n; k += run) {
+    std::vector<uint32_t> g;
+    for (size_t m = k; m < std::min(n, k + run); ++m) g.push_back(keys[m].second);
+    groups.push_back(std::move(g));
+  }
+  return groups;
+}
+
+SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vector<double>* irradiance) {
+  ThreadLimit limit(opt.threads);
+  Clock::time_point start = Clock::now();
+  SolveResult result = make_empty_result(scene);
+  for (auto& rr : result.receivers) rr.fragments.assign(scene.lights.size(), {});
+  if (irradiance) irradiance->assign(scene.receivers.size() * scene.lights.size(), 0.0);
+  bool coherence = opt.get_bool("coherence", true);
+  int tile = int(opt.get_int("tile", 8));
+  MemoryMeter memory;
+  Context ctx{&scene, &result, irradiance, coherence, opt.seed, &memory};
+  auto groups = receiver_groups(scene, tile);
+  Totals totals;
+  std::mutex merge_mutex;
+
+  // Multiple lights in turn (Algorithm 2 line 2); groups of one light in parallel.
+  for (size_t li = 0; li < scene.lights.size(); ++li) {
+    LightFrame lf = make_frame(scene.lights[li]);
+    tbb::parallel_for(size_t(0), groups.size(), [&](size_t g) {
+      Totals tot;
+      // Split the group by the side of the light plane; receivers on it fall back.
+      std::vector<uint32_t> side[2];
+      for (uint32_t i : groups[g]) {
+        Vec3f d = scene.receivers[i].p - lf.p0;
+        float h = dot(lf.n, d);
+        float tol = lf.plane_tol + kDotErr * norm1(lf.n) * norm1(d);
+        if (h > tol) side[0].push_back(i);
+        else if (h < -tol) side[1].push_back(i);
+        else shade_fallback(ctx, li, i, tot);
+      }
+      for (int s = 0; s < 2; ++s) {
+        if (side[s].empty()) continue;
+        // One tree per group, light and side; its random stream depends only on them.
+        uint64_t seed = splitmix64(opt.seed ^ splitmix64((uint64_t(g) << 1 | uint64_t(s)) ^ splitmix64(li + 0x9E37)));
+        shade_group(ctx, li, lf, side[s], s == 0 ? 1.0f : -1.0f, seed, tot);
+      }
+      std::lock_guard<std::mutex> lock(merge_mutex);
+      totals.merge(tot);
+    });
+  }
+
+  result.seconds = seconds_since(start);
+  Stats& st = result.stats;
+  st.set("relations", double(scene.relation_count()));
+  st.set("groups", double(groups.size()));
+  st.set("trees", double(totals.trees));
+  st.set("queries", double(totals.queries));
+  st.set("occluders", double(totals.occluders));
+  st.set("near_polygons", double(totals.near));
+  st.set("fragments", double(totals.fragments));
+  st.set("bsp_nodes", double(totals.bsp.nodes_created));
+  st.set("bsp_nodes_max", double(totals.bsp_nodes_max));
+  st.set("developments", double(totals.bsp.developments));
+  st.set("insert_tests", double(totals.bsp.insert_tests));
+  st.set("splits", double(totals.bsp.splits));
+  st.set("degenerate_on_line", double(totals.bsp.on_line));
+  st.set("degenerate_zero_area", double(totals.bsp.zero_area));
+  st.set("fallback_receivers", double(totals.fallback));
+  st.set("peak_memory_bytes", double(memory.peak.load()));
+  st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
+  st.set("occluder_selection_seconds", totals.select_s);
+  st.set("tree_init_seconds", totals.init_s);
+  st.set("query_seconds", totals.query_s);
+  st.set("bsp_query_seconds", totals.bsp_query_s);
+  double sum = totals.select_s + totals.init_s + totals.query_s;
+  if (sum > 0) {
+    st.set("occluder_selection_percent", 100.0 * totals.select_s / sum);
+    st.set("tree_init_percent", 100.0 * totals.init_s / sum);
+    st.set("query_percent", 100.0 * totals.query_s / sum);
+  }
+  st.set("irradiance_sum", totals.irradiance);
+  st.set("coherence", coherence ? 1.0 : 0.0);
+  return result;
+}
+
+std::vector<OptionSpec> PluckerSolver::options() const {
+  return {{"coherence", "on: queries reuse the tree; off: reset between queries (paper 002 section 5.1)", {"on", "off"}},
+          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}}};
+}
+
+SolveResult PluckerSolver::solve(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }
+
+}  // namespace visgate::plucker

@@ -1,0 +1,65 @@
+// `plucker-bsp`: the soft-shadow framework of paper 002 section 4.4 (Algorithm 2) around
+// the lazy Plücker BSP (bsp.h, Algorithm 1). Exact visible light fragments per receiver.
+//
+// Algorithm 2 as implemented:
+//  - receivers are grouped by neighbourhood (section 5.5 recommends it over grouping by
+//    triangle): tiles of `tile` x `tile` receivers of the scene's receiver grid, or, for
+//    scattered receivers, runs of tile^2 receivers in Morton order;
+//  - lights are handled in turn; for each light the groups are shaded in parallel (TBB);
+//  - per group and light: occluders are selected with Haines' shaft between the group's
+//    bounding box and the light's (occluder selection), clipped to the slab strictly
+//    between the light plane and the group's nearest receiver plane and oriented (tree
+//    initialisation: vvsets, lazy BSP with one undefined leaf), then every receiver of
+//    the group is queried in grid order, and the tree is dropped (bounded memory);
+//  - triangle parts that are not strictly in front of every receiver of the group (the
+//    band of the group's receiver plane, see shade_group), or whose plane separates the
+//    group's receivers (two-sided: measured 25x more developments when kept in the
+//    tree), are "near" polygons: rejected per receiver by the pyramid (r, light), else
+//    clipped to that receiver's slab and subtracted from the fragments with the same
+//    plane-through-the-query-point splits (bsp(o) walked once, nothing stored);
+//  - insertOccluder bounds the occluded lines with two vvsets: occluder-light (Theorem 1)
+//    and receiver region-occluder (bsp.h), the first decided one wins.
+// Per receiver and light: the visible fragments (convex polygons on the light plane,
+// counter-clockwise about the light normal), the visible fraction (sum of fragment areas
+// over the light area), per-sample bits by point-in-fragment of sample_position(light, j,
+// i), and the Lambert irradiance over the fragments (unit radiance).
+//
+// Semantics (DESIGN section 3): a triangle blocks r -> l only where it meets the open
+// segment; parts behind the receiver (its plane parallel to the light) or beyond the
+// light plane are clipped away before they reach the BSP.
+//
+// Guarantee: float32 (the paper's precision) with the error-bounded signs of lines.h;
+// what is float and what is decided against a bound is listed in bsp.h. Exact in the
+// paper's sense: no sampling noise; the fraction is an area, not a sample count.
+// Degenerate inputs: a receiver on the light's plane (|h| within the plane's rounding)
+// has no pyramid to project through; its bits come from a float32 segment test against
+// every triangle (Möller-Trumbore, lib/geom/predicates.h), its fraction from the bits,
+// and it reports no fragments (stats "fallback_receivers").
+//
+// Options: coherence=on|off (off: each tree is reset between queries, the paper's
+// "modified version", section 5.1; the reset is excluded from the timings), tile=N
+// (group side, default 8). Stats (Figure 8): peak_memory_bytes, occluder_selection_
+// seconds / tree_init_seconds / query_seconds and their percentages, bsp_nodes.
+#pragma once
+
+#include <vector>
+
+#include "lib/solver.h"
+
+namespace visgate::plucker {
+
+// The solve with per-receiver irradiance: irradiance[i * lights + l] (when non-null).
+SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vector<double>* irradiance);
+
+// Receiver groups of Algorithm 2 (exposed for tests): every receiver in exactly one group.
+std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile);
+
+class PluckerSolver : public Solver {
+ public:
+  std::string name() const override { return "plucker-bsp"; }
+  std::vector<OptionSpec> options() const override;
+  bool reports_fragments() const override { return true; }
+  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+};
+
+}  // namespace visgate::plucker

@@ -1,0 +1,538 @@
+// lib/plucker (paper 002 sections 3-4): Plücker geometry, Theorem 1, fragment splits,
+// the lazy BSP and the `plucker-bsp` solver, against hand-worked fractions, a double
+// precision ray caster on random scenes away from degeneracy, and properties (disjoint
+// fragments inside the light, fraction = fragment area, reproducible seeds).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "lib/geom/predicates.h"
+#include "oracle/region_oracle.h"
+#include "lib/plucker/bsp.h"
+#include "lib/plucker/fragment.h"
+#include "lib/plucker/lines.h"
+#include "lib/plucker/plucker_solver.h"
+#include "lib/scene/families.h"
+#include "lib/scene/rng.h"
+#include "lib/scene/shapes.h"
+#include "lib/solver.h"
+
+using namespace visgate;
+using namespace visgate::plucker;
+
+namespace {
+
+// Square light [-1,1]^2 (centre c) at height c.z emitting down, one receiver per point.
+Scene light_scene(const std::vector<Vec3f>& receivers, int samples = 64, Vec3d c = Vec3d(0, 0, 2)) {
+  Scene s;
+  s.name = "hand";
+  s.lights.push_back(make_square_light_down(c, 1.0, samples, 7));
+  for (const Vec3f& p : receivers) s.receivers.push_back({p, Vec3f(0, 0, 1)});
+  EXPECT_TRUE(finish_scene(s).ok());
+  return s;
+}
+
+SolveResult run(const Scene& s, std::map<std::string, std::string> opts = {}, uint64_t seed = 1,
+                std::vector<double>* irr = nullptr) {
+  SolveOptions o;
+  o.opts = std::move(opts);
+  o.seed = seed;
+  o.threads = 2;
+  return solve_plucker(s, o, irr);
+}
+
+double fragments_area(const std::vector<Polygon3f>& frags) {
+  double a = 0;
+  for (const auto& f : frags) {
+    // Independent of polygon_area: shoelace of the xy projection (the test lights are
+    // horizontal).
+    double twice = 0;
+    for (size_t k = 0; k < f.size(); ++k) {
+      const Vec3f& p = f[k];
+      const Vec3f& q = f[(k + 1) % f.size()];
+      twice += double(p.x) * double(q.y) - double(q.x) * double(p.y);
+    }
+    a += std::abs(0.5 * twice);
+  }
+  return a;
+}
+
+// Double precision relation classifier: +1 blocked, 0 visible, -1 within 1e-5
+// (normalised) of a sign change of one of the predicates (skipped by the comparisons).
+int classify_double(const TriangleSoup& soup, const Vec3f& rf, const Vec3f& lf) {
+  Vec3d r = to_double(rf), l = to_double(lf);
+  const double eps = 1e-5;
+  auto sgn = [&](double v, double scale) { return scale == 0 ? 0 : (v > eps * scale ? 1 : (v < -eps * scale ? -1 : 0)); };
+  bool ambiguous = false;
+  for (size_t t = 0; t < soup.size(); ++t) {
+    Vec3d a = to_double(soup.corner(t, 0)), b = to_double(soup.corner(t, 1)), c = to_double(soup.corner(t, 2));
+    int s1 = sgn(orient3d(a, b, c, r), length(b - a) * length(c - a) * length(r - a));
+    int s2 = sgn(orient3d(a, b, c, l), length(b - a) * length(c - a) * length(l - a));
+    Vec3d v[3] = {a, b, c};
+    int e[3];
+    for (int k = 0; k < 3; ++k) {
+      Vec3d p = v[k], q = v[(k + 1) % 3];
+      e[k] = sgn(orient3d(r, l, p, q), length(l - r) * length(p - r) * length(q - r));
+    }
+    bool hit = s1 * s2 == -1 && ((e[0] == 1 && e[1] == 1 && e[2] == 1) || (e[0] == -1 && e[1] == -1 && e[2] == -1));
+    if (hit) return 1;
+    bool planes_can = (s1 >= 0 && s2 <= 0) || (s1 <= 0 && s2 >= 0);
+    bool edges_can = (e[0] >= 0 && e[1] >= 0 && e[2] >= 0) || (e[0] <= 0 && e[1] <= 0 && e[2] <= 0);
+    if (planes_can && edges_can) ambiguous = true;
+  }
+  return ambiguous ? -1 : 0;
+}
+
+struct BitCheck {
+  size_t compared = 0, skipped = 0, mismatches = 0;
+};
+
+BitCheck compare_bits(const Scene& s, const SolveResult& res) {
+  BitCheck c;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t li = 0; li < s.lights.size(); ++li)
+      for (int j = 0; j < s.lights[li].samples; ++j) {
+        int cls = classify_double(s.mesh, s.receivers[i].p, sample_position(s.lights[li], j, i));
+        if (cls < 0) {
+          ++c.skipped;
+          continue;
+        }
+        ++c.compared;
+        bool vis = res.receivers[i].visible(s.light_offset(li) + size_t(j));
+        if (vis != (cls == 0)) ++c.mismatches;
+      }
+  return c;
+}
+
+}  // namespace
+
+// ---- Plücker geometry (sections 3.1-3.3) ----
+
+TEST(PluckerGeometry, SideOperatorEqualsDeterminant) {
+  Rng rng(3);
+  for (int k = 0; k < 1000; ++k) {
+    Vec3d p[4];
+    for (auto& v : p) v = Vec3d(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-2, 2));
+    double s = side(Pluckerd::through(p[0], p[1]), Pluckerd::through(p[2], p[3]));
+    double d = orient3d(p[0], p[1], p[2], p[3]);  // det[q-p, a-p, b-p]
+    EXPECT_NEAR(s, d, 1e-12 * (1 + std::abs(d)));
+  }
+}
+
+TEST(PluckerGeometry, StabbingByConsistentOrientation) {
+  Vec3f tri[3] = {Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(0, 1, 1)};
+  // Through the interior in both directions: stabs.
+  EXPECT_TRUE(line_stabs_polygon(Plucker::through(Vec3f(0.2f, 0.2f, 0), Vec3f(0.2f, 0.2f, 2)), tri, 3));
+  EXPECT_TRUE(line_stabs_polygon(Plucker::through(Vec3f(0.2f, 0.2f, 2), Vec3f(0.25f, 0.2f, 0)), tri, 3));
+  // Outside the hypotenuse: misses.
+  EXPECT_FALSE(line_stabs_polygon(Plucker::through(Vec3f(0.6f, 0.6f, 0), Vec3f(0.6f, 0.6f, 2)), tri, 3));
+  // Lines from below stabbing a triangle whose normal points up are positive (lines.h).
+  EXPECT_EQ(side_sign(Vec3f(0.2f, 0.2f, 0), Vec3f(0.2f, 0.2f, 2), tri[0], tri[1]), Sign::Positive);
+  EXPECT_EQ(side_sign(Vec3f(0.2f, 0.2f, 0), Vec3f(0.2f, 0.2f, 2), tri[1], tri[2]), Sign::Positive);
+  // Meeting the edge line: zero.
+  EXPECT_EQ(side_sign(Vec3f(0.5f, 0, 0), Vec3f(0.5f, 0, 2), tri[0], tri[1]), Sign::Zero);
+}
+
+TEST(PluckerGeometry, Theorem1OrientationBoundsEveryStabbingLine) {
+  // For random occluders, light quads and lines: a Positive (Negative) vvset orientation
+  // implies every sampled stabbing line is positive (negative), evaluated in double.
+  Rng rng(11);
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  int decided = 0, mixed = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    Vec3f o[3];
+    for (auto& v : o) v = Vec3f(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5)));
+    Vec3f dir[12];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j) dir[i * 4 + j] = light[j] - o[i];
+    Vec3f a(Vec3d(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(0, 2)));
+    Vec3f b(Vec3d(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(0, 2)));
+    Orientation s = vvset_orientation(o, 3, dir, 4, a, b);
+    if (s == Orientation::Mixed) {
+      ++mixed;
+      continue;
+    }
+    ++decided;
+    for (int k = 0; k < 50; ++k) {
+      double u = rng.uniform(), v = rng.uniform() * (1 - u);
+      Vec3d x = to_double(o[0]) + (to_double(o[1]) - to_double(o[0])) * u + (to_double(o[2]) - to_double(o[0])) * v;
+      Vec3d y(rng.uniform(-1, 1), rng.uniform(-1, 1), 2);
+      double sd = orient3d(x, y, to_double(a), to_double(b));
+      if (s == Orientation::Positive) EXPECT_GT(sd, 0.0);
+      else EXPECT_LT(sd, 0.0);
+    }
+  }
+  EXPECT_GT(decided, 50);
+  EXPECT_GT(mixed, 50);
+}
+
+TEST(PluckerFragment, SplitHalvesAndDegenerateCases) {
+  std::vector<Vec3f> sq = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  std::vector<Vec3f> pos, neg;
+  // Plane through the origin and the line x = 0, z = 1 (along y): splits at x = 0.
+  SplitResult s = split_fragment(Vec3f(0, 0, 0), Vec3f(0, -1, 1), Vec3f(0, 1, 1), sq.data(), 4, pos, neg);
+  ASSERT_EQ(s, SplitResult::Both);
+  EXPECT_DOUBLE_EQ(polygon_area(pos.data(), int(pos.size())), 2.0);
+  EXPECT_DOUBLE_EQ(polygon_area(neg.data(), int(neg.size())), 2.0);
+  // The query point on the node's line.
+  EXPECT_EQ(split_fragment(Vec3f(0, 0, 0), Vec3f(0, 0, 1), Vec3f(0, 0, 3), sq.data(), 4, pos, neg), SplitResult::OnLine);
+  // A zero-area fragment (a segment) on the splitting plane.
+  std::vector<Vec3f> seg = {Vec3f(0, -1, 2), Vec3f(0, 0, 2), Vec3f(0, 1, 2)};
+  EXPECT_EQ(split_fragment(Vec3f(0, 0, 0), Vec3f(0, -1, 1), Vec3f(0, 1, 1), seg.data(), 3, pos, neg),
+            SplitResult::ZeroArea);
+  // A vertex on the plane goes to both pieces.
+  std::vector<Vec3f> tri = {Vec3f(0, -1, 2), Vec3f(1, 1, 2), Vec3f(-1, 1, 2)};
+  ASSERT_EQ(split_fragment(Vec3f(0, 0, 0), Vec3f(0, -1, 1), Vec3f(0, 1, 1), tri.data(), 3, pos, neg), SplitResult::Both);
+  EXPECT_EQ(pos.size(), 3u);
+  EXPECT_EQ(neg.size(), 3u);
+}
+
+TEST(PluckerBsp, EmptyTreeReturnsTheLight) {
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  LazyBsp bsp(light, 4, {}, 1);
+  FragmentList out;
+  bsp.query(Vec3f(0, 0, 0), out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_DOUBLE_EQ(polygon_area(out.data(0), out.count(0)), 4.0);
+}
+
+TEST(PluckerBsp, SingleOccluderHasFourLeaves) {
+  // bsp(o) (Figure 4): three inner nodes, three visible leaves, one invisible leaf.
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Occluder o;
+  o.n = 3;
+  o.v[0] = Vec3f(-0.25f, -0.25f, 1);
+  o.v[1] = Vec3f(0.25f, -0.25f, 1);
+  o.v[2] = Vec3f(0, 0.25f, 1);  // normal +z: receivers below are on its negative side
+  LazyBsp bsp(light, 4, {o}, 1);
+  FragmentList out;
+  bsp.query(Vec3f(0, 0, 0), out);
+  EXPECT_EQ(bsp.node_count(), 7u);
+  double area = 0;
+  for (size_t k = 0; k < out.size(); ++k) area += polygon_area(out.data(k), out.count(k));
+  // The shadow is the occluder scaled by 2 from the origin: area 0.125 * 4 = 0.5.
+  EXPECT_NEAR(area, 4.0 - 0.5, 1e-6);
+  // A second query reuses the developed tree.
+  bsp.query(Vec3f(0.1f, 0, 0), out);
+  EXPECT_EQ(bsp.node_count(), 7u);
+  bsp.reset();
+  EXPECT_EQ(bsp.node_count(), 1u);
+}
+
+// ---- Hand-computed fractions ----
+
+TEST(PluckerSolver, SquareOccluderHalfCoveringTheLight) {
+  // Occluder x in [0, 0.5], y in [-0.5, 0.5] at z = 1 projects from the origin onto
+  // x in [0, 1], y in [-1, 1] at z = 2: exactly half the light.
+  Scene s = light_scene({Vec3f(0, 0, 0)});
+  shapes::add_quad(s.mesh, Vec3d(0, -0.5, 1), Vec3d(0.5, -0.5, 1), Vec3d(0.5, 0.5, 1), Vec3d(0, 0.5, 1));
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 0.5, 1e-6);
+  EXPECT_NEAR(fragments_area(r.receivers[0].fragments[0]), 2.0, 1e-6);
+  for (int j = 0; j < s.lights[0].samples; ++j) {
+    Vec3f p = sample_position(s.lights[0], j, 0);
+    if (std::abs(p.x) > 1e-4f) {
+      EXPECT_EQ(r.receivers[0].visible(size_t(j)), p.x < 0) << j;
+    }
+  }
+}
+
+TEST(PluckerSolver, FarFromOrigin) {
+  // The same configuration translated by (4096, -8192, 0): every coordinate is exact in
+  // float and the fraction stays one half.
+  Vec3d t(4096, -8192, 0);
+  Scene s = light_scene({Vec3f(Vec3d(t))}, 64, Vec3d(4096, -8192, 2));
+  shapes::add_quad(s.mesh, t + Vec3d(0, -0.5, 1), t + Vec3d(0.5, -0.5, 1), t + Vec3d(0.5, 0.5, 1), t + Vec3d(0, 0.5, 1));
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 0.5, 1e-4);
+}
+
+TEST(PluckerSolver, TotalAndNoOcclusion) {
+  Scene s = light_scene({Vec3f(0, 0, 0), Vec3f(5, 0, 0)});
+  // A 2 x 2 square at z = 1 hides the light from the origin (its shadow spans [-2,2]^2);
+  // from (5, 0, 0) the pyramid to the light passes x in [2, 3] at z = 1: no occlusion.
+  shapes::add_quad(s.mesh, Vec3d(-1, -1, 1), Vec3d(1, -1, 1), Vec3d(1, 1, 1), Vec3d(-1, 1, 1));
+  SolveResult r = run(s);
+  EXPECT_EQ(r.receivers[0].visible_fraction[0], 0.0f);
+  EXPECT_TRUE(r.receivers[0].fragments[0].empty());
+  for (int j = 0; j < s.lights[0].samples; ++j) EXPECT_FALSE(r.receivers[0].visible(size_t(j)));
+  EXPECT_NEAR(r.receivers[1].visible_fraction[0], 1.0, 1e-6);
+  for (int j = 0; j < s.lights[0].samples; ++j) EXPECT_TRUE(r.receivers[1].visible(size_t(j)));
+}
+
+TEST(PluckerSolver, OccluderTouchingTheLightPlane) {
+  // Triangle in the plane x = 0 with its edge y in [-3, 3] on the light plane z = 2 and
+  // apex (0, 0, 1); receiver (0.5, 0, 0). A point (0, y, z) projects to
+  // x = 0.5 - 1/z, y' = 2y/z: the apex to (-0.5, 0), the edge to itself. The shadow is
+  // the triangle apex (-0.5, 0), base x = 0, |y| <= 3, half-width 6t at t = x + 0.5;
+  // inside |y| <= 1: 12 t^2/2 on [0, 1/6] plus 2 (1/2 - 1/6): 1/6 + 2/3 = 5/6.
+  Scene s = light_scene({Vec3f(0.5f, 0, 0)});
+  s.mesh.vertices = {Vec3f(0, -3, 2), Vec3f(0, 3, 2), Vec3f(0, 0, 1)};
+  s.mesh.triangles = {{0, 1, 2}};
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], (4.0 - 5.0 / 6.0) / 4.0, 1e-5);
+}
+
+TEST(PluckerSolver, OccluderCrossingTheLightPlane) {
+  // Vertices (0, +-3, 3) above the light and apex (0, 0, 1): clipped at z = 2 to the base
+  // y in [-1.5, 1.5]; half-width 3t: 6 t^2/2 on [0, 1/3] plus 2 (1/2 - 1/3): 2/3.
+  Scene s = light_scene({Vec3f(0.5f, 0, 0)});
+  s.mesh.vertices = {Vec3f(0, -3, 3), Vec3f(0, 3, 3), Vec3f(0, 0, 1)};
+  s.mesh.triangles = {{0, 1, 2}};
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], (4.0 - 2.0 / 3.0) / 4.0, 1e-5);
+}
+
+TEST(PluckerSolver, OccluderCrossingTheReceiverPlane) {
+  // A wall x = 0, |y| <= 100, z in [-5, 1]; receiver (0.5, 0, 0). Only z in (0, 1]
+  // counts; it projects to x = 0.5 - 1/z <= -0.5 with |y'| >= 200: the strip
+  // x in [-1, -0.5] is hidden, fraction 3/4. The part below z = 0 must not block.
+  Scene s = light_scene({Vec3f(0.5f, 0, 0)});
+  shapes::add_quad(s.mesh, Vec3d(0, -100, -5), Vec3d(0, 100, -5), Vec3d(0, 100, 1), Vec3d(0, -100, 1));
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 0.75, 1e-5);
+}
+
+TEST(PluckerSolver, OccludersBehindBeyondAndInThePlanes) {
+  Scene s = light_scene({Vec3f(0, 0, 0)});
+  shapes::add_quad(s.mesh, Vec3d(-3, -3, -1), Vec3d(3, -3, -1), Vec3d(3, 3, -1), Vec3d(-3, 3, -1));  // behind
+  shapes::add_quad(s.mesh, Vec3d(-3, -3, 3), Vec3d(3, -3, 3), Vec3d(3, 3, 3), Vec3d(-3, 3, 3));      // beyond
+  shapes::add_quad(s.mesh, Vec3d(-3, -3, 2), Vec3d(3, -3, 2), Vec3d(3, 3, 2), Vec3d(-3, 3, 2));      // in the light plane
+  shapes::add_quad(s.mesh, Vec3d(-3, -3, 0), Vec3d(3, -3, 0), Vec3d(3, 3, 0), Vec3d(-3, 3, 0));      // through the receiver
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 1.0, 1e-6);
+  for (int j = 0; j < s.lights[0].samples; ++j) EXPECT_TRUE(r.receivers[0].visible(size_t(j)));
+}
+
+TEST(PluckerSolver, ReceiverOnAnOccluderEdgeLine) {
+  // The triangle's edge (0,0,0.5)-(0,0,1) lies on a line through the receiver at the
+  // origin; the receiver is in the triangle's plane y = 0, so no open segment from it
+  // crosses the triangle properly: nothing is hidden.
+  Scene s = light_scene({Vec3f(0, 0, 0)});
+  s.mesh.vertices = {Vec3f(0, 0, 0.5f), Vec3f(0, 0, 1), Vec3f(0.5f, 0, 1)};
+  s.mesh.triangles = {{0, 1, 2}};
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 1.0, 1e-6);
+}
+
+TEST(PluckerSolver, ReceiversOnBothSidesAndOnTheLightPlane) {
+  // Above the light (z = 4): an occluder at z = 3 covering x in [0, 1] of the light as
+  // seen from (0, 0, 4) (x in [0, 0.5] at mid-height) gives one half; a receiver on the
+  // light plane outside the light falls back to segment tests.
+  Scene s = light_scene({Vec3f(0, 0, 4), Vec3f(3, 0, 2)});
+  shapes::add_quad(s.mesh, Vec3d(0, -0.5, 3), Vec3d(0.5, -0.5, 3), Vec3d(0.5, 0.5, 3), Vec3d(0, 0.5, 3));
+  SolveResult r = run(s);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 0.5, 1e-6);
+  EXPECT_EQ(r.stats.get("fallback_receivers"), 1.0);
+  EXPECT_NEAR(r.receivers[1].visible_fraction[0], 1.0, 1e-6);
+}
+
+TEST(PluckerSolver, IrradianceOfAnUnoccludedLight) {
+  // E = integral over the light of cos(theta_r) cos(theta_l) / d^2, midpoint rule.
+  Scene s = light_scene({Vec3f(0.3f, -0.2f, 0)});
+  std::vector<double> irr;
+  run(s, {}, 1, &irr);
+  double e = 0;
+  const int n = 400;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      Vec3d x(-1 + (a + 0.5) * 2.0 / n, -1 + (b + 0.5) * 2.0 / n, 2);
+      Vec3d d = x - Vec3d(0.3, -0.2, 0);
+      double d2 = dot(d, d);
+      e += (d.z * d.z) / (d2 * d2) * (4.0 / (n * n));
+    }
+  EXPECT_NEAR(irr[0], e, 1e-5 * e);
+}
+
+// ---- Random scenes ----
+
+TEST(PluckerSolver, BitsMatchDoublePrecisionRayCastingOnRandomSoup) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    FamilyParams p;
+    p.seed = seed;
+    p.triangles = 60;
+    p.receivers = 100;
+    p.samples = 32;
+    auto scene = generate_family("random-soup", p);
+    ASSERT_TRUE(scene.ok());
+    SolveResult r = run(*scene, {}, seed);
+    BitCheck c = compare_bits(*scene, r);
+    EXPECT_EQ(c.mismatches, 0u) << "seed " << seed << " compared " << c.compared;
+    EXPECT_GT(c.compared, 20 * c.skipped);
+  }
+}
+
+TEST(PluckerSolver, BitsMatchDoublePrecisionRayCastingOnColumns) {
+  // Columns stand on the floor: their lower parts are behind or beside the receivers,
+  // exercising the per-receiver near polygons and the slab clipping.
+  FamilyParams p;
+  p.seed = 2;
+  p.triangles = 600;
+  p.receivers = 144;
+  p.samples = 32;
+  auto scene = generate_family("columns", p);
+  ASSERT_TRUE(scene.ok());
+  SolveResult r = run(*scene, {{"tile", "4"}});
+  BitCheck c = compare_bits(*scene, r);
+  EXPECT_EQ(c.mismatches, 0u) << "compared " << c.compared;
+  EXPECT_GT(c.compared, 20 * c.skipped);
+}
+
+TEST(PluckerSolver, FragmentsAreDisjointInsideTheLightAndSumToTheFraction) {
+  FamilyParams p;
+  p.seed = 5;
+  p.triangles = 80;
+  p.receivers = 64;
+  auto scene = generate_family("random-soup", p);
+  ASSERT_TRUE(scene.ok());
+  const Scene& s = *scene;
+  SolveResult r = run(s);
+  const Light& light = s.lights[0];
+  PlaneFrame frame = PlaneFrame::from_normal(light.normal);
+  Rng rng(9);
+  for (size_t i = 0; i < s.receivers.size(); ++i) {
+    const auto& frags = r.receivers[i].fragments[0];
+    EXPECT_NEAR(fragments_area(frags) / light.area, r.receivers[i].visible_fraction[0], 1e-6);
+    for (const auto& f : frags) {
+      ASSERT_GE(f.size(), 3u);
+      for (const Vec3f& v : f) {
+        EXPECT_NEAR(v.z, 2.0f, 1e-5f);
+        EXPECT_LE(std::abs(v.x), 0.5f + 1e-5f);
+        EXPECT_LE(std::abs(v.y), 0.5f + 1e-5f);
+      }
+    }
+    // Disjoint interiors: no point lies strictly inside two fragments (shrunk by 1e-5).
+    for (int k = 0; k < 200; ++k) {
+      Vec3f x(Vec3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 2.0));
+      int inside = 0;
+      for (const auto& f : frags) {
+        bool in = true;
+        for (size_t e = 0; e < f.size() && in; ++e) {
+          Vec3d a = to_double(f[e]), b = to_double(f[(e + 1) % f.size()]), q = to_double(x);
+          double len = std::hypot(b.x - a.x, b.y - a.y);
+          double o = (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+          if (frame.flip) o = -o;
+          in = o > 1e-5 * len;
+        }
+        inside += in;
+      }
+      EXPECT_LE(inside, 1) << "receiver " << i;
+    }
+  }
+}
+
+TEST(PluckerSolver, SeedsReproduceAndCoherenceDoesNotChangeTheAnswer) {
+  FamilyParams p;
+  p.seed = 4;
+  p.triangles = 120;
+  p.receivers = 64;
+  auto scene = generate_family("random-soup", p);
+  ASSERT_TRUE(scene.ok());
+  SolveResult a = run(*scene, {}, 7), b = run(*scene, {}, 7), c = run(*scene, {}, 8);
+  SolveResult d = run(*scene, {{"coherence", "off"}}, 7);
+  EXPECT_EQ(a.stats.get("bsp_nodes"), b.stats.get("bsp_nodes"));
+  EXPECT_GT(d.stats.get("bsp_nodes"), a.stats.get("bsp_nodes"));
+  for (size_t i = 0; i < scene->receivers.size(); ++i) {
+    EXPECT_EQ(a.receivers[i].fragments[0], b.receivers[i].fragments[0]);
+    EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits);
+    EXPECT_NEAR(a.receivers[i].visible_fraction[0], c.receivers[i].visible_fraction[0], 1e-5);
+    EXPECT_NEAR(a.receivers[i].visible_fraction[0], d.receivers[i].visible_fraction[0], 1e-5);
+  }
+}
+
+TEST(PluckerSolver, MultipleLightsAreIndependent) {
+  FamilyParams p;
+  p.seed = 6;
+  p.triangles = 60;
+  p.receivers = 36;
+  auto scene = generate_family("random-soup", p);
+  ASSERT_TRUE(scene.ok());
+  Scene one = *scene;
+  Scene two = *scene;
+  Light second = make_square_light_down(Vec3d(0.4, -0.3, 2.2), 0.3, 16, 3);
+  ASSERT_TRUE(prepare_light(second, "second").ok());
+  two.lights.push_back(second);
+  Scene only_second = *scene;
+  only_second.lights = {second};
+  SolveResult r1 = run(one), r2 = run(two), r3 = run(only_second);
+  for (size_t i = 0; i < one.receivers.size(); ++i) {
+    EXPECT_NEAR(r2.receivers[i].visible_fraction[0], r1.receivers[i].visible_fraction[0], 1e-5);
+    EXPECT_NEAR(r2.receivers[i].visible_fraction[1], r3.receivers[i].visible_fraction[0], 1e-5);
+  }
+}
+
+TEST(PluckerSolver, GroupsCoverEveryReceiverOnce) {
+  FamilyParams p;
+  p.receivers = 100;
+  auto scene = generate_family("random-soup", p);
+  ASSERT_TRUE(scene.ok());
+  Scene scattered = *scene;
+  scattered.grid.reset();
+  for (const Scene* s : {&*scene, &scattered}) {
+    std::vector<int> seen(s->receivers.size(), 0);
+    for (const auto& g : receiver_groups(*s, 3))
+      for (uint32_t i : g) ++seen[i];
+    for (int v : seen) EXPECT_EQ(v, 1);
+  }
+}
+
+TEST(PluckerSolver, RegisteredWithOptions) {
+  auto solver = make_solver("plucker-bsp");
+  ASSERT_TRUE(solver);
+  EXPECT_TRUE(solver->reports_fragments());
+  SolveOptions o;
+  o.opts["coherence"] = "maybe";
+  EXPECT_FALSE(solver->check_options(o).ok());
+  o.opts["coherence"] = "off";
+  EXPECT_TRUE(solver->check_options(o).ok());
+}
+
+TEST(PluckerBsp, TwoSidedOccluderHidesFromBothSides) {
+  // A two-sided occluder (bsp.h) answers queries from either side of its plane like the
+  // one-sided occluder oriented for that side.
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Occluder o;
+  o.n = 3;
+  o.v[0] = Vec3f(0, -0.5f, 0.5f);  // vertical triangle in the plane x = 0
+  o.v[1] = Vec3f(0, 0.5f, 0.5f);
+  o.v[2] = Vec3f(0, 0, 1.5f);
+  o.two_sided = true;
+  Occluder flipped = o;
+  flipped.two_sided = false;
+  std::swap(flipped.v[0], flipped.v[1]);
+  for (float x : {-0.5f, 0.5f}) {
+    // o's normal (v1 - v0) x (v2 - v0) is +x: a receiver at x < 0 is on its negative side.
+    Occluder one = x < 0 ? o : flipped;
+    one.two_sided = false;
+    LazyBsp two(light, 4, {o}, 3), single(light, 4, {one}, 3);
+    FragmentList a, b;
+    two.query(Vec3f(x, 0.1f, 0), a);
+    single.query(Vec3f(x, 0.1f, 0), b);
+    double area_a = 0, area_b = 0;
+    for (size_t k = 0; k < a.size(); ++k) area_a += polygon_area(a.data(k), a.count(k));
+    for (size_t k = 0; k < b.size(); ++k) area_b += polygon_area(b.data(k), b.count(k));
+    EXPECT_LT(area_b, 4.0 - 0.1);
+    EXPECT_NEAR(area_a, area_b, 1e-5) << x;
+  }
+}
+
+// ---- Against the exact region oracle ----
+
+TEST(PluckerOracle, FractionsMatchTheRegionOracle) {
+  for (const char* fam : {"random-soup", "columns"}) {
+    FamilyParams p;
+    p.seed = 3;
+    p.receivers = 64;
+    p.samples = 16;
+    if (std::string(fam) == "columns") p.triangles = 400;
+    auto scene = generate_family(fam, p);
+    ASSERT_TRUE(scene.ok());
+    SolveResult r = run(*scene);
+    int bad = 0;
+    for (size_t i = 0; i < scene->receivers.size(); ++i) {
+      oracle::RegionAnswer ex = oracle::visible_region(*scene, i, 0);
+      if (std::abs(ex.visible_fraction - r.receivers[i].visible_fraction[0]) > 1e-4) ++bad;
+    }
+    EXPECT_EQ(bad, 0) << fam;
+  }
+}
