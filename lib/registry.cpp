@@ -4,17 +4,19 @@
 #include "lib/plucker/plucker_solver.h"
 #include "lib/raycast/brute.h"
 #include "lib/raycast/embree_solver.h"
+#include "lib/ssv/ssv_solver.h"
 #include "lib/solver.h"
 
 namespace visgate {
 
-std::vector<std::string> solver_names() { return {"embree", "embree-robust", "brute", "iss", "plucker-bsp"}; }
+std::vector<std::string> solver_names() { return {"embree", "embree-robust", "brute", "iss", "ssv", "plucker-bsp"}; }
 
 std::unique_ptr<Solver> make_solver(const std::string& name) {
   if (name == "embree") return std::make_unique<raycast::EmbreeSolver>(false);
   if (name == "embree-robust") return std::make_unique<raycast::EmbreeSolver>(true);
   if (name == "brute") return std::make_unique<raycast::BruteSolver>();
   if (name == "iss") return std::make_unique<iss::IssSolver>();
+  if (name == "ssv") return std::make_unique<ssv::SsvSolver>();
   if (name == "plucker-bsp") return std::make_unique<plucker::PluckerSolver>();
   return nullptr;
 }

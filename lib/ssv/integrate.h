@@ -1,0 +1,162 @@
+// Projection of silhouette edges onto the light plane and integration of relative depth
+// complexity (paper 001 section 2.1, the integration step of [LAA*05]).
+//
+// Depth complexity. For a receiver r above the light plane (frame height h_r > 0) and a
+// point s of the light plane, D(s) = number of triangles T meeting the open segment
+// (r, s). The segment lies in the slab 0 < h < h_r, so D(s) = sum_T 1[s in R_T], where
+// R_T is the central projection from r of T clipped to the slab: triangles behind the
+// receiver or beyond the light plane add nothing, triangles crossing either plane add the
+// projection of their part inside. R_T is convex. Its boundary is made of projected
+// pieces of T's edges (clipped to the slab) and, when T crosses the light plane, of the
+// segment where T cuts the light plane (its "cut segment"; the slab's top face projects
+// to infinity).
+//
+// Side of a projected edge. For an edge a -> b in T's winding, the plane (a, b, r) meets
+// the light plane in the projected line P -> Q, and T lies on the side of that plane
+// where its third vertex c is. In the right-handed light frame (u, v, h),
+// orient3d(a, b, r, s) = -h_r * alpha * beta * cross2(Q - P, s - P) with alpha, beta > 0
+// (a = r + alpha (P - r), likewise b), and orient3d(a, b, r, c) = -orient3d(a, b, c, r) =
+// -facing(T). Hence R_T lies to the LEFT of P -> Q iff facing(T) > 0 (r on T's front
+// side), to the right iff facing(T) < 0, and is empty iff facing(T) = 0. Summed over the
+// triangles of an edge label (lib/mesh: a single edge has one triangle, a double edge two
+// neighbours traversing it in opposite directions), the edge a -> b carries the weight
+//   w = sign(facing(T1)) - sign(facing(T2))        (second term absent for single edges),
+// which is 0 unless the edge is a silhouette from r (exactly one triangle front-facing),
+// and +-2 for a silhouette double edge. The cut segment E -> F of a triangle crossing the
+// light plane (E where the winding leaves h >= 0, F where it re-enters) carries
+// w = sign(facing(T)) by the same argument (E and F have alpha = 1). Every triangle's
+// facing is evaluated once per receiver by the same double expression, so the pieces of
+// one triangle always form a closed boundary with one consistent side.
+//
+// Integration rule (crossing numbers). For a bounded region X with counter-clockwise
+// boundary, 1[s in X] = sum over boundary segments e of dir(e) * [the ray from s towards
+// +u crosses e], dir = +1 for upward (v increasing) and -1 for downward segments, with the
+// half-open convention v in [v_low, v_high) so that a ray through a shared vertex counts
+// once. Apply it to X = R_T n L' (L' the expanded light, light_frame.h, convex and
+// containing every sample): its boundary is the part of R_T's boundary inside L' (edges
+// clipped to the pyramid from r over L') plus the part of L's boundary inside R_T. A ray
+// towards +u from a sample inside L' crosses L's boundary once, on its right chain (the
+// edges along which v increases), never on the left chain. On the right chain the
+// boundary of X runs upward, from the point where R_T's boundary leaves L' through the
+// right chain to where it re-enters. So the rule per weighted piece P -> Q (R_T on its
+// left, weight w) is:
+//   1. samples with v in [min(v_P, v_Q), max(v_P, v_Q)) strictly left of the piece's
+//      line (smaller u) get +w if v_Q > v_P, -w if v_Q < v_P;
+//   2. if the piece leaves L' through a right-chain edge at Q: +w to every sample with
+//      v >= v_Q; if it enters through a right-chain edge at P: -w to every sample with
+//      v >= v_P.
+// Rule 2 telescopes: exit and re-entry of one region give +w on [v_exit, v_entry); a
+// region containing the top or bottom of the right chain gives a step plus a constant.
+// The result equals D(s) up to an additive constant per receiver, which the reference
+// ray removes. Pieces whose projection misses L' add nothing, so culling wedges that
+// exclude the receiver is exact.
+//
+// Sub-linear integration: the samples are ordered by v and cut into about sqrt(N) strips
+// of consecutive v, each ordered by u. The orders come from the light's jitter points,
+// sorted once per light (JitterOrder) and filtered per receiver in linear time, so no
+// receiver sorts anything. A piece updates the strips its v-range covers: in
+// a strip it covers entirely, the samples left of the line's u-range form a prefix of the
+// u-order (one difference-array update), only samples inside the line's u-range in that
+// strip are tested one by one; partially covered strips (at most two) are tested one by
+// one; rule 2 is one update of a difference array in v-order. Cost per piece
+// O(sqrt(N) log N + samples near the line) instead of O(N).
+//
+// Guarantee: float32 with these failure modes, all near-degenerate: a sample within
+// float rounding of a projected edge line (the segment passes near the edge); a receiver
+// within rounding of a triangle's plane (the triangle projects to a sliver, whose sign
+// may be wrong: only samples inside the sliver are affected); pieces whose projection
+// touches the boundary of L' (rule 2 thresholds v_Q, v_P carry rounding: samples whose v
+// lies within rounding of such a threshold may be miscounted); edges passing within
+// rounding of the receiver (projection undefined, the piece is dropped).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lib/mesh/prepare.h"
+#include "lib/ssv/light_frame.h"
+#include "lib/ssv/wedge.h"
+
+namespace visgate::ssv {
+
+// The orders of all jitter points of a light that the strips are cut from, computed once
+// per light: every receiver picks one jitter point per sample, so its sample orders are
+// these orders filtered, in linear time and without sorting per receiver.
+struct JitterOrder {
+  std::vector<uint32_t> by_v;         // jitter points sorted by v
+  std::vector<uint32_t> strip_start;  // strips: ranges of by_v; strips + 1 entries
+  std::vector<uint32_t> by_u;         // per strip, its jitter points sorted by u (same ranges)
+};
+JitterOrder make_jitter_order(const std::vector<Vec2f>& jitter_uv, int samples);
+
+// Per-sample relative depth-complexity counters with the strip structure above.
+class DepthCounter {
+ public:
+  // Samples in frame (u, v); `extent` the light's size (for the bulk-test margin). Cuts
+  // ceil(sqrt(N)) strips of equal count (sorting).
+  void reset(const std::vector<Vec2f>& uv, double extent);
+  // Samples are jitter points: sample j is jitter point pick[j]; `owner` maps jitter
+  // points to samples (owner[k] = j + 1 for picked points, 0 otherwise).
+  void reset(const std::vector<Vec2f>& jitter_uv, const JitterOrder& order, const std::vector<uint32_t>& pick,
+             const std::vector<uint32_t>& owner, double extent);
+  // Rule 1 for the piece P -> Q with weight w.
+  void add_piece(const Vec2f& P, const Vec2f& Q, int w);
+  // Rule 2: +w to every sample with v >= vc.
+  void add_step(float vc, int w);
+  // The counters per sample (index as given to reset).
+  void finish(std::vector<int32_t>& depth);
+  size_t size() const { return uv_.size(); }
+
+ private:
+  void finish_reset();
+
+  std::vector<Vec2f> uv_;
+  double extent_ = 0.0;
+  std::vector<int> strip_start_;  // strips of v-order positions; strips + 1 entries
+  std::vector<int> vorder_, sorder_, vrank_, spos_;
+  std::vector<float> vsorted_, usorted_;
+  std::vector<int32_t> direct_, diffv_, diffs_;
+};
+
+// Everything the integration of one receiver against one light needs.
+class ReceiverIntegrator {
+ public:
+  // `frame_pos`: the prepared mesh's vertices in frame coordinates.
+  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3f>& frame_pos, const LightFrame& frame)
+      : m_(m), fp_(frame_pos), frame_(frame) {}
+
+  // Starts a receiver (world position; its frame height must be > 0) with its samples.
+  void begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv);
+  // The same with samples given as picked jitter points (DepthCounter::reset).
+  void begin(const Vec3f& receiver, const JitterOrder& order, const std::vector<uint32_t>& pick,
+             const std::vector<uint32_t>& owner);
+  // sign(orient3d(T, r)) in double: +1 when r is on T's front side.
+  int facing(size_t t) const;
+  // Edge weight of section "Side of a projected edge" (0: not a silhouette from r).
+  int edge_weight(const Edge& e) const;
+  // Clips the edge to h >= 0 and to the pyramid from r over L', projects and integrates
+  // it with weight w. Returns false when nothing of it projects into L'.
+  bool add_edge(const Edge& e, int w);
+  // The cut segment of triangle t with the light plane, if t crosses it (weight from its
+  // facing). Returns false when t does not cross the plane or misses L'.
+  bool add_cut(size_t t);
+  void finish(std::vector<int32_t>& depth) { counter_.finish(depth); }
+
+  // The point where the edge between prepared vertices i and j crosses h = 0, computed
+  // from the pair in index order so every user gets the same float point.
+  Vec3f cut_point(uint32_t i, uint32_t j) const;
+
+ private:
+  bool add_segment(const Vec3f& A, const Vec3f& B, int w);
+  void set_receiver(const Vec3f& receiver);
+
+  const mesh::PreparedMesh& m_;
+  const std::vector<Vec3f>& fp_;
+  const LightFrame& frame_;
+  Vec3d r_world_{};
+  Vec3f r_{};                    // frame coordinates
+  std::vector<Vec3f> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  DepthCounter counter_;
+};
+
+}  // namespace visgate::ssv

@@ -1,0 +1,215 @@
+// Potential silhouette edges, penumbra wedges and wedge/box tests (see wedge.h).
+#include "lib/ssv/wedge.h"
+
+#include <cmath>
+
+#include "lib/geom/check.h"
+
+namespace visgate::ssv {
+
+std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m) {
+  std::vector<Edge> edges(m.edge_count());
+  std::vector<uint8_t> seen(m.edge_count(), 0);
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& tri = m.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      uint32_t label = tri.edge_labels[k];
+      if (seen[label]) continue;
+      seen[label] = 1;
+      Edge e;
+      e.a = tri.v[k];
+      e.b = tri.v[(k + 1) % 3];
+      e.t1 = int32_t(t);
+      e.t2 = m.is_double_edge[label] ? tri.neighbors[k] : -1;
+      edges[label] = e;
+    }
+  }
+  return edges;
+}
+
+namespace {
+
+struct PlaneD {
+  Vec3d n;  // unit
+  Vec3d p;  // a point on the plane
+  double eval(const Vec3d& x) const { return dot(n, x - p); }
+};
+
+Plane to_float(const PlaneD& pl) {
+  Plane f;
+  f.n = Vec3f(pl.n);
+  f.d = float(dot(pl.n, pl.p));
+  return f;
+}
+
+// Unit plane of the triangle, front (normal) side positive.
+PlaneD triangle_plane(const mesh::PreparedMesh& m, size_t t) {
+  Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
+  Vec3d n = cross(b - a, c - a);
+  double len = length(n);
+  return {len > 0.0 ? n / len : Vec3d(0, 0, 0), a};
+}
+
+// Orients a candidate plane so that L' lies on its closed negative side within tol;
+// false when L' straddles it (not a separating plane).
+bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double tol) {
+  double lo = 0.0, hi = 0.0;
+  for (const auto& l : light) {
+    double f = pl.eval(l);
+    lo = std::min(lo, f);
+    hi = std::max(hi, f);
+  }
+  if (hi <= tol) return true;
+  if (lo >= -tol) {
+    pl.n = -pl.n;
+    return true;
+  }
+  return false;
+}
+
+// Unit plane with normal n through p, or false when n is negligible relative to `scale2`
+// (the product of the two spanning lengths): 1e-12 relative leaves the direction of a
+// double cross product of float-derived vectors meaningful to about 1e-4.
+bool make_plane(const Vec3d& n, const Vec3d& p, double scale2, PlaneD& out) {
+  double len = length(n);
+  if (!(len > 1e-12 * scale2)) return false;
+  out = {n / len, p};
+  return true;
+}
+
+void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
+  Vec3f pmin, pmax;
+  for (int k = 0; k < 3; ++k) {
+    if (p.n[k] >= 0.0f) {
+      pmin[k] = box.lo[k];
+      pmax[k] = box.hi[k];
+    } else {
+      pmin[k] = box.hi[k];
+      pmax[k] = box.lo[k];
+    }
+  }
+  lo = dot(p.n, pmin) - p.d;
+  hi = dot(p.n, pmax) - p.d;
+}
+
+}  // namespace
+
+BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps, bool use_region) {
+  bool region_contains = true;
+  if (use_region && w.has_region) {
+    // Silhouette region (section 4.2): settled bits are never re-tested.
+    for (int k = 0; k < 2; ++k) {
+      uint8_t pos = k == 0 ? kPos1 : kPos2, neg = k == 0 ? kNeg1 : kNeg2;
+      if (s.region & (pos | neg)) continue;
+      float lo, hi;
+      box_range(w.tri[k], box, lo, hi);
+      if (lo >= eps) s.region |= pos;
+      else if (hi <= -eps) s.region |= neg;
+    }
+    if (((s.region & kPos1) && (s.region & kPos2)) || ((s.region & kNeg1) && (s.region & kNeg2)))
+      return BoxClass::Outside;
+    region_contains = ((s.region & kPos1) && (s.region & kNeg2)) || ((s.region & kNeg1) && (s.region & kPos2));
+  }
+  uint32_t mask = s.mask;
+  while (mask) {
+    int i = __builtin_ctz(mask);
+    mask &= mask - 1;
+    float lo, hi;
+    box_range(w.planes[size_t(i)], box, lo, hi);
+    if (hi < -eps) return BoxClass::Outside;
+    if (lo >= -eps) s.mask = uint16_t(s.mask & ~(1u << i));
+  }
+  return (s.mask == 0 && region_contains) ? BoxClass::Contains : BoxClass::Partial;
+}
+
+bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
+  for (int i = 0; i < w.plane_count; ++i)
+    if (w.planes[size_t(i)].eval(p) < -eps) return false;
+  return true;
+}
+
+std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
+                                const std::vector<Vec3f>& frame_pos, const LightFrame& frame, double tol,
+                                WedgeBuildCounts& counts) {
+  std::vector<Wedge> wedges;
+  const auto& L = frame.poly_world;
+  const size_t nl = L.size();
+  counts.edges += edges.size();
+  std::vector<PlaneD> cand;
+  for (size_t ei = 0; ei < edges.size(); ++ei) {
+    const Edge& e = edges[ei];
+    // Some incident triangle must reach above the light plane, and so must the edge.
+    bool above = false;
+    for (int32_t t : {e.t1, e.t2}) {
+      if (t < 0) continue;
+      for (uint32_t v : m.triangles[size_t(t)].v) above |= frame_pos[v].z > 0.0f;
+    }
+    if (!above || (frame_pos[e.a].z < 0.0f && frame_pos[e.b].z < 0.0f)) {
+      ++counts.below_light;
+      continue;
+    }
+    PlaneD p1 = triangle_plane(m, size_t(e.t1)), p2{};
+    if (e.t2 >= 0) {
+      // Potential silhouette w.r.t. L' (section 2.1): some light point sees exactly one
+      // of the two triangles front-facing.
+      p2 = triangle_plane(m, size_t(e.t2));
+      bool all_pos = true, all_neg = true;
+      for (const auto& l : L) {
+        double f1 = p1.eval(l), f2 = p2.eval(l);
+        all_pos &= f1 > tol && f2 > tol;
+        all_neg &= f1 < -tol && f2 < -tol;
+      }
+      if (all_pos || all_neg) {
+        ++counts.not_silhouette;
+        continue;
+      }
+    }
+    // The part of the edge on or above the light plane.
+    Vec3d A = to_double(m.vertex_pos[e.a]), B = to_double(m.vertex_pos[e.b]);
+    double ha = frame.height(A), hb = frame.height(B);
+    if (ha < 0.0 && hb > 0.0) A = A + (B - A) * (ha / (ha - hb));
+    if (hb < 0.0 && ha > 0.0) B = B + (A - B) * (hb / (hb - ha));
+
+    // Separating planes of the edge and L'.
+    cand.clear();
+    cand.push_back({frame.N, frame.origin});  // the light plane: h >= 0
+    Vec3d AB = B - A;
+    for (size_t i = 0; i < nl; ++i) {  // through the edge and a light vertex
+      PlaneD pl;
+      if (!make_plane(cross(AB, L[i] - A), A, length(AB) * length(L[i] - A), pl)) continue;
+      if (orient_against_light(pl, L, tol)) cand.push_back(pl);
+    }
+    for (int end = 0; end < 2; ++end) {  // through an edge endpoint and a light edge
+      const Vec3d& P = end == 0 ? A : B;
+      const Vec3d& Q = end == 0 ? B : A;
+      for (size_t i = 0; i < nl; ++i) {
+        const Vec3d& l0 = L[i];
+        const Vec3d& l1 = L[(i + 1) % nl];
+        PlaneD pl;
+        if (!make_plane(cross(l1 - l0, P - l0), l0, length(l1 - l0) * length(P - l0), pl)) continue;
+        if (!orient_against_light(pl, L, tol)) continue;
+        if (pl.eval(Q) < -tol) continue;  // the edge must lie on the inner side
+        cand.push_back(pl);
+      }
+    }
+    Wedge w;
+    w.edge = uint32_t(ei);
+    for (const auto& pl : cand) {
+      if (w.plane_count == kMaxWedgePlanes) {  // dropping a plane only enlarges the wedge
+        ++counts.planes_dropped;
+        continue;
+      }
+      w.planes[w.plane_count++] = to_float(pl);
+    }
+    w.tri[0] = to_float(p1);
+    if (e.t2 >= 0) {
+      w.tri[1] = to_float(p2);
+      w.has_region = true;
+    }
+    wedges.push_back(w);
+  }
+  counts.wedges += wedges.size();
+  return wedges;
+}
+
+}  // namespace visgate::ssv

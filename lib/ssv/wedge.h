@@ -1,0 +1,90 @@
+// Potential silhouette edges and penumbra wedges (paper 001 section 2.1) with the
+// silhouette regions of section 4.2, and the wedge/box tests with active plane masks that
+// the lazy wedge BSP (section 4.1) uses.
+//
+// Edges come from the prepared mesh (lib/mesh/prepare.h, paper 000 section 4.2): every
+// edge label is one edge, a double edge between two consistently oriented neighbours or a
+// single edge of one triangle (mesh boundaries, non-manifold edges and joins of
+// inconsistently oriented neighbours all become single edges, one per incidence).
+//
+// Guarantee: conservative up to float rounding covered by a tolerance. The wedge of an
+// edge (the part with h >= 0 above the light plane) is the intersection of the half-spaces
+// of its separating planes with the expanded light L' (light_frame.h), computed in double
+// and stored as float unit planes; points and boxes are tested with the tolerance
+// `eps` (a distance), so a point within eps outside a plane still counts as inside. The
+// exact region {x : some segment from x to L' meets the edge} is contained in it: each
+// separating plane has the edge on its closed inner side and L' on its closed outer side,
+// so x = p + t (p - l) (p on the edge, l in L', t >= 0) evaluates to
+// (1 + t) f(p) - t f(l) >= 0. The silhouette region of a double edge (section 3.3: exactly
+// one triangle front-facing) is tested the same way: a box is excluded only when it lies
+// at least eps inside both front half-spaces or both back half-spaces.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "lib/geom/aabb.h"
+#include "lib/geom/plane.h"
+#include "lib/mesh/prepare.h"
+#include "lib/ssv/light_frame.h"
+
+namespace visgate::ssv {
+
+// An edge a -> b in the winding of triangle t1; t2 the neighbour (traversing b -> a) or -1.
+struct Edge {
+  uint32_t a = 0, b = 0;
+  int32_t t1 = -1, t2 = -1;
+};
+
+// One edge per label of the prepared mesh, in label order.
+std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m);
+
+constexpr int kMaxWedgePlanes = 16;
+
+struct Wedge {
+  uint32_t edge = 0;                          // index into the edge list
+  uint8_t plane_count = 0;
+  bool has_region = false;                    // double edge: silhouette region planes valid
+  std::array<Plane, kMaxWedgePlanes> planes;  // unit normals; inside: n.x - d >= -eps
+  std::array<Plane, 2> tri;                   // unit triangle planes, front side positive
+};
+
+// Active-plane state of a wedge in a BSP node: bit i of `mask` set while wedge plane i does
+// not yet contain the node's box; `region` holds the four silhouette-region bits of
+// section 4.2 (kPos1, kNeg1, kPos2, kNeg2: box at least eps on the front / back side of
+// triangle plane 1 / 2).
+struct WedgeState {
+  uint32_t wedge = 0;
+  uint16_t mask = 0;
+  uint8_t region = 0;
+};
+constexpr uint8_t kPos1 = 1, kNeg1 = 2, kPos2 = 4, kNeg2 = 8;
+
+enum class BoxClass { Outside, Partial, Contains };
+
+// Classifies `box` against the wedge (and its silhouette region when `use_region`),
+// updating the state's masks for this box: Outside when some active plane (or the region
+// test) excludes the box, Contains when the box lies inside every plane (and inside the
+// silhouette region), else Partial.
+BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps, bool use_region);
+
+// True when p lies inside every wedge plane within eps.
+bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps);
+
+struct WedgeBuildCounts {
+  size_t edges = 0, below_light = 0, not_silhouette = 0, wedges = 0, planes_dropped = 0;
+};
+
+// Potential silhouette edges w.r.t. L' and their wedges. `frame_pos` holds the prepared
+// vertices in frame coordinates (used for the h >= 0 classification, the same values the
+// projection uses). An edge is dropped when no incident triangle has a vertex above the
+// light plane (it cannot meet a segment from a receiver above the plane to the light) or,
+// for a double edge, when every vertex of L' lies at least `tol` on the same side of both
+// triangle planes (no light point sees it as a silhouette, so no receiver in its wedge
+// does: section 2.1). `tol` is a distance.
+std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
+                                const std::vector<Vec3f>& frame_pos, const LightFrame& frame, double tol,
+                                WedgeBuildCounts& counts);
+
+}  // namespace visgate::ssv

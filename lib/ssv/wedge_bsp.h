@@ -1,0 +1,72 @@
+// The lazy wedge BSP of paper 001 section 4.1 (Figure 5: INIT-BSP, SPLIT-LEAF,
+// WEDGE-QUERY) with the silhouette-region test of section 4.2.
+//
+// An axis-aligned BSP over the scene bounds whose nodes hold wedges: an internal node
+// keeps the wedges that contain its whole box, a leaf the wedges that intersect it. A
+// query walks from the root to the leaf containing the point, splitting the leaves it
+// meets on the way (SPLIT-LEAF: stop below the minimum node size, 1/200 of the root's
+// longest side, or when the leaf holds no more than 25% of the wedges already collected
+// above it), and returns every wedge of every node on the path. Splits are always at the
+// middle of the longest axis, so the tree does not depend on the order of the queries.
+//
+// Guarantee: conservative (within the wedge tests' tolerance, wedge.h): every wedge whose
+// wedge (and silhouette region) contains the query point is returned, for query points
+// inside the root box. Thread-safe: concurrent queries split leaves under a per-node lock;
+// an internal node's wedge list never changes after its split is published.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "lib/ssv/wedge.h"
+
+namespace visgate::ssv {
+
+class WedgeBsp {
+ public:
+  // INIT-BSP: the root over `bounds` holding every wedge that intersects it.
+  WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float eps, bool use_region);
+  ~WedgeBsp();
+  WedgeBsp(const WedgeBsp&) = delete;
+  WedgeBsp& operator=(const WedgeBsp&) = delete;
+
+  // WEDGE-QUERY: appends the indices (into the wedge list) of the candidate wedges of p.
+  void query(const Vec3f& p, std::vector<uint32_t>& out);
+
+  size_t node_count() const { return nodes_.load(); }
+  size_t entry_count() const { return entries_.load(); }  // wedge entries in all nodes
+  // Bytes held by nodes and their wedge lists.
+  size_t memory_bytes() const;
+
+ private:
+  struct Node {
+    AABB box;
+    std::vector<WedgeState> wedges;
+    std::atomic<bool> split{false};
+    Node* child = nullptr;  // the two children, adjacent in the arena
+    int axis = 0;
+    float mid = 0.0f;
+  };
+
+  bool should_split(const Node& n, size_t wedges_above) const;
+  void split_leaf(Node& n);
+  std::mutex& lock_of(const Node* n) { return locks_[(reinterpret_cast<uintptr_t>(n) / sizeof(Node)) % locks_.size()]; }
+
+  const std::vector<Wedge>& wedges_;
+  float eps_;
+  bool use_region_;
+  float min_size_;
+  Node root_;
+  // Children are allocated in pairs from an arena (one allocation per split, freed at
+  // once); leaves are locked through a small table of striped mutexes.
+  std::deque<std::array<Node, 2>> arena_;
+  std::mutex arena_lock_;
+  std::array<std::mutex, 64> locks_;
+  std::atomic<size_t> nodes_{0}, entries_{0};
+};
+
+}  // namespace visgate::ssv

@@ -1,0 +1,498 @@
+// lib/ssv: the soft shadow volume method (paper 001) on hand-worked scenes, its
+// integration rule against direct counting, its wedges and BSP against their definitions,
+// property tests against an independent double-precision segment test on random scenes
+// away from degeneracy, and (where the oracle is built) against the exact oracle.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "lib/mesh/prepare.h"
+#include "lib/scene/families.h"
+#include "lib/scene/shapes.h"
+#include "lib/solver.h"
+#include "lib/ssv/integrate.h"
+#include "lib/ssv/light_frame.h"
+#include "lib/ssv/wedge.h"
+#include "lib/ssv/wedge_bsp.h"
+#include "oracle/relation_oracle.h"
+
+using namespace visgate;
+using namespace visgate::ssv;
+
+namespace {
+
+SolveResult run_ssv(const Scene& s, bool regions) {
+  SolveOptions o;
+  o.opts["silhouette_regions"] = regions ? "on" : "off";
+  return make_solver("ssv")->solve(s, o);
+}
+
+// A light quad [-1,1]^2 at z = 2 (emitting down) with explicit samples on a 4 x 4 grid
+// (x, y in {-0.75, -0.25, 0.25, 0.75}), one receiver at the origin.
+Scene quad_scene(const Vec3d& shift = Vec3d(0, 0, 0)) {
+  Scene s;
+  s.name = "hand";
+  Light l = make_square_light_down(Vec3d(0, 0, 2) + shift, 1.0, 16, 1);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  for (int b = 0; b < 4; ++b)
+    for (int a = 0; a < 4; ++a)
+      l.explicit_samples.push_back(Vec3f(Vec3d(-0.75 + 0.5 * a, -0.75 + 0.5 * b, 2.0) + shift));
+  s.lights.push_back(l);
+  s.receivers.push_back({Vec3f(shift), Vec3f(0, 0, 1)});
+  EXPECT_TRUE(finish_scene(s).ok());
+  return s;
+}
+
+// Independent reference: the open segment (r, s) against one triangle in double with a
+// safety margin. Returns +1 for a crossing with the crossing point inside the triangle
+// and the segment by more than `m`, 0 for a miss by more than `m`, -1 when too close to
+// call. Distances are relative to the triangle's size and the segment's length.
+int segment_vs_triangle(const Vec3d& r, const Vec3d& s, const Vec3d& a, const Vec3d& b, const Vec3d& c, double m) {
+  Vec3d n = cross(b - a, c - a);
+  double nl = length(n);
+  if (nl == 0.0) return 0;  // zero area: never blocks; the cases here keep away from it
+  n = n / nl;
+  double dr = dot(n, r - a), ds = dot(n, s - a), len = length(s - r);
+  double size = std::max(length(b - a), std::max(length(c - a), length(c - b)));
+  if ((dr > m * len && ds > m * len) || (dr < -m * len && ds < -m * len)) return 0;
+  if (std::abs(dr) <= m * len || std::abs(ds) <= m * len) return -1;
+  double t = dr / (dr - ds);
+  Vec3d p = r + (s - r) * t;
+  double lam = 1e300;
+  const Vec3d v[3] = {a, b, c};
+  for (int k = 0; k < 3; ++k) {
+    Vec3d e = v[(k + 1) % 3] - v[k];
+    double dist = dot(cross(e, p - v[k]), n) / length(e);  // signed distance inside
+    lam = std::min(lam, dist);
+  }
+  if (lam > m * size) return 1;
+  if (lam < -m * size) return 0;
+  return -1;
+}
+
+// Depth complexity of the open segment (r, s) by direct counting, or -1 when some
+// triangle is too close to call.
+int direct_depth(const TriangleSoup& soup, const Vec3f& r, const Vec3f& s, double m = 1e-4) {
+  int depth = 0;
+  for (size_t t = 0; t < soup.size(); ++t) {
+    int c = segment_vs_triangle(to_double(r), to_double(s), to_double(soup.corner(t, 0)), to_double(soup.corner(t, 1)),
+                                to_double(soup.corner(t, 2)), m);
+    if (c < 0) return -1;
+    depth += c;
+  }
+  return depth;
+}
+
+Vec3d rand_point(std::mt19937_64& g, const Vec3d& lo, const Vec3d& hi) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  return Vec3d(lo.x + (hi.x - lo.x) * u(g), lo.y + (hi.y - lo.y) * u(g), lo.z + (hi.z - lo.z) * u(g));
+}
+
+// Random blockers between a floor of receivers (z = 0) and a light at z = 2: loose
+// triangles (some crossing the light plane, some below the receivers), spheres and tori
+// (closed meshes: double edges), an inconsistently oriented pair and a non-manifold fan
+// (single edges of lib/mesh).
+Scene random_scene(uint64_t seed, int samples, int receivers) {
+  std::mt19937_64 g(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Scene s;
+  s.name = "ssv-random";
+  for (int k = 0; k < 12; ++k) {
+    Vec3d c = rand_point(g, Vec3d(-1.2, -1.2, 0.3), Vec3d(1.2, 1.2, 1.7));
+    Vec3d a = c + rand_point(g, Vec3d(-0.5, -0.5, -0.3), Vec3d(0.5, 0.5, 0.3));
+    Vec3d b = c + rand_point(g, Vec3d(-0.5, -0.5, -0.3), Vec3d(0.5, 0.5, 0.3));
+    Vec3d d = c + rand_point(g, Vec3d(-0.5, -0.5, -0.3), Vec3d(0.5, 0.5, 0.3));
+    uint32_t base = uint32_t(s.mesh.vertices.size());
+    s.mesh.vertices.push_back(Vec3f(a));
+    s.mesh.vertices.push_back(Vec3f(b));
+    s.mesh.vertices.push_back(Vec3f(d));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  // Triangles crossing the light plane and crossing the receivers' plane.
+  for (double zc : {2.0, 0.0}) {
+    Vec3d c = rand_point(g, Vec3d(-0.6, -0.6, zc - 0.1), Vec3d(0.6, 0.6, zc + 0.1));
+    uint32_t base = uint32_t(s.mesh.vertices.size());
+    s.mesh.vertices.push_back(Vec3f(c + Vec3d(-0.4, -0.1, -0.45)));
+    s.mesh.vertices.push_back(Vec3f(c + Vec3d(0.4, 0.05, -0.35)));
+    s.mesh.vertices.push_back(Vec3f(c + Vec3d(0.1, 0.3, 0.5)));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  shapes::add_sphere(s.mesh, rand_point(g, Vec3d(-0.8, -0.8, 0.8), Vec3d(0.8, 0.8, 1.2)), 0.25 + 0.2 * u(g), 9, 6);
+  shapes::add_torus(s.mesh, rand_point(g, Vec3d(-0.8, -0.8, 0.6), Vec3d(0.8, 0.8, 1.4)), 0.35, 0.1, 10, 6);
+  {
+    // Inconsistently oriented neighbours (same traversal of the shared edge) and a
+    // three-triangle fan on one edge.
+    Vec3d c = rand_point(g, Vec3d(-0.6, -0.6, 0.9), Vec3d(0.6, 0.6, 1.1));
+    uint32_t base = uint32_t(s.mesh.vertices.size());
+    for (const Vec3d& p : {c + Vec3d(-0.3, 0, 0), c + Vec3d(0.3, 0, 0.05), c + Vec3d(0, 0.35, 0.1), c + Vec3d(0, -0.3, -0.1),
+                           c + Vec3d(0.05, 0.1, 0.4)})
+      s.mesh.vertices.push_back(Vec3f(p));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+    s.mesh.triangles.push_back({base, base + 1, base + 3});  // same direction: inconsistent
+    s.mesh.triangles.push_back({base + 1, base, base + 4});  // third triangle on the edge
+  }
+  Light l = make_square_light_down(Vec3d(0.1, -0.05, 2.0), 0.8, samples, seed);
+  s.lights.push_back(l);
+  for (int i = 0; i < receivers; ++i) s.receivers.push_back({Vec3f(rand_point(g, Vec3d(-1.5, -1.5, 0), Vec3d(1.5, 1.5, 0))), Vec3f(0, 0, 1)});
+  EXPECT_TRUE(finish_scene(s).ok());
+  return s;
+}
+
+// Compares a result against direct counting (V = depth 0) on every relation that is
+// safely away from degeneracy; returns the number of safe relations compared.
+size_t expect_matches_direct(const Scene& s, const SolveResult& r, const std::string& what) {
+  size_t compared = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t l = 0; l < s.lights.size(); ++l)
+      for (int j = 0; j < s.lights[l].samples; ++j) {
+        int d = direct_depth(s.mesh, s.receivers[i].p, sample_position(s.lights[l], j, i));
+        if (d < 0) continue;
+        ++compared;
+        EXPECT_EQ(r.receivers[i].visible(s.light_offset(l) + size_t(j)), d == 0)
+            << what << " receiver " << i << " light " << l << " sample " << j << " depth " << d;
+      }
+  return compared;
+}
+
+// Compares a result against the exact relation oracle: no disagreement where the class
+// is not degenerate and the margin is at least tau = 1e-5 (DESIGN section 5). Returns the
+// number of relations compared.
+size_t expect_matches_oracle(const Scene& s, const oracle::RelationOracleResult& ex, const SolveResult& r,
+                             const std::string& what) {
+  size_t compared = 0, mismatches = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      char c = ex.classes[i][k];
+      if (c == 'd' || ex.margins[i][k] < 1e-5) continue;
+      ++compared;
+      if (r.receivers[i].visible(k) != (c == 'v') && ++mismatches <= 10)
+        ADD_FAILURE() << what << " receiver " << i << " relation " << k << " exact " << c << " margin " << ex.margins[i][k];
+    }
+  EXPECT_EQ(mismatches, 0u) << what;
+  return compared;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- hand-worked scenes
+
+TEST(Ssv, TriangleBetweenPointAndLightQuad) {
+  // The triangle at z = 1 with corners (0.05, 0.05), (1.05, 0.05), (0.05, 1.05). The
+  // segment to sample (x, y, 2) crosses z = 1 at (x/2, y/2): blocked iff x, y >= 0.1 and
+  // x + y <= 2.1, which among x, y in {+-0.25, +-0.75} holds for the four with x, y > 0.
+  for (bool regions : {true, false}) {
+    Scene s = quad_scene();
+    s.mesh.vertices = {Vec3f(0.05f, 0.05f, 1), Vec3f(1.05f, 0.05f, 1), Vec3f(0.05f, 1.05f, 1)};
+    s.mesh.triangles = {{0, 1, 2}};
+    SolveResult r = run_ssv(s, regions);
+    for (int b = 0; b < 4; ++b)
+      for (int a = 0; a < 4; ++a)
+        EXPECT_EQ(r.receivers[0].visible(size_t(b * 4 + a)), !(a >= 2 && b >= 2)) << a << "," << b;
+    EXPECT_FLOAT_EQ(r.receivers[0].visible_fraction[0], 12.0f / 16.0f);
+  }
+}
+
+TEST(Ssv, ClosedBoxBlocksEverythingThroughIt) {
+  // A closed box z in [0.5, 1.5] spanning [-3, 3]^2: the receiver below sees no sample
+  // (every segment crosses the bottom and the top: depth 2), a receiver inside the box
+  // sees none (depth 1: the top), one at x = 20 beside it sees all: its segment to
+  // (x_s, y_s, 2), |x_s| <= 0.75, reaches the plane x = 3 at z = 34 / (20 - x_s) > 1.6,
+  // above the box, and the plane z = 1.5 at x = 5 + 0.75 x_s > 4, beside it.
+  Scene s = quad_scene();
+  shapes::add_box(s.mesh, Vec3d(-3, -3, 0.5), Vec3d(3, 3, 1.5));
+  s.receivers.push_back({Vec3f(0, 0, 1), Vec3f(0, 0, 1)});
+  s.receivers.push_back({Vec3f(20, 0, 0), Vec3f(0, 0, 1)});
+  for (bool regions : {true, false}) {
+    SolveResult r = run_ssv(s, regions);
+    for (size_t j = 0; j < 16; ++j) {
+      EXPECT_FALSE(r.receivers[0].visible(j)) << j;
+      EXPECT_FALSE(r.receivers[1].visible(j)) << j;
+      EXPECT_TRUE(r.receivers[2].visible(j)) << j;
+    }
+  }
+}
+
+TEST(Ssv, ReceiverSeesPartOfTheLightThroughAHole) {
+  // A wall at z = 1 over [-3, 3]^2 with a square hole [-0.2, 0.2]^2 (eight triangles
+  // around it). Segment to (x, y, 2) meets z = 1 at (x/2, y/2): visible iff |x|, |y| < 0.4,
+  // i.e. exactly the four samples with x, y in {-0.25, 0.25}. Also far from the origin.
+  for (const Vec3d& shift : {Vec3d(0, 0, 0), Vec3d(4096, -2048, 1024)}) {
+    Scene s = quad_scene(shift);
+    auto q = [&](double x0, double y0, double x1, double y1) {
+      shapes::add_quad(s.mesh, Vec3d(x0, y0, 1) + shift, Vec3d(x1, y0, 1) + shift, Vec3d(x1, y1, 1) + shift,
+                       Vec3d(x0, y1, 1) + shift);
+    };
+    q(-3, -3, 3, -0.2);
+    q(-3, 0.2, 3, 3);
+    q(-3, -0.2, -0.2, 0.2);
+    q(0.2, -0.2, 3, 0.2);
+    for (bool regions : {true, false}) {
+      SolveResult r = run_ssv(s, regions);
+      for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+          bool vis = (a == 1 || a == 2) && (b == 1 || b == 2);
+          EXPECT_EQ(r.receivers[0].visible(size_t(b * 4 + a)), vis) << a << "," << b << " shift " << shift.x;
+        }
+    }
+  }
+}
+
+TEST(Ssv, ReceiverBehindTheLightAndSeveralLights) {
+  // Two lights; a receiver above the first light (behind it) is answered by rays; a
+  // blocker between the receiver at the origin and the second light only.
+  Scene s = quad_scene();
+  Light l2 = make_square_light_down(Vec3d(5, 0, 2), 0.5, 9, 3);
+  s.lights.push_back(l2);
+  s.receivers.push_back({Vec3f(0, 0, 3), Vec3f(0, 0, 1)});
+  // A big quad at z = 1 over x in [1.5, 3.5]: the origin's segments to light 2 (x in
+  // [4.5, 5.5] at z = 2) cross z = 1 at x in [2.25, 2.75]; segments to light 1 at
+  // |x| <= 0.75/2. The receiver at z = 3 sees both lights from behind through nothing.
+  shapes::add_quad(s.mesh, Vec3d(1.5, -2, 1), Vec3d(3.5, -2, 1), Vec3d(3.5, 2, 1), Vec3d(1.5, 2, 1));
+  ASSERT_TRUE(finish_scene(s).ok());
+  SolveResult r = run_ssv(s, true);
+  for (size_t j = 0; j < 16; ++j) EXPECT_TRUE(r.receivers[0].visible(j));
+  for (size_t j = 0; j < 9; ++j) EXPECT_FALSE(r.receivers[0].visible(16 + j));
+  for (size_t j = 0; j < 25; ++j) EXPECT_TRUE(r.receivers[1].visible(j));
+  EXPECT_EQ(r.stats.get("fallback_relations"), 25.0);
+}
+
+// ---------------------------------------------------------------- integration rule
+
+TEST(SsvIntegration, StripCounterEqualsNaiveRule) {
+  // The sub-linear counter against a plain loop over samples implementing rules 1 and 2.
+  std::mt19937_64 g(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int n : {1, 5, 16, 64, 256, 300}) {
+    std::vector<Vec2f> uv(static_cast<size_t>(n));
+    for (auto& p : uv) p = {u(g), u(g)};
+    DepthCounter dc;
+    dc.reset(uv, 2.0);
+    std::vector<int32_t> naive(size_t(n), 0);
+    for (int k = 0; k < 200; ++k) {
+      Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
+      int w = int(g() % 5) - 2;
+      dc.add_piece(P, Q, w);
+      float vc = 1.2f * u(g);
+      dc.add_step(vc, w);
+      for (int j = 0; j < n; ++j) {
+        const Vec2f& s = uv[size_t(j)];
+        if (P.v != Q.v) {
+          bool up = Q.v > P.v;
+          Vec2f lo = up ? P : Q, hi = up ? Q : P;
+          if (s.v >= lo.v && s.v < hi.v && cross2(Vec2f{hi.u - lo.u, hi.v - lo.v}, Vec2f{s.u - lo.u, s.v - lo.v}) > 0.0f)
+            naive[size_t(j)] += up ? w : -w;
+        }
+        if (s.v >= vc) naive[size_t(j)] += w;
+      }
+    }
+    std::vector<int32_t> got;
+    dc.finish(got);
+    EXPECT_EQ(got, naive) << "n = " << n;
+  }
+}
+
+TEST(SsvIntegration, RelativeDepthEqualsDirectCounting) {
+  // Every edge of random scenes integrated (no culling) against direct counting of the
+  // triangles crossing each segment: the difference must be one constant per receiver.
+  size_t compared = 0;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    Scene s = random_scene(seed, 64, 12);
+    mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
+    const Light& light = s.lights[0];
+    LightFrame frame = make_light_frame(light);
+    std::vector<Vec3f> fp(pm.vertex_pos.size());
+    for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame(pm.vertex_pos[v]);
+    std::vector<Edge> edges = mesh_edges(pm);
+    ReceiverIntegrator integ(pm, fp, frame);
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      std::vector<Vec2f> uv;
+      for (int j = 0; j < light.samples; ++j) {
+        size_t k = size_t(&sample_position(light, j, i) - light.jitter_points.data());
+        uv.push_back(frame.jitter_uv[k]);
+      }
+      integ.begin(s.receivers[i].p, uv);
+      for (const Edge& e : edges) integ.add_edge(e, integ.edge_weight(e));
+      for (size_t t = 0; t < pm.triangles.size(); ++t) integ.add_cut(t);
+      std::vector<int32_t> depth;
+      integ.finish(depth);
+      bool have = false;
+      int offset = 0;
+      for (int j = 0; j < light.samples; ++j) {
+        int d = direct_depth(s.mesh, s.receivers[i].p, sample_position(light, j, i));
+        if (d < 0) continue;
+        ++compared;
+        if (!have) {
+          offset = depth[size_t(j)] - d;
+          have = true;
+        }
+        EXPECT_EQ(depth[size_t(j)] - d, offset) << "seed " << seed << " receiver " << i << " sample " << j;
+      }
+    }
+  }
+  EXPECT_GT(compared, 3000u);
+}
+
+// ---------------------------------------------------------------- wedges and BSP
+
+TEST(SsvWedge, WedgeContainsEveryPointFromWhichTheEdgeOverlapsTheLight) {
+  // Sample points x = p + t (p - l) (p on the edge, l in L', t > 0): each must be inside
+  // the edge's wedge, whatever the silhouette status.
+  Scene s = random_scene(11, 16, 1);
+  mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
+  LightFrame frame = make_light_frame(s.lights[0]);
+  std::vector<Vec3f> fp(pm.vertex_pos.size());
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame(pm.vertex_pos[v]);
+  std::vector<Edge> edges = mesh_edges(pm);
+  WedgeBuildCounts counts;
+  std::vector<Wedge> wedges = build_wedges(pm, edges, fp, frame, 1e-9 * 4, counts);
+  ASSERT_GT(wedges.size(), 10u);
+  std::mt19937_64 g(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const float eps = float(4e-6 * 4);
+  size_t tested = 0;
+  for (const Wedge& w : wedges) {
+    const Edge& e = edges[w.edge];
+    Vec3d a = to_double(pm.vertex_pos[e.a]), b = to_double(pm.vertex_pos[e.b]);
+    for (int k = 0; k < 40; ++k) {
+      Vec3d p = a + (b - a) * u(g);
+      if (frame.height(p) <= 0.0) continue;
+      // A point of L' as a convex combination of a triangle fan.
+      size_t n = frame.poly_world.size(), f = 1 + size_t(g() % (n - 2));
+      double x = u(g), y = u(g);
+      if (x + y > 1) x = 1 - x, y = 1 - y;
+      Vec3d l = frame.poly_world[0] + (frame.poly_world[f] - frame.poly_world[0]) * x +
+                (frame.poly_world[f + 1] - frame.poly_world[0]) * y;
+      Vec3d q = p + (p - l) * (3.0 * u(g));
+      EXPECT_TRUE(point_in_wedge(w, Vec3f(q), eps)) << "edge " << w.edge;
+      ++tested;
+    }
+  }
+  EXPECT_GT(tested, 500u);
+}
+
+TEST(SsvWedge, BspQueryReportsEveryWedgeContainingThePoint) {
+  // Lazy BSP against a linear scan: every wedge that contains the point (and, with
+  // silhouette regions, whose edge is a silhouette from it) must be reported.
+  Scene s = random_scene(12, 16, 400);
+  mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
+  LightFrame frame = make_light_frame(s.lights[0]);
+  std::vector<Vec3f> fp(pm.vertex_pos.size());
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame(pm.vertex_pos[v]);
+  std::vector<Edge> edges = mesh_edges(pm);
+  WedgeBuildCounts counts;
+  std::vector<Wedge> wedges = build_wedges(pm, edges, fp, frame, 1e-9 * 4, counts);
+  AABB root = s.bounds();
+  const float eps = float(4e-6 * 4);
+  for (bool regions : {true, false}) {
+    WedgeBsp bsp(wedges, root, eps, regions);
+    std::mt19937_64 g(5);
+    size_t must = 0;
+    for (const Receiver& rc : s.receivers) {
+      std::vector<uint32_t> got;
+      bsp.query(rc.p, got);
+      std::sort(got.begin(), got.end());
+      EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "a wedge reported twice";
+      for (size_t wi = 0; wi < wedges.size(); ++wi) {
+        const Wedge& w = wedges[wi];
+        if (!point_in_wedge(w, rc.p, -eps)) continue;  // clearly inside only
+        if (regions && w.has_region) {
+          float f1 = w.tri[0].eval(rc.p), f2 = w.tri[1].eval(rc.p);
+          if (!((f1 > eps && f2 < -eps) || (f1 < -eps && f2 > eps))) continue;
+        }
+        ++must;
+        EXPECT_TRUE(std::binary_search(got.begin(), got.end(), uint32_t(wi))) << "wedge " << wi;
+      }
+    }
+    EXPECT_GT(must, 100u);
+    EXPECT_GT(bsp.node_count(), 1u);
+  }
+}
+
+// ---------------------------------------------------------------- whole method
+
+TEST(Ssv, FarFromOriginTerminatesAndMatchesOracle) {
+  // Around 1e6 the float midpoint of a small BSP node equals one of its faces long before
+  // the minimum node size: the lazy BSP must stop there (it used to split forever).
+  FamilyParams p;
+  p.seed = 2;
+  p.receivers = 64;
+  p.samples = 32;
+  auto scene = generate_family("far-origin", p);
+  ASSERT_TRUE(scene.ok());
+  SolveResult r = run_ssv(*scene, true);
+  EXPECT_LT(r.stats.get("bsp_nodes"), 1e6);
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(*scene, 0);
+  EXPECT_GT(expect_matches_oracle(*scene, ex, r, "far-origin"), 500u);
+}
+
+TEST(Ssv, RandomScenesMatchDirectCountingAwayFromDegeneracy) {
+  size_t compared = 0;
+  for (uint64_t seed = 21; seed <= 26; ++seed) {
+    Scene s = random_scene(seed, 64, 40);
+    SolveResult on = run_ssv(s, true), off = run_ssv(s, false);
+    compared += expect_matches_direct(s, on, "regions on");
+    expect_matches_direct(s, off, "regions off");
+    for (size_t i = 0; i < s.receivers.size(); ++i)
+      EXPECT_EQ(on.receivers[i].visible_bits, off.receivers[i].visible_bits) << "receiver " << i;
+    EXPECT_LE(on.stats.get("wedges_reported"), off.stats.get("wedges_reported"));
+    EXPECT_EQ(on.stats.get("wedges_validated"), off.stats.get("wedges_validated"));
+  }
+  EXPECT_GT(compared, 10000u);
+}
+
+TEST(Ssv, FamiliesMatchDirectCountingOnSafeRelations) {
+  // Generated families against direct counting where it is safe.
+  for (const char* fam : {"random-soup", "columns", "torus"}) {
+    if (!is_family(fam)) continue;
+    FamilyParams p;
+    p.seed = 3;
+    p.receivers = 100;
+    p.samples = 64;
+    auto scene = generate_family(fam, p);
+    ASSERT_TRUE(scene.ok()) << fam;
+    if (scene->mesh.size() > 3000) continue;  // keep direct counting fast
+    SolveResult r = run_ssv(*scene, true);
+    EXPECT_GT(expect_matches_direct(*scene, r, fam), 1000u) << fam;
+  }
+}
+
+TEST(Ssv, EdgeOnSliverDoesNotPoisonTheReceiver) {
+  // Found by `visgate check --family sliver-soup --seed 1 --count 2 --receivers 256
+  // --samples 64`: in sliver-soup seed 2, receiver 7 sees triangle 188 edge-on; sample 7
+  // lies within rounding of its projection and got a spurious depth of -1, so the
+  // reference ray to it (unblocked) declared the 63 visible samples blocked. The check
+  // ray to the next class detects the inconsistency.
+  FamilyParams p;
+  p.seed = 2;
+  p.receivers = 256;
+  p.samples = 64;
+  auto scene = generate_family("sliver-soup", p);
+  ASSERT_TRUE(scene.ok());
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(*scene, 0);
+  SolveResult r = run_ssv(*scene, true);
+  EXPECT_GT(expect_matches_oracle(*scene, ex, r, "sliver-soup seed 2"), 10000u);
+  EXPECT_GE(r.stats.get("inconsistent_receivers"), 1.0);
+}
+
+TEST(Ssv, OracleAgreesOnRandomSoupAndColumns) {
+  // No mismatch against the exact relation oracle, silhouette regions on and off.
+  for (const char* fam : {"random-soup", "columns"}) {
+    for (uint64_t seed : {1, 2}) {
+      FamilyParams p;
+      p.seed = seed;
+      p.receivers = 64;
+      p.samples = 64;
+      auto scene = generate_family(fam, p);
+      ASSERT_TRUE(scene.ok()) << fam;
+      oracle::RelationOracleResult ex = oracle::run_relation_oracle(*scene, 0);
+      for (bool regions : {true, false}) {
+        SolveResult r = run_ssv(*scene, regions);
+        std::string what = std::string(fam) + " seed " + std::to_string(seed) + (regions ? " regions on" : " regions off");
+        EXPECT_GT(expect_matches_oracle(*scene, ex, r, what), 1000u) << what;
+      }
+    }
+  }
+}
