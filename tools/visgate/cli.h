@@ -23,6 +23,8 @@ bool stderr_is_tty();
 void add_gen(CLI::App& app, Action& run);
 void add_solve(CLI::App& app, Action& run);
 void add_oracle(CLI::App& app, Action& run);
+void add_bench(CLI::App& app, Action& run);
+void add_render(CLI::App& app, Action& run);
 void add_check(CLI::App& app, Action& run);
 void add_minimize(CLI::App& app, Action& run);
 void add_gate(CLI::App& app, Action& run);

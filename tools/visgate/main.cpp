@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   add_gen(app, run);
   add_solve(app, run);
   add_oracle(app, run);
+  add_bench(app, run);
+  add_render(app, run);
   add_check(app, run);
   add_minimize(app, run);
   add_gate(app, run);

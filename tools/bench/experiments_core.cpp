@@ -1,0 +1,268 @@
+// The `visgate bench` experiments that need no exact oracle:
+//   complexity  seconds against receivers, samples and triangles for every method with
+//               fitted log-log slopes: the complexity cube of paper 000 Fig. 3.1, measured;
+//   iss         the analogue of paper 000 Tables 5.2 and 5.3 (section 5.2);
+//   ssv         the analogue of paper 001 Tables 1, 3 and 4 (section 5).
+#include <cmath>
+#include <limits>
+
+#include "tools/bench/bench.h"
+#include "tools/bench/run_method.h"
+
+namespace visgate::bench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string fmt_g(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+// ---------------------------------------------------------------------------------
+// complexity: paper 000 Fig. 3.1 spans the cost of a visibility method over receivers,
+// light samples and triangles; each axis is swept with the other two at a base point.
+
+Status run_complexity(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  std::vector<std::string> wanted = o.families.empty() ? std::vector<std::string>{"random-soup"} : o.families;
+  auto fams = ctx.families(wanted);
+  if (fams.empty()) return Error{"complexity: no registered family to measure"};
+  const std::string family = fams.front();
+  if (fams.size() > 1) ctx.note("complexity measures one family: " + family + " (the first given)");
+
+  struct Axis {
+    std::string name, unit;
+    std::vector<long> values;
+  };
+  long base_rec = o.quick ? 256 : 4096, base_smp = o.quick ? 16 : 64, base_tri = o.quick ? 100 : 800;
+  std::vector<Axis> axes = {
+      {"receivers", "receivers", o.quick ? std::vector<long>{64, 256, 1024} : std::vector<long>{1024, 4096, 16384, 65536}},
+      {"samples", "samples per receiver", o.quick ? std::vector<long>{4, 16, 64} : std::vector<long>{16, 64, 256, 1024}},
+      {"triangles", "triangles", o.quick ? std::vector<long>{50, 100, 200} : std::vector<long>{200, 800, 3200, 12800}},
+  };
+  auto methods = ctx.methods();
+  ctx.report.options["family"] = family;
+  ctx.report.options["base"] = {{"receivers", base_rec}, {"samples", base_smp}, {"triangles", base_tri}};
+  Json sweeps = Json::object();
+  for (const auto& a : axes) sweeps[a.name] = a.values;
+  ctx.report.options["sweeps"] = sweeps;
+
+  Table points{"points", "seconds per method at every point of the three sweeps (min of --repeat runs)",
+               {"axis", "method", "receivers", "samples_per_receiver", "triangles", "relations", "x",
+                "seconds_1t", "seconds_all", "runs_1t", "runs_all", "peak_mb"}, {}};
+  Table slopes{"slopes", "fitted log-log slope of seconds against each axis (1: linear)",
+               {"axis", "method", "slope_1t", "r2_1t", "slope_all", "r2_all", "points"}, {}};
+  // One guard over all three sweeps, its size the brute-force work relations x
+  // triangles: a method too slow at one point is not started on a point of another
+  // sweep predicted to cost more.
+  SweepGuard guard(o.budget);
+  for (const auto& axis : axes) {
+    std::map<std::string, std::vector<double>> xs, t1, ta;
+    for (long v : axis.values) {
+      FamilyParams p;
+      p.seed = o.seed;
+      p.receivers = axis.name == "receivers" ? v : base_rec;
+      p.samples = axis.name == "samples" ? v : base_smp;
+      p.triangles = axis.name == "triangles" ? v : base_tri;
+      auto scene = ctx.scene(family, p);
+      if (!scene) return scene.error();
+      const Scene& s = *scene;
+      double x = axis.name == "receivers" ? double(s.receivers.size())
+                 : axis.name == "samples" ? double(s.samples_per_receiver())
+                                          : double(s.mesh.size());
+      for (const auto& m : methods) {
+        double work = double(s.relation_count()) * double(std::max<size_t>(1, s.mesh.size()));
+        auto r = run_method(ctx, m, s, axis.name + "=" + fmt_g(x), &guard, work);
+        if (!r) continue;
+        points.add_row({axis.name, m, s.receivers.size(), s.samples_per_receiver(), s.mesh.size(), s.relation_count(), x,
+                        r->seconds_1t, r->seconds_all, r->runs_1t, r->runs_all, r->peak_mb});
+        xs[m].push_back(x);
+        t1[m].push_back(r->seconds_1t);
+        ta[m].push_back(r->seconds_all);
+      }
+    }
+    Chart c{"complexity-" + axis.name,
+            "Time against " + axis.unit + " (" + family + ", single thread; label: fitted log-log slope)",
+            axis.unit, "time (s)", true, true, {}};
+    for (const auto& m : methods) {
+      if (!xs.count(m)) continue;
+      SlopeFit f1 = fit_loglog(xs[m], t1[m]), fa = fit_loglog(xs[m], ta[m]);
+      slopes.add_row({axis.name, m, f1.points >= 2 ? f1.slope : kNaN, f1.points >= 2 ? f1.r2 : kNaN,
+                      fa.points >= 2 ? fa.slope : kNaN, fa.points >= 2 ? fa.r2 : kNaN, f1.points});
+      Series se{m, xs[m], t1[m], std::vector<std::string>(xs[m].size())};
+      if (f1.points >= 2) se.labels.back() = "slope " + fmt_g(std::round(f1.slope * 100) / 100);
+      c.series.push_back(std::move(se));
+    }
+    ctx.report.charts.push_back(std::move(c));
+  }
+  ctx.report.tables.push_back(std::move(slopes));
+  ctx.report.tables.push_back(std::move(points));
+  return {};
+}
+
+// ---------------------------------------------------------------------------------
+// iss: paper 000 section 5.2, Tables 5.2 (COLUMNS, BUNNY, TREE) and 5.3 (SODA): per
+// scene three receiver resolutions (each 4x the receivers of the last), 4x samples and
+// 4x light area at the medium resolution; relations, % blocked, ISS seconds, % of
+// relations ray-cast, ISS peak memory, comparison (embree) seconds and their ratio.
+
+struct Config {
+  std::string name;
+  int side;            // receiver grid side
+  int sample_factor;   // x samples
+  double light_scale;  // x light side (area scale squared)
+};
+
+Status run_iss(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  auto fams = ctx.families({"columns", "foliage", "rooms"});
+  if (fams.empty()) return Error{"iss: none of the families columns, foliage, rooms is registered"};
+  bool have_iss = ctx.has_method("iss", "the ISS columns of the iss experiment (embree figures are still measured)");
+  bool have_embree = ctx.has_method("embree", "the comparison columns of the iss experiment");
+
+  Table t{"table", "paper 000 Tables 5.2/5.3 analogue: ISS against one embree ray per relation",
+          {"scene", "config", "receivers", "samples_per_receiver", "triangles", "relations_M", "blocked_pct",
+           "iss_seconds_1t", "iss_seconds_all", "ray_cast_pct", "iss_peak_mb", "iss_reported_peak_mb", "embree_seconds_1t",
+           "embree_seconds_all", "ratio_1t", "ratio_all"}, {}};
+  Table st{"stats", "every figure the ISS solver reports, per row of the table", {"scene", "config", "stat", "value"}, {}};
+  Json configs = Json::object();
+  for (const auto& fam : fams) {
+    // The medium resolution: 64x64 receivers (rooms, with 27 lights: 32x32); --quick: 8x8.
+    int med = o.quick ? 8 : (fam == "rooms" ? 32 : 64);
+    long samples = o.quick ? 16 : -1;  // family default otherwise (columns 256, rooms 64 per light)
+    std::vector<Config> cfgs = {{"low", med / 2, 1, 1.0}, {"medium", med, 1, 1.0}, {"high", med * 2, 1, 1.0},
+                                {"4x smp", med, 4, 1.0}, {"4x area", med, 1, 2.0}};
+    Json cj = Json::array();
+    for (const auto& c : cfgs) {
+      FamilyParams p;
+      p.seed = o.seed;
+      p.receivers = long(c.side) * c.side;
+      p.light_scale = c.light_scale;
+      if (samples > 0 || c.sample_factor > 1) {
+        auto base = ctx.scene(fam, [&] { FamilyParams q = p; q.receivers = 1; q.samples = samples; return q; }());
+        if (!base) return base.error();
+        p.samples = long(base->lights.front().samples) * c.sample_factor;
+      }
+      cj.push_back({{"config", c.name}, {"grid", c.side}, {"samples", p.samples}, {"light_scale", c.light_scale}});
+      auto scene = ctx.scene(fam, p);
+      if (!scene) return scene.error();
+      const Scene& s = *scene;
+      std::string label = fam + " " + c.name;
+      std::optional<Measured> iss, emb;
+      if (have_iss) iss = run_method(ctx, "iss", s, label);
+      if (have_embree) emb = run_method(ctx, "embree", s, label);
+      const Measured* any = iss ? &*iss : emb ? &*emb : nullptr;
+      double blocked = any ? 100.0 * blocked_share(s, any->result) : kNaN;
+      double ray_pct = kNaN;
+      if (iss) {
+        ray_pct = stat_or_nan(iss->stats, {"ray_cast_pct", "raycast_pct", "percent_ray_cast", "ray_cast_percent"});
+        if (std::isnan(ray_pct)) {
+          double f = stat_or_nan(iss->stats, {"ray_cast_fraction", "raycast_fraction"});
+          double n = stat_or_nan(iss->stats, {"relations_ray_cast", "rays", "ray_casts", "rays_cast"});
+          if (!std::isnan(f)) ray_pct = 100.0 * f;
+          else if (!std::isnan(n) && s.relation_count()) ray_pct = 100.0 * n / double(s.relation_count());
+        }
+        add_stat_rows(st, {fam, c.name}, iss->stats);
+      }
+      double i1 = iss ? iss->seconds_1t : kNaN, ia = iss ? iss->seconds_all : kNaN;
+      double e1 = emb ? emb->seconds_1t : kNaN, ea = emb ? emb->seconds_all : kNaN;
+      t.add_row({fam, c.name, s.receivers.size(), s.samples_per_receiver(), s.mesh.size(),
+                 double(s.relation_count()) / 1e6, blocked, i1, ia, ray_pct, iss ? iss->peak_mb : kNaN,
+                 iss ? stat_or_nan(iss->stats, {"peak_memory_mb", "memory_mb"}) : kNaN, e1, ea,
+                 ratio(e1, i1), ratio(ea, ia)});
+    }
+    configs[fam] = cj;
+  }
+  ctx.report.options["configs"] = configs;
+  ctx.report.options["iss_options"] = Json::object();  // the method's defaults
+  ctx.report.tables.push_back(std::move(t));
+  ctx.report.tables.push_back(std::move(st));
+  return {};
+}
+
+// ---------------------------------------------------------------------------------
+// ssv: paper 001 section 5. Table 1: total time of the reference ray tracer (embree)
+// and of the soft shadow volume method, speedup and memory. Table 3: wedges reported
+// and validated per shadow query and their acceptance ratio. Table 4: the method with
+// and without silhouette regions (option silhouette_regions).
+
+Status run_ssv(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  auto fams = ctx.families({"columns", "foliage", "rooms", "torus", "random-soup"});
+  if (fams.empty()) return Error{"ssv: no registered family to measure"};
+  bool have_ssv = ctx.has_method("ssv", "the SSV columns of the ssv experiment (embree figures are still measured)");
+  bool have_embree = ctx.has_method("embree", "the reference ray tracer columns of the ssv experiment");
+  bool have_sr = false;
+  if (have_ssv) {
+    auto s = make_solver("ssv");
+    for (const auto& spec : s->options()) have_sr |= spec.name == "silhouette_regions";
+    if (!have_sr) ctx.note("ssv has no option silhouette_regions: Table 4 (with/without silhouette regions) skipped");
+  }
+
+  Table t1{"table1", "paper 001 Table 1 analogue: total time of the reference ray tracer and of SSV, speedup, memory",
+           {"scene", "receivers", "samples_per_receiver", "triangles", "relations_M", "blocked_pct", "embree_seconds_1t",
+            "embree_seconds_all", "embree_peak_mb", "ssv_seconds_1t", "ssv_seconds_all", "ssv_peak_mb", "speedup_1t",
+            "speedup_all"}, {}};
+  Table t3{"table3", "paper 001 Table 3 analogue: wedges reported and validated per shadow query, acceptance ratio",
+           {"scene", "queries", "wedges_reported_per_query", "wedges_validated_per_query", "acceptance_ratio"}, {}};
+  // The SSV solver reports wedges_reported and wedges_validated as means per shadow
+  // query (one query per receiver and light), as paper 001 Table 3 does.
+  Table t4{"table4", "paper 001 Table 4 analogue: SSV with (SR) and without (w/o SR) silhouette regions",
+           {"scene", "silhouette_regions", "seconds_1t", "seconds_all", "wedges_reported", "peak_mb"}, {}};
+  Table st{"stats", "every figure the SSV solver reports", {"scene", "silhouette_regions", "stat", "value"}, {}};
+  for (const auto& fam : fams) {
+    FamilyParams p;
+    p.seed = o.seed;
+    int side = o.quick ? 8 : (fam == "rooms" ? 32 : 64);
+    p.receivers = long(side) * side;
+    if (o.quick) p.samples = 16;
+    auto scene = ctx.scene(fam, p);
+    if (!scene) return scene.error();
+    const Scene& s = *scene;
+    std::optional<Measured> ssv, emb, off;
+    if (have_embree) emb = run_method(ctx, "embree", s, fam);
+    if (have_ssv) ssv = run_method(ctx, "ssv", s, fam, nullptr, 0.0, have_sr ? std::map<std::string, std::string>{{"silhouette_regions", "on"}} : std::map<std::string, std::string>{});
+    if (have_sr) off = run_method(ctx, "ssv", s, fam + " w/o SR", nullptr, 0.0, {{"silhouette_regions", "off"}});
+    const Measured* any = ssv ? &*ssv : emb ? &*emb : nullptr;
+    double e1 = emb ? emb->seconds_1t : kNaN, ea = emb ? emb->seconds_all : kNaN;
+    double s1 = ssv ? ssv->seconds_1t : kNaN, sa = ssv ? ssv->seconds_all : kNaN;
+    t1.add_row({fam, s.receivers.size(), s.samples_per_receiver(), s.mesh.size(), double(s.relation_count()) / 1e6,
+                any ? 100.0 * blocked_share(s, any->result) : kNaN, e1, ea, emb ? emb->peak_mb : kNaN, s1, sa,
+                ssv ? ssv->peak_mb : kNaN, ratio(e1, s1), ratio(ea, sa)});
+    if (ssv) {
+      const Stats& x = ssv->stats;
+      double q = stat_or_nan(x, {"queries", "shadow_queries"});
+      if (std::isnan(q)) q = double(s.receivers.size() * s.lights.size());
+      double rep = stat_or_nan(x, {"wedges_reported"}), val = stat_or_nan(x, {"wedges_validated"});
+      double acc = stat_or_nan(x, {"acceptance_ratio"});
+      if (std::isnan(acc)) acc = ratio(stat_or_nan(x, {"wedges_accepted"}), rep);
+      t3.add_row({fam, q, rep, val, acc});
+      add_stat_rows(st, {fam, have_sr ? "on" : "default"}, x);
+      if (off) {
+        t4.add_row({fam, "on", s1, sa, rep, ssv->peak_mb});
+        t4.add_row({fam, "off", off->seconds_1t, off->seconds_all, stat_or_nan(off->stats, {"wedges_reported"}),
+                    off->peak_mb});
+        add_stat_rows(st, {fam, "off"}, off->stats);
+      }
+    }
+  }
+  ctx.report.tables.push_back(std::move(t1));
+  if (have_ssv) ctx.report.tables.push_back(std::move(t3));
+  if (have_sr) ctx.report.tables.push_back(std::move(t4));
+  if (have_ssv) ctx.report.tables.push_back(std::move(st));
+  return {};
+}
+
+}  // namespace
+
+void add_core_experiments(std::vector<Experiment>& out) {
+  out.push_back({"complexity", "seconds against receivers, samples and triangles per method, with log-log slopes",
+                 run_complexity});
+  out.push_back({"iss", "paper 000 Tables 5.2/5.3 analogue: ISS against embree", run_iss});
+  out.push_back({"ssv", "paper 001 Tables 1, 3, 4 analogue: SSV against embree", run_ssv});
+}
+
+}  // namespace visgate::bench

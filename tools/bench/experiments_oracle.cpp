@@ -1,0 +1,539 @@
+// The `visgate bench` experiments that measure against the exact oracles:
+//   speed-accuracy  seconds against RMS error of the visible fraction (region oracle)
+//                   for N = 4..1024 samples; fragment methods (plucker-bsp) as their
+//                   exact point; the Pareto chart on log axes;
+//   plucker         the analogue of paper 002 section 5, Figures 7-10: equal time and
+//                   equal quality against embree, light area x1 to x100, 2 to 36 lights,
+//                   the coherence falloff factor (Figure 8, columns MV and FO);
+//   stability       disagreements with the relation oracle per margin decade, every
+//                   method on every family (DESIGN section 5);
+//   oracle          throughput of the relation and region oracles.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "oracle/comparator.h"
+#include "oracle/region_oracle.h"
+#include "oracle/relation_oracle.h"
+#include "tools/bench/bench.h"
+#include "tools/bench/run_method.h"
+
+namespace visgate::bench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// RMS errors of exactly 0 cannot be drawn on a log axis; they are drawn at this floor
+// (far below the error of any sampled method at N <= 1024: about 1/(2N) = 5e-4).
+constexpr double kLogFloor = 1e-7;
+
+std::string fmt_g(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
+// Exact visible fraction per (receiver, light), receiver-major, by the region oracle;
+// pairs in parallel (threads: 0 all).
+std::vector<double> exact_fractions(const Scene& s, int threads) {
+  size_t L = s.lights.size(), n = s.receivers.size() * L;
+  std::vector<double> out(n, 0.0);
+  ThreadLimit limit(threads);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) out[k] = oracle::visible_region(s, k / L, k % L).visible_fraction;
+  });
+  return out;
+}
+
+std::vector<double> method_fractions(const Scene& s, const SolveResult& r) {
+  std::vector<double> out;
+  out.reserve(s.receivers.size() * s.lights.size());
+  for (const auto& rr : r.receivers)
+    for (size_t l = 0; l < s.lights.size(); ++l) out.push_back(l < rr.visible_fraction.size() ? rr.visible_fraction[l] : 0.0);
+  return out;
+}
+
+double max_abs_error(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0;
+  for (size_t i = 0; i < a.size() && i < b.size(); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
+  return m;
+}
+
+bool is_fragment_method(const std::string& m) {
+  auto s = make_solver(m);
+  return s && s->reports_fragments();
+}
+
+bool has_option(const std::string& m, const std::string& opt) {
+  auto s = make_solver(m);
+  if (!s) return false;
+  for (const auto& spec : s->options())
+    if (spec.name == opt) return true;
+  return false;
+}
+
+// Scene sizes for the accuracy experiments: the region oracle does exact Boolean
+// operations per (receiver, light), so receivers and the rooms tessellation are kept
+// small enough for every experiment to finish within minutes on two cores.
+FamilyParams accuracy_params(const BenchOptions& o, const std::string& fam) {
+  FamilyParams p;
+  p.seed = o.seed;
+  int side = o.quick ? 4 : (fam == "rooms" ? 8 : 16);
+  p.receivers = long(side) * side;
+  if (fam == "rooms") p.triangles = o.quick ? 3000 : 6000;
+  return p;
+}
+
+// ---------------------------------------------------------------------------------
+// speed-accuracy
+
+Status run_speed_accuracy(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  auto fams = ctx.families({"columns", "foliage", "rooms"});
+  if (fams.empty()) return Error{"speed-accuracy: none of the families columns, foliage, rooms is registered"};
+  std::vector<long> ns = o.quick ? std::vector<long>{4, 16, 64} : std::vector<long>{4, 16, 64, 256, 1024};
+  auto methods = ctx.methods();
+  ctx.report.options["samples"] = ns;
+  Json sizes = Json::object();
+
+  Table t{"points", "seconds against RMS error of the visible fraction versus the exact region oracle",
+          {"family", "method", "samples", "relations", "seconds_1t", "seconds_all", "runs_1t", "runs_all",
+           "rms_error", "max_abs_error", "peak_mb"}, {}};
+  Table ot{"oracle", "the exact reference: region oracle per (receiver, light)",
+           {"family", "receivers", "lights", "triangles", "pairs", "region_oracle_seconds"}, {}};
+  for (const auto& fam : fams) {
+    FamilyParams p = accuracy_params(o, fam);
+    p.samples = ns.front();
+    auto base = ctx.scene(fam, p);
+    if (!base) return base.error();
+    sizes[fam] = scene_summary(*base);
+    ctx.progress.step(fam + ": region oracle");
+    auto t0 = std::chrono::steady_clock::now();
+    std::vector<double> exact = exact_fractions(*base, o.threads);
+    double oracle_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ot.add_row({fam, base->receivers.size(), base->lights.size(), base->mesh.size(), exact.size(), oracle_s});
+
+    Chart c{"speed-accuracy-" + fam,
+            "Speed against accuracy on " + fam + " (" + std::to_string(base->receivers.size()) +
+                " receivers; label: samples N; RMS 0 drawn at 1e-7)",
+            "time, single thread (s)", "RMS error of visible fraction (fraction of light area)", true, true, {}};
+    SweepGuard guard(o.budget);
+    for (const auto& m : methods) {
+      bool fragments = is_fragment_method(m);
+      Series se{m, {}, {}, {}};
+      for (long n : ns) {
+        if (fragments && n != ns.front()) break;  // exact: one point
+        p.samples = n;
+        auto scene = ctx.scene(fam, p);
+        if (!scene) return scene.error();
+        auto r = run_method(ctx, m, *scene, fam + " N=" + std::to_string(n), &guard, double(n));
+        if (!r) continue;
+        std::vector<double> got = method_fractions(*scene, r->result);
+        double rms = rms_error(got, exact), mx = max_abs_error(got, exact);
+        t.add_row({fam, m, fragments ? Json("exact") : Json(n), scene->relation_count(), r->seconds_1t, r->seconds_all,
+                   r->runs_1t, r->runs_all, rms, mx, r->peak_mb});
+        se.x.push_back(r->seconds());
+        se.y.push_back(std::max(rms, kLogFloor));
+        se.labels.push_back(fragments ? "exact" : "N=" + std::to_string(n));
+      }
+      c.series.push_back(std::move(se));
+    }
+    ctx.report.charts.push_back(std::move(c));
+  }
+  ctx.report.options["scenes"] = sizes;
+  ctx.report.tables.push_back(std::move(t));
+  ctx.report.tables.push_back(std::move(ot));
+  return {};
+}
+
+// ---------------------------------------------------------------------------------
+// plucker (paper 002 section 5)
+
+// Replaces the scene's lights by `count` copies of its first light, translated within
+// the light's plane to points evenly spaced on a circle about the original centre
+// (radius: a third of the receivers' bounding-box diagonal), each with its own seed:
+// lights of one size casting comparable shadows, as in paper 002 Figure 10.
+Status set_light_count(Scene& s, int count, int samples) {
+  if (s.lights.empty() || s.receivers.empty()) return Error{s.name + ": no light or no receiver to copy"};
+  Light proto = s.lights.front();
+  Vec3d c(0, 0, 0);
+  for (const auto& v : proto.polygon) c += to_double(v);
+  c = c / double(proto.polygon.size());
+  Vec3d n = to_double(proto.normal);
+  Vec3d u = to_double(proto.polygon[1]) - to_double(proto.polygon[0]);
+  u = u - n * dot(u, n);
+  u = u / std::sqrt(dot(u, u));
+  Vec3d w = cross(n, u);
+  AABB rb;
+  for (const auto& r : s.receivers) rb.extend(r.p);
+  Vec3d d = to_double(rb.hi) - to_double(rb.lo);
+  double radius = std::sqrt(dot(d, d)) / 3.0;
+  s.lights.clear();
+  for (int k = 0; k < count; ++k) {
+    double a = 2.0 * M_PI * double(k) / double(count);
+    Vec3d off = (u * std::cos(a) + w * std::sin(a)) * radius;
+    Light l;
+    for (const auto& v : proto.polygon) l.polygon.push_back(Vec3f(to_double(v) + off));
+    l.samples = samples;
+    l.pattern = proto.pattern;
+    l.jitter = proto.jitter;
+    l.seed = proto.seed + uint64_t(k);
+    Status st = prepare_light(l, s.name + ": lights[" + std::to_string(k) + "]");
+    if (!st) return st;
+    s.lights.push_back(std::move(l));
+  }
+  return {};
+}
+
+Status run_plucker(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  const std::string P = "plucker-bsp";
+  bool have_p = ctx.has_method(P, "the plucker-bsp figures (the embree side is still measured)");
+  bool have_e = ctx.has_method("embree", "the embree comparison");
+  std::vector<std::string> wanted = o.families.empty() ? std::vector<std::string>{"rooms"} : o.families;
+  auto fams = ctx.families(wanted);
+  if (fams.empty()) return Error{"plucker: no registered family to measure"};
+  const std::string fam = fams.front();
+  const double quality = 0.01;  // "comparable quality": RMS error of the visible fraction <= 1%
+  std::vector<long> ns = o.quick ? std::vector<long>{4, 16, 64} : std::vector<long>{4, 16, 64, 256, 1024};
+  ctx.report.options["family"] = fam;
+  ctx.report.options["equal_quality_rms"] = quality;
+  ctx.report.options["embree_samples"] = ns;
+
+  // Figure 7: equal time and equal quality.
+  FamilyParams p = accuracy_params(o, fam);
+  p.samples = ns.front();
+  auto base = ctx.scene(fam, p);
+  if (!base) return base.error();
+  ctx.report.options["scene"] = scene_summary(*base);
+  ctx.progress.step(fam + ": region oracle");
+  std::vector<double> exact = exact_fractions(*base, o.threads);
+
+  Table f7{"fig7", "paper 002 Figure 7 analogue: embree shadow rays at N samples against the exact method",
+           {"method", "samples", "seconds_1t", "seconds_all", "rms_error", "max_abs_error"}, {}};
+  Table eq{"equal", "equal time and equal quality (RMS <= equal_quality_rms) against plucker-bsp",
+           {"comparison", "embree_samples", "embree_seconds_1t", "embree_rms_error", "plucker_seconds_1t",
+            "plucker_rms_error", "embree_over_plucker"}, {}};
+  double tp = kNaN, rp = kNaN;
+  if (have_p) {
+    auto r = run_method(ctx, P, *base, "fig7");
+    if (r) {
+      auto got = method_fractions(*base, r->result);
+      tp = r->seconds_1t;
+      rp = rms_error(got, exact);
+      f7.add_row({P, "exact", r->seconds_1t, r->seconds_all, rp, max_abs_error(got, exact)});
+    }
+  }
+  std::vector<std::pair<long, std::pair<double, double>>> emb;  // N -> (seconds, rms)
+  if (have_e) {
+    SweepGuard guard(o.budget);
+    for (long n : ns) {
+      p.samples = n;
+      auto s = ctx.scene(fam, p);
+      if (!s) return s.error();
+      auto r = run_method(ctx, "embree", *s, "fig7 N=" + std::to_string(n), &guard, double(n));
+      if (!r) continue;
+      auto got = method_fractions(*s, r->result);
+      double rms = rms_error(got, exact);
+      f7.add_row({"embree", n, r->seconds_1t, r->seconds_all, rms, max_abs_error(got, exact)});
+      emb.push_back({n, {r->seconds_1t, rms}});
+    }
+  }
+  if (!emb.empty() && !std::isnan(tp)) {
+    // Equal time: the largest N whose time does not exceed the exact method's (else the smallest N).
+    auto et = emb.front();
+    for (const auto& e : emb)
+      if (e.second.first <= tp) et = e;
+    eq.add_row({"equal time", et.first, et.second.first, et.second.second, tp, rp, ratio(et.second.first, tp)});
+    // Equal quality: the smallest N reaching the RMS target.
+    const std::pair<long, std::pair<double, double>>* eqq = nullptr;
+    for (const auto& e : emb)
+      if (!eqq && e.second.second <= quality) eqq = &e;
+    if (eqq) eq.add_row({"equal quality", eqq->first, eqq->second.first, eqq->second.second, tp, rp,
+                         ratio(eqq->second.first, tp)});
+    else ctx.note("no embree sample count up to " + std::to_string(ns.back()) + " reached RMS " + fmt_g(quality) +
+                  ": no equal-quality row");
+  }
+  {
+    Chart c{"plucker-fig7", "Equal time / equal quality on " + fam + " (label: samples N)",
+            "time, single thread (s)", "RMS error of visible fraction (0 drawn at 1e-7)", true, true, {}};
+    Series se{"embree", {}, {}, {}};
+    for (const auto& e : emb) {
+      se.x.push_back(e.second.first);
+      se.y.push_back(std::max(e.second.second, kLogFloor));
+      se.labels.push_back("N=" + std::to_string(e.first));
+    }
+    c.series.push_back(std::move(se));
+    if (!std::isnan(tp)) c.series.push_back({P, {tp}, {std::max(rp, kLogFloor)}, {"exact"}});
+    ctx.report.charts.push_back(std::move(c));
+  }
+
+  // Figure 8: figures of the exact method and the coherence falloff factor (MV: every
+  // query without the coherence of the previous ones; FO = MV time / time).
+  Table f8{"fig8", "paper 002 Figure 8 analogue: coherence on and off, falloff factor FO",
+           {"coherence", "seconds_1t", "seconds_all", "peak_mb", "falloff_factor_1t"}, {}};
+  Table st{"stats", "every figure plucker-bsp reports", {"run", "stat", "value"}, {}};
+  if (have_p) {
+    if (has_option(P, "coherence")) {
+      auto on = run_method(ctx, P, *base, "coherence on", nullptr, 0.0, {{"coherence", "on"}});
+      auto off = run_method(ctx, P, *base, "coherence off", nullptr, 0.0, {{"coherence", "off"}});
+      if (on && off) {
+        f8.add_row({"on", on->seconds_1t, on->seconds_all, on->peak_mb, 1.0});
+        f8.add_row({"off", off->seconds_1t, off->seconds_all, off->peak_mb, ratio(off->seconds_1t, on->seconds_1t)});
+        add_stat_rows(st, {"coherence on"}, on->stats);
+        add_stat_rows(st, {"coherence off"}, off->stats);
+      }
+    } else {
+      ctx.note("plucker-bsp has no option coherence: the falloff factor (Figure 8) is not measured");
+    }
+  }
+
+  // Figure 9: light area x1 to x100 (side x1 to x10).
+  std::vector<double> areas = o.quick ? std::vector<double>{1, 16, 100} : std::vector<double>{1, 4, 16, 36, 64, 100};
+  const long f9_samples = 64;  // embree's sample count in Figures 9 and 10
+  Table f9{"fig9", "paper 002 Figure 9 analogue: time and peak memory as the light area grows",
+           {"area_factor", "method", "samples", "seconds_1t", "seconds_all", "peak_mb"}, {}};
+  Chart c9t{"plucker-fig9-time", "Time against light area on " + fam, "light area (x the original)",
+            "time, single thread (s)", true, true, {}};
+  Chart c9m{"plucker-fig9-memory", "Peak memory against light area on " + fam, "light area (x the original)",
+            "peak memory (MiB)", true, false, {}};
+  for (const std::string& m : {P, std::string("embree")}) {
+    if ((m == P && !have_p) || (m != P && !have_e)) continue;
+    Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
+    SweepGuard guard(o.budget);
+    for (double a : areas) {
+      FamilyParams q = accuracy_params(o, fam);
+      q.samples = f9_samples;
+      q.light_scale = std::sqrt(a);
+      auto s = ctx.scene(fam, q);
+      if (!s) return s.error();
+      auto r = run_method(ctx, m, *s, "light area x" + fmt_g(a), &guard, a);
+      if (!r) continue;
+      f9.add_row({a, m, m == P ? Json("exact") : Json(f9_samples), r->seconds_1t, r->seconds_all, r->peak_mb});
+      ts.x.push_back(a), ts.y.push_back(r->seconds_1t);
+      ms.x.push_back(a), ms.y.push_back(r->peak_mb);
+    }
+    c9t.series.push_back(std::move(ts));
+    c9m.series.push_back(std::move(ms));
+  }
+  ctx.report.charts.push_back(std::move(c9t));
+  ctx.report.charts.push_back(std::move(c9m));
+
+  // Figure 10: 2 to 36 lights of one size.
+  std::vector<int> counts = o.quick ? std::vector<int>{2, 4} : std::vector<int>{2, 4, 8, 16, 36};
+  const int f10_samples = 16;
+  Table f10{"fig10", "paper 002 Figure 10 analogue: time and peak memory against the number of lights",
+            {"lights", "method", "samples_per_light", "seconds_1t", "seconds_all", "peak_mb"}, {}};
+  Chart c10t{"plucker-fig10-time", "Time against the number of lights on " + fam, "lights", "time, single thread (s)",
+             true, true, {}};
+  Chart c10m{"plucker-fig10-memory", "Peak memory against the number of lights on " + fam, "lights",
+             "peak memory (MiB)", true, false, {}};
+  for (const std::string& m : {P, std::string("embree")}) {
+    if ((m == P && !have_p) || (m != P && !have_e)) continue;
+    Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
+    SweepGuard guard(o.budget);
+    for (int k : counts) {
+      FamilyParams q = accuracy_params(o, fam);
+      q.samples = f10_samples;
+      auto s = ctx.scene(fam, q);
+      if (!s) return s.error();
+      Status ls = set_light_count(*s, k, f10_samples);
+      if (!ls) return ls.error();
+      auto r = run_method(ctx, m, *s, std::to_string(k) + " lights", &guard, double(k));
+      if (!r) continue;
+      f10.add_row({k, m, m == P ? Json("exact") : Json(f10_samples), r->seconds_1t, r->seconds_all, r->peak_mb});
+      ts.x.push_back(k), ts.y.push_back(r->seconds_1t);
+      ms.x.push_back(k), ms.y.push_back(r->peak_mb);
+    }
+    c10t.series.push_back(std::move(ts));
+    c10m.series.push_back(std::move(ms));
+  }
+  ctx.report.charts.push_back(std::move(c10t));
+  ctx.report.charts.push_back(std::move(c10m));
+
+  ctx.report.tables.push_back(std::move(f7));
+  ctx.report.tables.push_back(std::move(eq));
+  if (!f8.rows.empty()) ctx.report.tables.push_back(std::move(f8));
+  ctx.report.tables.push_back(std::move(f9));
+  ctx.report.tables.push_back(std::move(f10));
+  if (!st.rows.empty()) ctx.report.tables.push_back(std::move(st));
+  return {};
+}
+
+// ---------------------------------------------------------------------------------
+// stability
+
+// Lower bound of histogram bucket k (oracle::DecadeHistogram): 10^(k-12).
+double decade_low(size_t k) { return std::pow(10.0, double(k) - 12.0); }
+
+Status run_stability(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  auto fams = ctx.families(o.families.empty() ? family_names() : o.families);
+  auto methods = ctx.methods();
+  int seeds = o.quick ? 1 : 3;
+  long receivers = o.quick ? 64 : 1024, samples = o.quick ? 4 : 16;
+  ctx.report.options["seeds"] = seeds;
+  ctx.report.options["receivers"] = receivers;
+  ctx.report.options["samples"] = samples;
+  ctx.report.options["tau"] = o.tau;
+
+  Table sum{"summary", "disagreements with the relation oracle, every method on every family (all seeds)",
+            {"family", "method", "relations", "degenerate", "disagreements", "mismatches", "false_visible",
+             "false_blocked", "fraction_mismatches", "fragment_mismatches", "disagreement_rate", "mismatch_rate"}, {}};
+  Table dec{"decades", "disagreements per margin decade [low, 10 low); low 0 holds margins below 1e-12",
+            {"family", "method", "margin_low", "disagreements", "rate"}, {}};
+  std::map<std::string, oracle::DecadeHistogram> total_hist;
+  std::map<std::string, size_t> total_rel;
+  for (const auto& fam : fams) {
+    std::map<std::string, oracle::Comparison> acc;
+    std::map<std::string, size_t> rel;
+    for (int sd = 0; sd < seeds; ++sd) {
+      FamilyParams p;
+      p.seed = o.seed + uint64_t(sd);
+      p.receivers = receivers;
+      p.samples = samples;
+      // Small meshes with --quick; rooms (30k triangles, 27 lights by default) reduced
+      // so the exact methods finish in minutes.
+      if (o.quick) p.triangles = 300;
+      else if (fam == "rooms") p.triangles = 6000;
+      auto s = ctx.scene(fam, p);
+      if (!s) {
+        ctx.note("family " + fam + " seed " + std::to_string(p.seed) + ": " + s.error().message + ": skipped");
+        continue;
+      }
+      ctx.progress.step(fam + " seed " + std::to_string(p.seed) + ": relation oracle");
+      auto exact = oracle::run_relation_oracle(*s, o.threads);
+      for (const auto& m : methods) {
+        auto solver = make_solver(m);
+        ctx.progress.step(fam + " seed " + std::to_string(p.seed) + ": " + m);
+        SolveOptions so;
+        so.seed = o.seed;
+        so.threads = o.threads;
+        SolveResult r = solver->solve(*s, so);
+        auto cmp = oracle::compare_relations(*s, r, exact, o.tau);
+        auto& a = acc[m];
+        a.relations += cmp.relations, a.degenerate += cmp.degenerate, a.agree += cmp.agree;
+        a.disagree += cmp.disagree, a.false_visible += cmp.false_visible, a.false_blocked += cmp.false_blocked;
+        a.fraction_mismatches += cmp.fraction_mismatches, a.fragment_mismatches += cmp.fragment_mismatches;
+        for (size_t k = 0; k < a.disagreement_margins.buckets.size(); ++k)
+          a.disagreement_margins.buckets[k] += cmp.disagreement_margins.buckets[k];
+        a.disagreement_margins.below += cmp.disagreement_margins.below;
+        rel[m] += cmp.relations;
+      }
+    }
+    Chart c{"stability-" + fam, "Disagreement rate per margin decade on " + fam + " (tau " + fmt_g(o.tau) + ")",
+            "margin (relative to scene diagonal; 1e-13: below 1e-12)", "disagreements per relation", true, true, {}};
+    for (const auto& m : methods) {
+      if (!acc.count(m)) continue;
+      const auto& a = acc[m];
+      double n = double(std::max<size_t>(1, a.relations));
+      sum.add_row({fam, m, a.relations, a.degenerate, a.disagree, a.mismatch_count(), a.false_visible, a.false_blocked,
+                   a.fraction_mismatches, a.fragment_mismatches, double(a.disagree) / n,
+                   double(a.mismatch_count()) / n});
+      Series se{m, {}, {}, {}};
+      auto add = [&](double low, size_t count) {
+        dec.add_row({fam, m, low, count, double(count) / n});
+        se.x.push_back(low == 0 ? 1e-13 : low);
+        se.y.push_back(double(count) / n);
+        se.labels.push_back("");
+      };
+      add(0.0, a.disagreement_margins.below);
+      for (size_t k = 0; k < a.disagreement_margins.buckets.size(); ++k) add(decade_low(k), a.disagreement_margins.buckets[k]);
+      c.series.push_back(std::move(se));
+      auto& th = total_hist[m];
+      for (size_t k = 0; k < th.buckets.size(); ++k) th.buckets[k] += a.disagreement_margins.buckets[k];
+      th.below += a.disagreement_margins.below;
+      total_rel[m] += a.relations;
+    }
+    ctx.report.charts.push_back(std::move(c));
+  }
+  Chart all{"stability-all", "Disagreement rate per margin decade, all families (tau " + fmt_g(o.tau) + ")",
+            "margin (relative to scene diagonal; 1e-13: below 1e-12)", "disagreements per relation", true, true, {}};
+  for (const auto& m : methods) {
+    if (!total_hist.count(m)) continue;
+    const auto& h = total_hist[m];
+    double n = double(std::max<size_t>(1, total_rel[m]));
+    Series se{m, {1e-13}, {double(h.below) / n}, {""}};
+    for (size_t k = 0; k < h.buckets.size(); ++k) {
+      se.x.push_back(decade_low(k));
+      se.y.push_back(double(h.buckets[k]) / n);
+      se.labels.push_back("");
+    }
+    all.series.push_back(std::move(se));
+  }
+  ctx.report.charts.push_back(std::move(all));
+  ctx.report.tables.push_back(std::move(sum));
+  ctx.report.tables.push_back(std::move(dec));
+  return {};
+}
+
+// ---------------------------------------------------------------------------------
+// oracle throughput
+
+Status run_oracle(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  auto fams = ctx.families(o.families.empty() ? family_names() : o.families);
+  long receivers = o.quick ? 64 : 1024, samples = o.quick ? 4 : 16;
+  size_t region_pairs = o.quick ? 16 : 128;  // (receiver, light) pairs timed for the region oracle
+  ctx.report.options["receivers"] = receivers;
+  ctx.report.options["samples"] = samples;
+  ctx.report.options["region_pairs"] = region_pairs;
+  int all_threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  Table t{"throughput", "exact oracle throughput (min of --repeat runs)",
+          {"family", "triangles", "relations", "relation_seconds_1t", "relation_seconds_all", "relations_per_s_1t",
+           "relations_per_s_all", "relation_peak_mb", "degenerate", "region_pairs", "region_seconds_1t",
+           "region_seconds_all", "regions_per_s_1t", "regions_per_s_all", "region_peak_mb"}, {}};
+  for (const auto& fam : fams) {
+    FamilyParams p;
+    p.seed = o.seed;
+    p.receivers = receivers;
+    p.samples = samples;
+    if (o.quick) p.triangles = 300;
+    auto s = ctx.scene(fam, p);
+    if (!s) {
+      ctx.note("family " + fam + ": " + s.error().message + ": skipped");
+      continue;
+    }
+    size_t degenerate = 0;
+    ctx.progress.step(fam + ": relation oracle, 1 thread");
+    Timed r1 = time_min(o.repeat, o.budget, [&] {
+      auto r = oracle::run_relation_oracle(*s, 1);
+      degenerate = 0;
+      for (const auto& c : r.classes) degenerate += size_t(std::count(c.begin(), c.end(), 'd'));
+    });
+    ctx.progress.step(fam + ": relation oracle, all threads");
+    Timed ra = time_min(o.repeat, o.budget, [&] { oracle::run_relation_oracle(*s, all_threads); });
+    // Region oracle on the first pairs (receiver-major) of the scene.
+    size_t L = s->lights.size(), pairs = std::min(region_pairs, s->receivers.size() * L);
+    auto regions = [&](int threads) {
+      ThreadLimit limit(threads);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs, 1), [&](const tbb::blocked_range<size_t>& rg) {
+        for (size_t k = rg.begin(); k != rg.end(); ++k) oracle::visible_region(*s, k / L, k % L);
+      });
+    };
+    ctx.progress.step(fam + ": region oracle");
+    Timed g1 = time_min(o.repeat, o.budget, [&] { regions(1); });
+    Timed ga = time_min(o.repeat, o.budget, [&] { regions(all_threads); });
+    double rel = double(s->relation_count());
+    t.add_row({fam, s->mesh.size(), s->relation_count(), r1.seconds, ra.seconds, ratio(rel, r1.seconds),
+               ratio(rel, ra.seconds), std::max(r1.peak_mb, ra.peak_mb), degenerate, pairs, g1.seconds, ga.seconds,
+               ratio(double(pairs), g1.seconds), ratio(double(pairs), ga.seconds), std::max(g1.peak_mb, ga.peak_mb)});
+  }
+  ctx.report.tables.push_back(std::move(t));
+  return {};
+}
+
+}  // namespace
+
+void add_oracle_experiments(std::vector<Experiment>& out) {
+  out.push_back({"speed-accuracy", "seconds against RMS error versus the exact region oracle, N = 4..1024 samples",
+                 run_speed_accuracy});
+  out.push_back({"plucker", "paper 002 Figures 7-10 analogue: plucker-bsp against embree", run_plucker});
+  out.push_back({"stability", "disagreement rate per margin decade, every method on every family", run_stability});
+  out.push_back({"oracle", "throughput of the relation and region oracles", run_oracle});
+}
+
+}  // namespace visgate::bench

@@ -1,0 +1,92 @@
+// Measuring methods: repeated runs, per-run peak memory (see measure.h).
+#include "tools/bench/measure.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <thread>
+
+namespace visgate::bench {
+
+namespace {
+
+double status_mb(const char* key) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  size_t n = std::char_traits<char>::length(key);
+  while (std::getline(in, line))
+    if (line.compare(0, n, key) == 0 && line.size() > n && line[n] == ':') {
+      try {
+        return double(std::stol(line.substr(n + 1))) / 1024.0;  // kB
+      } catch (...) {
+        return 0.0;
+      }
+    }
+  return 0.0;
+}
+
+}  // namespace
+
+bool reset_peak_memory() {
+  std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+  if (!f) return false;
+  bool ok = std::fputs("5", f) >= 0;
+  ok = (std::fclose(f) == 0) && ok;
+  return ok;
+}
+
+const char* peak_memory_mode() {
+  static const bool per_run = reset_peak_memory();
+  return per_run ? "per-run" : "process-hwm";
+}
+
+double rss_mb() { return status_mb("VmRSS"); }
+double hwm_mb() { return status_mb("VmHWM"); }
+
+Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& base, const MeasureConfig& cfg) {
+  Measured m;
+  int all_threads = cfg.all_threads > 0 ? cfg.all_threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  auto one_setting = [&](int threads, double& best, int& runs) {
+    SolveOptions so = base;
+    so.threads = threads;
+    for (int r = 0; r < std::max(1, cfg.repeat); ++r) {
+      bool reset = reset_peak_memory();
+      double before = rss_mb();
+      auto t0 = std::chrono::steady_clock::now();
+      SolveResult res = solver.solve(scene, so);
+      double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      double peak = reset ? hwm_mb() - before : hwm_mb();
+      m.peak_mb = std::max(m.peak_mb, peak);
+      double s = res.seconds > 0 ? res.seconds : wall;
+      best = runs ? std::min(best, s) : s;
+      ++runs;
+      if (m.result.receivers.empty()) {
+        m.stats = res.stats;
+        m.result = std::move(res);
+      }
+      if (s > cfg.budget) break;  // a long run is not repeated
+    }
+  };
+  if (cfg.single) one_setting(1, m.seconds_1t, m.runs_1t);
+  // A single-threaded run beyond the budget is not repeated with all threads either.
+  bool over = m.runs_1t && m.seconds_1t > cfg.budget;
+  if (cfg.all && !over) one_setting(all_threads, m.seconds_all, m.runs_all);
+  return m;
+}
+
+bool SweepGuard::skip(const std::string& method, double size, std::string* why) const {
+  auto it = last_.find(method);
+  if (it == last_.end() || it->second.first <= 0) return false;
+  double predicted = it->second.second * size / it->second.first;
+  if (predicted <= budget_) return false;
+  if (why) {
+    char b[160];
+    std::snprintf(b, sizeof b, "predicted %.1f s per run (last %.2f s at %g, linear) exceeds the budget %.0f s",
+                  predicted, it->second.second, it->second.first, budget_);
+    *why = b;
+  }
+  return true;
+}
+
+}  // namespace visgate::bench

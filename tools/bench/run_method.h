@@ -1,0 +1,31 @@
+// Helpers the experiments share to measure a method on a scene and tabulate its stats.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tools/bench/bench.h"
+
+namespace visgate::bench {
+
+// Measures `method` on `scene` (min of --repeat runs, 1 thread and all threads) with
+// the given method options. With a guard, a point predicted to exceed the budget is
+// skipped (noted) and nullopt returned; the guard records every measured point. Shows
+// `label` as progress. nullopt (noted) also when the method is not registered or
+// rejects the options.
+std::optional<Measured> run_method(BenchContext& ctx, const std::string& method, const Scene& scene,
+                                   const std::string& label, SweepGuard* guard = nullptr, double size = 0.0,
+                                   const std::map<std::string, std::string>& opts = {});
+
+// Share of blocked relations in a bit result (0..1).
+double blocked_share(const Scene& scene, const SolveResult& r);
+
+// Appends one row per stat of `stats` to a long-format table whose first columns are
+// `prefix` and whose last two are "stat" and "value".
+void add_stat_rows(Table& t, const std::vector<Json>& prefix, const Stats& stats);
+
+// "NaN" safe ratio a / b (NaN when either is missing or b is 0).
+double ratio(double a, double b);
+
+}  // namespace visgate::bench
