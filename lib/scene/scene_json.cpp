@@ -161,6 +161,10 @@ Result<Scene> read_scene_json(const std::string& text, const std::string& origin
     } else {
       light.seed = uint64_t(seed);
     }
+    // Lights with more samples in total than the relation limit can never fit; checked
+    // before prepare_light allocates samples * jitter points (fuzz_scene_json: a 160-byte
+    // file otherwise costs 800 MB and a minute under small limits).
+    if (uint64_t(samples) + scene.samples_per_receiver() > limits.max_relations) { rd.fail(where + ".samples", std::to_string(samples) + " samples exceed the relation limit " + std::to_string(limits.max_relations)); return err(); }
     light.samples = int(samples);
     light.jitter = int(jitter);
     if (lj.contains("pattern")) {

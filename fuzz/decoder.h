@@ -1,0 +1,105 @@
+// Structure-aware scene decoder for the fuzz targets (../shared/STYLE.md "Fuzzing";
+// DESIGN sections 3 and 5). Turns arbitrary bytes into a small, valid Scene or an Error,
+// never throws, never crashes and keeps every scene tiny (hard caps below) so one run of
+// a differential target stays in milliseconds.
+//
+// This is a library (target vg_fuzz_decode, links vg_scene only) so that `visgate
+// minimize` can read a fuzzer crash file through exactly the same decoding as the target
+// that wrote it:
+//
+//   auto bytes = read the crash file;
+//   auto c = visgate::fuzz::decode_case(bytes.data(), bytes.size(), visgate::fuzz::DecodeLimits{});
+//   if (!c) -> exit 2 with c.error().message;
+//   c->scene                                   the scene the target solved
+//   visgate::fuzz::decode_options(c->option_selector, solver->options())
+//                                              the method options the target used
+//   visgate::fuzz::target_method("fuzz_iss")   the method ("iss")
+//
+// Input layout of the differential targets (fuzz_iss, fuzz_ssv, fuzz_plucker,
+// fuzz_embree): [4 bytes option selector, little endian][scene bytes]. The scene bytes are
+// what `decode_scene` reads; fuzz_prepare feeds its whole input to `decode_scene`.
+//
+// Scene bytes, consumed with FuzzedDataProvider (integers come from the end of the input,
+// raw bytes from the front; short input decodes as zeros, so every byte string is valid):
+//   1. mode: one of the DESIGN section 7 families (generated with small parameters, then
+//      cut down to the caps) or a "raw" soup whose vertex coordinates are small integers
+//      times a power-of-two step (so coincident vertices, shared edges, vertices exactly on
+//      segments and coplanar triangles are reached), with optional explicit light samples;
+//   2. optional grid snapping of every coordinate to a power-of-two grid (exact
+//      degeneracies in family scenes);
+//   3. a list of perturbations of single coordinates: raw IEEE bits (NaN, Inf, subnormals
+//      and huge values are reachable), flips of low mantissa bits, steps of a few ulps,
+//      copies of another coordinate (exact coincidences), and sign flips.
+// Non-finite coordinates are rejected with an Error naming the element, as the scene
+// reader does (DESIGN section 2); lights that are no longer planar convex polygons are
+// rejected by prepare_light. The decoded scene never has a receiver grid (receivers are
+// an explicit list), so write_scene_json writes back exactly what was decoded.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lib/scene/error.h"
+#include "lib/scene/scene.h"
+
+namespace visgate::fuzz {
+
+// Hard caps on the decoded scene. Defaults keep a differential run (method + relation
+// oracle) well under a millisecond for the ray-casting methods.
+struct DecodeLimits {
+  size_t max_triangles = 48;     // blocker triangles
+  size_t max_receivers = 6;
+  int max_samples = 16;          // samples per light
+  size_t max_lights = 2;
+  size_t max_relations = 96;     // receivers * samples over all lights
+  size_t max_perturbations = 12;
+};
+
+// Decodes scene bytes (see the file comment). Errors: non-finite coordinates ("decoded
+// scene: mesh vertex 3: coordinate is NaN or infinite"), lights rejected by
+// prepare_light, families that are not built, scenes left without receivers or lights.
+Result<Scene> decode_scene(const uint8_t* data, size_t size, const DecodeLimits& limits);
+
+// Option selector bytes in front of the scene bytes of a differential target.
+constexpr size_t kOptionSelectorBytes = 4;
+
+struct DecodedCase {
+  Scene scene;
+  uint32_t option_selector = 0;
+};
+// Splits a differential target's input into option selector and scene and decodes the
+// scene. Input shorter than the selector decodes with selector 0 and empty scene bytes.
+Result<DecodedCase> decode_case(const uint8_t* data, size_t size, const DecodeLimits& limits);
+
+// Method options from the selector: for each option in declaration order, a value taken
+// from the remaining selector bits: one of `values`, or, for integer options (empty
+// `values`), an integer in 1..8. `Spec` is visgate::OptionSpec (lib/solver.h); any type
+// with `name` and `values` members works, so this header needs only vg_scene.
+template <class Spec>
+std::map<std::string, std::string> decode_options(uint32_t selector, const std::vector<Spec>& specs) {
+  std::map<std::string, std::string> out;
+  for (const auto& s : specs) {
+    if (s.values.empty()) {
+      out[s.name] = std::to_string(1 + selector % 8);
+      selector /= 8;
+    } else {
+      out[s.name] = s.values[selector % s.values.size()];
+      selector /= uint32_t(s.values.size());
+    }
+  }
+  return out;
+}
+
+// The method a fuzz target exercises: "fuzz_iss" -> "iss", "fuzz_ssv" -> "ssv",
+// "fuzz_plucker" -> "plucker-bsp", "fuzz_embree" -> "embree-robust"; "" for the input
+// targets.
+std::string target_method(const std::string& target);
+
+// The mode list the first choice indexes: the DESIGN section 7 families in that order
+// except `rooms` (too large to generate per run), then "raw".
+const std::vector<std::string>& decoder_modes();
+
+}  // namespace visgate::fuzz

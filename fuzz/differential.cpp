@@ -1,0 +1,147 @@
+// The differential check of the method fuzz targets; see differential.h.
+#include "fuzz/differential.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "fuzz/decoder.h"
+#include "lib/scene/scene_json.h"
+#include "lib/solver.h"
+#include "oracle/comparator.h"
+#include "oracle/region_oracle.h"
+#include "oracle/relation_oracle.h"
+
+namespace visgate::fuzz {
+
+namespace {
+
+struct Target {
+  std::string method;
+  std::unique_ptr<Solver> solver;  // nullptr: method not registered in this build
+};
+
+Target& target_state(const char* target) {
+  static std::map<std::string, Target> targets;
+  auto it = targets.find(target);
+  if (it != targets.end()) return it->second;
+  Target t;
+  t.method = target_method(target);
+  t.solver = make_solver(t.method);
+  if (!t.solver)
+    std::fprintf(stderr, "%s: method '%s' is not registered in this build; every input returns at once\n", target,
+                 t.method.c_str());
+  return targets.emplace(target, std::move(t)).first->second;
+}
+
+std::string options_text(const SolveOptions& opt) {
+  std::string s;
+  for (const auto& [k, v] : opt.opts) s += (s.empty() ? "" : " ") + k + "=" + v;
+  return s.empty() ? "(defaults)" : s;
+}
+
+// Prints the report header, the findings and the scene in hex-float, then aborts.
+[[noreturn]] void report_and_abort(const char* target, const std::string& method, const SolveOptions& opt,
+                                   const Scene& scene, const std::string& findings) {
+  std::fprintf(stderr, "==== visgate %s: MISMATCH ====\nmethod: %s\noptions: %s\ntau: %g\n%s", target, method.c_str(),
+               options_text(opt).c_str(), kTau, findings.c_str());
+  std::fprintf(stderr, "scene (hex-float):\n%s", write_scene_json(scene, SceneWriteOptions{true}).c_str());
+  std::fflush(stderr);
+  std::abort();
+}
+
+char class_char(oracle::RelationClass c) { return char(c); }
+
+}  // namespace
+
+int run_differential(const char* target, const uint8_t* data, size_t size) {
+  Target& t = target_state(target);
+  if (!t.solver) return 0;
+  static ThreadLimit one_thread(1);  // tiny scenes: threads cost more than they save
+
+  auto decoded = decode_case(data, size, DecodeLimits{});
+  if (!decoded) return 0;  // malformed or non-finite input, rejected cleanly
+  const Scene& scene = decoded->scene;
+  SolveOptions opt;
+  opt.opts = decode_options(decoded->option_selector, t.solver->options());
+  opt.seed = 1;
+  opt.threads = 1;
+  if (!t.solver->check_options(opt))
+    report_and_abort(target, t.method, opt, scene,
+                     "decode_options produced options the method rejects: " +
+                         t.solver->check_options(opt).error().message + "\n");
+
+  // Exact answers first: an exception from the oracle is an oracle bug, reported as such.
+  oracle::RelationOracleResult exact;
+  try {
+    exact = oracle::run_relation_oracle(scene, 1);
+  } catch (const std::exception& e) {
+    report_and_abort(target, "relation oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
+  }
+
+  SolveResult result;
+  try {
+    result = t.solver->solve(scene, opt);
+  } catch (const std::exception& e) {
+    report_and_abort(target, t.method, opt, scene, std::string("exception from solve: ") + e.what() + "\n");
+  }
+
+  // Result shape (DESIGN section 4): one entry per receiver, enough bits, one fraction
+  // per light.
+  const size_t words = (scene.samples_per_receiver() + 63) / 64;
+  if (result.receivers.size() != scene.receivers.size())
+    report_and_abort(target, t.method, opt, scene,
+                     "result has " + std::to_string(result.receivers.size()) + " receivers, scene has " +
+                         std::to_string(scene.receivers.size()) + "\n");
+  for (size_t i = 0; i < result.receivers.size(); ++i) {
+    const auto& rr = result.receivers[i];
+    if (rr.visible_bits.size() < words || rr.visible_fraction.size() != scene.lights.size())
+      report_and_abort(target, t.method, opt, scene,
+                       "receiver " + std::to_string(i) + ": result has " + std::to_string(rr.visible_bits.size()) +
+                           " bit words and " + std::to_string(rr.visible_fraction.size()) + " fractions\n");
+  }
+
+  std::string findings;
+  oracle::Comparison cmp = oracle::compare_relations(scene, result, exact, kTau);
+  for (const auto& m : cmp.mismatches) {
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "mismatch: receiver %zu light %zu sample %ld exact %c method %s margin %.17g direction %s"
+                  " exact_fraction %.17g method_fraction %.17g\n",
+                  m.receiver, m.light, m.sample, class_char(m.exact), m.method_visible ? "visible" : "blocked",
+                  m.margin, oracle::direction_name(m.direction), m.exact_fraction, m.method_fraction);
+    findings += line;
+  }
+  if (cmp.mismatch_count() > 0 && cmp.mismatches.empty())
+    findings += "comparator counted " + std::to_string(cmp.mismatch_count()) + " mismatches without records\n";
+
+  // Fragment methods: the visible fraction against the region oracle.
+  if (t.solver->reports_fragments()) {
+    for (size_t i = 0; i < scene.receivers.size(); ++i)
+      for (size_t l = 0; l < scene.lights.size(); ++l) {
+        double exact_fraction = 0.0;
+        try {
+          exact_fraction = oracle::visible_region(scene, i, l).visible_fraction;
+        } catch (const std::exception& e) {
+          report_and_abort(target, "region oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
+        }
+        const double got = result.receivers[i].visible_fraction[l];
+        if (!(std::abs(got - exact_fraction) <= kFractionTolerance)) {
+          char line[256];
+          std::snprintf(line, sizeof line,
+                        "mismatch: receiver %zu light %zu direction fraction exact_fraction %.17g method_fraction "
+                        "%.17g (tolerance %g)\n",
+                        i, l, exact_fraction, got, kFractionTolerance);
+          findings += line;
+        }
+      }
+  }
+  if (!findings.empty()) report_and_abort(target, t.method, opt, scene, findings);
+  return 0;
+}
+
+}  // namespace visgate::fuzz

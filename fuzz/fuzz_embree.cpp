@@ -1,0 +1,15 @@
+// fuzz_embree: differential target for `embree-robust` (DESIGN sections 4 and 5). Each input decodes
+// (fuzz/decoder.h) to a small scene plus method options; Embree with RTC_SCENE_FLAG_ROBUST
+// is run on it and every relation is compared with the exact relation oracle.
+// A mismatch (margin >= tau) or an exception prints method, options, relation, exact
+// class, margin and the hex-float scene, then aborts (fuzz/differential.h).
+// Embree is third-party: what this target finds is stored as an `open` case with a note
+// (corpus/fuzz/open/fuzz_embree/, README there), never worked around in lib/.
+#include <cstddef>
+#include <cstdint>
+
+#include "fuzz/differential.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  return visgate::fuzz::run_differential("fuzz_embree", data, size);
+}
