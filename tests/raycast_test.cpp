@@ -1,7 +1,11 @@
 // lib/raycast: the embree, embree-robust and brute solvers on hand-worked scenes.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "lib/raycast/brute.h"
+#include "lib/raycast/embree_solver.h"
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "lib/solver.h"
@@ -109,6 +113,121 @@ TEST(Raycast, BruteAgreesWithEmbreeRobustAwayFromDegeneracy) {
   size_t differ = 0, total = scene->relation_count();
   for (size_t i = 0; i < a.receivers.size(); ++i)
     for (size_t j = 0; j < scene->samples_per_receiver(); ++j) differ += a.receivers[i].visible(j) != b.receivers[i].visible(j);
+  EXPECT_LT(differ * 10000, total) << differ << " of " << total;
+}
+
+namespace {
+
+// quad_scene with the blocker of TriangleBetweenPointAndLightQuad, every coordinate
+// (mesh, light, receiver) multiplied by `scale`, a power of two, so the scaled scene is
+// exactly similar to the unscaled one and has the same answers.
+Scene scaled_triangle_scene(float scale) {
+  Scene s;
+  s.name = "scaled";
+  Light l;
+  l.polygon = {Vec3f(-1, -1, 2) * scale, Vec3f(1, -1, 2) * scale, Vec3f(1, 1, 2) * scale, Vec3f(-1, 1, 2) * scale};
+  l.samples = 16;
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  for (int b = 0; b < 4; ++b)
+    for (int a = 0; a < 4; ++a) l.explicit_samples.push_back(Vec3f(-0.75f + 0.5f * a, -0.75f + 0.5f * b, 2.0f) * scale);
+  s.lights.push_back(l);
+  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+  s.mesh.vertices = {Vec3f(0.05f, 0.05f, 1) * scale, Vec3f(1.05f, 0.05f, 1) * scale, Vec3f(0.05f, 1.05f, 1) * scale};
+  s.mesh.triangles = {{0, 1, 2}};
+  EXPECT_TRUE(finish_scene(s).ok());
+  return s;
+}
+
+}  // namespace
+
+TEST(Raycast, EmbreeDomainBoundIsTheDerivedPowerOfTwo) {
+  // 2^9 B^3 < 2^128 with B = 2^39 (embree_solver.h), and 2B below Embree's FLT_LARGE.
+  EXPECT_EQ(raycast::kEmbreeCoordinateBound, std::ldexp(1.0f, 39));
+  EXPECT_LT(2.0 * raycast::kEmbreeCoordinateBound, 1.844e18);
+  EXPECT_TRUE(std::isfinite(512.0f * std::pow(raycast::kEmbreeCoordinateBound, 3.0f)));
+  EXPECT_TRUE(raycast::within_embree_bound(Vec3f(raycast::kEmbreeCoordinateBound, 0, -raycast::kEmbreeCoordinateBound)));
+  EXPECT_FALSE(raycast::within_embree_bound(Vec3f(0, std::nextafter(raycast::kEmbreeCoordinateBound, 1e30f), 0)));
+  EXPECT_FALSE(raycast::within_embree_bound(Vec3f(0, 0, std::numeric_limits<float>::quiet_NaN())));
+}
+
+TEST(Raycast, CoordinatesBeyondEmbreesRangeAreDecidedWithoutEmbree) {
+  // Open finding fa6417c2 (fuzz_embree): finite coordinates near 1e36 made libembree3
+  // abort in `ray.valid()`. At scales 2^50, 2^61 and 2^120 (beyond 2^39, beyond FLT_LARGE,
+  // 1.3e36) every relation goes to the fallback and must give the hand-worked answer of
+  // TriangleBetweenPointAndLightQuad; at scale 1 none does.
+  for (float scale : {1.0f, std::ldexp(1.0f, 50), std::ldexp(1.0f, 61), std::ldexp(1.0f, 120)}) {
+    Scene s = scaled_triangle_scene(scale);
+    for (const char* m : {"embree", "embree-robust"}) {
+      SolveResult r = make_solver(m)->solve(s, SolveOptions{});
+      for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a)
+          EXPECT_EQ(r.receivers[0].visible(size_t(b * 4 + a)), !(a >= 2 && b >= 2)) << m << " scale " << scale << " sample " << a << "," << b;
+      EXPECT_EQ(r.stats.get("fallback_rays", -1), scale == 1.0f ? 0.0 : 16.0) << m << " scale " << scale;
+    }
+  }
+}
+
+TEST(Raycast, FarReceiverWithAnInRangeMeshUsesTheFallbackForItsRaysOnly) {
+  // Receiver at z = -2^41 below the scene of TriangleBetweenPointAndLightQuad: its
+  // segment to sample (x, y, 2) crosses z = 1 at (x, y) scaled by (2^41 + 1)/(2^41 + 2),
+  // within 2^-41 of (x, y); blocked iff x, y >= 0.05 and x + y <= 1.05, i.e. samples
+  // (0.25,0.25), (0.25,0.75), (0.75,0.25) (0.75 + 0.75 > 1.05). The near receiver at the
+  // origin keeps Embree's answer (4 blocked).
+  Scene s = scaled_triangle_scene(1.0f);
+  s.receivers.push_back({Vec3f(0, 0, -std::ldexp(1.0f, 41)), Vec3f(0, 0, 1)});
+  for (const char* m : {"embree", "embree-robust"}) {
+    SolveResult r = make_solver(m)->solve(s, SolveOptions{});
+    for (int b = 0; b < 4; ++b)
+      for (int a = 0; a < 4; ++a) {
+        const bool far_blocked = a >= 2 && b >= 2 && !(a == 3 && b == 3);
+        EXPECT_EQ(r.receivers[1].visible(size_t(b * 4 + a)), !far_blocked) << m << " sample " << a << "," << b;
+        EXPECT_EQ(r.receivers[0].visible(size_t(b * 4 + a)), !(a >= 2 && b >= 2)) << m << " sample " << a << "," << b;
+      }
+    EXPECT_EQ(r.stats.get("fallback_rays", -1), 16.0) << m;
+  }
+}
+
+TEST(Raycast, FarReceiverDoesNotBlurASmallTriangle) {
+  // fuzz_embree finding d439daea (the first fallback, orientation tests through the far
+  // receiver, lost the triangle's coordinates): receiver at (0.25, 7.1e22, 0), light
+  // point (-0.5, -0.5, 2), unit triangle in z = 0.5 around the origin. The segment meets
+  // z = 0.5 at y ~ 5.4e22, far from the triangle: visible. A segment from a far receiver
+  // straight down the y axis through a triangle in y = 0 is blocked.
+  TriangleSoup soup;
+  soup.vertices = {Vec3f(0.5f, -1, 0.5f), Vec3f(-0.25f, -0.25f, 0.5f), Vec3f(-0.25f, -1.5f, 0.5f),
+                   Vec3f(-1, 0, -1), Vec3f(1, 0, -1), Vec3f(0, 0, 1)};
+  soup.triangles = {{0, 1, 2}};
+  const Vec3f far(0.25f, 7.145125640569654e+22f, 0.0f);
+  EXPECT_FALSE(raycast::fallback_occluded(soup, far, Vec3f(-0.5f, -0.5f, 2)));
+  soup.triangles = {{3, 4, 5}};
+  EXPECT_TRUE(raycast::fallback_occluded(soup, Vec3f(0.25f, 7.1e22f, 0.0f), Vec3f(0.25f, -1, 0)));
+  EXPECT_TRUE(raycast::fallback_occluded(soup, Vec3f(0.25f, -1, 0), Vec3f(0.25f, 7.1e22f, 0.0f)));
+  EXPECT_FALSE(raycast::fallback_occluded(soup, Vec3f(2.0f, 7.1e22f, 0.0f), Vec3f(2.0f, -1, 0)));
+}
+
+TEST(Raycast, FallbackAgreesWithEmbreeRobustAwayFromDegeneracy) {
+  // The fallback (double orientation tests) against Embree on in-range random soups in
+  // general position; same bound as the brute-force comparison above.
+  FamilyParams p;
+  p.seed = 12;
+  p.receivers = 128;
+  p.samples = 32;
+  auto scene = generate_family("random-soup", p);
+  ASSERT_TRUE(scene.ok());
+  SolveResult b = make_solver("embree-robust")->solve(*scene, SolveOptions{});
+  size_t differ = 0, total = scene->relation_count(), blocked = 0;
+  for (size_t i = 0; i < scene->receivers.size(); ++i) {
+    size_t bit = 0;
+    for (const Light& light : scene->lights)
+      for (int j = 0; j < light.samples; ++j, ++bit) {
+        const bool occ = raycast::fallback_occluded(scene->mesh, scene->receivers[i].p, sample_position(light, j, i));
+        differ += occ == b.receivers[i].visible(bit);
+        blocked += occ;
+      }
+  }
+  EXPECT_GT(blocked, total / 20) << "the soup should block a fair share";
+  EXPECT_LT(blocked, total);
   EXPECT_LT(differ * 10000, total) << differ << " of " << total;
 }
 

@@ -6,14 +6,79 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <limits>
 
+#include "lib/geom/predicates.h"
+
 namespace visgate::raycast {
 
-EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust) {
-  RTCDevice device = rtcNewDevice("verbose=0");
-  VG_CHECK(device != nullptr);
+namespace {
+
+// The process-wide Embree device (see EmbreeScene): created once, thread-safe by the
+// C++ static initialisation guarantee; never released (reachable through the static, so
+// leak checkers do not count it), which avoids tearing Embree down after TBB at exit.
+RTCDevice shared_device() {
+  static RTCDevice device = [] {
+    RTCDevice d = rtcNewDevice("verbose=0");
+    VG_CHECK(d != nullptr);
+    return d;
+  }();
+  return device;
+}
+
+// Sign of a double as -1, 0, +1.
+int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
+
+}  // namespace
+
+bool within_embree_bound(const Vec3f& p) {
+  return std::abs(p.x) <= kEmbreeCoordinateBound && std::abs(p.y) <= kEmbreeCoordinateBound &&
+         std::abs(p.z) <= kEmbreeCoordinateBound;
+}
+
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
+  const Vec3d p = to_double(from), q = to_double(to);
+  for (const auto& t : soup.triangles) {
+    const Vec3d a = to_double(soup.vertices[t[0]]), b = to_double(soup.vertices[t[1]]),
+                c = to_double(soup.vertices[t[2]]);
+    // Signed distances (times |n|) of the endpoints from the triangle's plane; the
+    // receiver end strictly off the plane, the light end on the other side or on it
+    // (t in (0, 1]). n comes from the triangle alone, so its relative error is 1e-16
+    // whatever the endpoints' magnitude.
+    const Vec3d n = cross(b - a, c - a);
+    const double dp = dot(n, p - a), dq = dot(n, q - a);
+    const int sp = sign_of(dp), sq = sign_of(dq);
+    if (sp == 0 || sp == sq) continue;
+    // The crossing point, computed from the endpoint nearer to the plane so that its
+    // error is 1e-16 of that endpoint's distance, not of the segment's length (a far
+    // receiver, 1e22 away, must not blur a unit triangle).
+    Vec3d x;
+    if (sq == 0) x = q;
+    else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
+    else x = p + (q - p) * (dp / (dp - dq));
+    // Closed point-in-triangle test in the projection that drops n's dominant axis:
+    // the three edge cross products agree in sign (zeros allowed).
+    const Vec3d an = vabs(n);
+    const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+    const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+    auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
+      return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
+    };
+    const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
+    if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return true;
+  }
+  return false;
+}
+
+EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust) : soup_(&soup) {
+  for (const Vec3f& v : soup.vertices)
+    if (!within_embree_bound(v)) {
+      mesh_in_bound_ = false;  // every query goes to the fallback; no Embree scene
+      return;
+    }
+  RTCDevice device = shared_device();
   RTCScene scene = rtcNewScene(device);
   rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   if (soup.size() > 0) {
@@ -30,16 +95,18 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust) {
     rtcReleaseGeometry(geom);
   }
   rtcCommitScene(scene);
-  device_ = device;
   scene_ = scene;
 }
 
 EmbreeScene::~EmbreeScene() {
-  rtcReleaseScene(static_cast<RTCScene>(scene_));
-  rtcReleaseDevice(static_cast<RTCDevice>(device_));
+  if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
 }
 
 bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to);
+  }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
@@ -83,6 +150,7 @@ SolveResult EmbreeSolver::solve(const Scene& scene, const SolveOptions& opt) {
   result.stats.set("trace_seconds", std::chrono::duration<double>(t2 - t1).count());
   result.stats.set("relations", double(scene.relation_count()));
   result.stats.set("rays", double(scene.relation_count()));
+  result.stats.set("fallback_rays", double(es.fallback_rays()));
   return result;
 }
 

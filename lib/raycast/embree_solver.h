@@ -9,14 +9,54 @@
 // the baseline is measured as users would run it. `embree-robust` sets
 // RTC_SCENE_FLAG_ROBUST (watertight traversal and intersection, no cracks between
 // triangles that share an edge).
+//
+// Embree's input domain. Embree treats a float as valid input only when its magnitude is
+// below FLT_LARGE = 1.844e18 (embree common/math/constants.h, "we consider floating point
+// numbers in that range as valid input numbers"): a ray with |org| or |dir| above it
+// fails `ray.valid()` (an assertion abort in Debian's libembree3 3.13.5) and a triangle
+// with a vertex above it is silently dropped from the BVH. Below that bound its
+// intersectors can still overflow: the watertight test of RTC_SCENE_FLAG_ROBUST computes
+// U = dot(cross(e0, v2 + v0), D) and T = 2 dot(v0, Ng) (and Möller-Trumbore the same
+// degree), products of three coordinate differences. With every coordinate (vertex,
+// receiver, light point) bounded by B: a vertex relative to the origin is <= 2B, an edge
+// and the sum of two relative vertices <= 4B, the direction <= 2B, a cross product
+// component <= 2 (4B)^2 = 32 B^2, a dot product <= 3 * 32 B^2 * 2B = 192 B^3 and twice
+// it 384 B^3 < 2^9 B^3. Requiring 2^9 B^3 < 2^128 (FLT_MAX ~ 2^128) gives B <= 2^39
+// (2^9 * 2^117 = 2^126), so kEmbreeCoordinateBound = 2^39 ~ 5.5e11: every intermediate
+// stays finite and every ray is valid (|dir| <= 2^40 << FLT_LARGE). A relation with an
+// endpoint beyond the bound, or any relation of a mesh with a vertex beyond it, is
+// decided without Embree by `fallback_occluded` (double-precision plane and edge tests over
+// every triangle; never aborts), and counted in the stat "fallback_rays".
 #pragma once
+
+#include <atomic>
+#include <cstddef>
 
 #include "lib/solver.h"
 
 namespace visgate::raycast {
 
+// Largest coordinate magnitude handed to Embree (derivation above).
+inline constexpr float kEmbreeCoordinateBound = 0x1p39f;
+
+// True when every coordinate of p has magnitude <= kEmbreeCoordinateBound (false for NaN).
+bool within_embree_bound(const Vec3f& p);
+
+// The segment from `from` to `to` against every triangle of `soup`, without Embree, in
+// double (float inputs): the endpoints' plane sides from the triangle's normal, the
+// crossing point computed from the endpoint nearer to the plane, then a closed 2D
+// point-in-triangle test. Float-class guarantee: the error is about 1e-16 relative to
+// the triangle's size and the nearer endpoint's distance, so only relations within that
+// of a degeneracy can be misjudged (not exact). Embree's endpoint convention: hits with
+// t in (0, 1] (the receiver end excluded, the light end included), closed triangle
+// edges; a segment in the triangle's plane is a miss.
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to);
+
 // A committed Embree scene over a triangle soup, for methods that cast rays (ISS leaves,
-// SSV's reference ray) as well as for the baseline itself. Thread-safe queries.
+// SSV's reference ray) as well as for the baseline itself. Thread-safe queries. All
+// scenes share one Embree device per process (created on first use, thread-safe, kept
+// until exit): creating a device costs about a millisecond, more than a small solve.
+// `soup` must outlive the EmbreeScene (the fallback reads it).
 class EmbreeScene {
  public:
   EmbreeScene(const TriangleSoup& soup, bool robust);
@@ -25,12 +65,18 @@ class EmbreeScene {
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   // True when some triangle blocks the segment from `from` to `to` (parameter range
-  // [0, 1] of from + t (to - from), Embree's own endpoint semantics).
+  // [0, 1] of from + t (to - from), Embree's own endpoint semantics). Segments outside
+  // Embree's domain (see above) go to fallback_occluded.
   bool occluded(const Vec3f& from, const Vec3f& to) const;
 
+  // Queries answered by fallback_occluded so far.
+  size_t fallback_rays() const { return fallback_rays_.load(std::memory_order_relaxed); }
+
  private:
-  void* device_;
-  void* scene_;
+  const TriangleSoup* soup_;
+  void* scene_ = nullptr;       // nullptr when the mesh is outside Embree's domain
+  bool mesh_in_bound_ = true;
+  mutable std::atomic<size_t> fallback_rays_{0};
 };
 
 class EmbreeSolver : public Solver {
