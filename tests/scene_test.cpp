@@ -266,6 +266,139 @@ TEST(MeshFiles, ErrorsNameTheFile) {
   auto nan = read_polygon_file((d / "nan.off").string());
   ASSERT_FALSE(nan.ok());
   EXPECT_NE(nan.error().message.find("vertex 1"), std::string::npos) << nan.error().message;
+  // fuzz_mesh_files timeout 8e4b251f: OpenMesh's binary OFF reader trusts garbage counts.
+  std::ofstream(d / "bin.off", std::ios::binary) << std::string("OFFiBINARY \x01" "0z\n", 15);
+  auto bin = read_polygon_file((d / "bin.off").string());
+  ASSERT_FALSE(bin.ok());
+  EXPECT_NE(bin.error().message.find("bin.off: line 1: binary OFF is not supported"), std::string::npos)
+      << bin.error().message;
+  // fuzz_mesh_files timeout 4c2e1ebf: an "OFF:" header with a negative count made OpenMesh loop.
+  std::ofstream(d / "colon.off") << "OFF:\n-14 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  auto colon = read_polygon_file((d / "colon.off").string());
+  ASSERT_FALSE(colon.ok());
+  EXPECT_NE(colon.error().message.find("colon.off: line 1: unsupported OFF header 'OFF:'"), std::string::npos)
+      << colon.error().message;
+}
+
+namespace {
+
+// Binary PLY of a unit right triangle (vertices float x y z, one face as a uchar-counted
+// int list), little- or big-endian, with `face_count_override` replacing the list length
+// of the face when >= 0.
+std::string binary_triangle_ply(bool big_endian, int face_count_override = -1) {
+  std::string out = std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  auto put = [&](const void* p, size_t n) {
+    const char* c = static_cast<const char*>(p);
+    for (size_t k = 0; k < n; ++k) out += c[big_endian ? n - 1 - k : k];  // host is little-endian (x86-64)
+  };
+  const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  for (float f : v) put(&f, 4);
+  const unsigned char n = face_count_override >= 0 ? (unsigned char)face_count_override : 3;
+  out += char(n);
+  for (int i : {0, 1, 2}) put(&i, 4);
+  return out;
+}
+
+}  // namespace
+
+TEST(MeshFiles, BinaryPlyBothEndiannessesAreRead) {
+  fs::path d = temp_dir();
+  for (bool be : {false, true}) {
+    const fs::path f = d / (be ? "be.ply" : "le.ply");
+    std::ofstream(f, std::ios::binary) << binary_triangle_ply(be);
+    auto soup = read_polygon_file(f.string());
+    ASSERT_TRUE(soup.ok()) << soup.error().message;
+    ASSERT_EQ(soup->faces.size(), 1u);
+    EXPECT_EQ(soup->faces[0], (std::vector<uint32_t>{0, 1, 2}));
+    ASSERT_EQ(soup->vertices.size(), 3u);
+    EXPECT_EQ(soup->vertices[1].x, 1.0);
+    EXPECT_EQ(soup->vertices[2].y, 1.0);
+  }
+}
+
+TEST(MeshFiles, MalformedPlyHeadersAreRejectedNamingFileAndLine) {
+  fs::path d = temp_dir();
+  const std::string vtx = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
+  struct Case {
+    const char* name;
+    std::string text;
+    const char* expect;  // substring of the message after the file name
+  };
+  const Case cases[] = {
+      {"magic", "plx\nformat ascii 1.0\n" + vtx + face + "end_header\n" + body, "line 1: missing 'ply'"},
+      {"format", "ply\nformat ascii 2.0\n" + vtx + face + "end_header\n" + body, "line 2: expected 'format"},
+      {"binfmt", "ply\nformat binary_middle_endian 1.0\n" + vtx + face + "end_header\n" + body, "line 2: unknown format"},
+      // The OpenMesh SEGV of open/fuzz_mesh_files/asan/316a...: a property without a known type.
+      {"type", "ply\nformat ascii 1.0\n" + vtx + "property fex_indices\n" + face + "end_header\n" + body,
+       "line 7: expected 'property TYPE NAME'"},
+      {"unknown", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float128 x\nend_header\n0\n0\n0\n",
+       "line 4: property 'x': unknown type 'float128'"},
+      {"listcount", "ply\nformat ascii 1.0\n" + vtx + "element face 1\nproperty list float int vertex_indices\nend_header\n" + body,
+       "line 8: list 'vertex_indices': count type 'float' is not an integer type"},
+      // The OpenMesh out-of-memory of open/fuzz_mesh_files/asan/1f92...: a header that never ends.
+      {"noend", "ply\nformat binary_little_endian 1.0\n" + vtx + "element fac 1\nelement fac 1\n", "file ends before 'end_header'"},
+      {"keyword", "ply\nformat ascii 1.0\n" + vtx + "elemnt face 1\nend_header\n" + body, "line 7: unknown header keyword 'elemnt'"},
+      {"orphan", "ply\nformat ascii 1.0\nproperty float x\nend_header\n", "line 3: property before any element"},
+      {"beforefmt", "ply\n" + vtx + "format ascii 1.0\nend_header\n" + body, "line 2: 'element' before the 'format' line"},
+      {"count", "ply\nformat ascii 1.0\nelement vertex -3\nproperty float x\nend_header\n", "line 3: expected 'element NAME COUNT'"},
+      // Counts bounded by the file: 10^12 vertices in a 200-byte file.
+      {"huge", "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\nproperty float z\n"
+               "end_header\n" + body, "line 3: element 'vertex' announces 1000000000000 items, the file has room for at most"},
+      {"hugebin", "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
+                  "property float z\nend_header\nabcdefghijkl", "line 3: element 'vertex' announces 4000000000 items, the file has room for at most 1"},
+      {"noprops", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n", "line 3: element 'vertex' has items but no properties"},
+      {"short", "ply\nformat ascii 1.0\n" + vtx + face + "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n",
+       "element 'face' item 0 property 'vertex_indices': file ends early"},
+      {"nan", "ply\nformat ascii 1.0\n" + vtx + face + "end_header\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n",
+       "line 11: element 'vertex' item 1 property 'y': coordinate is NaN or infinite"},
+      {"intfrac", "ply\nformat ascii 1.0\n" + vtx + face + "end_header\n" + "0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n",
+       "line 13: element 'face' item 0 property 'vertex_indices': '1.5' is not an integer of type int"},
+      {"uchar", "ply\nformat ascii 1.0\n" + vtx + face + "end_header\n" + "0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n",
+       "'300' is not an integer of type uchar"},
+  };
+  for (const Case& c : cases) {
+    const fs::path f = d / (std::string(c.name) + ".ply");
+    std::ofstream(f, std::ios::binary) << c.text;
+    auto soup = read_polygon_file(f.string());
+    ASSERT_FALSE(soup.ok()) << c.name;
+    const std::string& m = soup.error().message;
+    EXPECT_EQ(m.rfind(f.string() + ": ", 0), 0u) << c.name << ": " << m;
+    EXPECT_NE(m.find(c.expect), std::string::npos) << c.name << ": " << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << c.name << ": " << m;
+  }
+  // Binary: a face list longer than the bytes left (255 ints after 12 bytes).
+  const fs::path f = d / "longlist.ply";
+  std::ofstream(f, std::ios::binary) << binary_triangle_ply(false, 255);
+  auto soup = read_polygon_file(f.string());
+  ASSERT_FALSE(soup.ok());
+  EXPECT_NE(soup.error().message.find("element 'face' item 0: list 'vertex_indices' of 255 entries does not fit"),
+            std::string::npos)
+      << soup.error().message;
+}
+
+TEST(MeshFiles, ObjFaceReferencesAreCheckedBeforeOpenMesh) {
+  // fuzz_mesh_files crash 93b7431b: `f /1 2 3` (an empty vertex part) made OpenMesh's
+  // OBJ reader assert. Every reference form with an integer vertex part still reads.
+  fs::path d = temp_dir();
+  const std::string verts = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+  for (const char* bad : {"f /1 2 3", "f 1 2 3/1/1/1", "f 1 x 3", "f 1 - 3"}) {
+    std::ofstream(d / "bad.obj") << verts << bad << "\n";
+    auto soup = read_polygon_file((d / "bad.obj").string());
+    ASSERT_FALSE(soup.ok()) << bad;
+    EXPECT_NE(soup.error().message.find("bad.obj: line 6: face 0: bad vertex reference"), std::string::npos)
+        << soup.error().message;
+  }
+  for (const char* good : {"f 1 2 3", "f 1/1 2/1 3/1", "f 1//1 2//1 3//1", "f 1/1/1 2/1/1 3/1/1", "f -3 -2 -1 # c"}) {
+    std::ofstream(d / "good.obj") << verts << good << "\n";
+    auto soup = read_polygon_file((d / "good.obj").string());
+    ASSERT_TRUE(soup.ok()) << good << ": " << soup.error().message;
+    ASSERT_EQ(soup->faces.size(), 1u) << good;
+    EXPECT_EQ(soup->faces[0], (std::vector<uint32_t>{0, 1, 2})) << good;
+  }
 }
 
 TEST(MeshFiles, SceneReferencesMeshFilesRelativeToTheJson) {
