@@ -10,6 +10,8 @@
 #include "lib/iss/blockers.h"
 #include "lib/iss/iss_solver.h"
 #include "lib/iss/shaft.h"
+#include "lib/iss/tree.h"
+#include "lib/mesh/prepare.h"
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "lib/solver.h"
@@ -158,6 +160,59 @@ TEST(IssShaft, ObliquePlanesCutTheCommonBox) {
   EXPECT_GT(g.plane_count(), 6);
 }
 
+TEST(IssShaft, ObliquePlanesSurviveRoundingOfTheSupportTest) {
+  // Flat receiver node on a floor and flat light node below a ceiling (a rooms leaf
+  // shaft). Hand-worked: at z = 0.01 the hull is the receiver rectangle (x >= 4.59375),
+  // so the wall-foot segment at x = 3.9, z = 0.01 is outside. The x-z hull edge through
+  // (4.59375, 0.01) and (1.70508, 2.78) used to be dropped when n.q rounded above d.
+  AABB r(Vec3f(4.59375f, 0.09375f, 0.01f), Vec3f(5.90625f, 1.40625f, 0.01f));
+  AABB l(Vec3f(1.70508f, 1.70696f, 2.78f), Vec3f(1.99886f, 1.99628f, 2.78f));
+  iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 12.0);
+  EXPECT_FALSE(g.may_intersect_segment(Vec3d(3.9, 2.1442, 0.01), Vec3d(3.9, 0.00765784, 0.01)));
+  EXPECT_FALSE(g.may_contain_point(Vec3d(3.9, 1.0, 0.01)));
+  // Every corner pair's segment is still inside (conservative after raising d).
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      Vec3d p(i & 1 ? r.hi.x : r.lo.x, i & 2 ? r.hi.y : r.lo.y, 0.01f);
+      Vec3d q(j & 1 ? l.hi.x : l.lo.x, j & 2 ? l.hi.y : l.lo.y, 2.78f);
+      EXPECT_TRUE(g.may_contain_point(p + (q - p) * 0.5));
+    }
+}
+
+TEST(IssTree, GridLeavesAreCompactNotStrips) {
+  // 32 x 32 receivers on a floor, leaves of 64: the N*A split must give square-ish
+  // leaves (8 x 8), not strips of collinear points (zero box area, see tree.cpp).
+  std::vector<AABB> boxes;
+  std::vector<Vec3f> centers;
+  for (int b = 0; b < 32; ++b)
+    for (int a = 0; a < 32; ++a) {
+      Vec3f p(0.1875f * float(a), 0.1875f * float(b), 0.01f);
+      boxes.emplace_back(p, p);
+      centers.push_back(p);
+    }
+  mesh::PreparedMesh m;
+  std::vector<AABB> tri_boxes;
+  iss::PointTree tree(boxes, centers, 64, m, tri_boxes);
+  std::vector<int> stack{tree.root()};
+  int leaves = 0;
+  while (!stack.empty()) {
+    int i = stack.back();
+    stack.pop_back();
+    tree.split(i);
+    const iss::TreeNode& n = tree.node(i);
+    if (n.split_done()) {
+      stack.push_back(n.left);
+      stack.push_back(n.right);
+      continue;
+    }
+    ++leaves;
+    EXPECT_LE(n.size(), 64u);
+    double ex = double(n.box.extent().x) + 0.1875, ey = double(n.box.extent().y) + 0.1875;
+    EXPECT_LE(std::max(ex, ey), 2.0 * std::min(ex, ey)) << "leaf " << ex << " x " << ey;
+  }
+  EXPECT_EQ(leaves, 16);
+}
+
 TEST(IssShaft, SegmentTriangleTestExcludesEndpoints) {
   Vec3d a(-1, -1, 0), b(1, -1, 0), c(0, 1, 0);
   EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, 0, -1), Vec3d(0, 0, 1), a, b, c));
@@ -229,6 +284,58 @@ TEST(Iss, PointsBehindAClosedBoxAreBlockedByShafts) {
     EXPECT_EQ(count_visible(s, r), 0.0) << describe(o);
     // The closed box decides the relations through shafts, not rays.
     EXPECT_GT(r.stats.get("relations_blocked_by_shaft"), 0.5 * double(s.relation_count())) << describe(o);
+  }
+}
+
+TEST(Iss, SlabAboveClutterIsDecidedByTheProbe) {
+  // Receivers on a floor, a closed slab above them, the light above the slab, and many
+  // small boxes under the slab: the probe of section 4.8 (iss_solver.cpp) finds the slab
+  // among the wide triangles and decides the initial shaft without building the rest.
+  // Hand-worked: the slab covers the whole shaft, every relation is blocked.
+  Scene s;
+  s.lights.push_back(square_light(0, 0, 4, 0.3, 16));
+  add_receiver_grid(s, -2, 2, -2, 2, 0.01, 16);
+  ASSERT_TRUE(finish_scene(s).ok());
+  shapes::add_box(s.mesh, Vec3d(-3, -3, 2.8), Vec3d(3, 3, 3.0));
+  for (int k = 0; k < 64; ++k) {
+    double x = -1.8 + 0.45 * (k % 8), y = -1.8 + 0.45 * (k / 8);
+    shapes::add_box(s.mesh, Vec3d(x, y, 1.0), Vec3d(x + 0.1, y + 0.1, 1.1));
+  }
+  for (const auto& o : kOptionSets) {
+    SolveResult r = run_iss(s, o);
+    EXPECT_EQ(count_visible(s, r), 0.0) << describe(o);
+    EXPECT_EQ(r.stats.get("relations_ray_cast"), 0.0) << describe(o);
+    EXPECT_GE(r.stats.get("initial_shafts_blocked_by_probe"), 1.0) << describe(o);
+  }
+}
+
+TEST(Iss, SlopedFloorReceiversUseTheEmptyShaftOnlyOnTheirSide) {
+  // The sloped floor of section 4.12: receivers 0.01 above the plane z = 0.1 x, so
+  // every receiver node's box meets the floor triangles. Hand-worked: with the light
+  // above the floor every relation is visible, and the extended empty-shaft rule
+  // decides them without rays; with the light below the floor every segment crosses
+  // it, so every relation is blocked, and the rule must not fire.
+  for (double lz : {4.0, -4.0}) {
+    Scene s;
+    s.lights.push_back(make_square_light_down(Vec3d(0, 0, lz), 0.5, 16, 3));
+    for (int b = 0; b < 16; ++b)
+      for (int a = 0; a < 16; ++a) {
+        float x = float(-1.0 + 2.0 * (a + 0.5) / 16), y = float(-1.0 + 2.0 * (b + 0.5) / 16);
+        s.receivers.push_back({Vec3f(x, y, 0.1f * x + 0.01f), Vec3f(0, 0, 1)});
+      }
+    ASSERT_TRUE(finish_scene(s).ok());
+    shapes::add_quad(s.mesh, Vec3d(-3, -3, -0.3), Vec3d(3, -3, 0.3), Vec3d(3, 3, 0.3), Vec3d(-3, 3, -0.3));
+    for (const auto& o : kOptionSets) {
+      SolveResult r = run_iss(s, o);
+      double rel = double(s.relation_count());
+      if (lz > 0) {
+        EXPECT_EQ(count_visible(s, r), rel) << describe(o);
+        EXPECT_GT(r.stats.get("relations_visible_by_empty_shaft"), 0.5 * rel) << describe(o);
+      } else {
+        EXPECT_EQ(count_visible(s, r), 0.0) << describe(o);
+        EXPECT_EQ(r.stats.get("relations_visible_by_empty_shaft"), 0.0) << describe(o);
+      }
+    }
   }
 }
 

@@ -158,10 +158,12 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
   tmp.reserve(8);
   int ax = g.main_axis();
   for (uint32_t t : tris) {
-    // Lines 6-8: a valid blocker intersects the shaft and neither node.
-    if (rnode.contains_triangle(t) || lnode.contains_triangle(t)) continue;
+    // Lines 6-8: a valid blocker intersects the shaft and neither node (cheapest test
+    // first: the shaft planes reject most triangles).
     Vec3d a = corner_d(m, t, 0), b = corner_d(m, t, 1), c = corner_d(m, t, 2);
-    if (!g.may_intersect_triangle(a, b, c)) continue;
+    if (g.separated_by_shaft_plane(a, b, c)) continue;
+    if (rnode.contains_triangle(t) || lnode.contains_triangle(t)) continue;
+    if (g.separated_by_triangle_plane(a, b, c)) continue;
     // CONSTRUCT-CLIPPED-PATCH: clip to the slab between the clip planes.
     const auto& tri = m.triangles[t];
     poly.clear();
@@ -350,12 +352,35 @@ void merge_patches(Surface& s, Workspace& ws) {
 }
 
 void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
+  // Early exits (section 4.13): a patch is simplified only when an edge of it left the
+  // shaft since the last simplification and it has two outside edges; when no patch
+  // qualifies the rebuild below would reproduce the surface, so only the fresh marks
+  // are cleared (the surface is compact on entry: every producer ends in compact_raw).
+  bool any_candidate = false;
+  for (const Patch& p : s.patches) {
+    uint32_t n_out = 0;
+    bool fresh = false;
+    for (uint32_t k = p.first; k < p.first + p.count; ++k) {
+      const RawEdge& re = s.raw[s.edges[k].raw];
+      n_out += re.inside ? 0 : 1;
+      fresh = fresh || re.fresh;
+    }
+    if (n_out >= 2 && fresh) {
+      any_candidate = true;
+      break;
+    }
+  }
+  if (!any_candidate) {
+    for (RawEdge& re : s.raw) re.fresh = 0;
+    return;
+  }
   std::vector<Edge>& out = ws.edge_tmp;
   out.clear();
-  std::vector<Patch> newp;
+  std::vector<Patch>& newp = ws.patch_tmp2;
+  newp.clear();
   newp.reserve(s.patches.size());
   ws.remap2.assign(s.patches.size(), -1);
-  std::vector<Edge> loop;
+  std::vector<Edge>& loop = ws.loop;
   for (size_t pi = 0; pi < s.patches.size(); ++pi) {
     Patch p = s.patches[pi];
     uint32_t n = p.count;
@@ -374,15 +399,33 @@ void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
     } else {
       // Chain the edges into loops: successor = an unused edge starting where this ends.
       std::vector<uint32_t>& ord = ws.order;
-      ord.resize(n);
-      std::iota(ord.begin(), ord.end(), 0u);
       auto start = [&](uint32_t k) -> const Vec3d& { return edge_vertex(s, s.edges[p.first + k], 0); };
       auto end = [&](uint32_t k) -> const Vec3d& { return edge_vertex(s, s.edges[p.first + k], 1); };
-      std::sort(ord.begin(), ord.end(), [&](uint32_t x, uint32_t y) { return lex_less(start(x), start(y)); });
       ws.next.assign(n, -1);
       ws.used.assign(n, 0);
+      // Fast path (section 4.13, avoid work): the edges are usually stored loop by loop
+      // already (triangles and every simplified patch are written that way), so chain
+      // them in storage order when each edge starts where the previous one ends and
+      // each run closes on its first edge. Otherwise chain by sorted start vertices.
+      bool sequential = true;
+      for (uint32_t k0 = 0, k = 0; k < n && sequential; ++k) {
+        if (k + 1 < n && end(k) == start(k + 1)) {
+          ws.next[k] = int32_t(k + 1);
+        } else if (end(k) == start(k0)) {
+          ws.next[k] = int32_t(k0);
+          k0 = k + 1;
+        } else {
+          sequential = false;
+        }
+      }
       bool ok = true;
-      for (uint32_t k = 0; k < n && ok; ++k) {
+      if (!sequential) {
+        ws.next.assign(n, -1);
+        ord.resize(n);
+        std::iota(ord.begin(), ord.end(), 0u);
+        std::sort(ord.begin(), ord.end(), [&](uint32_t x, uint32_t y) { return lex_less(start(x), start(y)); });
+      }
+      for (uint32_t k = 0; k < n && ok && !sequential; ++k) {
         const Vec3d& e = end(k);
         auto it = std::lower_bound(ord.begin(), ord.end(), e, [&](uint32_t x, const Vec3d& v) { return lex_less(start(x), v); });
         bool found = false;
@@ -476,7 +519,7 @@ void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
     newp.push_back(p);
   }
   s.edges.swap(out);
-  s.patches.swap(newp);
+  s.patches.assign(newp.begin(), newp.end());  // never more patches: no reallocation
   for (RawEdge& re : s.raw) re.fresh = 0;
   for (RawEdge& re : s.raw)
     for (int k = 0; k < 2; ++k)

@@ -104,7 +104,8 @@ struct Workspace {
   std::vector<int32_t> uf, remap, remap2;
   std::vector<RawEdge> raw_tmp;
   std::vector<Edge> edge_tmp;
-  std::vector<Patch> patch_tmp;
+  std::vector<Patch> patch_tmp, patch_tmp2;
+  std::vector<Edge> loop;
   std::vector<uint32_t> order;
   std::vector<int32_t> next;
   std::vector<uint8_t> used, fail;

@@ -77,13 +77,21 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
           // Line normal (dy, -dx); pick the sign that puts every corner on the <= side.
           for (double s : {1.0, -1.0}) {
             double nx = s * dy, ny = -s * dx;
+            // Support test with a rounding margin: the line passes through both corners
+            // exactly, but n.q rounds differently for the second corner, and a strict
+            // test rejected the true hull edge about half of the time (leaving a much
+            // larger shaft). d is then raised to the largest computed n.c over the eight
+            // corners, so every corner is on the <= side as evaluated, and the plane
+            // tolerance of eval() covers the rounding of n.c (file comment of shaft.h);
+            // the plane stays conservative. The margin 2^-40 |n|_1 S is the same bound.
             double d = nx * px + ny * py;
-            bool support = true;
-            for (int c = 0; c < 4 && support; ++c) {
-              if (nx * rx[c & 1] + ny * ry[c >> 1] > d) support = false;
-              if (nx * lx[c & 1] + ny * ly[c >> 1] > d) support = false;
+            double dmax = d;
+            for (int c = 0; c < 4; ++c) {
+              dmax = std::max(dmax, nx * rx[c & 1] + ny * ry[c >> 1]);
+              dmax = std::max(dmax, nx * lx[c & 1] + ny * ly[c >> 1]);
             }
-            if (!support) continue;
+            if (dmax - d > kTolFactor * (std::abs(nx) + std::abs(ny)) * scale_) continue;
+            d = dmax;
             Vec3d n(0, 0, 0);
             n[i] = nx;
             n[j] = ny;
@@ -135,21 +143,29 @@ bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const 
 }
 
 bool ShaftGeometry::may_intersect_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
-  // Separated by a shaft plane.
+  return !separated_by_shaft_plane(a, b, c) && !separated_by_triangle_plane(a, b, c);
+}
+
+bool ShaftGeometry::separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
   for (int i = 0; i < count_; ++i) {
     const Plane4d& p = planes_[size_t(i)];
-    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return false;
+    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
   }
-  // Separated by the triangle's plane: every box corner strictly on one side.
+  return false;
+}
+
+bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+  // Every box corner strictly on one side of the triangle's plane.
   Plane4d tp = plane_through(a, b, c, scale_);
-  if (tp.n == Vec3d(0, 0, 0)) return true;
+  if (tp.n == Vec3d(0, 0, 0)) return false;
   bool all_pos = true, all_neg = true;
   for (const Vec3d& q : corners_) {
     double e = tp.eval(q);
     if (!(e > tp.tol)) all_pos = false;
     if (!(e < -tp.tol)) all_neg = false;
+    if (!all_pos && !all_neg) return false;
   }
-  return !(all_pos || all_neg);
+  return all_pos || all_neg;
 }
 
 bool ShaftGeometry::may_intersect_box(const AABBd& b) const {

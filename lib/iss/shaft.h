@@ -68,6 +68,10 @@ class ShaftGeometry {
   bool may_contain_point(const Vec3d& p) const;
   bool may_intersect_segment(const Vec3d& a, const Vec3d& b) const;
   bool may_intersect_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
+  // The two halves of may_intersect_triangle (it is true iff both are false), so that
+  // callers can put a cheaper test between them.
+  bool separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
+  bool separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
   bool may_intersect_box(const AABBd& b) const;
   // The extended region E = hull + the receiver box's outer face extruded away from
   // the light + the light box's outer face extruded away from the receiver. E shrinks

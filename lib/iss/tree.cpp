@@ -2,6 +2,7 @@
 #include "lib/iss/tree.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "lib/geom/check.h"
@@ -10,14 +11,30 @@ namespace visgate::iss {
 
 namespace {
 
-// The "A" of the N*A cost: the surface area plus 1% of the squared extent sum, so that
-// flat or collinear point sets (receivers on a floor row, zero area) still prefer
-// balanced splits instead of cutting off one point at a time.
-double split_area(const AABB& b) {
+// The "A" of the N*A cost (section 4.3): the surface area of the box grown by `pad` on
+// every axis, `pad` being the typical point spacing of the node being split. Points on a
+// regular grid are cells of that size rather than dimensionless points: with the bare
+// box area a strip of collinear points has zero area, and the greedy split then peels
+// the node into long one- or two-point-wide strips (on the rooms family such strips span
+// several rooms, so the walls between the rooms are in the strip's inside list and can
+// never block its shafts). With the padding the cost prefers compact, square-ish nodes.
+double split_area(const AABB& b, double pad) {
   if (b.empty()) return 0.0;
   Vec3f e = b.extent();
-  double p = double(e.x) + double(e.y) + double(e.z);
-  return double(b.surface_area()) + 0.01 * p * p;
+  double x = double(e.x) + pad, y = double(e.y) + pad, z = double(e.z) + pad;
+  return 2.0 * (x * y + y * z + z * x);
+}
+
+// Typical spacing of n points whose centres span the extent e: the side of the square
+// cell each point covers on the two widest axes (the points are treated as a 2D set,
+// which receivers on surfaces and samples on area lights are), or the 1D spacing when
+// the set is collinear.
+double point_spacing(const Vec3f& e, uint32_t n) {
+  double a[3] = {double(e.x), double(e.y), double(e.z)};
+  std::sort(a, a + 3);
+  if (n <= 1) return 0.0;
+  if (a[1] > 0.0) return std::sqrt(a[2] * a[1] / double(n));
+  return a[2] / double(n);
 }
 
 }  // namespace
@@ -81,19 +98,22 @@ void PointTree::split(int i) {
     int best_ax = -1;
     uint32_t best_mid = 0;
     scratch_area_.resize(cnt + 1);
+    AABB cb;
+    for (uint32_t k = b; k < e; ++k) cb.extend(centers_[ord[k]]);
+    double pad = point_spacing(cb.extent(), cnt);
     for (int ax = 0; ax < 3; ++ax) {
       std::sort(ord + b, ord + e, [&](uint32_t p, uint32_t q) { return centers_[p][ax] < centers_[q][ax]; });
       AABB acc;
       for (uint32_t k = cnt; k-- > 0;) {
         acc.extend(boxes_[ord[b + k]]);
-        scratch_area_[k] = float(split_area(acc));
+        scratch_area_[k] = split_area(acc, pad);
       }
       acc = AABB{};
       for (uint32_t k = 1; k < cnt; ++k) {
         acc.extend(boxes_[ord[b + k - 1]]);
         // Only split between distinct centres so that the split is a plane.
         if (!(centers_[ord[b + k - 1]][ax] < centers_[ord[b + k]][ax])) continue;
-        double c = double(k) * split_area(acc) + double(cnt - k) * double(scratch_area_[k]);
+        double c = double(k) * split_area(acc, pad) + double(cnt - k) * scratch_area_[k];
         if (c < best) { best = c; best_ax = ax; best_mid = b + k; }
       }
     }
