@@ -8,6 +8,7 @@
 
 #include "lib/geom/predicates.h"
 #include "oracle/region_oracle.h"
+#include "oracle/relation_oracle.h"
 #include "lib/plucker/bsp.h"
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
@@ -535,4 +536,181 @@ TEST(PluckerOracle, FractionsMatchTheRegionOracle) {
     }
     EXPECT_EQ(bad, 0) << fam;
   }
+}
+
+// ---- Far from the origin (local frame, plucker_solver.h) ----
+
+namespace {
+
+// Bits against the relation oracle (non-degenerate relations with margin >= tau) and
+// fractions against the region oracle (1e-4 of the light area): the criteria.
+struct OracleCheck {
+  size_t compared = 0, bit_mismatches = 0, fraction_mismatches = 0;
+};
+
+// Counts over every result in `rs` (solves of the same scene).
+OracleCheck check_against_oracles(const Scene& s, const std::vector<SolveResult>& rs) {
+  OracleCheck c;
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+  for (size_t i = 0; i < s.receivers.size(); ++i) {
+    for (size_t b = 0; b < ex.classes[i].size(); ++b) {
+      char cls = ex.classes[i][b];
+      if (cls == 'd' || ex.margins[i][b] < 1e-5) continue;
+      ++c.compared;
+      for (const SolveResult& r : rs) c.bit_mismatches += r.receivers[i].visible(b) != (cls == 'v');
+    }
+    for (size_t li = 0; li < s.lights.size(); ++li) {
+      oracle::RegionAnswer reg = oracle::visible_region(s, i, li);
+      if (reg.edge_on) continue;
+      for (const SolveResult& r : rs)
+        c.fraction_mismatches += !(std::abs(reg.visible_fraction - r.receivers[i].visible_fraction[li]) <= 1e-4);
+    }
+  }
+  return c;
+}
+
+// The scene moved by `off` (every coordinate must stay exact in float: asserted).
+Scene translated_exactly(const Scene& src, const Vec3d& off) {
+  Scene s = src;
+  auto move = [&](Vec3f& v) {
+    Vec3f w(to_double(v) + off);
+    EXPECT_EQ(to_double(w) - off, to_double(v)) << "offset not exact";
+    v = w;
+  };
+  for (auto& v : s.mesh.vertices) move(v);
+  for (auto& l : s.lights) {
+    for (auto& v : l.polygon) move(v);
+    for (auto& v : l.explicit_samples) move(v);
+    for (auto& v : l.jitter_points) move(v);
+    for (size_t j = 0; j < l.jitter_boxes.size(); ++j) {
+      l.jitter_boxes[j] = AABB{};
+      for (int k = 0; k < l.jitter; ++k) l.jitter_boxes[j].extend(l.jitter_point(int(j), k));
+    }
+  }
+  for (auto& rc : s.receivers) move(rc.p);
+  if (s.grid) move(s.grid->origin);
+  return s;
+}
+
+}  // namespace
+
+TEST(PluckerOracle, FarOriginMatchesTheRelationAndRegionOracles) {
+  // far-origin: base scenes moved by offsets of 1e5..1e6 per axis, where the float
+  // spacing (1/128..1/16) is a sizeable part of the unit light. In absolute coordinates
+  // the fragments were off by that spacing (187 mismatches on seeds 1-2).
+  size_t compared = 0;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    FamilyParams p;
+    p.seed = seed;
+    p.triangles = 150;
+    p.receivers = 25;
+    p.samples = 16;
+    auto scene = generate_family("far-origin", p);
+    ASSERT_TRUE(scene.ok());
+    // With and without coherence (the tree is developed by different query sequences).
+    OracleCheck c = check_against_oracles(*scene, {run(*scene, {}, seed), run(*scene, {{"coherence", "off"}}, seed)});
+    EXPECT_EQ(c.bit_mismatches, 0u) << scene->name;
+    EXPECT_EQ(c.fraction_mismatches, 0u) << scene->name;
+    compared += c.compared;
+  }
+  EXPECT_GT(compared, 1000u);
+}
+
+TEST(PluckerSolver, FarOriginEqualsTheSceneMovedBackToTheOrigin) {
+  // Coordinates are taken relative to a light vertex, so moving the whole scene by an
+  // offset that keeps every input exact changes no bit and no fraction.
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    FamilyParams p;
+    p.seed = seed;
+    p.triangles = 150;
+    p.receivers = 25;
+    p.samples = 16;
+    auto scene = generate_family("far-origin", p);
+    ASSERT_TRUE(scene.ok());
+    // Back near the origin: minus the light's first vertex rounded to a multiple of 64
+    // (the far scene's coordinates are multiples of their float spacing, at most 1/16,
+    // and the moved ones are below 2^16 in magnitude, so the difference is exact).
+    Vec3d off;
+    for (int k = 0; k < 3; ++k) off[k] = -64.0 * std::round(double(scene->lights[0].polygon[0][k]) / 64.0);
+    Scene near = translated_exactly(*scene, off);
+    SolveResult a = run(*scene, {}, seed), b = run(near, {}, seed);
+    for (size_t i = 0; i < scene->receivers.size(); ++i) {
+      EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << scene->name << " receiver " << i;
+      EXPECT_EQ(a.receivers[i].visible_fraction, b.receivers[i].visible_fraction) << scene->name << " receiver " << i;
+    }
+  }
+}
+
+// ---- Explicit samples off the light polygon (DESIGN section 6) ----
+
+TEST(PluckerSolver, ExplicitSamplesOffTheLightAreJudgedOnTheirSegment) {
+  // Light [-1,1]^2 at z = 2 emitting down, receiver at the origin. Each sample poses a
+  // relation the light-plane fragments cannot answer:
+  //  0 (0.25, 0, 1), between the receiver and the light; a blocker at z = 1.5 covering
+  //    x in [0.15, 0.45] meets both r -> (0.25, 0, 2) (x = 0.1875: the orthogonal
+  //    projection) and r -> (0.5, 0, 2) (x = 0.375: the central projection) but lies
+  //    beyond the sample: visible.
+  //  1 (0.5, 0.5, 4), beyond the light plane; a blocker at z = 3 covering x, y in
+  //    [0.3, 0.45] x [0.32, 0.5] meets the segment at (0.375, 0.375): blocked (the BSP
+  //    clips that blocker away as beyond the light; the segment passes z = 1.5 at
+  //    y = 0.1875, beside the first blocker).
+  // (No segment passes within 0.01 of a quad's diagonal: every relation is proper.)
+  //  2 (3, 0, 2), on the light plane outside the light; the blocker at z = 1 covering
+  //    x in [1.4, 1.6], y in [-0.1, 0.2] meets it at x = 1.5: blocked.
+  //  3 (3, 1, 2), same plane, passes that blocker at y = 0.5: visible.
+  //  4 (0, 0.5, -1), behind the receiver; the blocker at z = -0.5 covering y in
+  //    [0.2, 0.35] meets it at y = 0.25: blocked.
+  //  5 (0.5, 0.5, 2), on the light, unblocked: visible (the fragment path).
+  Scene s;
+  s.name = "off-light-samples";
+  Light l = make_square_light_down(Vec3d(0, 0, 2), 1.0, 6, 7);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  l.explicit_samples = {Vec3f(0.25f, 0, 1), Vec3f(0.5f, 0.5f, 4), Vec3f(3, 0, 2),
+                        Vec3f(3, 1, 2),     Vec3f(0, 0.5f, -1), Vec3f(0.5f, 0.5f, 2)};
+  s.lights.push_back(l);
+  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+  shapes::add_quad(s.mesh, Vec3d(0.15, -0.1, 1.5), Vec3d(0.45, -0.1, 1.5), Vec3d(0.45, 0.1, 1.5), Vec3d(0.15, 0.1, 1.5));
+  shapes::add_quad(s.mesh, Vec3d(0.3, 0.32, 3), Vec3d(0.45, 0.32, 3), Vec3d(0.45, 0.5, 3), Vec3d(0.3, 0.5, 3));
+  shapes::add_quad(s.mesh, Vec3d(1.4, -0.1, 1), Vec3d(1.6, -0.1, 1), Vec3d(1.6, 0.2, 1), Vec3d(1.4, 0.2, 1));
+  shapes::add_quad(s.mesh, Vec3d(-0.1, 0.2, -0.5), Vec3d(0.1, 0.2, -0.5), Vec3d(0.1, 0.35, -0.5), Vec3d(-0.1, 0.35, -0.5));
+  ASSERT_TRUE(finish_scene(s).ok());
+  const bool expected[6] = {true, false, false, true, false, true};
+  SolveResult r = run(s);
+  for (int j = 0; j < 6; ++j) {
+    oracle::RelationAnswer a = oracle::classify_segment(s, s.receivers[0].p, sample_position(s.lights[0], j, 0));
+    ASSERT_NE(a.cls, oracle::RelationClass::Degenerate) << j;
+    EXPECT_EQ(a.cls == oracle::RelationClass::Visible, expected[j]) << "hand-worked case " << j;
+    EXPECT_EQ(r.receivers[0].visible(size_t(j)), expected[j]) << "sample " << j;
+  }
+  EXPECT_EQ(r.stats.get("segment_relations"), 5.0);
+  // The fraction is still the area of the light seen from r: the z = 1.5 blocker's
+  // shadow x in [0.2, 0.6], y in [-2/15, 2/15] (scaled by 4/3), nothing else in the pyramid.
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], 1.0 - 0.4 * (4.0 / 15.0) / 4.0, 1e-6);
+}
+
+TEST(PluckerSolver, MinimisedSampleFarOffTheLightPlane) {
+  // The minimiser's case (corpus/plucker-bsp/far-origin): receiver at the world origin,
+  // one triangle, the explicit sample 2995 units off the light plane; the exact relation
+  // is blocked (margin 5e-4). Projecting the sample onto the light plane answered visible.
+  Scene s;
+  s.name = "minimised-far-off-plane";
+  s.mesh.vertices = {Vec3f(-491520, -262144, 393216), Vec3f(-500736, -163840, 409600), Vec3f(-524288, -262144, 524288)};
+  s.mesh.triangles = {{0, 1, 2}};
+  Light l;
+  l.polygon = {Vec3f(-500811.5f, -170915.5f, 412595), Vec3f(-500811.5f, -170914.5f, 412595),
+               Vec3f(-500810.5f, -170914.5f, 412595), Vec3f(-500810.5f, -170915.5f, 412595)};
+  l.samples = 1;
+  l.jitter = 1;
+  l.seed = 1;
+  l.pattern = SamplePattern::Explicit;
+  l.explicit_samples = {Vec3f(-500811, -170915, 409600)};
+  s.lights.push_back(l);
+  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  oracle::RelationAnswer a = oracle::classify_segment(s, s.receivers[0].p, sample_position(s.lights[0], 0, 0));
+  ASSERT_EQ(a.cls, oracle::RelationClass::Blocked);
+  SolveResult r = run(s);
+  EXPECT_FALSE(r.receivers[0].visible(0));
+  EXPECT_EQ(r.stats.get("segment_relations"), 1.0);
 }

@@ -21,8 +21,8 @@
 // forward error bound of lines.h (undecided counts as mixed: costs time, never
 // correctness). Fragment splits use the computed plane through r and the node's line,
 // with only the evaluation of each vertex's side bounded (fragment.cpp): the computed
-// plane differs from the true one by an angle of about u / sin(angle of the edge seen
-// from r), so lines within that angle of a node's hyperplane may be sent to the wrong
+// plane (lines.h edge_plane_normal) differs from the true one by an angle of about
+// u / sin(angle between the edge and the direction to r), so lines within that angle of a node's hyperplane may be sent to the wrong
 // side (false visible/blocked slivers of that width; measured: no mismatch above the
 // harness's tau on random-soup and columns). Degenerate cases, handled explicitly:
 //  - query point on a node's line (SplitResult::OnLine): every line r -> x meets the

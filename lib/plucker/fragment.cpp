@@ -10,7 +10,8 @@ namespace visgate::plucker {
 namespace {
 constexpr int kMaxStack = 64;
 // Signs against the computed plane: N = (a - r) x (b - r) is taken as exact (the plane
-// through r and the line is only known to the angle kCrossErr |a-r|_1 |b-r|_1 / |N|,
+// through r and the line is only known to the angle kCrossErr s / |N|, s the product of
+// the 1-norms of the two shortest of a - r, b - r, b - a (lines.h edge_plane_normal),
 // which is the float method's inherent uncertainty, see bsp.h), and only the evaluation
 // of d . N is bounded: 1 rounding in d = x - r, 1 per product, 2 in the sum, < 4.01 u
 // sum |d_i N_i| <= 4.01 u |d|_1 |N|_inf; doubled. Every fragment is thus split
@@ -20,9 +21,8 @@ constexpr float kDotErr = 8.0f * kUnitRoundoff;
 
 SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n) {
   // Same signs as split_fragment below.
-  Vec3f ra = a - r, rb = b - r;
-  Vec3f nrm = cross(ra, rb);
-  float scale = norm1(ra) * norm1(rb);
+  float scale = 0.0f;
+  Vec3f nrm = edge_plane_normal(r, a, b, scale);
   float cross_bound = kCrossErr * scale;
   if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)
     return SplitResult::OnLine;
@@ -45,10 +45,10 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
                            std::vector<Vec3f>& pos, std::vector<Vec3f>& neg) {
   // makePlane(xyz, hyperplane) (Algorithm 1 line 18): the plane through r and a -> b has
   // normal N = (a - r) x (b - r), and for x on the light det[x - r, a - r, b - r] =
-  // (x - r) . N = side(line(r, x), line(a, b)).
-  Vec3f ra = a - r, rb = b - r;
-  Vec3f nrm = cross(ra, rb);
-  float scale = norm1(ra) * norm1(rb);
+  // (x - r) . N = side(line(r, x), line(a, b)), N computed from the two shortest of
+  // a - r, b - r, b - a (lines.h edge_plane_normal).
+  float scale = 0.0f;
+  Vec3f nrm = edge_plane_normal(r, a, b, scale);
   // Query point on the node's line: N vanishes within the cross-product error bound.
   float cross_bound = kCrossErr * scale;
   if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)

@@ -18,9 +18,9 @@ Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, 
   // occluder vertex, one dot product per vvset line (section 3.3, Theorem 1).
   bool pos = false, neg = false;
   for (int i = 0; i < n; ++i) {
-    Vec3f pa = a - occ[i], pb = b - occ[i];
-    Vec3f nrm = cross(pa, pb);
-    float scale = kDetErr * norm1(pa) * norm1(pb);
+    float scale = 0.0f;
+    Vec3f nrm = edge_plane_normal(occ[i], a, b, scale);
+    scale *= kDetErr;
     const Vec3f* d = dir + size_t(i) * size_t(m);
     for (int j = 0; j < m; ++j) {
       float s = dot(d[j], nrm);
@@ -32,6 +32,18 @@ Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, 
     }
   }
   return pos ? Orientation::Positive : Orientation::Negative;
+}
+
+bool segment_blocked(const Vec3f& r, const Vec3f& s, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  // Plane sides: det[r - a, b - a, c - a] and det[s - a, b - a, c - a].
+  Sign sr = side_sign(a, r, b, c);
+  if (sr == Sign::Zero) return false;
+  Sign ss = side_sign(a, s, b, c);
+  if (ss == Sign::Zero || ss == sr) return false;
+  // Edge lines: det[s - r, v_k - r, v_k+1 - r] = side(r -> s, v_k -> v_k+1).
+  Sign e0 = side_sign(r, s, a, b);
+  if (e0 == Sign::Zero) return false;
+  return side_sign(r, s, b, c) == e0 && side_sign(r, s, c, a) == e0;
 }
 
 }  // namespace visgate::plucker

@@ -24,8 +24,8 @@ namespace visgate::plucker {
 // Unit roundoff of float32 (round to nearest): 2^-24.
 constexpr float kUnitRoundoff = 0x1p-24f;
 
-// Error bound of det[d, a, b] = d . (a x b) where d = x - p, a = a' - p, b = b' - p are
-// float differences of float inputs: 3 roundings in the differences, 2 in each cross
+// Error bound of det[d, a, b] = d . (a x b) where d, a, b are float differences of float
+// inputs (e.g. d = x - p, a = a' - p, b = b' - p, or b = b' - a', edge_plane_normal): 3 roundings in the differences, 2 in each cross
 // component (product, difference), 1 in the product with d, 2 in the sum of three terms:
 // 8 roundings, (1 + u)^8 - 1 < 8.01 u, relative to the permanent sum |d_i a_j b_k| over
 // the six terms, which is at most |d|_1 |a|_1 |b|_1. The bound itself is evaluated in
@@ -38,15 +38,40 @@ constexpr float kCrossErr = 8.0f * kUnitRoundoff;
 
 inline float norm1(const Vec3f& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); }
 
+// The normal of the plane through p and the line a -> b, (a - p) x (b - p), computed as
+// the cross product of the two shortest of a - p, b - p and b - a (in exact arithmetic
+// (a - p) x (b - p) = (a - p) x (b - a) = (b - p) x (b - a)); `scale` receives the
+// product of their 1-norms, the scale of its rounding error (kCrossErr per component;
+// with a third float difference d, kDetErr |d|_1 scale for d . N). For a short edge far
+// from p this is |a - p| |b - a| instead of |a - p| |b - p|: the plane is then known
+// to the precision of the geometry, not to u |a - p| / |b - a| (measured: a column
+// face clipped 3e-5 above the floor left a 1.6e-5 long edge whose plane through a
+// receiver 4 units away was "undecided" with the textbook form, columns seed 101).
+inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, float& scale) {
+  Vec3f pa = a - p, pb = b - p, ab = b - a;
+  float na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
+  if (nab >= na && nab >= nb) {
+    scale = na * nb;
+    return cross(pa, pb);
+  }
+  if (nb >= na) {
+    scale = na * nab;
+    return cross(pa, ab);
+  }
+  scale = nb * nab;
+  return cross(pb, ab);
+}
+
 enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
 
 // side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
 // sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
 // their relative precision.
 inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3f& b) {
-  Vec3f d = x - p, pa = a - p, pb = b - p;
-  float s = dot(d, cross(pa, pb));
-  float bound = kDetErr * norm1(d) * norm1(pa) * norm1(pb);
+  Vec3f d = x - p;
+  float scale = 0.0f;
+  float s = dot(d, edge_plane_normal(p, a, b, scale));
+  float bound = kDetErr * norm1(d) * scale;
   return s > bound ? Sign::Positive : (s < -bound ? Sign::Negative : Sign::Zero);
 }
 
@@ -63,6 +88,14 @@ bool line_stabs_polygon(const Plucker& line, const Vec3f* poly, int n);
 // is strictly negative, Mixed otherwise (including any value within the error bound):
 // conservative, never Positive or Negative for a set that has a line of the other sign.
 enum class Orientation : uint8_t { Positive, Negative, Mixed };
+
+// DESIGN section 3 for one triangle: the open segment r -> s crosses the triangle
+// (a, b, c) properly, i.e. r and s are strictly on opposite sides of its plane and the
+// line r -> s has the same strict sign against its three edge lines (section 3.2).
+// Every sign is decided against kDetErr; an undecided sign (within rounding of a touch
+// or of a zero-area triangle) counts as "not blocked". Float: wrong only for relations
+// within the determinant's rounding of a degenerate configuration.
+bool segment_blocked(const Vec3f& r, const Vec3f& s, const Vec3f& a, const Vec3f& b, const Vec3f& c);
 
 Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, const Vec3f& a, const Vec3f& b);
 

@@ -10,7 +10,6 @@
 #include <mutex>
 
 #include "lib/geom/check.h"
-#include "lib/geom/predicates.h"
 #include "lib/plucker/bsp.h"
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
@@ -28,22 +27,31 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // product, 2 in the sum: (1 + u)^4 - 1 < 4.01 u of |n|_1 |x - p0|_1; doubled.
 constexpr float kDotErr = 8.0f * kUnitRoundoff;
 
+// A light in its local frame (plucker_solver.h "Local frame"): every point below is
+// relative to `origin`, the light's first vertex.
 struct LightFrame {
   const Light* light = nullptr;
-  std::vector<Vec3f> poly;
+  Vec3f origin{};          // world position of the local origin (light vertex 0)
+  std::vector<Vec3f> poly;  // local
   Vec3f n{}, p0{}, centroid{};
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
-  AABB box;
+  AABB box;                // local
   PlaneFrame frame;
+  std::vector<Vec3f> samples;     // local jitter points, parallel to light.jitter_points
+  std::vector<uint8_t> on_light;  // per jitter point: on the light polygon (fragment test)
 };
+
+Vec3f to_local(const Vec3f& x, const Vec3f& origin) { return x - origin; }
 
 LightFrame make_frame(const Light& light) {
   LightFrame f;
   f.light = &light;
-  f.poly = light.polygon;
+  f.origin = light.polygon[0];
+  f.poly.reserve(light.polygon.size());
+  for (const Vec3f& v : light.polygon) f.poly.push_back(to_local(v, f.origin));
   f.n = light.normal;
-  f.p0 = light.polygon[0];
-  for (const Vec3f& v : light.polygon) {
+  f.p0 = f.poly[0];  // (0, 0, 0)
+  for (const Vec3f& v : f.poly) {
     f.box.extend(v);
     Vec3f d = v - f.p0;
     float h = std::abs(dot(f.n, d)) + kDotErr * norm1(f.n) * norm1(d);
@@ -51,9 +59,38 @@ LightFrame make_frame(const Light& light) {
   }
   f.frame = PlaneFrame::from_normal(f.n);
   Vec3d c(0, 0, 0);
-  for (const Vec3f& v : light.polygon) c += to_double(v);
-  f.centroid = Vec3f(c / double(light.polygon.size()));
+  for (const Vec3f& v : f.poly) c += to_double(v);
+  f.centroid = Vec3f(c / double(f.poly.size()));
+  // Light points (DESIGN section 6 allows explicit samples anywhere): a point on the
+  // light's plane (|h| within the rounding bound used for receivers) and inside the
+  // light polygon (point_in_fragment's boundary bound) is decided by point-in-fragment;
+  // any other point by segment tests (plucker_solver.h "Light points").
+  f.samples.resize(light.jitter_points.size());
+  f.on_light.resize(light.jitter_points.size());
+  for (size_t k = 0; k < light.jitter_points.size(); ++k) {
+    Vec3f q = to_local(light.jitter_points[k], f.origin);
+    f.samples[k] = q;
+    Vec3f d = q - f.p0;
+    float h = dot(f.n, d);
+    float tol = f.plane_tol + kDotErr * norm1(f.n) * norm1(d);
+    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.frame, f.poly.data(), int(f.poly.size()), q);
+  }
   return f;
+}
+
+// Index of sample_position(light, j, i) in light.jitter_points (and LightFrame::samples).
+size_t sample_index(const Light& light, int j, size_t i) {
+  return size_t(&sample_position(light, j, i) - light.jitter_points.data());
+}
+
+// The open segment r -> s (local) against every triangle of the scene, each translated
+// to the local frame as it is tested (lines.h segment_blocked).
+bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec3f& r, const Vec3f& s) {
+  for (size_t t = 0; t < scene.mesh.size(); ++t)
+    if (segment_blocked(r, s, to_local(scene.mesh.corner(t, 0), origin), to_local(scene.mesh.corner(t, 1), origin),
+                        to_local(scene.mesh.corner(t, 2), origin)))
+      return true;
+  return false;
 }
 
 // A triangle part handled per receiver (plucker_solver.h "near" polygons).
@@ -64,14 +101,14 @@ struct NearPoly {
 
 struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
-  uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0;
+  uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
     select_s += o.select_s; init_s += o.init_s; query_s += o.query_s; bsp_query_s += o.bsp_query_s;
     irradiance += o.irradiance;
     trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
-    fragments += o.fragments; fallback += o.fallback;
+    fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
     bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
     bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
@@ -138,22 +175,21 @@ void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const FragmentList
   }
 }
 
-// One receiver on the light plane: float segment tests (plucker_solver.h, degenerate).
-void shade_fallback(const Context& ctx, size_t li, size_t i, Totals& tot) {
+// One receiver on the light plane: float segment tests in the local frame
+// (plucker_solver.h, degenerate).
+void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t i, Totals& tot) {
   const Scene& scene = *ctx.scene;
   const Light& light = scene.lights[li];
   ReceiverResult& rr = ctx.result->receivers[i];
   size_t off = scene.light_offset(li);
-  const Vec3f& r = scene.receivers[i].p;
+  const Vec3f r = to_local(scene.receivers[i].p, lf.origin);
   int vis = 0;
   for (int j = 0; j < light.samples; ++j) {
-    Vec3f l = sample_position(light, j, i);
-    bool blocked = false;
-    for (size_t t = 0; t < scene.mesh.size() && !blocked; ++t)
-      blocked = segment_hits_triangle_mt(r, l - r, scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2));
+    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, lf.samples[sample_index(light, j, i)]);
     rr.set_visible(off + size_t(j), !blocked);
     vis += !blocked;
   }
+  tot.segment_relations += size_t(light.samples);
   rr.visible_fraction[li] = float(double(vis) / double(light.samples));
   rr.fragments[li].clear();
   ++tot.fallback;
@@ -179,11 +215,17 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
 
   // --- Occluder selection (Figure 8 "SC") ---
   Clock::time_point t0 = Clock::now();
+  // Everything below is in the light's local frame (plucker_solver.h): the group's
+  // receivers are translated here, the triangles as they are selected.
+  std::vector<Vec3f> rloc(group.size());
   AABB rbox;
-  for (uint32_t i : group) rbox.extend(scene.receivers[i].p);
-  // g-values are taken relative to a reference receiver (translation invariant: far
-  // from the origin, g . p in absolute coordinates would lose every digit).
-  const Vec3f ref = scene.receivers[group[0]].p;
+  for (size_t k = 0; k < group.size(); ++k) {
+    rloc[k] = to_local(scene.receivers[group[k]].p, lf.origin);
+    rbox.extend(rloc[k]);
+  }
+  // g-values are taken relative to a reference receiver (g . p keeps the digits of the
+  // differences, not those of the local coordinates).
+  const Vec3f ref = rloc[0];
   AABB both = rbox;
   both.extend(lf.box);
   float coord_max = max_component(vmax(vabs(both.lo - ref), vabs(both.hi - ref)));
@@ -191,8 +233,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   auto group_plane = [&](const Vec3f& g, float& gmin, float& gmax) {
     gmin = std::numeric_limits<float>::infinity();
     gmax = -gmin;
-    for (uint32_t i : group) {
-      float v = gval(g, scene.receivers[i].p);
+    for (const Vec3f& p : rloc) {
+      float v = gval(g, p);
       gmin = std::min(gmin, v);
       gmax = std::max(gmax, v);
     }
@@ -236,7 +278,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<Vec3f> poly0, lower, upper;
   std::vector<float> vals;
   for (size_t t = 0; t < scene.mesh.size(); ++t) {
-    Vec3f tri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
+    Vec3f tri[3] = {to_local(scene.mesh.corner(t, 0), lf.origin), to_local(scene.mesh.corner(t, 1), lf.origin),
+                    to_local(scene.mesh.corner(t, 2), lf.origin)};
     if (shaft.culls(tri[0], tri[1], tri[2])) continue;
     float h[3] = {height(tri[0]), height(tri[1]), height(tri[2])};
     // Beyond, or lying in, the light plane: it never meets an open segment (occluders
@@ -311,9 +354,10 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
-  for (uint32_t i : group) {
+  for (size_t gk = 0; gk < group.size(); ++gk) {
+    const uint32_t i = group[gk];
     const Receiver& rec = scene.receivers[i];
-    const Vec3f& r = rec.p;
+    const Vec3f& r = rloc[gk];
     Clock::time_point tq = Clock::now();
     bsp.query(r, frags);
     tot.bsp_query_s += seconds_since(tq);
@@ -367,16 +411,23 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     out.reserve(frags.size());
     double area = 0.0, irr = 0.0;
     for (size_t f = 0; f < frags.size(); ++f) {
-      out.emplace_back(frags.data(f), frags.data(f) + frags.count(f));
+      // Reported in world coordinates: one float rounding per vertex (plucker_solver.h).
+      auto& wf = out.emplace_back(frags.data(f), frags.data(f) + frags.count(f));
+      for (Vec3f& v : wf) v = v + lf.origin;
       area += polygon_area(frags.data(f), frags.count(f));
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
     }
     rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
     for (int j = 0; j < light.samples; ++j) {
+      size_t k = sample_index(light, j, i);
       bool vis = false;
-      if (!frags.polys.empty()) {
-        const Vec3f& sp = sample_position(light, j, i);
+      if (lf.on_light[k]) {
+        const Vec3f& sp = lf.samples[k];
         for (size_t f = 0; f < frags.size() && !vis; ++f) vis = point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp);
+      } else {
+        // Off the light polygon (explicit samples): the segment r -> sample itself.
+        vis = !segment_blocked_by_scene(scene, lf.origin, r, lf.samples[k]);
+        ++tot.segment_relations;
       }
       rr.set_visible(off + size_t(j), vis);
     }
@@ -472,12 +523,12 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
       // Split the group by the side of the light plane; receivers on it fall back.
       std::vector<uint32_t> side[2];
       for (uint32_t i : groups[g]) {
-        Vec3f d = scene.receivers[i].p - lf.p0;
+        Vec3f d = to_local(scene.receivers[i].p, lf.origin) - lf.p0;
         float h = dot(lf.n, d);
         float tol = lf.plane_tol + kDotErr * norm1(lf.n) * norm1(d);
         if (h > tol) side[0].push_back(i);
         else if (h < -tol) side[1].push_back(i);
-        else shade_fallback(ctx, li, i, tot);
+        else shade_fallback(ctx, li, lf, i, tot);
       }
       for (int s = 0; s < 2; ++s) {
         if (side[s].empty()) continue;
@@ -507,6 +558,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("degenerate_on_line", double(totals.bsp.on_line));
   st.set("degenerate_zero_area", double(totals.bsp.zero_area));
   st.set("fallback_receivers", double(totals.fallback));
+  st.set("segment_relations", double(totals.segment_relations));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
   st.set("occluder_selection_seconds", totals.select_s);

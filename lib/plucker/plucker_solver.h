@@ -28,13 +28,39 @@
 // segment; parts behind the receiver (its plane parallel to the light) or beyond the
 // light plane are clipped away before they reach the BSP.
 //
+// Local frame: all geometry of one light (occluder selection, clipping, vvsets, the
+// BSP, fragments, point-in-fragment, segment tests, irradiance) is computed on
+// coordinates relative to o = the light's first vertex (a float input, so no rounding
+// of the origin itself). Light vertices, receivers and sample positions are translated
+// per light, group or query, triangles as each group selects them (no copy of the
+// scene). x - o is exact in float when every component of x is within a factor 2 of
+// o's (Sterbenz: every point of a scene far from the world origin whose extent is small
+// against its offset, e.g. the far-origin family at |x| ~ 1e5..1e6); otherwise it is
+// rounded once, with an error of u |x_k - o_k| relative to the local coordinate, which
+// is the scale every bound of lines.h / fragment.h is relative to. So the float
+// guarantee below holds for the scene's extent, not its distance from the origin. o
+// being an input vertex also makes the method translation-invariant bit for bit for
+// translations that keep the inputs exact (fl((x+t) - (o+t)) = fl(x - o)).
+// Fragments are reported in world coordinates (local + o, one float rounding per
+// vertex: far from the origin they move by up to half the float spacing there);
+// the fraction, the bits and the irradiance are computed on the local fragments.
+//
 // Guarantee: float32 (the paper's precision) with the error-bounded signs of lines.h;
 // what is float and what is decided against a bound is listed in bsp.h. Exact in the
 // paper's sense: no sampling noise; the fraction is an area, not a sample count.
+// Light points (DESIGN section 6 allows explicit samples anywhere; the relation is the
+// open segment receiver -> sample): a sample on the light's plane (|h| within the
+// plane's rounding bound) and inside the light polygon (point_in_fragment's bound) is
+// decided by point-in-fragment, which projects it orthogonally onto the fragments'
+// plane (it is on that plane up to rounding, so this is the central projection from
+// the receiver up to rounding). Any other sample (off the plane, or on it outside the
+// polygon) is decided by the float segment test of lines.h (segment_blocked: proper
+// crossing by error-bounded orientation signs) against every triangle, in the local
+// frame (stats "segment_relations"): the BSP only describes segments ending on the
+// light polygon, and blockers beyond a sample or beyond the light plane matter there.
 // Degenerate inputs: a receiver on the light's plane (|h| within the plane's rounding)
-// has no pyramid to project through; its bits come from a float32 segment test against
-// every triangle (Möller-Trumbore, lib/geom/predicates.h), its fraction from the bits,
-// and it reports no fragments (stats "fallback_receivers").
+// has no pyramid to project through; its bits come from the same segment test, its
+// fraction from the bits, and it reports no fragments (stats "fallback_receivers").
 //
 // Options: coherence=on|off (off: each tree is reset between queries, the paper's
 // "modified version", section 5.1; the reset is excluded from the timings), tile=N
