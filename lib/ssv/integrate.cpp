@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "lib/geom/check.h"
@@ -182,6 +183,16 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   r_world_ = to_double(receiver);
   r_ = frame_.to_frame(receiver);
   VG_CHECK(r_.z > 0.0f);
+  pieces_.clear();
+  // Clearance threshold. A projected point r + (x - r) s is computed in float from frame
+  // coordinates bounded by S = extent + |r_u| + |r_v| + h_r (the pieces are clipped to
+  // the pyramid over L', so |x| <= S as well): a few roundings of magnitude S, below
+  // 2^-21 S together; the sample's own frame coordinates are rounded once (2^-24 S).
+  // Embree's robust test decides the reference segment with float arithmetic relative to
+  // its origin, an angular error of a few ulps, i.e. a few 2^-23 S in the light plane.
+  // 2^-14 S is above both by a factor of 64 and below the spacing of any sample pattern
+  // that matters (256 samples on a light of extent E are about E / 16 apart).
+  clear_min_ = 0x1p-14 * (frame_.extent + std::abs(double(r_.x)) + std::abs(double(r_.y)) + double(r_.z));
   const size_t n = frame_.poly.size();
   side_.resize(n);
   // Plane through r and the edge (L'_i, L'_i+1), oriented with L's interior positive:
@@ -195,6 +206,8 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
 }
 
 int ReceiverIntegrator::facing(size_t t) const {
+  const auto& v = m_.triangles[t].v;
+  if (!(fp_[v[0]].z > 0.0f || fp_[v[1]].z > 0.0f || fp_[v[2]].z > 0.0f)) return 0;
   Vec3d a = to_double(m_.corner(t, 0)), b = to_double(m_.corner(t, 1)), c = to_double(m_.corner(t, 2));
   double f = dot(cross(b - a, c - a), r_world_ - a);
   return (f > 0.0) - (f < 0.0);
@@ -276,9 +289,28 @@ bool ReceiverIntegrator::add_segment(const Vec3f& A, const Vec3f& B, int w) {
   Vec2f P, Q;
   if (!project(A2, P) || !project(B2, Q)) return false;
   counter_.add_piece(P, Q, w);
+  pieces_.push_back(P);
+  pieces_.push_back(Q);
   if (enter >= 0 && frame_.right_chain[size_t(enter)]) counter_.add_step(P.v, -w);
   if (exit >= 0 && frame_.right_chain[size_t(exit)]) counter_.add_step(Q.v, w);
   return true;
+}
+
+double ReceiverIntegrator::clearance(size_t j) const {
+  const Vec2f& sf = counter_.sample_uv(j);
+  const double su = sf.u, sv = sf.v;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k + 1 < pieces_.size(); k += 2) {
+    // Distance from the sample to the segment P Q.
+    const double pu = pieces_[k].u, pv = pieces_[k].v;
+    const double du = double(pieces_[k + 1].u) - pu, dv = double(pieces_[k + 1].v) - pv;
+    const double len2 = du * du + dv * dv;
+    double t = len2 > 0.0 ? ((su - pu) * du + (sv - pv) * dv) / len2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    const double eu = su - (pu + t * du), ev = sv - (pv + t * dv);
+    best = std::min(best, eu * eu + ev * ev);
+  }
+  return std::sqrt(best);
 }
 
 }  // namespace visgate::ssv

@@ -61,8 +61,17 @@
 // one; rule 2 is one update of a difference array in v-order. Cost per piece
 // O(sqrt(N) log N + samples near the line) instead of O(N).
 //
+// Active triangles. R_T is empty for a triangle with no vertex strictly above the light
+// plane (entirely below it, lying in it, or touching it from below): such a triangle
+// gets facing 0 and adds no piece, so a triangle lying in the light plane (grid-snapped
+// scenes) does not count the samples it contains, whose open segments never reach it.
+// A triangle with a vertex above adds every clipped edge, including an edge lying in the
+// light plane (it projects onto itself), so its boundary stays closed.
+//
 // Guarantee: float32 with these failure modes, all near-degenerate: a sample within
-// float rounding of a projected edge line (the segment passes near the edge); a receiver
+// float rounding of a projected edge line (the segment passes near the edge; exactly on
+// it the segment touches the edge and the relation itself is degenerate, and such a
+// sample is never used as the reference, see clearance below); a receiver
 // within rounding of a triangle's plane (the triangle projects to a sliver, whose sign
 // may be wrong: only samples inside the sliver are affected); pieces whose projection
 // touches the boundary of L' (rule 2 thresholds v_Q, v_P carry rounding: samples whose v
@@ -106,6 +115,7 @@ class DepthCounter {
   // The counters per sample (index as given to reset).
   void finish(std::vector<int32_t>& depth);
   size_t size() const { return uv_.size(); }
+  const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
   void finish_reset();
@@ -130,7 +140,10 @@ class ReceiverIntegrator {
   // The same with samples given as picked jitter points (DepthCounter::reset).
   void begin(const Vec3f& receiver, const JitterOrder& order, const std::vector<uint32_t>& pick,
              const std::vector<uint32_t>& owner);
-  // sign(orient3d(T, r)) in double: +1 when r is on T's front side.
+  // sign(orient3d(T, r)) in double: +1 when r is on T's front side; 0 as well for a
+  // triangle with no vertex strictly above the light plane (h > 0): it meets no open
+  // segment from r to the light plane, so R_T is empty (a triangle lying in the light
+  // plane, or touching it from below, adds nothing).
   int facing(size_t t) const;
   // Edge weight of section "Side of a projected edge" (0: not a silhouette from r).
   int edge_weight(const Edge& e) const;
@@ -141,6 +154,18 @@ class ReceiverIntegrator {
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
   void finish(std::vector<int32_t>& depth) { counter_.finish(depth); }
+
+  // Reference-sample clearance. The counters are exact only for samples away from every
+  // projected piece, and the reference ray decides a whole class from one sample: a
+  // sample on a projected silhouette edge (its segment touches the edge: grid-snapped
+  // scenes, far-origin coordinates rounded onto a common line) has a counter of either
+  // side and an Embree answer of either side. `clearance` is the distance in the light
+  // plane from sample j to the nearest piece integrated since begin() (edges and cut
+  // segments after clipping), computed in double from the float pieces;
+  // `clearance_threshold` the distance below which a sample is not trusted as a
+  // reference (derivation at its definition).
+  double clearance(size_t j) const;
+  double clearance_threshold() const { return clear_min_; }
 
   // The point where the edge between prepared vertices i and j crosses h = 0, computed
   // from the pair in index order so every user gets the same float point.
@@ -156,6 +181,8 @@ class ReceiverIntegrator {
   Vec3d r_world_{};
   Vec3f r_{};                    // frame coordinates
   std::vector<Vec3f> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
+  double clear_min_ = 0.0;
   DepthCounter counter_;
 };
 

@@ -29,9 +29,36 @@ struct ThreadState {
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick, owner;  // DepthCounter::reset
   std::vector<int32_t> depth;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0;
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
 };
+
+// Samples of one class examined for a clear reference (ReceiverIntegrator::clearance):
+// a bound on the work per receiver; the first clear one is taken. Eight random samples
+// all within 2^-14 S of a projected edge happen only in exactly degenerate scenes, which
+// then pay one ray per sample.
+constexpr int kCandidates = 8;
+
+// Picks, among the first kCandidates samples of depth d (in sample order), the first one
+// whose clearance reaches the threshold, else the one of largest clearance; `j` must
+// hold some sample of depth d on entry and receives the pick. Returns whether the pick
+// is clear.
+bool pick_clear_sample(const ReceiverIntegrator& integ, const std::vector<int32_t>& depth, int32_t d, int& j) {
+  const double need = integ.clearance_threshold();
+  double best = -1.0;
+  int seen = 0;
+  for (size_t k = 0; k < depth.size() && seen < kCandidates; ++k) {
+    if (depth[k] != d) continue;
+    ++seen;
+    const double c = integ.clearance(k);
+    if (c > best) {
+      best = c;
+      j = int(k);
+    }
+    if (c >= need) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
@@ -65,7 +92,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
 
   double init_seconds = 0, peak_memory = 0;
   WedgeBuildCounts counts;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, nodes = 0;
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, nodes = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
 
   for (size_t l = 0; l < scene.lights.size(); ++l) {
@@ -136,26 +163,41 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         for (uint32_t t : cut_triangles) st.integrator.add_cut(t);
         st.integrator.finish(st.depth);
         auto e = Clock::now();
-        // Reference ray to the first sample of minimum relative depth complexity, and a
-        // check ray to the first sample of the next class: it must be blocked (its depth
-        // is at least one more than the minimum's, which is >= 0). When it is not, some
-        // near-degenerate projection has corrupted the counters (typically a sample
-        // within rounding of a sliver seen edge-on gets a spurious extra class): the
-        // receiver is answered by one ray per sample instead.
+        // Reference ray to a sample of minimum relative depth complexity, and a check
+        // ray to a sample of the next class: it must be blocked (its depth is at least
+        // one more than the minimum's, which is >= 0). Both samples are chosen clear of
+        // every projected piece (ReceiverIntegrator::clearance): a sample on a projected
+        // silhouette edge has a counter and an Embree answer of either side, and one
+        // reference decides its whole class. When no sample of the minimum class is
+        // clear among the first kCandidates, or the check ray is unblocked (some
+        // near-degenerate projection corrupted the counters, e.g. a sample within
+        // rounding of a sliver seen edge-on), the receiver is answered by one ray per
+        // sample instead.
         int best = 0, next = -1;
         for (int j = 1; j < light.samples; ++j)
           if (st.depth[size_t(j)] < st.depth[size_t(best)]) best = j;
         const int32_t dmin = st.depth[size_t(best)];
         for (int j = 0; j < light.samples; ++j)
           if (st.depth[size_t(j)] > dmin && (next < 0 || st.depth[size_t(j)] < st.depth[size_t(next)])) next = j;
-        const bool open = !embree.occluded(r, sample_position(light, best, i));
-        const bool next_open = next >= 0 && !embree.occluded(r, sample_position(light, next, i));
-        st.rays += next >= 0 ? 2 : 1;
-        if (next_open) {
+        const bool trusted = pick_clear_sample(st.integrator, st.depth, dmin, best);
+        if (next >= 0) pick_clear_sample(st.integrator, st.depth, st.depth[size_t(next)], next);
+        bool fallback_receiver = !trusted;
+        bool open = false;
+        if (trusted) {
+          open = !embree.occluded(r, sample_position(light, best, i));
+          const bool next_open = next >= 0 && !embree.occluded(r, sample_position(light, next, i));
+          st.rays += next >= 0 ? 2 : 1;
+          if (next_open) {
+            fallback_receiver = true;
+            st.inconsistent += 1;
+          }
+        } else {
+          st.doubtful += 1;
+        }
+        if (fallback_receiver) {
           for (int j = 0; j < light.samples; ++j)
             rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
           st.fallback += light.samples;
-          st.inconsistent += 1;
         } else if (open) {
           for (int j = 0; j < light.samples; ++j)
             if (st.depth[size_t(j)] == dmin) rr.set_visible(offset + size_t(j), true);
@@ -177,6 +219,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
       fallback += st.fallback;
       rays += st.rays;
       inconsistent += st.inconsistent;
+      doubtful += st.doubtful;
       t_query += st.t_query;
       t_valid += st.t_valid;
       t_integrate += st.t_integrate;
@@ -213,6 +256,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   s.set("reference_rays", rays);
   s.set("fallback_relations", fallback);
   s.set("inconsistent_receivers", inconsistent);
+  s.set("doubtful_receivers", doubtful);
   s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
   s.set("silhouette_regions", use_region ? 1.0 : 0.0);
   return result;

@@ -51,7 +51,12 @@ PlaneD triangle_plane(const mesh::PreparedMesh& m, size_t t) {
 }
 
 // Orients a candidate plane so that L' lies on its closed negative side within tol;
-// false when L' straddles it (not a separating plane).
+// false when L' straddles it (not a separating plane) or lies in it within tol. The
+// latter happens for an edge touching or lying in the light plane (grid-snapped scenes):
+// every candidate through it and a light vertex or edge is the light plane itself, and
+// either orientation of it would be arbitrary (the wrong one excludes every receiver).
+// The light plane is added once, oriented, by build_wedges; dropping a candidate only
+// enlarges the wedge.
 bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double tol) {
   double lo = 0.0, hi = 0.0;
   for (const auto& l : light) {
@@ -59,6 +64,7 @@ bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double to
     lo = std::min(lo, f);
     hi = std::max(hi, f);
   }
+  if (hi <= tol && lo >= -tol) return false;
   if (hi <= tol) return true;
   if (lo >= -tol) {
     pl.n = -pl.n;
@@ -138,18 +144,25 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
   std::vector<PlaneD> cand;
   for (size_t ei = 0; ei < edges.size(); ++ei) {
     const Edge& e = edges[ei];
-    // Some incident triangle must reach above the light plane, and so must the edge.
-    bool above = false;
-    for (int32_t t : {e.t1, e.t2}) {
-      if (t < 0) continue;
-      for (uint32_t v : m.triangles[size_t(t)].v) above |= frame_pos[v].z > 0.0f;
-    }
-    if (!above || (frame_pos[e.a].z < 0.0f && frame_pos[e.b].z < 0.0f)) {
+    // Some incident triangle must reach above the light plane (be active, integrate.h),
+    // and so must the edge.
+    auto active = [&](int32_t t) {
+      if (t < 0) return false;
+      for (uint32_t v : m.triangles[size_t(t)].v)
+        if (frame_pos[v].z > 0.0f) return true;
+      return false;
+    };
+    const bool act1 = active(e.t1), act2 = active(e.t2);
+    if (!(act1 || act2) || (frame_pos[e.a].z < 0.0f && frame_pos[e.b].z < 0.0f)) {
       ++counts.below_light;
       continue;
     }
-    PlaneD p1 = triangle_plane(m, size_t(e.t1)), p2{};
-    if (e.t2 >= 0) {
+    // A double edge with one inactive neighbour has the weight of a single edge of the
+    // active one (its facing is 0, integrate.h): no silhouette region, no culling by the
+    // pair's planes.
+    const bool pair = act1 && act2;
+    PlaneD p1 = triangle_plane(m, size_t(act1 ? e.t1 : e.t2)), p2{};
+    if (pair) {
       // Potential silhouette w.r.t. L' (section 2.1): some light point sees exactly one
       // of the two triangles front-facing.
       p2 = triangle_plane(m, size_t(e.t2));
@@ -202,7 +215,7 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
       w.planes[w.plane_count++] = to_float(pl);
     }
     w.tri[0] = to_float(p1);
-    if (e.t2 >= 0) {
+    if (pair) {
       w.tri[1] = to_float(p2);
       w.has_region = true;
     }

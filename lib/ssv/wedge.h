@@ -15,7 +15,9 @@
 // exact region {x : some segment from x to L' meets the edge} is contained in it: each
 // separating plane has the edge on its closed inner side and L' on its closed outer side,
 // so x = p + t (p - l) (p on the edge, l in L', t >= 0) evaluates to
-// (1 + t) f(p) - t f(l) >= 0. The silhouette region of a double edge (section 3.3: exactly
+// (1 + t) f(p) - t f(l) >= 0. A candidate plane that contains L' (within the tolerance
+// `tol`; only the light plane can, for an edge touching or lying in it) separates
+// nothing and is dropped: the light plane enters once, as h >= 0. The silhouette region of a double edge (section 3.3: exactly
 // one triangle front-facing) is tested the same way: a box is excluded only when it lies
 // at least eps inside both front half-spaces or both back half-spaces.
 #pragma once
@@ -80,9 +82,11 @@ struct WedgeBuildCounts {
 // vertices in frame coordinates (used for the h >= 0 classification, the same values the
 // projection uses). An edge is dropped when no incident triangle has a vertex above the
 // light plane (it cannot meet a segment from a receiver above the plane to the light) or,
-// for a double edge, when every vertex of L' lies at least `tol` on the same side of both
-// triangle planes (no light point sees it as a silhouette, so no receiver in its wedge
-// does: section 2.1). `tol` is a distance.
+// for a double edge with both neighbours active (a vertex above the light plane), when
+// every vertex of L' lies at least `tol` on the same side of both triangle planes (no
+// light point sees it as a silhouette, so no receiver in its wedge does: section 2.1).
+// A double edge with one inactive neighbour is treated as a single edge of the active
+// one, matching its integration weight (integrate.h). `tol` is a distance.
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3f>& frame_pos, const LightFrame& frame, double tol,
                                 WedgeBuildCounts& counts);
