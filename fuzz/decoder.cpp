@@ -207,7 +207,12 @@ void perturb(FuzzedDataProvider& in, Scene& s) {
     }
     case 3: {  // copy a coordinate of another element: exact coincidences
       const Kind from = Kind(in.ConsumeIntegralInRange<int>(0, 4));
-      float* src = coordinate(s, from, in.ConsumeIntegral<uint16_t>(), in.ConsumeIntegralInRange<int>(0, 2));
+      // Separate statements: the order in which function arguments are evaluated is
+      // unspecified (g++ and clang differ), and the bytes must decode the same scene in
+      // every build (the replay build is g++, the fuzzers clang).
+      const uint16_t from_index = in.ConsumeIntegral<uint16_t>();
+      const int from_axis = in.ConsumeIntegralInRange<int>(0, 2);
+      float* src = coordinate(s, from, from_index, from_axis);
       if (src) *c = *src;
       break;
     }
