@@ -27,7 +27,7 @@ Status run_repair(BenchContext& ctx) {
   const auto& o = ctx.opt;
   auto fams = ctx.families({"rooms", "columns", "torus", "random-soup"});
   if (fams.empty()) return Error{"repair: no registered family to measure"};
-  std::vector<long> sizes = o.quick ? std::vector<long>{1000, 4000} : std::vector<long>{2000, 8000, 32000, 128000};
+  std::vector<long> sizes = o.quick ? std::vector<long>{1000, 4000} : std::vector<long>{2000, 16000, 128000, 1024000};
   struct Mode {
     std::string name;
     mesh::RepairOptions opt;
