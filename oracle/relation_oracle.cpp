@@ -315,7 +315,8 @@ class Bvh {
     std::vector<Tri> tris(n);
     for (size_t i = 0; i < n; ++i) {
       tris[i] = make_tri(mesh.corner(i, 0), mesh.corner(i, 1), mesh.corner(i, 2));
-      centre[i] = (tris[i].lo + tris[i].hi) * 0.5f;
+      // Halves first: lo + hi overflows to infinity for coordinates near FLT_MAX.
+      centre[i] = tris[i].lo * 0.5f + tris[i].hi * 0.5f;
     }
     if (n > 0) {
       nodes_.reserve(2 * n / kLeaf + 2);
@@ -373,8 +374,12 @@ class Bvh {
     // log_{4/3}(n) + 1 (< 62 for 2^32 triangles) and the fixed stack of 128 suffices.
     int ax = cbox.longest_axis();
     constexpr int kBins = 16;
-    const float c0 = cbox.lo[ax], cw = cbox.extent()[ax];
-    auto bin_of = [&](uint32_t t) { return std::min(kBins - 1, int(float(kBins) * ((centre[t][ax] - c0) / cw))); };
+    // In double: the float extent overflows to infinity when the centroids span more
+    // than FLT_MAX (coordinates near +-FLT_MAX), and inf / inf would be NaN. cw > 0 here.
+    const double c0 = cbox.lo[ax], cw = double(cbox.hi[ax]) - double(cbox.lo[ax]);
+    auto bin_of = [&](uint32_t t) {
+      return std::min(kBins - 1, int(double(kBins) * ((double(centre[t][ax]) - c0) / cw)));
+    };
     AABB bb[kBins];
     uint32_t bc[kBins] = {};
     for (uint32_t i = begin; i < end; ++i) {

@@ -244,6 +244,36 @@ TEST(RelationOracle, FarFromOrigin) {
   EXPECT_EQ(cls(s, {o + 2, o + 2, o}, {o + 2, o + 2, o + 2}), RC::Visible);  // endpoint on the face
 }
 
+TEST(RelationOracle, CoordinatesNearFloatMaxBuildTheBvh) {
+  // fuzz_embree 34d3cdc4 / fuzz_iss 7884d4d6: with boxes spanning -FLT_MAX..FLT_MAX the
+  // BVH's centroid extent overflowed to infinity and (centre - c0) / inf binned a NaN
+  // (UBSan: NaN to int; a segfault in the g++ build). Eight small triangles far apart
+  // force inner nodes, a ninth spans the whole float range. Classes worked out by hand:
+  // each triangle lies in a plane z = const and the vertical segments cross it inside
+  // (blocked) or pass beside it (visible).
+  const float big = std::numeric_limits<float>::max(), m = big * 0.9f;  // centres span 1.35 FLT_MAX
+  std::vector<std::array<Vec3f, 3>> tris;
+  for (int k = 0; k < 8; ++k) {
+    const float x = (k % 2 ? 1.0f : -1.0f) * m / float(1 << k);
+    const float leg = std::abs(x) * 0x1p-18f;  // 4 d, d = |x| 2^-20
+    tris.push_back({Vec3f(x, 0, 0), Vec3f(x + leg, 0, 0), Vec3f(x, leg, 0)});
+  }
+  tris.push_back({Vec3f(-big, -big, 1), Vec3f(big, -big, 1), Vec3f(-big, big, 1)});
+  Scene s = soup_scene(tris);
+  const float x3 = m / 8, d = x3 * 0x1p-20f;  // triangle k = 3, legs 4 d
+  const std::vector<Vec3f> from = {{x3 + d, d, -1}, {x3 + d, 3.5f * d, -1}, {-1, -1, 0.5f}};
+  const std::vector<Vec3f> to = {{x3 + d, d, 0.5f}, {x3 + d, 3.5f * d, 0.5f}, {-1, -1, 2}};
+  const RC expected[3] = {RC::Blocked, RC::Visible, RC::Blocked};
+  s.lights.push_back(explicit_light({{-1, -1, 4}, {-1, 1, 4}, {1, 1, 4}, {1, -1, 4}}, to));
+  for (const Vec3f& p : from) s.receivers.push_back({p, {0, 0, 1}});
+  RelationOracleResult r = run_relation_oracle(s, 1);
+  for (size_t i = 0; i < from.size(); ++i) {
+    EXPECT_EQ(r.classes[i][i], char(expected[i])) << i;
+    for (size_t j = 0; j < to.size(); ++j)  // the BVH run agrees with the brute-force scan
+      EXPECT_EQ(r.classes[i][j], char(classify_segment(s, from[i], to[j]).cls)) << i << " " << j;
+  }
+}
+
 TEST(RelationOracle, NonFiniteInputIsRejectedUpstreamByTheSceneReader) {
   // The oracle never sees NaN or Inf: read_scene_json rejects them (DESIGN section 2),
   // naming the element.
