@@ -255,6 +255,30 @@ TEST(MeshFiles, OffPlyStlAreRead) {
   }
 }
 
+// OpenMesh's OFF reader reads the counts after the header line and knows no comments;
+// visgate hands it a canonical text (mesh_io.cpp prescan_off), so both spellings of the
+// header and commented files give the same soup. Before, "OFF 4 2 0" read as an empty
+// mesh (silently) and fuzz_mesh_files oom d7b33115 made it allocate 3 GB.
+TEST(MeshFiles, OffCountsOnTheHeaderLineAndCommentsAreRead) {
+  fs::path d = temp_dir();
+  std::ofstream(d / "a.off") << "OFF 4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+  std::ofstream(d / "b.off") << "# made by hand\nOFF\n\n# counts\n4 2 0\n0 0 0 # origin\n1 0 0\n1 1 0\n0 1 0\n"
+                                "# faces\n3 0 1 2\n3 0 2 3\n";
+  for (const char* f : {"a.off", "b.off"}) {
+    auto soup = read_polygon_file((d / f).string());
+    ASSERT_TRUE(soup.ok()) << f << ": " << soup.error().message;
+    ASSERT_EQ(soup->vertices.size(), 4u) << f;
+    EXPECT_EQ(soup->vertices[2], Vec3d(1, 1, 0)) << f;
+    ASSERT_EQ(soup->faces.size(), 2u) << f;
+    EXPECT_EQ(soup->faces[1], (std::vector<uint32_t>{0, 2, 3})) << f;
+  }
+  // The fuzzer's input: counts 0 0 on the header line, then a huge number.
+  std::ofstream(d / "oom.off") << "OFF 0 0 24\n0" << std::string(100, '9') << "\n";
+  auto oom = read_polygon_file((d / "oom.off").string());
+  ASSERT_TRUE(oom.ok()) << oom.error().message;  // a valid empty mesh; the extra line is ignored
+  EXPECT_EQ(oom->vertices.size(), 0u);
+}
+
 TEST(MeshFiles, ErrorsNameTheFile) {
   fs::path d = temp_dir();
   auto missing = read_polygon_file((d / "none.obj").string());

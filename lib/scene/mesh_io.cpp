@@ -4,7 +4,11 @@
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/IO/reader/OFFReader.hh>
 #include <OpenMesh/Core/System/omstream.hh>
+#include <unistd.h>
+
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -122,7 +126,15 @@ std::string number_error(const std::string& tok, size_t line, const std::string&
   return "line " + std::to_string(line) + ": " + what + ": not a number: '" + tok.substr(0, 32) + "'";
 }
 
-std::string prescan_off(std::istream& in) {
+// OFF files are handed to OpenMesh in a canonical form that this pre-scan writes
+// (`canonical`): OpenMesh's OFF reader takes the first line as the header and reads the
+// counts and vertices token by token after it, so it silently reads "OFF 3 1 0" (counts
+// on the header line, which many writers produce) as an empty mesh or as a huge vertex
+// count (fuzz_mesh_files oom d7b33115: 3 GB), and it reads a '#' comment as a failed
+// number, leaving counts uninitialised. The canonical text is the magic alone on line 1,
+// "nv nf 0" on line 2, then every vertex and face line with comments and blank lines
+// removed: exactly what was validated here.
+std::string prescan_off(std::istream& in, std::string& canonical) {
   std::string line;
   size_t lineno = 0;
   std::vector<std::string> toks;
@@ -158,6 +170,14 @@ std::string prescan_off(std::istream& in) {
       nv != std::floor(nv) || nf != std::floor(nf))
     return "line " + std::to_string(lineno) + ": bad vertex and face counts";
   if (nv > 1e8 || nf > 1e8) return "line " + std::to_string(lineno) + ": counts exceed the limit 100000000";
+  canonical = magic + "\n" + std::to_string(size_t(nv)) + " " + std::to_string(size_t(nf)) + " 0\n";
+  auto keep_line = [&] {
+    for (size_t k = 0; k < toks.size(); ++k) {
+      if (k) canonical += ' ';
+      canonical += toks[k];
+    }
+    canonical += '\n';
+  };
   for (size_t v = 0; v < size_t(nv); ++v) {
     if (!next_line()) return "vertex " + std::to_string(v) + ": file ends early (" + std::to_string(size_t(nv)) + " vertices announced)";
     if (toks.size() < 3) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(v) + ": needs 3 coordinates";
@@ -165,6 +185,7 @@ std::string prescan_off(std::istream& in) {
       double x;
       if (!finite_number(toks[k], x)) return number_error(toks[k], lineno, "vertex " + std::to_string(v));
     }
+    keep_line();
   }
   for (size_t f = 0; f < size_t(nf); ++f) {
     if (!next_line()) return "face " + std::to_string(f) + ": file ends early (" + std::to_string(size_t(nf)) + " faces announced)";
@@ -176,6 +197,7 @@ std::string prescan_off(std::istream& in) {
       if (!finite_number(toks[q], idx) || idx < 0 || idx >= nv || idx != std::floor(idx))
         return "line " + std::to_string(lineno) + ": face " + std::to_string(f) + ": vertex index '" + toks[q].substr(0, 32) + "' out of range";
     }
+    keep_line();
   }
   return {};
 }
@@ -477,10 +499,11 @@ std::string prescan_ply(const std::string& data) {
   return {};
 }
 
-std::string prescan_mesh_file(const std::string& path, const std::string& ext) {
+// `canonical` receives the text to hand to OpenMesh instead of the file (OFF only).
+std::string prescan_mesh_file(const std::string& path, const std::string& ext, std::string& canonical) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "cannot open file";
-  if (ext == ".off") return prescan_off(in);
+  if (ext == ".off") return prescan_off(in, canonical);
   if (ext == ".obj") return prescan_obj(in);
   if (ext == ".ply") {
     std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -523,7 +546,8 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
     return Error{path + ": unsupported mesh format '" + ext + "' (OBJ, OFF, PLY, STL)"};
 
-  if (auto pre = prescan_mesh_file(path, ext); !pre.empty()) return Error{path + ": " + pre};
+  std::string canonical;
+  if (auto pre = prescan_mesh_file(path, ext, canonical); !pre.empty()) return Error{path + ": " + pre};
 
   SoupImporter imp;
   bool ok = false;
@@ -534,7 +558,25 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
     omout().disable();
     OIO::Options opt = OIO::Options::Default;
     try {
-      ok = OIO::IOManager().read(path, imp, opt);
+      if (ext == ".off") {
+        // OpenMesh's own OFF reader on the canonical text (see prescan_off). The reader
+        // takes its options (colours, normals, texture coordinates) from the header line
+        // in can_u_read, whose stream form is private: it is given a one-line file
+        // holding the canonical header, then read() parses the canonical text.
+        static std::atomic<uint64_t> serial{0};
+        const fs::path head = fs::temp_directory_path(ec) / ("visgate-off-header-" + std::to_string(::getpid()) + "-" +
+                                                             std::to_string(serial++) + ".off");
+        {
+          std::ofstream h(head, std::ios::binary);
+          h << canonical.substr(0, canonical.find('\n') + 1);
+          if (!h) return Error{path + ": cannot write a temporary file in " + head.parent_path().string()};
+        }
+        std::istringstream body(canonical);
+        ok = OIO::OFFReader().can_u_read(head.string()) && OIO::OFFReader().read(body, imp, opt);
+        fs::remove(head, ec);
+      } else {
+        ok = OIO::IOManager().read(path, imp, opt);
+      }
     } catch (const std::exception& e) {
       return Error{path + ": cannot read mesh: " + e.what()};
     }
