@@ -62,6 +62,20 @@ void scale_lights(Scene& s, double k) {
   }
 }
 
+// Determinism across compilers. The order in which a function's (or constructor's)
+// arguments are evaluated, and the operands of an overloaded operator, is unspecified:
+// g++ evaluates Vec3d(rng.uniform(), rng.uniform(), rng.uniform()) right to left, clang
+// left to right, so the same seed gave different scenes in the g++ build and the clang
+// fuzz build. Every draw below is therefore its own statement. The order kept is the one
+// g++ used (right to left for arguments, right operand first for Vec3d + and *), so the
+// scenes of the g++ build are unchanged bit for bit.
+Vec3d uniform3(Rng& rng, const Vec3d& lo, const Vec3d& hi) {
+  const double z = rng.uniform(lo.z, hi.z);
+  const double y = rng.uniform(lo.y, hi.y);
+  const double x = rng.uniform(lo.x, hi.x);
+  return Vec3d(x, y, z);
+}
+
 // random-soup: random triangles of size ~0.1-0.4 in the slab 0.3 < z < 1.7 between a
 // receiver grid on z = 0 and a square light at z = 2.
 Result<Scene> gen_random_soup(const FamilyParams& p) {
@@ -70,11 +84,11 @@ Result<Scene> gen_random_soup(const FamilyParams& p) {
   Rng rng(p.seed);
   long n = p.triangles > 0 ? p.triangles : 200;
   for (long t = 0; t < n; ++t) {
-    Vec3d c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.3, 1.7));
+    const Vec3d c = uniform3(rng, Vec3d(-1, -1, 0.3), Vec3d(1, 1, 1.7));
     double size = rng.uniform(0.1, 0.4);
     uint32_t base = uint32_t(s.mesh.vertices.size());
     for (int k = 0; k < 3; ++k)
-      s.mesh.vertices.push_back(Vec3f(c + Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * size));
+      s.mesh.vertices.push_back(Vec3f(c + uniform3(rng, Vec3d(-1, -1, -1), Vec3d(1, 1, 1)) * size));
     s.mesh.triangles.push_back({base, base + 1, base + 2});
   }
   s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.5, p.samples > 0 ? int(p.samples) : 16, p.seed));
@@ -193,7 +207,7 @@ Result<Scene> gen_rooms(const FamilyParams& p) {
         // Decorative objects: vases on the table, lamps near the ceiling.
         for (int k = 0; k < 4; ++k) {
           Vec3d c = k < 2 ? o + Vec3d(tx + 0.3 + 0.6 * k, ty + 0.4, th + 0.12)
-                          : o + Vec3d(rng.uniform(0.8, 3.2), rng.uniform(0.8, 3.2), rng.uniform(1.6, 2.2));
+                          : o + uniform3(rng, Vec3d(0.8, 0.8, 1.6), Vec3d(3.2, 3.2, 2.2));
           shapes::add_sphere(s.mesh, c, k < 2 ? 0.1 : 0.15, slices, stacks);
         }
         // Ceiling light.
@@ -217,7 +231,7 @@ int samples_or(const FamilyParams& p, int fallback) { return p.samples > 0 ? int
 
 Vec3d random_unit(Rng& rng) {
   for (;;) {
-    Vec3d v(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    const Vec3d v = uniform3(rng, Vec3d(-1, -1, -1), Vec3d(1, 1, 1));
     double l = length(v);
     if (l > 0.1 && l <= 1.0) return v / l;
   }
@@ -263,9 +277,11 @@ Result<Scene> gen_torus(const FamilyParams& p) {
   int nv = std::max(3, int(std::lround(std::sqrt(double(target) / 8.0))));  // minor segments
   int nu = std::max(3, int(target / (2 * nv)));                               // major segments
   double R = rng.uniform(0.45, 0.7), r = R * rng.uniform(0.2, 0.45);
-  shapes::add_torus(s.mesh, Vec3d(rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1), rng.uniform(0.8, 1.2)), R, r, nu, nv);
-  shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1), normalize(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), 0.0) + Vec3d(1e-3, 0, 0)),
-                 rng.uniform(0.0, 0.4));
+  shapes::add_torus(s.mesh, uniform3(rng, Vec3d(-0.1, -0.1, 0.8), Vec3d(0.1, 0.1, 1.2)), R, r, nu, nv);
+  const double tilt = rng.uniform(0.0, 0.4);
+  const double axis_y = rng.uniform(-1, 1);
+  const double axis_x = rng.uniform(-1, 1);
+  shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1), normalize(Vec3d(axis_x, axis_y, 0.0) + Vec3d(1e-3, 0, 0)), tilt);
   s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.4 * p.light_scale, samples_or(p, 16), p.seed));
   int side = grid_side(p.receivers, 16);
   s.grid = make_floor_grid(-1.2, 1.2, -1.2, 1.2, 0.0, side, side, 0.0f);
@@ -334,17 +350,30 @@ Result<Scene> gen_grid_snapped(const FamilyParams& p) {
   for (long t = 0; t < n; ++t) {
     uint32_t base = uint32_t(s.mesh.vertices.size());
     int kind = int(rng.below(3));
-    Vec3d a(gi(-4, 4), gi(-4, 4), gi(2, 6));
+    // Grid points drawn z, y, x (see uniform3).
+    auto grid_point = [&](int lo, int hi, int zlo, int zhi) {
+      const double z = gi(zlo, zhi);
+      const double y = gi(lo, hi);
+      const double x = gi(lo, hi);
+      return Vec3d(x, y, z);
+    };
+    const Vec3d a = grid_point(-4, 4, 2, 6);
     Vec3d b, c;
     if (kind == 0) {  // horizontal: in a grid plane z = const
-      b = Vec3d(a.x + gi(-3, 3), a.y + gi(-3, 3), a.z);
-      c = Vec3d(a.x + gi(-3, 3), a.y + gi(-3, 3), a.z);
+      for (Vec3d* v : {&b, &c}) {
+        const double dy = gi(-3, 3);
+        const double dx = gi(-3, 3);
+        *v = Vec3d(a.x + dx, a.y + dy, a.z);
+      }
     } else if (kind == 1) {  // vertical: in a plane x = const, holding vertical segments
-      b = Vec3d(a.x, a.y + gi(-3, 3), a.z + gi(-2, 2));
-      c = Vec3d(a.x, a.y + gi(-3, 3), a.z + gi(-2, 2));
+      for (Vec3d* v : {&b, &c}) {
+        const double dz = gi(-2, 2);
+        const double dy = gi(-3, 3);
+        *v = Vec3d(a.x, a.y + dy, a.z + dz);
+      }
     } else {  // general, every vertex on the grid
-      b = Vec3d(gi(-4, 4), gi(-4, 4), gi(2, 6));
-      c = Vec3d(gi(-4, 4), gi(-4, 4), gi(2, 6));
+      b = grid_point(-4, 4, 2, 6);
+      c = grid_point(-4, 4, 2, 6);
     }
     s.mesh.vertices.push_back(Vec3f(a));
     s.mesh.vertices.push_back(Vec3f(b));
@@ -357,10 +386,18 @@ Result<Scene> gen_grid_snapped(const FamilyParams& p) {
   l.jitter = 1;
   l.pattern = SamplePattern::Explicit;
   int hk = int(std::lround(half / g));
-  for (int j = 0; j < ns; ++j) l.explicit_samples.push_back(Vec3f(Vec3d(gi(-hk, hk), gi(-hk, hk), 2.0)));
+  for (int j = 0; j < ns; ++j) {
+    const double y = gi(-hk, hk);
+    const double x = gi(-hk, hk);
+    l.explicit_samples.push_back(Vec3f(Vec3d(x, y, 2.0)));
+  }
   s.lights.push_back(l);
   long nr = p.receivers > 0 ? p.receivers : 64;
-  for (long i = 0; i < nr; ++i) s.receivers.push_back(Receiver{Vec3f(Vec3d(gi(-6, 6), gi(-6, 6), 0.0)), Vec3f(0, 0, 1)});
+  for (long i = 0; i < nr; ++i) {
+    const double y = gi(-6, 6);
+    const double x = gi(-6, 6);
+    s.receivers.push_back(Receiver{Vec3f(Vec3d(x, y, 0.0)), Vec3f(0, 0, 1)});
+  }
   return finished(s);
 }
 
@@ -382,7 +419,7 @@ Result<Scene> gen_shared_edge_fan(const FamilyParams& p) {
   int piece = 0;
   while (made < target) {
     size_t v0 = s.mesh.vertices.size(), t0 = s.mesh.triangles.size();
-    Vec3d c(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(0.7, 1.3));
+    const Vec3d c = uniform3(rng, Vec3d(-0.8, -0.8, 0.7), Vec3d(0.8, 0.8, 1.3));
     if (piece++ % 2 == 0) {
       int m = int(std::clamp(target - made, 2L, 32L) / 2);
       int nu = std::max(1, int(std::sqrt(double(m)))), nv = std::max(1, m / nu);
@@ -401,7 +438,8 @@ Result<Scene> gen_shared_edge_fan(const FamilyParams& p) {
       shapes::add_fan(s.mesh, c, rim, true);
       shared_vertices.push_back(uint32_t(v0));
     }
-    shapes::rotate(s.mesh, v0, c, random_unit(rng), rng.uniform(0.1, 0.9));
+    const double angle = rng.uniform(0.1, 0.9);
+    shapes::rotate(s.mesh, v0, c, random_unit(rng), angle);
     // Interior edges: edges used by two triangles of this piece.
     std::map<std::pair<uint32_t, uint32_t>, int> uses;
     for (size_t t = t0; t < s.mesh.triangles.size(); ++t)
@@ -442,8 +480,9 @@ Result<Scene> gen_sliver_soup(const FamilyParams& p) {
   Rng rng(p.seed);
   long n = p.triangles > 0 ? p.triangles : 200;
   for (long t = 0; t < n; ++t) {
-    Vec3d c(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(0.5, 1.5));
-    Vec3d d = random_unit(rng) * (rng.uniform(0.5, 2.0) / 2);
+    const Vec3d c = uniform3(rng, Vec3d(-0.8, -0.8, 0.5), Vec3d(0.8, 0.8, 1.5));
+    const double half_length = rng.uniform(0.5, 2.0) / 2;
+    Vec3d d = random_unit(rng) * half_length;
     Vec3d side = normalize(cross(d, random_unit(rng)));
     double width = length(d) * 2 * std::pow(10.0, -rng.uniform(2.0, 7.0));
     uint32_t base = uint32_t(s.mesh.vertices.size());
@@ -484,7 +523,8 @@ Result<Scene> gen_on_surface(const FamilyParams& p) {
   faces.push_back({Vec3d(-F, -F, 0), Vec3d(2 * F, 0, 0), Vec3d(0, 2 * F, 0), Vec3d(0, 0, 1)});
   while (long(s.mesh.size()) + 12 <= target) {
     uint64_t kind = rng.below(3);
-    Vec3d c(rng.uniform(-1.2, 1.2), rng.uniform(-1.2, 1.2), 0);
+    const double cy = rng.uniform(-1.2, 1.2);  // y before x (see uniform3)
+    const Vec3d c(rng.uniform(-1.2, 1.2), cy, 0);
     double w = rng.uniform(0.05, 0.3);
     if (kind == 0) {  // box on the floor, receivers on its top face
       double h = std::ldexp(std::round(rng.uniform(1, 8)), -3);  // dyadic height: top face exact
@@ -509,12 +549,18 @@ Result<Scene> gen_on_surface(const FamilyParams& p) {
     Vec3d q;
     Vec3d n(0, 0, 1);
     if (kind == 0) {  // floor vertex
-      q = Vec3d(-F + cell * double(rng.below(uint64_t(cells) + 1)), -F + cell * double(rng.below(uint64_t(cells) + 1)), 0);
+      const double y = -F + cell * double(rng.below(uint64_t(cells) + 1));
+      const double x = -F + cell * double(rng.below(uint64_t(cells) + 1));
+      q = Vec3d(x, y, 0);
     } else if (kind == 1) {  // floor edge
-      q = Vec3d(-F + cell * double(rng.below(uint64_t(cells) + 1)), rng.uniform(-F, F), 0);
+      const double y = rng.uniform(-F, F);
+      const double x = -F + cell * double(rng.below(uint64_t(cells) + 1));
+      q = Vec3d(x, y, 0);
     } else {
       const Face& f = faces[rng.below(faces.size())];
-      q = f.o + f.u * rng.uniform(0.02, 0.98) + f.v * rng.uniform(0.02, 0.98);
+      const double b = rng.uniform(0.02, 0.98);
+      const double a = rng.uniform(0.02, 0.98);
+      q = f.o + f.u * a + f.v * b;
       n = f.n;
     }
     s.receivers.push_back(Receiver{Vec3f(q), Vec3f(n)});
@@ -534,7 +580,8 @@ Result<Scene> gen_foliage(const FamilyParams& p) {
   // Leaf size shrinks with the count so the crown's density stays about constant.
   double leaf = 0.06 * std::sqrt(4000.0 / double(std::max(leaves, 100L)));
   for (long t = 0; t < leaves; ++t) {
-    Vec3d c = Vec3d(0, 0, 1.3) + random_unit(rng) * (0.7 * std::cbrt(rng.uniform()));
+    const double radius = 0.7 * std::cbrt(rng.uniform());
+    Vec3d c = Vec3d(0, 0, 1.3) + random_unit(rng) * radius;
     Vec3d a = random_unit(rng), b = normalize(cross(a, random_unit(rng)));
     double sz = leaf * rng.uniform(0.5, 1.0);
     uint32_t base = uint32_t(s.mesh.vertices.size());
@@ -608,7 +655,10 @@ Result<Scene> gen_far_origin(const FamilyParams& p) {
   if (!r) return r;
   Scene s = std::move(*r);
   Vec3d off;
-  for (int k = 0; k < 3; ++k) off[k] = std::round(std::pow(10.0, rng.uniform(5.0, 6.0))) * (rng.below(2) ? 1.0 : -1.0);
+  for (int k = 0; k < 3; ++k) {
+    const double magnitude = std::round(std::pow(10.0, rng.uniform(5.0, 6.0)));
+    off[k] = magnitude * (rng.below(2) ? 1.0 : -1.0);
+  }
   auto move = [&](Vec3f& v) { v = Vec3f(to_double(v) + off); };
   for (auto& v : s.mesh.vertices) move(v);
   for (auto& l : s.lights) {
