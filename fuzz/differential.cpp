@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fuzz/decoder.h"
+#include "lib/raycast/embree_solver.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
 #include "oracle/comparator.h"
@@ -107,7 +108,26 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
 
   std::string findings;
   oracle::Comparison cmp = oracle::compare_relations(scene, result, exact, kTau);
+  // fuzz_embree: Embree's known robust-mode false hit (corpus/embree-robust/sliver/
+  // 4c8dae81..., open, third-party) is recorded once and not reported again: a
+  // false-blocked relation that Embree with hit verification (EmbreeScene's default,
+  // lib/raycast/embree_solver.h) answers visible is that hit. Every other mismatch,
+  // including false-visible ones and false hits the double-precision test confirms,
+  // still aborts, so the target keeps looking for new kinds of Embree failures.
+  std::unique_ptr<raycast::EmbreeScene> verified;
+  static size_t known_suppressed = 0;
   for (const auto& m : cmp.mismatches) {
+    if (t.method == "embree-robust" && m.direction == oracle::Direction::FalseBlocked && m.sample >= 0) {
+      if (!verified) verified = std::make_unique<raycast::EmbreeScene>(scene.mesh, true);
+      const Vec3f r = scene.receivers[m.receiver].p;
+      const Vec3f l = sample_position(scene.lights[m.light], int(m.sample), m.receiver);
+      if (!verified->occluded(r, l)) {
+        if (known_suppressed++ == 0)
+          std::fprintf(stderr, "%s: known third-party finding (Embree robust-mode false hit, corpus/embree-robust/"
+                               "sliver/4c8dae81...) seen; it is counted, not reported again\n", target);
+        continue;
+      }
+    }
     char line[512];
     std::snprintf(line, sizeof line,
                   "mismatch: receiver %zu light %zu sample %ld exact %c method %s margin %.17g direction %s"

@@ -231,6 +231,54 @@ TEST(Raycast, FallbackAgreesWithEmbreeRobustAwayFromDegeneracy) {
   EXPECT_LT(differ * 10000, total) << differ << " of " << total;
 }
 
+TEST(Raycast, VerifiedScenesRejectRobustModesCoplanarFalseHit) {
+  // corpus/embree-robust/sliver/2df110a9...: the triangle lies in the plane z - y = 2,
+  // the segment runs within 6e-8 of that plane but 0.375 beside the triangle (at x =
+  // -0.5, where the triangle's x range begins, it is at y = -0.125, z = 1.875; the
+  // triangle spans y <= -0.5). RTC_SCENE_FLAG_ROBUST (libembree3 3.13.5) reports a hit
+  // at t = 1; EmbreeScene's verification (the default, used by ISS and SSV) rejects it.
+  TriangleSoup soup;
+  soup.vertices = {Vec3f(-0.0f, -0.5f, 1.5f), Vec3f(-0.5f, -1, 1), Vec3f(0, -1, 1)};
+  soup.triangles = {{0, 1, 2}};
+  const Vec3f from(-2, -0.50000006f, 1.5f), to(-0.0f, 0, 2);
+  EXPECT_FALSE(raycast::segment_hits_triangle(soup.vertices[0], soup.vertices[1], soup.vertices[2], from, to));
+  raycast::EmbreeScene verified(soup, true);
+  EXPECT_FALSE(verified.occluded(from, to));
+  // A segment through the triangle's interior (its centroid, off the plane on both
+  // sides) is still blocked in every mode.
+  const Vec3f centroid(-1.0f / 6, -2.5f / 3, 3.5f / 3), n(0, -1, 1);
+  for (bool robust : {false, true})
+    for (bool verify : {false, true}) {
+      raycast::EmbreeScene es(soup, robust, verify);
+      EXPECT_TRUE(es.occluded(centroid - n, centroid + n)) << robust << verify;
+    }
+  EXPECT_EQ(verified.rejected_hits(), 1u);
+}
+
+TEST(Raycast, VerifiedHitsAreConfirmedByTheDoubleTest) {
+  // Property: a verified scene reports a hit only where segment_hits_triangle confirms
+  // one, and on general-position soups it agrees with the unverified robust scene.
+  FamilyParams p;
+  p.seed = 5;
+  p.receivers = 64;
+  p.samples = 16;
+  auto scene = generate_family("sliver-soup", p);
+  ASSERT_TRUE(scene.ok());
+  raycast::EmbreeScene verified(scene->mesh, true), plain(scene->mesh, true, false);
+  size_t differ = 0, total = 0;
+  for (size_t i = 0; i < scene->receivers.size(); ++i)
+    for (int j = 0; j < scene->lights[0].samples; ++j, ++total) {
+      const Vec3f r = scene->receivers[i].p, l = sample_position(scene->lights[0], j, i);
+      const bool v = verified.occluded(r, l);
+      if (v) {
+        EXPECT_TRUE(raycast::fallback_occluded(scene->mesh, r, l)) << i << " " << j;
+      }
+      differ += v != plain.occluded(r, l);
+    }
+  EXPECT_LE(differ, verified.rejected_hits());  // a rejected candidate may hide behind a true hit
+  EXPECT_LT(differ * 100, total) << differ << " of " << total;
+}
+
 TEST(Solver, OptionsAreChecked) {
   auto s = make_solver("embree");
   SolveOptions o;

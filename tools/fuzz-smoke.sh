@@ -15,6 +15,7 @@
 # Usage: tools/fuzz-smoke.sh [SECONDS]
 # Environment: VISGATE_FUZZ_BUILD (build dir, default <repo>/build-fuzz-clang),
 #              JOBS (build jobs and targets run at once, default 2),
+#              FUZZ_SMOKE_SEED (libFuzzer -seed, default 1),
 #              FUZZ_SMOKE_SKIP (space-separated targets not to fuzz, e.g. while a
 #              third-party finding is open; each skip is printed).
 set -euo pipefail
@@ -41,7 +42,9 @@ run_target() {
   # shellcheck disable=SC2207
   local opts=($("$ROOT/fuzz/options-flags.sh" "$ROOT/fuzz/$t.options"))
   local rc=0
-  timeout -k 10 $(( SECS + 120 )) "$bin" "${opts[@]}" -max_total_time="$SECS" -print_final_stats=1 \
+  # A fixed seed (FUZZ_SMOKE_SEED, default 1): the smoke mutates the same way in every
+  # CI run, so a finding reproduces with the same command; campaigns use random seeds.
+  timeout -k 10 $(( SECS + 120 )) "$bin" "${opts[@]}" -seed="${FUZZ_SMOKE_SEED:-1}" -max_total_time="$SECS" -print_final_stats=1 \
     -artifact_prefix="$dir/" "$dir/new" "$ROOT/corpus/fuzz/$t" > "$dir/log" 2>&1 || rc=$?
   local execs
   execs=$(grep -E '^stat::number_of_executed_units' "$dir/log" | awk '{print $2}' || true)

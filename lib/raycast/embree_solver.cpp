@@ -38,41 +38,73 @@ bool within_embree_bound(const Vec3f& p) {
          std::abs(p.z) <= kEmbreeCoordinateBound;
 }
 
-bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
+bool segment_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, const Vec3f& from, const Vec3f& to) {
   const Vec3d p = to_double(from), q = to_double(to);
-  for (const auto& t : soup.triangles) {
-    const Vec3d a = to_double(soup.vertices[t[0]]), b = to_double(soup.vertices[t[1]]),
-                c = to_double(soup.vertices[t[2]]);
-    // Signed distances (times |n|) of the endpoints from the triangle's plane; the
-    // receiver end strictly off the plane, the light end on the other side or on it
-    // (t in (0, 1]). n comes from the triangle alone, so its relative error is 1e-16
-    // whatever the endpoints' magnitude.
-    const Vec3d n = cross(b - a, c - a);
-    const double dp = dot(n, p - a), dq = dot(n, q - a);
-    const int sp = sign_of(dp), sq = sign_of(dq);
-    if (sp == 0 || sp == sq) continue;
-    // The crossing point, computed from the endpoint nearer to the plane so that its
-    // error is 1e-16 of that endpoint's distance, not of the segment's length (a far
-    // receiver, 1e22 away, must not blur a unit triangle).
-    Vec3d x;
-    if (sq == 0) x = q;
-    else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
-    else x = p + (q - p) * (dp / (dp - dq));
-    // Closed point-in-triangle test in the projection that drops n's dominant axis:
-    // the three edge cross products agree in sign (zeros allowed).
-    const Vec3d an = vabs(n);
-    const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-    const int u = (drop + 1) % 3, v = (drop + 2) % 3;
-    auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
-      return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
-    };
-    const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
-    if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return true;
-  }
+  const Vec3d a = to_double(fa), b = to_double(fb), c = to_double(fc);
+  // Signed distances (times |n|) of the endpoints from the triangle's plane; the
+  // receiver end strictly off the plane, the light end on the other side or on it
+  // (t in (0, 1]). n comes from the triangle alone, so its relative error is 1e-16
+  // whatever the endpoints' magnitude.
+  const Vec3d n = cross(b - a, c - a);
+  const double dp = dot(n, p - a), dq = dot(n, q - a);
+  const int sp = sign_of(dp), sq = sign_of(dq);
+  if (sp == 0 || sp == sq) return false;
+  // The crossing point, computed from the endpoint nearer to the plane so that its
+  // error is 1e-16 of that endpoint's distance, not of the segment's length (a far
+  // receiver, 1e22 away, must not blur a unit triangle).
+  Vec3d x;
+  if (sq == 0) x = q;
+  else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
+  else x = p + (q - p) * (dp / (dp - dq));
+  // Closed point-in-triangle test in the projection that drops n's dominant axis:
+  // the three edge cross products agree in sign (zeros allowed).
+  const Vec3d an = vabs(n);
+  const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
+    return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
+  };
+  const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
+  return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
+}
+
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
+  for (const auto& t : soup.triangles)
+    if (segment_hits_triangle(soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]], from, to)) return true;
   return false;
 }
 
-EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust) : soup_(&soup) {
+namespace {
+
+// The intersect context of a verified query: Embree passes it to the filter, which
+// needs the segment's float endpoints (org + dir would be rounded again).
+struct VerifyContext {
+  RTCIntersectContext base;  // first member: Embree sees a plain RTCIntersectContext
+  Vec3f from, to;
+  const TriangleSoup* soup;
+  size_t rejected;
+};
+
+// Occlusion filter of a verified scene: a candidate hit stands only when the double-
+// precision segment/triangle test agrees (see embree_solver.h, "Hit verification").
+void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* vc = reinterpret_cast<const VerifyContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    const auto& t = vc->soup->triangles[prim];
+    if (!segment_hits_triangle(vc->soup->vertices[t[0]], vc->soup->vertices[t[1]], vc->soup->vertices[t[2]], vc->from,
+                               vc->to)) {
+      args->valid[i] = 0;
+      ++const_cast<VerifyContext*>(vc)->rejected;
+    }
+  }
+}
+
+}  // namespace
+
+EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits)
+    : soup_(&soup), verify_(verify_hits) {
   for (const Vec3f& v : soup.vertices)
     if (!within_embree_bound(v)) {
       mesh_in_bound_ = false;  // every query goes to the fallback; no Embree scene
@@ -90,6 +122,7 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust) : soup_(&soup) {
     auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                               3 * sizeof(uint32_t), soup.triangles.size()));
     std::memcpy(ib, soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
+    if (verify_) rtcSetGeometryOccludedFilterFunction(geom, verify_hit_filter);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(scene, geom);
     rtcReleaseGeometry(geom);
@@ -107,8 +140,12 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
     fallback_rays_.fetch_add(1, std::memory_order_relaxed);
     return fallback_occluded(*soup_, from, to);
   }
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+  VerifyContext vc;
+  rtcInitIntersectContext(&vc.base);
+  vc.from = from;
+  vc.to = to;
+  vc.soup = soup_;
+  vc.rejected = 0;
   RTCRay ray;
   ray.org_x = from.x;
   ray.org_y = from.y;
@@ -123,14 +160,15 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
   ray.mask = 0xFFFFFFFFu;
   ray.id = 0;
   ray.flags = 0;
-  rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
+  rtcOccluded1(static_cast<RTCScene>(scene_), &vc.base, &ray);
+  if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
   return ray.tfar == -std::numeric_limits<float>::infinity();
 }
 
 SolveResult EmbreeSolver::solve(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   auto t0 = std::chrono::steady_clock::now();
-  EmbreeScene es(scene.mesh, robust_);
+  EmbreeScene es(scene.mesh, robust_, /*verify_hits=*/false);  // the baseline as users run it
   auto t1 = std::chrono::steady_clock::now();
   SolveResult result = make_empty_result(scene);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, scene.receivers.size(), 16), [&](const tbb::blocked_range<size_t>& range) {

@@ -52,14 +52,29 @@ bool within_embree_bound(const Vec3f& p);
 // edges; a segment in the triangle's plane is a miss.
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to);
 
+// The test of fallback_occluded for one triangle (a, b, c), with the same conventions.
+bool segment_hits_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& from, const Vec3f& to);
+
 // A committed Embree scene over a triangle soup, for methods that cast rays (ISS leaves,
 // SSV's reference ray) as well as for the baseline itself. Thread-safe queries. All
 // scenes share one Embree device per process (created on first use, thread-safe, kept
 // until exit): creating a device costs about a millisecond, more than a small solve.
 // `soup` must outlive the EmbreeScene (the fallback reads it).
+//
+// Hit verification (verify_hits, on by default; the `embree` and `embree-robust`
+// baselines switch it off to be measured as users run Embree). RTC_SCENE_FLAG_ROBUST
+// reports hits that do not exist for segments nearly in a triangle's plane: its
+// watertight test sees the triangle edge-on in ray space, and Debian's libembree3
+// 3.13.5 returned a hit at t = 1, u = v = 0 for a segment 0.375 away from the triangle
+// (corpus/embree-robust/sliver/2df110a9..., an open third-party case; fuzz_embree
+// found it, and it made ISS leaf rays and SSV reference rays answer false-blocked with
+// margin 1e-3). With verification an occlusion filter re-tests every candidate hit
+// with segment_hits_triangle and rejects the ones it does not confirm, so a hit needs
+// both Embree and the double-precision test; misses are Embree's alone (the filter sees
+// only candidates). The filter runs on hits only, which occlusion rays stop at.
 class EmbreeScene {
  public:
-  EmbreeScene(const TriangleSoup& soup, bool robust);
+  EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits = true);
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
@@ -71,12 +86,15 @@ class EmbreeScene {
 
   // Queries answered by fallback_occluded so far.
   size_t fallback_rays() const { return fallback_rays_.load(std::memory_order_relaxed); }
+  // Candidate hits the verification filter rejected so far.
+  size_t rejected_hits() const { return rejected_hits_.load(std::memory_order_relaxed); }
 
  private:
   const TriangleSoup* soup_;
+  bool verify_;
   void* scene_ = nullptr;       // nullptr when the mesh is outside Embree's domain
   bool mesh_in_bound_ = true;
-  mutable std::atomic<size_t> fallback_rays_{0};
+  mutable std::atomic<size_t> fallback_rays_{0}, rejected_hits_{0};
 };
 
 class EmbreeSolver : public Solver {
