@@ -279,6 +279,49 @@ TEST(MeshFiles, OffCountsOnTheHeaderLineAndCommentsAreRead) {
   EXPECT_EQ(oom->vertices.size(), 0u);
 }
 
+// Numbers the C++ stream reads of OpenMesh's readers would fail on (the stream then
+// stops and later values stay uninitialised) are rejected by the pre-scan, naming the
+// line and element. fuzz_mesh_files crash 8bf94312: a face size "001e39" was cast to
+// size_t (UBSan).
+TEST(MeshFiles, NumbersOpenMeshCannotReadAreRejected) {
+  fs::path d = temp_dir();
+  struct Case { const char* name; std::string text; const char* message; };
+  const std::string v3 = "0 0 0\n1 0 0\n0 1 0\n";
+  const Case cases[] = {
+      {"big.off", "OFF\n3 1 0\n0 0 0\n1e39 0 0\n0 1 0\n3 0 1 2\n", "line 4: vertex 1: '1e39' overflows float32"},
+      {"hex.off", "OFF\n3 1 0\n0 0 0\n0x1p3 0 0\n0 1 0\n3 0 1 2\n", "line 4: vertex 1: not a decimal number: '0x1p3'"},
+      {"inf.off", "OFF\n3 1 0\n0 0 0\n-inf 0 0\n0 1 0\n3 0 1 2\n", "line 4: vertex 1: coordinate is NaN or infinite"},
+      {"size.off", "OFF\n3 1 0\n" + v3 + "001e39 0 1 2\n", "line 6: face 0: bad vertex count"},
+      {"neg.off", "OFF\n3 1 0\n" + v3 + "3 0 -1 2\n", "line 6: face 0: vertex index '-1' out of range"},
+      {"frac.off", "OFF\n3.0 1 0\n" + v3 + "3 0 1 2\n", "line 2: bad vertex and face counts"},
+      {"noff.off", "NOFF\n3 1 0\n0 0 0 0 0 1\n1 0 0\n0 1 0 0 0 1\n3 0 1 2\n", "line 4: vertex 1: needs 6 numbers"},
+      {"big.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 1: '1e39' overflows float32"},
+      {"big.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 4e38 0\nvertex 0 1 0\nendloop\n"
+                  "endfacet\nendsolid t\n", "line 5: vertex 1: '4e38' overflows float32"},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(d / c.name) << c.text;
+    auto r = read_polygon_file((d / c.name).string());
+    ASSERT_FALSE(r.ok()) << c.name;
+    EXPECT_NE(r.error().message.find(std::string(c.name) + ": " + c.message), std::string::npos) << r.error().message;
+  }
+  // fuzz_mesh_files oom 867bfe69: tokens after a face's indices are not read by OpenMesh
+  // as part of that face (no face colours in the header), so they must not become the
+  // next face: "0 2147483648 2 0" is an empty face, then the next line's face.
+  std::ofstream(d / "extra.off") << "OFF\n3 2 0\n" << v3 << "0 2147483648 2 0\n3 0 1 2 7 7\n";
+  auto extra = read_polygon_file((d / "extra.off").string());
+  ASSERT_TRUE(extra.ok()) << extra.error().message;
+  ASSERT_EQ(extra->faces.size(), 2u);
+  EXPECT_TRUE(extra->faces[0].empty());
+  EXPECT_EQ(extra->faces[1], (std::vector<uint32_t>{0, 1, 2}));
+  // Subnormal and underflowing decimals read as the float stream reads them.
+  std::ofstream(d / "tiny.off") << "OFF\n3 1 0\n0 0 0\n1e-50 0 0\n0 1e-40 0\n3 0 1 2\n";
+  auto tiny = read_polygon_file((d / "tiny.off").string());
+  ASSERT_TRUE(tiny.ok()) << tiny.error().message;
+  EXPECT_EQ(tiny->vertices[1].x, 0.0);
+  EXPECT_EQ(float(tiny->vertices[2].y), 1e-40f);
+}
+
 TEST(MeshFiles, ErrorsNameTheFile) {
   fs::path d = temp_dir();
   auto missing = read_polygon_file((d / "none.obj").string());

@@ -110,20 +110,67 @@ class SoupImporter : public OIO::BaseImporter {
 // that may pass as coordinates or in-range indices), and its binary STL reader trusts
 // the triangle count. Returns an empty string when the file may be handed to OpenMesh,
 // else a message naming the line and element.
+// Numbers exactly as the C++ streams OpenMesh's readers use parse them (num_get: strtod
+// or strtof on [+-]digits[.digits][(e|E)[+-]digits]): hex floats ("0x1p3" reads as 0
+// and leaves "x1p3"), "inf" and "nan" fail the stream, and so does a float that
+// overflows float32 ("1e39"): each would leave later values uninitialised.
+bool decimal_syntax(const std::string& tok) {
+  size_t i = 0, n = tok.size();
+  if (i < n && (tok[i] == '+' || tok[i] == '-')) ++i;
+  size_t digits = 0;
+  while (i < n && std::isdigit(static_cast<unsigned char>(tok[i]))) ++i, ++digits;
+  if (i < n && tok[i] == '.') {
+    ++i;
+    while (i < n && std::isdigit(static_cast<unsigned char>(tok[i]))) ++i, ++digits;
+  }
+  if (digits == 0) return false;
+  if (i < n && (tok[i] == 'e' || tok[i] == 'E')) {
+    ++i;
+    if (i < n && (tok[i] == '+' || tok[i] == '-')) ++i;
+    size_t exp = 0;
+    while (i < n && std::isdigit(static_cast<unsigned char>(tok[i]))) ++i, ++exp;
+    if (exp == 0) return false;
+  }
+  return i == n;
+}
+
 bool finite_number(const std::string& tok, double& out) {
-  const char* b = tok.c_str();
-  char* e = nullptr;
-  out = std::strtod(b, &e);
-  return e != b && *e == '\0' && std::isfinite(out);
+  if (!decimal_syntax(tok)) return false;
+  out = std::strtod(tok.c_str(), nullptr);
+  return std::isfinite(out);
+}
+
+// A decimal number that a float read accepts (underflow to zero or a subnormal is
+// accepted by the stream; overflow is not).
+bool float_number(const std::string& tok, double& out) {
+  if (!finite_number(tok, out)) return false;
+  const float f = std::strtof(tok.c_str(), nullptr);
+  return std::isfinite(f);
+}
+
+// A count or an index: plain digits (an optional '+'; a stream read of an unsigned
+// integer would wrap "-1" to 4294967295), at most `limit`.
+bool count_number(const std::string& tok, uint64_t limit, uint64_t& out) {
+  size_t i = tok.size() > 0 && tok[0] == '+' ? 1 : 0;
+  if (i == tok.size() || tok.size() - i > 18) return false;
+  out = 0;
+  for (; i < tok.size(); ++i) {
+    if (!std::isdigit(static_cast<unsigned char>(tok[i]))) return false;
+    out = out * 10 + uint64_t(tok[i] - '0');
+  }
+  return out <= limit;
 }
 
 std::string number_error(const std::string& tok, size_t line, const std::string& what) {
+  const std::string at = "line " + std::to_string(line) + ": " + what + ": ";
   double v = 0;
-  const char* b = tok.c_str();
-  char* e = nullptr;
-  v = std::strtod(b, &e);
-  if (e != b && *e == '\0' && !std::isfinite(v)) return "line " + std::to_string(line) + ": " + what + ": coordinate is NaN or infinite";
-  return "line " + std::to_string(line) + ": " + what + ": not a number: '" + tok.substr(0, 32) + "'";
+  if (finite_number(tok, v)) return at + "'" + tok.substr(0, 32) + "' overflows float32";
+  if (decimal_syntax(tok)) return at + "'" + tok.substr(0, 32) + "' overflows double";
+  std::string lower;
+  for (char c : tok.substr(0, 16)) lower += char(std::tolower(static_cast<unsigned char>(c)));
+  const size_t sign = lower.size() > 0 && (lower[0] == '+' || lower[0] == '-') ? 1 : 0;
+  if (lower.compare(sign, 3, "nan") == 0 || lower.compare(sign, 3, "inf") == 0) return at + "coordinate is NaN or infinite";
+  return at + "not a decimal number: '" + tok.substr(0, 32) + "'";
 }
 
 // OFF files are handed to OpenMesh in a canonical form that this pre-scan writes
@@ -165,39 +212,50 @@ std::string prescan_off(std::istream& in, std::string& canonical) {
            "' (OFF, COFF, NOFF, CNOFF, NCOFF, STOFF)";
   toks.erase(toks.begin());
   if (toks.empty() && !next_line()) return "line " + std::to_string(lineno) + ": missing vertex and face counts";
-  double nv = 0, nf = 0;
-  if (toks.size() < 2 || !finite_number(toks[0], nv) || !finite_number(toks[1], nf) || nv < 0 || nf < 0 ||
-      nv != std::floor(nv) || nf != std::floor(nf))
+  constexpr uint64_t kMaxCount = 100000000;
+  uint64_t nv = 0, nf = 0;
+  if (toks.size() < 2 || !count_number(toks[0], UINT64_MAX / 16, nv) || !count_number(toks[1], UINT64_MAX / 16, nf))
     return "line " + std::to_string(lineno) + ": bad vertex and face counts";
-  if (nv > 1e8 || nf > 1e8) return "line " + std::to_string(lineno) + ": counts exceed the limit 100000000";
-  canonical = magic + "\n" + std::to_string(size_t(nv)) + " " + std::to_string(size_t(nf)) + " 0\n";
-  auto keep_line = [&] {
-    for (size_t k = 0; k < toks.size(); ++k) {
+  if (nv > kMaxCount || nf > kMaxCount) return "line " + std::to_string(lineno) + ": counts exceed the limit 100000000";
+  canonical = magic + "\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n";
+  // OpenMesh reads a vertex as 3 floats (3 more for the normal of NOFF/CNOFF) token by
+  // token and then the rest of its line (colours, texture coordinates); a face as its
+  // size and that many indices token by token, and the rest of the line only when the
+  // header has face colours (C). So a vertex line needs its coordinates, and a face line
+  // keeps exactly the tokens the reader will take: anything else would become the next
+  // face (fuzz_mesh_files oom 867bfe69: "0 2147483648 2 0", a face of size 0 followed by a
+  // size of 2^31 that OpenMesh then pushed into a vector).
+  const bool normals = magic.find('N') != std::string::npos, face_colours = magic.find('C') != std::string::npos;
+  const size_t coords = normals ? 6 : 3;
+  auto keep_line = [&](size_t n) {
+    for (size_t k = 0; k < n; ++k) {
       if (k) canonical += ' ';
       canonical += toks[k];
     }
     canonical += '\n';
   };
-  for (size_t v = 0; v < size_t(nv); ++v) {
-    if (!next_line()) return "vertex " + std::to_string(v) + ": file ends early (" + std::to_string(size_t(nv)) + " vertices announced)";
-    if (toks.size() < 3) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(v) + ": needs 3 coordinates";
-    for (int k = 0; k < 3; ++k) {
+  for (size_t v = 0; v < nv; ++v) {
+    if (!next_line()) return "vertex " + std::to_string(v) + ": file ends early (" + std::to_string(nv) + " vertices announced)";
+    if (toks.size() < coords)
+      return "line " + std::to_string(lineno) + ": vertex " + std::to_string(v) + ": needs " + std::to_string(coords) +
+             " numbers (coordinates" + (normals ? " and normal)" : ")");
+    for (size_t k = 0; k < coords; ++k) {
       double x;
-      if (!finite_number(toks[k], x)) return number_error(toks[k], lineno, "vertex " + std::to_string(v));
+      if (!float_number(toks[k], x)) return number_error(toks[k], lineno, "vertex " + std::to_string(v));
     }
-    keep_line();
+    keep_line(toks.size());
   }
-  for (size_t f = 0; f < size_t(nf); ++f) {
-    if (!next_line()) return "face " + std::to_string(f) + ": file ends early (" + std::to_string(size_t(nf)) + " faces announced)";
-    double k = 0;
-    if (!finite_number(toks[0], k) || k < 0 || k != std::floor(k) || toks.size() < size_t(k) + 1)
+  for (size_t f = 0; f < nf; ++f) {
+    if (!next_line()) return "face " + std::to_string(f) + ": file ends early (" + std::to_string(nf) + " faces announced)";
+    uint64_t k = 0;
+    if (!count_number(toks[0], toks.size() - 1, k))
       return "line " + std::to_string(lineno) + ": face " + std::to_string(f) + ": bad vertex count";
     for (size_t q = 1; q <= size_t(k); ++q) {
-      double idx;
-      if (!finite_number(toks[q], idx) || idx < 0 || idx >= nv || idx != std::floor(idx))
+      uint64_t idx;
+      if (nv == 0 || !count_number(toks[q], nv - 1, idx))
         return "line " + std::to_string(lineno) + ": face " + std::to_string(f) + ": vertex index '" + toks[q].substr(0, 32) + "' out of range";
     }
-    keep_line();
+    keep_line(face_colours ? toks.size() : size_t(k) + 1);
   }
   return {};
 }
@@ -215,7 +273,7 @@ std::string prescan_obj(std::istream& in) {
         std::string t;
         if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
         double x;
-        if (!finite_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
+        if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
       }
       ++vertices;
     } else if (kw == "f") {
@@ -258,7 +316,7 @@ std::string prescan_ascii_stl(std::istream& in) {
       std::string t;
       if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
       double x;
-      if (!finite_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
+      if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
     }
     ++vertices;
   }
@@ -473,7 +531,9 @@ std::string prescan_ply(const std::string& data) {
                                  p.name.substr(0, 32) + "'";
         auto value = [&](const PlyType& t, double& v) -> std::string {
           if (!next_token(tok)) return what + ": file ends early";
-          if (!finite_number(tok, v)) return number_error(tok, tline, what);
+          // A float property is read into a float, any other into a double or an integer.
+          const bool ok = !t.integer && t.size == 4 ? float_number(tok, v) : finite_number(tok, v);
+          if (!ok) return number_error(tok, tline, what);
           // Integers as plain digits: OpenMesh reads them with operator>> on an integer,
           // which stops at '.', 'e' or 'x' and leaves the rest for the next value.
           if (t.integer && (tok.find_first_not_of("+-0123456789") != std::string::npos || !ply_int_in_range(v, t)))
