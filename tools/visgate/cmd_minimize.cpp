@@ -4,10 +4,17 @@
 // corpus entry, else the first mismatch found) and writes the corpus entry
 // DIR/<method>/<class>/<sha1>.json (DESIGN section 8). Re-minimising an entry writes the
 // identical entry. Exit: 0 stored (or no mismatch to minimise), 2 bad input, 3 internal.
+//
+// The input may also be a fuzzer crash file of a differential target (fuzz_iss, fuzz_ssv,
+// fuzz_plucker, fuzz_embree: anything that is not JSON): it is decoded by the targets'
+// own decoder (fuzz/decoder.h), so the scene and, unless --opt is given, the method
+// options are exactly the ones the target ran. Detected by the first byte not being '{';
+// --fuzz-input forces it (an input whose selector byte happens to be '{').
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 
+#include "fuzz/decoder.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "oracle/comparator.h"
@@ -23,6 +30,7 @@ struct MinimizeOpts {
   long receiver = -1, light = -1, sample = -1;
   double tau = -1;
   int threads = 0;
+  bool fuzz_input = false;  // decode as a fuzzer input even if it starts with '{'
 };
 
 uint64_t seed_from_name(const std::string& name) {
@@ -78,6 +86,18 @@ int run_minimize(const MinimizeOpts& o) {
       base.seed = e->info.seed;
       base.source_scene = e->info.source_scene;
     }
+  } else if (o.fuzz_input || text->find_first_not_of(" \t\r\n") == std::string::npos ||
+             (*text)[text->find_first_not_of(" \t\r\n")] != '{') {
+    // A fuzzer input: [option selector][scene bytes], decoded as the target did.
+    const auto* bytes = reinterpret_cast<const uint8_t*>(text->data());
+    auto c = fuzz::decode_case(bytes, text->size(), fuzz::DecodeLimits{});
+    if (!c) return bad_input(o.scene + ": fuzzer input does not decode: " + c.error().message);
+    scene = std::move(c->scene);
+    if (o.opts.empty()) spec.options.opts = fuzz::decode_options(c->option_selector, solver->options());
+    base.family = family_from_scene_name(scene.name);
+    base.seed = seed_from_name(scene.name);
+    base.source_scene = scene.name + " (fuzzer input " + std::filesystem::path(o.scene).filename().string() + ")";
+    base.status = "open";
   } else {
     auto s = read_scene_file(o.scene);
     if (!s) return bad_input(s.error().message);
@@ -134,7 +154,7 @@ int run_minimize(const MinimizeOpts& o) {
 void add_minimize(CLI::App& app, Action& run) {
   auto o = std::make_shared<MinimizeOpts>();
   auto* sub = app.add_subcommand("minimize", "Minimise a mismatching relation into a corpus entry");
-  sub->add_option("scene", o->scene, "Scene JSON or corpus entry")->required();
+  sub->add_option("scene", o->scene, "Scene JSON, corpus entry or fuzzer crash file")->required();
   sub->add_option("--method", o->method, "Method")->required();
   sub->add_option("--receiver", o->receiver, "Receiver index of the relation");
   sub->add_option("--light", o->light, "Light index of the relation");
@@ -143,6 +163,7 @@ void add_minimize(CLI::App& app, Action& run) {
   sub->add_option("--opt", o->opts, "Method option key=value (repeatable)");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
   sub->add_option("-o,--output", o->out, "Corpus root folder")->required();
+  sub->add_flag("--fuzz-input", o->fuzz_input, "Decode the input as a differential fuzz target's input");
   sub->callback([o, &run] { run = [o] { return run_minimize(*o); }; });
 }
 
