@@ -22,6 +22,13 @@ CXXFLAGS="${CXXFLAGS//-stdlib=libc++/}"
 # (a third-party downcast, see fuzz/configure-clang.sh); it stays off.
 CFLAGS="$CFLAGS -fno-sanitize=vptr"
 CXXFLAGS="$CXXFLAGS -fno-sanitize=vptr"
+# No coverage feedback from the oracles and third-party headers (fuzz/coverage-ignorelist.txt),
+# where coverage instrumentation is on at all (not in OSS-Fuzz's coverage builds).
+case "$CXXFLAGS" in
+  *fuzzer-no-link*|*sanitize-coverage*)
+    CFLAGS="$CFLAGS -fsanitize-coverage-ignorelist=$ROOT/fuzz/coverage-ignorelist.txt"
+    CXXFLAGS="$CXXFLAGS -fsanitize-coverage-ignorelist=$ROOT/fuzz/coverage-ignorelist.txt" ;;
+esac
 
 cmake -S "$ROOT" -B "$BUILD" \
   -DCMAKE_BUILD_TYPE=Release \
