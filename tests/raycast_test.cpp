@@ -255,6 +255,21 @@ TEST(Raycast, VerifiedScenesRejectRobustModesCoplanarFalseHit) {
   EXPECT_EQ(verified.rejected_hits(), 1u);
 }
 
+TEST(Raycast, DoubleTestRejectsPointsBeyondASliver) {
+  // corpus/embree-robust/sliver/: a sliver of area 4e-25 in the plane z = 1 (its long
+  // edges on the line y = -x) and a segment crossing that plane at (-0.5, 0.5, 1), on
+  // the extension of the long edges, 0.7 beyond the sliver. The edge sign products round
+  // to zero there; the box check rejects the point. A segment through the sliver's box
+  // on the far side of the line misses too; one through a vertex (closed test) hits.
+  const Vec3f a(0, 8.27180613e-25f, 1), b(1, -1, 1), c(0, -0.0f, 1);
+  EXPECT_FALSE(raycast::segment_hits_triangle(a, b, c, Vec3f(0, -0.0f, -0.0f), Vec3f(-1, 1, 2)));
+  EXPECT_FALSE(raycast::segment_hits_triangle(a, b, c, Vec3f(0.5f, 0, 0), Vec3f(0.5f, 0, 2)));
+  EXPECT_TRUE(raycast::segment_hits_triangle(a, b, c, Vec3f(1, -1, 0), Vec3f(1, -1, 2)));
+  // A regular triangle: the box check keeps interior hits.
+  EXPECT_TRUE(raycast::segment_hits_triangle(Vec3f(0, 0, 1), Vec3f(2, 0, 1), Vec3f(0, 2, 1), Vec3f(0.5f, 0.5f, 0),
+                                             Vec3f(0.5f, 0.5f, 2)));
+}
+
 TEST(Raycast, VerifiedHitsAreConfirmedByTheDoubleTest) {
   // Property: a verified scene reports a hit only where segment_hits_triangle confirms
   // one, and on general-position soups it agrees with the unverified robust scene.

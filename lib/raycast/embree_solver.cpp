@@ -56,6 +56,19 @@ bool segment_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, co
   if (sq == 0) x = q;
   else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
   else x = p + (q - p) * (dp / (dp - dq));
+  // The crossing point must lie in the triangle's box (grown by 2^-40 of the largest
+  // magnitude, far above the rounding of x). Without this a sliver fails the sign test
+  // below: for a triangle of area 4e-25 the edge products of a point on the extension
+  // of its long edges all round to zero or agree, and a point 0.7 beyond the sliver
+  // passed as inside (fuzz_embree campaign, corpus/embree-robust/sliver/a70c2a9d: a
+  // robust-mode false hit that this test then confirmed).
+  {
+    const Vec3d lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
+    const Vec3d mag = vmax(vabs(lo), vmax(vabs(hi), vabs(x)));
+    const double slack = 0x1p-40 * std::max(mag.x, std::max(mag.y, mag.z));
+    for (int k = 0; k < 3; ++k)
+      if (x[k] < lo[k] - slack || x[k] > hi[k] + slack) return false;
+  }
   // Closed point-in-triangle test in the projection that drops n's dominant axis:
   // the three edge cross products agree in sign (zeros allowed).
   const Vec3d an = vabs(n);
