@@ -31,6 +31,20 @@ RTCDevice shared_device() {
 // Sign of a double as -1, 0, +1.
 int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
 
+// Closed point-in-triangle test of a point x in the triangle's plane, in the projection
+// that drops n's dominant axis: the three edge cross products agree in sign (zeros
+// allowed).
+bool point_in_triangle_closed(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, const Vec3d& x) {
+  const Vec3d an = vabs(n);
+  const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
+    return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
+  };
+  const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
+  return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
+}
+
 }  // namespace
 
 bool within_embree_bound(const Vec3f& p) {
@@ -58,16 +72,25 @@ bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f&
     if (sq == 0) x = q;
     else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
     else x = p + (q - p) * (dp / (dp - dq));
-    // Closed point-in-triangle test in the projection that drops n's dominant axis:
-    // the three edge cross products agree in sign (zeros allowed).
-    const Vec3d an = vabs(n);
-    const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-    const int u = (drop + 1) % 3, v = (drop + 2) % 3;
-    auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
-      return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
-    };
-    const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
-    if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return true;
+    if (point_in_triangle_closed(a, b, c, n, x)) return true;
+  }
+  return false;
+}
+
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to, double t0, double t1) {
+  const Vec3d p = to_double(from), q = to_double(to);
+  for (const auto& t : soup.triangles) {
+    const Vec3d a = to_double(soup.vertices[t[0]]), b = to_double(soup.vertices[t[1]]),
+                c = to_double(soup.vertices[t[2]]);
+    // The line's crossing parameter t = dp / (dp - dq) (as above, from the triangle's
+    // own normal); a line in or parallel to the plane is a miss.
+    const Vec3d n = cross(b - a, c - a);
+    const double dp = dot(n, p - a), dq = dot(n, q - a);
+    if (dp == dq) continue;
+    const double tc = dp / (dp - dq);
+    if (!(tc >= t0 && tc <= t1)) continue;
+    const Vec3d x = tc == 1.0 ? q : p + (q - p) * tc;
+    if (point_in_triangle_closed(a, b, c, n, x)) return true;
   }
   return false;
 }
@@ -107,6 +130,19 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
     fallback_rays_.fetch_add(1, std::memory_order_relaxed);
     return fallback_occluded(*soup_, from, to);
   }
+  return occluded_embree(from, to, 0.0f, 1.0f);
+}
+
+bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
+  VG_CHECK(tnear >= 0.0f && tnear <= tfar);
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to, tnear, tfar);
+  }
+  return occluded_embree(from, to, tnear, tfar);
+}
+
+bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
@@ -117,8 +153,8 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
   ray.dir_x = d.x;
   ray.dir_y = d.y;
   ray.dir_z = d.z;
-  ray.tnear = 0.0f;
-  ray.tfar = 1.0f;
+  ray.tnear = tnear;
+  ray.tfar = tfar;
   ray.time = 0.0f;
   ray.mask = 0xFFFFFFFFu;
   ray.id = 0;

@@ -51,6 +51,10 @@ bool within_embree_bound(const Vec3f& p);
 // t in (0, 1] (the receiver end excluded, the light end included), closed triangle
 // edges; a segment in the triangle's plane is a miss.
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to);
+// The same over a parameter range of the line from + t (to - from): hits with t in
+// [t0, t1] (0 <= t0 <= t1; t1 may exceed 1; closed at both ends like Embree's robust
+// intersector, which includes tnear as well as tfar), same tests and error.
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to, double t0, double t1);
 
 // A committed Embree scene over a triangle soup, for methods that cast rays (ISS leaves,
 // SSV's reference ray) as well as for the baseline itself. Thread-safe queries. All
@@ -68,11 +72,17 @@ class EmbreeScene {
   // [0, 1] of from + t (to - from), Embree's own endpoint semantics). Segments outside
   // Embree's domain (see above) go to fallback_occluded.
   bool occluded(const Vec3f& from, const Vec3f& to) const;
+  // The same over the parameter range [tnear, tfar] of from + t (to - from) (Embree's
+  // ray range: 0 <= tnear <= tfar, tfar may exceed 1), for methods that must tell hits
+  // near an endpoint from hits inside the segment (SSV's reference ray).
+  bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const;
 
   // Queries answered by fallback_occluded so far.
   size_t fallback_rays() const { return fallback_rays_.load(std::memory_order_relaxed); }
 
  private:
+  bool occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const;
+
   const TriangleSoup* soup_;
   void* scene_ = nullptr;       // nullptr when the mesh is outside Embree's domain
   bool mesh_in_bound_ = true;
