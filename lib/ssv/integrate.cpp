@@ -181,33 +181,38 @@ void ReceiverIntegrator::begin(const Vec3f& receiver, const JitterOrder& order, 
 
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   r_world_ = to_double(receiver);
-  r_ = frame_.to_frame(receiver);
-  VG_CHECK(r_.z > 0.0f);
+  r_ = frame_.to_frame_d(receiver);
+  VG_CHECK(r_.z > 0.0);
   pieces_.clear();
-  // Clearance threshold. A projected point r + (x - r) s is computed in float from frame
-  // coordinates bounded by S = extent + |r_u| + |r_v| + h_r (the pieces are clipped to
-  // the pyramid over L', so |x| <= S as well): a few roundings of magnitude S, below
-  // 2^-21 S together; the sample's own frame coordinates are rounded once (2^-24 S).
-  // Embree's robust test decides the reference segment with float arithmetic relative to
-  // its origin, an angular error of a few ulps, i.e. a few 2^-23 S in the light plane.
-  // 2^-14 S is above both by a factor of 64 and below the spacing of any sample pattern
-  // that matters (256 samples on a light of extent E are about E / 16 apart).
-  clear_min_ = 0x1p-14 * (frame_.extent + std::abs(double(r_.x)) + std::abs(double(r_.y)) + double(r_.z));
+  doubtful_ = false;
+  // Clearance threshold. The pieces are clipped and projected in double from unrounded
+  // frame coordinates and rounded once to float, like the samples' (u, v): with |u|, |v|
+  // below 2E on L' (E the light's extent) each is within 2^-23 E of its exact value, and
+  // the counter's float cross products add a few 2^-23 E more. Embree's robust test
+  // decides the reference segment in float relative to its origin r, an angular error
+  // of a few ulps: a few 2^-23 |q - r| in the light plane, and |q - r| <= S = E + |r_u| +
+  // |r_v| + h_r. 2^-16 S is above both by a factor of 32 and far below the spacing of
+  // any sample pattern that matters (256 samples on a light of extent E are about E / 16
+  // apart; a light 1e-3 wide seen from 3 away still has samples 2.5e-4 apart against a
+  // threshold of 4.6e-5).
+  clear_min_ = 0x1p-16 * (frame_.extent + std::abs(r_.x) + std::abs(r_.y) + r_.z);
   const size_t n = frame_.poly.size();
   side_.resize(n);
   // Plane through r and the edge (L'_i, L'_i+1), oriented with L's interior positive:
   // the frame origin (vertex average) is inside L'.
   for (size_t i = 0; i < n; ++i) {
-    Vec3f a(frame_.poly[i].u, frame_.poly[i].v, 0.0f), b(frame_.poly[(i + 1) % n].u, frame_.poly[(i + 1) % n].v, 0.0f);
-    Vec3f nrm = cross(a - r_, b - r_);
-    if (dot(nrm, Vec3f(0, 0, 0) - r_) < 0.0f) nrm = -nrm;
+    const Vec2f& p = frame_.poly[i];
+    const Vec2f& q = frame_.poly[(i + 1) % n];
+    const Vec3d a(p.u, p.v, 0.0), b(q.u, q.v, 0.0);
+    Vec3d nrm = cross(a - r_, b - r_);
+    if (dot(nrm, Vec3d(0, 0, 0) - r_) < 0.0) nrm = -nrm;
     side_[i] = nrm;
   }
 }
 
 int ReceiverIntegrator::facing(size_t t) const {
   const auto& v = m_.triangles[t].v;
-  if (!(fp_[v[0]].z > 0.0f || fp_[v[1]].z > 0.0f || fp_[v[2]].z > 0.0f)) return 0;
+  if (!(fp_[v[0]].z > 0.0 || fp_[v[1]].z > 0.0 || fp_[v[2]].z > 0.0)) return 0;
   Vec3d a = to_double(m_.corner(t, 0)), b = to_double(m_.corner(t, 1)), c = to_double(m_.corner(t, 2));
   double f = dot(cross(b - a, c - a), r_world_ - a);
   return (f > 0.0) - (f < 0.0);
@@ -219,24 +224,24 @@ int ReceiverIntegrator::edge_weight(const Edge& e) const {
   return w;
 }
 
-Vec3f ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const {
-  if (fp_[i].z == 0.0f) return fp_[i];
-  if (fp_[j].z == 0.0f) return fp_[j];
+Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const {
+  if (fp_[i].z == 0.0) return fp_[i];
+  if (fp_[j].z == 0.0) return fp_[j];
   if (i > j) std::swap(i, j);
-  const Vec3f& p = fp_[i];
-  const Vec3f& q = fp_[j];
-  float t = p.z / (p.z - q.z);
-  Vec3f x = p + (q - p) * t;
-  x.z = 0.0f;
+  const Vec3d& p = fp_[i];
+  const Vec3d& q = fp_[j];
+  const double t = p.z / (p.z - q.z);
+  Vec3d x = p + (q - p) * t;
+  x.z = 0.0;
   return x;
 }
 
 bool ReceiverIntegrator::add_edge(const Edge& e, int w) {
-  const Vec3f& a = fp_[e.a];
-  const Vec3f& b = fp_[e.b];
-  if (a.z < 0.0f && b.z < 0.0f) return false;
-  Vec3f A = a.z < 0.0f ? cut_point(e.a, e.b) : a;
-  Vec3f B = b.z < 0.0f ? cut_point(e.a, e.b) : b;
+  const Vec3d& a = fp_[e.a];
+  const Vec3d& b = fp_[e.b];
+  if (a.z < 0.0 && b.z < 0.0) return false;
+  const Vec3d A = a.z < 0.0 ? cut_point(e.a, e.b) : a;
+  const Vec3d B = b.z < 0.0 ? cut_point(e.a, e.b) : b;
   return add_segment(A, B, w);
 }
 
@@ -244,50 +249,63 @@ bool ReceiverIntegrator::add_cut(size_t t) {
   const auto& v = m_.triangles[t].v;
   bool pos = false, neg = false;
   for (uint32_t i : v) {
-    pos |= fp_[i].z > 0.0f;
-    neg |= fp_[i].z < 0.0f;
+    pos |= fp_[i].z > 0.0;
+    neg |= fp_[i].z < 0.0;
   }
   if (!pos || !neg) return false;
-  Vec3f E{}, F{};
+  Vec3d E{}, F{};
   for (int k = 0; k < 3; ++k) {
     uint32_t p = v[size_t(k)], q = v[size_t((k + 1) % 3)];
-    if (fp_[p].z >= 0.0f && fp_[q].z < 0.0f) E = cut_point(p, q);
-    if (fp_[p].z < 0.0f && fp_[q].z >= 0.0f) F = cut_point(p, q);
+    if (fp_[p].z >= 0.0 && fp_[q].z < 0.0) E = cut_point(p, q);
+    if (fp_[p].z < 0.0 && fp_[q].z >= 0.0) F = cut_point(p, q);
   }
   int w = facing(t);
   if (w == 0) return false;
   return add_segment(E, F, w);
 }
 
-bool ReceiverIntegrator::add_segment(const Vec3f& A, const Vec3f& B, int w) {
+bool ReceiverIntegrator::add_segment(const Vec3d& a, const Vec3d& b, int w) {
   // Clip to the pyramid from r over L' (h >= 0 is already done): Liang-Barsky on the
-  // side planes, remembering which plane cut each end.
-  float t0 = 0.0f, t1 = 1.0f;
+  // side planes, remembering which plane cut each end. Double precision: the side
+  // planes of a light that is small against its distance to the receiver are nearly
+  // parallel, and a float normal cross(a - r, b - r) of two almost equal vectors loses
+  // most of its bits (a 1e-3 light seen from distance 2 got a normal with relative error
+  // 1e-4, which moved the clipped ends 15% of the light inwards and dropped counts). In
+  // double every step below errs by about 1e-16 of the frame magnitudes, far below the
+  // float rounding of the inputs. A point on a side plane (f = 0) counts as outside, so
+  // a piece that starts or ends exactly on the boundary of L' records that plane (rule 2
+  // needs the step of a right-chain contact).
+  double t0 = 0.0, t1 = 1.0;
   int enter = -1, exit = -1;
   for (size_t i = 0; i < side_.size(); ++i) {
-    float fa = dot(side_[i], A - r_), fb = dot(side_[i], B - r_);
-    if (fa < 0.0f && fb < 0.0f) return false;
-    if (fa >= 0.0f && fb >= 0.0f) continue;
-    float t = fa / (fa - fb);
-    if (fa < 0.0f) {
-      if (t > t0) { t0 = t; enter = int(i); }
+    const double fa = dot(side_[i], a - r_), fb = dot(side_[i], b - r_);
+    if (fa <= 0.0 && fb <= 0.0) return false;
+    if (fa > 0.0 && fb > 0.0) continue;
+    const double t = fa / (fa - fb);
+    if (fa <= 0.0) {
+      if (t >= t0) { t0 = t; enter = int(i); }
     } else {
-      if (t < t1) { t1 = t; exit = int(i); }
+      if (t <= t1) { t1 = t; exit = int(i); }
     }
   }
   if (!(t0 < t1)) return false;
-  Vec3f A2 = enter >= 0 ? A + (B - A) * t0 : A;
-  Vec3f B2 = exit >= 0 ? A + (B - A) * t1 : B;
-  // Central projection from r onto h = 0.
-  auto project = [&](const Vec3f& x, Vec2f& out) {
-    float den = r_.z - x.z;
-    if (!(den > 0.0f)) return false;
-    float s = r_.z / den;
-    out = {r_.x + (x.x - r_.x) * s, r_.y + (x.y - r_.y) * s};
+  const Vec3d a2 = enter >= 0 ? a + (b - a) * t0 : a;
+  const Vec3d b2 = exit >= 0 ? a + (b - a) * t1 : b;
+  // Central projection from r onto h = 0. Inside the pyramid only its apex r reaches the
+  // receiver's height, so a point at or above it is an edge through (within rounding of)
+  // the receiver: the projection is undefined and the receiver is marked doubtful.
+  auto project = [&](const Vec3d& x, Vec2f& out) {
+    const double den = r_.z - x.z;
+    if (!(den > 0.0)) return false;
+    const double s = r_.z / den;
+    out = {float(r_.x + (x.x - r_.x) * s), float(r_.y + (x.y - r_.y) * s)};
     return std::isfinite(out.u) && std::isfinite(out.v);
   };
   Vec2f P, Q;
-  if (!project(A2, P) || !project(B2, Q)) return false;
+  if (!project(a2, P) || !project(b2, Q)) {
+    doubtful_ = true;
+    return false;
+  }
   counter_.add_piece(P, Q, w);
   pieces_.push_back(P);
   pieces_.push_back(Q);

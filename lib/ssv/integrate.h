@@ -68,15 +68,19 @@
 // A triangle with a vertex above adds every clipped edge, including an edge lying in the
 // light plane (it projects onto itself), so its boundary stays closed.
 //
-// Guarantee: float32 with these failure modes, all near-degenerate: a sample within
+// Precision. Clipping and projection run in double on unrounded frame coordinates; the
+// projected pieces are rounded once to float, like the samples, and counted in float.
+//
+// Guarantee: float32 counts with these failure modes, all near-degenerate: a sample within
 // float rounding of a projected edge line (the segment passes near the edge; exactly on
 // it the segment touches the edge and the relation itself is degenerate, and such a
 // sample is never used as the reference, see clearance below); a receiver
 // within rounding of a triangle's plane (the triangle projects to a sliver, whose sign
 // may be wrong: only samples inside the sliver are affected); pieces whose projection
 // touches the boundary of L' (rule 2 thresholds v_Q, v_P carry rounding: samples whose v
-// lies within rounding of such a threshold may be miscounted); edges passing within
-// rounding of the receiver (projection undefined, the piece is dropped).
+// lies within rounding of such a threshold may be miscounted). An edge passing through
+// (within rounding of) the receiver has no projection: the receiver is marked doubtful
+// and answered by rays.
 #pragma once
 
 #include <cstdint>
@@ -131,8 +135,8 @@ class DepthCounter {
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {
  public:
-  // `frame_pos`: the prepared mesh's vertices in frame coordinates.
-  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3f>& frame_pos, const LightFrame& frame)
+  // `frame_pos`: the prepared mesh's vertices in frame coordinates (double, not rounded).
+  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
       : m_(m), fp_(frame_pos), frame_(frame) {}
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
@@ -154,6 +158,10 @@ class ReceiverIntegrator {
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
   void finish(std::vector<int32_t>& depth) { counter_.finish(depth); }
+  // True when some piece inside the pyramid could not be projected since begin(): an
+  // edge through (or within rounding of) the receiver. Its counters are unreliable and
+  // the receiver must be answered by rays.
+  bool doubtful() const { return doubtful_; }
 
   // Reference-sample clearance. The counters are exact only for samples away from every
   // projected piece, and the reference ray decides a whole class from one sample: a
@@ -169,18 +177,19 @@ class ReceiverIntegrator {
 
   // The point where the edge between prepared vertices i and j crosses h = 0, computed
   // from the pair in index order so every user gets the same float point.
-  Vec3f cut_point(uint32_t i, uint32_t j) const;
+  Vec3d cut_point(uint32_t i, uint32_t j) const;
 
  private:
-  bool add_segment(const Vec3f& A, const Vec3f& B, int w);
+  bool add_segment(const Vec3d& a, const Vec3d& b, int w);
   void set_receiver(const Vec3f& receiver);
 
   const mesh::PreparedMesh& m_;
-  const std::vector<Vec3f>& fp_;
+  const std::vector<Vec3d>& fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};
-  Vec3f r_{};                    // frame coordinates
-  std::vector<Vec3f> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  Vec3d r_{};                    // frame coordinates (double, not rounded)
+  std::vector<Vec3d> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  bool doubtful_ = false;
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;
   DepthCounter counter_;

@@ -58,9 +58,15 @@ LightFrame make_light_frame(const Light& light) {
   // Scale about the vertex average (the frame origin) until every jitter point is inside
   // by 1e-4 of the light's extent: a margin far above the float rounding of the frame
   // coordinates (about 1e-7 relative) and far below any sample spacing that matters.
+  // Samples of the built-in patterns lie in L (scale 1.001 suffices); explicit samples
+  // may lie anywhere in the light's plane. Beyond a scale of 4 (a sample more than about
+  // one light extent outside L: fuzzed scenes put one at 1e36) L' would blow up the
+  // pyramid and with it the precision of every clipped piece, so the frame is marked
+  // unusable and the solver answers that light by rays.
   double scale = 1.001;
   const double margin = 1e-4 * f.extent;
-  for (int iter = 0; iter < 200; ++iter) {
+  f.usable = false;
+  while (scale <= 4.0) {
     f.poly.resize(n);
     for (size_t i = 0; i < n; ++i) f.poly[i] = {float(base[i].u * scale), float(base[i].v * scale)};
     bool ok = true;
@@ -69,7 +75,10 @@ LightFrame make_light_frame(const Light& light) {
         ok = false;
         break;
       }
-    if (ok) break;
+    if (ok) {
+      f.usable = true;
+      break;
+    }
     scale *= 1.25;
   }
   f.poly_world.resize(n);

@@ -5,7 +5,9 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 #include "lib/mesh/prepare.h"
@@ -23,41 +25,132 @@ using Clock = std::chrono::steady_clock;
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const std::vector<Vec3f>& fp, const LightFrame& f) : integrator(m, fp, f) {}
+  ThreadState(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f) : integrator(m, fp, f) {}
   ReceiverIntegrator integrator;
   std::vector<uint32_t> candidates;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick, owner;  // DepthCounter::reset
   std::vector<int32_t> depth;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0;
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
+  // The last reference answer of this thread: which ranged ray to cast first. It only
+  // changes how many rays are cast (stat reference_rays), never an answer.
+  bool expect_blocked = false;
 };
 
-// Samples of one class examined for a clear reference (ReceiverIntegrator::clearance):
-// a bound on the work per receiver; the first clear one is taken. Eight random samples
-// all within 2^-14 S of a projected edge happen only in exactly degenerate scenes, which
-// then pay one ray per sample.
-constexpr int kCandidates = 8;
+// Reference rays. The counters give each sample its depth complexity up to one
+// constant per receiver; one ray to a point of the minimum class tells whether that
+// class is visible (the rest is then blocked), and a check ray to the next class must
+// find it blocked. One ray decides a whole class, so it must not be near-degenerate:
+//
+// - Its light point q must be clear of every projected piece (silhouette edges and cut
+//   segments, ReceiverIntegrator::clearance): a sample within rounding of a projected
+//   silhouette has a counter and an Embree answer of either side. Up to kCandidates
+//   samples of the class are tried, in sample order.
+// - q is not the sample itself but a point at a quarter of the clearance threshold from
+//   it, in a direction hashed from the relation: no projected piece lies between them,
+//   so q has the sample's depth complexity, but q is in general position. A sample
+//   exactly on the projection of a mesh vertex or edge inside a surface (shared-edge-fan
+//   aims segments through shared vertices) is counted consistently by the integration
+//   (once per surface), while Embree may report either side for that one segment
+//   (fuzz_ssv finding 322875af: a segment through a fan's vertex was unblocked, the
+//   rest of its class blocked). Where float spacing cannot hold the offset (far from
+//   the origin) q is the sample.
+// - Hits within 2^-18 (in t) of either end are told apart from hits inside the segment
+//   by two ranged rays: A over [0, 1 + 2^-18] and B over [2^-18, 1 - 2^-18]. A
+//   unblocked: visible; B blocked: blocked; otherwise the only hits lie at the ends
+//   (a light point on a triangle in the light plane, which the counters rightly ignore
+//   but Embree's inclusive tfar reports: fuzz_ssv findings 1653e5da, 1dc1c280,
+//   9c17a27b, bc83a84f; a receiver on a face) and the answer is ambiguous: the next
+//   candidate is tried. 2^-18 = 3.8e-6 is about 30 times the relative error of
+//   Embree's t (a few float ulps), so a hit at the end is never mistaken for an
+//   interior one, and it is below tau = 1e-5: a crossing that close to an end has a
+//   margin below tau for its own relation. The ray that settles the expected answer
+//   is cast first (one ray in the common case); the outcome does not depend on the
+//   order.
+enum class RefAnswer { Visible, Blocked, Ambiguous, NoCandidate };
 
-// Picks, among the first kCandidates samples of depth d (in sample order), the first one
-// whose clearance reaches the threshold, else the one of largest clearance; `j` must
-// hold some sample of depth d on entry and receives the pick. Returns whether the pick
-// is clear.
-bool pick_clear_sample(const ReceiverIntegrator& integ, const std::vector<int32_t>& depth, int32_t d, int& j) {
-  const double need = integ.clearance_threshold();
-  double best = -1.0;
-  int seen = 0;
-  for (size_t k = 0; k < depth.size() && seen < kCandidates; ++k) {
-    if (depth[k] != d) continue;
-    ++seen;
-    const double c = integ.clearance(k);
-    if (c > best) {
-      best = c;
-      j = int(k);
-    }
-    if (c >= need) return true;
+constexpr int kCandidates = 8;
+constexpr float kEndZone = 0x1p-18f;
+
+struct RefContext {
+  const raycast::EmbreeScene& embree;
+  const Light& light;
+  const LightFrame& frame;
+  const ReceiverIntegrator& integ;
+  const std::vector<int32_t>& depth;
+  const Vec3f& r;
+  size_t receiver, light_index;
+};
+
+RefAnswer ranged_answer(const RefContext& c, const Vec3f& q, bool expect_blocked, double& rays) {
+  if (expect_blocked) {
+    rays += 1;
+    if (c.embree.occluded(c.r, q, kEndZone, 1.0f - kEndZone)) return RefAnswer::Blocked;
+    rays += 1;
+    return c.embree.occluded(c.r, q, 0.0f, 1.0f + kEndZone) ? RefAnswer::Ambiguous : RefAnswer::Visible;
   }
-  return false;
+  rays += 1;
+  if (!c.embree.occluded(c.r, q, 0.0f, 1.0f + kEndZone)) return RefAnswer::Visible;
+  rays += 1;
+  return c.embree.occluded(c.r, q, kEndZone, 1.0f - kEndZone) ? RefAnswer::Blocked : RefAnswer::Ambiguous;
+}
+
+// The reference point of sample j (see above): world position, rounded once.
+Vec3f reference_point(const RefContext& c, int j) {
+  const Vec3f s = sample_position(c.light, j, c.receiver);
+  const double step = 0.25 * c.integ.clearance_threshold();
+  const uint64_t h = relation_hash(c.receiver * 0x9E3779B97F4A7C15ull + c.light_index, uint64_t(j), 0x55u);
+  const double phi = double(h >> 11) * 0x1p-53 * 6.283185307179586;
+  const Vec3d qd = to_double(s) + c.frame.U * (step * std::cos(phi)) + c.frame.V * (step * std::sin(phi));
+  const Vec3f q(qd);
+  // Keep q only when its rounding left it within half the threshold of the sample.
+  const Vec3d fs = c.frame.to_frame_d(s), fq = c.frame.to_frame_d(q);
+  const double du = fq.x - fs.x, dv = fq.y - fs.y;
+  if (!(du * du + dv * dv <= 4.0 * step * step)) return s;
+  return q;
+}
+
+// The answer for the class of depth d: the first conclusive one among its first
+// kCandidates samples that are clear, else Ambiguous, or NoCandidate when none of them
+// is clear.
+RefAnswer class_answer(const RefContext& c, int32_t d, bool expect_blocked, double& rays) {
+  const double need = c.integ.clearance_threshold();
+  int seen = 0;
+  bool cast = false;
+  for (size_t k = 0; k < c.depth.size() && seen < kCandidates; ++k) {
+    if (c.depth[k] != d) continue;
+    ++seen;
+    if (!(c.integ.clearance(k) >= need)) continue;
+    cast = true;
+    const RefAnswer a = ranged_answer(c, reference_point(c, int(k)), expect_blocked, rays);
+    if (a != RefAnswer::Ambiguous) return a;
+  }
+  return cast ? RefAnswer::Ambiguous : RefAnswer::NoCandidate;
+}
+
+// The check: the first conclusive answer for the classes above dmin, lowest first, up to
+// kCheckClasses of them (a class whose samples all lie on projected pieces, such as the
+// inside of a sliver, has no clear candidate and the next one is tried). NoCandidate
+// when no sample above dmin is clear among them: every such sample is within rounding
+// distance of a projected piece, a near-degenerate relation whose own answer is outside
+// the gate, and the minimum class stands on its own clear reference.
+constexpr int kCheckClasses = 4;
+
+RefAnswer check_answer(const RefContext& c, int32_t dmin, double& rays) {
+  int32_t d = dmin;
+  bool cast = false;
+  for (int k = 0; k < kCheckClasses; ++k) {
+    int32_t up = std::numeric_limits<int32_t>::max();
+    for (int32_t x : c.depth)
+      if (x > d && x < up) up = x;
+    if (up == std::numeric_limits<int32_t>::max()) break;
+    const RefAnswer a = class_answer(c, up, true, rays);
+    if (a == RefAnswer::Visible || a == RefAnswer::Blocked) return a;
+    cast |= a == RefAnswer::Ambiguous;
+    d = up;
+  }
+  return cast ? RefAnswer::Ambiguous : RefAnswer::NoCandidate;
 }
 
 }  // namespace
@@ -92,7 +185,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
 
   double init_seconds = 0, peak_memory = 0;
   WedgeBuildCounts counts;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, nodes = 0;
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0, nodes = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
 
   for (size_t l = 0; l < scene.lights.size(); ++l) {
@@ -100,11 +193,12 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
     const size_t offset = scene.light_offset(l);
     auto ti0 = Clock::now();
     const LightFrame frame = make_light_frame(light);
-    // Samples off the light plane by more than 1e-5 of the light's extent (explicit
-    // samples placed elsewhere) break the projection model: cast rays for that light.
-    const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent;
-    std::vector<Vec3f> frame_pos(pm.vertex_pos.size());
-    for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_frame(pm.vertex_pos[v]);
+    // Samples off the light plane by more than 1e-5 of the light's extent, or far outside
+    // the light polygon (explicit samples placed elsewhere, light_frame.h), break the
+    // projection model: cast rays for that light.
+    const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent || !frame.usable;
+    std::vector<Vec3d> frame_pos(pm.vertex_pos.size());
+    for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_frame_d(pm.vertex_pos[v]);
     std::vector<Wedge> wedges;
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback) {
@@ -112,8 +206,8 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
       for (size_t t = 0; t < pm.triangles.size(); ++t) {
         bool pos = false, neg = false;
         for (uint32_t v : pm.triangles[t].v) {
-          pos |= frame_pos[v].z > 0.0f;
-          neg |= frame_pos[v].z < 0.0f;
+          pos |= frame_pos[v].z > 0.0;
+          neg |= frame_pos[v].z < 0.0;
         }
         if (pos && neg) cut_triangles.push_back(uint32_t(t));
       }
@@ -163,42 +257,32 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         for (uint32_t t : cut_triangles) st.integrator.add_cut(t);
         st.integrator.finish(st.depth);
         auto e = Clock::now();
-        // Reference ray to a sample of minimum relative depth complexity, and a check
-        // ray to a sample of the next class: it must be blocked (its depth is at least
-        // one more than the minimum's, which is >= 0). Both samples are chosen clear of
-        // every projected piece (ReceiverIntegrator::clearance): a sample on a projected
-        // silhouette edge has a counter and an Embree answer of either side, and one
-        // reference decides its whole class. When no sample of the minimum class is
-        // clear among the first kCandidates, or the check ray is unblocked (some
-        // near-degenerate projection corrupted the counters, e.g. a sample within
-        // rounding of a sliver seen edge-on), the receiver is answered by one ray per
-        // sample instead.
-        int best = 0, next = -1;
-        for (int j = 1; j < light.samples; ++j)
-          if (st.depth[size_t(j)] < st.depth[size_t(best)]) best = j;
-        const int32_t dmin = st.depth[size_t(best)];
-        for (int j = 0; j < light.samples; ++j)
-          if (st.depth[size_t(j)] > dmin && (next < 0 || st.depth[size_t(j)] < st.depth[size_t(next)])) next = j;
-        const bool trusted = pick_clear_sample(st.integrator, st.depth, dmin, best);
-        if (next >= 0) pick_clear_sample(st.integrator, st.depth, st.depth[size_t(next)], next);
-        bool fallback_receiver = !trusted;
-        bool open = false;
-        if (trusted) {
-          open = !embree.occluded(r, sample_position(light, best, i));
-          const bool next_open = next >= 0 && !embree.occluded(r, sample_position(light, next, i));
-          st.rays += next >= 0 ? 2 : 1;
-          if (next_open) {
-            fallback_receiver = true;
-            st.inconsistent += 1;
+        // Reference ray to the minimum class and check ray to the classes above it (see
+        // "Reference rays" above). When the integration was doubtful, no reference is
+        // conclusive, or the check finds a class above the minimum unblocked (the
+        // counters are inconsistent), the receiver is answered by one ray per sample.
+        const int32_t dmin = *std::min_element(st.depth.begin(), st.depth.end());
+        const bool one_class = std::all_of(st.depth.begin(), st.depth.end(), [&](int32_t x) { return x == dmin; });
+        RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
+        if (!st.integrator.doubtful()) {
+          const RefContext ctx{embree, light, frame, st.integrator, st.depth, r, i, l};
+          ref = class_answer(ctx, dmin, st.expect_blocked, st.rays);
+          const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
+          if (decided) st.expect_blocked = ref == RefAnswer::Blocked;
+          if (decided && !one_class) check = check_answer(ctx, dmin, st.rays);
+          if (check == RefAnswer::NoCandidate) {
+            st.unchecked += 1;
+            check = RefAnswer::Blocked;
           }
-        } else {
-          st.doubtful += 1;
         }
-        if (fallback_receiver) {
+        const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
+        if (!decided || check == RefAnswer::Ambiguous) st.doubtful += 1;
+        else if (check == RefAnswer::Visible) st.inconsistent += 1;
+        if (!decided || check != RefAnswer::Blocked) {
           for (int j = 0; j < light.samples; ++j)
             rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
           st.fallback += light.samples;
-        } else if (open) {
+        } else if (ref == RefAnswer::Visible) {
           for (int j = 0; j < light.samples; ++j)
             if (st.depth[size_t(j)] == dmin) rr.set_visible(offset + size_t(j), true);
         }
@@ -220,13 +304,14 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
       rays += st.rays;
       inconsistent += st.inconsistent;
       doubtful += st.doubtful;
+      unchecked += st.unchecked;
       t_query += st.t_query;
       t_valid += st.t_valid;
       t_integrate += st.t_integrate;
       t_ray += st.t_ray;
     }
     nodes += double(bsp.node_count());
-    double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3f)) +
+    double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3d)) +
                  double(edges.size() * sizeof(Edge));
     peak_memory = std::max(peak_memory, mem);
   }
@@ -257,6 +342,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   s.set("fallback_relations", fallback);
   s.set("inconsistent_receivers", inconsistent);
   s.set("doubtful_receivers", doubtful);
+  s.set("unchecked_receivers", unchecked);
   s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
   s.set("silhouette_regions", use_region ? 1.0 : 0.0);
   return result;

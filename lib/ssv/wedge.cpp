@@ -135,7 +135,7 @@ bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
 }
 
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                const std::vector<Vec3f>& frame_pos, const LightFrame& frame, double tol,
+                                const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
                                 WedgeBuildCounts& counts) {
   std::vector<Wedge> wedges;
   const auto& L = frame.poly_world;
@@ -149,11 +149,11 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     auto active = [&](int32_t t) {
       if (t < 0) return false;
       for (uint32_t v : m.triangles[size_t(t)].v)
-        if (frame_pos[v].z > 0.0f) return true;
+        if (frame_pos[v].z > 0.0) return true;
       return false;
     };
     const bool act1 = active(e.t1), act2 = active(e.t2);
-    if (!(act1 || act2) || (frame_pos[e.a].z < 0.0f && frame_pos[e.b].z < 0.0f)) {
+    if (!(act1 || act2) || (frame_pos[e.a].z < 0.0 && frame_pos[e.b].z < 0.0)) {
       ++counts.below_light;
       continue;
     }

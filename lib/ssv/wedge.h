@@ -88,7 +88,7 @@ struct WedgeBuildCounts {
 // A double edge with one inactive neighbour is treated as a single edge of the active
 // one, matching its integration weight (integrate.h). `tol` is a distance.
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                const std::vector<Vec3f>& frame_pos, const LightFrame& frame, double tol,
+                                const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
                                 WedgeBuildCounts& counts);
 
 }  // namespace visgate::ssv
