@@ -296,6 +296,65 @@ TEST(SsvIntegration, StripCounterEqualsNaiveRule) {
   }
 }
 
+TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
+  // The per-light strips over jitter boxes (K points per sample, one picked per receiver)
+  // against the plain loop: small boxes (a stratified pattern), boxes as wide as the
+  // light (a random pattern: everything is tested one by one) and K = 1, with pieces and
+  // steps placed exactly on sample coordinates as well as at random.
+  std::mt19937_64 g(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  for (int K : {1, 4, 16})
+    for (float spread : {0.02f, 2.0f})
+      for (int n : {1, 7, 64, 256}) {
+        const int side = std::max(1, int(std::sqrt(double(n))));
+        std::vector<Vec2f> jitter(size_t(n) * size_t(K));
+        for (int j = 0; j < n; ++j) {
+          const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
+          const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
+          for (int k = 0; k < K; ++k)
+            jitter[size_t(j) * size_t(K) + size_t(k)] = {cu + spread * (u01(g) - 0.5f), cv + spread * (u01(g) - 0.5f)};
+        }
+        const SampleStrips strips = make_sample_strips(jitter, n, K);
+        for (int receiver = 0; receiver < 3; ++receiver) {
+          std::vector<uint32_t> pick(static_cast<size_t>(n));
+          std::vector<Vec2f> uv(static_cast<size_t>(n));
+          for (int j = 0; j < n; ++j) {
+            pick[size_t(j)] = uint32_t(j * K + int(g() % uint64_t(K)));
+            uv[size_t(j)] = jitter[pick[size_t(j)]];
+          }
+          DepthCounter dc;
+          dc.reset(strips, jitter, pick, 2.0);
+          std::vector<int32_t> naive(size_t(n), 0);
+          for (int k = 0; k < 150; ++k) {
+            Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
+            float vc = 1.2f * u(g);
+            if (k % 3 == 0) {  // through samples exactly: v on a sample's v, u on another's
+              P.v = uv[g() % uv.size()].v;
+              Q = uv[g() % uv.size()];
+              vc = uv[g() % uv.size()].v;
+            }
+            const int w = int(g() % 5) - 2;
+            dc.add_piece(P, Q, w);
+            dc.add_step(vc, w);
+            for (int j = 0; j < n; ++j) {
+              const Vec2f& s = uv[size_t(j)];
+              if (P.v != Q.v) {
+                const bool up = Q.v > P.v;
+                const Vec2f lo = up ? P : Q, hi = up ? Q : P;
+                if (s.v >= lo.v && s.v < hi.v &&
+                    cross2(Vec2f{hi.u - lo.u, hi.v - lo.v}, Vec2f{s.u - lo.u, s.v - lo.v}) > 0.0f)
+                  naive[size_t(j)] += up ? w : -w;
+              }
+              if (s.v >= vc) naive[size_t(j)] += w;
+            }
+          }
+          std::vector<int32_t> got;
+          dc.finish(got);
+          EXPECT_EQ(got, naive) << "K = " << K << " spread " << spread << " n = " << n;
+        }
+      }
+}
+
 TEST(SsvIntegration, RelativeDepthEqualsDirectCounting) {
   // Every edge of random scenes integrated (no culling) against direct counting of the
   // triangles crossing each segment: the difference must be one constant per receiver.

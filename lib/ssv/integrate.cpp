@@ -2,6 +2,7 @@
 #include "lib/ssv/integrate.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -10,96 +11,102 @@
 
 namespace visgate::ssv {
 
-JitterOrder make_jitter_order(const std::vector<Vec2f>& uv, int samples) {
-  JitterOrder o;
-  const uint32_t n = uint32_t(uv.size());
-  o.by_v.resize(n);
-  std::iota(o.by_v.begin(), o.by_v.end(), 0u);
-  std::sort(o.by_v.begin(), o.by_v.end(),
-            [&](uint32_t a, uint32_t b) { return uv[a].v < uv[b].v || (uv[a].v == uv[b].v && a < b); });
-  // ceil(sqrt(N)) strips of equal jitter-point count: about sqrt(N) samples each.
-  const uint32_t strips = uint32_t(std::max(1, int(std::ceil(std::sqrt(double(samples))))));
-  for (uint32_t s = 0; s <= strips; ++s) o.strip_start.push_back(uint32_t(uint64_t(n) * s / strips));
-  o.by_u = o.by_v;
-  for (uint32_t s = 0; s < strips; ++s)
-    std::sort(o.by_u.begin() + o.strip_start[s], o.by_u.begin() + o.strip_start[s + 1],
-              [&](uint32_t a, uint32_t b) { return uv[a].u < uv[b].u || (uv[a].u == uv[b].u && a < b); });
+namespace {
+
+// Strips of samples with boxes [u_lo, u_hi] x [v_lo, v_hi] (see integrate.h).
+SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
+  SampleStrips o;
+  const int n = int(box.size());
+  o.n = n;
+  o.u_hi.resize(size_t(n));
+  o.v_lo.resize(size_t(n));
+  for (int j = 0; j < n; ++j) {
+    const auto& b = box[size_t(j)];
+    o.u_hi[size_t(j)] = b[1];
+    o.v_lo[size_t(j)] = b[2];
+    o.max_width = std::max(o.max_width, double(b[1]) - double(b[0]));
+    o.max_height = std::max(o.max_height, double(b[3]) - double(b[2]));
+  }
+  o.vorder.resize(size_t(n));
+  std::iota(o.vorder.begin(), o.vorder.end(), 0);
+  std::sort(o.vorder.begin(), o.vorder.end(), [&](int a, int b) {
+    return o.v_lo[size_t(a)] < o.v_lo[size_t(b)] || (o.v_lo[size_t(a)] == o.v_lo[size_t(b)] && a < b);
+  });
+  o.vrank.resize(size_t(n));
+  o.vlo_sorted.resize(size_t(n));
+  for (int k = 0; k < n; ++k) {
+    o.vrank[size_t(o.vorder[size_t(k)])] = k;
+    o.vlo_sorted[size_t(k)] = o.v_lo[size_t(o.vorder[size_t(k)])];
+  }
+  // ceil(sqrt(N)) strips of equal count.
+  const int strips = std::max(1, std::min(n, int(std::ceil(std::sqrt(double(n))))));
+  for (int t = 0; t <= strips; ++t) o.strip_start.push_back(int(int64_t(n) * t / strips));
+  o.sorder = o.vorder;
+  for (size_t t = 0; t + 1 < o.strip_start.size(); ++t) {
+    const int start = o.strip_start[t], end = o.strip_start[t + 1];
+    float vmin = std::numeric_limits<float>::infinity(), vmax = -std::numeric_limits<float>::infinity();
+    for (int k = start; k < end; ++k) {
+      const auto& b = box[size_t(o.vorder[size_t(k)])];
+      vmin = std::min(vmin, b[2]);
+      vmax = std::max(vmax, b[3]);
+    }
+    o.strip_vmin.push_back(vmin);
+    o.strip_vmax.push_back(vmax);
+    std::sort(o.sorder.begin() + start, o.sorder.begin() + end, [&](int a, int b) {
+      return o.u_hi[size_t(a)] < o.u_hi[size_t(b)] || (o.u_hi[size_t(a)] == o.u_hi[size_t(b)] && a < b);
+    });
+  }
+  o.srank.resize(size_t(n));
+  o.uhi_sorted.resize(size_t(n));
+  for (int k = 0; k < n; ++k) {
+    o.srank[size_t(o.sorder[size_t(k)])] = k;
+    o.uhi_sorted[size_t(k)] = o.u_hi[size_t(o.sorder[size_t(k)])];
+  }
   return o;
 }
 
+}  // namespace
+
+SampleStrips make_sample_strips(const std::vector<Vec2f>& jitter_uv, int samples, int jitter) {
+  VG_CHECK(jitter_uv.size() == size_t(samples) * size_t(jitter));
+  std::vector<std::array<float, 4>> box(static_cast<size_t>(samples));
+  for (int j = 0; j < samples; ++j) {
+    auto& b = box[size_t(j)];
+    b = {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+         std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+    for (int k = 0; k < jitter; ++k) {
+      const Vec2f& p = jitter_uv[size_t(j) * size_t(jitter) + size_t(k)];
+      b[0] = std::min(b[0], p.u);
+      b[1] = std::max(b[1], p.u);
+      b[2] = std::min(b[2], p.v);
+      b[3] = std::max(b[3], p.v);
+    }
+  }
+  return strips_from_boxes(box);
+}
+
 void DepthCounter::reset(const std::vector<Vec2f>& uv, double extent) {
+  std::vector<std::array<float, 4>> box(uv.size());
+  for (size_t j = 0; j < uv.size(); ++j) box[j] = {uv[j].u, uv[j].u, uv[j].v, uv[j].v};
+  own_ = strips_from_boxes(box);
+  strips_ = &own_;
   uv_ = uv;
   extent_ = extent;
-  const int n = int(uv_.size());
-  const int strip = std::max(1, int(std::ceil(std::sqrt(double(n)))));
-  vorder_.resize(size_t(n));
-  std::iota(vorder_.begin(), vorder_.end(), 0);
-  std::sort(vorder_.begin(), vorder_.end(), [&](int a, int b) {
-    return uv_[size_t(a)].v < uv_[size_t(b)].v || (uv_[size_t(a)].v == uv_[size_t(b)].v && a < b);
-  });
-  strip_start_.clear();
-  for (int start = 0; start < n; start += strip) strip_start_.push_back(start);
-  strip_start_.push_back(n);
-  sorder_ = vorder_;
-  for (size_t s = 0; s + 1 < strip_start_.size(); ++s)
-    std::sort(sorder_.begin() + strip_start_[s], sorder_.begin() + strip_start_[s + 1], [&](int a, int b) {
-      return uv_[size_t(a)].u < uv_[size_t(b)].u || (uv_[size_t(a)].u == uv_[size_t(b)].u && a < b);
-    });
-  finish_reset();
+  clear_counters();
 }
 
-void DepthCounter::reset(const std::vector<Vec2f>& jitter_uv, const JitterOrder& order, const std::vector<uint32_t>& pick,
-                         const std::vector<uint32_t>& owner, double extent) {
+void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& jitter_uv, const std::vector<uint32_t>& pick,
+                         double extent) {
+  VG_CHECK(pick.size() == size_t(strips.n));
+  strips_ = &strips;
+  uv_.resize(pick.size());
+  for (size_t j = 0; j < pick.size(); ++j) uv_[j] = jitter_uv[pick[j]];
   extent_ = extent;
-  const size_t n = pick.size();
-  uv_.resize(n);
-  for (size_t j = 0; j < n; ++j) uv_[j] = jitter_uv[pick[j]];
-  // Filter the light's orders by the receiver's picks (branch-free: every entry is
-  // written, the count advances only for picked points; one slot of slack at the end);
-  // empty strips are skipped.
-  vorder_.resize(n + 1);
-  sorder_.resize(n + 1);
-  strip_start_.clear();
-  int* vo = vorder_.data();
-  int* so = sorder_.data();
-  const uint32_t* own = owner.data();
-  size_t nv = 0, ns = 0;
-  for (size_t s = 0; s + 1 < order.strip_start.size(); ++s) {
-    const size_t before = nv;
-    const uint32_t k0 = order.strip_start[s], k1 = order.strip_start[s + 1];
-    for (uint32_t k = k0; k < k1; ++k) {
-      const uint32_t o = own[order.by_v[k]];
-      vo[nv] = int(o) - 1;
-      nv += o != 0;
-    }
-    for (uint32_t k = k0; k < k1; ++k) {
-      const uint32_t o = own[order.by_u[k]];
-      so[ns] = int(o) - 1;
-      ns += o != 0;
-    }
-    if (nv != before) strip_start_.push_back(int(before));
-  }
-  strip_start_.push_back(int(n));
-  VG_CHECK(nv == n && ns == n);
-  vorder_.resize(n);
-  sorder_.resize(n);
-  finish_reset();
+  clear_counters();
 }
 
-void DepthCounter::finish_reset() {
+void DepthCounter::clear_counters() {
   const size_t n = uv_.size();
-  vsorted_.resize(n);
-  vrank_.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    vsorted_[k] = uv_[size_t(vorder_[k])].v;
-    vrank_[size_t(vorder_[k])] = int(k);
-  }
-  usorted_.resize(n);
-  spos_.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    usorted_[k] = uv_[size_t(sorder_[k])].u;
-    spos_[size_t(sorder_[k])] = int(k);
-  }
   direct_.assign(n, 0);
   diffv_.assign(n + 1, 0);
   diffs_.assign(n + 1, 0);
@@ -107,14 +114,16 @@ void DepthCounter::finish_reset() {
 
 void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   if (P.v == Q.v || w == 0) return;
+  const SampleStrips& S = *strips_;
   const bool up = Q.v > P.v;
   const Vec2f lo = up ? P : Q, hi = up ? Q : P;
   const int c = up ? w : -w;
-  // Samples with v in [lo.v, hi.v).
-  const int kb = int(std::lower_bound(vsorted_.begin(), vsorted_.end(), lo.v) - vsorted_.begin());
-  const int ke = int(std::lower_bound(vsorted_.begin(), vsorted_.end(), hi.v) - vsorted_.begin());
-  if (kb >= ke) return;
   const Vec2f d{hi.u - lo.u, hi.v - lo.v};
+  // The one-by-one test: v in [lo.v, hi.v) and strictly left of the line.
+  auto in_left = [&](int j) {
+    const Vec2f& s = uv_[size_t(j)];
+    return s.v >= lo.v && s.v < hi.v && cross2(d, Vec2f{s.u - lo.u, s.v - lo.v}) > 0.0f;
+  };
   auto left = [&](int j) {
     const Vec2f& s = uv_[size_t(j)];
     return cross2(d, Vec2f{s.u - lo.u, s.v - lo.v}) > 0.0f;
@@ -125,39 +134,51 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   const double margin =
       1e-6 * (extent_ + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
   const double slope = double(d.u) / double(d.v);
-  const int strips = int(strip_start_.size()) - 1;
-  int s0 = int(std::upper_bound(strip_start_.begin(), strip_start_.end(), kb) - strip_start_.begin()) - 1;
-  for (int s = s0; s < strips && strip_start_[size_t(s)] < ke; ++s) {
-    const int start = strip_start_[size_t(s)], end = strip_start_[size_t(s) + 1];
-    if (start >= kb && end <= ke) {
-      // Whole strip inside the v-range: the line's u-range over the strip's v-range.
-      double xa = lo.u + (double(vsorted_[size_t(start)]) - lo.v) * slope;
-      double xb = lo.u + (double(vsorted_[size_t(end - 1)]) - lo.v) * slope;
-      float x0 = float(std::min(xa, xb) - margin), x1 = float(std::max(xa, xb) + margin);
-      auto first = usorted_.begin() + start, last = usorted_.begin() + end;
-      const int ia = int(std::lower_bound(first, last, x0) - usorted_.begin());
-      const int ib = int(std::upper_bound(first, last, x1) - usorted_.begin());
+  const int strips = int(S.strip_start.size()) - 1;
+  for (int t = 0; t < strips; ++t) {
+    const float vmin = S.strip_vmin[size_t(t)], vmax = S.strip_vmax[size_t(t)];
+    if (vmax < lo.v || vmin >= hi.v) continue;  // no sample of the strip in [lo.v, hi.v)
+    const int start = S.strip_start[size_t(t)], end = S.strip_start[size_t(t) + 1];
+    if (vmin >= lo.v && vmax < hi.v) {
+      // Every sample of the strip is in the v-range: the line's u-range over the strip.
+      const double xa = lo.u + (double(vmin) - lo.v) * slope;
+      const double xb = lo.u + (double(vmax) - lo.v) * slope;
+      const float x0 = float(std::min(xa, xb) - margin);
+      const double x1 = std::max(xa, xb) + margin + S.max_width;
+      auto first = S.uhi_sorted.begin() + start, last = S.uhi_sorted.begin() + end;
+      // Boxes with u_hi < x0 are surely left (prefix); those with u_hi > x1 are surely
+      // right (their u_lo >= u_hi - max_width exceeds the line's u-range).
+      const int ia = int(std::lower_bound(first, last, x0) - S.uhi_sorted.begin());
       diffs_[size_t(start)] += c;
       diffs_[size_t(ia)] -= c;
-      for (int k = ia; k < ib; ++k) {
-        int j = sorder_[size_t(k)];
+      for (int k = ia; k < end && double(S.uhi_sorted[size_t(k)]) <= x1; ++k) {
+        const int j = S.sorder[size_t(k)];
         if (left(j)) direct_[size_t(j)] += c;
       }
     } else {
-      for (int k = std::max(start, kb); k < std::min(end, ke); ++k) {
-        int j = vorder_[size_t(k)];
-        if (left(j)) direct_[size_t(j)] += c;
+      for (int k = start; k < end; ++k) {
+        const int j = S.vorder[size_t(k)];
+        if (in_left(j)) direct_[size_t(j)] += c;
       }
     }
   }
 }
 
 void DepthCounter::add_step(float vc, int w) {
-  const size_t k = size_t(std::lower_bound(vsorted_.begin(), vsorted_.end(), vc) - vsorted_.begin());
-  diffv_[k] += w;
+  const SampleStrips& S = *strips_;
+  // Boxes with v_lo >= vc: a suffix of the v_lo order. Boxes below it with v_lo within
+  // the tallest box of vc may reach it: tested one by one.
+  const int kb = int(std::lower_bound(S.vlo_sorted.begin(), S.vlo_sorted.end(), vc) - S.vlo_sorted.begin());
+  diffv_[size_t(kb)] += w;
+  const double reach = double(vc) - S.max_height;  // exact: no box below it reaches vc
+  for (int k = kb - 1; k >= 0 && double(S.vlo_sorted[size_t(k)]) >= reach; --k) {
+    const int j = S.vorder[size_t(k)];
+    if (uv_[size_t(j)].v >= vc) direct_[size_t(j)] += w;
+  }
 }
 
 void DepthCounter::finish(std::vector<int32_t>& depth) {
+  const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
   for (size_t k = 1; k <= n; ++k) {
     diffv_[k] += diffv_[k - 1];
@@ -165,7 +186,7 @@ void DepthCounter::finish(std::vector<int32_t>& depth) {
   }
   depth.resize(n);
   for (size_t j = 0; j < n; ++j)
-    depth[j] = direct_[j] + diffv_[size_t(vrank_[j])] + diffs_[size_t(spos_[j])];
+    depth[j] = direct_[j] + diffv_[size_t(S.vrank[j])] + diffs_[size_t(S.srank[j])];
 }
 
 void ReceiverIntegrator::begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv) {
@@ -173,10 +194,9 @@ void ReceiverIntegrator::begin(const Vec3f& receiver, const std::vector<Vec2f>& 
   counter_.reset(samples_uv, frame_.extent);
 }
 
-void ReceiverIntegrator::begin(const Vec3f& receiver, const JitterOrder& order, const std::vector<uint32_t>& pick,
-                               const std::vector<uint32_t>& owner) {
+void ReceiverIntegrator::begin(const Vec3f& receiver, const SampleStrips& strips, const std::vector<uint32_t>& pick) {
   set_receiver(receiver);
-  counter_.reset(frame_.jitter_uv, order, pick, owner, frame_.extent);
+  counter_.reset(strips, frame_.jitter_uv, pick, frame_.extent);
 }
 
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
@@ -214,7 +234,8 @@ int ReceiverIntegrator::facing(size_t t) const {
   const auto& v = m_.triangles[t].v;
   if (!(fp_[v[0]].z > 0.0 || fp_[v[1]].z > 0.0 || fp_[v[2]].z > 0.0)) return 0;
   Vec3d a = to_double(m_.corner(t, 0)), b = to_double(m_.corner(t, 1)), c = to_double(m_.corner(t, 2));
-  double f = dot(cross(b - a, c - a), r_world_ - a);
+  const Vec3d n = cross(b - a, c - a);
+  const double f = dot(n, r_world_ - a);
   return (f > 0.0) - (f < 0.0);
 }
 

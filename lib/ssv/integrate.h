@@ -51,15 +51,21 @@
 // ray removes. Pieces whose projection misses L' add nothing, so culling wedges that
 // exclude the receiver is exact.
 //
-// Sub-linear integration: the samples are ordered by v and cut into about sqrt(N) strips
-// of consecutive v, each ordered by u. The orders come from the light's jitter points,
-// sorted once per light (JitterOrder) and filtered per receiver in linear time, so no
-// receiver sorts anything. A piece updates the strips its v-range covers: in
-// a strip it covers entirely, the samples left of the line's u-range form a prefix of the
-// u-order (one difference-array update), only samples inside the line's u-range in that
-// strip are tested one by one; partially covered strips (at most two) are tested one by
-// one; rule 2 is one update of a difference array in v-order. Cost per piece
-// O(sqrt(N) log N + samples near the line) instead of O(N).
+// Sub-linear integration. Each sample lies in its jitter box (the box of its K jitter
+// points in (u, v)); the samples are ordered once per light by the boxes' v_lo and cut
+// into ceil(sqrt(N)) strips of consecutive v_lo, each ordered by the boxes' u_hi
+// (SampleStrips). Per receiver only the picked points are filled in: no receiver sorts
+// or filters anything. A piece updates the strips whose v-extent (the union of their
+// boxes' v-ranges) meets its v-range. In a strip inside the v-range, every sample whose
+// box lies left of the line's u-range over the strip (u_hi below it, with a margin) is
+// surely left: a prefix of the u_hi order, one difference-array update. Samples further
+// in the order are tested one by one until u_hi exceeds the line's u-range by the
+// widest box (beyond, every box lies right of the line). Strips that only partly meet
+// the v-range are tested one by one. Rule 2 is one difference-array update in v_lo order
+// (boxes at or above the threshold) plus one-by-one tests of the boxes that straddle it.
+// Every bulk decision is one the one-by-one test would make, so the result does not
+// depend on the boxes; they only decide how much is tested one by one. Cost per piece
+// O(sqrt(N) log N + samples whose boxes are near the line), against O(N).
 //
 // Active triangles. R_T is empty for a triangle with no vertex strictly above the light
 // plane (entirely below it, lying in it, or touching it from below): such a triangle
@@ -92,26 +98,31 @@
 
 namespace visgate::ssv {
 
-// The orders of all jitter points of a light that the strips are cut from, computed once
-// per light: every receiver picks one jitter point per sample, so its sample orders are
-// these orders filtered, in linear time and without sorting per receiver.
-struct JitterOrder {
-  std::vector<uint32_t> by_v;         // jitter points sorted by v
-  std::vector<uint32_t> strip_start;  // strips: ranges of by_v; strips + 1 entries
-  std::vector<uint32_t> by_u;         // per strip, its jitter points sorted by u (same ranges)
+// The strips of a light's samples (see "Sub-linear integration"), built once per light.
+struct SampleStrips {
+  int n = 0;                               // samples
+  std::vector<float> u_hi, v_lo;           // per sample: its box's u_hi and v_lo
+  double max_width = 0.0, max_height = 0.0;  // largest box extent in u and in v (exact)
+  std::vector<int> vorder, vrank;          // samples sorted by v_lo; position of each
+  std::vector<float> vlo_sorted;           // v_lo in that order
+  std::vector<int> strip_start;            // strips: ranges of the v_lo order; strips + 1
+  std::vector<float> strip_vmin, strip_vmax;  // per strip: min v_lo, max v_hi
+  std::vector<int> sorder, srank;          // per strip, its samples sorted by u_hi
+  std::vector<float> uhi_sorted;           // u_hi in that order
 };
-JitterOrder make_jitter_order(const std::vector<Vec2f>& jitter_uv, int samples);
+// Sample j's box is the box of jitter points j*K .. j*K+K-1 of `jitter_uv`.
+SampleStrips make_sample_strips(const std::vector<Vec2f>& jitter_uv, int samples, int jitter);
 
 // Per-sample relative depth-complexity counters with the strip structure above.
 class DepthCounter {
  public:
-  // Samples in frame (u, v); `extent` the light's size (for the bulk-test margin). Cuts
-  // ceil(sqrt(N)) strips of equal count (sorting).
+  // Samples in frame (u, v), one point each (their own strips are built: sorting);
+  // `extent` the light's size (for the bulk-test margin).
   void reset(const std::vector<Vec2f>& uv, double extent);
-  // Samples are jitter points: sample j is jitter point pick[j]; `owner` maps jitter
-  // points to samples (owner[k] = j + 1 for picked points, 0 otherwise).
-  void reset(const std::vector<Vec2f>& jitter_uv, const JitterOrder& order, const std::vector<uint32_t>& pick,
-             const std::vector<uint32_t>& owner, double extent);
+  // Samples of a light with its strips: sample j is jitter point pick[j], which lies in
+  // sample j's box.
+  void reset(const SampleStrips& strips, const std::vector<Vec2f>& jitter_uv, const std::vector<uint32_t>& pick,
+             double extent);
   // Rule 1 for the piece P -> Q with weight w.
   void add_piece(const Vec2f& P, const Vec2f& Q, int w);
   // Rule 2: +w to every sample with v >= vc.
@@ -122,13 +133,12 @@ class DepthCounter {
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
-  void finish_reset();
+  void clear_counters();
 
+  const SampleStrips* strips_ = nullptr;
+  SampleStrips own_;  // for reset(uv, extent)
   std::vector<Vec2f> uv_;
   double extent_ = 0.0;
-  std::vector<int> strip_start_;  // strips of v-order positions; strips + 1 entries
-  std::vector<int> vorder_, sorder_, vrank_, spos_;
-  std::vector<float> vsorted_, usorted_;
   std::vector<int32_t> direct_, diffv_, diffs_;
 };
 
@@ -141,9 +151,9 @@ class ReceiverIntegrator {
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
   void begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv);
-  // The same with samples given as picked jitter points (DepthCounter::reset).
-  void begin(const Vec3f& receiver, const JitterOrder& order, const std::vector<uint32_t>& pick,
-             const std::vector<uint32_t>& owner);
+  // The same with samples given as picked jitter points of a light with its strips
+  // (DepthCounter::reset).
+  void begin(const Vec3f& receiver, const SampleStrips& strips, const std::vector<uint32_t>& pick);
   // sign(orient3d(T, r)) in double: +1 when r is on T's front side; 0 as well for a
   // triangle with no vertex strictly above the light plane (h > 0): it meets no open
   // segment from r to the light plane, so R_T is empty (a triangle lying in the light

@@ -29,7 +29,7 @@ struct ThreadState {
   ReceiverIntegrator integrator;
   std::vector<uint32_t> candidates;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
-  std::vector<uint32_t> pick, owner;  // DepthCounter::reset
+  std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
   double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
@@ -213,7 +213,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
       }
     }
     WedgeBsp bsp(wedges, root, eps, use_region);
-    const JitterOrder order = make_jitter_order(frame.jitter_uv, light.samples);
+    const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, frame_pos, frame); });
@@ -234,15 +234,18 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         st.candidates.clear();
         bsp.query(r, st.candidates);
         auto b = Clock::now();
+        // The jitter point of every sample (sample_position, DESIGN section 3): hash
+        // prefix once per receiver, a power-of-two jitter count by mask.
         st.pick.resize(size_t(light.samples));
-        st.owner.resize(light.jitter_points.size());
-        for (int j = 0; j < light.samples; ++j) {
-          uint32_t k = uint32_t(&sample_position(light, j, i) - light.jitter_points.data());
-          st.pick[size_t(j)] = k;
-          st.owner[k] = uint32_t(j) + 1;
+        {
+          const uint64_t prefix = relation_hash_prefix(i, light.seed), K = uint64_t(light.jitter);
+          const bool pow2 = (K & (K - 1)) == 0;
+          for (int j = 0; j < light.samples; ++j) {
+            const uint64_t h = relation_hash_step(prefix, uint64_t(j));
+            st.pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
+          }
         }
-        st.integrator.begin(r, order, st.pick, st.owner);
-        for (uint32_t k : st.pick) st.owner[k] = 0;
+        st.integrator.begin(r, strips, st.pick);
         auto c = Clock::now();
         // Validation: receiver inside the wedge and the edge a silhouette from it.
         st.valid.clear();

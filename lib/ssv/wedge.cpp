@@ -128,6 +128,67 @@ BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps,
   return (s.mask == 0 && region_contains) ? BoxClass::Contains : BoxClass::Partial;
 }
 
+SplitBoxes split_boxes(const AABB& box, int axis, float mid) {
+  AABB lb = box, rb = box;
+  lb.hi[axis] = mid;
+  rb.lo[axis] = mid;
+  SplitBoxes b;
+  b.c_left = (lb.lo + lb.hi) * 0.5f;
+  b.c_right = (rb.lo + rb.hi) * 0.5f;
+  const Vec3f el = (lb.hi - lb.lo) * 0.5f, er = (rb.hi - rb.lo) * 0.5f;
+  b.half = Vec3f(std::max(el.x, er.x), std::max(el.y, er.y), std::max(el.z, er.z));
+  return b;
+}
+
+void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, float eps, bool use_region,
+                    WedgeState& left, BoxClass& left_class, WedgeState& right, BoxClass& right_class) {
+  left = s;
+  right = s;
+  bool out_l = false, out_r = false;
+  // Range of plane p over each half: [dist - rad, dist + rad].
+  auto ranges = [&](const Plane& p, float& lo_l, float& hi_l, float& lo_r, float& hi_r) {
+    const float rad = dot(vabs(p.n), b.half);
+    const float dl = dot(p.n, b.c_left) - p.d, dr = dot(p.n, b.c_right) - p.d;
+    lo_l = dl - rad;
+    hi_l = dl + rad;
+    lo_r = dr - rad;
+    hi_r = dr + rad;
+  };
+  bool contains_l = true, contains_r = true;
+  if (use_region && w.has_region) {
+    // Silhouette region (section 4.2): settled bits are never re-tested.
+    for (int k = 0; k < 2; ++k) {
+      const uint8_t pos = k == 0 ? kPos1 : kPos2, neg = k == 0 ? kNeg1 : kNeg2;
+      if (s.region & (pos | neg)) continue;
+      float lo_l, hi_l, lo_r, hi_r;
+      ranges(w.tri[k], lo_l, hi_l, lo_r, hi_r);
+      if (lo_l >= eps) left.region |= pos;
+      else if (hi_l <= -eps) left.region |= neg;
+      if (lo_r >= eps) right.region |= pos;
+      else if (hi_r <= -eps) right.region |= neg;
+    }
+    auto region_out = [](uint8_t r) { return ((r & kPos1) && (r & kPos2)) || ((r & kNeg1) && (r & kNeg2)); };
+    auto region_in = [](uint8_t r) { return ((r & kPos1) && (r & kNeg2)) || ((r & kNeg1) && (r & kPos2)); };
+    out_l = region_out(left.region);
+    out_r = region_out(right.region);
+    contains_l = region_in(left.region);
+    contains_r = region_in(right.region);
+  }
+  uint32_t mask = s.mask;
+  while (mask && !(out_l && out_r)) {
+    const int i = __builtin_ctz(mask);
+    mask &= mask - 1;
+    float lo_l, hi_l, lo_r, hi_r;
+    ranges(w.planes[size_t(i)], lo_l, hi_l, lo_r, hi_r);
+    if (hi_l < -eps) out_l = true;
+    else if (lo_l >= -eps) left.mask = uint16_t(left.mask & ~(1u << i));
+    if (hi_r < -eps) out_r = true;
+    else if (lo_r >= -eps) right.mask = uint16_t(right.mask & ~(1u << i));
+  }
+  left_class = out_l ? BoxClass::Outside : (left.mask == 0 && contains_l) ? BoxClass::Contains : BoxClass::Partial;
+  right_class = out_r ? BoxClass::Outside : (right.mask == 0 && contains_r) ? BoxClass::Contains : BoxClass::Partial;
+}
+
 bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
   for (int i = 0; i < w.plane_count; ++i)
     if (w.planes[size_t(i)].eval(p) < -eps) return false;

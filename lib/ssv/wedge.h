@@ -71,6 +71,21 @@ enum class BoxClass { Outside, Partial, Contains };
 // silhouette region), else Partial.
 BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps, bool use_region);
 
+// The two halves of a box split at `mid` along `axis` (left: box.lo..mid, right:
+// mid..box.hi) as centres and one common half-extent (the larger of the two halves'
+// per component: a box range can only grow, never shrink).
+struct SplitBoxes {
+  Vec3f c_left, c_right, half;
+};
+SplitBoxes split_boxes(const AABB& box, int axis, float mid);
+
+// classify_box for both halves of a split, from the state `s` of the parent box: each
+// active plane is evaluated once for both halves. Box ranges come from the centre and
+// half-extent (n.c - d -/+ |n|.e): the same as the corner evaluation of classify_box
+// up to float rounding, far below eps.
+void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, float eps, bool use_region,
+                    WedgeState& left, BoxClass& left_class, WedgeState& right, BoxClass& right_class);
+
 // True when p lies inside every wedge plane within eps.
 bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps);
 

@@ -1,6 +1,8 @@
 // Lazy wedge BSP (see wedge_bsp.h), paper 001 Figure 5.
 #include "lib/ssv/wedge_bsp.h"
 
+#include <algorithm>
+
 #include "lib/geom/check.h"
 
 namespace visgate::ssv {
@@ -10,21 +12,38 @@ WedgeBsp::WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float e
   root_.box = bounds;
   // Minimum node size: 1/200 of the scene's longest side (section 4.1).
   min_size_ = max_component(bounds.extent()) / 200.0f;
-  root_.wedges.reserve(wedges.size());
+  std::vector<WedgeState> all;
+  all.reserve(wedges.size());
   for (size_t i = 0; i < wedges.size(); ++i) {
     WedgeState s;
     s.wedge = uint32_t(i);
     s.mask = uint16_t((1u << wedges[i].plane_count) - 1u);
-    if (classify_box(wedges[i], s, bounds, eps_, use_region_) != BoxClass::Outside) root_.wedges.push_back(s);
+    if (classify_box(wedges[i], s, bounds, eps_, use_region_) != BoxClass::Outside) all.push_back(s);
   }
+  root_.wedges = allocate(all.size());
+  std::copy(all.begin(), all.end(), root_.wedges);
+  root_.count = uint32_t(all.size());
   nodes_ = 1;
-  entries_ = root_.wedges.size();
+  entries_ = all.size();
+}
+
+WedgeState* WedgeBsp::allocate(size_t count) {
+  std::lock_guard<std::mutex> guard(arena_lock_);
+  if (chunks_.empty() || chunk_used_ + count > chunk_size_) {
+    chunk_size_ = std::max<size_t>(count, size_t(1) << 14);
+    chunks_.emplace_back(new WedgeState[chunk_size_]);
+    chunk_used_ = 0;
+    list_capacity_ += chunk_size_;
+  }
+  WedgeState* p = chunks_.back().get() + chunk_used_;
+  chunk_used_ += count;
+  return p;
 }
 
 WedgeBsp::~WedgeBsp() = default;
 
 bool WedgeBsp::should_split(const Node& n, size_t wedges_above) const {
-  if (n.wedges.empty()) return false;
+  if (n.count == 0) return false;
   if (max_component(n.box.extent()) < min_size_) return false;
   // Far from the origin the float midpoint stops separating the box's faces before the
   // minimum size is reached: a split that would not shrink the box is never made.
@@ -32,15 +51,15 @@ bool WedgeBsp::should_split(const Node& n, size_t wedges_above) const {
   const float mid = 0.5f * (n.box.lo[axis] + n.box.hi[axis]);
   if (!(n.box.lo[axis] < mid && mid < n.box.hi[axis])) return false;
   // "fewer than 25% of the wedges above": stop when the leaf holds at most a quarter.
-  if (double(n.wedges.size()) <= 0.25 * double(wedges_above)) return false;
+  if (double(n.count) <= 0.25 * double(wedges_above)) return false;
   return true;
 }
 
 // SPLIT-LEAF: wedges containing the node stay; the others go to the children they meet.
 // Called with n.lock held and n still a leaf.
 void WedgeBsp::split_leaf(Node& n) {
-  int axis = n.box.longest_axis();
-  float mid = 0.5f * (n.box.lo[axis] + n.box.hi[axis]);
+  const int axis = n.box.longest_axis();
+  const float mid = 0.5f * (n.box.lo[axis] + n.box.hi[axis]);
   Node* pair;
   {
     std::lock_guard<std::mutex> guard(arena_lock_);
@@ -52,25 +71,39 @@ void WedgeBsp::split_leaf(Node& n) {
   right->box = n.box;
   left->box.hi[axis] = mid;
   right->box.lo[axis] = mid;
-  std::vector<WedgeState> kept;
-  for (const WedgeState& s : n.wedges) {
+  // Classify into per-thread scratch lists, then copy them into exact-size spans.
+  thread_local std::vector<WedgeState> to_left, to_right;
+  to_left.clear();
+  to_right.clear();
+  const SplitBoxes halves = split_boxes(n.box, axis, mid);
+  uint32_t kept = 0;
+  for (uint32_t k = 0; k < n.count; ++k) {
+    const WedgeState& s = n.wedges[k];
     const Wedge& w = wedges_[s.wedge];
     // The state's masks describe n.box: a wedge with no active plane (and inside its
     // silhouette region) contains the node.
-    bool region_in = !use_region_ || !w.has_region ||
-                     ((s.region & kPos1) && (s.region & kNeg2)) || ((s.region & kNeg1) && (s.region & kPos2));
+    const bool region_in = !use_region_ || !w.has_region ||
+                           ((s.region & kPos1) && (s.region & kNeg2)) || ((s.region & kNeg1) && (s.region & kPos2));
     if (s.mask == 0 && region_in) {
-      kept.push_back(s);
+      n.wedges[kept++] = s;  // in place: kept <= k
       continue;
     }
-    WedgeState sl = s, sr = s;
-    if (classify_box(w, sl, left->box, eps_, use_region_) != BoxClass::Outside) left->wedges.push_back(sl);
-    if (classify_box(w, sr, right->box, eps_, use_region_) != BoxClass::Outside) right->wedges.push_back(sr);
+    WedgeState sl, sr;
+    BoxClass cl, cr;
+    classify_split(w, s, halves, eps_, use_region_, sl, cl, sr, cr);
+    if (cl != BoxClass::Outside) to_left.push_back(sl);
+    if (cr != BoxClass::Outside) to_right.push_back(sr);
   }
-  entries_ += kept.size() + left->wedges.size() + right->wedges.size();
-  entries_ -= n.wedges.size();
+  left->wedges = to_left.empty() ? nullptr : allocate(to_left.size());
+  right->wedges = to_right.empty() ? nullptr : allocate(to_right.size());
+  std::copy(to_left.begin(), to_left.end(), left->wedges);
+  std::copy(to_right.begin(), to_right.end(), right->wedges);
+  left->count = uint32_t(to_left.size());
+  right->count = uint32_t(to_right.size());
+  entries_ += kept + to_left.size() + to_right.size();
+  entries_ -= n.count;
   nodes_ += 2;
-  n.wedges = std::move(kept);
+  n.count = kept;
   n.axis = axis;
   n.mid = mid;
   n.child = pair;
@@ -84,21 +117,20 @@ void WedgeBsp::query(const Vec3f& p, std::vector<uint32_t>& out) {
       std::unique_lock<std::mutex> guard(lock_of(n));
       if (!n->split.load(std::memory_order_relaxed)) {
         if (!should_split(*n, out.size())) {
-          for (const WedgeState& s : n->wedges) out.push_back(s.wedge);
+          for (uint32_t k = 0; k < n->count; ++k) out.push_back(n->wedges[k].wedge);
           return;
         }
         split_leaf(*n);
       }
     }
     // Internal node: its list (wedges containing the node) is final.
-    for (const WedgeState& s : n->wedges) out.push_back(s.wedge);
+    for (uint32_t k = 0; k < n->count; ++k) out.push_back(n->wedges[k].wedge);
     n = (p[n->axis] <= n->mid) ? n->child : n->child + 1;
   }
 }
 
 size_t WedgeBsp::memory_bytes() const {
-  return nodes_.load() * sizeof(Node) + entries_.load() * sizeof(WedgeState) +
-         wedges_.size() * sizeof(Wedge);
+  return nodes_.load() * sizeof(Node) + list_capacity_ * sizeof(WedgeState) + wedges_.size() * sizeof(Wedge);
 }
 
 }  // namespace visgate::ssv

@@ -45,15 +45,18 @@ class WedgeBsp {
  private:
   struct Node {
     AABB box;
-    std::vector<WedgeState> wedges;
+    WedgeState* wedges = nullptr;  // `count` states in the list arena
+    uint32_t count = 0;
     std::atomic<bool> split{false};
-    Node* child = nullptr;  // the two children, adjacent in the arena
+    Node* child = nullptr;  // the two children, adjacent in the node arena
     int axis = 0;
     float mid = 0.0f;
   };
 
   bool should_split(const Node& n, size_t wedges_above) const;
   void split_leaf(Node& n);
+  // `count` contiguous states from the list arena (never moved or freed before the tree).
+  WedgeState* allocate(size_t count);
   std::mutex& lock_of(const Node* n) { return locks_[(reinterpret_cast<uintptr_t>(n) / sizeof(Node)) % locks_.size()]; }
 
   const std::vector<Wedge>& wedges_;
@@ -62,8 +65,12 @@ class WedgeBsp {
   float min_size_;
   Node root_;
   // Children are allocated in pairs from an arena (one allocation per split, freed at
-  // once); leaves are locked through a small table of striped mutexes.
+  // once), wedge lists as exact-size spans of chunks of a list arena (a split writes its
+  // children's lists once; a node's list only shrinks, in place, when it is split);
+  // leaves are locked through a small table of striped mutexes.
   std::deque<std::array<Node, 2>> arena_;
+  std::vector<std::unique_ptr<WedgeState[]>> chunks_;
+  size_t chunk_used_ = 0, chunk_size_ = 0, list_capacity_ = 0;
   std::mutex arena_lock_;
   std::array<std::mutex, 64> locks_;
   std::atomic<size_t> nodes_{0}, entries_{0};
