@@ -168,9 +168,10 @@ class ReceiverIntegrator {
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
   void finish(std::vector<int32_t>& depth) { counter_.finish(depth); }
-  // True when some piece inside the pyramid could not be projected since begin(): an
-  // edge through (or within rounding of) the receiver. Its counters are unreliable and
-  // the receiver must be answered by rays.
+  // True when, since begin(), some piece inside the pyramid could not be projected (an
+  // edge through, or within rounding of, the receiver) or some triangle was nearly
+  // edge-on (facing). Its counters are unreliable and the receiver must be answered by
+  // rays.
   bool doubtful() const { return doubtful_; }
 
   // Reference-sample clearance. The counters are exact only for samples away from every
@@ -199,7 +200,7 @@ class ReceiverIntegrator {
   Vec3d r_world_{};
   Vec3d r_{};                    // frame coordinates (double, not rounded)
   std::vector<Vec3d> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
-  bool doubtful_ = false;
+  mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;
   DepthCounter counter_;
