@@ -139,7 +139,9 @@ class DepthCounter {
   SampleStrips own_;  // for reset(uv, extent)
   std::vector<Vec2f> uv_;
   double extent_ = 0.0;
-  std::vector<int32_t> direct_, diffv_, diffs_;
+  std::vector<float> vu_, vv_, su_, sv_;  // picked points in v_lo order and in strip u_hi order
+  std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
+  std::vector<int32_t> diffv_, diffs_;    // bulk counts: difference arrays over the same positions
 };
 
 // Everything the integration of one receiver against one light needs.
