@@ -142,8 +142,7 @@ RefAnswer check_answer(const RefContext& c, int32_t dmin, double& rays) {
   bool cast = false;
   for (int k = 0; k < kCheckClasses; ++k) {
     int32_t up = std::numeric_limits<int32_t>::max();
-    for (int32_t x : c.depth)
-      if (x > d && x < up) up = x;
+    for (int32_t x : c.depth) up = std::min(up, x > d ? x : std::numeric_limits<int32_t>::max());
     if (up == std::numeric_limits<int32_t>::max()) break;
     const RefAnswer a = class_answer(c, up, true, rays);
     if (a == RefAnswer::Visible || a == RefAnswer::Blocked) return a;
@@ -264,8 +263,12 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         // "Reference rays" above). When the integration was doubtful, no reference is
         // conclusive, or the check finds a class above the minimum unblocked (the
         // counters are inconsistent), the receiver is answered by one ray per sample.
-        const int32_t dmin = *std::min_element(st.depth.begin(), st.depth.end());
-        const bool one_class = std::all_of(st.depth.begin(), st.depth.end(), [&](int32_t x) { return x == dmin; });
+        int32_t dmin = st.depth[0], dmax = st.depth[0];
+        for (int32_t x : st.depth) {
+          dmin = std::min(dmin, x);
+          dmax = std::max(dmax, x);
+        }
+        const bool one_class = dmin == dmax;
         RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
         if (!st.integrator.doubtful()) {
           const RefContext ctx{embree, light, frame, st.integrator, st.depth, r, i, l};
@@ -286,8 +289,15 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
             rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
           st.fallback += light.samples;
         } else if (ref == RefAnswer::Visible) {
-          for (int j = 0; j < light.samples; ++j)
-            if (st.depth[size_t(j)] == dmin) rr.set_visible(offset + size_t(j), true);
+          // Bits of the minimum class, set a word at a time (the bits start cleared).
+          for (int j = 0; j < light.samples;) {
+            const size_t bit = offset + size_t(j);
+            const int run = std::min(light.samples - j, 64 - int(bit & 63));
+            uint64_t word = 0;
+            for (int k = 0; k < run; ++k) word |= uint64_t(st.depth[size_t(j + k)] == dmin) << k;
+            rr.visible_bits[bit >> 6] |= word << (bit & 63);
+            j += run;
+          }
         }
         auto f = Clock::now();
         st.queries += 1;

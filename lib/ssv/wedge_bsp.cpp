@@ -72,11 +72,11 @@ void WedgeBsp::split_leaf(Node& n) {
   left->box.hi[axis] = mid;
   right->box.lo[axis] = mid;
   // Classify into per-thread scratch lists, then copy them into exact-size spans.
-  thread_local std::vector<WedgeState> to_left, to_right;
+  thread_local std::vector<WedgeState> to_left, to_right, to_keep;
   to_left.clear();
   to_right.clear();
+  to_keep.clear();
   const SplitBoxes halves = split_boxes(n.box, axis, mid);
-  uint32_t kept = 0;
   for (uint32_t k = 0; k < n.count; ++k) {
     const WedgeState& s = n.wedges[k];
     const Wedge& w = wedges_[s.wedge];
@@ -85,7 +85,7 @@ void WedgeBsp::split_leaf(Node& n) {
     const bool region_in = !use_region_ || !w.has_region ||
                            ((s.region & kPos1) && (s.region & kNeg2)) || ((s.region & kNeg1) && (s.region & kPos2));
     if (s.mask == 0 && region_in) {
-      n.wedges[kept++] = s;  // in place: kept <= k
+      to_keep.push_back(s);
       continue;
     }
     WedgeState sl, sr;
@@ -94,16 +94,17 @@ void WedgeBsp::split_leaf(Node& n) {
     if (cl != BoxClass::Outside) to_left.push_back(sl);
     if (cr != BoxClass::Outside) to_right.push_back(sr);
   }
-  left->wedges = to_left.empty() ? nullptr : allocate(to_left.size());
-  right->wedges = to_right.empty() ? nullptr : allocate(to_right.size());
-  std::copy(to_left.begin(), to_left.end(), left->wedges);
-  std::copy(to_right.begin(), to_right.end(), right->wedges);
-  left->count = uint32_t(to_left.size());
-  right->count = uint32_t(to_right.size());
-  entries_ += kept + to_left.size() + to_right.size();
+  auto store = [&](const std::vector<WedgeState>& v, WedgeState*& p, uint32_t& c) {
+    p = v.empty() ? nullptr : allocate(v.size());
+    std::copy(v.begin(), v.end(), p);
+    c = uint32_t(v.size());
+  };
+  store(to_left, left->wedges, left->count);
+  store(to_right, right->wedges, right->count);
+  store(to_keep, n.kept, n.kept_count);
+  entries_ += to_keep.size() + to_left.size() + to_right.size();
   entries_ -= n.count;
   nodes_ += 2;
-  n.count = kept;
   n.axis = axis;
   n.mid = mid;
   n.child = pair;
@@ -114,17 +115,16 @@ void WedgeBsp::query(const Vec3f& p, std::vector<uint32_t>& out) {
   Node* n = &root_;
   for (;;) {
     if (!n->split.load(std::memory_order_acquire)) {
-      std::unique_lock<std::mutex> guard(lock_of(n));
-      if (!n->split.load(std::memory_order_relaxed)) {
-        if (!should_split(*n, out.size())) {
-          for (uint32_t k = 0; k < n->count; ++k) out.push_back(n->wedges[k].wedge);
-          return;
-        }
-        split_leaf(*n);
+      // A leaf: its list is final; the lock is needed only to split it.
+      if (!should_split(*n, out.size())) {
+        for (uint32_t k = 0; k < n->count; ++k) out.push_back(n->wedges[k].wedge);
+        return;
       }
+      std::unique_lock<std::mutex> guard(lock_of(n));
+      if (!n->split.load(std::memory_order_relaxed)) split_leaf(*n);
     }
-    // Internal node: its list (wedges containing the node) is final.
-    for (uint32_t k = 0; k < n->count; ++k) out.push_back(n->wedges[k].wedge);
+    // Internal node: the wedges containing it.
+    for (uint32_t k = 0; k < n->kept_count; ++k) out.push_back(n->kept[k].wedge);
     n = (p[n->axis] <= n->mid) ? n->child : n->child + 1;
   }
 }

@@ -11,8 +11,12 @@
 //
 // Guarantee: conservative (within the wedge tests' tolerance, wedge.h): every wedge whose
 // wedge (and silhouette region) contains the query point is returned, for query points
-// inside the root box. Thread-safe: concurrent queries split leaves under a per-node lock;
-// an internal node's wedge list never changes after its split is published.
+// inside the root box. Thread-safe: concurrent queries split leaves under a per-node lock
+// (taken only when the leaf is to be split); a leaf's list never changes, an internal
+// node's list is written before its split is published. A query that reads a leaf
+// while another thread splits it reports the leaf's list, a superset of what the split
+// node and its child would report: still conservative, and identical answers, since
+// validation (point_in_wedge) decides every candidate.
 #pragma once
 
 #include <array>
@@ -45,8 +49,12 @@ class WedgeBsp {
  private:
   struct Node {
     AABB box;
-    WedgeState* wedges = nullptr;  // `count` states in the list arena
+    // As a leaf: the `count` wedges meeting the box (written once, before the node is
+    // reachable, never changed). Once split: the `kept` wedges containing the box.
+    WedgeState* wedges = nullptr;
     uint32_t count = 0;
+    WedgeState* kept = nullptr;
+    uint32_t kept_count = 0;
     std::atomic<bool> split{false};
     Node* child = nullptr;  // the two children, adjacent in the node arena
     int axis = 0;
