@@ -141,7 +141,7 @@ class DepthCounter {
   double extent_ = 0.0;
   std::vector<float> vu_, vv_, su_, sv_;  // picked points in v_lo order and in strip u_hi order
   std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
-  std::vector<int32_t> diffv_, diffs_;    // bulk counts: difference arrays over the same positions
+  std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
 
 // Everything the integration of one receiver against one light needs.

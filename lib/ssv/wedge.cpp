@@ -142,9 +142,11 @@ SplitBoxes split_boxes(const AABB& box, int axis, float mid) {
 
 void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, float eps, bool use_region,
                     WedgeState& left, BoxClass& left_class, WedgeState& right, BoxClass& right_class) {
+  // Written without data-dependent branches except the loop over active planes: the
+  // outcomes are close to random per wedge, and mispredictions were a third of the
+  // cost of a split (callgrind --branch-sim, columns).
   left = s;
   right = s;
-  bool out_l = false, out_r = false;
   // Range of plane p over each half: [dist - rad, dist + rad].
   auto ranges = [&](const Plane& p, float& lo_l, float& hi_l, float& lo_r, float& hi_r) {
     const float rad = dot(vabs(p.n), b.half);
@@ -154,39 +156,43 @@ void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, fl
     lo_r = dr - rad;
     hi_r = dr + rad;
   };
-  bool contains_l = true, contains_r = true;
+  bool out_l = false, out_r = false, contains_l = true, contains_r = true;
   if (use_region && w.has_region) {
     // Silhouette region (section 4.2): settled bits are never re-tested.
+    uint8_t rl = s.region, rr = s.region;
     for (int k = 0; k < 2; ++k) {
       const uint8_t pos = k == 0 ? kPos1 : kPos2, neg = k == 0 ? kNeg1 : kNeg2;
       if (s.region & (pos | neg)) continue;
       float lo_l, hi_l, lo_r, hi_r;
       ranges(w.tri[k], lo_l, hi_l, lo_r, hi_r);
-      if (lo_l >= eps) left.region |= pos;
-      else if (hi_l <= -eps) left.region |= neg;
-      if (lo_r >= eps) right.region |= pos;
-      else if (hi_r <= -eps) right.region |= neg;
+      rl |= uint8_t((lo_l >= eps ? pos : 0) | (hi_l <= -eps ? neg : 0));
+      rr |= uint8_t((lo_r >= eps ? pos : 0) | (hi_r <= -eps ? neg : 0));
     }
-    auto region_out = [](uint8_t r) { return ((r & kPos1) && (r & kPos2)) || ((r & kNeg1) && (r & kNeg2)); };
-    auto region_in = [](uint8_t r) { return ((r & kPos1) && (r & kNeg2)) || ((r & kNeg1) && (r & kPos2)); };
-    out_l = region_out(left.region);
-    out_r = region_out(right.region);
-    contains_l = region_in(left.region);
-    contains_r = region_in(right.region);
+    // Outside: on the front side of both triangles or on the back side of both.
+    // Contains: on the front side of exactly one (the silhouette region, "XOR").
+    auto both = [](uint8_t r, uint8_t x, uint8_t y) { return (r & x) && (r & y); };
+    out_l = both(rl, kPos1, kPos2) | both(rl, kNeg1, kNeg2);
+    out_r = both(rr, kPos1, kPos2) | both(rr, kNeg1, kNeg2);
+    contains_l = both(rl, kPos1, kNeg2) | both(rl, kNeg1, kPos2);
+    contains_r = both(rr, kPos1, kNeg2) | both(rr, kNeg1, kPos2);
+    left.region = rl;
+    right.region = rr;
   }
-  uint32_t mask = s.mask;
-  while (mask && !(out_l && out_r)) {
+  uint32_t mask = s.mask, keep_l = s.mask, keep_r = s.mask;
+  while (mask) {
     const int i = __builtin_ctz(mask);
     mask &= mask - 1;
     float lo_l, hi_l, lo_r, hi_r;
     ranges(w.planes[size_t(i)], lo_l, hi_l, lo_r, hi_r);
-    if (hi_l < -eps) out_l = true;
-    else if (lo_l >= -eps) left.mask = uint16_t(left.mask & ~(1u << i));
-    if (hi_r < -eps) out_r = true;
-    else if (lo_r >= -eps) right.mask = uint16_t(right.mask & ~(1u << i));
+    out_l |= hi_l < -eps;
+    out_r |= hi_r < -eps;
+    keep_l &= ~((lo_l >= -eps ? 1u : 0u) << i);  // the plane contains the half
+    keep_r &= ~((lo_r >= -eps ? 1u : 0u) << i);
   }
-  left_class = out_l ? BoxClass::Outside : (left.mask == 0 && contains_l) ? BoxClass::Contains : BoxClass::Partial;
-  right_class = out_r ? BoxClass::Outside : (right.mask == 0 && contains_r) ? BoxClass::Contains : BoxClass::Partial;
+  left.mask = uint16_t(keep_l);
+  right.mask = uint16_t(keep_r);
+  left_class = out_l ? BoxClass::Outside : (keep_l == 0 && contains_l) ? BoxClass::Contains : BoxClass::Partial;
+  right_class = out_r ? BoxClass::Outside : (keep_r == 0 && contains_r) ? BoxClass::Contains : BoxClass::Partial;
 }
 
 bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {

@@ -44,12 +44,14 @@ std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m);
 
 constexpr int kMaxWedgePlanes = 16;
 
+// Field order: what every box test reads (header, triangle planes, first planes) shares
+// the first cache line.
 struct Wedge {
   uint32_t edge = 0;                          // index into the edge list
   uint8_t plane_count = 0;
   bool has_region = false;                    // double edge: silhouette region planes valid
-  std::array<Plane, kMaxWedgePlanes> planes;  // unit normals; inside: n.x - d >= -eps
   std::array<Plane, 2> tri;                   // unit triangle planes, front side positive
+  std::array<Plane, kMaxWedgePlanes> planes;  // unit normals; inside: n.x - d >= -eps
 };
 
 // Active-plane state of a wedge in a BSP node: bit i of `mask` set while wedge plane i does

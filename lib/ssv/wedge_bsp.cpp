@@ -29,6 +29,10 @@ WedgeBsp::WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float e
 
 WedgeState* WedgeBsp::allocate(size_t count) {
   std::lock_guard<std::mutex> guard(arena_lock_);
+  return allocate_locked(count);
+}
+
+WedgeState* WedgeBsp::allocate_locked(size_t count) {
   if (chunks_.empty() || chunk_used_ + count > chunk_size_) {
     chunk_size_ = std::max<size_t>(count, size_t(1) << 14);
     chunks_.emplace_back(new WedgeState[chunk_size_]);
@@ -60,18 +64,7 @@ bool WedgeBsp::should_split(const Node& n, size_t wedges_above) const {
 void WedgeBsp::split_leaf(Node& n) {
   const int axis = n.box.longest_axis();
   const float mid = 0.5f * (n.box.lo[axis] + n.box.hi[axis]);
-  Node* pair;
-  {
-    std::lock_guard<std::mutex> guard(arena_lock_);
-    pair = arena_.emplace_back().data();
-  }
-  Node* left = pair;
-  Node* right = pair + 1;
-  left->box = n.box;
-  right->box = n.box;
-  left->box.hi[axis] = mid;
-  right->box.lo[axis] = mid;
-  // Classify into per-thread scratch lists, then copy them into exact-size spans.
+  // Classify into per-thread scratch lists, then copy them into one exact-size span.
   thread_local std::vector<WedgeState> to_left, to_right, to_keep;
   to_left.clear();
   to_right.clear();
@@ -81,7 +74,7 @@ void WedgeBsp::split_leaf(Node& n) {
     const WedgeState& s = n.wedges[k];
     const Wedge& w = wedges_[s.wedge];
     // The state's masks describe n.box: a wedge with no active plane (and inside its
-    // silhouette region) contains the node.
+    // silhouette region) contains the node and stays in it.
     const bool region_in = !use_region_ || !w.has_region ||
                            ((s.region & kPos1) && (s.region & kNeg2)) || ((s.region & kNeg1) && (s.region & kPos2));
     if (s.mask == 0 && region_in) {
@@ -94,17 +87,31 @@ void WedgeBsp::split_leaf(Node& n) {
     if (cl != BoxClass::Outside) to_left.push_back(sl);
     if (cr != BoxClass::Outside) to_right.push_back(sr);
   }
+  // One trip to the arenas per split: the node pair and the three lists.
+  Node* pair;
+  WedgeState* lists;
+  const size_t total = to_left.size() + to_right.size() + to_keep.size();
+  {
+    std::lock_guard<std::mutex> guard(arena_lock_);
+    pair = arena_.emplace_back().data();
+    lists = allocate_locked(total);
+  }
+  Node* left = pair;
+  Node* right = pair + 1;
+  left->box = n.box;
+  right->box = n.box;
+  left->box.hi[axis] = mid;
+  right->box.lo[axis] = mid;
   auto store = [&](const std::vector<WedgeState>& v, WedgeState*& p, uint32_t& c) {
-    p = v.empty() ? nullptr : allocate(v.size());
-    std::copy(v.begin(), v.end(), p);
+    p = lists;
+    lists = std::copy(v.begin(), v.end(), lists);
     c = uint32_t(v.size());
   };
   store(to_left, left->wedges, left->count);
   store(to_right, right->wedges, right->count);
   store(to_keep, n.kept, n.kept_count);
-  entries_ += to_keep.size() + to_left.size() + to_right.size();
-  entries_ -= n.count;
-  nodes_ += 2;
+  entries_.fetch_add(total - n.count, std::memory_order_relaxed);
+  nodes_.fetch_add(2, std::memory_order_relaxed);
   n.axis = axis;
   n.mid = mid;
   n.child = pair;

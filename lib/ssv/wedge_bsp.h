@@ -65,6 +65,7 @@ class WedgeBsp {
   void split_leaf(Node& n);
   // `count` contiguous states from the list arena (never moved or freed before the tree).
   WedgeState* allocate(size_t count);
+  WedgeState* allocate_locked(size_t count);  // arena_lock_ held
   std::mutex& lock_of(const Node* n) { return locks_[(reinterpret_cast<uintptr_t>(n) / sizeof(Node)) % locks_.size()]; }
 
   const std::vector<Wedge>& wedges_;
