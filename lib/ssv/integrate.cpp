@@ -281,6 +281,9 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
     const Vec3d a(p.u, p.v, 0.0), b(q.u, q.v, 0.0);
     Vec3d nrm = cross(a - r_, b - r_);
     if (dot(nrm, Vec3d(0, 0, 0) - r_) < 0.0) nrm = -nrm;
+    // A receiver so far away (beyond about 1e10 light extents) that the edge's two
+    // directions from it agree to double precision has no usable side plane.
+    if (!(length(nrm) > 1e-12 * length(a - r_) * length(b - r_))) doubtful_ = true;
     side_[i] = nrm;
   }
 }
