@@ -325,6 +325,7 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
           DepthCounter dc;
           dc.reset(strips, jitter, pick, 2.0);
           std::vector<int32_t> naive(size_t(n), 0);
+          std::vector<uint8_t> naive_unclear(size_t(n), 0);
           for (int k = 0; k < 150; ++k) {
             Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
             float vc = 1.2f * u(g);
@@ -341,16 +342,24 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
               if (P.v != Q.v) {
                 const bool up = Q.v > P.v;
                 const Vec2f lo = up ? P : Q, hi = up ? Q : P;
-                if (s.v >= lo.v && s.v < hi.v &&
-                    cross2(Vec2f{hi.u - lo.u, hi.v - lo.v}, Vec2f{s.u - lo.u, s.v - lo.v}) > 0.0f)
-                  naive[size_t(j)] += up ? w : -w;
+                const float cr = cross2(Vec2f{hi.u - lo.u, hi.v - lo.v}, Vec2f{s.u - lo.u, s.v - lo.v});
+                if (s.v >= lo.v && s.v < hi.v && cr > 0.0f && w != 0) naive[size_t(j)] += up ? w : -w;
+                // Unclear: within 1e-6 of the magnitudes (extent 2) of the piece's line,
+                // in its v-range (DepthCounter::add_piece); pieces of weight 0 add nothing.
+                const double m = 1e-6 * (2.0 + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
+                const float near = float(m * std::hypot(double(hi.u - lo.u), double(hi.v - lo.v)));
+                if (w != 0 && s.v >= lo.v && s.v < hi.v && std::abs(cr) <= near) naive_unclear[size_t(j)] = 1;
               }
               if (s.v >= vc) naive[size_t(j)] += w;
             }
           }
           std::vector<int32_t> got;
-          dc.finish(got);
+          std::vector<uint8_t> unclear;
+          dc.finish(got, &unclear);
           EXPECT_EQ(got, naive) << "K = " << K << " spread " << spread << " n = " << n;
+          // Exactly the samples the plain loop calls unclear are flagged: bulk decisions
+          // never skip a sample within the margin.
+          EXPECT_EQ(unclear, naive_unclear) << "K = " << K << " spread " << spread << " n = " << n;
         }
       }
 }

@@ -146,6 +146,8 @@ void DepthCounter::clear_counters() {
   }
   dv_.assign(n, 0);
   ds_.assign(n, 0);
+  fv_.assign(n, 0);
+  fs_.assign(n, 0);
   diffv_.assign(n + 1, 0);
 }
 
@@ -156,38 +158,48 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   const Vec2f lo = up ? P : Q, hi = up ? Q : P;
   const int c = up ? w : -w;
   const float du = hi.u - lo.u, dv = hi.v - lo.v;
+  // Margin. The float cross product below errs only for samples within a few float32
+  // ulps (about 1e-7 relative to the coordinates' magnitude) of the line; `margin`, 1e-6
+  // of the magnitudes (a distance), is well beyond that band. Samples within `margin` of
+  // the line are marked unclear (answered by their own ray: their count may be off by
+  // the piece's weight, and the relation may still be decided, far from degenerate, by
+  // another triangle: fuzz_ssv 879e57f8, a sample 7e-10 from a projected edge of a
+  // triangle seen nearly edge-on, blocked by another with margin 1.5e-3). Every sample
+  // classified in bulk lies further than `margin` from the line.
+  const double margin =
+      1e-6 * (extent_ + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
+  const float near_cross = float(margin * std::hypot(double(du), double(dv)));  // |cross| below: within margin
   // The one-by-one test, cross2(hi - lo, s - lo) > 0 (strictly left of the line), over
   // positions [k0, k1) of one order; with the v-range [lo.v, hi.v) where the position's
   // box may lie partly outside it. Four positions at a time with SSE2 (the same float
   // operations in the same order as the scalar tail: identical results).
-  auto run = [&](const float* u, const float* v, int32_t* out, int k0, int k1, bool v_range) {
+  auto run = [&](const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
     int k = k0;
 #if defined(__SSE2__)
     const __m128 lou = _mm_set1_ps(lo.u), lov = _mm_set1_ps(lo.v), hiv = _mm_set1_ps(hi.v);
     const __m128 vdu = _mm_set1_ps(du), vdv = _mm_set1_ps(dv), zero = _mm_setzero_ps();
+    const __m128 near = _mm_set1_ps(near_cross), sign = _mm_set1_ps(-0.0f);
     const __m128i vc = _mm_set1_epi32(c);
     const __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
     for (; k + 4 <= k1; k += 4) {
       const __m128 uu = _mm_loadu_ps(u + k), vv = _mm_loadu_ps(v + k);
       const __m128 cr = _mm_sub_ps(_mm_mul_ps(vdu, _mm_sub_ps(vv, lov)), _mm_mul_ps(vdv, _mm_sub_ps(uu, lou)));
-      __m128 m = _mm_cmpgt_ps(cr, zero);
       const __m128 in = v_range ? _mm_and_ps(_mm_cmpge_ps(vv, lov), _mm_cmplt_ps(vv, hiv)) : all;
-      m = _mm_and_ps(m, in);
-      const __m128i add = _mm_and_si128(_mm_castps_si128(m), vc);
+      const __m128 m = _mm_and_ps(_mm_cmpgt_ps(cr, zero), in);
+      const __m128 f = _mm_and_ps(_mm_cmple_ps(_mm_andnot_ps(sign, cr), near), in);
       __m128i* o = reinterpret_cast<__m128i*>(out + k);
-      _mm_storeu_si128(o, _mm_add_epi32(_mm_loadu_si128(o), add));
+      _mm_storeu_si128(o, _mm_add_epi32(_mm_loadu_si128(o), _mm_and_si128(_mm_castps_si128(m), vc)));
+      __m128i* g = reinterpret_cast<__m128i*>(flag + k);
+      _mm_storeu_si128(g, _mm_or_si128(_mm_loadu_si128(g), _mm_castps_si128(f)));
     }
 #endif
     for (; k < k1; ++k) {
       const bool in = !v_range || ((v[k] >= lo.v) & (v[k] < hi.v));
-      out[k] += (in & (du * (v[k] - lo.v) - dv * (u[k] - lo.u) > 0.0f)) ? c : 0;
+      const float cr = du * (v[k] - lo.v) - dv * (u[k] - lo.u);
+      out[k] += (in & (cr > 0.0f)) ? c : 0;
+      flag[k] |= (in & (std::abs(cr) <= near_cross)) ? -1 : 0;
     }
   };
-  // Bulk margin: the float cross product above errs only for samples within a few
-  // float32 ulps (about 1e-7 relative to the coordinates' magnitude) of the line; 1e-6 of
-  // the magnitudes keeps every bulk-classified sample clear of that band.
-  const double margin =
-      1e-6 * (extent_ + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
   const double slope = double(du) / double(dv);
   // Only samples with v_lo in [lo.v - max_height, hi.v) can have v in [lo.v, hi.v): a
   // range [kb, ke) of the v_lo order, met by a run of consecutive strips.
@@ -202,11 +214,14 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
     const float vmin = S.strip_vmin[size_t(t)], vmax = S.strip_vmax[size_t(t)];
     const int start = S.strip_start[size_t(t)], end = S.strip_start[size_t(t) + 1];
     if (vmin >= lo.v && vmax < hi.v) {
-      // Every sample of the strip is in the v-range: the line's u-range over the strip.
+      // Every sample of the strip is in the v-range: the line's u-range over the strip,
+      // widened so that a sample outside it is further than `margin` from the line (a
+      // horizontal offset x is a distance x |dv| / |d|).
       const double xa = lo.u + (double(vmin) - lo.v) * slope;
       const double xb = lo.u + (double(vmax) - lo.v) * slope;
-      const float x0 = float(std::min(xa, xb) - margin);
-      const double x1 = std::max(xa, xb) + margin + S.max_width;
+      const double mu = margin * std::hypot(double(du), double(dv)) / std::abs(double(dv)) * (1.0 + 0x1p-20);
+      const float x0 = float(std::min(xa, xb) - mu);
+      const double x1 = std::max(xa, xb) + mu + S.max_width;
       // Boxes with u_hi < x0 are surely left (prefix); those with u_hi > x1 are surely
       // right (their u_lo >= u_hi - max_width exceeds the line's u-range): only the
       // positions between are tested.
@@ -215,9 +230,9 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
       const int ib = start + branchless_lower_bound(uh, end - start, std::nextafter(float(x1), INFINITY));
       int32_t* out = ds_.data();
       for (int k = start; k < ia; ++k) out[k] += c;  // the surely-left prefix
-      run(su_.data(), sv_.data(), out, ia, std::max(ia, ib), false);
+      run(su_.data(), sv_.data(), out, fs_.data(), ia, std::max(ia, ib), false);
     } else {
-      run(vu_.data(), vv_.data(), dv_.data(), std::max(start, kb), std::min(end, ke), true);
+      run(vu_.data(), vv_.data(), dv_.data(), fv_.data(), std::max(start, kb), std::min(end, ke), true);
     }
   }
 }
@@ -232,7 +247,7 @@ void DepthCounter::add_step(float vc, int w) {
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
 }
 
-void DepthCounter::finish(std::vector<int32_t>& depth) {
+void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear) {
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
   int32_t run = 0;  // rule 2: prefix sums of the steps, folded into the v-order counts
@@ -242,6 +257,10 @@ void DepthCounter::finish(std::vector<int32_t>& depth) {
   }
   depth.resize(n);
   for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
+  if (unclear) {
+    unclear->resize(n);
+    for (size_t j = 0; j < n; ++j) (*unclear)[j] = uint8_t((fv_[size_t(S.vrank[j])] | fs_[size_t(S.srank[j])]) != 0);
+  }
 }
 
 void ReceiverIntegrator::begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv) {

@@ -127,8 +127,10 @@ class DepthCounter {
   void add_piece(const Vec2f& P, const Vec2f& Q, int w);
   // Rule 2: +w to every sample with v >= vc.
   void add_step(float vc, int w);
-  // The counters per sample (index as given to reset).
-  void finish(std::vector<int32_t>& depth);
+  // The counters per sample (index as given to reset), and optionally per sample whether
+  // it lies within the margin of some piece's line in that piece's v-range (unclear: its
+  // count may be off by that piece's weight).
+  void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr);
   size_t size() const { return uv_.size(); }
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
@@ -141,6 +143,7 @@ class DepthCounter {
   double extent_ = 0.0;
   std::vector<float> vu_, vv_, su_, sv_;  // picked points in v_lo order and in strip u_hi order
   std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
+  std::vector<int32_t> fv_, fs_;          // unclear flags (0 or -1) per position
   std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
 
@@ -169,7 +172,7 @@ class ReceiverIntegrator {
   // The cut segment of triangle t with the light plane, if t crosses it (weight from its
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
-  void finish(std::vector<int32_t>& depth) { counter_.finish(depth); }
+  void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr) { counter_.finish(depth, unclear); }
   // True when, since begin(), some piece inside the pyramid could not be projected (an
   // edge through, or within rounding of, the receiver) or some triangle was nearly
   // edge-on (facing). Its counters are unreliable and the receiver must be answered by

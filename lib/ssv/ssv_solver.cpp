@@ -31,7 +31,9 @@ struct ThreadState {
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
+  std::vector<uint8_t> unclear;  // DepthCounter::finish
   double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0;
+  double unclear_rays = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
   // The last reference answer of this thread: which ranged ray to cast first. It only
   // changes how many rays are cast (stat reference_rays), never an answer.
@@ -71,6 +73,8 @@ struct ThreadState {
 enum class RefAnswer { Visible, Blocked, Ambiguous, NoCandidate };
 
 constexpr int kCandidates = 8;
+// Depth given to unclear samples: never a class (DepthCounter::finish).
+constexpr int32_t kUnclear = std::numeric_limits<int32_t>::max();
 constexpr float kEndZone = 0x1p-18f;
 
 struct RefContext {
@@ -185,6 +189,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   double init_seconds = 0, peak_memory = 0;
   WedgeBuildCounts counts;
   double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0, nodes = 0;
+  double unclear_rays = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
 
   for (size_t l = 0; l < scene.lights.size(); ++l) {
@@ -257,20 +262,29 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         auto d = Clock::now();
         for (const auto& [e, weight] : st.valid) st.integrator.add_edge(edges[e], weight);
         for (uint32_t t : cut_triangles) st.integrator.add_cut(t);
-        st.integrator.finish(st.depth);
+        st.integrator.finish(st.depth, &st.unclear);
         auto e = Clock::now();
         // Reference ray to the minimum class and check ray to the classes above it (see
         // "Reference rays" above). When the integration was doubtful, no reference is
         // conclusive, or the check finds a class above the minimum unblocked (the
         // counters are inconsistent), the receiver is answered by one ray per sample.
-        int32_t dmin = st.depth[0], dmax = st.depth[0];
-        for (int32_t x : st.depth) {
-          dmin = std::min(dmin, x);
-          dmax = std::max(dmax, x);
+        // Unclear samples (within the margin of a projected piece, DepthCounter::finish)
+        // take no part in the classes: their depth becomes kUnclear and each gets its
+        // own ray below.
+        int32_t dmin = kUnclear, dmax = std::numeric_limits<int32_t>::min();
+        size_t unclear = 0;
+        for (size_t j = 0; j < st.depth.size(); ++j) {
+          const bool u = st.unclear[j] != 0;
+          unclear += u;
+          st.depth[j] = u ? kUnclear : st.depth[j];
+          dmin = std::min(dmin, u ? kUnclear : st.depth[j]);
+          dmax = std::max(dmax, u ? std::numeric_limits<int32_t>::min() : st.depth[j]);
         }
-        const bool one_class = dmin == dmax;
+        const bool one_class = dmin >= dmax;
         RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
-        if (!st.integrator.doubtful()) {
+        if (dmin == kUnclear && !st.integrator.doubtful()) {
+          ref = RefAnswer::Blocked;  // no clear sample: every one gets its own ray below
+        } else if (!st.integrator.doubtful()) {
           const RefContext ctx{embree, light, frame, st.integrator, st.depth, r, i, l};
           ref = class_answer(ctx, dmin, st.expect_blocked, st.rays);
           const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
@@ -288,6 +302,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
           for (int j = 0; j < light.samples; ++j)
             rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
           st.fallback += light.samples;
+          unclear = 0;
         } else if (ref == RefAnswer::Visible) {
           // Bits of the minimum class, set a word at a time (the bits start cleared).
           for (int j = 0; j < light.samples;) {
@@ -298,6 +313,12 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
             rr.visible_bits[bit >> 6] |= word << (bit & 63);
             j += run;
           }
+        }
+        if (unclear > 0) {
+          for (int j = 0; j < light.samples; ++j)
+            if (st.unclear[size_t(j)])
+              rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
+          st.unclear_rays += double(unclear);
         }
         auto f = Clock::now();
         st.queries += 1;
@@ -318,6 +339,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
       inconsistent += st.inconsistent;
       doubtful += st.doubtful;
       unchecked += st.unchecked;
+      unclear_rays += st.unclear_rays;
       t_query += st.t_query;
       t_valid += st.t_valid;
       t_integrate += st.t_integrate;
@@ -356,6 +378,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   s.set("inconsistent_receivers", inconsistent);
   s.set("doubtful_receivers", doubtful);
   s.set("unchecked_receivers", unchecked);
+  s.set("unclear_relations", unclear_rays);
   s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
   s.set("silhouette_regions", use_region ? 1.0 : 0.0);
   return result;

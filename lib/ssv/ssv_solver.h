@@ -29,10 +29,13 @@
 // degeneracies named above (reference on a projected edge or vertex, light points on
 // faces in the light plane, edges in the light plane, triangles touching the light
 // plane) by construction. Remaining failure modes (all near-degenerate, see integrate.h
-// and wedge.h): samples within rounding of a projected silhouette edge may get a wrong
-// count (only their own answer: they are never the reference); receivers within rounding
-// of a triangle's plane; projected edges touching the boundary of the expanded light;
-// rays inherit Embree's endpoint semantics for the samples answered by rays. Receivers on
+// and wedge.h): receivers within rounding of a triangle's plane (nearly edge-on ones
+// are doubtful); projected edges touching the boundary of the expanded light;
+// rays inherit Embree's endpoint semantics for the samples answered by rays. A sample
+// within the counter's margin (1e-6 of the light-plane magnitudes) of a projected piece
+// may be miscounted by that piece's weight, and its relation may still be decided far
+// from degeneracy by another triangle: each such sample gets its own ray (stat
+// unclear_relations; 12 of 1M relations on columns). Receivers on
 // or behind the light plane (frame height <= 0), and every receiver of a light whose
 // jitter points lie off its plane by more than 1e-5 of its extent or far outside its
 // polygon (light_frame.h), are answered by one Embree ray per relation instead (counted
