@@ -457,7 +457,7 @@ TEST(SsvWedge, BspQueryReportsEveryWedgeContainingThePoint) {
   AABB root = s.bounds();
   const float eps = float(4e-6 * 4);
   for (bool regions : {true, false}) {
-    WedgeBsp bsp(wedges, root, eps, regions);
+    WedgeBsp bsp(wedges, root, max_component(root.extent()) / 200.0f, eps, regions);
     std::mt19937_64 g(5);
     size_t must = 0;
     for (const Receiver& rc : s.receivers) {

@@ -336,16 +336,72 @@ int ReceiverIntegrator::edge_weight(const Edge& e) const {
   return w;
 }
 
-Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const {
-  if (fp_[i].z == 0.0) return fp_[i];
-  if (fp_[j].z == 0.0) return fp_[j];
+Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {
+  if (fp[i].z == 0.0) return fp[i];
+  if (fp[j].z == 0.0) return fp[j];
   if (i > j) std::swap(i, j);
-  const Vec3d& p = fp_[i];
-  const Vec3d& q = fp_[j];
+  const Vec3d& p = fp[i];
+  const Vec3d& q = fp[j];
   const double t = p.z / (p.z - q.z);
   Vec3d x = p + (q - p) * t;
   x.z = 0.0;
   return x;
+}
+
+Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const { return light_plane_point(fp_, i, j); }
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f) {
+  // L' in double, with its bounding box.
+  const size_t nl = f.poly.size();
+  double ulo = INFINITY, uhi = -INFINITY, vlo = INFINITY, vhi = -INFINITY;
+  for (const Vec2f& p : f.poly) {
+    ulo = std::min(ulo, double(p.u));
+    uhi = std::max(uhi, double(p.u));
+    vlo = std::min(vlo, double(p.v));
+    vhi = std::max(vhi, double(p.v));
+  }
+  double area2 = 0.0;  // twice the signed area: L' is counter-clockwise, checked anyway
+  for (size_t i = 0; i < nl; ++i) {
+    const Vec2f& a = f.poly[i];
+    const Vec2f& b = f.poly[(i + 1) % nl];
+    area2 += double(a.u) * b.v - double(b.u) * a.v;
+  }
+  const double orient = area2 >= 0.0 ? 1.0 : -1.0;
+  // A generous tolerance (1e-6 of the extent): keeping a segment that misses L' costs
+  // one clipped-away piece per receiver; dropping one that meets it would be wrong.
+  const double tol = 1e-6 * f.extent;
+  std::vector<uint32_t> out;
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& v = m.triangles[t].v;
+    bool pos = false, neg = false;
+    for (uint32_t i : v) {
+      pos |= fp[i].z > 0.0;
+      neg |= fp[i].z < 0.0;
+    }
+    if (!pos || !neg) continue;
+    // The cut segment E F exactly as add_cut computes it.
+    Vec3d E{}, F{};
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t p = v[size_t(k)], q = v[size_t((k + 1) % 3)];
+      if (fp[p].z >= 0.0 && fp[q].z < 0.0) E = light_plane_point(fp, p, q);
+      if (fp[p].z < 0.0 && fp[q].z >= 0.0) F = light_plane_point(fp, p, q);
+    }
+    // Misses L' when its box misses L''s box, or both ends lie outside one edge of L'
+    // (L' is convex and counter-clockwise: inside is to the left of every edge).
+    if (std::max(E.x, F.x) < ulo - tol || std::min(E.x, F.x) > uhi + tol || std::max(E.y, F.y) < vlo - tol ||
+        std::min(E.y, F.y) > vhi + tol)
+      continue;
+    bool outside = false;
+    for (size_t i = 0; i < nl && !outside; ++i) {
+      const Vec2f& a = f.poly[i];
+      const Vec2f& b = f.poly[(i + 1) % nl];
+      const double eu = double(b.u) - a.u, ev = double(b.v) - a.v, len = std::hypot(eu, ev);
+      auto side = [&](const Vec3d& x) { return orient * (eu * (x.y - a.v) - ev * (x.x - a.u)) / len; };
+      outside = side(E) < -tol && side(F) < -tol;
+    }
+    if (!outside) out.push_back(uint32_t(t));
+  }
+  return out;
 }
 
 bool ReceiverIntegrator::add_edge(const Edge& e, int w) {

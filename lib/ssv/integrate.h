@@ -147,6 +147,17 @@ class DepthCounter {
   std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
 
+// The point where the edge between vertices i and j (frame coordinates `fp`) crosses
+// h = 0, computed from the pair in index order so every user gets the same point.
+Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
+
+// The triangles crossing the light plane whose cut segment may meet L': the candidates
+// for ReceiverIntegrator::add_cut. A cut segment lies in the light plane, so its
+// projection from every receiver is itself, and one that misses L' adds nothing for any
+// receiver (rooms: the walls of every room of a storey cross the plane of each of its
+// ceiling lights, far from it).
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f);
+
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {
  public:

@@ -7,11 +7,9 @@
 
 namespace visgate::ssv {
 
-WedgeBsp::WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float eps, bool use_region)
-    : wedges_(wedges), eps_(eps), use_region_(use_region) {
+WedgeBsp::WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float min_size, float eps, bool use_region)
+    : wedges_(wedges), eps_(eps), use_region_(use_region), min_size_(min_size) {
   root_.box = bounds;
-  // Minimum node size: 1/200 of the scene's longest side (section 4.1).
-  min_size_ = max_component(bounds.extent()) / 200.0f;
   std::vector<WedgeState> all;
   all.reserve(wedges.size());
   for (size_t i = 0; i < wedges.size(); ++i) {

@@ -32,8 +32,10 @@ namespace visgate::ssv {
 
 class WedgeBsp {
  public:
-  // INIT-BSP: the root over `bounds` holding every wedge that intersects it.
-  WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float eps, bool use_region);
+  // INIT-BSP: the root over `bounds` holding every wedge that intersects it; leaves
+  // smaller than `min_size` along their longest axis are not split (section 4.1: 1/200
+  // of the scene's longest side).
+  WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float min_size, float eps, bool use_region);
   ~WedgeBsp();
   WedgeBsp(const WedgeBsp&) = delete;
   WedgeBsp& operator=(const WedgeBsp&) = delete;
