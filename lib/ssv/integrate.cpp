@@ -168,7 +168,8 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   // classified in bulk lies further than `margin` from the line.
   const double margin =
       1e-6 * (extent_ + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
-  const float near_cross = float(margin * std::hypot(double(du), double(dv)));  // |cross| below: within margin
+  const double dlen = std::sqrt(double(du) * du + double(dv) * dv);
+  const float near_cross = float(margin * dlen);  // |cross| below it: within margin of the line
   // The one-by-one test, cross2(hi - lo, s - lo) > 0 (strictly left of the line), over
   // positions [k0, k1) of one order; with the v-range [lo.v, hi.v) where the position's
   // box may lie partly outside it. Four positions at a time with SSE2 (the same float
@@ -219,7 +220,7 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
       // horizontal offset x is a distance x |dv| / |d|).
       const double xa = lo.u + (double(vmin) - lo.v) * slope;
       const double xb = lo.u + (double(vmax) - lo.v) * slope;
-      const double mu = margin * std::hypot(double(du), double(dv)) / std::abs(double(dv)) * (1.0 + 0x1p-20);
+      const double mu = margin * dlen / std::abs(double(dv)) * (1.0 + 0x1p-20);
       const float x0 = float(std::min(xa, xb) - mu);
       const double x1 = std::max(xa, xb) + mu + S.max_width;
       // Boxes with u_hi < x0 are surely left (prefix); those with u_hi > x1 are surely
@@ -307,12 +308,25 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   }
 }
 
+std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m) {
+  std::vector<TrianglePlane> out(m.triangles.size());
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    TrianglePlane& p = out[t];
+    const Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
+    p.n = cross(b - a, c - a);
+    p.a = a;
+    p.c = (a + b + c) / 3.0;
+    p.nn = dot(p.n, p.n);
+    p.rad2 = std::max(dot(a - p.c, a - p.c), std::max(dot(b - p.c, b - p.c), dot(c - p.c, c - p.c)));
+  }
+  return out;
+}
+
 int ReceiverIntegrator::facing(size_t t) const {
   const auto& v = m_.triangles[t].v;
   if (!(fp_[v[0]].z > 0.0 || fp_[v[1]].z > 0.0 || fp_[v[2]].z > 0.0)) return 0;
-  Vec3d a = to_double(m_.corner(t, 0)), b = to_double(m_.corner(t, 1)), c = to_double(m_.corner(t, 2));
-  const Vec3d n = cross(b - a, c - a);
-  const double f = dot(n, r_world_ - a);
+  const TrianglePlane& p = planes_[t];
+  const double f = dot(p.n, r_world_ - p.a);
   // Nearly edge-on. With r within 2^-20 (relative to its distance from the triangle) of
   // the triangle's plane, T projects to a sliver narrower than float resolution in the
   // light plane: its three pieces round onto one line and the strict-left tests of
@@ -321,11 +335,17 @@ int ReceiverIntegrator::facing(size_t t) const {
   // projection a depth of -1, and they were blocked by another triangle with margin
   // 0.04). The sign itself is right (double error about 1e-16 of the same scale), but
   // the receiver is answered by rays. f = 0 exactly is harmless: T then adds no piece
-  // at all, and no open segment from r crosses it properly.
-  if (f != 0.0) {  // squared: f^2 <= 2^-40 |n|^2 max |r - v|^2
-    const Vec3d ra = r_world_ - a, rb = r_world_ - b, rc = r_world_ - c;
-    const double reach2 = std::max(dot(ra, ra), std::max(dot(rb, rb), dot(rc, rc)));
-    if (f * f <= 0x1p-40 * dot(n, n) * reach2) doubtful_ = true;
+  // at all, and no open segment from r crosses it properly. The test is f^2 <= 2^-40
+  // |n|^2 max |r - v|^2; max |r - v|^2 <= 2 (|r - c|^2 + rad^2) rules most out cheaply.
+  if (f != 0.0) {
+    const Vec3d rc = r_world_ - p.c;
+    const double f2 = f * f, lim = 0x1p-40 * p.nn;
+    if (f2 <= lim * 2.0 * (dot(rc, rc) + p.rad2)) {
+      const Vec3d a = to_double(m_.corner(t, 0)), b = to_double(m_.corner(t, 1)), c = to_double(m_.corner(t, 2));
+      const Vec3d ra = r_world_ - a, rb = r_world_ - b, rcc = r_world_ - c;
+      const double reach2 = std::max(dot(ra, ra), std::max(dot(rb, rb), dot(rcc, rcc)));
+      if (f2 <= lim * reach2) doubtful_ = true;
+    }
   }
   return (f > 0.0) - (f < 0.0);
 }
@@ -497,6 +517,26 @@ double ReceiverIntegrator::clearance(size_t j) const {
     best = std::min(best, eu * eu + ev * ev);
   }
   return std::sqrt(best);
+}
+
+bool ReceiverIntegrator::clear(size_t j) const {
+  // clearance(j) >= clearance_threshold(), with a box test first: a piece whose bounding
+  // box, grown by the threshold, does not hold the sample is further away.
+  const Vec2f& sf = counter_.sample_uv(j);
+  const double su = sf.u, sv = sf.v, c = clear_min_, c2 = c * c;
+  for (size_t k = 0; k + 1 < pieces_.size(); k += 2) {
+    const double pu = pieces_[k].u, pv = pieces_[k].v, qu = pieces_[k + 1].u, qv = pieces_[k + 1].v;
+    if (su < std::min(pu, qu) - c || su > std::max(pu, qu) + c || sv < std::min(pv, qv) - c ||
+        sv > std::max(pv, qv) + c)
+      continue;
+    const double du = qu - pu, dv = qv - pv;
+    const double len2 = du * du + dv * dv;
+    double t = len2 > 0.0 ? ((su - pu) * du + (sv - pv) * dv) / len2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    const double eu = su - (pu + t * du), ev = sv - (pv + t * dv);
+    if (!(eu * eu + ev * ev >= c2)) return false;
+  }
+  return true;
 }
 
 }  // namespace visgate::ssv

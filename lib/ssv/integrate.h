@@ -158,12 +158,25 @@ Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
 // ceiling lights, far from it).
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f);
 
+// Per triangle, what facing() needs, computed once per solve (light-independent): the
+// unnormalised normal cross(b - a, c - a) and corner a in double, the vertex average c
+// and the squared distance from it to the farthest corner.
+struct TrianglePlane {
+  Vec3d n, a, c;
+  double nn = 0.0, rad2 = 0.0;
+};
+std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m);
+
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {
  public:
   // `frame_pos`: the prepared mesh's vertices in frame coordinates (double, not rounded).
   ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
-      : m_(m), fp_(frame_pos), frame_(frame) {}
+      : m_(m), own_planes_(triangle_planes(m)), planes_(own_planes_), fp_(frame_pos), frame_(frame) {}
+  // The same with the triangle planes computed once by the caller.
+  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes,
+                     const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
+      : m_(m), planes_(planes), fp_(frame_pos), frame_(frame) {}
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
   void begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv);
@@ -200,6 +213,8 @@ class ReceiverIntegrator {
   // `clearance_threshold` the distance below which a sample is not trusted as a
   // reference (derivation at its definition).
   double clearance(size_t j) const;
+  // clearance(j) >= clearance_threshold(), faster (early exit, box test per piece).
+  bool clear(size_t j) const;
   double clearance_threshold() const { return clear_min_; }
 
   // The point where the edge between prepared vertices i and j crosses h = 0, computed
@@ -211,6 +226,8 @@ class ReceiverIntegrator {
   void set_receiver(const Vec3f& receiver);
 
   const mesh::PreparedMesh& m_;
+  std::vector<TrianglePlane> own_planes_;
+  const std::vector<TrianglePlane>& planes_;
   const std::vector<Vec3d>& fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};

@@ -25,9 +25,11 @@ using Clock = std::chrono::steady_clock;
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f) : integrator(m, fp, f) {}
+  ThreadState(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes, const std::vector<Vec3d>& fp,
+              const LightFrame& f)
+      : integrator(m, planes, fp, f) {}
   ReceiverIntegrator integrator;
-  std::vector<uint32_t> candidates;
+  std::vector<WedgeState> candidates;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
@@ -119,13 +121,12 @@ Vec3f reference_point(const RefContext& c, int j) {
 // kCandidates samples that are clear, else Ambiguous, or NoCandidate when none of them
 // is clear.
 RefAnswer class_answer(const RefContext& c, int32_t d, bool expect_blocked, double& rays) {
-  const double need = c.integ.clearance_threshold();
   int seen = 0;
   bool cast = false;
   for (size_t k = 0; k < c.depth.size() && seen < kCandidates; ++k) {
     if (c.depth[k] != d) continue;
     ++seen;
-    if (!(c.integ.clearance(k) >= need)) continue;
+    if (!c.integ.clear(k)) continue;
     cast = true;
     const RefAnswer a = ranged_answer(c, reference_point(c, int(k)), expect_blocked, rays);
     if (a != RefAnswer::Ambiguous) return a;
@@ -171,6 +172,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
 
   SolveResult result = make_empty_result(scene);
   const std::vector<Edge> edges = mesh_edges(pm);
+  const std::vector<TrianglePlane> tri_planes = triangle_planes(pm);
 
   // Root box. Paper 001 (section 4.1) roots the BSP at the scene bounds, assuming every
   // query lies inside. Here every query point is known in advance: the receivers. The
@@ -221,7 +223,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
-    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, frame_pos, frame); });
+    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
       ThreadState& st = states.local();
       for (size_t i = range.begin(); i != range.end(); ++i) {
@@ -254,9 +256,12 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         auto c = Clock::now();
         // Validation: receiver inside the wedge and the edge a silhouette from it.
         st.valid.clear();
-        for (uint32_t wi : st.candidates) {
-          const Wedge& w = wedges[wi];
-          if (!point_in_wedge(w, r, eps)) continue;
+        // Only the planes still active in the node the wedge was found in are tested:
+        // the others contain the node's box, hence r. Accepting a wedge that excludes r
+        // is harmless anyway: its edge's projection misses L' and is clipped away.
+        for (const WedgeState& ws : st.candidates) {
+          const Wedge& w = wedges[ws.wedge];
+          if (!point_in_wedge(w, ws.mask, r, eps)) continue;
           int weight = st.integrator.edge_weight(edges[w.edge]);
           if (weight != 0) st.valid.emplace_back(w.edge, weight);
         }

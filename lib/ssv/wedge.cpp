@@ -195,6 +195,15 @@ void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, fl
   right_class = out_r ? BoxClass::Outside : (keep_r == 0 && contains_r) ? BoxClass::Contains : BoxClass::Partial;
 }
 
+bool point_in_wedge(const Wedge& w, uint32_t mask, const Vec3f& p, float eps) {
+  while (mask) {
+    const int i = __builtin_ctz(mask);
+    mask &= mask - 1;
+    if (w.planes[size_t(i)].eval(p) < -eps) return false;
+  }
+  return true;
+}
+
 bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
   for (int i = 0; i < w.plane_count; ++i)
     if (w.planes[size_t(i)].eval(p) < -eps) return false;

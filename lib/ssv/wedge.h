@@ -90,6 +90,9 @@ void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, fl
 
 // True when p lies inside every wedge plane within eps.
 bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps);
+// The same over the planes in `mask` only (the others are known to hold p: the BSP
+// node's box p lies in is inside them within eps).
+bool point_in_wedge(const Wedge& w, uint32_t mask, const Vec3f& p, float eps);
 
 struct WedgeBuildCounts {
   size_t edges = 0, below_light = 0, not_silhouette = 0, wedges = 0, planes_dropped = 0;

@@ -116,22 +116,28 @@ void WedgeBsp::split_leaf(Node& n) {
   n.split.store(true, std::memory_order_release);
 }
 
-void WedgeBsp::query(const Vec3f& p, std::vector<uint32_t>& out) {
+void WedgeBsp::query(const Vec3f& p, std::vector<WedgeState>& out) {
   Node* n = &root_;
   for (;;) {
     if (!n->split.load(std::memory_order_acquire)) {
       // A leaf: its list is final; the lock is needed only to split it.
       if (!should_split(*n, out.size())) {
-        for (uint32_t k = 0; k < n->count; ++k) out.push_back(n->wedges[k].wedge);
+        out.insert(out.end(), n->wedges, n->wedges + n->count);
         return;
       }
       std::unique_lock<std::mutex> guard(lock_of(n));
       if (!n->split.load(std::memory_order_relaxed)) split_leaf(*n);
     }
-    // Internal node: the wedges containing it.
-    for (uint32_t k = 0; k < n->kept_count; ++k) out.push_back(n->kept[k].wedge);
+    // Internal node: the wedges containing it (their masks are 0).
+    out.insert(out.end(), n->kept, n->kept + n->kept_count);
     n = (p[n->axis] <= n->mid) ? n->child : n->child + 1;
   }
+}
+
+void WedgeBsp::query(const Vec3f& p, std::vector<uint32_t>& out) {
+  std::vector<WedgeState> states;
+  query(p, states);
+  for (const WedgeState& s : states) out.push_back(s.wedge);
 }
 
 size_t WedgeBsp::memory_bytes() const {

@@ -42,6 +42,10 @@ class WedgeBsp {
 
   // WEDGE-QUERY: appends the indices (into the wedge list) of the candidate wedges of p.
   void query(const Vec3f& p, std::vector<uint32_t>& out);
+  // The same with each wedge's state in the node it came from: mask 0 for the wedges of
+  // internal nodes (they contain the node's box), the leaf's active planes otherwise;
+  // validation then tests only the planes in the mask (point_in_wedge).
+  void query(const Vec3f& p, std::vector<WedgeState>& out);
 
   size_t node_count() const { return nodes_.load(); }
   size_t entry_count() const { return entries_.load(); }  // wedge entries in all nodes
