@@ -308,20 +308,6 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   }
 }
 
-std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m) {
-  std::vector<TrianglePlane> out(m.triangles.size());
-  for (size_t t = 0; t < m.triangles.size(); ++t) {
-    TrianglePlane& p = out[t];
-    const Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
-    p.n = cross(b - a, c - a);
-    p.a = a;
-    p.c = (a + b + c) / 3.0;
-    p.nn = dot(p.n, p.n);
-    p.rad2 = std::max(dot(a - p.c, a - p.c), std::max(dot(b - p.c, b - p.c), dot(c - p.c, c - p.c)));
-  }
-  return out;
-}
-
 int ReceiverIntegrator::facing(size_t t) const {
   const auto& v = m_.triangles[t].v;
   if (!(fp_[v[0]].z > 0.0 || fp_[v[1]].z > 0.0 || fp_[v[2]].z > 0.0)) return 0;

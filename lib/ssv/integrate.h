@@ -158,15 +158,6 @@ Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
 // ceiling lights, far from it).
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f);
 
-// Per triangle, what facing() needs, computed once per solve (light-independent): the
-// unnormalised normal cross(b - a, c - a) and corner a in double, the vertex average c
-// and the squared distance from it to the farthest corner.
-struct TrianglePlane {
-  Vec3d n, a, c;
-  double nn = 0.0, rad2 = 0.0;
-};
-std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m);
-
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {
  public:

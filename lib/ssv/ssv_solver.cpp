@@ -216,7 +216,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
     std::vector<Wedge> wedges;
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback) {
-      wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts);
+      wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
     WedgeBsp bsp(wedges, root, min_node, eps, use_region);

@@ -7,6 +7,22 @@
 
 namespace visgate::ssv {
 
+std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m) {
+  std::vector<TrianglePlane> out(m.triangles.size());
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    TrianglePlane& p = out[t];
+    const Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
+    p.n = cross(b - a, c - a);
+    p.a = a;
+    p.nn = dot(p.n, p.n);
+    const double len = std::sqrt(p.nn);
+    p.unit = len > 0.0 ? p.n / len : Vec3d(0, 0, 0);
+    p.c = (a + b + c) / 3.0;
+    p.rad2 = std::max(dot(a - p.c, a - p.c), std::max(dot(b - p.c, b - p.c), dot(c - p.c, c - p.c)));
+  }
+  return out;
+}
+
 std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m) {
   std::vector<Edge> edges(m.edge_count());
   std::vector<uint8_t> seen(m.edge_count(), 0);
@@ -40,14 +56,6 @@ Plane to_float(const PlaneD& pl) {
   f.n = Vec3f(pl.n);
   f.d = float(dot(pl.n, pl.p));
   return f;
-}
-
-// Unit plane of the triangle, front (normal) side positive.
-PlaneD triangle_plane(const mesh::PreparedMesh& m, size_t t) {
-  Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
-  Vec3d n = cross(b - a, c - a);
-  double len = length(n);
-  return {len > 0.0 ? n / len : Vec3d(0, 0, 0), a};
 }
 
 // Orients a candidate plane so that L' lies on its closed negative side within tol;
@@ -212,7 +220,14 @@ bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
 
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
-                                WedgeBuildCounts& counts) {
+                                WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes) {
+  std::vector<TrianglePlane> own;
+  if (!planes) {
+    own = triangle_planes(m);
+    planes = &own;
+  }
+  // Unit plane of a triangle, front (normal) side positive.
+  auto triangle_plane = [&](size_t t) { return PlaneD{(*planes)[t].unit, (*planes)[t].a}; };
   std::vector<Wedge> wedges;
   const auto& L = frame.poly_world;
   const size_t nl = L.size();
@@ -237,11 +252,11 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     // active one (its facing is 0, integrate.h): no silhouette region, no culling by the
     // pair's planes.
     const bool pair = act1 && act2;
-    PlaneD p1 = triangle_plane(m, size_t(act1 ? e.t1 : e.t2)), p2{};
+    PlaneD p1 = triangle_plane(size_t(act1 ? e.t1 : e.t2)), p2{};
     if (pair) {
       // Potential silhouette w.r.t. L' (section 2.1): some light point sees exactly one
       // of the two triangles front-facing.
-      p2 = triangle_plane(m, size_t(e.t2));
+      p2 = triangle_plane(size_t(e.t2));
       bool all_pos = true, all_neg = true;
       for (const auto& l : L) {
         double f1 = p1.eval(l), f2 = p2.eval(l);

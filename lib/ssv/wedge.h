@@ -39,6 +39,16 @@ struct Edge {
   int32_t t1 = -1, t2 = -1;
 };
 
+// Per triangle, computed once per solve (light-independent): the unnormalised normal
+// cross(b - a, c - a) and corner a in double, the unit normal (0 for zero area), the
+// vertex average c and the squared distance from it to the farthest corner. Used by
+// ReceiverIntegrator::facing and build_wedges.
+struct TrianglePlane {
+  Vec3d n, a, unit, c;
+  double nn = 0.0, rad2 = 0.0;
+};
+std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m);
+
 // One edge per label of the prepared mesh, in label order.
 std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m);
 
@@ -109,6 +119,6 @@ struct WedgeBuildCounts {
 // one, matching its integration weight (integrate.h). `tol` is a distance.
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
-                                WedgeBuildCounts& counts);
+                                WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes = nullptr);
 
 }  // namespace visgate::ssv
