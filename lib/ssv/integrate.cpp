@@ -84,8 +84,36 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
     o.srank[size_t(o.sorder[size_t(k)])] = k;
     o.uhi_sorted[size_t(k)] = o.u_hi[size_t(o.sorder[size_t(k)])];
   }
+  // n buckets over [v_lo min, v_lo max] (about one sample each when evenly spread).
+  const double span = n > 0 ? double(o.vlo_sorted.back()) - o.vlo_sorted.front() : 0.0;
+  const int buckets = std::max(1, n);
+  o.bucket_scale = span > 0.0 ? double(buckets) / span : 0.0;
+  o.bucket_first.assign(size_t(buckets) + 1, n);
+  if (o.bucket_scale > 0.0)
+    for (int b = 0, k = 0; b <= buckets; ++b) {
+      const double start = double(o.vlo_sorted.front()) + double(b) / o.bucket_scale;
+      while (k < n && double(o.vlo_sorted[size_t(k)]) < start) ++k;
+      o.bucket_first[size_t(b)] = k;
+    }
   return o;
 }
+
+}  // namespace
+
+int SampleStrips::vlo_lower_bound(double x) const {
+  if (n == 0 || !(x > double(vlo_sorted.front()))) return 0;
+  if (x > double(vlo_sorted.back())) return n;
+  // The bucket of x, from a rounded product: count over it and its two neighbours, which
+  // holds the answer even if the rounding picked the neighbour of the right bucket.
+  const int buckets = int(bucket_first.size()) - 1;
+  const int b = std::clamp(int((x - double(vlo_sorted.front())) * bucket_scale), 0, buckets - 1);
+  const int k0 = bucket_first[size_t(std::max(b - 1, 0))], k1 = bucket_first[size_t(std::min(b + 2, buckets))];
+  int k = k0;
+  for (int i = k0; i < k1; ++i) k += double(vlo_sorted[size_t(i)]) < x;
+  return k;
+}
+
+namespace {
 
 }  // namespace
 
@@ -204,9 +232,8 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   const double slope = double(du) / double(dv);
   // Only samples with v_lo in [lo.v - max_height, hi.v) can have v in [lo.v, hi.v): a
   // range [kb, ke) of the v_lo order, met by a run of consecutive strips.
-  const int n = S.n;
-  const int kb = branchless_lower_bound(S.vlo_sorted.data(), n, double(lo.v) - S.max_height);
-  const int ke = branchless_lower_bound(S.vlo_sorted.data(), n, hi.v);
+  const int kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
+  const int ke = S.vlo_lower_bound(hi.v);
   if (kb >= ke) return;
   const int strips = int(S.strip_start.size()) - 1;
   // The strip holding position kb: the last strip start <= kb.
@@ -242,9 +269,9 @@ void DepthCounter::add_step(float vc, int w) {
   const SampleStrips& S = *strips_;
   // Boxes with v_lo >= vc: a suffix of the v_lo order. Boxes below it with v_lo within
   // the tallest box of vc may reach it: tested one by one.
-  const int kb = branchless_lower_bound(S.vlo_sorted.data(), S.n, vc);
+  const int kb = S.vlo_lower_bound(vc);
   diffv_[size_t(kb)] += w;
-  const int kr = branchless_lower_bound(S.vlo_sorted.data(), kb, double(vc) - S.max_height);
+  const int kr = S.vlo_lower_bound(double(vc) - S.max_height);
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
 }
 

@@ -109,6 +109,12 @@ struct SampleStrips {
   std::vector<float> strip_vmin, strip_vmax;  // per strip: min v_lo, max v_hi
   std::vector<int> sorder, srank;          // per strip, its samples sorted by u_hi
   std::vector<float> uhi_sorted;           // u_hi in that order
+  // Bucket index over v_lo for O(1) searches: bucket b starts at vlo_sorted[0] + b / scale;
+  // bucket_first[b] is the first position whose v_lo is not below that start.
+  double bucket_scale = 0.0;
+  std::vector<int> bucket_first;
+  // Position of the first v_lo not less than x (std::lower_bound on vlo_sorted).
+  int vlo_lower_bound(double x) const;
 };
 // Sample j's box is the box of jitter points j*K .. j*K+K-1 of `jitter_uv`.
 SampleStrips make_sample_strips(const std::vector<Vec2f>& jitter_uv, int samples, int jitter);

@@ -10,6 +10,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_solver.h"
 #include "lib/ssv/integrate.h"
@@ -142,12 +146,16 @@ RefAnswer class_answer(const RefContext& c, int32_t d, bool expect_blocked, doub
 // the gate, and the minimum class stands on its own clear reference.
 constexpr int kCheckClasses = 4;
 
-RefAnswer check_answer(const RefContext& c, int32_t dmin, double& rays) {
+RefAnswer check_answer(const RefContext& c, int32_t dmin, int32_t second, double& rays) {
   int32_t d = dmin;
   bool cast = false;
   for (int k = 0; k < kCheckClasses; ++k) {
-    int32_t up = std::numeric_limits<int32_t>::max();
-    for (int32_t x : c.depth) up = std::min(up, x > d ? x : std::numeric_limits<int32_t>::max());
+    // The next class above d (the second-lowest is known from the caller's scan).
+    int32_t up = second;
+    if (k > 0) {
+      up = std::numeric_limits<int32_t>::max();
+      for (int32_t x : c.depth) up = std::min(up, x > d ? x : std::numeric_limits<int32_t>::max());
+    }
     if (up == std::numeric_limits<int32_t>::max()) break;
     const RefAnswer a = class_answer(c, up, true, rays);
     if (a == RefAnswer::Visible || a == RefAnswer::Blocked) return a;
@@ -277,16 +285,17 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         // Unclear samples (within the margin of a projected piece, DepthCounter::finish)
         // take no part in the classes: their depth becomes kUnclear and each gets its
         // own ray below.
-        int32_t dmin = kUnclear, dmax = std::numeric_limits<int32_t>::min();
+        int32_t dmin = kUnclear, second = kUnclear;  // lowest and second-lowest class
         size_t unclear = 0;
         for (size_t j = 0; j < st.depth.size(); ++j) {
           const bool u = st.unclear[j] != 0;
           unclear += u;
-          st.depth[j] = u ? kUnclear : st.depth[j];
-          dmin = std::min(dmin, u ? kUnclear : st.depth[j]);
-          dmax = std::max(dmax, u ? std::numeric_limits<int32_t>::min() : st.depth[j]);
+          const int32_t x = u ? kUnclear : st.depth[j];
+          st.depth[j] = x;
+          second = x < dmin ? dmin : (x > dmin ? std::min(second, x) : second);
+          dmin = std::min(dmin, x);
         }
-        const bool one_class = dmin >= dmax;
+        const bool one_class = second == kUnclear;
         RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
         if (dmin == kUnclear && !st.integrator.doubtful()) {
           ref = RefAnswer::Blocked;  // no clear sample: every one gets its own ray below
@@ -295,7 +304,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
           ref = class_answer(ctx, dmin, st.expect_blocked, st.rays);
           const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
           if (decided) st.expect_blocked = ref == RefAnswer::Blocked;
-          if (decided && !one_class) check = check_answer(ctx, dmin, st.rays);
+          if (decided && !one_class) check = check_answer(ctx, dmin, second, st.rays);
           if (check == RefAnswer::NoCandidate) {
             st.unchecked += 1;
             check = RefAnswer::Blocked;
@@ -310,12 +319,21 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
           st.fallback += light.samples;
           unclear = 0;
         } else if (ref == RefAnswer::Visible) {
-          // Bits of the minimum class, set a word at a time (the bits start cleared).
+          // Bits of the minimum class, set a word at a time (the bits start cleared),
+          // four samples per SSE2 compare.
           for (int j = 0; j < light.samples;) {
             const size_t bit = offset + size_t(j);
             const int run = std::min(light.samples - j, 64 - int(bit & 63));
             uint64_t word = 0;
-            for (int k = 0; k < run; ++k) word |= uint64_t(st.depth[size_t(j + k)] == dmin) << k;
+            int k = 0;
+#if defined(__SSE2__)
+            const __m128i dm = _mm_set1_epi32(dmin);
+            for (; k + 4 <= run; k += 4) {
+              const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st.depth.data() + j + k));
+              word |= uint64_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(x, dm)))) << k;
+            }
+#endif
+            for (; k < run; ++k) word |= uint64_t(st.depth[size_t(j + k)] == dmin) << k;
             rr.visible_bits[bit >> 6] |= word << (bit & 63);
             j += run;
           }
