@@ -668,3 +668,77 @@ TEST(SsvDegenerate, EdgeInTheLightPlaneKeepsItsWedge) {
   }
   EXPECT_TRUE(found);
 }
+
+// ---------------------------------------------------------------- reference rays and the light frame
+
+TEST(SsvDegenerate, LightPointOnATriangleInTheLightPlaneIsNotTheReference) {
+  // Hand-worked (fuzz_ssv 1653e5da): light [-1,1]^2 at z = 2 emitting down, explicit
+  // samples (-0.5, -0.5, 2) and (0.5, 0.5, 2), receiver at the origin, and one triangle
+  // lying in the light plane under sample 0: (-0.75,-0.75,2), (0,-0.75,2), (-0.75,0,2).
+  // No vertex lies below the plane (h > 0), so the triangle meets no open segment: both
+  // relations are visible (sample 0 with margin 0: its endpoint is on the face), both
+  // samples have the same depth, and sample 0 comes first. Embree's inclusive tfar
+  // reports the endpoint hit, so a plain reference ray to sample 0 would call the class
+  // blocked; the ranged rays see a hit only at the end and move to sample 1.
+  for (bool regions : {true, false}) {
+    Scene s;
+    s.name = "in-plane";
+    Light l = make_square_light_down(Vec3d(0, 0, 2), 1.0, 2, 1);
+    l.jitter = 1;
+    l.pattern = SamplePattern::Explicit;
+    l.explicit_samples = {Vec3f(-0.5f, -0.5f, 2), Vec3f(0.5f, 0.5f, 2)};
+    s.lights.push_back(l);
+    s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+    s.mesh.vertices = {Vec3f(-0.75f, -0.75f, 2), Vec3f(0, -0.75f, 2), Vec3f(-0.75f, 0, 2)};
+    s.mesh.triangles = {{0, 1, 2}};
+    ASSERT_TRUE(finish_scene(s).ok());
+    oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+    ASSERT_EQ(ex.classes[0], "vv");
+    SolveResult r = run_ssv(s, regions);
+    EXPECT_TRUE(r.receivers[0].visible(0));
+    EXPECT_TRUE(r.receivers[0].visible(1));
+    EXPECT_EQ(r.stats.get("fallback_relations"), 0.0) << "decided by a second reference, not by rays";
+  }
+}
+
+TEST(SsvLightFrame, NearlyCoincidentVerticesAreDropped) {
+  // fuzz_ssv 0741b915 / 51dac59d: a light vertex within 1e-17..1e-44 of the next. The
+  // frame keeps a triangle (the short edge is gone), stays usable, and every side plane
+  // through a receiver has a non-zero normal: the solve matches the oracle.
+  Scene s;
+  s.name = "near-duplicate-vertex";
+  Light l;
+  l.polygon = {Vec3f(-0.5f, -0.5f, 2), Vec3f(-0.5f, 0.5f, 2), Vec3f(0.5f, 1e-30f, 2), Vec3f(0.5f, 0, 2)};
+  l.samples = 16;
+  l.jitter = 4;
+  l.seed = 3;
+  s.lights.push_back(l);
+  for (int k = 0; k < 16; ++k) s.receivers.push_back({Vec3f(-0.9f + 0.12f * float(k), 0.3f - 0.05f * float(k), 0), Vec3f(0, 0, 1)});
+  shapes::add_sphere(s.mesh, Vec3d(0.1, 0.05, 1.0), 0.3, 10, 6);
+  ASSERT_TRUE(finish_scene(s).ok());
+  const LightFrame f = make_light_frame(s.lights[0]);
+  EXPECT_EQ(f.poly.size(), 3u);
+  EXPECT_TRUE(f.usable);
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+  for (bool regions : {true, false}) {
+    SolveResult r = run_ssv(s, regions);
+    EXPECT_GT(expect_matches_oracle(s, ex, r, "near-duplicate vertex"), 150u);
+    EXPECT_EQ(r.stats.get("fallback_relations"), 0.0);
+  }
+}
+
+TEST(SsvLightFrame, SampleFarOutsideTheLightSendsTheLightToRays) {
+  // fuzz_ssv 9ede82eb and others: an explicit sample 1e36 outside the light polygon. L'
+  // may grow to 4 times the polygon at most; beyond, the light is answered by one ray
+  // per relation (counted), and the answers still match the oracle.
+  Scene s = quad_scene();
+  s.lights[0].explicit_samples[5] = Vec3f(0.25f, 4.69e36f, 2);
+  s.mesh.vertices = {Vec3f(-0.3f, -0.4f, 1), Vec3f(0.6f, -0.2f, 1), Vec3f(0.1f, 0.7f, 1.2f)};
+  s.mesh.triangles = {{0, 1, 2}};
+  ASSERT_TRUE(finish_scene(s).ok());
+  EXPECT_FALSE(make_light_frame(s.lights[0]).usable);
+  SolveResult r = run_ssv(s, true);
+  EXPECT_EQ(r.stats.get("fallback_relations"), double(s.relation_count()));
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+  EXPECT_GT(expect_matches_oracle(s, ex, r, "far sample"), 10u);
+}
