@@ -6,8 +6,14 @@
 // of relative depth complexity per sample (integrate.h) and one reference ray.
 //
 // Each light is processed in turn with its own wedges and BSP. Per receiver and light:
-// the samples of minimum relative depth complexity are visible iff one Embree ray
-// (RTC_SCENE_FLAG_ROBUST) to a point of that class is unblocked; all others are blocked.
+// the samples of minimum relative depth complexity are visible iff one ray to a point
+// of that class is unblocked; all others are blocked. Every ray asks two Embree scenes
+// (RTC_SCENE_FLAG_ROBUST and default) and settles their disagreements with the
+// double-precision test of lib/raycast (stat ray_disputes). Triangles narrower than
+// 2^-20 of their length are left out of counting and rays alike (they decide only
+// relations of margin below 1e-6; stat slivers_dropped), and SSV computes with FTZ and
+// DAZ cleared (Embree sets them in TBB workers), so it reads denormal inputs as the
+// oracle does (ssv_solver.cpp).
 // Beyond the paper, a check ray to a class above the minimum must find it blocked. The
 // reference point is kept clear of every projected piece and in general position, and
 // hits within 2^-18 of either end of its segment are told apart from interior hits
@@ -48,8 +54,9 @@
 // reference_ray_seconds summed over threads (thread-seconds; the ray time includes the
 // fallback rays), reference_rays (reference and check rays, ranged), fallback_relations,
 // inconsistent_receivers and doubtful_receivers (answered by one ray per sample, see
-// above), unchecked_receivers (no clear sample above the minimum class to check), plus
-// prepare_seconds (mesh preparation, excluded from `seconds`).
+// above), unchecked_receivers (no clear sample above the minimum class to check),
+// unclear_relations, ray_disputes, slivers_dropped, plus prepare_seconds (mesh
+// preparation, excluded from `seconds`).
 #pragma once
 
 #include "lib/solver.h"
