@@ -742,3 +742,21 @@ TEST(SsvLightFrame, SampleFarOutsideTheLightSendsTheLightToRays) {
   oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
   EXPECT_GT(expect_matches_oracle(s, ex, r, "far sample"), 10u);
 }
+
+TEST(SsvDegenerate, NearlyEdgeOnTriangleBoundary) {
+  // The nearly-edge-on rule of ReceiverIntegrator::facing: a triangle whose plane passes
+  // within 2^-20 (relative to the receiver's distance from its farthest corner, here
+  // sqrt(0.5^2 + 1.5^2) = 1.58) of the receiver makes the receiver doubtful (rays). The
+  // vertical triangle in the plane x = d, seen by a receiver at the origin: d = 2^-22 is
+  // inside the band (2^-22 < 1.5e-6), d = 2^-18 outside it; both must match the oracle.
+  for (float d : {0x1p-22f, 0x1p-18f}) {
+    Scene s = quad_scene();
+    s.mesh.vertices = {Vec3f(d, -0.5f, 0.5f), Vec3f(d, 0.5f, 0.5f), Vec3f(d, 0, 1.5f)};
+    s.mesh.triangles = {{0, 1, 2}};
+    ASSERT_TRUE(finish_scene(s).ok());
+    SolveResult r = run_ssv(s, true);
+    EXPECT_EQ(r.stats.get("doubtful_receivers"), d < 0x1p-20f ? 1.0 : 0.0) << d;
+    oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+    expect_matches_oracle(s, ex, r, "edge-on d = " + std::to_string(d));
+  }
+}
