@@ -294,6 +294,41 @@ TEST(Raycast, VerifiedHitsAreConfirmedByTheDoubleTest) {
   EXPECT_LT(differ * 100, total) << differ << " of " << total;
 }
 
+TEST(Raycast, RangedQueriesTellEndpointHitsFromInteriorHits) {
+  // Segment (0,0,0) -> (0,0,2) and unit triangles in z = 1 (t = 0.5) and z = 2 (through
+  // the far endpoint, t = 1). The ranged query sees a hit iff its t lies in the range,
+  // for Embree and for the double-precision fallback alike; the endpoint hit counts for
+  // [0, 1] (Embree's inclusive tfar), not for [0, 1 - 2^-18], and for [0, 1 + 2^-18].
+  TriangleSoup mid, end;
+  mid.vertices = {Vec3f(-1, -1, 1), Vec3f(1, -1, 1), Vec3f(0, 1, 1)};
+  mid.triangles = {{0, 1, 2}};
+  end.vertices = {Vec3f(-1, -1, 2), Vec3f(1, -1, 2), Vec3f(0, 1, 2)};
+  end.triangles = {{0, 1, 2}};
+  const Vec3f a(0, 0, 0), b(0, 0, 2);
+  const float lo = 1.0f - 0x1p-18f, hi = 1.0f + 0x1p-18f;
+  raycast::EmbreeScene em(mid, true), ee(end, true);
+  EXPECT_TRUE(em.occluded(a, b, 0.0f, 0.6f));
+  EXPECT_FALSE(em.occluded(a, b, 0.0f, 0.4f));
+  EXPECT_FALSE(em.occluded(a, b, 0.6f, 2.0f));
+  EXPECT_TRUE(ee.occluded(a, b, 0.0f, 1.0f));
+  EXPECT_FALSE(ee.occluded(a, b, 0.0f, lo));
+  EXPECT_TRUE(ee.occluded(a, b, 0.0f, hi));
+  EXPECT_TRUE(ee.occluded(a, b, lo, hi));
+  EXPECT_TRUE(raycast::fallback_occluded(mid, a, b, 0.0, 0.6));
+  EXPECT_FALSE(raycast::fallback_occluded(mid, a, b, 0.0, 0.4));
+  EXPECT_FALSE(raycast::fallback_occluded(mid, a, b, 0.6, 2.0));
+  EXPECT_TRUE(raycast::fallback_occluded(end, a, b, 0.0, 1.0));
+  EXPECT_FALSE(raycast::fallback_occluded(end, a, b, 0.0, lo));
+  EXPECT_TRUE(raycast::fallback_occluded(end, a, b, 0.0, hi));
+  // Reversed: the triangle at the origin end is at t = 1 seen from the far end.
+  // Embree's robust intersector includes tnear too (a hit at the origin counts), and so
+  // does the ranged fallback; only a positive tnear excludes the origin end.
+  EXPECT_TRUE(ee.occluded(b, a, 0.0f, 1.0f));
+  EXPECT_FALSE(ee.occluded(b, a, 0x1p-18f, 1.0f));
+  EXPECT_TRUE(raycast::fallback_occluded(end, b, a, 0.0, 0.5));
+  EXPECT_FALSE(raycast::fallback_occluded(end, b, a, 0x1p-18, 0.5));
+}
+
 TEST(Solver, OptionsAreChecked) {
   auto s = make_solver("embree");
   SolveOptions o;

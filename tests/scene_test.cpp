@@ -213,6 +213,15 @@ TEST(Light, SamplePositionHashIsFixed) {
       const Vec3f& p = sample_position(l, j, i);
       EXPECT_EQ(&p, &l.jitter_point(j, int(relation_hash(i, uint64_t(j), 5) % 4)));
     }
+  // Pinned values (the splitmix64 chain of DESIGN section 3, computed independently in
+  // Python from rng.h's constants), and the two-step form.
+  EXPECT_EQ(relation_hash(0, 0, 1), 0xb18a02f46d8d86c3ull);
+  EXPECT_EQ(relation_hash(7, 3, 5), 0x356134838b0fb435ull);
+  EXPECT_EQ(relation_hash(4095, 255, 1), 0x1b4beb9ae4c57ea4ull);
+  for (uint64_t seed : {0ull, 5ull, 0xFFFFFFFFFFFFFFFFull})
+    for (uint64_t i : {0ull, 1ull, 4095ull, 1ull << 40})
+      for (uint64_t j = 0; j < 300; ++j)
+        EXPECT_EQ(relation_hash_step(relation_hash_prefix(i, seed), j), relation_hash(i, j, seed));
 }
 
 TEST(Light, ExplicitSamplesAreUsedVerbatim) {

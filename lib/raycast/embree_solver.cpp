@@ -31,6 +31,46 @@ RTCDevice shared_device() {
 // Sign of a double as -1, 0, +1.
 int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
 
+// Closed point-in-triangle test of a point x in the triangle's plane (n its normal).
+// The point must lie in the triangle's box (grown by 2^-40 of the largest magnitude,
+// far above the rounding of x): without this a sliver fails the sign test below, for a
+// triangle of area 4e-25 the edge products of a point on the extension of its long
+// edges all round to zero or agree, and a point 0.7 beyond the sliver passed as inside
+// (fuzz_embree campaign, corpus/embree-robust/sliver/6cbacd9b: a robust-mode false hit
+// that this test then confirmed). Then, in the projection that drops n's dominant axis,
+// the three edge cross products agree in sign (zeros allowed).
+bool point_in_triangle_closed(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, const Vec3d& x) {
+  const Vec3d lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
+  const Vec3d mag = vmax(vabs(lo), vmax(vabs(hi), vabs(x)));
+  const double slack = 0x1p-40 * std::max(mag.x, std::max(mag.y, mag.z));
+  for (int k = 0; k < 3; ++k)
+    if (x[k] < lo[k] - slack || x[k] > hi[k] + slack) return false;
+  const Vec3d an = vabs(n);
+  const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
+    return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
+  };
+  const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
+  return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
+}
+
+// The ranged test of fallback_occluded(soup, from, to, t0, t1) for one triangle.
+bool line_range_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, const Vec3f& from, const Vec3f& to,
+                              double t0, double t1) {
+  const Vec3d p = to_double(from), q = to_double(to);
+  const Vec3d a = to_double(fa), b = to_double(fb), c = to_double(fc);
+  // The line's crossing parameter t = dp / (dp - dq) (from the triangle's own normal,
+  // as in segment_hits_triangle); a line in or parallel to the plane is a miss.
+  const Vec3d n = cross(b - a, c - a);
+  const double dp = dot(n, p - a), dq = dot(n, q - a);
+  if (dp == dq) return false;
+  const double tc = dp / (dp - dq);
+  if (!(tc >= t0 && tc <= t1)) return false;
+  const Vec3d x = tc == 1.0 ? q : p + (q - p) * tc;
+  return point_in_triangle_closed(a, b, c, n, x);
+}
+
 }  // namespace
 
 bool within_embree_bound(const Vec3f& p) {
@@ -56,29 +96,7 @@ bool segment_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, co
   if (sq == 0) x = q;
   else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
   else x = p + (q - p) * (dp / (dp - dq));
-  // The crossing point must lie in the triangle's box (grown by 2^-40 of the largest
-  // magnitude, far above the rounding of x). Without this a sliver fails the sign test
-  // below: for a triangle of area 4e-25 the edge products of a point on the extension
-  // of its long edges all round to zero or agree, and a point 0.7 beyond the sliver
-  // passed as inside (fuzz_embree campaign, corpus/embree-robust/sliver/a70c2a9d: a
-  // robust-mode false hit that this test then confirmed).
-  {
-    const Vec3d lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
-    const Vec3d mag = vmax(vabs(lo), vmax(vabs(hi), vabs(x)));
-    const double slack = 0x1p-40 * std::max(mag.x, std::max(mag.y, mag.z));
-    for (int k = 0; k < 3; ++k)
-      if (x[k] < lo[k] - slack || x[k] > hi[k] + slack) return false;
-  }
-  // Closed point-in-triangle test in the projection that drops n's dominant axis:
-  // the three edge cross products agree in sign (zeros allowed).
-  const Vec3d an = vabs(n);
-  const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
-  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
-    return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
-  };
-  const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
-  return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
+  return point_in_triangle_closed(a, b, c, n, x);
 }
 
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
@@ -87,29 +105,40 @@ bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f&
   return false;
 }
 
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to, double t0, double t1) {
+  for (const auto& t : soup.triangles)
+    if (line_range_hits_triangle(soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]], from, to, t0, t1))
+      return true;
+  return false;
+}
+
 namespace {
 
 // The intersect context of a verified query: Embree passes it to the filter, which
-// needs the segment's float endpoints (org + dir would be rounded again).
+// needs the query's float endpoints (org + dir would be rounded again) and its range.
 struct VerifyContext {
   RTCIntersectContext base;  // first member: Embree sees a plain RTCIntersectContext
   Vec3f from, to;
-  const TriangleSoup* soup;
-  size_t rejected;
+  double t0 = 0.0, t1 = 1.0;
+  bool ranged = false;       // false: the segment test, t in (0, 1]
+  const TriangleSoup* soup = nullptr;
+  size_t rejected = 0;
 };
 
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
-// precision segment/triangle test agrees (see embree_solver.h, "Hit verification").
+// precision test of the same query agrees (see embree_solver.h, "Hit verification").
 void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
-  const auto* vc = reinterpret_cast<const VerifyContext*>(args->context);
+  auto* vc = reinterpret_cast<VerifyContext*>(args->context);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const auto& t = vc->soup->triangles[prim];
-    if (!segment_hits_triangle(vc->soup->vertices[t[0]], vc->soup->vertices[t[1]], vc->soup->vertices[t[2]], vc->from,
-                               vc->to)) {
+    const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
+    const bool confirmed = vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, vc->to, vc->t0, vc->t1)
+                                      : segment_hits_triangle(a, b, c, vc->from, vc->to);
+    if (!confirmed) {
       args->valid[i] = 0;
-      ++const_cast<VerifyContext*>(vc)->rejected;
+      ++vc->rejected;
     }
   }
 }
@@ -153,12 +182,27 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
     fallback_rays_.fetch_add(1, std::memory_order_relaxed);
     return fallback_occluded(*soup_, from, to);
   }
+  return occluded_embree(from, to, 0.0f, 1.0f, false);
+}
+
+bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
+  VG_CHECK(tnear >= 0.0f && tnear <= tfar);
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to, tnear, tfar);
+  }
+  return occluded_embree(from, to, tnear, tfar, true);
+}
+
+bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged) const {
   VerifyContext vc;
   rtcInitIntersectContext(&vc.base);
   vc.from = from;
   vc.to = to;
+  vc.t0 = tnear;
+  vc.t1 = tfar;
+  vc.ranged = ranged;
   vc.soup = soup_;
-  vc.rejected = 0;
   RTCRay ray;
   ray.org_x = from.x;
   ray.org_y = from.y;
@@ -167,8 +211,8 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
   ray.dir_x = d.x;
   ray.dir_y = d.y;
   ray.dir_z = d.z;
-  ray.tnear = 0.0f;
-  ray.tfar = 1.0f;
+  ray.tnear = tnear;
+  ray.tfar = tfar;
   ray.time = 0.0f;
   ray.mask = 0xFFFFFFFFu;
   ray.id = 0;

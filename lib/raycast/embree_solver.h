@@ -51,6 +51,10 @@ bool within_embree_bound(const Vec3f& p);
 // t in (0, 1] (the receiver end excluded, the light end included), closed triangle
 // edges; a segment in the triangle's plane is a miss.
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to);
+// The same over a parameter range of the line from + t (to - from): hits with t in
+// [t0, t1] (0 <= t0 <= t1; t1 may exceed 1; closed at both ends like Embree's robust
+// intersector, which includes tnear as well as tfar), same tests and error.
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to, double t0, double t1);
 
 // The test of fallback_occluded for one triangle (a, b, c), with the same conventions.
 bool segment_hits_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& from, const Vec3f& to);
@@ -69,7 +73,8 @@ bool segment_hits_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, const
 // (corpus/embree-robust/sliver/2df110a9..., an open third-party case; fuzz_embree
 // found it, and it made ISS leaf rays and SSV reference rays answer false-blocked with
 // margin 1e-3). With verification an occlusion filter re-tests every candidate hit
-// with segment_hits_triangle and rejects the ones it does not confirm, so a hit needs
+// with segment_hits_triangle (ranged queries: the ranged test of fallback_occluded)
+// and rejects the ones it does not confirm, so a hit needs
 // both Embree and the double-precision test; misses are Embree's alone (the filter sees
 // only candidates). The filter runs on hits only, which occlusion rays stop at.
 class EmbreeScene {
@@ -83,6 +88,10 @@ class EmbreeScene {
   // [0, 1] of from + t (to - from), Embree's own endpoint semantics). Segments outside
   // Embree's domain (see above) go to fallback_occluded.
   bool occluded(const Vec3f& from, const Vec3f& to) const;
+  // The same over the parameter range [tnear, tfar] of from + t (to - from) (Embree's
+  // ray range: 0 <= tnear <= tfar, tfar may exceed 1), for methods that must tell hits
+  // near an endpoint from hits inside the segment (SSV's reference ray).
+  bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const;
 
   // Queries answered by fallback_occluded so far.
   size_t fallback_rays() const { return fallback_rays_.load(std::memory_order_relaxed); }
@@ -90,6 +99,9 @@ class EmbreeScene {
   size_t rejected_hits() const { return rejected_hits_.load(std::memory_order_relaxed); }
 
  private:
+  // ranged: the filter confirms with the ranged test, else with segment_hits_triangle.
+  bool occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged) const;
+
   const TriangleSoup* soup_;
   bool verify_;
   void* scene_ = nullptr;       // nullptr when the mesh is outside Embree's domain

@@ -43,7 +43,7 @@ AABB Scene::bounds() const {
 }
 
 uint64_t relation_hash(uint64_t receiver, uint64_t sample, uint64_t seed) {
-  return splitmix64(splitmix64(splitmix64(seed) ^ receiver) ^ (sample * 0xD1B54A32D192ED03ull));
+  return relation_hash_step(relation_hash_prefix(receiver, seed), sample);
 }
 
 namespace {

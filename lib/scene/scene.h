@@ -14,6 +14,7 @@
 #include "lib/geom/aabb.h"
 #include "lib/geom/vec.h"
 #include "lib/scene/error.h"
+#include "lib/scene/rng.h"
 
 namespace visgate {
 
@@ -83,6 +84,14 @@ struct Scene {
 // the seed, the receiver index and the sample index. Never change it: stored corpus cases
 // depend on it.
 uint64_t relation_hash(uint64_t receiver, uint64_t sample, uint64_t seed);
+
+// The same hash in two steps, for loops over the samples of one receiver (SSV picks the
+// jitter point of every sample of a receiver): relation_hash(i, j, seed) ==
+// relation_hash_step(relation_hash_prefix(i, seed), j).
+inline uint64_t relation_hash_prefix(uint64_t receiver, uint64_t seed) { return splitmix64(splitmix64(seed) ^ receiver); }
+inline uint64_t relation_hash_step(uint64_t prefix, uint64_t sample) {
+  return splitmix64(prefix ^ (sample * 0xD1B54A32D192ED03ull));
+}
 
 // The light point of relation (receiver i, sample j of `light`): jitter point
 // h(i, j, light.seed) mod K of sample j.

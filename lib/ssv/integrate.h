@@ -51,15 +51,21 @@
 // ray removes. Pieces whose projection misses L' add nothing, so culling wedges that
 // exclude the receiver is exact.
 //
-// Sub-linear integration: the samples are ordered by v and cut into about sqrt(N) strips
-// of consecutive v, each ordered by u. The orders come from the light's jitter points,
-// sorted once per light (JitterOrder) and filtered per receiver in linear time, so no
-// receiver sorts anything. A piece updates the strips its v-range covers: in
-// a strip it covers entirely, the samples left of the line's u-range form a prefix of the
-// u-order (one difference-array update), only samples inside the line's u-range in that
-// strip are tested one by one; partially covered strips (at most two) are tested one by
-// one; rule 2 is one update of a difference array in v-order. Cost per piece
-// O(sqrt(N) log N + samples near the line) instead of O(N).
+// Sub-linear integration. Each sample lies in its jitter box (the box of its K jitter
+// points in (u, v)); the samples are ordered once per light by the boxes' v_lo and cut
+// into ceil(sqrt(N)) strips of consecutive v_lo, each ordered by the boxes' u_hi
+// (SampleStrips). Per receiver only the picked points are filled in: no receiver sorts
+// or filters anything. A piece updates the strips whose v-extent (the union of their
+// boxes' v-ranges) meets its v-range. In a strip inside the v-range, every sample whose
+// box lies left of the line's u-range over the strip (u_hi below it, with a margin) is
+// surely left: a prefix of the u_hi order, one difference-array update. Samples further
+// in the order are tested one by one until u_hi exceeds the line's u-range by the
+// widest box (beyond, every box lies right of the line). Strips that only partly meet
+// the v-range are tested one by one. Rule 2 is one difference-array update in v_lo order
+// (boxes at or above the threshold) plus one-by-one tests of the boxes that straddle it.
+// Every bulk decision is one the one-by-one test would make, so the result does not
+// depend on the boxes; they only decide how much is tested one by one. Cost per piece
+// O(sqrt(N) log N + samples whose boxes are near the line), against O(N).
 //
 // Active triangles. R_T is empty for a triangle with no vertex strictly above the light
 // plane (entirely below it, lying in it, or touching it from below): such a triangle
@@ -68,15 +74,19 @@
 // A triangle with a vertex above adds every clipped edge, including an edge lying in the
 // light plane (it projects onto itself), so its boundary stays closed.
 //
-// Guarantee: float32 with these failure modes, all near-degenerate: a sample within
+// Precision. Clipping and projection run in double on unrounded frame coordinates; the
+// projected pieces are rounded once to float, like the samples, and counted in float.
+//
+// Guarantee: float32 counts with these failure modes, all near-degenerate: a sample within
 // float rounding of a projected edge line (the segment passes near the edge; exactly on
 // it the segment touches the edge and the relation itself is degenerate, and such a
 // sample is never used as the reference, see clearance below); a receiver
 // within rounding of a triangle's plane (the triangle projects to a sliver, whose sign
 // may be wrong: only samples inside the sliver are affected); pieces whose projection
 // touches the boundary of L' (rule 2 thresholds v_Q, v_P carry rounding: samples whose v
-// lies within rounding of such a threshold may be miscounted); edges passing within
-// rounding of the receiver (projection undefined, the piece is dropped).
+// lies within rounding of such a threshold may be miscounted). An edge passing through
+// (within rounding of) the receiver has no projection: the receiver is marked doubtful
+// and answered by rays.
 #pragma once
 
 #include <cstdint>
@@ -88,58 +98,88 @@
 
 namespace visgate::ssv {
 
-// The orders of all jitter points of a light that the strips are cut from, computed once
-// per light: every receiver picks one jitter point per sample, so its sample orders are
-// these orders filtered, in linear time and without sorting per receiver.
-struct JitterOrder {
-  std::vector<uint32_t> by_v;         // jitter points sorted by v
-  std::vector<uint32_t> strip_start;  // strips: ranges of by_v; strips + 1 entries
-  std::vector<uint32_t> by_u;         // per strip, its jitter points sorted by u (same ranges)
+// The strips of a light's samples (see "Sub-linear integration"), built once per light.
+struct SampleStrips {
+  int n = 0;                               // samples
+  std::vector<float> u_hi, v_lo;           // per sample: its box's u_hi and v_lo
+  double max_width = 0.0, max_height = 0.0;  // largest box extent in u and in v (exact)
+  std::vector<int> vorder, vrank;          // samples sorted by v_lo; position of each
+  std::vector<float> vlo_sorted;           // v_lo in that order
+  std::vector<int> strip_start;            // strips: ranges of the v_lo order; strips + 1
+  std::vector<float> strip_vmin, strip_vmax;  // per strip: min v_lo, max v_hi
+  std::vector<int> sorder, srank;          // per strip, its samples sorted by u_hi
+  std::vector<float> uhi_sorted;           // u_hi in that order
+  // Bucket index over v_lo for O(1) searches: bucket b starts at vlo_sorted[0] + b / scale;
+  // bucket_first[b] is the first position whose v_lo is not below that start.
+  double bucket_scale = 0.0;
+  std::vector<int> bucket_first;
+  // Position of the first v_lo not less than x (std::lower_bound on vlo_sorted).
+  int vlo_lower_bound(double x) const;
 };
-JitterOrder make_jitter_order(const std::vector<Vec2f>& jitter_uv, int samples);
+// Sample j's box is the box of jitter points j*K .. j*K+K-1 of `jitter_uv`.
+SampleStrips make_sample_strips(const std::vector<Vec2f>& jitter_uv, int samples, int jitter);
 
 // Per-sample relative depth-complexity counters with the strip structure above.
 class DepthCounter {
  public:
-  // Samples in frame (u, v); `extent` the light's size (for the bulk-test margin). Cuts
-  // ceil(sqrt(N)) strips of equal count (sorting).
+  // Samples in frame (u, v), one point each (their own strips are built: sorting);
+  // `extent` the light's size (for the bulk-test margin).
   void reset(const std::vector<Vec2f>& uv, double extent);
-  // Samples are jitter points: sample j is jitter point pick[j]; `owner` maps jitter
-  // points to samples (owner[k] = j + 1 for picked points, 0 otherwise).
-  void reset(const std::vector<Vec2f>& jitter_uv, const JitterOrder& order, const std::vector<uint32_t>& pick,
-             const std::vector<uint32_t>& owner, double extent);
+  // Samples of a light with its strips: sample j is jitter point pick[j], which lies in
+  // sample j's box.
+  void reset(const SampleStrips& strips, const std::vector<Vec2f>& jitter_uv, const std::vector<uint32_t>& pick,
+             double extent);
   // Rule 1 for the piece P -> Q with weight w.
   void add_piece(const Vec2f& P, const Vec2f& Q, int w);
   // Rule 2: +w to every sample with v >= vc.
   void add_step(float vc, int w);
-  // The counters per sample (index as given to reset).
-  void finish(std::vector<int32_t>& depth);
+  // The counters per sample (index as given to reset), and optionally per sample whether
+  // it lies within the margin of some piece's line in that piece's v-range (unclear: its
+  // count may be off by that piece's weight).
+  void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr);
   size_t size() const { return uv_.size(); }
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
-  void finish_reset();
+  void clear_counters();
 
+  const SampleStrips* strips_ = nullptr;
+  SampleStrips own_;  // for reset(uv, extent)
   std::vector<Vec2f> uv_;
   double extent_ = 0.0;
-  std::vector<int> strip_start_;  // strips of v-order positions; strips + 1 entries
-  std::vector<int> vorder_, sorder_, vrank_, spos_;
-  std::vector<float> vsorted_, usorted_;
-  std::vector<int32_t> direct_, diffv_, diffs_;
+  std::vector<float> vu_, vv_, su_, sv_;  // picked points in v_lo order and in strip u_hi order
+  std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
+  std::vector<int32_t> fv_, fs_;          // unclear flags (0 or -1) per position
+  std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
+
+// The point where the edge between vertices i and j (frame coordinates `fp`) crosses
+// h = 0, computed from the pair in index order so every user gets the same point.
+Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
+
+// The triangles crossing the light plane whose cut segment may meet L': the candidates
+// for ReceiverIntegrator::add_cut. A cut segment lies in the light plane, so its
+// projection from every receiver is itself, and one that misses L' adds nothing for any
+// receiver (rooms: the walls of every room of a storey cross the plane of each of its
+// ceiling lights, far from it).
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f);
 
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {
  public:
-  // `frame_pos`: the prepared mesh's vertices in frame coordinates.
-  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3f>& frame_pos, const LightFrame& frame)
-      : m_(m), fp_(frame_pos), frame_(frame) {}
+  // `frame_pos`: the prepared mesh's vertices in frame coordinates (double, not rounded).
+  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
+      : m_(m), own_planes_(triangle_planes(m)), planes_(own_planes_), fp_(frame_pos), frame_(frame) {}
+  // The same with the triangle planes computed once by the caller.
+  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes,
+                     const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
+      : m_(m), planes_(planes), fp_(frame_pos), frame_(frame) {}
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
   void begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv);
-  // The same with samples given as picked jitter points (DepthCounter::reset).
-  void begin(const Vec3f& receiver, const JitterOrder& order, const std::vector<uint32_t>& pick,
-             const std::vector<uint32_t>& owner);
+  // The same with samples given as picked jitter points of a light with its strips
+  // (DepthCounter::reset).
+  void begin(const Vec3f& receiver, const SampleStrips& strips, const std::vector<uint32_t>& pick);
   // sign(orient3d(T, r)) in double: +1 when r is on T's front side; 0 as well for a
   // triangle with no vertex strictly above the light plane (h > 0): it meets no open
   // segment from r to the light plane, so R_T is empty (a triangle lying in the light
@@ -153,7 +193,12 @@ class ReceiverIntegrator {
   // The cut segment of triangle t with the light plane, if t crosses it (weight from its
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
-  void finish(std::vector<int32_t>& depth) { counter_.finish(depth); }
+  void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr) { counter_.finish(depth, unclear); }
+  // True when, since begin(), some piece inside the pyramid could not be projected (an
+  // edge through, or within rounding of, the receiver) or some triangle was nearly
+  // edge-on (facing). Its counters are unreliable and the receiver must be answered by
+  // rays.
+  bool doubtful() const { return doubtful_; }
 
   // Reference-sample clearance. The counters are exact only for samples away from every
   // projected piece, and the reference ray decides a whole class from one sample: a
@@ -165,22 +210,27 @@ class ReceiverIntegrator {
   // `clearance_threshold` the distance below which a sample is not trusted as a
   // reference (derivation at its definition).
   double clearance(size_t j) const;
+  // clearance(j) >= clearance_threshold(), faster (early exit, box test per piece).
+  bool clear(size_t j) const;
   double clearance_threshold() const { return clear_min_; }
 
   // The point where the edge between prepared vertices i and j crosses h = 0, computed
   // from the pair in index order so every user gets the same float point.
-  Vec3f cut_point(uint32_t i, uint32_t j) const;
+  Vec3d cut_point(uint32_t i, uint32_t j) const;
 
  private:
-  bool add_segment(const Vec3f& A, const Vec3f& B, int w);
+  bool add_segment(const Vec3d& a, const Vec3d& b, int w);
   void set_receiver(const Vec3f& receiver);
 
   const mesh::PreparedMesh& m_;
-  const std::vector<Vec3f>& fp_;
+  std::vector<TrianglePlane> own_planes_;
+  const std::vector<TrianglePlane>& planes_;
+  const std::vector<Vec3d>& fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};
-  Vec3f r_{};                    // frame coordinates
-  std::vector<Vec3f> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  Vec3d r_{};                    // frame coordinates (double, not rounded)
+  std::vector<Vec3d> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;
   DepthCounter counter_;

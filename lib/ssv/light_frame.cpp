@@ -26,7 +26,7 @@ bool strictly_inside(const std::vector<Vec2f>& poly, const Vec2f& p, double marg
 
 LightFrame make_light_frame(const Light& light) {
   LightFrame f;
-  const size_t n = light.polygon.size();
+  size_t n = light.polygon.size();
   VG_CHECK(n >= 3);
   Vec3d c(0, 0, 0);
   AABB box;
@@ -37,17 +37,36 @@ LightFrame make_light_frame(const Light& light) {
   f.origin = c / double(n);
   f.extent = box.diagonal();
   f.N = normalize(to_double(light.normal));
-  // U along the first polygon edge with its normal component removed.
-  Vec3d e = to_double(light.polygon[1]) - to_double(light.polygon[0]);
-  e = e - f.N * dot(e, f.N);
+  // U along the longest polygon edge with its normal component removed.
+  Vec3d e(0, 0, 0);
+  for (size_t i = 0; i < n; ++i) {
+    Vec3d d = to_double(light.polygon[(i + 1) % n]) - to_double(light.polygon[i]);
+    d = d - f.N * dot(d, f.N);
+    if (length(d) > length(e)) e = d;
+  }
   f.U = normalize(e);
   f.V = cross(f.N, f.U);
 
-  std::vector<Vec2f> base(n);
+  // The polygon in the frame without (nearly) coincident vertices: an edge shorter than
+  // 2^-20 of the extent has no usable direction (fuzz_ssv: a light vertex 1.5e-44 from
+  // the next gave the side plane through the receiver and that edge a zero normal in
+  // double, and every piece was clipped away). Dropping such a vertex changes the
+  // polygon by a sliver of that width; L' below must still hold every jitter point.
+  std::vector<Vec2f> base;
+  const double min_edge = 0x1p-20 * f.extent;
   for (size_t i = 0; i < n; ++i) {
     Vec3d d = to_double(light.polygon[i]) - f.origin;
-    base[i] = {float(dot(d, f.U)), float(dot(d, f.V))};
+    const Vec2f p{float(dot(d, f.U)), float(dot(d, f.V))};
+    auto far_from = [&](const Vec2f& q) { return std::hypot(double(p.u) - q.u, double(p.v) - q.v) >= min_edge; };
+    if (base.empty() || far_from(base.back())) base.push_back(p);
   }
+  while (base.size() > 1) {
+    const Vec2f& a = base.back();
+    const Vec2f& b = base.front();
+    if (std::hypot(double(a.u) - b.u, double(a.v) - b.v) >= min_edge) break;
+    base.pop_back();
+  }
+  n = base.size();
   f.jitter_uv.resize(light.jitter_points.size());
   for (size_t k = 0; k < light.jitter_points.size(); ++k) {
     Vec3f q = f.to_frame(light.jitter_points[k]);
@@ -58,9 +77,16 @@ LightFrame make_light_frame(const Light& light) {
   // Scale about the vertex average (the frame origin) until every jitter point is inside
   // by 1e-4 of the light's extent: a margin far above the float rounding of the frame
   // coordinates (about 1e-7 relative) and far below any sample spacing that matters.
+  // Samples of the built-in patterns lie in L (scale 1.001 suffices); explicit samples
+  // may lie anywhere in the light's plane. Beyond a scale of 4 (a sample more than about
+  // one light extent outside L: fuzzed scenes put one at 1e36) L' would blow up the
+  // pyramid and with it the precision of every clipped piece, so the frame is marked
+  // unusable and the solver answers that light by rays.
   double scale = 1.001;
   const double margin = 1e-4 * f.extent;
-  for (int iter = 0; iter < 200; ++iter) {
+  f.usable = false;
+  f.poly = base;
+  while (n >= 3 && scale <= 4.0) {
     f.poly.resize(n);
     for (size_t i = 0; i < n; ++i) f.poly[i] = {float(base[i].u * scale), float(base[i].v * scale)};
     bool ok = true;
@@ -69,7 +95,10 @@ LightFrame make_light_frame(const Light& light) {
         ok = false;
         break;
       }
-    if (ok) break;
+    if (ok) {
+      f.usable = true;
+      break;
+    }
     scale *= 1.25;
   }
   f.poly_world.resize(n);

@@ -4,7 +4,7 @@
 // light polygon L' that the wedges and the integration use.
 //
 // L' is the light polygon scaled about its vertex average until every jitter point lies
-// strictly inside it (at least by 1e-3 relative). Depth complexity is integrated over L'
+// strictly inside it (by 1e-4 of the light's extent), by at most a factor of 4. Depth complexity is integrated over L'
 // instead of L: every sample lies in L', so the counters of the samples are unchanged, and
 // samples on (or rounded just outside) the boundary of L stay strictly inside the
 // integration domain. The wedges of L' contain those of L (conservative).
@@ -31,11 +31,17 @@ struct LightFrame {
   std::vector<uint8_t> right_chain;  // per edge i (poly[i] -> poly[i+1]): v strictly increases
   std::vector<Vec2f> jitter_uv;    // per jitter point of the light, frame (u, v)
   float max_jitter_h = 0.0f;       // largest |h| of a jitter point (samples off the plane)
+  bool usable = true;              // false: some jitter point lies far outside L (see make_light_frame)
 
   // (u, v, h) of a world point, computed in double and rounded once.
   Vec3f to_frame(const Vec3f& p) const {
     Vec3d d = to_double(p) - origin;
     return Vec3f(float(dot(d, U)), float(dot(d, V)), float(dot(d, N)));
+  }
+  // The same without the final rounding.
+  Vec3d to_frame_d(const Vec3f& p) const {
+    Vec3d d = to_double(p) - origin;
+    return Vec3d(dot(d, U), dot(d, V), dot(d, N));
   }
   double height(const Vec3d& p) const { return dot(p - origin, N); }
 };

@@ -5,8 +5,15 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <limits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_solver.h"
@@ -23,76 +30,258 @@ using Clock = std::chrono::steady_clock;
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const std::vector<Vec3f>& fp, const LightFrame& f) : integrator(m, fp, f) {}
+  ThreadState(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes, const std::vector<Vec3d>& fp,
+              const LightFrame& f)
+      : integrator(m, planes, fp, f) {}
   ReceiverIntegrator integrator;
-  std::vector<uint32_t> candidates;
+  std::vector<WedgeState> candidates;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
-  std::vector<uint32_t> pick, owner;  // DepthCounter::reset
+  std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0;
+  std::vector<uint8_t> unclear;  // DepthCounter::finish
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0;
+  double unclear_rays = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
+  // The last reference answer of this thread: which ranged ray to cast first. It only
+  // changes how many rays are cast (stat reference_rays), never an answer.
+  bool expect_blocked = false;
 };
 
-// Samples of one class examined for a clear reference (ReceiverIntegrator::clearance):
-// a bound on the work per receiver; the first clear one is taken. Eight random samples
-// all within 2^-14 S of a projected edge happen only in exactly degenerate scenes, which
-// then pay one ray per sample.
-constexpr int kCandidates = 8;
+// Float mode. Embree's device makes every TBB worker thread run with flush-to-zero and
+// denormals-are-zero set in MXCSR (measured: 0x9fc0 inside parallel_for bodies once an
+// Embree scene exists, 0x1fa0 on the main thread). Under DAZ a denormal float input
+// reads as 0, so SSV would solve a slightly different scene than the one the oracle
+// reads, and its answers would depend on which thread ran a receiver (fuzz_ssv
+// b23d6514: a vertex at 1.2e-38 became 0, which flipped a relation of margin 1e-3).
+// Every SSV computation runs with both modes cleared, restored on exit.
+class FloatModeGuard {
+ public:
+#if defined(__SSE2__)
+  FloatModeGuard() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ & ~(0x8000u | 0x0040u)); }  // FTZ, DAZ
+  ~FloatModeGuard() { _mm_setcsr(saved_); }
 
-// Picks, among the first kCandidates samples of depth d (in sample order), the first one
-// whose clearance reaches the threshold, else the one of largest clearance; `j` must
-// hold some sample of depth d on entry and receives the pick. Returns whether the pick
-// is clear.
-bool pick_clear_sample(const ReceiverIntegrator& integ, const std::vector<int32_t>& depth, int32_t d, int& j) {
-  const double need = integ.clearance_threshold();
-  double best = -1.0;
-  int seen = 0;
-  for (size_t k = 0; k < depth.size() && seen < kCandidates; ++k) {
-    if (depth[k] != d) continue;
-    ++seen;
-    const double c = integ.clearance(k);
-    if (c > best) {
-      best = c;
-      j = int(k);
+ private:
+  unsigned saved_;
+#endif
+};
+
+// Slivers. A triangle whose width 2 area / L (L its longest edge) is at most 2^-20 L
+// is left out of the integration and of the ray scenes alike. It blocks only segments
+// that pass within that width of its long edges, so every relation it decides has a
+// margin of at most 2^-20 L / diagonal < 1e-6, below tau; no relation it leaves
+// visible can change. Kept, it defeats every float ray test: points on the supporting
+// line of its long edges, far outside it, get edge functions that are all zero after
+// rounding (fuzz_ssv 03e9716a: Embree's robust intersector, a sliver 3.5e-15 wide, a
+// segment 0.18 away on its line; b23d6514: the double-precision test of lib/raycast, a
+// sliver 1.2e-38 wide). Leaving it out of both keeps the counters and the rays about
+// the same scene. Zero-area triangles, which never block, go the same way.
+TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
+  TriangleSoup out;
+  out.vertices = soup.vertices;
+  out.triangles.reserve(soup.triangles.size());
+  for (const auto& t : soup.triangles) {
+    const Vec3d a = to_double(soup.vertices[t[0]]), b = to_double(soup.vertices[t[1]]), c = to_double(soup.vertices[t[2]]);
+    const Vec3d ab = b - a, bc = c - b, ca = a - c;
+    const double l2 = std::max(dot(ab, ab), std::max(dot(bc, bc), dot(ca, ca)));
+    const double area2 = length(cross(ab, c - a));  // twice the area
+    // width = area2 / L <= 2^-20 L  <=>  area2 <= 2^-20 L^2
+    if (area2 <= 0x1p-20 * l2) {
+      ++dropped;
+      continue;
     }
-    if (c >= need) return true;
+    out.triangles.push_back(t);
   }
-  return false;
+  return out;
+}
+
+// Rays. Every ray SSV casts (references, checks, the rays of doubtful and unclear
+// samples and of lights answered by rays) asks Embree's robust scene
+// (RTC_SCENE_FLAG_ROBUST, watertight: no misses along shared edges) with lib/raycast's
+// hit verification: every candidate hit is confirmed by the double-precision test of
+// the same query (segment_hits_triangle, or its ranged form), and one it does not
+// confirm is dropped (counted in stats as ray_disputes). The robust intersector can
+// report hits on the supporting line of a nearly zero-area triangle far outside it
+// (fuzz_ssv 03e9716a: a sliver 3.5e-15 wide, a segment 0.18 away on the extension of
+// its long edges, visible with margin 1e-3; corpus/embree-robust/). Disputes are rare
+// (none on columns, rooms or foliage).
+class Caster {
+ public:
+  explicit Caster(const TriangleSoup& soup) : robust_(soup, true) {}
+  bool occluded(const Vec3f& from, const Vec3f& to) const { return robust_.occluded(from, to); }
+  bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
+    return robust_.occluded(from, to, tnear, tfar);
+  }
+  size_t disputes() const { return robust_.rejected_hits(); }
+
+ private:
+  raycast::EmbreeScene robust_;  // hit verification on (the default)
+};
+
+// Reference rays. The counters give each sample its depth complexity up to one
+// constant per receiver; one ray to a point of the minimum class tells whether that
+// class is visible (the rest is then blocked), and a check ray to the next class must
+// find it blocked. One ray decides a whole class, so it must not be near-degenerate:
+//
+// - Its light point q must be clear of every projected piece (silhouette edges and cut
+//   segments, ReceiverIntegrator::clearance): a sample within rounding of a projected
+//   silhouette has a counter and an Embree answer of either side. Up to kCandidates
+//   samples of the class are tried, in sample order.
+// - q is not the sample itself but a point at a quarter of the clearance threshold from
+//   it, in a direction hashed from the relation: no projected piece lies between them,
+//   so q has the sample's depth complexity, but q is in general position. A sample
+//   exactly on the projection of a mesh vertex or edge inside a surface (shared-edge-fan
+//   aims segments through shared vertices) is counted consistently by the integration
+//   (once per surface), while Embree may report either side for that one segment
+//   (fuzz_ssv finding 322875af: a segment through a fan's vertex was unblocked, the
+//   rest of its class blocked). Where float spacing cannot hold the offset (far from
+//   the origin) q is the sample.
+// - Hits within 2^-18 (in t) of either end are told apart from hits inside the segment
+//   by two ranged rays: A over [0, 1 + 2^-18] and B over [2^-18, 1 - 2^-18]. A
+//   unblocked: visible; B blocked: blocked; otherwise the only hits lie at the ends
+//   (a light point on a triangle in the light plane, which the counters rightly ignore
+//   but Embree's inclusive tfar reports: fuzz_ssv findings 1653e5da, 1dc1c280,
+//   9c17a27b, bc83a84f; a receiver on a face) and the answer is ambiguous: the next
+//   candidate is tried. 2^-18 = 3.8e-6 is about 30 times the relative error of
+//   Embree's t (a few float ulps), so a hit at the end is never mistaken for an
+//   interior one, and it is below tau = 1e-5: a crossing that close to an end has a
+//   margin below tau for its own relation. The ray that settles the expected answer
+//   is cast first (one ray in the common case); the outcome does not depend on the
+//   order.
+enum class RefAnswer { Visible, Blocked, Ambiguous, NoCandidate };
+
+constexpr int kCandidates = 8;
+// Depth given to unclear samples: never a class (DepthCounter::finish).
+constexpr int32_t kUnclear = std::numeric_limits<int32_t>::max();
+constexpr float kEndZone = 0x1p-18f;
+
+struct RefContext {
+  const Caster& embree;
+  const Light& light;
+  const LightFrame& frame;
+  const ReceiverIntegrator& integ;
+  const std::vector<int32_t>& depth;
+  const Vec3f& r;
+  size_t receiver, light_index;
+};
+
+RefAnswer ranged_answer(const RefContext& c, const Vec3f& q, bool expect_blocked, double& rays) {
+  if (expect_blocked) {
+    rays += 1;
+    if (c.embree.occluded(c.r, q, kEndZone, 1.0f - kEndZone)) return RefAnswer::Blocked;
+    rays += 1;
+    return c.embree.occluded(c.r, q, 0.0f, 1.0f + kEndZone) ? RefAnswer::Ambiguous : RefAnswer::Visible;
+  }
+  rays += 1;
+  if (!c.embree.occluded(c.r, q, 0.0f, 1.0f + kEndZone)) return RefAnswer::Visible;
+  rays += 1;
+  return c.embree.occluded(c.r, q, kEndZone, 1.0f - kEndZone) ? RefAnswer::Blocked : RefAnswer::Ambiguous;
+}
+
+// The reference point of sample j (see above): world position, rounded once.
+Vec3f reference_point(const RefContext& c, int j) {
+  const Vec3f s = sample_position(c.light, j, c.receiver);
+  const double step = 0.25 * c.integ.clearance_threshold();
+  const uint64_t h = relation_hash(c.receiver * 0x9E3779B97F4A7C15ull + c.light_index, uint64_t(j), 0x55u);
+  const double phi = double(h >> 11) * 0x1p-53 * 6.283185307179586;
+  const Vec3d qd = to_double(s) + c.frame.U * (step * std::cos(phi)) + c.frame.V * (step * std::sin(phi));
+  const Vec3f q(qd);
+  // Keep q only when its rounding left it within half the threshold of the sample.
+  const Vec3d fs = c.frame.to_frame_d(s), fq = c.frame.to_frame_d(q);
+  const double du = fq.x - fs.x, dv = fq.y - fs.y;
+  if (!(du * du + dv * dv <= 4.0 * step * step)) return s;
+  return q;
+}
+
+// The answer for the class of depth d: the first conclusive one among its first
+// kCandidates samples that are clear, else Ambiguous, or NoCandidate when none of them
+// is clear.
+RefAnswer class_answer(const RefContext& c, int32_t d, bool expect_blocked, double& rays) {
+  int seen = 0;
+  bool cast = false;
+  for (size_t k = 0; k < c.depth.size() && seen < kCandidates; ++k) {
+    if (c.depth[k] != d) continue;
+    ++seen;
+    if (!c.integ.clear(k)) continue;
+    cast = true;
+    const RefAnswer a = ranged_answer(c, reference_point(c, int(k)), expect_blocked, rays);
+    if (a != RefAnswer::Ambiguous) return a;
+  }
+  return cast ? RefAnswer::Ambiguous : RefAnswer::NoCandidate;
+}
+
+// The check: the first conclusive answer for the classes above dmin, lowest first, up to
+// kCheckClasses of them (a class whose samples all lie on projected pieces, such as the
+// inside of a sliver, has no clear candidate and the next one is tried). NoCandidate
+// when no sample above dmin is clear among them: every such sample is within rounding
+// distance of a projected piece, a near-degenerate relation whose own answer is outside
+// the gate, and the minimum class stands on its own clear reference.
+constexpr int kCheckClasses = 4;
+
+RefAnswer check_answer(const RefContext& c, int32_t dmin, int32_t second, double& rays) {
+  int32_t d = dmin;
+  bool cast = false;
+  for (int k = 0; k < kCheckClasses; ++k) {
+    // The next class above d (the second-lowest is known from the caller's scan).
+    int32_t up = second;
+    if (k > 0) {
+      up = std::numeric_limits<int32_t>::max();
+      for (int32_t x : c.depth) up = std::min(up, x > d ? x : std::numeric_limits<int32_t>::max());
+    }
+    if (up == std::numeric_limits<int32_t>::max()) break;
+    const RefAnswer a = class_answer(c, up, true, rays);
+    if (a == RefAnswer::Visible || a == RefAnswer::Blocked) return a;
+    cast |= a == RefAnswer::Ambiguous;
+    d = up;
+  }
+  return cast ? RefAnswer::Ambiguous : RefAnswer::NoCandidate;
 }
 
 }  // namespace
 
 SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
+  const FloatModeGuard float_mode;
   const bool use_region = opt.get_bool("silhouette_regions", true);
 
   auto tp0 = Clock::now();
-  const mesh::PreparedMesh pm = mesh::prepare_mesh(scene.mesh);
+  size_t slivers = 0;
+  const TriangleSoup blockers = without_slivers(scene.mesh, slivers);
+  const mesh::PreparedMesh pm = mesh::prepare_mesh(blockers);
   auto t0 = Clock::now();
 
-  raycast::EmbreeScene embree(scene.mesh, true);
+  Caster embree(blockers);
   auto t1 = Clock::now();
 
   SolveResult result = make_empty_result(scene);
   const std::vector<Edge> edges = mesh_edges(pm);
+  const std::vector<TrianglePlane> tri_planes = triangle_planes(pm);
 
-  // Root box: the scene bounds (blockers, lights, receivers) grown by 1e-3 of the
-  // diagonal so that every receiver lies strictly inside.
-  AABB root = scene.bounds();
-  const float grow = float(1e-3 * root.diagonal()) + std::numeric_limits<float>::min();
+  // Root box. Paper 001 (section 4.1) roots the BSP at the scene bounds, assuming every
+  // query lies inside. Here every query point is known in advance: the receivers. The
+  // root is their bounds (grown by 1e-3 of the scene's diagonal, so each lies strictly
+  // inside): the lazy construction never refines outside it anyway, but the top levels
+  // of a scene-sized root classify every wedge of the light, most of which never reach
+  // a receiver (rooms: 27 lights on several storeys over a grid of receivers on the
+  // ground floor). The minimum node size stays 1/200 of the scene's longest side.
+  const AABB scene_box = scene.bounds();
+  const float grow = float(1e-3 * scene_box.diagonal()) + std::numeric_limits<float>::min();
+  AABB root;
+  for (const Receiver& rc : scene.receivers) root.extend(rc.p);
   root.lo -= Vec3f(grow, grow, grow);
   root.hi += Vec3f(grow, grow, grow);
+  const float min_node = max_component(scene_box.extent()) / 200.0f;
   // Tolerances. M bounds the magnitude of every coordinate. A float plane test n.x - d
   // with a unit normal errs by a few ulps of M (about 4e-7 M with the rounding of n and d
   // from double); eps = 4e-6 M is ten times that. `tol` judges the double-precision
   // wedge planes (errors about 1e-15 M).
-  const double M = std::max(max_component(vabs(root.lo)), max_component(vabs(root.hi)));
+  const double M = std::max(max_component(vabs(scene_box.lo)), max_component(vabs(scene_box.hi))) + double(grow);
   const float eps = float(4e-6 * M);
   const double tol = 1e-9 * M;
 
   double init_seconds = 0, peak_memory = 0;
   WedgeBuildCounts counts;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, nodes = 0;
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0, nodes = 0;
+  double unclear_rays = 0;
   double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
 
   for (size_t l = 0; l < scene.lights.size(); ++l) {
@@ -100,30 +289,25 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
     const size_t offset = scene.light_offset(l);
     auto ti0 = Clock::now();
     const LightFrame frame = make_light_frame(light);
-    // Samples off the light plane by more than 1e-5 of the light's extent (explicit
-    // samples placed elsewhere) break the projection model: cast rays for that light.
-    const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent;
-    std::vector<Vec3f> frame_pos(pm.vertex_pos.size());
-    for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_frame(pm.vertex_pos[v]);
+    // Samples off the light plane by more than 1e-5 of the light's extent, or far outside
+    // the light polygon (explicit samples placed elsewhere, light_frame.h), break the
+    // projection model: cast rays for that light.
+    const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent || !frame.usable;
+    std::vector<Vec3d> frame_pos(pm.vertex_pos.size());
+    for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_frame_d(pm.vertex_pos[v]);
     std::vector<Wedge> wedges;
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback) {
-      wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts);
-      for (size_t t = 0; t < pm.triangles.size(); ++t) {
-        bool pos = false, neg = false;
-        for (uint32_t v : pm.triangles[t].v) {
-          pos |= frame_pos[v].z > 0.0f;
-          neg |= frame_pos[v].z < 0.0f;
-        }
-        if (pos && neg) cut_triangles.push_back(uint32_t(t));
-      }
+      wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
+      cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
-    WedgeBsp bsp(wedges, root, eps, use_region);
-    const JitterOrder order = make_jitter_order(frame.jitter_uv, light.samples);
+    WedgeBsp bsp(wedges, root, min_node, eps, use_region);
+    const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
-    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, frame_pos, frame); });
+    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
+      const FloatModeGuard range_float_mode;
       ThreadState& st = states.local();
       for (size_t i = range.begin(); i != range.end(); ++i) {
         ReceiverResult& rr = result.receivers[i];
@@ -140,67 +324,100 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
         st.candidates.clear();
         bsp.query(r, st.candidates);
         auto b = Clock::now();
+        // The jitter point of every sample (sample_position, DESIGN section 3): hash
+        // prefix once per receiver, a power-of-two jitter count by mask.
         st.pick.resize(size_t(light.samples));
-        st.owner.resize(light.jitter_points.size());
-        for (int j = 0; j < light.samples; ++j) {
-          uint32_t k = uint32_t(&sample_position(light, j, i) - light.jitter_points.data());
-          st.pick[size_t(j)] = k;
-          st.owner[k] = uint32_t(j) + 1;
+        {
+          const uint64_t prefix = relation_hash_prefix(i, light.seed), K = uint64_t(light.jitter);
+          const bool pow2 = (K & (K - 1)) == 0;
+          for (int j = 0; j < light.samples; ++j) {
+            const uint64_t h = relation_hash_step(prefix, uint64_t(j));
+            st.pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
+          }
         }
-        st.integrator.begin(r, order, st.pick, st.owner);
-        for (uint32_t k : st.pick) st.owner[k] = 0;
+        st.integrator.begin(r, strips, st.pick);
         auto c = Clock::now();
         // Validation: receiver inside the wedge and the edge a silhouette from it.
         st.valid.clear();
-        for (uint32_t wi : st.candidates) {
-          const Wedge& w = wedges[wi];
-          if (!point_in_wedge(w, r, eps)) continue;
+        // Only the planes still active in the node the wedge was found in are tested:
+        // the others contain the node's box, hence r. Accepting a wedge that excludes r
+        // is harmless anyway: its edge's projection misses L' and is clipped away.
+        for (const WedgeState& ws : st.candidates) {
+          const Wedge& w = wedges[ws.wedge];
+          if (!point_in_wedge(w, ws.mask, r, eps)) continue;
           int weight = st.integrator.edge_weight(edges[w.edge]);
           if (weight != 0) st.valid.emplace_back(w.edge, weight);
         }
         auto d = Clock::now();
         for (const auto& [e, weight] : st.valid) st.integrator.add_edge(edges[e], weight);
         for (uint32_t t : cut_triangles) st.integrator.add_cut(t);
-        st.integrator.finish(st.depth);
+        st.integrator.finish(st.depth, &st.unclear);
         auto e = Clock::now();
-        // Reference ray to a sample of minimum relative depth complexity, and a check
-        // ray to a sample of the next class: it must be blocked (its depth is at least
-        // one more than the minimum's, which is >= 0). Both samples are chosen clear of
-        // every projected piece (ReceiverIntegrator::clearance): a sample on a projected
-        // silhouette edge has a counter and an Embree answer of either side, and one
-        // reference decides its whole class. When no sample of the minimum class is
-        // clear among the first kCandidates, or the check ray is unblocked (some
-        // near-degenerate projection corrupted the counters, e.g. a sample within
-        // rounding of a sliver seen edge-on), the receiver is answered by one ray per
-        // sample instead.
-        int best = 0, next = -1;
-        for (int j = 1; j < light.samples; ++j)
-          if (st.depth[size_t(j)] < st.depth[size_t(best)]) best = j;
-        const int32_t dmin = st.depth[size_t(best)];
-        for (int j = 0; j < light.samples; ++j)
-          if (st.depth[size_t(j)] > dmin && (next < 0 || st.depth[size_t(j)] < st.depth[size_t(next)])) next = j;
-        const bool trusted = pick_clear_sample(st.integrator, st.depth, dmin, best);
-        if (next >= 0) pick_clear_sample(st.integrator, st.depth, st.depth[size_t(next)], next);
-        bool fallback_receiver = !trusted;
-        bool open = false;
-        if (trusted) {
-          open = !embree.occluded(r, sample_position(light, best, i));
-          const bool next_open = next >= 0 && !embree.occluded(r, sample_position(light, next, i));
-          st.rays += next >= 0 ? 2 : 1;
-          if (next_open) {
-            fallback_receiver = true;
-            st.inconsistent += 1;
-          }
-        } else {
-          st.doubtful += 1;
+        // Reference ray to the minimum class and check ray to the classes above it (see
+        // "Reference rays" above). When the integration was doubtful, no reference is
+        // conclusive, or the check finds a class above the minimum unblocked (the
+        // counters are inconsistent), the receiver is answered by one ray per sample.
+        // Unclear samples (within the margin of a projected piece, DepthCounter::finish)
+        // take no part in the classes: their depth becomes kUnclear and each gets its
+        // own ray below.
+        int32_t dmin = kUnclear, second = kUnclear;  // lowest and second-lowest class
+        size_t unclear = 0;
+        for (size_t j = 0; j < st.depth.size(); ++j) {
+          const bool u = st.unclear[j] != 0;
+          unclear += u;
+          const int32_t x = u ? kUnclear : st.depth[j];
+          st.depth[j] = x;
+          second = x < dmin ? dmin : (x > dmin ? std::min(second, x) : second);
+          dmin = std::min(dmin, x);
         }
-        if (fallback_receiver) {
+        const bool one_class = second == kUnclear;
+        RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
+        if (dmin == kUnclear && !st.integrator.doubtful()) {
+          ref = RefAnswer::Blocked;  // no clear sample: every one gets its own ray below
+        } else if (!st.integrator.doubtful()) {
+          const RefContext ctx{embree, light, frame, st.integrator, st.depth, r, i, l};
+          ref = class_answer(ctx, dmin, st.expect_blocked, st.rays);
+          const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
+          if (decided) st.expect_blocked = ref == RefAnswer::Blocked;
+          if (decided && !one_class) check = check_answer(ctx, dmin, second, st.rays);
+          if (check == RefAnswer::NoCandidate) {
+            st.unchecked += 1;
+            check = RefAnswer::Blocked;
+          }
+        }
+        const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
+        if (!decided || check == RefAnswer::Ambiguous) st.doubtful += 1;
+        else if (check == RefAnswer::Visible) st.inconsistent += 1;
+        if (!decided || check != RefAnswer::Blocked) {
           for (int j = 0; j < light.samples; ++j)
             rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
           st.fallback += light.samples;
-        } else if (open) {
+          unclear = 0;
+        } else if (ref == RefAnswer::Visible) {
+          // Bits of the minimum class, set a word at a time (the bits start cleared),
+          // four samples per SSE2 compare.
+          for (int j = 0; j < light.samples;) {
+            const size_t bit = offset + size_t(j);
+            const int run = std::min(light.samples - j, 64 - int(bit & 63));
+            uint64_t word = 0;
+            int k = 0;
+#if defined(__SSE2__)
+            const __m128i dm = _mm_set1_epi32(dmin);
+            for (; k + 4 <= run; k += 4) {
+              const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st.depth.data() + j + k));
+              word |= uint64_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(x, dm)))) << k;
+            }
+#endif
+            for (; k < run; ++k) word |= uint64_t(st.depth[size_t(j + k)] == dmin) << k;
+            rr.visible_bits[bit >> 6] |= word << (bit & 63);
+            j += run;
+          }
+        }
+        if (unclear > 0) {
           for (int j = 0; j < light.samples; ++j)
-            if (st.depth[size_t(j)] == dmin) rr.set_visible(offset + size_t(j), true);
+            if (st.unclear[size_t(j)])
+              rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
+          st.unclear_rays += double(unclear);
         }
         auto f = Clock::now();
         st.queries += 1;
@@ -220,13 +437,15 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
       rays += st.rays;
       inconsistent += st.inconsistent;
       doubtful += st.doubtful;
+      unchecked += st.unchecked;
+      unclear_rays += st.unclear_rays;
       t_query += st.t_query;
       t_valid += st.t_valid;
       t_integrate += st.t_integrate;
       t_ray += st.t_ray;
     }
     nodes += double(bsp.node_count());
-    double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3f)) +
+    double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3d)) +
                  double(edges.size() * sizeof(Edge));
     peak_memory = std::max(peak_memory, mem);
   }
@@ -257,6 +476,10 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   s.set("fallback_relations", fallback);
   s.set("inconsistent_receivers", inconsistent);
   s.set("doubtful_receivers", doubtful);
+  s.set("unchecked_receivers", unchecked);
+  s.set("unclear_relations", unclear_rays);
+  s.set("ray_disputes", double(embree.disputes()));
+  s.set("slivers_dropped", double(slivers));
   s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
   s.set("silhouette_regions", use_region ? 1.0 : 0.0);
   return result;

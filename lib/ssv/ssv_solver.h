@@ -6,46 +6,56 @@
 // of relative depth complexity per sample (integrate.h) and one reference ray.
 //
 // Each light is processed in turn with its own wedges and BSP. Per receiver and light:
-// the samples of minimum relative depth complexity are visible iff one Embree ray
-// (RTC_SCENE_FLAG_ROBUST) to one of them is unblocked; all others are blocked. The
-// reference sample is chosen clear of every projected piece (integrate.h, "Reference-
-// sample clearance": a sample exactly on a projected silhouette edge, common in
-// grid-snapped scenes and in far-origin scenes whose coordinates round onto common lines,
-// touches the edge, and its ray would decide its whole class by a degenerate answer);
-// when none of the first 8 samples of the class is clear, the receiver is answered by one
-// ray per sample (stat doubtful_receivers). Beyond the paper, a second (check) ray goes to
-// a clear sample of the next-lowest class, which must be blocked; when it is not, the
-// counters are inconsistent (a near-degenerate projection, e.g. a sample within rounding
-// of an edge-on sliver, produced a spurious class) and that receiver is answered by one
-// ray per sample (stats: inconsistent_receivers, fallback_relations).
+// the samples of minimum relative depth complexity are visible iff one ray to a point
+// of that class is unblocked; all others are blocked. Every ray asks Embree's robust
+// scene with lib/raycast's hit verification: a hit stands only when the double-
+// precision test of the same query confirms it (stat ray_disputes). Triangles narrower than
+// 2^-20 of their length are left out of counting and rays alike (they decide only
+// relations of margin below 1e-6; stat slivers_dropped), and SSV computes with FTZ and
+// DAZ cleared (Embree sets them in TBB workers), so it reads denormal inputs as the
+// oracle does (ssv_solver.cpp).
+// Beyond the paper, a check ray to a class above the minimum must find it blocked. The
+// reference point is kept clear of every projected piece and in general position, and
+// hits within 2^-18 of either end of its segment are told apart from interior hits
+// (ssv_solver.cpp, "Reference rays"): one ray decides a whole class, so it must never be
+// a near-degenerate relation. A receiver is answered by one ray per sample instead when
+// its integration met an edge through the receiver (doubtful), when no reference among
+// the first 8 clear samples of the minimum class is conclusive (doubtful), or when the
+// check finds a class above the minimum unblocked (inconsistent); all counted in stats.
 //
 // Precision. Projection and integration run in the light's frame (origin at the light's
-// vertex average, coordinates computed in double and rounded once to float), so their
-// rounding scales with the distance to the light, not with the distance to the world
-// origin. Wedge planes and the BSP stay in world coordinates with a tolerance of 4e-6 of
-// the largest coordinate (ssv_solver.cpp): far from the origin they are looser (less
-// culling), never tighter, so correctness does not depend on them.
+// vertex average): vertices and receivers are transformed, clipped to the pyramid over
+// L' and projected in double and rounded once to float in the light plane, so the
+// rounding scales with the light's extent, not with the distance to the world origin or
+// to the receiver. Wedge planes and the BSP stay in world coordinates with a tolerance
+// of 4e-6 of the largest coordinate (ssv_solver.cpp): far from the origin they are looser
+// (less culling), never tighter, so correctness does not depend on them.
 //
-// Guarantee: float32, correct for inputs away from degeneracy, and for the exact
-// degeneracies named above (reference sample on a projected edge, edges in the light
-// plane, triangles touching the light plane) by construction. Remaining failure modes
-// (all near-degenerate; see integrate.h and wedge.h for details): samples within rounding
-// of a projected silhouette edge may get a wrong count (only their own answer, unless the
-// check ray catches it); receivers within rounding of a triangle's plane; projected edges
-// touching the boundary of the expanded light; edges through the receiver; rays
-// inherit Embree's endpoint semantics (a surface touching the sample or the receiver).
-// Receivers on or behind the light plane (frame height <= 0), and every receiver of a
-// light whose jitter points lie off its plane by more than 1e-5 of its extent, are
-// answered by one Embree ray per relation instead (counted in stats as
-// fallback_relations).
+// Guarantee: float32 answers, correct for inputs away from degeneracy, and for the exact
+// degeneracies named above (reference on a projected edge or vertex, light points on
+// faces in the light plane, edges in the light plane, triangles touching the light
+// plane) by construction. Remaining failure modes (all near-degenerate, see integrate.h
+// and wedge.h): receivers within rounding of a triangle's plane (nearly edge-on ones
+// are doubtful); projected edges touching the boundary of the expanded light;
+// rays inherit Embree's endpoint semantics for the samples answered by rays. A sample
+// within the counter's margin (1e-6 of the light-plane magnitudes) of a projected piece
+// may be miscounted by that piece's weight, and its relation may still be decided far
+// from degeneracy by another triangle: each such sample gets its own ray (stat
+// unclear_relations; 12 of 1M relations on columns). Receivers on
+// or behind the light plane (frame height <= 0), and every receiver of a light whose
+// jitter points lie off its plane by more than 1e-5 of its extent or far outside its
+// polygon (light_frame.h), are answered by one Embree ray per relation instead (counted
+// in stats as fallback_relations).
 //
 // Stats (paper 001 Tables 2-4): queries, wedges_reported and wedges_validated (per query
 // averages), acceptance_ratio, wedges, bsp_nodes, memory_mb (peak BSP plus wedges and
 // per-light arrays), init_seconds (edges, wedges), embree_build_seconds, and the per-phase
 // times bsp_build_query_seconds, validation_seconds, projection_integration_seconds,
 // reference_ray_seconds summed over threads (thread-seconds; the ray time includes the
-// fallback rays), reference_rays (reference and check rays), inconsistent_receivers and
-// doubtful_receivers (answered by one ray per sample, see above), plus prepare_seconds (mesh
+// fallback rays), reference_rays (reference and check rays, ranged), fallback_relations,
+// inconsistent_receivers and doubtful_receivers (answered by one ray per sample, see
+// above), unchecked_receivers (no clear sample above the minimum class to check),
+// unclear_relations, ray_disputes, slivers_dropped, plus prepare_seconds (mesh
 // preparation, excluded from `seconds`).
 #pragma once
 

@@ -39,17 +39,29 @@ struct Edge {
   int32_t t1 = -1, t2 = -1;
 };
 
+// Per triangle, computed once per solve (light-independent): the unnormalised normal
+// cross(b - a, c - a) and corner a in double, the unit normal (0 for zero area), the
+// vertex average c and the squared distance from it to the farthest corner. Used by
+// ReceiverIntegrator::facing and build_wedges.
+struct TrianglePlane {
+  Vec3d n, a, unit, c;
+  double nn = 0.0, rad2 = 0.0;
+};
+std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m);
+
 // One edge per label of the prepared mesh, in label order.
 std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m);
 
 constexpr int kMaxWedgePlanes = 16;
 
+// Field order: what every box test reads (header, triangle planes, first planes) shares
+// the first cache line.
 struct Wedge {
   uint32_t edge = 0;                          // index into the edge list
   uint8_t plane_count = 0;
   bool has_region = false;                    // double edge: silhouette region planes valid
-  std::array<Plane, kMaxWedgePlanes> planes;  // unit normals; inside: n.x - d >= -eps
   std::array<Plane, 2> tri;                   // unit triangle planes, front side positive
+  std::array<Plane, kMaxWedgePlanes> planes;  // unit normals; inside: n.x - d >= -eps
 };
 
 // Active-plane state of a wedge in a BSP node: bit i of `mask` set while wedge plane i does
@@ -71,8 +83,26 @@ enum class BoxClass { Outside, Partial, Contains };
 // silhouette region), else Partial.
 BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps, bool use_region);
 
+// The two halves of a box split at `mid` along `axis` (left: box.lo..mid, right:
+// mid..box.hi) as centres and one common half-extent (the larger of the two halves'
+// per component: a box range can only grow, never shrink).
+struct SplitBoxes {
+  Vec3f c_left, c_right, half;
+};
+SplitBoxes split_boxes(const AABB& box, int axis, float mid);
+
+// classify_box for both halves of a split, from the state `s` of the parent box: each
+// active plane is evaluated once for both halves. Box ranges come from the centre and
+// half-extent (n.c - d -/+ |n|.e): the same as the corner evaluation of classify_box
+// up to float rounding, far below eps.
+void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, float eps, bool use_region,
+                    WedgeState& left, BoxClass& left_class, WedgeState& right, BoxClass& right_class);
+
 // True when p lies inside every wedge plane within eps.
 bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps);
+// The same over the planes in `mask` only (the others are known to hold p: the BSP
+// node's box p lies in is inside them within eps).
+bool point_in_wedge(const Wedge& w, uint32_t mask, const Vec3f& p, float eps);
 
 struct WedgeBuildCounts {
   size_t edges = 0, below_light = 0, not_silhouette = 0, wedges = 0, planes_dropped = 0;
@@ -88,7 +118,7 @@ struct WedgeBuildCounts {
 // A double edge with one inactive neighbour is treated as a single edge of the active
 // one, matching its integration weight (integrate.h). `tol` is a distance.
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                const std::vector<Vec3f>& frame_pos, const LightFrame& frame, double tol,
-                                WedgeBuildCounts& counts);
+                                const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
+                                WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes = nullptr);
 
 }  // namespace visgate::ssv

@@ -11,8 +11,12 @@
 //
 // Guarantee: conservative (within the wedge tests' tolerance, wedge.h): every wedge whose
 // wedge (and silhouette region) contains the query point is returned, for query points
-// inside the root box. Thread-safe: concurrent queries split leaves under a per-node lock;
-// an internal node's wedge list never changes after its split is published.
+// inside the root box. Thread-safe: concurrent queries split leaves under a per-node lock
+// (taken only when the leaf is to be split); a leaf's list never changes, an internal
+// node's list is written before its split is published. A query that reads a leaf
+// while another thread splits it reports the leaf's list, a superset of what the split
+// node and its child would report: still conservative, and identical answers, since
+// validation (point_in_wedge) decides every candidate.
 #pragma once
 
 #include <array>
@@ -28,14 +32,20 @@ namespace visgate::ssv {
 
 class WedgeBsp {
  public:
-  // INIT-BSP: the root over `bounds` holding every wedge that intersects it.
-  WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float eps, bool use_region);
+  // INIT-BSP: the root over `bounds` holding every wedge that intersects it; leaves
+  // smaller than `min_size` along their longest axis are not split (section 4.1: 1/200
+  // of the scene's longest side).
+  WedgeBsp(const std::vector<Wedge>& wedges, const AABB& bounds, float min_size, float eps, bool use_region);
   ~WedgeBsp();
   WedgeBsp(const WedgeBsp&) = delete;
   WedgeBsp& operator=(const WedgeBsp&) = delete;
 
   // WEDGE-QUERY: appends the indices (into the wedge list) of the candidate wedges of p.
   void query(const Vec3f& p, std::vector<uint32_t>& out);
+  // The same with each wedge's state in the node it came from: mask 0 for the wedges of
+  // internal nodes (they contain the node's box), the leaf's active planes otherwise;
+  // validation then tests only the planes in the mask (point_in_wedge).
+  void query(const Vec3f& p, std::vector<WedgeState>& out);
 
   size_t node_count() const { return nodes_.load(); }
   size_t entry_count() const { return entries_.load(); }  // wedge entries in all nodes
@@ -45,15 +55,23 @@ class WedgeBsp {
  private:
   struct Node {
     AABB box;
-    std::vector<WedgeState> wedges;
+    // As a leaf: the `count` wedges meeting the box (written once, before the node is
+    // reachable, never changed). Once split: the `kept` wedges containing the box.
+    WedgeState* wedges = nullptr;
+    uint32_t count = 0;
+    WedgeState* kept = nullptr;
+    uint32_t kept_count = 0;
     std::atomic<bool> split{false};
-    Node* child = nullptr;  // the two children, adjacent in the arena
+    Node* child = nullptr;  // the two children, adjacent in the node arena
     int axis = 0;
     float mid = 0.0f;
   };
 
   bool should_split(const Node& n, size_t wedges_above) const;
   void split_leaf(Node& n);
+  // `count` contiguous states from the list arena (never moved or freed before the tree).
+  WedgeState* allocate(size_t count);
+  WedgeState* allocate_locked(size_t count);  // arena_lock_ held
   std::mutex& lock_of(const Node* n) { return locks_[(reinterpret_cast<uintptr_t>(n) / sizeof(Node)) % locks_.size()]; }
 
   const std::vector<Wedge>& wedges_;
@@ -62,8 +80,12 @@ class WedgeBsp {
   float min_size_;
   Node root_;
   // Children are allocated in pairs from an arena (one allocation per split, freed at
-  // once); leaves are locked through a small table of striped mutexes.
+  // once), wedge lists as exact-size spans of chunks of a list arena (a split writes its
+  // children's lists once; a node's list only shrinks, in place, when it is split);
+  // leaves are locked through a small table of striped mutexes.
   std::deque<std::array<Node, 2>> arena_;
+  std::vector<std::unique_ptr<WedgeState[]>> chunks_;
+  size_t chunk_used_ = 0, chunk_size_ = 0, list_capacity_ = 0;
   std::mutex arena_lock_;
   std::array<std::mutex, 64> locks_;
   std::atomic<size_t> nodes_{0}, entries_{0};
