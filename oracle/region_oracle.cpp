@@ -16,6 +16,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "lib/geom/float_mode.h"
+
 namespace visgate::oracle {
 
 namespace {
@@ -228,6 +230,7 @@ double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d&
 }  // namespace
 
 RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index) {
+  const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
   VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
   const Light& light = scene.lights[light_index];
   const Receiver& rec = scene.receivers[receiver];

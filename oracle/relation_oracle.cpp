@@ -15,6 +15,7 @@
 #include <limits>
 #include <numeric>
 
+#include "lib/geom/float_mode.h"
 #include "lib/solver.h"
 
 namespace visgate::oracle {
@@ -456,6 +457,7 @@ RelationClass classify_segment_triangle(const Vec3f& p, const Vec3f& q, const Ve
 }
 
 RelationAnswer classify_segment(const Scene& scene, const Vec3f& from, const Vec3f& to) {
+  const IeeeFloatMode ieee;
   if (from == to) return RelationAnswer{RelationClass::Visible, 0.0};
   double diag, cap;
   scene_scale(scene, diag, cap);
@@ -476,6 +478,7 @@ RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<s
   ThreadLimit limit(threads);
   Bvh bvh(scene.mesh);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, receivers.size(), 1), [&](const tbb::blocked_range<size_t>& rg) {
+    const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
     for (size_t k = rg.begin(); k < rg.end(); ++k) {
       size_t i = receivers[k];
       VG_CHECK(i < scene.receivers.size());

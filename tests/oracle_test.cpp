@@ -6,6 +6,10 @@
 // and from an independent double-precision point-sampling estimate.
 #include <gtest/gtest.h>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/intersections.h>
 
@@ -272,6 +276,33 @@ TEST(RelationOracle, CoordinatesNearFloatMaxBuildTheBvh) {
     for (size_t j = 0; j < to.size(); ++j)  // the BVH run agrees with the brute-force scan
       EXPECT_EQ(r.classes[i][j], char(classify_segment(s, from[i], to[j]).cls)) << i << " " << j;
   }
+}
+
+TEST(RelationOracle, DenormalInputsAreReadAsGivenUnderFlushToZero) {
+  // Embree leaves flush-to-zero and denormals-are-zero on in TBB workers
+  // (lib/geom/float_mode.h). A segment at x = 2^-140 (a float32 denormal) crosses the
+  // triangle's plane strictly inside it, 2^-140 from its edge x = 0: blocked. Read with
+  // DAZ, x would be 0 and the crossing on the edge: degenerate. The oracle runs in an
+  // IeeeFloatMode scope, so DAZ on the calling thread changes nothing.
+#if defined(__SSE2__)
+  const float x = std::ldexp(1.0f, -140);
+  ASSERT_GT(x, 0.0f);
+  ASSERT_LT(x, std::numeric_limits<float>::min());
+  Scene s = soup_scene({{Vec3f(0, 0, 1), Vec3f(2, 0, 1), Vec3f(0, 2, 1)}});
+  s.lights.push_back(explicit_light({{-1, -1, 4}, {-1, 1, 4}, {1, 1, 4}, {1, -1, 4}}, {{x, 0.5f, 2}}));
+  s.receivers.push_back({{x, 0.5f, 0}, {0, 0, 1}});
+  const unsigned saved = _mm_getcsr();
+  _mm_setcsr(saved | 0x8040u);  // FTZ | DAZ, as in an Embree-touched TBB worker
+  const RC single = cls(s, {x, 0.5f, 0}, {x, 0.5f, 2});
+  const RelationOracleResult all = run_relation_oracle(s, 1);
+  const unsigned after = _mm_getcsr();
+  _mm_setcsr(saved);
+  EXPECT_EQ(single, RC::Blocked);
+  EXPECT_EQ(all.classes[0], "b");
+  EXPECT_EQ(after, saved | 0x8040u) << "the scope restores the caller's mode";
+#else
+  GTEST_SKIP() << "no SSE MXCSR on this target";
+#endif
 }
 
 TEST(RelationOracle, NonFiniteInputIsRejectedUpstreamByTheSceneReader) {

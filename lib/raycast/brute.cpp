@@ -6,6 +6,7 @@
 
 #include <chrono>
 
+#include "lib/geom/float_mode.h"
 #include "lib/geom/predicates.h"
 
 namespace visgate::raycast {
@@ -22,6 +23,9 @@ SolveResult BruteSolver::solve(const Scene& scene, const SolveOptions& opt) {
   auto t0 = std::chrono::steady_clock::now();
   SolveResult result = make_empty_result(scene);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, scene.receivers.size(), 4), [&](const tbb::blocked_range<size_t>& range) {
+    // Textbook IEEE float32 on every thread: Embree leaves FTZ/DAZ on in TBB workers
+    // (lib/geom/float_mode.h), which would make the answers depend on the thread.
+    const IeeeFloatMode ieee;
     for (size_t i = range.begin(); i != range.end(); ++i) {
       ReceiverResult& rr = result.receivers[i];
       size_t bit = 0;

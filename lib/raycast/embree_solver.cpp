@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 
+#include "lib/geom/float_mode.h"
 #include "lib/geom/predicates.h"
 
 namespace visgate::raycast {
@@ -100,12 +101,14 @@ bool segment_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, co
 }
 
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
+  const IeeeFloatMode ieee;
   for (const auto& t : soup.triangles)
     if (segment_hits_triangle(soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]], from, to)) return true;
   return false;
 }
 
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to, double t0, double t1) {
+  const IeeeFloatMode ieee;
   for (const auto& t : soup.triangles)
     if (line_range_hits_triangle(soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]], from, to, t0, t1))
       return true;
@@ -128,6 +131,7 @@ struct VerifyContext {
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
 // precision test of the same query agrees (see embree_solver.h, "Hit verification").
 void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
+  const IeeeFloatMode ieee;  // this may run on a TBB worker with FTZ/DAZ on
   auto* vc = reinterpret_cast<VerifyContext*>(args->context);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;

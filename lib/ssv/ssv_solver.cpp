@@ -15,6 +15,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_solver.h"
 #include "lib/ssv/integrate.h"
@@ -47,23 +48,8 @@ struct ThreadState {
   bool expect_blocked = false;
 };
 
-// Float mode. Embree's device makes every TBB worker thread run with flush-to-zero and
-// denormals-are-zero set in MXCSR (measured: 0x9fc0 inside parallel_for bodies once an
-// Embree scene exists, 0x1fa0 on the main thread). Under DAZ a denormal float input
-// reads as 0, so SSV would solve a slightly different scene than the one the oracle
-// reads, and its answers would depend on which thread ran a receiver (fuzz_ssv
-// b23d6514: a vertex at 1.2e-38 became 0, which flipped a relation of margin 1e-3).
-// Every SSV computation runs with both modes cleared, restored on exit.
-class FloatModeGuard {
- public:
-#if defined(__SSE2__)
-  FloatModeGuard() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ & ~(0x8000u | 0x0040u)); }  // FTZ, DAZ
-  ~FloatModeGuard() { _mm_setcsr(saved_); }
-
- private:
-  unsigned saved_;
-#endif
-};
+// Float mode: every SSV computation runs in an IeeeFloatMode scope (lib/geom/float_mode.h:
+// Embree sets FTZ/DAZ in TBB workers; fuzz_ssv b23d6514).
 
 // Slivers. A triangle whose width 2 area / L (L its longest edge) is at most 2^-20 L
 // is left out of the integration and of the ray scenes alike. It blocks only segments
@@ -240,7 +226,7 @@ RefAnswer check_answer(const RefContext& c, int32_t dmin, int32_t second, double
 
 SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
-  const FloatModeGuard float_mode;
+  const IeeeFloatMode float_mode;
   const bool use_region = opt.get_bool("silhouette_regions", true);
 
   auto tp0 = Clock::now();
@@ -307,7 +293,7 @@ SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
 
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
-      const FloatModeGuard range_float_mode;
+      const IeeeFloatMode range_float_mode;
       ThreadState& st = states.local();
       for (size_t i = range.begin(); i != range.end(); ++i) {
         ReceiverResult& rr = result.receivers[i];

@@ -1,0 +1,42 @@
+// IEEE float mode for exact and float32 computations (DESIGN section 2).
+//
+// Embree's device makes every TBB worker thread run with flush-to-zero (FTZ) and
+// denormals-are-zero (DAZ) set in MXCSR once an Embree scene exists (measured: 0x9fc0
+// inside parallel_for bodies, 0x1fa0 on the main thread). Under DAZ a denormal input
+// reads as 0 and under FTZ a denormal result becomes 0: a method would solve a slightly
+// different scene than the one it was given, its answers would depend on which thread
+// ran a receiver (fuzz_ssv b23d6514: a vertex at 1.2e-38 became 0 and flipped a relation
+// of margin 1e-3), and CGAL's filtered predicates, whose error bounds assume IEEE
+// gradual underflow, could return a wrong sign. Code that must see the inputs as given
+// (the oracles, the methods, the double-precision ray tests) opens an IeeeFloatMode
+// scope: both modes cleared, the previous MXCSR restored on exit. Rounding stays
+// round-to-nearest (Embree never changes it).
+#pragma once
+
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
+namespace visgate {
+
+class IeeeFloatMode {
+ public:
+#if defined(__SSE2__)
+  static constexpr unsigned kFlushToZero = 0x8000u, kDenormalsAreZero = 0x0040u;
+  IeeeFloatMode() : saved_(_mm_getcsr()) {
+    if (saved_ & (kFlushToZero | kDenormalsAreZero)) _mm_setcsr(saved_ & ~(kFlushToZero | kDenormalsAreZero));
+  }
+  ~IeeeFloatMode() {
+    if (saved_ & (kFlushToZero | kDenormalsAreZero)) _mm_setcsr(saved_);
+  }
+#endif
+  IeeeFloatMode(const IeeeFloatMode&) = delete;
+  IeeeFloatMode& operator=(const IeeeFloatMode&) = delete;
+
+ private:
+#if defined(__SSE2__)
+  unsigned saved_;
+#endif
+};
+
+}  // namespace visgate
