@@ -17,6 +17,7 @@
 
 #include "lib/mesh/mesh_write.h"
 #include "lib/mesh/repair.h"
+#include "lib/mesh/repair_predicates.h"
 #include "lib/mesh/sha256.h"
 #include "lib/scene/mesh_io.h"
 #include "lib/scene/rng.h"
@@ -468,6 +469,215 @@ TEST(RepairZoo, BadToleranceIsAnError) {
   EXPECT_FALSE(repair_mesh(tet(), o, kEx).ok());
   o.weld_tolerance = std::nan("");
   EXPECT_FALSE(repair_mesh(tet(), o, kEx).ok());
+}
+
+// ------------------------------------------------------------------------------------
+// The double-precision filters in front of the exact predicates (repair_predicates.h):
+// whenever a filter answers, its sign is CGAL's exact sign. The inputs are built to be
+// nearly degenerate, so that the plain double evaluation gets the sign wrong in some of
+// them (counted and required: the filter must then abstain), and exactly degenerate, so
+// that the filter must abstain.
+
+namespace {
+
+// A double `k` ulps from x.
+double ulps(double x, int k) {
+  for (; k > 0; --k) x = std::nextafter(x, INFINITY);
+  for (; k < 0; ++k) x = std::nextafter(x, -INFINITY);
+  return x;
+}
+
+// Random point at scale 2^e around `centre`.
+Vec3d random_point(Rng& rng, const Vec3d& centre, int e) {
+  const double s = std::ldexp(1.0, e);
+  return centre + Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * s;
+}
+
+// det[b - a, c - a, d - a] in plain double, as a naive caller would compute it.
+double naive_orient(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+  return dot(cross(b - a, c - a), d - a);
+}
+
+}  // namespace
+
+TEST(RepairPredicates, Orient3dFilterIsExactWhenItAnswers) {
+  Rng rng(11);
+  size_t answered = 0, abstained = 0, naive_wrong = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3d centre = it % 3 == 0 ? Vec3d(0, 0, 0) : random_point(rng, Vec3d(0, 0, 0), int(rng.below(40)) - 10);
+    const int e = int(rng.below(30)) - 15;
+    const Vec3d a = random_point(rng, centre, e), b = random_point(rng, centre, e), c = random_point(rng, centre, e);
+    // d on the plane up to rounding, then moved a few ulps on one axis.
+    const double s = rng.uniform(-2, 2), t = rng.uniform(-2, 2);
+    Vec3d d = a + (b - a) * s + (c - a) * t;
+    const int ax = int(rng.below(3)), k = int(rng.below(7)) - 3;
+    d[ax] = ulps(d[ax], k);
+    const int exact = kEx.orientation(a, b, c, d);
+    const int f = orient3d_filter(a, b, c, d);
+    const double naive = naive_orient(a, b, c, d);
+    if ((naive > 0 ? 1 : naive < 0 ? -1 : 0) != exact) ++naive_wrong;
+    if (f == kUnknown) {
+      ++abstained;
+      continue;
+    }
+    ++answered;
+    ASSERT_EQ(f, exact) << "iteration " << it;
+  }
+  EXPECT_GT(naive_wrong, 100u);  // the inputs do defeat plain double evaluation
+  EXPECT_GT(answered, 1000u);    // and the filter still decides many of them
+  EXPECT_GT(abstained, 100u);
+  // Exactly degenerate: coplanar (d = a, d on an edge's line through dyadic steps).
+  const Vec3d a(1e7, -3, 0.5), b(1e7 + 1, -3, 0.5), c(1e7, -2, 0.75);
+  EXPECT_EQ(orient3d_filter(a, b, c, a), kUnknown);
+  EXPECT_EQ(orient3d_filter(a, b, c, a + (b - a) * 0.5 + (c - a) * 0.25), kUnknown);
+  // Far from degenerate: answered.
+  EXPECT_EQ(orient3d_filter(kA, kB, kC, kD), 1);
+  EXPECT_EQ(orient3d_filter(kA, kC, kB, kD), -1);
+  // Magnitudes where products would overflow or underflow: the filter abstains and the
+  // exact predicate decides.
+  EXPECT_EQ(orient3d_filter(kA * 0x1p400, kB * 0x1p400, kC * 0x1p400, kD * 0x1p400), kUnknown);
+  EXPECT_EQ(FilteredPredicates(kEx).orientation(kA * 0x1p400, kB * 0x1p400, kC * 0x1p400, kD * 0x1p400), 1);
+  EXPECT_EQ(orient3d_filter(kA * 0x1p-300, kB * 0x1p-300, kC * 0x1p-300, kD * 0x1p-300), kUnknown);
+  EXPECT_EQ(FilteredPredicates(kEx).orientation(kA * 0x1p-300, kB * 0x1p-300, kC * 0x1p-300, kD * 0x1p-300), 1);
+}
+
+TEST(RepairPredicates, CollinearAndLineBoxFiltersAreConservative) {
+  Rng rng(12);
+  const FilteredPredicates fp(kEx);
+  size_t off_line_certified = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3d centre = random_point(rng, Vec3d(0, 0, 0), int(rng.below(40)) - 10);
+    const int e = int(rng.below(30)) - 15;
+    const Vec3d a = random_point(rng, centre, e), b = random_point(rng, centre, e);
+    // p on the line up to rounding, moved by up to 2 ulps.
+    Vec3d p = a + (b - a) * rng.uniform(-0.5, 1.5);
+    const int ax = int(rng.below(3));
+    p[ax] = ulps(p[ax], int(rng.below(5)) - 2);
+    const bool exact = kEx.collinear(a, b, p);
+    ASSERT_EQ(fp.collinear(a, b, p), exact) << "iteration " << it;
+    // A point box: the line may meet it iff p is collinear, and the filter must never
+    // say "misses" for a collinear p.
+    const bool may = line_may_meet_box(a, b, p, p);
+    if (exact) {
+      ASSERT_TRUE(may) << "iteration " << it;
+    } else if (!may) {
+      ++off_line_certified;
+    }
+    // A box around p that contains a point exactly on the line (a itself or b) must
+    // never be pruned.
+    ASSERT_TRUE(line_may_meet_box(a, b, vmin(p, a), vmax(p, a)));
+  }
+  EXPECT_GT(off_line_certified, 1000u);
+  // Dyadic points exactly on the segment (1, 1, 1) + k/8 (3, -2, 5) far from the origin.
+  const Vec3d a(1e6 + 1, 1e6 + 1, -1e6 + 1), d(3, -2, 5);
+  for (int k = 0; k <= 8; ++k) {
+    const Vec3d p = a + d * (k / 8.0);
+    EXPECT_TRUE(line_may_meet_box(a, a + d, p, p));
+    EXPECT_TRUE(fp.collinear(a, a + d, p));
+    Vec3d q = p;
+    q.y = ulps(q.y, 1);
+    EXPECT_FALSE(fp.collinear(a, a + d, q));
+  }
+}
+
+TEST(RepairPredicates, TriangleAndSegmentTestsMatchCgal) {
+  // Coordinates on a small integer grid make coplanar, touching and collinear pairs
+  // common; every answer is compared with CGAL's do_intersect.
+  Rng rng(13);
+  const FilteredPredicates fp(kEx);
+  size_t hits = 0, seg_hits = 0;
+  auto grid_point = [&](double scale, const Vec3d& off) {
+    return off + Vec3d(double(rng.below(4)), double(rng.below(4)), double(rng.below(4))) * scale;
+  };
+  for (int it = 0; it < 30000; ++it) {
+    const double scale = it % 2 ? 1.0 : 0x1p-20;
+    const Vec3d off = it % 3 ? Vec3d(0, 0, 0) : Vec3d(1e6, -1e6, 3e5);
+    Vec3d t[6];
+    for (auto& p : t) p = grid_point(scale, off);
+    if (kEx.collinear(t[0], t[1], t[2]) || kEx.collinear(t[3], t[4], t[5])) continue;
+    const bool want = kEx.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]);
+    ASSERT_EQ(fp.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]), want) << "iteration " << it;
+    hits += want;
+    if (t[3] != t[4]) {
+      const bool ws = kEx.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]);
+      ASSERT_EQ(fp.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]), ws) << "iteration " << it;
+      seg_hits += ws;
+    }
+  }
+  EXPECT_GT(hits, 1000u);
+  EXPECT_GT(seg_hits, 1000u);
+  // All six points in one tilted plane z = x + 2y (exact on the grid), far from the
+  // origin: every pair goes through the coplanar 2D tests; coplanar_side too.
+  size_t coplanar_hits = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3d off = it % 2 ? Vec3d(0, 0, 0) : Vec3d(4096, -8192, 4096 - 16384);
+    Vec3d t[6];
+    for (auto& p : t) {
+      const double x = double(rng.below(5)), y = double(rng.below(5));
+      p = off + Vec3d(x, y, x + 2 * y);
+    }
+    if (kEx.collinear(t[0], t[1], t[2]) || kEx.collinear(t[3], t[4], t[5])) continue;
+    const bool want = kEx.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]);
+    ASSERT_EQ(fp.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]), want) << "coplanar iteration " << it;
+    coplanar_hits += want;
+    if (t[3] != t[4]) {
+      ASSERT_EQ(fp.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]),
+                kEx.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]))
+          << "coplanar iteration " << it;
+    }
+    ASSERT_EQ(fp.coplanar_side(t[0], t[1], t[2], t[3]), kEx.coplanar_side(t[0], t[1], t[2], t[3]))
+        << "coplanar iteration " << it;
+  }
+  EXPECT_GT(coplanar_hits, 1000u);
+}
+
+// Self-intersections of a soup of many small triangles sharing no vertex (so every pair
+// is a plain triangle/triangle test): the set analyze_mesh reports equals all pairs
+// tested one by one with CGAL, so the box tree misses no candidate.
+TEST(RepairPredicates, SelfIntersectionsMatchAllPairsBruteForce) {
+  Rng rng(14);
+  IndexedMesh m;
+  for (int t = 0; t < 600; ++t) {
+    const Vec3d c(double(rng.below(12)), double(rng.below(12)), double(rng.below(4)));
+    for (int k = 0; k < 3; ++k)
+      m.vertices.push_back(c + Vec3d(double(rng.below(3)), double(rng.below(3)), double(rng.below(2))));
+    m.triangles.push_back({uint32_t(3 * t), uint32_t(3 * t + 1), uint32_t(3 * t + 2)});
+  }
+  std::vector<std::array<uint32_t, 2>> want;
+  std::vector<uint8_t> flat(m.triangles.size());
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const auto& t = m.triangles[i];
+    flat[i] = kEx.collinear(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
+  }
+  for (uint32_t i = 0; i < m.triangles.size(); ++i)
+    for (uint32_t j = i + 1; j < m.triangles.size(); ++j) {
+      if (flat[i] || flat[j]) continue;
+      const auto &a = m.triangles[i], &b = m.triangles[j];
+      // Equal positions would make the triangles share a vertex: skip such pairs in
+      // both lists (analyze_mesh sees vertices by index, and none is shared here).
+      if (kEx.triangles_intersect(m.vertices[a[0]], m.vertices[a[1]], m.vertices[a[2]], m.vertices[b[0]],
+                                  m.vertices[b[1]], m.vertices[b[2]]))
+        want.push_back({i, j});
+    }
+  Analysis an = analyze_mesh(m, kEx);
+  EXPECT_GT(want.size(), 500u);
+  EXPECT_EQ(an.self_intersections, want);
+  EXPECT_GE(an.self_intersection_pairs_tested, want.size());
+}
+
+// A T-junction on a long diagonal boundary edge far from the origin: the vertex at an
+// exactly representable interior point is found; one ulp off the line it is not.
+TEST(RepairZoo, TJunctionOnALongDiagonalEdgeFarAway) {
+  const Vec3d a(1e6, 2e6, -3e6), d(3, 6, 9);
+  for (int off = 0; off < 2; ++off) {
+    Vec3d m = a + d * 0.25;
+    if (off) m.z = ulps(m.z, 1);
+    // Triangle (a, b, apex) and a fan of triangles elsewhere sharing m on its boundary.
+    PolygonSoup s = make_soup({a, a + d, a + Vec3d(0, 0, 10), m, m + Vec3d(1, -1, 0), m + Vec3d(1, 1, -5)},
+                              {{0, 1, 2}, {3, 4, 5}});
+    RepairResult r = run(s, [] { RepairOptions o; o.check_only = true; return o; }());
+    EXPECT_EQ(r.before.defects.t_junctions, off ? 0u : 1u) << "off " << off;
+  }
 }
 
 // ------------------------------------------------------------------------------------

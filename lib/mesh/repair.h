@@ -107,6 +107,8 @@ struct Analysis {
   std::vector<uint32_t> nonmanifold_vertices;
   std::vector<std::array<uint32_t, 3>> t_junctions;       // vertex, edge end, edge end
   std::vector<std::array<uint32_t, 2>> self_intersections;  // triangle index pairs
+  size_t self_intersection_pairs_tested = 0;  // candidate pairs (overlapping boxes) decided exactly
+  std::vector<std::pair<const char*, double>> seconds;  // wall time of each phase of the analysis
 };
 
 // Analyses `m` by its own indices. `vertex_class` (optional, one entry per vertex) names
