@@ -8,15 +8,21 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <numeric>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 
 #include "lib/mesh/mesh_write.h"
 #include "lib/mesh/repair.h"
+#include "lib/mesh/repair_input.h"
+#include "lib/mesh/repair_report.h"
 #include "lib/mesh/repair_predicates.h"
 #include "lib/mesh/sha256.h"
 #include "lib/scene/mesh_io.h"
@@ -62,6 +68,13 @@ size_t step_change(const RepairResult& r, const std::string& step, const std::st
         if (k == key) return v;
   ADD_FAILURE() << "no step " << step << " / " << key;
   return 0;
+}
+
+// A double `k` ulps from x.
+double ulps(double x, int k) {
+  for (; k > 0; --k) x = std::nextafter(x, INFINITY);
+  for (; k < 0; ++k) x = std::nextafter(x, -INFINITY);
+  return x;
 }
 
 // Tetrahedron A(0,0,0) B(1,0,0) C(0,1,0) D(0,0,1) with outward faces (normals -z, -y, -x
@@ -147,6 +160,45 @@ TEST(RepairWeld, ToleranceBoundaryIsExact) {
   // Exact mode: -0 equals +0.
   std::vector<Vec3d> z = {{0.0, 1, 2}, {-0.0, 1, 2}};
   EXPECT_EQ(weld_vertices_exact(z, used, 0.0, WeldMode::Chain, kEx).merged, 1u);
+}
+
+// The spatial hash misses no pair: clusters equal those of union-find over all pairs
+// decided exactly, on points where many pairs sit exactly at distance T (a dyadic grid
+// of step T on two axes, so neighbours are T apart when T is dyadic), others a few ulps
+// beyond it, far from the origin and across cell boundaries.
+TEST(RepairWeld, MatchesAllPairsBruteForce) {
+  Rng rng(21);
+  for (double T : {0.25, 0x1p-20, 3e-7}) {
+    std::vector<Vec3d> p;
+    const Vec3d o(1e5, -2e5, 7);
+    for (int i = 0; i < 700; ++i) {
+      Vec3d q = o + Vec3d(double(rng.below(12)) * T, double(rng.below(12)) * T, double(rng.below(3)) * 3 * T);
+      if (rng.below(3) == 0) q.x = ulps(q.x, int(rng.below(5)) - 2);
+      p.push_back(q);
+    }
+    std::vector<uint8_t> used(p.size(), 1);
+    WeldResult w = weld_vertices_exact(p, used, T, WeldMode::Chain, kEx);
+    // Brute force: union-find with the lowest index as root.
+    std::vector<uint32_t> root(p.size());
+    std::iota(root.begin(), root.end(), 0u);
+    std::function<uint32_t(uint32_t)> find = [&](uint32_t x) { return root[x] == x ? x : root[x] = find(root[x]); };
+    size_t exact_t = 0;
+    for (uint32_t i = 0; i < p.size(); ++i)
+      for (uint32_t j = i + 1; j < p.size(); ++j) {
+        const int c = kEx.compare_distance(p[i], p[j], T);
+        exact_t += c == 0;
+        if (c <= 0) {
+          uint32_t a = find(i), b = find(j);
+          if (a != b) root[std::max(a, b)] = std::min(a, b);
+        }
+      }
+    std::vector<uint32_t> want(p.size());
+    for (uint32_t i = 0; i < p.size(); ++i) want[i] = find(i);
+    if (T != 3e-7) {
+      EXPECT_GT(exact_t, 100u) << "T " << T;  // dyadic T: the boundary case is exercised
+    }
+    EXPECT_EQ(w.rep, want) << "T " << T;
+  }
 }
 
 // Chaining: v0, v1, v2 on a line 0.6 T apart. Chain mode merges all three (diameter
@@ -480,13 +532,6 @@ TEST(RepairZoo, BadToleranceIsAnError) {
 
 namespace {
 
-// A double `k` ulps from x.
-double ulps(double x, int k) {
-  for (; k > 0; --k) x = std::nextafter(x, INFINITY);
-  for (; k < 0; ++k) x = std::nextafter(x, -INFINITY);
-  return x;
-}
-
 // Random point at scale 2^e around `centre`.
 Vec3d random_point(Rng& rng, const Vec3d& centre, int e) {
   const double s = std::ldexp(1.0, e);
@@ -810,6 +855,174 @@ TEST(RepairRoundTrip, RepairedMeshReadsBackAndIsAFixedPoint) {
 
 // ------------------------------------------------------------------------------------
 
+// ------------------------------------------------------------------------------------
+// The input audit: attributes the reader does not keep are counted by name, and double
+// coordinates (which the reader rounds to float32) are restored exactly.
+
+namespace {
+std::string write_file(const std::string& name, const std::string& bytes) {
+  const std::string path = (temp_dir() / name).string();
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+  return path;
+}
+
+// Reads `bytes` as file `name` and audits it; the audit's counts as a map.
+struct Audited {
+  PolygonSoup soup;
+  InputAudit audit;
+  std::map<std::string, size_t> counts;
+};
+Audited audit_bytes(const std::string& name, const std::string& bytes) {
+  Audited a;
+  const std::string path = write_file(name, bytes);
+  auto soup = read_polygon_file(path);
+  EXPECT_TRUE(soup.ok()) << name << ": " << (soup.ok() ? "" : soup.error().message);
+  if (!soup.ok()) return a;
+  a.soup = std::move(*soup);
+  auto r = audit_input(path, bytes, a.soup);
+  EXPECT_TRUE(r.ok()) << name << ": " << (r.ok() ? "" : r.error().message);
+  if (!r.ok()) return a;
+  a.audit = *r;
+  for (const auto& [k, v] : r->not_kept) a.counts[k] = v;
+  return a;
+}
+
+template <class T>
+void put_bin(std::string& out, T v, bool big) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  if (big) std::reverse(b, b + sizeof(T));
+  out.append(b, sizeof(T));
+}
+
+const char* kTetObjFaces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+}  // namespace
+
+TEST(RepairInput, AttributesAreCountedNotDropped) {
+  {
+    // OBJ: 4 normals, 3 texture coordinates, a material, a group, a polyline, corner
+    // references on two faces, and a smoothing statement.
+    Audited a = audit_bytes("a.obj",
+                            "mtllib m.mtl\no thing\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                            "vn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                            "g side\nusemtl red\ns 1\nf 1/1/1 3/3/3 2/2/2\nf 1//1 2//2 4//4\nf 1 4 3\nf 2 3 4\nl 1 2\n");
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"material_libraries", 1}, {"objects", 1}, {"vertex_normals", 4},
+                                                        {"texcoords", 3}, {"groups", 1}, {"materials", 1},
+                                                        {"smoothing_groups", 1}, {"face_corner_references", 2},
+                                                        {"line_elements", 1}}));
+    EXPECT_FALSE(a.audit.double_data);
+  }
+  {
+    // PLY: per-vertex normal (nx ny nz: one attribute) and colour, a per-vertex
+    // "quality", a face colour, and an extra element.
+    Audited a = audit_bytes("a.ply",
+                            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                            "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+                            "property uchar blue\nproperty float quality\nelement face 4\nproperty list uchar int vertex_indices\n"
+                            "property uchar red\nproperty uchar green\nproperty uchar blue\nelement edge 1\nproperty int vertex1\n"
+                            "property int vertex2\nend_header\n"
+                            "0 0 0 0 0 1 1 2 3 0.5\n1 0 0 0 0 1 1 2 3 0.5\n0 1 0 0 0 1 1 2 3 0.5\n0 0 1 0 0 1 1 2 3 0.5\n"
+                            "3 0 2 1 9 9 9\n3 0 1 3 9 9 9\n3 0 3 2 9 9 9\n3 1 2 3 9 9 9\n0 1\n");
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"vertex_normals", 4}, {"vertex_colors", 4},
+                                                        {"ply_property vertex.quality", 4}, {"face_colors", 4},
+                                                        {"ply_element edge", 1}}));
+  }
+  {
+    // OFF with vertex colours (COFF) and a face colour on one face line.
+    Audited a = audit_bytes("a.off",
+                            "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 255 0 0 255\n0 1 0 255 0 0 255\n0 0 1 255 0 0 255\n"
+                            "3 0 2 1\n3 0 1 3 1 1 1\n3 0 3 2\n3 1 2 3\n");
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"vertex_colors", 4}, {"face_colors", 1}}));
+  }
+  {
+    // Binary STL: two facets with normals, one with a non-zero attribute word (colour
+    // in some dialects); ASCII STL: facet normals.
+    std::string b(80, ' ');
+    put_bin<uint32_t>(b, 2, false);
+    const float f[2][12] = {{0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}};
+    for (int t = 0; t < 2; ++t) {
+      for (float x : f[t]) put_bin<float>(b, x, false);
+      put_bin<uint16_t>(b, uint16_t(t == 0 ? 0x801f : 0), false);
+    }
+    Audited a = audit_bytes("a.stl", b);
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"face_normals", 1}, {"facet_attribute_words", 1}}));
+    Audited t = audit_bytes("t.stl",
+                            "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+                            "endfacet\nendsolid t\n");
+    EXPECT_EQ(t.counts, (std::map<std::string, size_t>{{"face_normals", 1}}));
+  }
+  std::filesystem::remove_all(temp_dir());
+}
+
+TEST(RepairInput, DoubleCoordinatesAreKeptExactly) {
+  const Vec3d want[4] = {{0.1, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1.0000000000000002}};
+  auto expect_exact = [&](const Audited& a, const char* what) {
+    ASSERT_EQ(a.soup.vertices.size(), 4u) << what;
+    EXPECT_TRUE(a.audit.double_data) << what;
+    EXPECT_TRUE(a.soup.double_precision) << what;
+    EXPECT_EQ(a.audit.coordinates_restored, 2u) << what;
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(a.soup.vertices[size_t(i)], want[i]) << what << " vertex " << i;
+  };
+  // Text: 1.0000000000000002 has 17 significant digits and is not a float, so the file
+  // holds double data, and 0.1 is read as the double 0.1 too.
+  expect_exact(audit_bytes("d.obj", std::string("v 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.0000000000000002\n") + kTetObjFaces),
+               "obj");
+  expect_exact(audit_bytes("d.off", "OFF\n4 4 0\n0.1 0 0\n1 0 0\n0 1 0\n# comment\n0 0 1.0000000000000002\n"
+                                    "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+               "off");
+  const std::string ply_head = "element vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+                               "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+  expect_exact(audit_bytes("d.ply", "ply\nformat ascii 1.0\n" + ply_head +
+                                        "0.1 0 0\n1 0 0\n0 1 0\n0 0 1.0000000000000002\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+               "ply ascii");
+  for (bool big : {false, true}) {
+    std::string b = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") + " 1.0\n" + ply_head;
+    for (const Vec3d& v : want)
+      for (int k = 0; k < 3; ++k) put_bin<double>(b, v[k], big);
+    const int f[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    for (const auto& t : f) {
+      b.push_back(3);
+      for (int k = 0; k < 3; ++k) put_bin<int32_t>(b, t[k], big);
+    }
+    expect_exact(audit_bytes(big ? "be.ply" : "le.ply", b), big ? "ply big-endian" : "ply little-endian");
+  }
+  // Float data (at most 9 significant digits) stays float: 0.1 is the float 0.1f.
+  Audited fl = audit_bytes("f.obj", std::string("v 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.00000012\n") + kTetObjFaces);
+  EXPECT_FALSE(fl.audit.double_data);
+  EXPECT_EQ(fl.soup.vertices[0].x, double(0.1f));
+  // ASCII STL with double data cannot be kept (the reader merges corners by their float
+  // positions): refused, naming the file, line and vertex.
+  const std::string stl = write_file("d.stl",
+                                     "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                     "vertex 0 0.10000000000000001 0\nendloop\nendfacet\nendsolid t\n");
+  auto soup = read_polygon_file(stl);
+  ASSERT_TRUE(soup.ok());
+  auto r = audit_input(stl, "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                            "vertex 0 0.10000000000000001 0\nendloop\nendfacet\nendsolid t\n",
+                       *soup);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("d.stl: line 6: vertex 2"), std::string::npos) << r.error().message;
+  std::filesystem::remove_all(temp_dir());
+}
+
+// Output triangles are in input face order, and the runs map every one of them back.
+TEST(RepairReport, SourceRunsMapEveryOutputTriangle) {
+  // Face 0 a quad (2 triangles), face 1 a triangle, face 2 a repeated-vertex triangle
+  // (removed), faces 3 and 4 triangles, face 5 a pentagon (3 triangles).
+  std::vector<uint32_t> src = {0, 0, 1, 3, 4, 5, 5, 5, kFilledHole, kFilledHole};
+  auto runs = source_runs(src);
+  EXPECT_EQ(runs, (std::vector<std::array<size_t, 4>>{{0, 0, 1, 2}, {2, 1, 1, 1}, {3, 3, 2, 1}, {5, 5, 1, 3}}));
+  // A quad mesh is one run.
+  EXPECT_EQ(source_runs({0, 0, 1, 1, 2, 2}), (std::vector<std::array<size_t, 4>>{{0, 0, 3, 2}}));
+  // Through repair: the T-junction split appends a triangle, which the output order puts
+  // back next to its face; hole filling comes last.
+  PolygonSoup s = make_soup({{0, 0, 0}, {2, 0, 0}, {1, 1, 0}, {1, 0, 0}, {1, -1, 0}}, {{0, 1, 2}, {0, 4, 3}, {3, 4, 1}});
+  RepairResult r = run(s);
+  EXPECT_EQ(r.output_source, (std::vector<uint32_t>{0, 0, 1, 2}));
+  EXPECT_EQ(source_runs(r.output_source), (std::vector<std::array<size_t, 4>>{{0, 0, 1, 2}, {2, 1, 2, 1}}));
+}
+
 TEST(RepairSha256, Fips180Vectors) {
   EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
@@ -894,6 +1107,75 @@ TEST(RepairCli, NeverOverwritesTheInputWithoutInPlace) {
   EXPECT_EQ(run_cli("repair " + in.string() + " --in-place"), 0);
   EXPECT_NE(read_all(in), text);
   EXPECT_EQ(run_cli("repair --check " + in.string()), 0);
+  std::filesystem::remove_all(dir);
+}
+
+// Double data through the CLI: every coordinate comes back bit for bit (17 digits), the
+// attributes the output cannot hold are in the report and on stderr, and a report path
+// that is a folder is refused before anything is written.
+TEST(RepairCli, DoubleDataAndAttributesSurviveTheRoundTrip) {
+  auto dir = temp_dir();
+  auto in = dir / "d.obj";
+  write_text(in, "v 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.0000000000000002\nvn 0 0 1\nvt 0.5 0.5\n"
+                 "f 1/1/1 3/1/1 2/1/1\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  for (const char* ext : {".ply", ".obj", ".off"}) {
+    auto out = dir / (std::string("o") + ext);
+    auto rep = dir / "r.json";
+    std::string err;
+    ASSERT_EQ(run_cli("repair " + in.string() + " -o " + out.string() + " --report " + rep.string(), &err), 0) << err;
+    EXPECT_NE(err.find("attributes not kept: vertex_normals=1 texcoords=1 face_corner_references=1"), std::string::npos)
+        << err;
+    auto j = nlohmann::json::parse(read_all(rep));
+    EXPECT_EQ(j["input"]["attributes_not_kept"]["vertex_normals"], 1);
+    EXPECT_EQ(j["input"]["attributes_not_kept"]["texcoords"], 1);
+    EXPECT_EQ(j["input"]["double_coordinates_restored"], 2);
+    EXPECT_EQ(j["output"]["coordinate_digits"], 17);
+    EXPECT_EQ(j["faces"]["output_source_runs"], nlohmann::json::parse("[[0, 0, 4, 1]]"));
+    // Read the vertex lines back with strtod: the doubles, bit for bit. OBJ: "v" lines;
+    // OFF: the 4 lines after "OFF" and the counts; PLY: the 4 lines after end_header.
+    std::ifstream f(out);
+    std::vector<double> xs;
+    const std::string e(ext);
+    int skip = e == ".off" ? 2 : -1;
+    int left = e == ".obj" ? 1 << 30 : 4;
+    for (std::string line; std::getline(f, line) && left > 0;) {
+      if (e == ".ply" && skip < 0) {
+        if (line == "end_header") skip = 0;
+        continue;
+      }
+      if (skip > 0) {
+        --skip;
+        continue;
+      }
+      std::istringstream ls(line);
+      if (e == ".obj") {
+        std::string kw;
+        if (!(ls >> kw) || kw != "v") continue;
+      }
+      std::string x, y, z;
+      ASSERT_TRUE(bool(ls >> x >> y >> z)) << ext << ": " << line;
+      for (const std::string* t : {&x, &y, &z}) xs.push_back(std::strtod(t->c_str(), nullptr));
+      --left;
+    }
+    ASSERT_EQ(xs.size(), 12u) << ext;
+    EXPECT_EQ(xs[0], 0.1) << ext;
+    EXPECT_EQ(xs[11], 1.0000000000000002) << ext;
+  }
+  // A report path that is a folder: exit 2, no mesh, no temporary file left.
+  std::filesystem::create_directories(dir / "rep");
+  auto out = dir / "never.obj";
+  std::string err;
+  EXPECT_EQ(run_cli("repair " + in.string() + " -o " + out.string() + " --report " + (dir / "rep").string(), &err), 2);
+  EXPECT_FALSE(std::filesystem::exists(out));
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".visgate-tmp"), std::string::npos) << e.path();
+  // ASCII STL double data cannot be kept: exit 2 naming the vertex, nothing written.
+  auto stl = dir / "d.stl";
+  write_text(stl, "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0.10000000000000001 0\n"
+                  "endloop\nendfacet\nendsolid t\n");
+  EXPECT_EQ(run_cli("repair " + stl.string() + " -o " + out.string(), &err), 2);
+  EXPECT_NE(err.find("vertex 2"), std::string::npos) << err;
+  EXPECT_FALSE(std::filesystem::exists(out));
   std::filesystem::remove_all(dir);
 }
 

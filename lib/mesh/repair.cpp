@@ -719,51 +719,81 @@ WeldResult weld_vertices_exact(const std::vector<Vec3d>& pos, const std::vector<
     // fit: two points within T then fall in the same or adjacent cells. The key
     // floor(fl(fl(p - lo) / h)) is monotone in p, and its rounding error (a few ulps of
     // a value below 2^41, i.e. below 2^-10) is smaller than the 2^-8 relative margin, so
-    // keys of points within T differ by at most one.
+    // keys of points within T differ by at most one. The key is computed in long double
+    // (64-bit significand, wider exponent) so that p - lo cannot overflow.
     Vec3d lo = pos[ids[0]], hi = lo;
     for (uint32_t i : ids) {
       lo = vmin(lo, pos[i]);
       hi = vmax(hi, pos[i]);
     }
-    double extent = max_component(hi - lo);
-    double h = std::max(tolerance, extent * 0x1p-40) * (1.0 + 0x1p-8);
-    struct Cell {
-      int64_t x, y, z;
-      bool operator==(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
+    long double extent = 0;
+    for (int k = 0; k < 3; ++k) extent = std::max(extent, (long double)hi[k] - (long double)lo[k]);
+    const long double h = std::max((long double)tolerance, extent * 0x1p-40L) * (1.0L + 0x1p-8L);
+    struct CellKey {
+      int64_t c[3];
+      uint32_t id;
     };
-    struct CellHash {
-      size_t operator()(const Cell& c) const {
-        uint64_t k = uint64_t(c.x) * 0x9E3779B97F4A7C15ull ^ uint64_t(c.y) * 0xC2B2AE3D27D4EB4Full ^
-                     uint64_t(c.z) * 0x165667B19E3779F9ull;
-        return size_t(k ^ (k >> 29));
+    std::vector<CellKey> keys(ids.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        keys[i].id = ids[i];
+        for (int k = 0; k < 3; ++k)
+          keys[i].c[k] = int64_t(std::floor(((long double)pos[ids[i]][k] - (long double)lo[k]) / h));
       }
+    });
+    // Cells as ranges of the keys sorted by cell.
+    auto cell_less = [](const CellKey& x, const CellKey& y) {
+      if (x.c[0] != y.c[0]) return x.c[0] < y.c[0];
+      if (x.c[1] != y.c[1]) return x.c[1] < y.c[1];
+      if (x.c[2] != y.c[2]) return x.c[2] < y.c[2];
+      return x.id < y.id;
     };
-    auto cell_of = [&](const Vec3d& p) {
-      return Cell{int64_t(std::floor((p.x - lo.x) / h)), int64_t(std::floor((p.y - lo.y) / h)),
-                  int64_t(std::floor((p.z - lo.z) / h))};
+    std::sort(keys.begin(), keys.end(), cell_less);
+    auto cmp_cell = [](const int64_t* x, const int64_t* y) {
+      for (int k = 0; k < 3; ++k)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+      return 0;
     };
-    std::unordered_map<Cell, std::vector<uint32_t>, CellHash> grid;
-    grid.reserve(ids.size());
-    for (uint32_t i : ids) grid[cell_of(pos[i])].push_back(i);
+    std::vector<uint32_t> cell_start;
+    for (uint32_t i = 0; i < keys.size(); ++i)
+      if (i == 0 || cmp_cell(keys[i].c, keys[i - 1].c) != 0) cell_start.push_back(i);
+    cell_start.push_back(uint32_t(keys.size()));
+    const uint32_t ncells = uint32_t(cell_start.size() - 1);
+    auto cell_key = [&](uint32_t cell) { return keys[cell_start[cell]].c; };
     const double t2 = tolerance * tolerance;
-    for (uint32_t i : ids) {
-      Cell c = cell_of(pos[i]);
-      for (int64_t dx = -1; dx <= 1; ++dx)
-        for (int64_t dy = -1; dy <= 1; ++dy)
-          for (int64_t dz = -1; dz <= 1; ++dz) {
-            auto it = grid.find(Cell{c.x + dx, c.y + dy, c.z + dz});
-            if (it == grid.end()) continue;
-            for (uint32_t j : it->second) {
-              if (j <= i) continue;
-              // Double filter: d2 and t2 carry relative errors below 8 * 2^-53; a 2^-40
-              // margin decides clear cases, the exact predicate the rest.
-              Vec3d d = pos[i] - pos[j];
-              double d2 = dot(d, d);
-              if (d2 > t2 * (1 + 0x1p-40) && t2 > 0x1p-900) continue;
-              if ((d2 < t2 * (1 - 0x1p-40) && d2 > 0x1p-900) || ex.compare_distance(pos[i], pos[j], tolerance) <= 0)
-                uf.unite(i, j);
-            }
-          }
+    auto try_pair = [&](uint32_t i, uint32_t j) {
+      // Double filter: d2 and t2 carry relative errors below 8 * 2^-53; a 2^-40 margin
+      // decides clear cases, the exact predicate the rest.
+      Vec3d d = pos[i] - pos[j];
+      double d2 = dot(d, d);
+      if (d2 > t2 * (1 + 0x1p-40) && t2 > 0x1p-900) return;
+      if ((d2 < t2 * (1 - 0x1p-40) && d2 > 0x1p-900) || ex.compare_distance(pos[i], pos[j], tolerance) <= 0)
+        uf.unite(i, j);
+    };
+    auto cross_cells = [&](uint32_t a, uint32_t b) {
+      for (uint32_t i = cell_start[a]; i < cell_start[a + 1]; ++i)
+        for (uint32_t j = cell_start[b]; j < cell_start[b + 1]; ++j) try_pair(keys[i].id, keys[j].id);
+    };
+    // Each pair of adjacent cells once: a cell with itself, with (0, 0, +1), and with the
+    // three cells z-1..z+1 of the rows (x, y+1), (x+1, y-1), (x+1, y), (x+1, y+1). Cells
+    // are visited in sorted order, so the cells of each such row are found by a pointer
+    // that only moves forward (a merge, no hashing).
+    const int64_t rows[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
+    uint32_t ptr[4] = {0, 0, 0, 0};
+    for (uint32_t cell = 0; cell < ncells; ++cell) {
+      const int64_t* c = cell_key(cell);
+      for (uint32_t i = cell_start[cell]; i < cell_start[cell + 1]; ++i)
+        for (uint32_t j = i + 1; j < cell_start[cell + 1]; ++j) try_pair(keys[i].id, keys[j].id);
+      if (cell + 1 < ncells) {
+        const int64_t up[3] = {c[0], c[1], c[2] + 1};
+        if (cmp_cell(cell_key(cell + 1), up) == 0) cross_cells(cell, cell + 1);
+      }
+      for (int r = 0; r < 4; ++r) {
+        const int64_t first[3] = {c[0] + rows[r][0], c[1] + rows[r][1], c[2] - 1};
+        const int64_t last[3] = {c[0] + rows[r][0], c[1] + rows[r][1], c[2] + 1};
+        while (ptr[r] < ncells && cmp_cell(cell_key(ptr[r]), first) < 0) ++ptr[r];
+        for (uint32_t o = ptr[r]; o < ncells && cmp_cell(cell_key(o), last) <= 0; ++o) cross_cells(cell, o);
+      }
     }
   }
   // Clusters (root = lowest member; members collected in ascending order).
@@ -1224,6 +1254,24 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
     t0 = clock::now();
     size_t copies = split_nonmanifold(w, cls);
     R.steps.push_back({"split_nonmanifold", {{"vertex_copies_added", copies}}, seconds_since(t0)});
+  }
+
+  // Output triangles in input face order (stable; hole fillers last), so that the report
+  // maps them to input faces by runs.
+  {
+    const size_t nf = R.input_faces;
+    std::vector<uint32_t> off(nf + 2, 0);
+    for (uint32_t s : w.src) ++off[(s == kFilledHole ? nf : size_t(s)) + 1];
+    for (size_t f = 0; f <= nf; ++f) off[f + 1] += off[f];
+    std::vector<Tri> tris(w.tris.size());
+    std::vector<uint32_t> src(w.src.size());
+    for (size_t t = 0; t < w.tris.size(); ++t) {
+      const uint32_t slot = off[w.src[t] == kFilledHole ? nf : size_t(w.src[t])]++;
+      tris[slot] = w.tris[t];
+      src[slot] = w.src[t];
+    }
+    w.tris = std::move(tris);
+    w.src = std::move(src);
   }
 
   // After.

@@ -160,7 +160,8 @@ struct RemovedTriangle {
 
 struct RepairResult {
   IndexedMesh output;                    // after repair (the input, welded exactly, with check_only)
-  std::vector<uint32_t> output_source;   // per output triangle: input face, or kFilledHole
+  std::vector<uint32_t> output_source;   // per output triangle: input face, or kFilledHole;
+                                         // non-decreasing, hole fillers last
   std::vector<uint32_t> output_vertex_class;  // per output vertex: the vertex before splitting
   size_t input_vertices = 0, input_faces = 0, input_triangles = 0;
   size_t polygons_triangulated = 0, fan_fallbacks = 0, unreferenced_vertices = 0;
