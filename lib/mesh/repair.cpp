@@ -1161,7 +1161,9 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
                                                  : weld_vertices_exact(w.pos, used, T, WeldMode::Chain, ex).merged;
   double weld_seconds = seconds_since(t0) + (T == 0.0 ? exact_weld_seconds : 0.0);
   if (T != 0.0) before_seconds += exact_weld_seconds;
-  R.steps.push_back({"analyze_input", {}, before_seconds});
+  R.steps.push_back({"analyze_input",
+                     {{"self_intersection_pairs_tested", R.before.self_intersection_pairs_tested}},
+                     before_seconds});
   if (opt.check_only) {
     R.output = std::move(before);
     R.output_source = w.src;
@@ -1293,7 +1295,9 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
         weld_vertices_exact(R.output.vertices, orig, T, WeldMode::Chain, ex).merged;
   }
   R.output_vertex_class = std::move(cls);
-  R.steps.push_back({"analyze_output", {}, seconds_since(t0)});
+  R.steps.push_back({"analyze_output",
+                     {{"self_intersection_pairs_tested", R.after.self_intersection_pairs_tested}},
+                     seconds_since(t0)});
 
   // Face accounting: every input face is in the output or has a removal record.
   std::vector<uint8_t> present(R.input_faces, 0), recorded(R.input_faces, 0);

@@ -9,7 +9,8 @@
 // (double) code only proposes candidates (spatial hashing cells, bounding-box overlaps,
 // ear-clipping order); every decision goes through ExactPredicates, which the caller
 // implements exactly (oracle/exact_predicates.h does it with CGAL; the library never
-// includes CGAL):
+// includes CGAL), behind the double filters of repair_predicates.h, which answer only
+// when a proven error bound makes the sign certain:
 //   - welding: |p - q| <= T decided exactly (compare_distance);
 //   - zero area: exact collinearity of the three corners;
 //   - T-junctions: exact collinearity plus exact coordinate comparisons;

@@ -147,7 +147,15 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
   for (const StepRecord& s : r.steps) {
     json c = json::object();
     for (const auto& [name, n] : s.changes) c[name] = n;
-    steps.push_back({{"name", s.name}, {"changes", c}, {"seconds", s.seconds}});
+    json step = {{"name", s.name}, {"changes", c}, {"seconds", s.seconds}};
+    // The analyses also give the time of each of their phases.
+    const Analysis* a = s.name == "analyze_input" ? &r.before : (s.name == "analyze_output" ? &r.after : nullptr);
+    if (a) {
+      json phases = json::object();
+      for (const auto& [name, sec] : a->seconds) phases[name] = sec;
+      step["phases"] = phases;
+    }
+    steps.push_back(step);
   }
   j["steps"] = steps;
   // Weld clusters whose diameter exceeds T through chaining (or that strict mode split).
