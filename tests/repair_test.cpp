@@ -575,6 +575,16 @@ TEST(RepairPredicates, Orient3dFilterIsExactWhenItAnswers) {
   const Vec3d a(1e7, -3, 0.5), b(1e7 + 1, -3, 0.5), c(1e7, -2, 0.75);
   EXPECT_EQ(orient3d_filter(a, b, c, a), kUnknown);
   EXPECT_EQ(orient3d_filter(a, b, c, a + (b - a) * 0.5 + (c - a) * 0.25), kUnknown);
+  // Zero by structure: four points sharing a coordinate exactly (a floor z = 0.3 far from
+  // the origin) are certified coplanar; with d one ulp off the floor the filter does not
+  // say coplanar, and the filtered predicate gives the exact sign.
+  const Vec3d f0(1e6, 2e6, 0.3), f1(1e6 + 3, 2e6 - 1, 0.3), f2(1e6 - 2, 2e6 + 5, 0.3), f3(1e6 + 0.1, 2e6 + 0.7, 0.3);
+  EXPECT_EQ(orient3d_filter(f0, f1, f2, f3), 0);
+  EXPECT_EQ(kEx.orientation(f0, f1, f2, f3), 0);
+  const Vec3d f4(f3.x, f3.y, ulps(0.3, 1));
+  EXPECT_NE(orient3d_filter(f0, f1, f2, f4), 0);
+  EXPECT_EQ(FilteredPredicates(kEx).orientation(f0, f1, f2, f4), kEx.orientation(f0, f1, f2, f4));
+  EXPECT_NE(kEx.orientation(f0, f1, f2, f4), 0);
   // Far from degenerate: answered.
   EXPECT_EQ(orient3d_filter(kA, kB, kC, kD), 1);
   EXPECT_EQ(orient3d_filter(kA, kC, kB, kD), -1);

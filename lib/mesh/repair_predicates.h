@@ -5,9 +5,10 @@
 // Guarantee: exact. Each filter evaluates the predicate's polynomial in double and
 // compares it with a proven bound on its rounding error (derived at each constant
 // below); it answers only when the sign is certain and returns kUnknown otherwise, in
-// which case the exact predicate decides. An exactly zero value is never certified by a
-// filter, so every degenerate case (coplanar, collinear, touching) goes to the exact
-// predicate. The bounds hold for round-to-nearest and for directed rounding (|delta| <=
+// which case the exact predicate decides. An exactly zero value is certified only where
+// it is zero by structure (the points share a coordinate exactly: coplanar in an
+// axis-aligned plane, as the faces of boxes standing on a floor are); every other
+// degenerate case (coplanar, collinear, touching) goes to the exact predicate. The bounds hold for round-to-nearest and for directed rounding (|delta| <=
 // 2u per operation; u = 2^-53), and for any finite double input: where a product could
 // overflow or underflow the filter returns kUnknown.
 //
@@ -61,6 +62,13 @@ inline int det2_filter(double u1, double v1, double u2, double v2) {
 // overflow) and an underflowing product contributes at most 2^-1075 * 2^302 * 4 < 2^-770
 // absolutely, below 2^-70 P once P >= 2^-700 (checked).
 constexpr double kOrient3dErr = 3 * 0x1p-50;
+// Four points with one coordinate exactly equal lie in an axis-aligned plane: their
+// determinant has a zero column, so it is exactly 0.
+inline bool axis_coplanar(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+  for (int k = 0; k < 3; ++k)
+    if (a[k] == b[k] && a[k] == c[k] && a[k] == d[k]) return true;
+  return false;
+}
 inline int orient3d_filter(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
   const double e1x = b.x - a.x, e1y = b.y - a.y, e1z = b.z - a.z;
   const double e2x = c.x - a.x, e2y = c.y - a.y, e2z = c.z - a.z;
@@ -68,16 +76,17 @@ inline int orient3d_filter(const Vec3d& a, const Vec3d& b, const Vec3d& c, const
   // Differences of finite doubles are never NaN (at worst infinite), so std::max is safe.
   const double m = std::max({std::fabs(e1x), std::fabs(e1y), std::fabs(e1z), std::fabs(e2x), std::fabs(e2y),
                              std::fabs(e2z), std::fabs(qx), std::fabs(qy), std::fabs(qz)});
-  if (!(m <= 0x1p301)) return kUnknown;
+  if (!(m <= 0x1p301)) return axis_coplanar(a, b, c, d) ? 0 : kUnknown;
   const double a1 = e1y * e2z, a2 = e1z * e2y, b1 = e1z * e2x, b2 = e1x * e2z, c1 = e1x * e2y, c2 = e1y * e2x;
   const double D = (a1 - a2) * qx + (b1 - b2) * qy + (c1 - c2) * qz;
   const double P = (std::fabs(a1) + std::fabs(a2)) * std::fabs(qx) + (std::fabs(b1) + std::fabs(b2)) * std::fabs(qy) +
                    (std::fabs(c1) + std::fabs(c2)) * std::fabs(qz);
-  if (!(P >= 0x1p-700)) return kUnknown;
-  const double err = kOrient3dErr * P;
-  if (D > err) return 1;
-  if (D < -err) return -1;
-  return kUnknown;
+  if (P >= 0x1p-700) {
+    const double err = kOrient3dErr * P;
+    if (D > err) return 1;
+    if (D < -err) return -1;
+  }
+  return axis_coplanar(a, b, c, d) ? 0 : kUnknown;
 }
 
 // False when the line through a and b certainly misses the closed box [lo, hi] (so no
@@ -145,6 +154,8 @@ class FilteredPredicates {
     const int u = (ax + 1) % 3, w = (ax + 2) % 3;
     const int s = det2_filter(q[u] - p[u], r[w] - p[w], q[w] - p[w], r[u] - p[u]);
     if (s != kUnknown) return s;
+    // Three points sharing one 2D coordinate exactly are collinear.
+    if ((p[u] == q[u] && p[u] == r[u]) || (p[w] == q[w] && p[w] == r[w])) return 0;
     return ex_.orientation(Vec3d(p[u], p[w], 0), Vec3d(q[u], q[w], 0), Vec3d(r[u], r[w], 0), Vec3d(p[u], p[w], 1));
   }
   // CGAL's coplanar triangle/triangle and segment/triangle tests over orient2d.
