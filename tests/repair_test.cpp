@@ -8,15 +8,22 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <numeric>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 
 #include "lib/mesh/mesh_write.h"
 #include "lib/mesh/repair.h"
+#include "lib/mesh/repair_input.h"
+#include "lib/mesh/repair_report.h"
+#include "lib/mesh/repair_predicates.h"
 #include "lib/mesh/sha256.h"
 #include "lib/scene/mesh_io.h"
 #include "lib/scene/rng.h"
@@ -61,6 +68,13 @@ size_t step_change(const RepairResult& r, const std::string& step, const std::st
         if (k == key) return v;
   ADD_FAILURE() << "no step " << step << " / " << key;
   return 0;
+}
+
+// A double `k` ulps from x.
+double ulps(double x, int k) {
+  for (; k > 0; --k) x = std::nextafter(x, INFINITY);
+  for (; k < 0; ++k) x = std::nextafter(x, -INFINITY);
+  return x;
 }
 
 // Tetrahedron A(0,0,0) B(1,0,0) C(0,1,0) D(0,0,1) with outward faces (normals -z, -y, -x
@@ -146,6 +160,45 @@ TEST(RepairWeld, ToleranceBoundaryIsExact) {
   // Exact mode: -0 equals +0.
   std::vector<Vec3d> z = {{0.0, 1, 2}, {-0.0, 1, 2}};
   EXPECT_EQ(weld_vertices_exact(z, used, 0.0, WeldMode::Chain, kEx).merged, 1u);
+}
+
+// The spatial hash misses no pair: clusters equal those of union-find over all pairs
+// decided exactly, on points where many pairs sit exactly at distance T (a dyadic grid
+// of step T on two axes, so neighbours are T apart when T is dyadic), others a few ulps
+// beyond it, far from the origin and across cell boundaries.
+TEST(RepairWeld, MatchesAllPairsBruteForce) {
+  Rng rng(21);
+  for (double T : {0.25, 0x1p-20, 3e-7}) {
+    std::vector<Vec3d> p;
+    const Vec3d o(1e5, -2e5, 7);
+    for (int i = 0; i < 700; ++i) {
+      Vec3d q = o + Vec3d(double(rng.below(12)) * T, double(rng.below(12)) * T, double(rng.below(3)) * 3 * T);
+      if (rng.below(3) == 0) q.x = ulps(q.x, int(rng.below(5)) - 2);
+      p.push_back(q);
+    }
+    std::vector<uint8_t> used(p.size(), 1);
+    WeldResult w = weld_vertices_exact(p, used, T, WeldMode::Chain, kEx);
+    // Brute force: union-find with the lowest index as root.
+    std::vector<uint32_t> root(p.size());
+    std::iota(root.begin(), root.end(), 0u);
+    std::function<uint32_t(uint32_t)> find = [&](uint32_t x) { return root[x] == x ? x : root[x] = find(root[x]); };
+    size_t exact_t = 0;
+    for (uint32_t i = 0; i < p.size(); ++i)
+      for (uint32_t j = i + 1; j < p.size(); ++j) {
+        const int c = kEx.compare_distance(p[i], p[j], T);
+        exact_t += c == 0;
+        if (c <= 0) {
+          uint32_t a = find(i), b = find(j);
+          if (a != b) root[std::max(a, b)] = std::min(a, b);
+        }
+      }
+    std::vector<uint32_t> want(p.size());
+    for (uint32_t i = 0; i < p.size(); ++i) want[i] = find(i);
+    if (T != 3e-7) {
+      EXPECT_GT(exact_t, 100u) << "T " << T;  // dyadic T: the boundary case is exercised
+    }
+    EXPECT_EQ(w.rep, want) << "T " << T;
+  }
 }
 
 // Chaining: v0, v1, v2 on a line 0.6 T apart. Chain mode merges all three (diameter
@@ -471,6 +524,218 @@ TEST(RepairZoo, BadToleranceIsAnError) {
 }
 
 // ------------------------------------------------------------------------------------
+// The double-precision filters in front of the exact predicates (repair_predicates.h):
+// whenever a filter answers, its sign is CGAL's exact sign. The inputs are built to be
+// nearly degenerate, so that the plain double evaluation gets the sign wrong in some of
+// them (counted and required: the filter must then abstain), and exactly degenerate, so
+// that the filter must abstain.
+
+namespace {
+
+// Random point at scale 2^e around `centre`.
+Vec3d random_point(Rng& rng, const Vec3d& centre, int e) {
+  const double s = std::ldexp(1.0, e);
+  return centre + Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * s;
+}
+
+// det[b - a, c - a, d - a] in plain double, as a naive caller would compute it.
+double naive_orient(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+  return dot(cross(b - a, c - a), d - a);
+}
+
+}  // namespace
+
+TEST(RepairPredicates, Orient3dFilterIsExactWhenItAnswers) {
+  Rng rng(11);
+  size_t answered = 0, abstained = 0, naive_wrong = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3d centre = it % 3 == 0 ? Vec3d(0, 0, 0) : random_point(rng, Vec3d(0, 0, 0), int(rng.below(40)) - 10);
+    const int e = int(rng.below(30)) - 15;
+    const Vec3d a = random_point(rng, centre, e), b = random_point(rng, centre, e), c = random_point(rng, centre, e);
+    // d on the plane up to rounding, then moved a few ulps on one axis.
+    const double s = rng.uniform(-2, 2), t = rng.uniform(-2, 2);
+    Vec3d d = a + (b - a) * s + (c - a) * t;
+    const int ax = int(rng.below(3)), k = int(rng.below(7)) - 3;
+    d[ax] = ulps(d[ax], k);
+    const int exact = kEx.orientation(a, b, c, d);
+    const int f = orient3d_filter(a, b, c, d);
+    const double naive = naive_orient(a, b, c, d);
+    if ((naive > 0 ? 1 : naive < 0 ? -1 : 0) != exact) ++naive_wrong;
+    if (f == kUnknown) {
+      ++abstained;
+      continue;
+    }
+    ++answered;
+    ASSERT_EQ(f, exact) << "iteration " << it;
+  }
+  EXPECT_GT(naive_wrong, 100u);  // the inputs do defeat plain double evaluation
+  EXPECT_GT(answered, 1000u);    // and the filter still decides many of them
+  EXPECT_GT(abstained, 100u);
+  // Exactly degenerate: coplanar (d = a, d on an edge's line through dyadic steps).
+  const Vec3d a(1e7, -3, 0.5), b(1e7 + 1, -3, 0.5), c(1e7, -2, 0.75);
+  EXPECT_EQ(orient3d_filter(a, b, c, a), kUnknown);
+  EXPECT_EQ(orient3d_filter(a, b, c, a + (b - a) * 0.5 + (c - a) * 0.25), kUnknown);
+  // Zero by structure: four points sharing a coordinate exactly (a floor z = 0.3 far from
+  // the origin) are certified coplanar; with d one ulp off the floor the filter does not
+  // say coplanar, and the filtered predicate gives the exact sign.
+  const Vec3d f0(1e6, 2e6, 0.3), f1(1e6 + 3, 2e6 - 1, 0.3), f2(1e6 - 2, 2e6 + 5, 0.3), f3(1e6 + 0.1, 2e6 + 0.7, 0.3);
+  EXPECT_EQ(orient3d_filter(f0, f1, f2, f3), 0);
+  EXPECT_EQ(kEx.orientation(f0, f1, f2, f3), 0);
+  const Vec3d f4(f3.x, f3.y, ulps(0.3, 1));
+  EXPECT_NE(orient3d_filter(f0, f1, f2, f4), 0);
+  EXPECT_EQ(FilteredPredicates(kEx).orientation(f0, f1, f2, f4), kEx.orientation(f0, f1, f2, f4));
+  EXPECT_NE(kEx.orientation(f0, f1, f2, f4), 0);
+  // Far from degenerate: answered.
+  EXPECT_EQ(orient3d_filter(kA, kB, kC, kD), 1);
+  EXPECT_EQ(orient3d_filter(kA, kC, kB, kD), -1);
+  // Magnitudes where products would overflow or underflow: the filter abstains and the
+  // exact predicate decides.
+  EXPECT_EQ(orient3d_filter(kA * 0x1p400, kB * 0x1p400, kC * 0x1p400, kD * 0x1p400), kUnknown);
+  EXPECT_EQ(FilteredPredicates(kEx).orientation(kA * 0x1p400, kB * 0x1p400, kC * 0x1p400, kD * 0x1p400), 1);
+  EXPECT_EQ(orient3d_filter(kA * 0x1p-300, kB * 0x1p-300, kC * 0x1p-300, kD * 0x1p-300), kUnknown);
+  EXPECT_EQ(FilteredPredicates(kEx).orientation(kA * 0x1p-300, kB * 0x1p-300, kC * 0x1p-300, kD * 0x1p-300), 1);
+}
+
+TEST(RepairPredicates, CollinearAndLineBoxFiltersAreConservative) {
+  Rng rng(12);
+  const FilteredPredicates fp(kEx);
+  size_t off_line_certified = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3d centre = random_point(rng, Vec3d(0, 0, 0), int(rng.below(40)) - 10);
+    const int e = int(rng.below(30)) - 15;
+    const Vec3d a = random_point(rng, centre, e), b = random_point(rng, centre, e);
+    // p on the line up to rounding, moved by up to 2 ulps.
+    Vec3d p = a + (b - a) * rng.uniform(-0.5, 1.5);
+    const int ax = int(rng.below(3));
+    p[ax] = ulps(p[ax], int(rng.below(5)) - 2);
+    const bool exact = kEx.collinear(a, b, p);
+    ASSERT_EQ(fp.collinear(a, b, p), exact) << "iteration " << it;
+    // A point box: the line may meet it iff p is collinear, and the filter must never
+    // say "misses" for a collinear p.
+    const bool may = line_may_meet_box(a, b, p, p);
+    if (exact) {
+      ASSERT_TRUE(may) << "iteration " << it;
+    } else if (!may) {
+      ++off_line_certified;
+    }
+    // A box around p that contains a point exactly on the line (a itself or b) must
+    // never be pruned.
+    ASSERT_TRUE(line_may_meet_box(a, b, vmin(p, a), vmax(p, a)));
+  }
+  EXPECT_GT(off_line_certified, 1000u);
+  // Dyadic points exactly on the segment (1, 1, 1) + k/8 (3, -2, 5) far from the origin.
+  const Vec3d a(1e6 + 1, 1e6 + 1, -1e6 + 1), d(3, -2, 5);
+  for (int k = 0; k <= 8; ++k) {
+    const Vec3d p = a + d * (k / 8.0);
+    EXPECT_TRUE(line_may_meet_box(a, a + d, p, p));
+    EXPECT_TRUE(fp.collinear(a, a + d, p));
+    Vec3d q = p;
+    q.y = ulps(q.y, 1);
+    EXPECT_FALSE(fp.collinear(a, a + d, q));
+  }
+}
+
+TEST(RepairPredicates, TriangleAndSegmentTestsMatchCgal) {
+  // Coordinates on a small integer grid make coplanar, touching and collinear pairs
+  // common; every answer is compared with CGAL's do_intersect.
+  Rng rng(13);
+  const FilteredPredicates fp(kEx);
+  size_t hits = 0, seg_hits = 0;
+  auto grid_point = [&](double scale, const Vec3d& off) {
+    return off + Vec3d(double(rng.below(4)), double(rng.below(4)), double(rng.below(4))) * scale;
+  };
+  for (int it = 0; it < 30000; ++it) {
+    const double scale = it % 2 ? 1.0 : 0x1p-20;
+    const Vec3d off = it % 3 ? Vec3d(0, 0, 0) : Vec3d(1e6, -1e6, 3e5);
+    Vec3d t[6];
+    for (auto& p : t) p = grid_point(scale, off);
+    if (kEx.collinear(t[0], t[1], t[2]) || kEx.collinear(t[3], t[4], t[5])) continue;
+    const bool want = kEx.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]);
+    ASSERT_EQ(fp.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]), want) << "iteration " << it;
+    hits += want;
+    if (t[3] != t[4]) {
+      const bool ws = kEx.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]);
+      ASSERT_EQ(fp.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]), ws) << "iteration " << it;
+      seg_hits += ws;
+    }
+  }
+  EXPECT_GT(hits, 1000u);
+  EXPECT_GT(seg_hits, 1000u);
+  // All six points in one tilted plane z = x + 2y (exact on the grid), far from the
+  // origin: every pair goes through the coplanar 2D tests; coplanar_side too.
+  size_t coplanar_hits = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const Vec3d off = it % 2 ? Vec3d(0, 0, 0) : Vec3d(4096, -8192, 4096 - 16384);
+    Vec3d t[6];
+    for (auto& p : t) {
+      const double x = double(rng.below(5)), y = double(rng.below(5));
+      p = off + Vec3d(x, y, x + 2 * y);
+    }
+    if (kEx.collinear(t[0], t[1], t[2]) || kEx.collinear(t[3], t[4], t[5])) continue;
+    const bool want = kEx.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]);
+    ASSERT_EQ(fp.triangles_intersect(t[0], t[1], t[2], t[3], t[4], t[5]), want) << "coplanar iteration " << it;
+    coplanar_hits += want;
+    if (t[3] != t[4]) {
+      ASSERT_EQ(fp.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]),
+                kEx.segment_triangle_intersect(t[3], t[4], t[0], t[1], t[2]))
+          << "coplanar iteration " << it;
+    }
+    ASSERT_EQ(fp.coplanar_side(t[0], t[1], t[2], t[3]), kEx.coplanar_side(t[0], t[1], t[2], t[3]))
+        << "coplanar iteration " << it;
+  }
+  EXPECT_GT(coplanar_hits, 1000u);
+}
+
+// Self-intersections of a soup of many small triangles sharing no vertex (so every pair
+// is a plain triangle/triangle test): the set analyze_mesh reports equals all pairs
+// tested one by one with CGAL, so the box tree misses no candidate.
+TEST(RepairPredicates, SelfIntersectionsMatchAllPairsBruteForce) {
+  Rng rng(14);
+  IndexedMesh m;
+  for (int t = 0; t < 600; ++t) {
+    const Vec3d c(double(rng.below(12)), double(rng.below(12)), double(rng.below(4)));
+    for (int k = 0; k < 3; ++k)
+      m.vertices.push_back(c + Vec3d(double(rng.below(3)), double(rng.below(3)), double(rng.below(2))));
+    m.triangles.push_back({uint32_t(3 * t), uint32_t(3 * t + 1), uint32_t(3 * t + 2)});
+  }
+  std::vector<std::array<uint32_t, 2>> want;
+  std::vector<uint8_t> flat(m.triangles.size());
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const auto& t = m.triangles[i];
+    flat[i] = kEx.collinear(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
+  }
+  for (uint32_t i = 0; i < m.triangles.size(); ++i)
+    for (uint32_t j = i + 1; j < m.triangles.size(); ++j) {
+      if (flat[i] || flat[j]) continue;
+      const auto &a = m.triangles[i], &b = m.triangles[j];
+      // Equal positions would make the triangles share a vertex: skip such pairs in
+      // both lists (analyze_mesh sees vertices by index, and none is shared here).
+      if (kEx.triangles_intersect(m.vertices[a[0]], m.vertices[a[1]], m.vertices[a[2]], m.vertices[b[0]],
+                                  m.vertices[b[1]], m.vertices[b[2]]))
+        want.push_back({i, j});
+    }
+  Analysis an = analyze_mesh(m, kEx);
+  EXPECT_GT(want.size(), 500u);
+  EXPECT_EQ(an.self_intersections, want);
+  EXPECT_GE(an.self_intersection_pairs_tested, want.size());
+}
+
+// A T-junction on a long diagonal boundary edge far from the origin: the vertex at an
+// exactly representable interior point is found; one ulp off the line it is not.
+TEST(RepairZoo, TJunctionOnALongDiagonalEdgeFarAway) {
+  const Vec3d a(1e6, 2e6, -3e6), d(3, 6, 9);
+  for (int off = 0; off < 2; ++off) {
+    Vec3d m = a + d * 0.25;
+    if (off) m.z = ulps(m.z, 1);
+    // Triangle (a, b, apex) and a fan of triangles elsewhere sharing m on its boundary.
+    PolygonSoup s = make_soup({a, a + d, a + Vec3d(0, 0, 10), m, m + Vec3d(1, -1, 0), m + Vec3d(1, 1, -5)},
+                              {{0, 1, 2}, {3, 4, 5}});
+    RepairResult r = run(s, [] { RepairOptions o; o.check_only = true; return o; }());
+    EXPECT_EQ(r.before.defects.t_junctions, off ? 0u : 1u) << "off " << off;
+  }
+}
+
+// ------------------------------------------------------------------------------------
 // Round trips: write each format, read back with the importer, compare bit for bit.
 
 namespace {
@@ -600,6 +865,174 @@ TEST(RepairRoundTrip, RepairedMeshReadsBackAndIsAFixedPoint) {
 
 // ------------------------------------------------------------------------------------
 
+// ------------------------------------------------------------------------------------
+// The input audit: attributes the reader does not keep are counted by name, and double
+// coordinates (which the reader rounds to float32) are restored exactly.
+
+namespace {
+std::string write_file(const std::string& name, const std::string& bytes) {
+  const std::string path = (temp_dir() / name).string();
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+  return path;
+}
+
+// Reads `bytes` as file `name` and audits it; the audit's counts as a map.
+struct Audited {
+  PolygonSoup soup;
+  InputAudit audit;
+  std::map<std::string, size_t> counts;
+};
+Audited audit_bytes(const std::string& name, const std::string& bytes) {
+  Audited a;
+  const std::string path = write_file(name, bytes);
+  auto soup = read_polygon_file(path);
+  EXPECT_TRUE(soup.ok()) << name << ": " << (soup.ok() ? "" : soup.error().message);
+  if (!soup.ok()) return a;
+  a.soup = std::move(*soup);
+  auto r = audit_input(path, bytes, a.soup);
+  EXPECT_TRUE(r.ok()) << name << ": " << (r.ok() ? "" : r.error().message);
+  if (!r.ok()) return a;
+  a.audit = *r;
+  for (const auto& [k, v] : r->not_kept) a.counts[k] = v;
+  return a;
+}
+
+template <class T>
+void put_bin(std::string& out, T v, bool big) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  if (big) std::reverse(b, b + sizeof(T));
+  out.append(b, sizeof(T));
+}
+
+const char* kTetObjFaces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+}  // namespace
+
+TEST(RepairInput, AttributesAreCountedNotDropped) {
+  {
+    // OBJ: 4 normals, 3 texture coordinates, a material, a group, a polyline, corner
+    // references on two faces, and a smoothing statement.
+    Audited a = audit_bytes("a.obj",
+                            "mtllib m.mtl\no thing\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                            "vn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                            "g side\nusemtl red\ns 1\nf 1/1/1 3/3/3 2/2/2\nf 1//1 2//2 4//4\nf 1 4 3\nf 2 3 4\nl 1 2\n");
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"material_libraries", 1}, {"objects", 1}, {"vertex_normals", 4},
+                                                        {"texcoords", 3}, {"groups", 1}, {"materials", 1},
+                                                        {"smoothing_groups", 1}, {"face_corner_references", 2},
+                                                        {"line_elements", 1}}));
+    EXPECT_FALSE(a.audit.double_data);
+  }
+  {
+    // PLY: per-vertex normal (nx ny nz: one attribute) and colour, a per-vertex
+    // "quality", a face colour, and an extra element.
+    Audited a = audit_bytes("a.ply",
+                            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                            "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+                            "property uchar blue\nproperty float quality\nelement face 4\nproperty list uchar int vertex_indices\n"
+                            "property uchar red\nproperty uchar green\nproperty uchar blue\nelement edge 1\nproperty int vertex1\n"
+                            "property int vertex2\nend_header\n"
+                            "0 0 0 0 0 1 1 2 3 0.5\n1 0 0 0 0 1 1 2 3 0.5\n0 1 0 0 0 1 1 2 3 0.5\n0 0 1 0 0 1 1 2 3 0.5\n"
+                            "3 0 2 1 9 9 9\n3 0 1 3 9 9 9\n3 0 3 2 9 9 9\n3 1 2 3 9 9 9\n0 1\n");
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"vertex_normals", 4}, {"vertex_colors", 4},
+                                                        {"ply_property vertex.quality", 4}, {"face_colors", 4},
+                                                        {"ply_element edge", 1}}));
+  }
+  {
+    // OFF with vertex colours (COFF) and a face colour on one face line.
+    Audited a = audit_bytes("a.off",
+                            "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 255 0 0 255\n0 1 0 255 0 0 255\n0 0 1 255 0 0 255\n"
+                            "3 0 2 1\n3 0 1 3 1 1 1\n3 0 3 2\n3 1 2 3\n");
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"vertex_colors", 4}, {"face_colors", 1}}));
+  }
+  {
+    // Binary STL: two facets with normals, one with a non-zero attribute word (colour
+    // in some dialects); ASCII STL: facet normals.
+    std::string b(80, ' ');
+    put_bin<uint32_t>(b, 2, false);
+    const float f[2][12] = {{0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}};
+    for (int t = 0; t < 2; ++t) {
+      for (float x : f[t]) put_bin<float>(b, x, false);
+      put_bin<uint16_t>(b, uint16_t(t == 0 ? 0x801f : 0), false);
+    }
+    Audited a = audit_bytes("a.stl", b);
+    EXPECT_EQ(a.counts, (std::map<std::string, size_t>{{"face_normals", 1}, {"facet_attribute_words", 1}}));
+    Audited t = audit_bytes("t.stl",
+                            "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+                            "endfacet\nendsolid t\n");
+    EXPECT_EQ(t.counts, (std::map<std::string, size_t>{{"face_normals", 1}}));
+  }
+  std::filesystem::remove_all(temp_dir());
+}
+
+TEST(RepairInput, DoubleCoordinatesAreKeptExactly) {
+  const Vec3d want[4] = {{0.1, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1.0000000000000002}};
+  auto expect_exact = [&](const Audited& a, const char* what) {
+    ASSERT_EQ(a.soup.vertices.size(), 4u) << what;
+    EXPECT_TRUE(a.audit.double_data) << what;
+    EXPECT_TRUE(a.soup.double_precision) << what;
+    EXPECT_EQ(a.audit.coordinates_restored, 2u) << what;
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(a.soup.vertices[size_t(i)], want[i]) << what << " vertex " << i;
+  };
+  // Text: 1.0000000000000002 has 17 significant digits and is not a float, so the file
+  // holds double data, and 0.1 is read as the double 0.1 too.
+  expect_exact(audit_bytes("d.obj", std::string("v 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.0000000000000002\n") + kTetObjFaces),
+               "obj");
+  expect_exact(audit_bytes("d.off", "OFF\n4 4 0\n0.1 0 0\n1 0 0\n0 1 0\n# comment\n0 0 1.0000000000000002\n"
+                                    "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+               "off");
+  const std::string ply_head = "element vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+                               "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+  expect_exact(audit_bytes("d.ply", "ply\nformat ascii 1.0\n" + ply_head +
+                                        "0.1 0 0\n1 0 0\n0 1 0\n0 0 1.0000000000000002\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+               "ply ascii");
+  for (bool big : {false, true}) {
+    std::string b = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") + " 1.0\n" + ply_head;
+    for (const Vec3d& v : want)
+      for (int k = 0; k < 3; ++k) put_bin<double>(b, v[k], big);
+    const int f[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    for (const auto& t : f) {
+      b.push_back(3);
+      for (int k = 0; k < 3; ++k) put_bin<int32_t>(b, t[k], big);
+    }
+    expect_exact(audit_bytes(big ? "be.ply" : "le.ply", b), big ? "ply big-endian" : "ply little-endian");
+  }
+  // Float data (at most 9 significant digits) stays float: 0.1 is the float 0.1f.
+  Audited fl = audit_bytes("f.obj", std::string("v 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.00000012\n") + kTetObjFaces);
+  EXPECT_FALSE(fl.audit.double_data);
+  EXPECT_EQ(fl.soup.vertices[0].x, double(0.1f));
+  // ASCII STL with double data cannot be kept (the reader merges corners by their float
+  // positions): refused, naming the file, line and vertex.
+  const std::string stl = write_file("d.stl",
+                                     "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                     "vertex 0 0.10000000000000001 0\nendloop\nendfacet\nendsolid t\n");
+  auto soup = read_polygon_file(stl);
+  ASSERT_TRUE(soup.ok());
+  auto r = audit_input(stl, "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                            "vertex 0 0.10000000000000001 0\nendloop\nendfacet\nendsolid t\n",
+                       *soup);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("d.stl: line 6: vertex 2"), std::string::npos) << r.error().message;
+  std::filesystem::remove_all(temp_dir());
+}
+
+// Output triangles are in input face order, and the runs map every one of them back.
+TEST(RepairReport, SourceRunsMapEveryOutputTriangle) {
+  // Face 0 a quad (2 triangles), face 1 a triangle, face 2 a repeated-vertex triangle
+  // (removed), faces 3 and 4 triangles, face 5 a pentagon (3 triangles).
+  std::vector<uint32_t> src = {0, 0, 1, 3, 4, 5, 5, 5, kFilledHole, kFilledHole};
+  auto runs = source_runs(src);
+  EXPECT_EQ(runs, (std::vector<std::array<size_t, 4>>{{0, 0, 1, 2}, {2, 1, 1, 1}, {3, 3, 2, 1}, {5, 5, 1, 3}}));
+  // A quad mesh is one run.
+  EXPECT_EQ(source_runs({0, 0, 1, 1, 2, 2}), (std::vector<std::array<size_t, 4>>{{0, 0, 3, 2}}));
+  // Through repair: the T-junction split appends a triangle, which the output order puts
+  // back next to its face; hole filling comes last.
+  PolygonSoup s = make_soup({{0, 0, 0}, {2, 0, 0}, {1, 1, 0}, {1, 0, 0}, {1, -1, 0}}, {{0, 1, 2}, {0, 4, 3}, {3, 4, 1}});
+  RepairResult r = run(s);
+  EXPECT_EQ(r.output_source, (std::vector<uint32_t>{0, 0, 1, 2}));
+  EXPECT_EQ(source_runs(r.output_source), (std::vector<std::array<size_t, 4>>{{0, 0, 1, 2}, {2, 1, 2, 1}}));
+}
+
 TEST(RepairSha256, Fips180Vectors) {
   EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
@@ -684,6 +1117,75 @@ TEST(RepairCli, NeverOverwritesTheInputWithoutInPlace) {
   EXPECT_EQ(run_cli("repair " + in.string() + " --in-place"), 0);
   EXPECT_NE(read_all(in), text);
   EXPECT_EQ(run_cli("repair --check " + in.string()), 0);
+  std::filesystem::remove_all(dir);
+}
+
+// Double data through the CLI: every coordinate comes back bit for bit (17 digits), the
+// attributes the output cannot hold are in the report and on stderr, and a report path
+// that is a folder is refused before anything is written.
+TEST(RepairCli, DoubleDataAndAttributesSurviveTheRoundTrip) {
+  auto dir = temp_dir();
+  auto in = dir / "d.obj";
+  write_text(in, "v 0.1 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.0000000000000002\nvn 0 0 1\nvt 0.5 0.5\n"
+                 "f 1/1/1 3/1/1 2/1/1\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  for (const char* ext : {".ply", ".obj", ".off"}) {
+    auto out = dir / (std::string("o") + ext);
+    auto rep = dir / "r.json";
+    std::string err;
+    ASSERT_EQ(run_cli("repair " + in.string() + " -o " + out.string() + " --report " + rep.string(), &err), 0) << err;
+    EXPECT_NE(err.find("attributes not kept: vertex_normals=1 texcoords=1 face_corner_references=1"), std::string::npos)
+        << err;
+    auto j = nlohmann::json::parse(read_all(rep));
+    EXPECT_EQ(j["input"]["attributes_not_kept"]["vertex_normals"], 1);
+    EXPECT_EQ(j["input"]["attributes_not_kept"]["texcoords"], 1);
+    EXPECT_EQ(j["input"]["double_coordinates_restored"], 2);
+    EXPECT_EQ(j["output"]["coordinate_digits"], 17);
+    EXPECT_EQ(j["faces"]["output_source_runs"], nlohmann::json::parse("[[0, 0, 4, 1]]"));
+    // Read the vertex lines back with strtod: the doubles, bit for bit. OBJ: "v" lines;
+    // OFF: the 4 lines after "OFF" and the counts; PLY: the 4 lines after end_header.
+    std::ifstream f(out);
+    std::vector<double> xs;
+    const std::string e(ext);
+    int skip = e == ".off" ? 2 : -1;
+    int left = e == ".obj" ? 1 << 30 : 4;
+    for (std::string line; std::getline(f, line) && left > 0;) {
+      if (e == ".ply" && skip < 0) {
+        if (line == "end_header") skip = 0;
+        continue;
+      }
+      if (skip > 0) {
+        --skip;
+        continue;
+      }
+      std::istringstream ls(line);
+      if (e == ".obj") {
+        std::string kw;
+        if (!(ls >> kw) || kw != "v") continue;
+      }
+      std::string x, y, z;
+      ASSERT_TRUE(bool(ls >> x >> y >> z)) << ext << ": " << line;
+      for (const std::string* t : {&x, &y, &z}) xs.push_back(std::strtod(t->c_str(), nullptr));
+      --left;
+    }
+    ASSERT_EQ(xs.size(), 12u) << ext;
+    EXPECT_EQ(xs[0], 0.1) << ext;
+    EXPECT_EQ(xs[11], 1.0000000000000002) << ext;
+  }
+  // A report path that is a folder: exit 2, no mesh, no temporary file left.
+  std::filesystem::create_directories(dir / "rep");
+  auto out = dir / "never.obj";
+  std::string err;
+  EXPECT_EQ(run_cli("repair " + in.string() + " -o " + out.string() + " --report " + (dir / "rep").string(), &err), 2);
+  EXPECT_FALSE(std::filesystem::exists(out));
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".visgate-tmp"), std::string::npos) << e.path();
+  // ASCII STL double data cannot be kept: exit 2 naming the vertex, nothing written.
+  auto stl = dir / "d.stl";
+  write_text(stl, "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0.10000000000000001 0\n"
+                  "endloop\nendfacet\nendsolid t\n");
+  EXPECT_EQ(run_cli("repair " + stl.string() + " -o " + out.string(), &err), 2);
+  EXPECT_NE(err.find("vertex 2"), std::string::npos) << err;
+  EXPECT_FALSE(std::filesystem::exists(out));
   std::filesystem::remove_all(dir);
 }
 

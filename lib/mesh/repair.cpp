@@ -11,7 +11,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include "lib/mesh/box_tree.h"
+#include "lib/mesh/repair_predicates.h"
 
 namespace visgate::mesh {
 
@@ -65,21 +68,49 @@ struct EdgeTable {
   uint32_t hi(size_t g) const { return uint32_t(recs[start[g]].key & 0xffffffffu); }
 };
 
-EdgeTable build_edges(const std::vector<Tri>& tris, const std::vector<uint8_t>* active) {
+// Edge records bucketed by their lower vertex (a counting sort, stable in triangle
+// order), then each bucket sorted by its upper vertex: O(records) plus small sorts,
+// where a global comparison sort of 3 records per triangle dominated the analysis.
+EdgeTable build_edges(const std::vector<Tri>& tris, const std::vector<uint8_t>* active, size_t nverts) {
   EdgeTable e;
-  e.recs.reserve(tris.size() * 3);
+  std::vector<uint32_t> off(nverts + 1, 0);
+  size_t m = 0;
   for (uint32_t t = 0; t < tris.size(); ++t) {
     if (active && !(*active)[t]) continue;
-    for (uint8_t k = 0; k < 3; ++k) {
-      uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
-      uint64_t key = a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
-      e.recs.push_back({key, t, k, uint8_t(a < b)});
+    for (uint8_t k = 0; k < 3; ++k) ++off[size_t(std::min(tris[t][k], tris[t][(k + 1) % 3])) + 1];
+    m += 3;
+  }
+  for (size_t v = 0; v < nverts; ++v) off[v + 1] += off[v];
+  e.recs.resize(m);
+  {
+    std::vector<uint32_t> fill(off.begin(), off.end() - 1);
+    for (uint32_t t = 0; t < tris.size(); ++t) {
+      if (active && !(*active)[t]) continue;
+      for (uint8_t k = 0; k < 3; ++k) {
+        uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
+        uint64_t key = a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a);
+        e.recs[fill[std::min(a, b)]++] = {key, t, k, uint8_t(a < b)};
+      }
     }
   }
-  std::sort(e.recs.begin(), e.recs.end(), [](const EdgeRec& x, const EdgeRec& y) {
-    return x.key != y.key ? x.key < y.key : (x.tri != y.tri ? x.tri < y.tri : x.k < y.k);
+  // Within a bucket the records are in (triangle, corner) order; a stable sort by key
+  // gives the (key, triangle, corner) order.
+  auto by_key = [](const EdgeRec& x, const EdgeRec& y) { return x.key < y.key; };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nverts, 1 << 12), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      EdgeRec* b = e.recs.data() + off[v];
+      EdgeRec* en = e.recs.data() + off[v + 1];
+      if (en - b <= 1) continue;
+      if (en - b <= 32) {
+        for (EdgeRec* i = b + 1; i < en; ++i)
+          for (EdgeRec* j = i; j > b && by_key(*j, *(j - 1)); --j) std::swap(*j, *(j - 1));
+      } else {
+        std::stable_sort(b, en, by_key);
+      }
+    }
   });
   e.tri_edge.assign(tris.size() * 3, kNone);
+  e.start.reserve(m / 2 + 1);
   for (uint32_t i = 0; i < e.recs.size(); ++i) {
     if (i == 0 || e.recs[i].key != e.recs[i - 1].key) e.start.push_back(i);
     e.tri_edge[3 * size_t(e.recs[i].tri) + e.recs[i].k] = uint32_t(e.start.size() - 1);
@@ -171,14 +202,19 @@ struct TJunction {
   uint32_t v, group;
 };
 
-bool strictly_inside_segment(const Vec3d& a, const Vec3d& b, const Vec3d& p, const ExactPredicates& ex) {
+bool strictly_inside_segment(const Vec3d& a, const Vec3d& b, const Vec3d& p, const FilteredPredicates& fp) {
   if (p == a || p == b) return false;
   for (int ax = 0; ax < 3; ++ax)
     if (p[ax] < std::min(a[ax], b[ax]) || p[ax] > std::max(a[ax], b[ax])) return false;
-  return ex.collinear(a, b, p);
+  return fp.collinear(a, b, p);
 }
 
-std::vector<TJunction> find_t_junctions(const std::vector<Vec3d>& pos, const EdgeTable& e, const ExactPredicates& ex) {
+// Each boundary edge queries a tree of the boundary vertices with the segment itself:
+// a node is visited only when its box overlaps the segment's box and the segment's line
+// may meet it (line_may_meet_box, a conservative filter). Querying edge boxes with
+// points instead made every vertex a candidate of every long diagonal edge around it.
+std::vector<TJunction> find_t_junctions(const std::vector<Vec3d>& pos, const EdgeTable& e,
+                                        const FilteredPredicates& fp) {
   std::vector<uint32_t> bedges;
   std::vector<uint32_t> bverts;
   for (uint32_t g = 0; g < e.groups(); ++g)
@@ -191,20 +227,24 @@ std::vector<TJunction> find_t_junctions(const std::vector<Vec3d>& pos, const Edg
   if (bedges.empty()) return out;
   std::sort(bverts.begin(), bverts.end());
   bverts.erase(std::unique(bverts.begin(), bverts.end()), bverts.end());
-  std::vector<Box3d> boxes(bedges.size());
-  for (size_t i = 0; i < bedges.size(); ++i) {
-    const Vec3d &a = pos[e.lo(bedges[i])], &b = pos[e.hi(bedges[i])];
-    boxes[i] = Box3d{vmin(a, b), vmax(a, b)};
-  }
-  BoxTree tree(boxes);
-  for (uint32_t v : bverts) {
-    const Vec3d& p = pos[v];
-    tree.query(Box3d{p, p}, [&](uint32_t i) {
-      uint32_t g = bedges[i];
-      if (e.lo(g) == v || e.hi(g) == v) return;
-      if (strictly_inside_segment(pos[e.lo(g)], pos[e.hi(g)], p, ex)) out.push_back({v, g});
-    });
-  }
+  std::vector<Box3d> points(bverts.size());
+  for (size_t i = 0; i < bverts.size(); ++i) points[i] = Box3d{pos[bverts[i]], pos[bverts[i]]};
+  BoxTree tree(points);
+  tbb::enumerable_thread_specific<std::vector<TJunction>> local;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, bedges.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<TJunction>& mine = local.local();
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const uint32_t g = bedges[i], lo = e.lo(g), hi = e.hi(g);
+      const Vec3d &a = pos[lo], &b = pos[hi];
+      const Box3d sb{vmin(a, b), vmax(a, b)};
+      tree.query_if([&](const Box3d& x) { return boxes_overlap(x, sb) && line_may_meet_box(a, b, x.lo, x.hi); },
+                    [&](uint32_t k) {
+                      const uint32_t v = bverts[k];
+                      if (v != lo && v != hi && strictly_inside_segment(a, b, pos[v], fp)) mine.push_back({v, g});
+                    });
+    }
+  });
+  for (auto& part : local) out.insert(out.end(), part.begin(), part.end());
   std::sort(out.begin(), out.end(), [](const TJunction& x, const TJunction& y) {
     return x.group != y.group ? x.group < y.group : x.v < y.v;
   });
@@ -238,7 +278,7 @@ UnionFind corner_fans(const std::vector<Tri>& tris, const EdgeTable& e) {
 // edge) without intersecting.
 
 bool pair_intersects(const std::vector<Vec3d>& pos, const Tri& A, const Tri& B, const uint32_t* cls,
-                     const ExactPredicates& ex) {
+                     const FilteredPredicates& fp) {
   auto c = [&](uint32_t v) { return cls ? cls[v] : v; };
   int sa[3] = {-1, -1, -1};  // for corner i of A: corner of B with the same class
   int shared = 0;
@@ -247,7 +287,7 @@ bool pair_intersects(const std::vector<Vec3d>& pos, const Tri& A, const Tri& B, 
       if (c(A[size_t(i)]) == c(B[size_t(j)])) { sa[i] = j; ++shared; break; }
   const Vec3d &a0 = pos[A[0]], &a1 = pos[A[1]], &a2 = pos[A[2]];
   const Vec3d &b0 = pos[B[0]], &b1 = pos[B[1]], &b2 = pos[B[2]];
-  if (shared == 0) return ex.triangles_intersect(a0, a1, a2, b0, b1, b2);
+  if (shared == 0) return fp.triangles_intersect(a0, a1, a2, b0, b1, b2);
   if (shared >= 3) return true;  // the same three points: the faces coincide
   if (shared == 2) {
     // Shared edge (u, w); apexes p of A and q of B. The planes meet in line uw, so the
@@ -259,8 +299,8 @@ bool pair_intersects(const std::vector<Vec3d>& pos, const Tri& A, const Tri& B, 
     const Vec3d& p = pos[A[size_t(ia)]];
     int jb = 3 - sa[iu] - sa[iw];
     const Vec3d& q = pos[B[size_t(jb)]];
-    if (ex.orientation(u, w, p, q) != 0) return false;
-    return ex.coplanar_side(u, w, p, q) > 0;
+    if (fp.orientation(u, w, p, q) != 0) return false;
+    return fp.coplanar_side(u, w, p, q) > 0;
   }
   // One shared vertex v: A = (v, a, b), B = (v, c, d). Their intersection is convex and
   // contains v; it holds a second point iff an edge opposite v crosses the other face, or
@@ -272,52 +312,56 @@ bool pair_intersects(const std::vector<Vec3d>& pos, const Tri& A, const Tri& B, 
   const Vec3d& b = pos[A[size_t((ia + 2) % 3)]];
   const Vec3d& cc = pos[B[size_t((ib + 1) % 3)]];
   const Vec3d& d = pos[B[size_t((ib + 2) % 3)]];
-  if (ex.segment_triangle_intersect(a, b, v, cc, d)) return true;
-  if (ex.segment_triangle_intersect(cc, d, v, a, b)) return true;
+  // Plane sides first: when c and d lie strictly on one side of A's plane, B meets that
+  // plane only at v (and likewise with the roles swapped).
+  const int sc = fp.orientation(v, a, b, cc), sd = fp.orientation(v, a, b, d);
+  if (sc == sd && sc != 0) return false;
+  const int s_a = fp.orientation(v, cc, d, a), s_b = fp.orientation(v, cc, d, b);
+  if (s_a == s_b && s_a != 0) return false;
+  if (fp.segment_triangle_intersect(a, b, v, cc, d)) return true;
+  if (fp.segment_triangle_intersect(cc, d, v, a, b)) return true;
+  if (sc != 0 || sd != 0) return false;  // not coplanar: the two edge tests decide
   auto in_angle = [&](const Vec3d& x, const Vec3d& p, const Vec3d& q) {
     // x in the closed angle p-v-q, given x coplanar with v, p, q (angle < pi).
-    return ex.orientation(v, p, q, x) == 0 && ex.coplanar_side(v, p, q, x) >= 0 && ex.coplanar_side(v, q, p, x) >= 0;
+    return fp.coplanar_side(v, p, q, x) >= 0 && fp.coplanar_side(v, q, p, x) >= 0;
   };
   return in_angle(a, cc, d) || in_angle(b, cc, d) || in_angle(cc, a, b) || in_angle(d, a, b);
 }
 
+// Candidate pairs (overlapping boxes) come from a parallel dual traversal of the box
+// tree and are decided where they are found, each thread keeping its own hits.
 std::vector<std::array<uint32_t, 2>> self_intersections(const std::vector<Vec3d>& pos, const std::vector<Tri>& tris,
                                                         const std::vector<uint8_t>& candidate, const uint32_t* cls,
-                                                        const ExactPredicates& ex) {
+                                                        const FilteredPredicates& fp, size_t& pairs_tested) {
   std::vector<uint32_t> ids;
   for (uint32_t t = 0; t < tris.size(); ++t)
     if (candidate[t]) ids.push_back(t);
   std::vector<Box3d> boxes(ids.size());
-  for (size_t i = 0; i < ids.size(); ++i) {
-    const Tri& t = tris[ids[i]];
-    boxes[i] = Box3d{pos[t[0]], pos[t[0]]};
-    boxes[i].extend(pos[t[1]]);
-    boxes[i].extend(pos[t[2]]);
-  }
-  std::vector<std::array<uint32_t, 2>> out;
-  BoxTree tree(boxes);
-  // Candidate pairs are gathered in batches and decided in parallel (the exact
-  // predicates are thread-safe: CGAL's filters protect the rounding mode per thread).
-  constexpr size_t kBatch = size_t(1) << 20;
-  std::vector<std::array<uint32_t, 2>> batch;
-  std::vector<uint8_t> hit;
-  batch.reserve(kBatch);
-  auto flush = [&] {
-    hit.assign(batch.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, batch.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i)
-        hit[i] = pair_intersects(pos, tris[batch[i][0]], tris[batch[i][1]], cls, ex);
-    });
-    for (size_t i = 0; i < batch.size(); ++i)
-      if (hit[i]) out.push_back(batch[i]);
-    batch.clear();
-  };
-  tree.self_pairs([&](uint32_t i, uint32_t j) {
-    uint32_t x = ids[i], y = ids[j];
-    batch.push_back({std::min(x, y), std::max(x, y)});
-    if (batch.size() == kBatch) flush();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Tri& t = tris[ids[i]];
+      boxes[i] = Box3d{pos[t[0]], pos[t[0]]};
+      boxes[i].extend(pos[t[1]]);
+      boxes[i].extend(pos[t[2]]);
+    }
   });
-  flush();
+  BoxTree tree(boxes);
+  struct Local {
+    std::vector<std::array<uint32_t, 2>> hits;
+    size_t pairs = 0;
+  };
+  tbb::enumerable_thread_specific<Local> local;
+  tree.self_pairs_parallel(local, [&](Local& L, uint32_t i, uint32_t j) {
+    ++L.pairs;
+    uint32_t x = std::min(ids[i], ids[j]), y = std::max(ids[i], ids[j]);
+    if (pair_intersects(pos, tris[x], tris[y], cls, fp)) L.hits.push_back({x, y});
+  });
+  std::vector<std::array<uint32_t, 2>> out;
+  pairs_tested = 0;
+  for (Local& L : local) {
+    out.insert(out.end(), L.hits.begin(), L.hits.end());
+    pairs_tested += L.pairs;
+  }
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -336,23 +380,38 @@ inline bool same_orientation(const Tri& a, const Tri& b) {
 }
 
 // Marks later copies of a face: dup[t] = 1 (same orientation as the first), 2 (opposite).
-std::vector<uint8_t> find_duplicates(const std::vector<Tri>& tris, const std::vector<uint8_t>& active) {
-  std::vector<uint32_t> order;
-  order.reserve(tris.size());
+// Faces are bucketed by their smallest vertex (a stable counting sort), then each bucket
+// is sorted by the other two.
+std::vector<uint8_t> find_duplicates(const std::vector<Tri>& tris, const std::vector<uint8_t>& active, size_t nverts) {
+  std::vector<uint32_t> off(nverts + 1, 0);
   for (uint32_t t = 0; t < tris.size(); ++t)
-    if (active[t]) order.push_back(t);
-  std::vector<std::array<uint32_t, 3>> keys(tris.size());
-  for (uint32_t t : order) keys[t] = sorted3(tris[t]);
-  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return keys[x] != keys[y] ? keys[x] < keys[y] : x < y; });
-  std::vector<uint8_t> dup(tris.size(), 0);
-  for (size_t i = 1; i < order.size(); ++i) {
-    size_t j = i;
-    uint32_t first = order[i - 1];
-    while (j < order.size() && keys[order[j]] == keys[first]) {
-      dup[order[j]] = same_orientation(tris[order[j]], tris[first]) ? 1 : 2;
-      ++j;
+    if (active[t]) ++off[size_t(std::min(tris[t][0], std::min(tris[t][1], tris[t][2]))) + 1];
+  for (size_t v = 0; v < nverts; ++v) off[v + 1] += off[v];
+  struct Rec {
+    uint64_t key;  // (middle << 32) | largest vertex
+    uint32_t t;
+  };
+  std::vector<Rec> recs(off[nverts]);
+  {
+    std::vector<uint32_t> fill(off.begin(), off.end() - 1);
+    for (uint32_t t = 0; t < tris.size(); ++t) {
+      if (!active[t]) continue;
+      const auto k = sorted3(tris[t]);
+      recs[fill[k[0]]++] = {uint64_t(k[1]) << 32 | k[2], t};
     }
-    i = j;
+  }
+  std::vector<uint8_t> dup(tris.size(), 0);
+  auto by_key = [](const Rec& x, const Rec& y) { return x.key < y.key; };
+  for (size_t v = 0; v < nverts; ++v) {
+    Rec* b = recs.data() + off[v];
+    Rec* en = recs.data() + off[v + 1];
+    if (en - b <= 1) continue;
+    std::stable_sort(b, en, by_key);  // stable: the first of a group is the earliest face
+    for (Rec* i = b; i < en;) {
+      Rec* j = i + 1;
+      for (; j < en && j->key == i->key; ++j) dup[j->t] = same_orientation(tris[j->t], tris[i->t]) ? 1 : 2;
+      i = j;
+    }
   }
   return dup;
 }
@@ -386,6 +445,7 @@ size_t DefectCounts::total() const {
 
 Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std::vector<uint32_t>* vertex_class) {
   Analysis A;
+  const FilteredPredicates fp(ex);
   const auto& tris = m.triangles;
   const auto& pos = m.vertices;
   const size_t nt = tris.size();
@@ -396,6 +456,11 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
       for (uint32_t v : t) seen[v] = 1;
     A.vertices = size_t(std::count(seen.begin(), seen.end(), uint8_t(1)));
   }
+  auto phase = std::chrono::steady_clock::now();
+  auto lap = [&](const char* what) {
+    A.seconds.push_back({what, seconds_since(phase)});
+    phase = std::chrono::steady_clock::now();
+  };
   // Faces: repeated vertices, zero area, duplicates.
   std::vector<uint8_t> active(nt, 1), candidate(nt, 1);
   for (size_t t = 0; t < nt; ++t) {
@@ -403,19 +468,20 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
       active[t] = candidate[t] = 0;
       ++A.defects.repeated_vertex_faces;
-    } else if (ex.collinear(pos[f[0]], pos[f[1]], pos[f[2]])) {
+    } else if (fp.collinear(pos[f[0]], pos[f[1]], pos[f[2]])) {
       candidate[t] = 0;
       ++A.defects.zero_area_faces;
     }
   }
-  std::vector<uint8_t> dup = find_duplicates(tris, active);
+  std::vector<uint8_t> dup = find_duplicates(tris, active, pos.size());
   for (size_t t = 0; t < nt; ++t) {
     if (dup[t] == 1) ++A.defects.duplicate_faces;
     if (dup[t] == 2) ++A.defects.opposite_duplicate_faces;
     if (dup[t]) candidate[t] = 0;
   }
+  lap("faces");
   // Edges.
-  EdgeTable e = build_edges(tris, &active);
+  EdgeTable e = build_edges(tris, &active, pos.size());
   A.edges = e.groups();
   std::vector<uint8_t> vert_on_nm_edge(pos.size(), 0);
   for (size_t g = 0; g < e.groups(); ++g) {
@@ -456,14 +522,24 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
     if (e.size(g) == 2 && e.recs[e.start[g]].fwd == e.recs[e.start[g] + 1].fwd) A.components[c].consistent = false;
   }
   {
-    std::vector<uint64_t> cv;
-    cv.reserve(nt * 3);
+    // Distinct vertices per component: a vertex counts once for the first component
+    // that uses it; the rare other (vertex, component) incidences (vertices shared by
+    // components through a corner only) are sorted and counted apart.
+    std::vector<uint32_t> first_comp(pos.size(), kNone);
+    std::vector<uint64_t> extra;
     for (uint32_t t = 0; t < nt; ++t)
       if (active[t])
-        for (uint32_t v : tris[t]) cv.push_back(uint64_t(comp_of[t]) << 32 | v);
-    std::sort(cv.begin(), cv.end());
-    cv.erase(std::unique(cv.begin(), cv.end()), cv.end());
-    for (uint64_t x : cv) ++A.components[x >> 32].vertices;
+        for (uint32_t v : tris[t]) {
+          if (first_comp[v] == kNone) {
+            first_comp[v] = comp_of[t];
+            ++A.components[comp_of[t]].vertices;
+          } else if (first_comp[v] != comp_of[t]) {
+            extra.push_back(uint64_t(comp_of[t]) << 32 | v);
+          }
+        }
+    std::sort(extra.begin(), extra.end());
+    extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
+    for (uint64_t x : extra) ++A.components[x >> 32].vertices;
   }
   // Orientability: parity propagation across two-face edges (BFS per component).
   Adjacency adj = build_adjacency(e, nt);
@@ -490,6 +566,7 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
       }
     }
   }
+  lap("components");
   // Closed components: orientation by the exact sign of the enclosed volume.
   {
     std::vector<std::vector<uint32_t>> members(nc);
@@ -507,15 +584,18 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
       }
     }
   }
+  lap("volumes");
   // Boundary loops.
   for (Loop& L : boundary_loops(e)) {
     ++A.components[comp_of[e.recs[e.start[L.groups[0]]].tri]].boundary_loops;
     A.boundary_loops.push_back(std::move(L.verts));
   }
   A.defects.boundary_loops = A.boundary_loops.size();
+  lap("boundary_loops");
   // T-junctions.
-  for (const TJunction& tj : find_t_junctions(pos, e, ex)) A.t_junctions.push_back({tj.v, e.lo(tj.group), e.hi(tj.group)});
+  for (const TJunction& tj : find_t_junctions(pos, e, fp)) A.t_junctions.push_back({tj.v, e.lo(tj.group), e.hi(tj.group)});
   A.defects.t_junctions = A.t_junctions.size();
+  lap("t_junctions");
   // Non-manifold vertices: more than one fan.
   {
     UnionFind fans = corner_fans(tris, e);
@@ -546,9 +626,12 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
       if (twice_g >= 0 && twice_g % 2 == 0) ci.genus = int(twice_g / 2);
     }
   }
+  lap("fans");
   // Self-intersections.
-  A.self_intersections = self_intersections(pos, tris, candidate, vertex_class ? vertex_class->data() : nullptr, ex);
+  A.self_intersections = self_intersections(pos, tris, candidate, vertex_class ? vertex_class->data() : nullptr, fp,
+                                            A.self_intersection_pairs_tested);
   A.defects.self_intersections = A.self_intersections.size();
+  lap("self_intersections");
   return A;
 }
 
@@ -636,51 +719,81 @@ WeldResult weld_vertices_exact(const std::vector<Vec3d>& pos, const std::vector<
     // fit: two points within T then fall in the same or adjacent cells. The key
     // floor(fl(fl(p - lo) / h)) is monotone in p, and its rounding error (a few ulps of
     // a value below 2^41, i.e. below 2^-10) is smaller than the 2^-8 relative margin, so
-    // keys of points within T differ by at most one.
+    // keys of points within T differ by at most one. The key is computed in long double
+    // (64-bit significand, wider exponent) so that p - lo cannot overflow.
     Vec3d lo = pos[ids[0]], hi = lo;
     for (uint32_t i : ids) {
       lo = vmin(lo, pos[i]);
       hi = vmax(hi, pos[i]);
     }
-    double extent = max_component(hi - lo);
-    double h = std::max(tolerance, extent * 0x1p-40) * (1.0 + 0x1p-8);
-    struct Cell {
-      int64_t x, y, z;
-      bool operator==(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
+    long double extent = 0;
+    for (int k = 0; k < 3; ++k) extent = std::max(extent, (long double)hi[k] - (long double)lo[k]);
+    const long double h = std::max((long double)tolerance, extent * 0x1p-40L) * (1.0L + 0x1p-8L);
+    struct CellKey {
+      int64_t c[3];
+      uint32_t id;
     };
-    struct CellHash {
-      size_t operator()(const Cell& c) const {
-        uint64_t k = uint64_t(c.x) * 0x9E3779B97F4A7C15ull ^ uint64_t(c.y) * 0xC2B2AE3D27D4EB4Full ^
-                     uint64_t(c.z) * 0x165667B19E3779F9ull;
-        return size_t(k ^ (k >> 29));
+    std::vector<CellKey> keys(ids.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        keys[i].id = ids[i];
+        for (int k = 0; k < 3; ++k)
+          keys[i].c[k] = int64_t(std::floor(((long double)pos[ids[i]][k] - (long double)lo[k]) / h));
       }
+    });
+    // Cells as ranges of the keys sorted by cell.
+    auto cell_less = [](const CellKey& x, const CellKey& y) {
+      if (x.c[0] != y.c[0]) return x.c[0] < y.c[0];
+      if (x.c[1] != y.c[1]) return x.c[1] < y.c[1];
+      if (x.c[2] != y.c[2]) return x.c[2] < y.c[2];
+      return x.id < y.id;
     };
-    auto cell_of = [&](const Vec3d& p) {
-      return Cell{int64_t(std::floor((p.x - lo.x) / h)), int64_t(std::floor((p.y - lo.y) / h)),
-                  int64_t(std::floor((p.z - lo.z) / h))};
+    std::sort(keys.begin(), keys.end(), cell_less);
+    auto cmp_cell = [](const int64_t* x, const int64_t* y) {
+      for (int k = 0; k < 3; ++k)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+      return 0;
     };
-    std::unordered_map<Cell, std::vector<uint32_t>, CellHash> grid;
-    grid.reserve(ids.size());
-    for (uint32_t i : ids) grid[cell_of(pos[i])].push_back(i);
+    std::vector<uint32_t> cell_start;
+    for (uint32_t i = 0; i < keys.size(); ++i)
+      if (i == 0 || cmp_cell(keys[i].c, keys[i - 1].c) != 0) cell_start.push_back(i);
+    cell_start.push_back(uint32_t(keys.size()));
+    const uint32_t ncells = uint32_t(cell_start.size() - 1);
+    auto cell_key = [&](uint32_t cell) { return keys[cell_start[cell]].c; };
     const double t2 = tolerance * tolerance;
-    for (uint32_t i : ids) {
-      Cell c = cell_of(pos[i]);
-      for (int64_t dx = -1; dx <= 1; ++dx)
-        for (int64_t dy = -1; dy <= 1; ++dy)
-          for (int64_t dz = -1; dz <= 1; ++dz) {
-            auto it = grid.find(Cell{c.x + dx, c.y + dy, c.z + dz});
-            if (it == grid.end()) continue;
-            for (uint32_t j : it->second) {
-              if (j <= i) continue;
-              // Double filter: d2 and t2 carry relative errors below 8 * 2^-53; a 2^-40
-              // margin decides clear cases, the exact predicate the rest.
-              Vec3d d = pos[i] - pos[j];
-              double d2 = dot(d, d);
-              if (d2 > t2 * (1 + 0x1p-40) && t2 > 0x1p-900) continue;
-              if ((d2 < t2 * (1 - 0x1p-40) && d2 > 0x1p-900) || ex.compare_distance(pos[i], pos[j], tolerance) <= 0)
-                uf.unite(i, j);
-            }
-          }
+    auto try_pair = [&](uint32_t i, uint32_t j) {
+      // Double filter: d2 and t2 carry relative errors below 8 * 2^-53; a 2^-40 margin
+      // decides clear cases, the exact predicate the rest.
+      Vec3d d = pos[i] - pos[j];
+      double d2 = dot(d, d);
+      if (d2 > t2 * (1 + 0x1p-40) && t2 > 0x1p-900) return;
+      if ((d2 < t2 * (1 - 0x1p-40) && d2 > 0x1p-900) || ex.compare_distance(pos[i], pos[j], tolerance) <= 0)
+        uf.unite(i, j);
+    };
+    auto cross_cells = [&](uint32_t a, uint32_t b) {
+      for (uint32_t i = cell_start[a]; i < cell_start[a + 1]; ++i)
+        for (uint32_t j = cell_start[b]; j < cell_start[b + 1]; ++j) try_pair(keys[i].id, keys[j].id);
+    };
+    // Each pair of adjacent cells once: a cell with itself, with (0, 0, +1), and with the
+    // three cells z-1..z+1 of the rows (x, y+1), (x+1, y-1), (x+1, y), (x+1, y+1). Cells
+    // are visited in sorted order, so the cells of each such row are found by a pointer
+    // that only moves forward (a merge, no hashing).
+    const int64_t rows[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
+    uint32_t ptr[4] = {0, 0, 0, 0};
+    for (uint32_t cell = 0; cell < ncells; ++cell) {
+      const int64_t* c = cell_key(cell);
+      for (uint32_t i = cell_start[cell]; i < cell_start[cell + 1]; ++i)
+        for (uint32_t j = i + 1; j < cell_start[cell + 1]; ++j) try_pair(keys[i].id, keys[j].id);
+      if (cell + 1 < ncells) {
+        const int64_t up[3] = {c[0], c[1], c[2] + 1};
+        if (cmp_cell(cell_key(cell + 1), up) == 0) cross_cells(cell, cell + 1);
+      }
+      for (int r = 0; r < 4; ++r) {
+        const int64_t first[3] = {c[0] + rows[r][0], c[1] + rows[r][1], c[2] - 1};
+        const int64_t last[3] = {c[0] + rows[r][0], c[1] + rows[r][1], c[2] + 1};
+        while (ptr[r] < ncells && cmp_cell(cell_key(ptr[r]), first) < 0) ++ptr[r];
+        for (uint32_t o = ptr[r]; o < ncells && cmp_cell(cell_key(o), last) <= 0; ++o) cross_cells(cell, o);
+      }
     }
   }
   // Clusters (root = lowest member; members collected in ascending order).
@@ -787,8 +900,8 @@ void remove_triangles(Work& w, const std::vector<uint8_t>& keep, const std::vect
 // because each p lies strictly inside ab and c is off that line (zero-area triangles were
 // removed before). Returns the number of points inserted.
 size_t split_t_junctions(Work& w, const ExactPredicates& ex, size_t& added) {
-  EdgeTable e = build_edges(w.tris, nullptr);
-  std::vector<TJunction> tj = find_t_junctions(w.pos, e, ex);
+  EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
+  std::vector<TJunction> tj = find_t_junctions(w.pos, e, FilteredPredicates(ex));
   if (tj.empty()) return 0;
   std::unordered_map<uint64_t, std::vector<uint32_t>> points;  // edge key -> points, ordered from lo
   for (const TJunction& j : tj) points[e.recs[e.start[j.group]].key].push_back(j.v);
@@ -841,7 +954,7 @@ struct OrientStats {
 OrientStats orient(Work& w, const ExactPredicates& ex) {
   OrientStats st;
   const size_t nt = w.tris.size();
-  EdgeTable e = build_edges(w.tris, nullptr);
+  EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
   Adjacency adj = build_adjacency(e, nt);
   std::vector<int8_t> parity(nt, -1);
   std::vector<uint32_t> patch;
@@ -889,7 +1002,8 @@ OrientStats orient(Work& w, const ExactPredicates& ex) {
 // directed, by ear clipping the loop traversed against its faces' direction; a loop
 // whose fill would contain an exactly degenerate triangle is left open.
 void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, size_t& filled, size_t& added, size_t& skipped) {
-  EdgeTable e = build_edges(w.tris, nullptr);
+  const FilteredPredicates fp(ex);
+  EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
   for (const Loop& L : boundary_loops(e)) {
     const size_t n = L.groups.size();
     if (!L.closed || n > max_len || n < 3) {
@@ -916,7 +1030,7 @@ void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, size_t& fill
     triangulate_polygon(w.pos, poly, fill);
     bool ok = true;
     for (const Tri& t : fill)
-      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || ex.collinear(w.pos[t[0]], w.pos[t[1]], w.pos[t[2]])) ok = false;
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || fp.collinear(w.pos[t[0]], w.pos[t[1]], w.pos[t[2]])) ok = false;
     if (!ok) {
       ++skipped;
       continue;
@@ -934,7 +1048,7 @@ void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, size_t& fill
 // position); ends of non-manifold edges are fans of their own faces, so this resolves
 // non-manifold edges too. `cls` maps every vertex (new ones included) to the original.
 size_t split_nonmanifold(Work& w, std::vector<uint32_t>& cls) {
-  EdgeTable e = build_edges(w.tris, nullptr);
+  EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
   UnionFind fans = corner_fans(w.tris, e);
   const size_t nt = w.tris.size();
   std::vector<uint32_t> root_vertex(nt * 3, kNone);
@@ -965,6 +1079,7 @@ size_t split_nonmanifold(Work& w, std::vector<uint32_t>& cls) {
 Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& opt, const ExactPredicates& ex) {
   if (!std::isfinite(opt.weld_tolerance) || opt.weld_tolerance < 0)
     return Error{"--weld-tolerance: must be a finite number >= 0"};
+  const FilteredPredicates fp(ex);
   using clock = std::chrono::steady_clock;
   RepairResult R;
   const double T = opt.weld_tolerance;
@@ -1046,7 +1161,9 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
                                                  : weld_vertices_exact(w.pos, used, T, WeldMode::Chain, ex).merged;
   double weld_seconds = seconds_since(t0) + (T == 0.0 ? exact_weld_seconds : 0.0);
   if (T != 0.0) before_seconds += exact_weld_seconds;
-  R.steps.push_back({"analyze_input", {}, before_seconds});
+  R.steps.push_back({"analyze_input",
+                     {{"self_intersection_pairs_tested", R.before.self_intersection_pairs_tested}},
+                     before_seconds});
   if (opt.check_only) {
     R.output = std::move(before);
     R.output_source = w.src;
@@ -1084,13 +1201,13 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
         keep[t] = 0;
         reason[t] = "repeated_vertex";
         ++repeated;
-      } else if (ex.collinear(w.pos[f[0]], w.pos[f[1]], w.pos[f[2]])) {
+      } else if (fp.collinear(w.pos[f[0]], w.pos[f[1]], w.pos[f[2]])) {
         keep[t] = 0;
         reason[t] = "zero_area";
         ++zero;
       }
     }
-    std::vector<uint8_t> dup = find_duplicates(w.tris, keep);
+    std::vector<uint8_t> dup = find_duplicates(w.tris, keep, w.pos.size());
     for (size_t t = 0; t < nt; ++t) {
       if (dup[t] == 1) { keep[t] = 0; reason[t] = "duplicate"; ++dups; }
       if (dup[t] == 2) { keep[t] = 0; reason[t] = "opposite_duplicate"; ++odups; }
@@ -1141,6 +1258,24 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
     R.steps.push_back({"split_nonmanifold", {{"vertex_copies_added", copies}}, seconds_since(t0)});
   }
 
+  // Output triangles in input face order (stable; hole fillers last), so that the report
+  // maps them to input faces by runs.
+  {
+    const size_t nf = R.input_faces;
+    std::vector<uint32_t> off(nf + 2, 0);
+    for (uint32_t s : w.src) ++off[(s == kFilledHole ? nf : size_t(s)) + 1];
+    for (size_t f = 0; f <= nf; ++f) off[f + 1] += off[f];
+    std::vector<Tri> tris(w.tris.size());
+    std::vector<uint32_t> src(w.src.size());
+    for (size_t t = 0; t < w.tris.size(); ++t) {
+      const uint32_t slot = off[w.src[t] == kFilledHole ? nf : size_t(w.src[t])]++;
+      tris[slot] = w.tris[t];
+      src[slot] = w.src[t];
+    }
+    w.tris = std::move(tris);
+    w.src = std::move(src);
+  }
+
   // After.
   t0 = clock::now();
   R.output.vertices = std::move(w.pos);
@@ -1160,7 +1295,9 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
         weld_vertices_exact(R.output.vertices, orig, T, WeldMode::Chain, ex).merged;
   }
   R.output_vertex_class = std::move(cls);
-  R.steps.push_back({"analyze_output", {}, seconds_since(t0)});
+  R.steps.push_back({"analyze_output",
+                     {{"self_intersection_pairs_tested", R.after.self_intersection_pairs_tested}},
+                     seconds_since(t0)});
 
   // Face accounting: every input face is in the output or has a removal record.
   std::vector<uint8_t> present(R.input_faces, 0), recorded(R.input_faces, 0);

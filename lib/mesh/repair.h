@@ -9,7 +9,8 @@
 // (double) code only proposes candidates (spatial hashing cells, bounding-box overlaps,
 // ear-clipping order); every decision goes through ExactPredicates, which the caller
 // implements exactly (oracle/exact_predicates.h does it with CGAL; the library never
-// includes CGAL):
+// includes CGAL), behind the double filters of repair_predicates.h, which answer only
+// when a proven error bound makes the sign certain:
 //   - welding: |p - q| <= T decided exactly (compare_distance);
 //   - zero area: exact collinearity of the three corners;
 //   - T-junctions: exact collinearity plus exact coordinate comparisons;
@@ -107,6 +108,8 @@ struct Analysis {
   std::vector<uint32_t> nonmanifold_vertices;
   std::vector<std::array<uint32_t, 3>> t_junctions;       // vertex, edge end, edge end
   std::vector<std::array<uint32_t, 2>> self_intersections;  // triangle index pairs
+  size_t self_intersection_pairs_tested = 0;  // candidate pairs (overlapping boxes) decided exactly
+  std::vector<std::pair<const char*, double>> seconds;  // wall time of each phase of the analysis
 };
 
 // Analyses `m` by its own indices. `vertex_class` (optional, one entry per vertex) names
@@ -158,7 +161,8 @@ struct RemovedTriangle {
 
 struct RepairResult {
   IndexedMesh output;                    // after repair (the input, welded exactly, with check_only)
-  std::vector<uint32_t> output_source;   // per output triangle: input face, or kFilledHole
+  std::vector<uint32_t> output_source;   // per output triangle: input face, or kFilledHole;
+                                         // non-decreasing, hole fillers last
   std::vector<uint32_t> output_vertex_class;  // per output vertex: the vertex before splitting
   size_t input_vertices = 0, input_faces = 0, input_triangles = 0;
   size_t polygons_triangulated = 0, fan_fallbacks = 0, unreferenced_vertices = 0;

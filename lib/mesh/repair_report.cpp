@@ -1,6 +1,7 @@
 // Repair report (see repair_report.h).
 #include "lib/mesh/repair_report.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace visgate::mesh {
@@ -57,6 +58,45 @@ json details_json(const Analysis& a, const std::vector<uint32_t>& src) {
 
 }  // namespace
 
+std::vector<std::pair<std::string, size_t>> attributes_not_kept(const PolygonSoup& soup, const InputAudit& audit) {
+  std::vector<std::pair<std::string, size_t>> out = {{"vertex_normals", soup.vertex_normals},
+                                                     {"vertex_colors", soup.vertex_colors},
+                                                     {"texcoords", soup.texcoords},
+                                                     {"face_normals", soup.face_normals},
+                                                     {"face_colors", soup.face_colors}};
+  for (const auto& [name, n] : audit.not_kept) {
+    bool merged = false;
+    for (auto& [k, v] : out)
+      if (k == name) {
+        v = std::max(v, n);  // the reader and the audit count the same values
+        merged = true;
+      }
+    if (!merged) out.push_back({name, n});
+  }
+  return out;
+}
+
+std::vector<std::array<size_t, 4>> source_runs(const std::vector<uint32_t>& source) {
+  std::vector<std::array<size_t, 4>> runs;
+  size_t t = 0;
+  while (t < source.size() && source[t] != kFilledHole) {
+    // Triangles of face source[t], then as many following faces with the same count.
+    const size_t first = t, face = source[t];
+    size_t per = 0;
+    while (t < source.size() && source[t] == face) ++t, ++per;
+    size_t faces = 1;
+    for (;;) {
+      size_t u = t, k = 0;
+      while (u < source.size() && source[u] == face + faces && k < per) ++u, ++k;
+      if (k != per || (u < source.size() && source[u] == face + faces)) break;
+      t = u;
+      ++faces;
+    }
+    runs.push_back({first, face, faces, per});
+  }
+  return runs;
+}
+
 std::vector<std::string> remaining_defects(const RepairResult& r, bool check_only) {
   std::vector<std::string> out;
   const DefectCounts& d = check_only ? r.before.defects : r.after.defects;
@@ -80,13 +120,11 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
                 {"triangles", r.input_triangles},
                 {"polygons_triangulated", r.polygons_triangulated},
                 {"double_precision", soup.double_precision},
-                {"unreferenced_vertices", r.unreferenced_vertices},
-                {"attributes_not_kept",
-                 {{"vertex_normals", soup.vertex_normals},
-                  {"vertex_colors", soup.vertex_colors},
-                  {"texcoords", soup.texcoords},
-                  {"face_normals", soup.face_normals},
-                  {"face_colors", soup.face_colors}}}};
+                {"double_coordinates_restored", ctx.audit.coordinates_restored},
+                {"unreferenced_vertices", r.unreferenced_vertices}};
+  json attrs = json::object();
+  for (const auto& [name, n] : attributes_not_kept(soup, ctx.audit)) attrs[name] = n;
+  j["input"]["attributes_not_kept"] = attrs;
   if (check) {
     j["output"] = nullptr;
   } else {
@@ -109,7 +147,15 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
   for (const StepRecord& s : r.steps) {
     json c = json::object();
     for (const auto& [name, n] : s.changes) c[name] = n;
-    steps.push_back({{"name", s.name}, {"changes", c}, {"seconds", s.seconds}});
+    json step = {{"name", s.name}, {"changes", c}, {"seconds", s.seconds}};
+    // The analyses also give the time of each of their phases.
+    const Analysis* a = s.name == "analyze_input" ? &r.before : (s.name == "analyze_output" ? &r.after : nullptr);
+    if (a) {
+      json phases = json::object();
+      for (const auto& [name, sec] : a->seconds) phases[name] = sec;
+      step["phases"] = phases;
+    }
+    steps.push_back(step);
   }
   j["steps"] = steps;
   // Weld clusters whose diameter exceeds T through chaining (or that strict mode split).
@@ -136,18 +182,31 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
                 {"triangles_removed", r.removed.size()},
                 {"triangles_added_by_hole_filling", check ? 0 : filled},
                 {"removed_by_reason", removed}};
+  json runs = json::array();
+  if (!check)
+    for (const auto& run : source_runs(r.output_source)) runs.push_back({run[0], run[1], run[2], run[3]});
+  j["faces"]["output_source_runs"] = check ? json(nullptr) : runs;
   j["topology"]["before"] = details_json(r.before, r.before_source);
   j["topology"]["after"] = check ? json(nullptr) : details_json(r.after, r.output_source);
   return j;
 }
 
-std::string repair_report_table(const RepairResult& r, const ReportContext& ctx) {
+std::string repair_report_table(const RepairResult& r, const PolygonSoup& soup, const ReportContext& ctx) {
   const bool check = ctx.options.check_only;
   std::string out;
   char line[256];
   std::snprintf(line, sizeof line, "%s: %zu vertices, %zu faces (%zu triangles)\n", ctx.input_path.c_str(),
                 r.input_vertices, r.input_faces, r.input_triangles);
   out += line;
+  {
+    std::string lost;
+    for (const auto& [name, n] : attributes_not_kept(soup, ctx.audit))
+      if (n) lost += " " + name + "=" + std::to_string(n);
+    if (!lost.empty()) out += "  attributes not kept:" + lost + "\n";
+    if (ctx.audit.double_data)
+      out += "  double coordinates: " + std::to_string(ctx.audit.coordinates_restored) +
+             " vertices kept at double precision (the reader rounds them to float32)\n";
+  }
   std::snprintf(line, sizeof line, "  %-26s %10s %10s\n", "defect", "before", check ? "" : "after");
   out += line;
   auto before = r.before.defects.items();

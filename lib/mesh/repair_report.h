@@ -9,6 +9,7 @@
 #include <string>
 
 #include "lib/mesh/repair.h"
+#include "lib/mesh/repair_input.h"
 
 namespace visgate::mesh {
 
@@ -16,16 +17,30 @@ struct ReportContext {
   std::string input_path, input_sha256;
   std::string output_path, output_sha256;  // empty with --check
   RepairOptions options;
+  InputAudit audit;  // what the reader does not keep (attributes), double data restored
   int exit_code = 0;
   double total_seconds = 0.0;
 };
 
 // Lists longer than this are cut in the report (their full counts are always given).
+// The face accounting (output_source_runs) is never cut.
 constexpr size_t kReportListLimit = 10000;
+
+// Attributes the output does not keep: the five the reader counts (vertex_normals,
+// vertex_colors, texcoords, face_normals, face_colors; always present) and every other
+// one the audit found, by name.
+std::vector<std::pair<std::string, size_t>> attributes_not_kept(const PolygonSoup& soup, const InputAudit& audit);
+
+// Runs [first_output_triangle, first_input_face, faces, triangles_per_face]: output
+// triangles first .. first + faces * triangles_per_face - 1 come from input faces
+// first_input_face .. + faces - 1, triangles_per_face consecutive ones each. Output
+// triangles after the last run were added by hole filling. Needs a non-decreasing
+// `source` (RepairResult::output_source).
+std::vector<std::array<size_t, 4>> source_runs(const std::vector<uint32_t>& source);
 
 nlohmann::ordered_json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const ReportContext& ctx);
 // Defect table (before / after) and step timings, for a terminal.
-std::string repair_report_table(const RepairResult& r, const ReportContext& ctx);
+std::string repair_report_table(const RepairResult& r, const PolygonSoup& soup, const ReportContext& ctx);
 // Names of the defects left (after repair; with check_only, those of the input).
 std::vector<std::string> remaining_defects(const RepairResult& r, bool check_only);
 

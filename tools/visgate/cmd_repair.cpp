@@ -5,12 +5,16 @@
 // --check), 1 defects left (listed), 2 bad input or usage (nothing written), 3 internal.
 // The input is never modified unless --in-place; files are written through a temporary
 // file and a rename.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 #include "lib/mesh/repair.h"
+#include "lib/mesh/repair_input.h"
 #include "lib/mesh/repair_report.h"
 #include "lib/mesh/sha256.h"
 #include "lib/scene/json_exact.h"
@@ -27,6 +31,43 @@ struct RepairOpts {
   double tolerance = 0.0;
   size_t fill_holes = 0;
   bool in_place = false, split = false, check = false, stl_ascii = false;
+};
+
+// Files written together: each is written to a temporary file next to its target, and
+// commit() renames them all into place; until then (and after any failure) the targets
+// are untouched and the temporary files are removed.
+class StagedFiles {
+ public:
+  ~StagedFiles() {
+    std::error_code ec;
+    for (const auto& [tmp, target] : staged_) std::filesystem::remove(tmp, ec);
+  }
+  Status stage(const std::string& target, const std::string& bytes) {
+    namespace fs = std::filesystem;
+    fs::path t(target);
+    fs::path dir = t.parent_path().empty() ? fs::path(".") : t.parent_path();
+    fs::path tmp = dir / ("." + t.filename().string() + ".visgate-tmp" + std::to_string(::getpid()));
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) return Error{target + ": cannot write (temporary file " + tmp.string() + ")"};
+    staged_.push_back({tmp.string(), target});
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+    out.flush();
+    if (!out) return Error{target + ": write failed (disk full?)"};
+    return {};
+  }
+  Status commit() {
+    for (size_t i = 0; i < staged_.size(); ++i) {
+      std::error_code ec;
+      std::filesystem::rename(staged_[i].first, staged_[i].second, ec);
+      if (ec) return Error{staged_[i].second + ": cannot rename the temporary file into place"};
+      staged_[i].first.clear();
+    }
+    staged_.clear();
+    return {};
+  }
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;  // temporary file, target
 };
 
 // Same file (existing or not), by canonical path.
@@ -77,12 +118,19 @@ int run_repair(const RepairOpts& o) {
     auto dir = std::filesystem::path(o.report).parent_path();
     if (!dir.empty() && !std::filesystem::is_directory(dir, ec)) return bad_input(o.report + ": folder does not exist");
   }
+  // Targets that are folders would fail only at the rename, after the other file moved.
+  for (const std::string& target : {o.check ? std::string() : out, o.report}) {
+    std::error_code ec;
+    if (!target.empty() && std::filesystem::is_directory(target, ec)) return bad_input(target + ": is a folder");
+  }
 
-  // Read.
+  // Read, then audit what the reader does not keep (attributes, double coordinates).
   auto bytes = read_text_file(o.in);
   if (!bytes) return bad_input(bytes.error().message);
   auto soup = read_polygon_file(o.in);
   if (!soup) return bad_input(soup.error().message);
+  auto audit = mesh::audit_input(o.in, *bytes, *soup);
+  if (!audit) return bad_input(audit.error().message);
 
   // Repair.
   oracle::CgalExactPredicates ex;
@@ -94,6 +142,7 @@ int run_repair(const RepairOpts& o) {
   ctx.input_path = o.in;
   ctx.input_sha256 = mesh::sha256_hex(*bytes);
   ctx.options = ro;
+  ctx.audit = *audit;
   std::string encoded;
   if (!o.check) {
     auto enc = mesh::encode_mesh(r.output, fmt, out);
@@ -105,16 +154,19 @@ int run_repair(const RepairOpts& o) {
   ctx.exit_code = mesh::remaining_defects(r, o.check).empty() ? kOk : kFound;
   ctx.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  // Write: the mesh, then the report (both atomic).
+  // Write: the mesh and the report each to a temporary file in its folder, and only when
+  // both are complete, rename them into place.
+  StagedFiles files;
   if (!o.check) {
-    Status st = write_file_atomic(out, encoded);
+    Status st = files.stage(out, encoded);
     if (!st) return bad_input(st.error().message);
   }
   if (!o.report.empty()) {
-    Status st = write_file_atomic(o.report, mesh::repair_report_json(r, *soup, ctx).dump(2) + "\n");
+    Status st = files.stage(o.report, mesh::repair_report_json(r, *soup, ctx).dump(2) + "\n");
     if (!st) return bad_input(st.error().message);
   }
-  std::string table = mesh::repair_report_table(r, ctx);
+  if (Status st = files.commit(); !st) return bad_input(st.error().message);
+  std::string table = mesh::repair_report_table(r, *soup, ctx);
   std::fwrite(table.data(), 1, table.size(), stderr);
   return ctx.exit_code;
 }
