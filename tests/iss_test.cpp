@@ -213,6 +213,57 @@ TEST(IssTree, GridLeavesAreCompactNotStrips) {
   EXPECT_EQ(leaves, 16);
 }
 
+TEST(IssTree, LeavesDoNotStraddleAWall) {
+  // 32 x 8 receivers at z = 0.01 (x = 0.1 + 0.2 a, y = 0.1 + 0.2 b) and a wall box
+  // 2.95 <= x <= 3.25 standing on the floor: columns a <= 14 lie left of it, a = 15
+  // (x = 3.1) inside it, a >= 16 right of it. Hand-worked: a leaf with points of two of
+  // these classes would hold a wall face in its inside list (section 4.4.2: the wall
+  // could never block its shafts); the split cost of tree.h keeps the classes apart.
+  for (double offset : {0.0, 4096.0}) {  // also far from the origin (float spacing 2^-12)
+    std::vector<AABB> boxes;
+    std::vector<Vec3f> centers;
+    std::vector<int> cls;
+    for (int b = 0; b < 8; ++b)
+      for (int a = 0; a < 32; ++a) {
+        Vec3f p(float(offset + 0.1 + 0.2 * a), float(0.1 + 0.2 * b), 0.01f);
+        boxes.emplace_back(p, p);
+        centers.push_back(p);
+        cls.push_back(a <= 14 ? 0 : a == 15 ? 1 : 2);
+      }
+    TriangleSoup soup;
+    shapes::add_box(soup, Vec3d(offset + 2.95, -1, 0), Vec3d(offset + 3.25, 3, 2));
+    mesh::PreparedMesh m = mesh::prepare_mesh(soup);
+    std::vector<AABB> tri_boxes;
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+      AABB tb;
+      for (int k = 0; k < 3; ++k) tb.extend(m.corner(t, k));
+      tri_boxes.push_back(tb);
+    }
+    iss::PointTree tree(boxes, centers, 16, m, tri_boxes);
+    ASSERT_FALSE(tree.node(tree.root()).inside.empty());
+    std::vector<int> stack{tree.root()};
+    int leaves = 0;
+    while (!stack.empty()) {
+      int i = stack.back();
+      stack.pop_back();
+      tree.split(i);
+      const iss::TreeNode& n = tree.node(i);
+      if (n.split_done()) {
+        stack.push_back(n.left);
+        stack.push_back(n.right);
+        continue;
+      }
+      ++leaves;
+      EXPECT_LE(n.size(), 16u);
+      int c0 = cls[tree.order()[n.begin]];
+      for (uint32_t k = n.begin; k < n.end; ++k)
+        EXPECT_EQ(cls[tree.order()[k]], c0) << "offset " << offset << ": leaf mixes wall sides";
+      EXPECT_TRUE(n.inside.empty()) << "offset " << offset;
+    }
+    EXPECT_GE(leaves, 16);
+  }
+}
+
 TEST(IssShaft, SegmentTriangleTestExcludesEndpoints) {
   Vec3d a(-1, -1, 0), b(1, -1, 0), c(0, 1, 0);
   EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, 0, -1), Vec3d(0, 0, 1), a, b, c));
