@@ -11,6 +11,7 @@
 
 #include "lib/geom/check.h"
 #include "lib/iss/blockers.h"
+#include "lib/iss/radial_pairing.h"
 #include "lib/iss/shaft.h"
 #include "lib/iss/tree.h"
 #include "lib/mesh/prepare.h"
@@ -675,6 +676,7 @@ SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
 
   auto tp0 = Clock::now();
   mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);
+  size_t paired = pair_nonmanifold_edges(m);  // radial_pairing.h: part of preparation
   auto t0 = Clock::now();
   SolveResult result = make_empty_result(scene);
   // The Embree scene (robust flags) is needed for leaf rays, and by the custom caster
@@ -692,6 +694,7 @@ SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
   tr.finish_stats(result.stats);
   result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
   result.stats.set("time_embree_build", embree_build);
+  result.stats.set("nonmanifold_edges_paired", double(paired));
   result.stats.set("leaf_receivers", p.leaf_receivers);
   result.stats.set("leaf_samples", p.leaf_samples);
   return result;
