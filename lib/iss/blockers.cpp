@@ -229,15 +229,18 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
   return s;
 }
 
-void classify_edges(Surface& s, const ShaftGeometry& g) {
+size_t classify_edges(Surface& s, const ShaftGeometry& g) {
+  size_t left = 0;
   for (RawEdge& re : s.raw) {
     if (!re.inside) continue;  // line 3: outside the parent, outside the sub-shaft
     re.inside = g.may_intersect_segment(re.v[0], re.v[1]) ? 1 : 0;
     re.fresh = re.inside ? 0 : 1;
+    left += re.fresh;
   }
+  return left;
 }
 
-void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
+size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
   auto classify = [](const AABBd& b, const Plane4d& pl) {
     // CLASSIFY-AABB-PLANE: 0 FRONT, 1 BACK, 2 INTERSECTS (conservative with pl.tol).
     double mn = 1e300, mx = -1e300;
@@ -251,6 +254,7 @@ void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeom
     if (mx < -pl.tol) return 1;
     return 2;
   };
+  size_t changed = 0;
   for (Patch& p : s.patches) {
     if (p.facing != Facing::Inconsistent || p.tri < 0) continue;
     uint32_t t = uint32_t(p.tri);
@@ -264,7 +268,9 @@ void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeom
     else if (lr == 0) p.facing = Facing::TowardsLight;
     else if (lr == 1) p.facing = Facing::TowardsReceiver;
     else p.facing = Facing::Inconsistent;
+    changed += p.facing != Facing::Inconsistent;
   }
+  return changed;
 }
 
 void merge_patches(Surface& s, Workspace& ws) {

@@ -77,6 +77,9 @@ struct Surface {
   Vec3d vsum{0, 0, 0};  // vertex centre data (section 4.7.9): sum and count of the
   double vcount = 0;    // endpoints of edges inside the shaft
   bool refined = true;  // false when postponed in the last construction
+  // Transient, set by the traversal: refinement found nothing to change (no edge left
+  // the shaft, no facing changed), so the loose edges and bounds are still current.
+  bool unchanged = false;
 
   size_t bytes() const {
     return raw.capacity() * sizeof(RawEdge) + edges.capacity() * sizeof(Edge) + patches.capacity() * sizeof(Patch) +
@@ -116,8 +119,10 @@ struct Workspace {
 // intersect the shaft and is in neither node's inside list; neighbours by edge label.
 Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws);
-void classify_edges(Surface& s, const ShaftGeometry& g);                       // Figure 4.21
-void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);  // Figure 4.22
+// CLASSIFY-EDGES (Figure 4.21); returns the number of raw edges that left the shaft.
+size_t classify_edges(Surface& s, const ShaftGeometry& g);
+// UPDATE-PATCH-FACINGS (Figure 4.22); returns the number of patches that became consistent.
+size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);
 void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23
 void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws);     // section 4.7.5
 void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws);    // Figure 4.25

@@ -158,6 +158,8 @@ class Traversal {
     st.set("surfaces_removed", n_removed_);
     st.set("surfaces_postponed", n_postponed_);
     st.set("surfaces_combined", n_combined_);
+    st.set("surfaces_unchanged", n_unchanged_);
+    st.set("surfaces_dropped_outside", n_dropped_);
     st.set("embree_fallback_rays", n_fallback_);
     st.set("initial_shafts_blocked_by_probe", n_probe_blocked_);
     st.set("leaf_rays_with_surfaces", n_leaf_surfaces_);
@@ -263,11 +265,26 @@ class Traversal {
   }
 
   // ---- section 4.7: sub-shaft construction ---------------------------------------------
-  void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out) {
-    { ScopedTimer t(times_[kClassify]); classify_edges(s, g); }
+  // Lines 14-18 of Figure 4.19 for one surface. `settled`: the surface is as the parent
+  // shaft's construction left it (merged, simplified, one component), not a new triangle
+  // surface and not postponed there.
+  void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out, bool settled) {
+    size_t left, became;
+    { ScopedTimer t(times_[kClassify]); left = classify_edges(s, g); }
     check(s, "classify_edges");
-    { ScopedTimer t(times_[kFacings]); update_patch_facings(ctx_, s, g); }
+    { ScopedTimer t(times_[kFacings]); became = update_patch_facings(ctx_, s, g); }
     check(s, "update_patch_facings");
+    // Early exit (section 4.13). Merging needs a patch whose facing just became
+    // consistent (inside edges only ever leave, facings only ever settle), simplifying
+    // an edge that just left the shaft (the fresh marks), splitting a connecting edge
+    // that just left; with none of them the three passes would reproduce the surface.
+    if (settled && left == 0 && became == 0) {
+      s.unchanged = true;
+      ++n_unchanged_;
+      out.push_back(std::move(s));
+      return;
+    }
+    s.unchanged = false;
     { ScopedTimer t(times_[kMerge]); merge_patches(s, ws_); }
     check(s, "merge_patches");
     { ScopedTimer t(times_[kSimplify]); simplify_patches(s, g, ws_); }
@@ -283,11 +300,13 @@ class Traversal {
   void finish_surfaces(Shaft& sh, std::vector<Surface>& temp) {
     {
       ScopedTimer t(times_[kLooseCombine]);
-      for (Surface& s : temp) compute_loose_edges(ctx_, s);
+      for (Surface& s : temp)
+        if (!s.unchanged) compute_loose_edges(ctx_, s);  // unchanged: still current
       size_t before = temp.size();
       combine_surfaces(ctx_, temp, sh.surfaces, sh.g, ws_);
       if (sh.surfaces.size() < before) n_combined_ += double(before - sh.surfaces.size());
-      for (Surface& s : sh.surfaces) compute_bounds(s, sh.g);
+      for (Surface& s : sh.surfaces)
+        if (!s.unchanged) compute_bounds(s, sh.g);
     }
     for (const Surface& s : sh.surfaces) check(s, "combine_surfaces");
   }
@@ -305,6 +324,16 @@ class Traversal {
     std::vector<Surface> temp;
     temp.reserve(parent.surfaces.size() + 4);
     for (Surface& ps : parent.surfaces) {
+      // Early exit (section 4.13): a surface whose box misses the sub-shaft has every
+      // edge outside it, cannot block it (its boundary cannot wind around the test line:
+      // a plane through that line separates the line from the clamped boundary) and has
+      // no loose edge to combine through, so SHAFT-TRAVERSE would remove it as redundant
+      // (section 4.7.8) right after the refinement. It is dropped before the copy; no
+      // removed-surface box is needed either, since no segment inside the shaft meets it.
+      if (!sub.g.may_intersect_box(ps.box)) {
+        ++n_dropped_;
+        continue;
+      }
       Surface s;
       {
         ScopedTimer t(times_[kCopy]);
@@ -316,11 +345,13 @@ class Traversal {
       if (p_.postpone && s.vcount > 0 && sub.g.may_contain_point(s.vsum * (1.0 / s.vcount)) &&
           !can_block_shaft(s.box, sub.g)) {
         s.refined = false;
+        s.unchanged = true;  // loose edges and bounds stay as computed for the parent
         ++n_postponed_;
         temp.push_back(std::move(s));
         continue;
       }
-      refine(std::move(s), sub.g, temp);
+      bool settled = s.refined;
+      refine(std::move(s), sub.g, temp, settled);
     }
     Surface nt;
     {
@@ -328,7 +359,7 @@ class Traversal {
       nt = construct_triangle_surface(ctx_, split_node.gone, sub.g, rn(r), ln(l), ws_);
     }
     check(nt, "construct_triangle_surface");
-    if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp);
+    if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp, false);
     finish_surfaces(sub, temp);
     account(sub);
     return sub;
@@ -362,7 +393,7 @@ class Traversal {
     check(s, "construct_triangle_surface (probe)");
     if (s.patches.empty()) return false;
     probe_out_.clear();
-    refine(std::move(s), g, probe_out_);
+    refine(std::move(s), g, probe_out_, false);
     for (Surface& ps : probe_out_) {
       compute_bounds(ps, g);
       ++n_blocking_tests_;
@@ -387,7 +418,7 @@ class Traversal {
     }
     check(s, "construct_triangle_surface");
     std::vector<Surface> temp;
-    if (!s.patches.empty()) refine(std::move(s), sh.g, temp);
+    if (!s.patches.empty()) refine(std::move(s), sh.g, temp, false);
     finish_surfaces(sh, temp);
     account(sh);
     return sh;
@@ -643,7 +674,7 @@ class Traversal {
   Clock::time_point clock0_ = Clock::now();
   uint64_t tick0_ = ticks();
   double n_blocked_shaft_ = 0, n_empty_ = 0, n_rays_ = 0, n_rays_blocked_ = 0, n_shafts_ = 0, n_blocking_tests_ = 0;
-  double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0;
+  double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0, n_unchanged_ = 0, n_dropped_ = 0;
   double n_leaf_surfaces_ = 0, n_leaf_ghosts_ = 0, n_leaf_node_tris_ = 0, n_probe_blocked_ = 0;
   std::vector<uint32_t> wide_[3];
   std::vector<float> wide_extent_[3], cross_;
