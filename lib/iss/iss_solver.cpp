@@ -14,6 +14,7 @@
 #include "lib/iss/radial_pairing.h"
 #include "lib/iss/shaft.h"
 #include "lib/iss/tree.h"
+#include "lib/iss/triangle_bvh.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_solver.h"
 
@@ -98,13 +99,17 @@ class Traversal {
       for (int k = 0; k < 3; ++k) tb.extend(m.corner(t2, k));
       tri_boxes_[t2] = tb;
     }
+    bvh_ = std::make_unique<TriangleBvh>(tri_boxes_);
     std::vector<AABB> boxes;
     std::vector<Vec3f> centers;
     for (const Receiver& r : scene.receivers) {
       boxes.emplace_back(r.p, r.p);
       centers.push_back(r.p);
     }
-    rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_);
+    std::vector<uint32_t> cand;
+    bvh_->query_box(PointTree::bounds_of(boxes), cand);
+    rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_,
+                                         &cand);
     // Probe candidates (see probe_blocked): per main axis, the triangles ordered by
     // their smaller box extent across that axis, largest first.
     for (int a = 0; a < 3; ++a) {
@@ -131,12 +136,30 @@ class Traversal {
       std::vector<AABB> boxes(light_->jitter_boxes);
       std::vector<Vec3f> centers;
       for (const AABB& b : boxes) centers.push_back(b.center());
-      ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p_.leaf_samples, mesh_, tri_boxes_);
+      std::vector<uint32_t> cand;
+      bvh_->query_box(PointTree::bounds_of(boxes), cand);
+      ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p_.leaf_samples, mesh_, tri_boxes_,
+                                           &cand);
     }
-    // COMPUTE-SHADOWS (Figure 4.32).
-    std::vector<uint32_t> tris(mesh_.triangles.size());
-    for (uint32_t t = 0; t < tris.size(); ++t) tris[t] = t;
-    pre_traverse(rtree_->root(), ltree_->root(), tris);
+    // COMPUTE-SHADOWS (Figure 4.32), with the triangle array restricted to the
+    // triangles whose box may meet the root shaft (triangle_bvh.h) instead of all. The
+    // root's blocker probe runs first: when it decides the light no array is needed.
+    int r0 = rtree_->root(), l0 = ltree_->root();
+    if (!rn(r0).box.overlaps(ln(l0).box)) {
+      MainAxis ax = choose_main_axis(rn(r0).box, ln(l0).box);
+      if (ax.axis >= 0 && probe_blocked(r0, l0, ax, mesh_.triangles.size())) {
+        record_blocked(r0, l0);
+        light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
+        ltree_.reset();
+        return;
+      }
+    }
+    std::vector<uint32_t> tris;
+    {
+      ScopedTimer t(times_[kTriangleSurface]);
+      bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);
+    }
+    pre_traverse(r0, l0, tris, false);
     light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
     ltree_.reset();
   }
@@ -165,7 +188,7 @@ class Traversal {
     st.set("leaf_rays_with_surfaces", n_leaf_surfaces_);
     st.set("leaf_rays_with_removed_only", n_leaf_ghosts_);
     st.set("leaf_rays_empty_with_node_triangles", n_leaf_node_tris_);
-    double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_);
+    double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes());
     st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
     st.set("receiver_tree_nodes", double(rtree_->node_count()));
     double secs = std::chrono::duration<double>(Clock::now() - clock0_).count();
@@ -602,13 +625,14 @@ class Traversal {
   }
 
   // PRE-TRAVERSE (Figure 4.32).
-  void pre_traverse(int r, int l, const std::vector<uint32_t>& tris) {
+  // `probe`: run the blocker probe before an initial shaft (false when the caller did).
+  void pre_traverse(int r, int l, const std::vector<uint32_t>& tris, bool probe = true) {
     TreeNode& R = rn(r);
     TreeNode& L = ln(l);
     if (!R.box.overlaps(L.box)) {
       MainAxis ax = choose_main_axis(R.box, L.box);
       if (ax.axis >= 0) {
-        if (probe_blocked(r, l, ax, tris.size())) {
+        if (probe && probe_blocked(r, l, ax, tris.size())) {
           record_blocked(r, l);
           return;
         }
@@ -665,6 +689,7 @@ class Traversal {
   BlockerContext ctx_;
   double scale_ = 1.0;
   std::vector<AABB> tri_boxes_;
+  std::unique_ptr<TriangleBvh> bvh_;
   std::unique_ptr<PointTree> rtree_, ltree_;
   const Light* light_ = nullptr;
   size_t light_offset_ = 0;

@@ -42,7 +42,8 @@ double point_spacing(const Vec3f& e, uint32_t n) {
 bool TreeNode::contains_triangle(uint32_t t) const { return std::binary_search(inside.begin(), inside.end(), t); }
 
 PointTree::PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int max_points_in_leaf,
-                     const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes)
+                     const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes,
+                     const std::vector<uint32_t>* root_candidates)
     : boxes_(std::move(boxes)), centers_(std::move(centers)), max_leaf_(std::max(1, max_points_in_leaf)),
       mesh_(mesh), tri_boxes_(triangle_boxes) {
   order_.resize(boxes_.size());
@@ -51,10 +52,20 @@ PointTree::PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int ma
   TreeNode& r = nodes_.back();
   r.begin = 0;
   r.end = uint32_t(order_.size());
-  std::vector<uint32_t> all(mesh_.triangles.size());
-  std::iota(all.begin(), all.end(), 0u);
-  finish_node(r, all);
+  if (root_candidates) {
+    finish_node(r, *root_candidates);
+  } else {
+    std::vector<uint32_t> all(mesh_.triangles.size());
+    std::iota(all.begin(), all.end(), 0u);
+    finish_node(r, all);
+  }
   r.gone.clear();
+}
+
+AABB PointTree::bounds_of(const std::vector<AABB>& boxes) {
+  AABB b;
+  for (const AABB& x : boxes) b.extend(x);
+  return b;
 }
 
 void PointTree::finish_node(TreeNode& n, const std::vector<uint32_t>& parent_triangles) {

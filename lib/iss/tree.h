@@ -61,9 +61,14 @@ struct TreeNode {
 
 class PointTree {
  public:
-  // `boxes[i]` is the box of point i, `centers[i]` its split position.
+  // `boxes[i]` is the box of point i, `centers[i]` its split position. The root's
+  // inside list is filtered from `root_candidates` (sorted; every triangle whose box
+  // meets the root box must be in it) or, when null, from every triangle.
   PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int max_points_in_leaf,
-            const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes);
+            const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes,
+            const std::vector<uint32_t>* root_candidates = nullptr);
+  // Box of a set of point boxes (the root box a tree over them will have).
+  static AABB bounds_of(const std::vector<AABB>& boxes);
 
   TreeNode& node(int i) { return nodes_[size_t(i)]; }
   const TreeNode& node(int i) const { return nodes_[size_t(i)]; }
