@@ -45,11 +45,6 @@ Vec3d clip_point(Vec3d p0, Vec3d p1, int ax, double c) {
   return x;
 }
 
-struct PolyVertex {
-  Vec3d p;
-  int32_t label;  // label of the edge that starts at this vertex
-};
-
 // One Sutherland-Hodgman pass keeping side * (x[ax] - c) >= 0.
 void clip_poly(const std::vector<PolyVertex>& in, std::vector<PolyVertex>& out, int ax, double c, double side) {
   out.clear();
@@ -148,14 +143,35 @@ void Workspace::reset_labels(size_t n) {
   ++stamp;
 }
 
+Surface Workspace::take_surface() {
+  if (spare.empty()) return Surface{};
+  Surface s = std::move(spare.back());
+  spare.pop_back();
+  return s;
+}
+
+void Workspace::recycle(Surface&& s) {
+  if (spare.size() >= kMaxSpare) return;
+  if (s.raw.capacity() > kMaxSpareEdges || s.edges.capacity() > 2 * kMaxSpareEdges) return;  // let it go
+  s.raw.clear();
+  s.edges.clear();
+  s.patches.clear();
+  s.loose.clear();
+  s.box = AABBd{};
+  s.vsum = Vec3d(0, 0, 0);
+  s.vcount = 0;
+  s.refined = true;
+  s.unchanged = false;
+  spare.push_back(std::move(s));
+}
+
 Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws) {
-  Surface s;
+  Surface s = ws.take_surface();
   const mesh::PreparedMesh& m = *ctx.mesh;
   ws.reset_labels(m.edge_count());
-  std::vector<PolyVertex> poly, tmp;
-  poly.reserve(8);
-  tmp.reserve(8);
+  std::vector<PolyVertex>& poly = ws.poly;
+  std::vector<PolyVertex>& tmp = ws.poly_tmp;
   int ax = g.main_axis();
   for (uint32_t t : tris) {
     // Lines 6-8: a valid blocker intersects the shaft and neither node (cheapest test
@@ -311,7 +327,8 @@ void merge_patches(Surface& s, Workspace& ws) {
   }
   for (size_t gi = 0; gi < size_t(ng); ++gi) cnt[gi + 1] += cnt[gi];
   ws.edge_tmp.resize(cnt[size_t(ng)]);
-  std::vector<uint32_t> fill(cnt.begin(), cnt.end() - 1);
+  std::vector<uint32_t>& fill = ws.fill;
+  fill.assign(cnt.begin(), cnt.end() - 1);
   for (size_t i = 0; i < np; ++i) {
     int32_t gi = group(int32_t(i));
     const Patch& p = s.patches[i];
@@ -567,8 +584,11 @@ void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws) {
     if (e.flipped && ws.remap[e.raw] >= 0) e.raw = uint32_t(ws.remap[e.raw]);
   // Distribute patches, edges and raw edges to the components.
   size_t base = out.size();
-  out.resize(base + size_t(nc));
-  std::vector<int32_t> local_patch(np), local_raw(s.raw.size(), -1);
+  for (int32_t c = 0; c < nc; ++c) out.push_back(ws.take_surface());
+  std::vector<int32_t>& local_patch = ws.local_patch;
+  std::vector<int32_t>& local_raw = ws.local_raw;
+  local_patch.assign(np, -1);
+  local_raw.assign(s.raw.size(), -1);
   for (size_t i = 0; i < np; ++i) {
     Surface& c = out[base + size_t(comp(int32_t(i)))];
     local_patch[i] = int32_t(c.patches.size());
@@ -596,6 +616,7 @@ void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws) {
       c.edges.push_back(e);
     }
   }
+  ws.recycle(std::move(s));
 }
 
 void compute_loose_edges(const BlockerContext& ctx, Surface& s) {
@@ -610,7 +631,8 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
                       const ShaftGeometry& g, Workspace& ws) {
   size_t ns = in.size();
   ws.reset_labels(ctx.mesh->edge_count());
-  std::vector<int32_t> suf(ns);
+  std::vector<int32_t>& suf = ws.sets;
+  suf.resize(ns);
   std::iota(suf.begin(), suf.end(), 0);
   bool any = false;
   for (size_t i = 0; i < ns; ++i) {
@@ -628,19 +650,27 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
     for (Surface& s : in) out.push_back(std::move(s));
     return;
   }
-  // Members of each set, in order.
-  std::vector<std::vector<int32_t>> sets(ns);
-  for (size_t i = 0; i < ns; ++i) sets[size_t(uf_find(suf, int32_t(i)))].push_back(int32_t(i));
+  // Members of each set in index order, grouped by a counting sort on the set's root
+  // (the smallest member, uf_union keeps the smaller index as the root).
+  std::vector<uint32_t>& start = ws.group_start;
+  std::vector<int32_t>& members = ws.members;
+  start.assign(ns + 1, 0);
+  members.resize(ns);
+  for (size_t i = 0; i < ns; ++i) ++start[size_t(uf_find(suf, int32_t(i))) + 1];
+  for (size_t r = 0; r < ns; ++r) start[r + 1] += start[r];
+  ws.fill.assign(start.begin(), start.end() - 1);
+  for (size_t i = 0; i < ns; ++i) members[ws.fill[size_t(uf_find(suf, int32_t(i)))]++] = int32_t(i);
   for (size_t r = 0; r < ns; ++r) {
-    if (sets[r].empty()) continue;
-    if (sets[r].size() == 1) {
-      out.push_back(std::move(in[size_t(sets[r][0])]));
+    uint32_t m0 = start[r], m1 = start[r + 1];
+    if (m0 == m1) continue;
+    if (m1 - m0 == 1) {
+      out.push_back(std::move(in[size_t(members[m0])]));
       continue;
     }
     // CONSTRUCT-COMBINED-SURFACE: concatenate, then unify matching loose edges.
-    Surface c;
-    for (int32_t si : sets[r]) {
-      Surface& s = in[size_t(si)];
+    Surface c = ws.take_surface();
+    for (uint32_t mi = m0; mi < m1; ++mi) {
+      Surface& s = in[size_t(members[mi])];
       uint32_t rb = uint32_t(c.raw.size()), eb = uint32_t(c.edges.size());
       int32_t pb = int32_t(c.patches.size());
       for (RawEdge re : s.raw) {
@@ -656,10 +686,13 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
         p.first += eb;
         c.patches.push_back(p);
       }
+      ws.recycle(std::move(s));
     }
     ws.reset_labels(ctx.mesh->edge_count());
-    std::vector<std::pair<int32_t, Edge>> extra;  // edges appended to a patch
-    std::vector<std::pair<uint32_t, Edge>> replace;  // raw B -> edge to use instead
+    auto& extra = ws.extra;      // edges appended to a patch
+    auto& replace = ws.replace;  // raw B -> edge to use instead
+    extra.clear();
+    replace.clear();
     size_t nraw0 = c.raw.size();
     for (size_t i = 0; i < nraw0; ++i) {
       RawEdge& b = c.raw[i];
@@ -708,7 +741,8 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
         if (ws.remap[e.raw] >= 0) e = replace[size_t(ws.remap[e.raw])].second;
     }
     if (!extra.empty()) {
-      std::vector<Edge> ne;
+      std::vector<Edge>& ne = ws.edge_tmp2;
+      ne.clear();
       ne.reserve(c.edges.size() + extra.size());
       for (size_t pi = 0; pi < c.patches.size(); ++pi) {
         Patch& p = c.patches[pi];
@@ -726,6 +760,7 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
     simplify_patches(c, g, ws);    // same with simplifying
     compute_loose_edges(ctx, c);
     if (!c.patches.empty()) out.push_back(std::move(c));
+    else ws.recycle(std::move(c));
   }
 }
 

@@ -99,20 +99,42 @@ struct BlockerContext {
   double scale = 1.0;  // S of shaft.h
 };
 
-// Reusable scratch storage (section 4.13: no allocation in the inner loops).
+// A vertex of a triangle being clipped (CONSTRUCT-CLIPPED-PATCH) and the label of the
+// edge that starts at it.
+struct PolyVertex {
+  Vec3d p;
+  int32_t label;
+};
+
+// Reusable scratch storage (section 4.13: no allocation in the inner loops) and the
+// pool of surfaces (section 4.13: "a custom pool-based memory manager for data
+// structures that are allocated and deallocated often"): a surface that is no longer
+// needed is cleared and kept with its arrays' capacity, and the next surface a
+// construction needs is taken from the pool, so that copying a parent's surface into a
+// sub-shaft usually reuses memory instead of allocating four arrays.
 struct Workspace {
   std::vector<int32_t> label_slot;
   std::vector<uint32_t> label_stamp;
   uint32_t stamp = 0;
   std::vector<int32_t> uf, remap, remap2;
   std::vector<RawEdge> raw_tmp;
-  std::vector<Edge> edge_tmp;
+  std::vector<Edge> edge_tmp, edge_tmp2;
   std::vector<Patch> patch_tmp, patch_tmp2;
   std::vector<Edge> loop;
-  std::vector<uint32_t> order;
-  std::vector<int32_t> next;
+  std::vector<uint32_t> order, fill, group_start;
+  std::vector<int32_t> next, local_patch, local_raw, sets, members;
   std::vector<uint8_t> used, fail;
+  std::vector<PolyVertex> poly, poly_tmp;
+  std::vector<std::pair<int32_t, Edge>> extra;     // combine: edges appended to a patch
+  std::vector<std::pair<uint32_t, Edge>> replace;  // combine: raw edge -> edge instead
+  std::vector<Surface> spare;                      // the surface pool
   void reset_labels(size_t n);
+  // An empty surface, from the pool when it holds one.
+  Surface take_surface();
+  // Returns a surface to the pool (cleared; arrays above kMaxSpareEdges are freed, and
+  // the pool keeps at most kMaxSpare surfaces).
+  void recycle(Surface&& s);
+  static constexpr size_t kMaxSpare = 1024, kMaxSpareEdges = 4096;
 };
 
 // Section 4.7.1 / Figure 4.20: one clipped patch per triangle of `tris` that may

@@ -220,7 +220,12 @@ class Traversal {
     peak_bytes_ = std::max(peak_bytes_, live_bytes_);
     ++n_shafts_;
   }
-  void release(Shaft& sh) { live_bytes_ -= sh.bytes; }
+  // The shaft is done: its surfaces go back to the pool (section 4.13).
+  void release(Shaft& sh) {
+    live_bytes_ -= sh.bytes;
+    for (Surface& s : sh.surfaces) ws_.recycle(std::move(s));
+    sh.surfaces.clear();
+  }
 
   void record_blocked(int r, int l) { n_blocked_shaft_ += double(rn(r).size()) * double(ln(l).size()); }
 
@@ -344,8 +349,8 @@ class Traversal {
     sub.g = geometry(r, l, ax);
     for (const AABBd& gb : parent.ghosts)
       if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
-    std::vector<Surface> temp;
-    temp.reserve(parent.surfaces.size() + 4);
+    std::vector<Surface>& temp = temp_;  // not re-entrant: no traversal in between
+    temp.clear();
     for (Surface& ps : parent.surfaces) {
       // Early exit (section 4.13): a surface whose box misses the sub-shaft has every
       // edge outside it, cannot block it (its boundary cannot wind around the test line:
@@ -360,8 +365,12 @@ class Traversal {
       Surface s;
       {
         ScopedTimer t(times_[kCopy]);
-        if (move_parent) s = std::move(ps);
-        else s = ps;
+        if (move_parent) {
+          s = std::move(ps);
+        } else {
+          s = ws_.take_surface();
+          s = ps;  // DUPLICATE-SURFACE into pooled arrays: no allocation when they fit
+        }
       }
       // Section 4.7.9: postpone the refinement when the vertex centre stays inside and
       // the surface cannot block the shaft yet.
@@ -383,7 +392,9 @@ class Traversal {
     }
     check(nt, "construct_triangle_surface");
     if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp, false);
+    else ws_.recycle(std::move(nt));
     finish_surfaces(sub, temp);
+    temp.clear();
     account(sub);
     return sub;
   }
@@ -414,18 +425,24 @@ class Traversal {
     ShaftGeometry g = geometry(r, l, ax);
     Surface s = construct_triangle_surface(ctx_, probe_tris_, g, R, L, ws_);
     check(s, "construct_triangle_surface (probe)");
-    if (s.patches.empty()) return false;
+    if (s.patches.empty()) {
+      ws_.recycle(std::move(s));
+      return false;
+    }
     probe_out_.clear();
     refine(std::move(s), g, probe_out_, false);
+    bool blocked = false;
     for (Surface& ps : probe_out_) {
       compute_bounds(ps, g);
       ++n_blocking_tests_;
-      if (blocks_shaft(ps, g)) {
+      if (!blocked && blocks_shaft(ps, g)) {
         ++n_probe_blocked_;
-        return true;
+        blocked = true;
       }
+      ws_.recycle(std::move(ps));
     }
-    return false;
+    probe_out_.clear();
+    return blocked;
   }
 
   // CONSTRUCT-INITIAL-SHAFT (Figure 4.31).
@@ -561,6 +578,7 @@ class Traversal {
       if (all_edges_outside(s)) {
         sh.ghosts.push_back(s.box);
         ++n_removed_;
+        ws_.recycle(std::move(s));
         if (k + 1 != sh.surfaces.size()) sh.surfaces[k] = std::move(sh.surfaces.back());
         sh.surfaces.pop_back();
         continue;
@@ -704,7 +722,7 @@ class Traversal {
   std::vector<uint32_t> wide_[3];
   std::vector<float> wide_extent_[3], cross_;
   std::vector<uint32_t> probe_tris_;
-  std::vector<Surface> probe_out_;
+  std::vector<Surface> probe_out_, temp_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
 };
 
