@@ -127,6 +127,43 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
   return ray.tfar == -std::numeric_limits<float>::infinity();
 }
 
+void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* out) const {
+  if (n <= 0) return;
+  if (n > 16) {
+    occluded_fan(from, to, 16, out);
+    occluded_fan(from, to + 16, n - 16, out + 16);
+    return;
+  }
+  if (!mesh_in_bound_ || !within_embree_bound(from)) {
+    for (int k = 0; k < n; ++k) out[k] = occluded(from, to[k]);
+    return;
+  }
+  alignas(64) RTCRay16 ray;
+  alignas(64) int valid[16];
+  for (int k = 0; k < 16; ++k) {
+    bool use = k < n && within_embree_bound(to[k]);
+    valid[k] = use ? -1 : 0;
+    Vec3f d = use ? to[k] - from : Vec3f(0, 0, 1);
+    ray.org_x[k] = from.x;
+    ray.org_y[k] = from.y;
+    ray.org_z[k] = from.z;
+    ray.dir_x[k] = d.x;
+    ray.dir_y[k] = d.y;
+    ray.dir_z[k] = d.z;
+    ray.tnear[k] = 0.0f;
+    ray.tfar[k] = 1.0f;
+    ray.time[k] = 0.0f;
+    ray.mask[k] = 0xFFFFFFFFu;
+    ray.id[k] = unsigned(k);
+    ray.flags[k] = 0;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcOccluded16(valid, static_cast<RTCScene>(scene_), &ctx, &ray);
+  for (int k = 0; k < n; ++k)
+    out[k] = valid[k] ? ray.tfar[k] == -std::numeric_limits<float>::infinity() : occluded(from, to[k]);
+}
+
 SolveResult EmbreeSolver::solve(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   auto t0 = std::chrono::steady_clock::now();
