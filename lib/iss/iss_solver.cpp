@@ -254,15 +254,30 @@ class Traversal {
       uint32_t i = ro[a];
       ReceiverResult& rr = result_.receivers[i];
       const Vec3f& rp = scene_.receivers[i].p;
-      for (uint32_t b = L.begin; b < L.end; ++b) {
-        int j = int(lo[b]);
-        const Vec3f& lp = sample_position(*light_, j, i);
-        bool occ = p_.custom_rays ? custom_occluded(rp, lp, R, L, sh, tris) : embree_->occluded(rp, lp);
-        rr.set_visible(light_offset_ + size_t(j), !occ);
-        n_rays_ += 1;
-        if (occ) n_rays_blocked_ += 1;
+      if (p_.custom_rays) {
+        for (uint32_t b = L.begin; b < L.end; ++b) {
+          int j = int(lo[b]);
+          bool occ = custom_occluded(rp, sample_position(*light_, j, i), R, L, sh, tris);
+          rr.set_visible(light_offset_ + size_t(j), !occ);
+          n_rays_blocked_ += occ;
+        }
+        continue;
+      }
+      // The standard caster: the receiver's segments to the leaf's samples form a
+      // coherent fan, traced 16 at a time as one Embree packet (occluded_fan).
+      for (uint32_t b0 = L.begin; b0 < L.end; b0 += 16) {
+        int n = int(std::min<uint32_t>(16, L.end - b0));
+        Vec3f to[16];
+        bool occ[16];
+        for (int k = 0; k < n; ++k) to[k] = sample_position(*light_, int(lo[b0 + uint32_t(k)]), i);
+        embree_->occluded_fan(rp, to, n, occ);
+        for (int k = 0; k < n; ++k) {
+          rr.set_visible(light_offset_ + size_t(lo[b0 + uint32_t(k)]), !occ[k]);
+          n_rays_blocked_ += occ[k];
+        }
       }
     }
+    n_rays_ += double(R.size()) * double(L.size());
   }
 
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
