@@ -111,7 +111,10 @@ class Traversal {
     rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_,
                                          &cand);
     // Probe candidates (see probe_blocked): per main axis, the triangles ordered by
-    // their smaller box extent across that axis, largest first.
+    // their smaller box extent across that axis, largest first (ties by index). The
+    // probe never takes more than max(64, triangles / 16) of them, so only that many
+    // plus one are kept: a full prefix then says "more than the cap".
+    size_t keep = std::min(m.triangles.size(), std::max<size_t>(64, m.triangles.size() / 16) + 1);
     for (int a = 0; a < 3; ++a) {
       std::vector<uint32_t>& w = wide_[a];
       w.resize(m.triangles.size());
@@ -121,10 +124,15 @@ class Traversal {
         Vec3f e = tri_boxes_[t2].extent();
         cross_[t2] = std::min(e[(a + 1) % 3], e[(a + 2) % 3]);
       }
-      std::stable_sort(w.begin(), w.end(), [&](uint32_t x, uint32_t y) { return cross_[x] > cross_[y]; });
+      auto wider = [&](uint32_t x, uint32_t y) { return cross_[x] != cross_[y] ? cross_[x] > cross_[y] : x < y; };
+      std::nth_element(w.begin(), w.begin() + long(keep) - (keep > 0), w.end(), wider);
+      w.resize(keep);
+      std::sort(w.begin(), w.end(), wider);
       wide_extent_[a].resize(w.size());
       for (size_t k = 0; k < w.size(); ++k) wide_extent_[a][k] = cross_[w[k]];
     }
+    cross_ = {};
+    wide_truncated_ = keep < m.triangles.size();
   }
 
   void run_light(size_t li) {
@@ -250,6 +258,7 @@ class Traversal {
     const TreeNode& L = ln(l);
     const auto& ro = rtree_->order();
     const auto& lo = ltree_->order();
+    size_t blocked = 0;
     for (uint32_t a = R.begin; a < R.end; ++a) {
       uint32_t i = ro[a];
       ReceiverResult& rr = result_.receivers[i];
@@ -272,12 +281,14 @@ class Traversal {
         for (int k = 0; k < n; ++k) to[k] = sample_position(*light_, int(lo[b0 + uint32_t(k)]), i);
         embree_->occluded_fan(rp, to, n, occ);
         for (int k = 0; k < n; ++k) {
-          rr.set_visible(light_offset_ + size_t(lo[b0 + uint32_t(k)]), !occ[k]);
-          n_rays_blocked_ += occ[k];
+          // Bits start blocked (make_empty_result): only visible ones are written.
+          if (!occ[k]) rr.set_visible(light_offset_ + size_t(lo[b0 + uint32_t(k)]), true);
+          blocked += occ[k];
         }
       }
     }
     n_rays_ += double(R.size()) * double(L.size());
+    n_rays_blocked_ += double(blocked);
   }
 
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
@@ -432,10 +443,11 @@ class Traversal {
     Vec3f re = R.box.extent(), le = L.box.extent();
     float thr = std::min(std::min(re[b], le[b]), std::min(re[c], le[c]));
     const std::vector<float>& ext = wide_extent_[a];
-    // Number of triangles with cross extent >= thr (ext is descending).
+    // Number of triangles with cross extent >= thr (ext is descending; a full prefix
+    // means more than any cap).
     size_t n = size_t(std::lower_bound(ext.begin(), ext.end(), thr, [](float x, float v) { return x >= v; }) - ext.begin());
     size_t cap = std::max<size_t>(64, n_tris / 16);
-    if (n == 0 || n > cap) return false;
+    if (n == 0 || n > cap || (wide_truncated_ && n == ext.size())) return false;
     probe_tris_.assign(wide_[a].begin(), wide_[a].begin() + long(n));
     ShaftGeometry g = geometry(r, l, ax);
     Surface s = construct_triangle_surface(ctx_, probe_tris_, g, R, L, ws_);
@@ -736,6 +748,7 @@ class Traversal {
   double n_leaf_surfaces_ = 0, n_leaf_ghosts_ = 0, n_leaf_node_tris_ = 0, n_probe_blocked_ = 0;
   std::vector<uint32_t> wide_[3];
   std::vector<float> wide_extent_[3], cross_;
+  bool wide_truncated_ = false;
   std::vector<uint32_t> probe_tris_;
   std::vector<Surface> probe_out_, temp_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;

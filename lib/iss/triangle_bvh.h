@@ -5,6 +5,9 @@
 // triangles whose box may meet the root shaft (the triangle array that COMPUTE-SHADOWS,
 // Figure 4.32, starts PRE-TRAVERSE with, which the thesis fills with every triangle).
 //
+// Build: Morton order of the box centres (radix sort), then balanced halving of that
+// order down to leaves of 8; linear in the triangle count.
+//
 // Guarantee: both queries return a superset, sorted by index, of what they select:
 // a triangle is left out only when its box (float32, exact) is disjoint from the query
 // box, or when a node box that contains it is outside a shaft plane by more than the
