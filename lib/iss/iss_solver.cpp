@@ -75,9 +75,15 @@ struct Shaft {
 
 enum class SplitMode { Receiver, Light };
 
+// Leaf sizes (section 4.3; the thesis sets them per scene, Table 5.1, SODA 16/16).
+// Defaults measured with `visgate bench iss` and CPU-time A/B runs (README, ISS):
+// 16 receivers, because the shafts of the rooms family are decided by walls only once
+// the receiver nodes are a few grid cells wide; 256 samples, i.e. a light of up to 256
+// samples is one light-tree leaf and never split: light splits decided few relations on
+// rooms and none on columns, and their leaf rays go 16 per Embree packet anyway.
 struct Params {
-  int leaf_receivers = 64;
-  int leaf_samples = 16;
+  int leaf_receivers = 16;
+  int leaf_samples = 256;
   bool custom_rays = false;
   bool postpone = true;
 };
@@ -761,8 +767,8 @@ bool validate_all() { return g_validate; }
 
 std::vector<OptionSpec> IssSolver::options() const {
   return {
-      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 64)", {}},
-      {"leaf_samples", "maximum light samples in a light-tree leaf (default 16)", {}},
+      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 16)", {}},
+      {"leaf_samples", "maximum light samples in a light-tree leaf (default 256)", {}},
       {"ray_caster", "leaf relations by Embree rays or the custom shaft ray caster of section 4.10", {"embree", "custom"}},
       {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
   };
