@@ -234,11 +234,25 @@ class Traversal {
     peak_bytes_ = std::max(peak_bytes_, live_bytes_);
     ++n_shafts_;
   }
-  // The shaft is done: its surfaces go back to the pool (section 4.13).
+  // The shaft is done: its surfaces, and its two arrays, go back to the pools (section
+  // 4.13), so that the next shaft's arrays need no allocation.
   void release(Shaft& sh) {
     live_bytes_ -= sh.bytes;
     for (Surface& s : sh.surfaces) ws_.recycle(std::move(s));
     sh.surfaces.clear();
+    sh.ghosts.clear();
+    if (surface_lists_.size() < 256) {
+      surface_lists_.push_back(std::move(sh.surfaces));
+      ghost_lists_.push_back(std::move(sh.ghosts));
+    }
+  }
+  // A shaft with pooled (empty) arrays.
+  void init_shaft(Shaft& sh) {
+    if (surface_lists_.empty()) return;
+    sh.surfaces = std::move(surface_lists_.back());
+    sh.ghosts = std::move(ghost_lists_.back());
+    surface_lists_.pop_back();
+    ghost_lists_.pop_back();
   }
 
   void record_blocked(int r, int l) { n_blocked_shaft_ += double(rn(r).size()) * double(ln(l).size()); }
@@ -375,6 +389,7 @@ class Traversal {
   // child and moved into the second (section 4.13: no needless copies).
   Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent) {
     Shaft sub;
+    init_shaft(sub);
     sub.r = r;
     sub.l = l;
     MainAxis ax{parent.g.main_axis(), parent.g.dir()};
@@ -481,6 +496,7 @@ class Traversal {
   // CONSTRUCT-INITIAL-SHAFT (Figure 4.31).
   Shaft construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris) {
     Shaft sh;
+    init_shaft(sh);
     sh.r = r;
     sh.l = l;
     sh.g = geometry(r, l, ax);
@@ -757,6 +773,8 @@ class Traversal {
   bool wide_truncated_ = false;
   std::vector<uint32_t> probe_tris_;
   std::vector<Surface> probe_out_, temp_;
+  std::vector<std::vector<Surface>> surface_lists_;
+  std::vector<std::vector<AABBd>> ghost_lists_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
 };
 
