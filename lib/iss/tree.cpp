@@ -130,17 +130,25 @@ void PointTree::split(int i) {
         }
     }
     for (int ax = 0; ax < 3; ++ax) {
-      std::sort(ord + b, ord + e, [&](uint32_t p, uint32_t q) { return centers_[p][ax] < centers_[q][ax]; });
+      // The points in centre order on this axis (ties by index): (key, index) pairs
+      // sort without indirection; the order is kept for the final split.
+      std::vector<std::pair<float, uint32_t>>& keyed = scratch_keyed_;
+      keyed.resize(cnt);
+      for (uint32_t k = 0; k < cnt; ++k) keyed[k] = {centers_[ord[b + k]][ax], ord[b + k]};
+      std::sort(keyed.begin(), keyed.end());
+      scratch_axis_ord_[ax].resize(cnt);
+      uint32_t* sorted = scratch_axis_ord_[ax].data();
+      for (uint32_t k = 0; k < cnt; ++k) sorted[k] = keyed[k].second;
       // pre[k]: box of the first k points; suf[k]: box of the points from k on.
       scratch_pre_[0] = AABB{};
       for (uint32_t k = 0; k < cnt; ++k) {
         scratch_pre_[k + 1] = scratch_pre_[k];
-        scratch_pre_[k + 1].extend(boxes_[ord[b + k]]);
+        scratch_pre_[k + 1].extend(boxes_[sorted[k]]);
       }
       scratch_suf_[cnt] = AABB{};
       for (uint32_t k = cnt; k-- > 0;) {
         scratch_suf_[k] = scratch_suf_[k + 1];
-        scratch_suf_[k].extend(boxes_[ord[b + k]]);
+        scratch_suf_[k].extend(boxes_[sorted[k]]);
       }
       // Large blockers per side: overlap with pre[k] only grows with k and overlap with
       // suf[k] only shrinks, so each triangle's first (last) overlapping k is a binary
@@ -169,7 +177,7 @@ void PointTree::split(int i) {
       for (uint32_t k = cnt + 1; k-- > 0;) scratch_cr_[k] += scratch_cr_[k + 1];  // cr[k]: first k without overlap >= k
       for (uint32_t k = 1; k < cnt; ++k) {
         // Only split between distinct centres so that the split is a plane.
-        if (!(centers_[ord[b + k - 1]][ax] < centers_[ord[b + k]][ax])) continue;
+        if (!(keyed[k - 1].first < keyed[k].first)) continue;
         // Triangles overlapping suf[k]: those whose first k without overlap is > k.
         double tl = double(scratch_cl_[k]), tr = double(scratch_cr_[k + 1]);
         double c = double(k) * split_area(scratch_pre_[k], pad) * (1.0 + tl) +
@@ -181,7 +189,7 @@ void PointTree::split(int i) {
       n->is_leaf = true;
       return;
     }
-    std::sort(ord + b, ord + e, [&](uint32_t p, uint32_t q) { return centers_[p][best_ax] < centers_[q][best_ax]; });
+    std::copy(scratch_axis_ord_[best_ax].begin(), scratch_axis_ord_[best_ax].begin() + cnt, ord + b);
     mid = best_mid;
   }
   int li = int(nodes_.size());

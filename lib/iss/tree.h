@@ -30,6 +30,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <utility>
 #include <vector>
 
 #include "lib/geom/aabb.h"
@@ -90,7 +91,8 @@ class PointTree {
   const mesh::PreparedMesh& mesh_;
   const std::vector<AABB>& tri_boxes_;
   std::vector<AABB> scratch_pre_, scratch_suf_;
-  std::vector<uint32_t> scratch_cl_, scratch_cr_, big_;
+  std::vector<uint32_t> scratch_cl_, scratch_cr_, big_, scratch_axis_ord_[3];
+  std::vector<std::pair<float, uint32_t>> scratch_keyed_;
   size_t list_bytes_ = 0;
 };
 
