@@ -138,24 +138,40 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
     for (int k = 0; k < n; ++k) out[k] = occluded(from, to[k]);
     return;
   }
-  alignas(64) RTCRay16 ray;
-  alignas(64) int valid[16];
+  // A per-thread packet whose constant fields (tnear, time, mask, id, flags) are set
+  // once; each call writes the origin, the directions, tfar and the lane mask.
+  struct alignas(64) Packet {
+    RTCRay16 ray;
+    alignas(64) int valid[16];
+    Packet() {
+      for (int k = 0; k < 16; ++k) {
+        ray.tnear[k] = 0.0f;
+        ray.time[k] = 0.0f;
+        ray.mask[k] = 0xFFFFFFFFu;
+        ray.id[k] = unsigned(k);
+        ray.flags[k] = 0;
+        ray.dir_x[k] = ray.dir_y[k] = 0.0f;
+        ray.dir_z[k] = 1.0f;  // inactive lanes keep a valid direction
+      }
+    }
+  };
+  thread_local Packet pk;
+  RTCRay16& ray = pk.ray;
+  int* valid = pk.valid;
   for (int k = 0; k < 16; ++k) {
-    bool use = k < n && within_embree_bound(to[k]);
-    valid[k] = use ? -1 : 0;
-    Vec3f d = use ? to[k] - from : Vec3f(0, 0, 1);
     ray.org_x[k] = from.x;
     ray.org_y[k] = from.y;
     ray.org_z[k] = from.z;
+    ray.tfar[k] = 1.0f;
+    valid[k] = 0;
+  }
+  for (int k = 0; k < n; ++k) {
+    if (!within_embree_bound(to[k])) continue;
+    valid[k] = -1;
+    Vec3f d = to[k] - from;
     ray.dir_x[k] = d.x;
     ray.dir_y[k] = d.y;
     ray.dir_z[k] = d.z;
-    ray.tnear[k] = 0.0f;
-    ray.tfar[k] = 1.0f;
-    ray.time[k] = 0.0f;
-    ray.mask[k] = 0xFFFFFFFFu;
-    ray.id[k] = unsigned(k);
-    ray.flags[k] = 0;
   }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
