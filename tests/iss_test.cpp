@@ -311,6 +311,23 @@ TEST(IssBvh, QueriesReturnEverySelectedTriangleSorted) {
   EXPECT_TRUE(got.empty());
 }
 
+TEST(IssRays, LeafSamplePositionIsSamplePosition) {
+  // The division-free jitter index of the leaf caster against the one definition in
+  // lib/scene, for K = 1..8 (powers of two and not) and many receivers and samples.
+  for (int k = 1; k <= 8; ++k) {
+    Light l = square_light(0, 0, 2, 1.0, 32, uint64_t(k) * 77);
+    l.jitter = k;
+    Scene s;
+    s.lights.push_back(l);
+    s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+    ASSERT_TRUE(finish_scene(s).ok());
+    const Light& fl = s.lights[0];
+    for (size_t i = 0; i < 2000; i += 7)
+      for (int j = 0; j < fl.samples; ++j)
+        ASSERT_EQ(&iss::leaf_sample_position(fl, j, i), &sample_position(fl, j, i)) << "K " << k << " i " << i << " j " << j;
+  }
+}
+
 TEST(IssShaft, SegmentTriangleTestExcludesEndpoints) {
   Vec3d a(-1, -1, 0), b(1, -1, 0), c(0, 1, 0);
   EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, 0, -1), Vec3d(0, 0, 1), a, b, c));

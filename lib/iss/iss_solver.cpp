@@ -298,7 +298,7 @@ class Traversal {
         int n = int(std::min<uint32_t>(16, L.end - b0));
         Vec3f to[16];
         bool occ[16];
-        for (int k = 0; k < n; ++k) to[k] = sample_position(*light_, int(lo[b0 + uint32_t(k)]), i);
+        for (int k = 0; k < n; ++k) to[k] = leaf_sample_position(*light_, int(lo[b0 + uint32_t(k)]), i);
         embree_->occluded_fan(rp, to, n, occ);
         for (int k = 0; k < n; ++k) {
           // Bits start blocked (make_empty_result): only visible ones are written.
