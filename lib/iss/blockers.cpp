@@ -152,6 +152,7 @@ Surface Workspace::take_surface() {
 
 void Workspace::recycle(Surface&& s) {
   if (spare.size() >= kMaxSpare) return;
+  if (s.raw.capacity() == 0 && s.edges.capacity() == 0) return;  // a moved-from husk
   if (s.raw.capacity() > kMaxSpareEdges || s.edges.capacity() > 2 * kMaxSpareEdges) return;  // let it go
   s.raw.clear();
   s.edges.clear();
