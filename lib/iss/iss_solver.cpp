@@ -833,9 +833,9 @@ SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
   tr.set_embree(&es);
   for (size_t l = 0; l < scene.lights.size(); ++l) tr.run_light(l);
   auto t1 = Clock::now();
+  tr.finish_stats(result.stats);  // before the fractions: the breakdown covers the traversal
   fractions_from_bits(scene, result);
   result.seconds = std::chrono::duration<double>(t1 - t0).count();
-  tr.finish_stats(result.stats);
   result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
   result.stats.set("time_embree_build", embree_build);
   result.stats.set("nonmanifold_edges_paired", double(paired));
