@@ -418,6 +418,28 @@ TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
   EXPECT_NE(iss::validate(broken, nullptr), "");
 }
 
+TEST(IssBlockers, CanBlockShaftUsesTheClampedBoxAndFaceToFaceSegments) {
+  // Receiver box 1 x 1 x 0.5 at z in [1, 1.5] (outer face z = 1, the lower clip
+  // plane), light face at z = 4. Hand-worked: the winding test clamps a boundary lying
+  // below z = 1 onto that plane, so a surface whose boundary box [-2, 2]^2 x [0, 0.5]
+  // covers the receiver face from below may block (its surface can reach up through the
+  // shaft); the unclamped box meets no box-to-box segment. A boundary below the plane
+  // but beside the face ([5, 6] in x) cannot wind around the test segment.
+  AABB r(Vec3f(0, 0, 1), Vec3f(1, 1, 1.5f)), l(Vec3f(0.25f, 0.25f, 4), Vec3f(0.75f, 0.75f, 4));
+  iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 6.0);
+  ASSERT_EQ(g.main_axis(), 2);
+  iss::AABBd below{Vec3d(-2, -2, 0), Vec3d(2, 2, 0.5)}, beside{Vec3d(5, -2, 0), Vec3d(6, 2, 0.5)};
+  EXPECT_TRUE(iss::can_block_shaft(below, g));
+  EXPECT_FALSE(iss::can_block_shaft(beside, g));
+  iss::AABBd c = iss::clamped_box(below, g);
+  EXPECT_EQ(c.lo.z, 1.0);
+  EXPECT_EQ(c.hi.z, 1.0);
+  // A box across the whole slab is unchanged by the clamp and may block.
+  iss::AABBd across{Vec3d(-2, -2, 2), Vec3d(2, 2, 3)};
+  EXPECT_TRUE(iss::can_block_shaft(across, g));
+  EXPECT_EQ(iss::clamped_box(across, g).lo.z, 2.0);
+}
+
 // ---- hand-worked scenes -------------------------------------------------------------------
 
 TEST(Iss, TriangleBetweenPointAndLightQuad) {

@@ -785,14 +785,41 @@ bool all_edges_outside(const Surface& s) {
   return true;
 }
 
+AABBd clamp_box(const AABBd& box, int axis, double lo, double hi) {
+  AABBd c = box;
+  if (c.empty() || axis < 0) return c;
+  c.lo[axis] = std::min(hi, std::max(lo, box.lo[axis]));
+  c.hi[axis] = std::min(hi, std::max(lo, box.hi[axis]));
+  return c;
+}
+
+AABBd clamped_box(const AABBd& box, const ShaftGeometry& g) {
+  return clamp_box(box, g.main_axis(), g.clip_lo(), g.clip_hi());
+}
+
 bool can_block_shaft(const AABBd& box, const ShaftGeometry& g) {
-  // The surface must meet every box-to-box segment, so its box must overlap three such
-  // segments (grown by the plane tolerance of shaft.h).
+  // The winding number is computed for the boundary clamped to the slab between the
+  // clip planes (section 4.5), which lies in the clamped box. For every segment from
+  // the receiver box's outer face to the light box's outer face, the winding of the
+  // clamped boundary about it equals the (constant) intersection number of blockers.h,
+  // so a nonzero winding needs the clamped box to meet every such segment; three are
+  // tested: the test segment and the segments between the two faces' low corners and
+  // between their high corners, each grown by the plane tolerance of shaft.h.
+  // Neither the unclamped box nor segments from other corners of the node boxes will
+  // do: a boundary entirely below the receiver's clip plane, of a surface reaching up
+  // through the shaft, is clamped onto that plane around the test segment's end, and
+  // a segment from the top of the receiver box passes above it (corpus/iss/other,
+  // on-surface-110: a false-visible relation, since the surface was then removed).
+  AABBd c = clamped_box(box, g);
   Vec3d q1, q2;
   g.test_segment(q1, q2);
+  int ax = g.main_axis();
+  Vec3d r_lo = g.receiver().lo, r_hi = g.receiver().hi, l_lo = g.light().lo, l_hi = g.light().hi;
+  r_lo[ax] = r_hi[ax] = q1[ax];  // the outer faces, on the clip planes
+  l_lo[ax] = l_hi[ax] = q2[ax];
   double grow = 0x1p-40 * g.scale();
-  return segment_may_hit_box(q1, q2, box, grow) && segment_may_hit_box(g.receiver().lo, g.light().lo, box, grow) &&
-         segment_may_hit_box(g.receiver().hi, g.light().hi, box, grow);
+  return segment_may_hit_box(q1, q2, c, grow) && segment_may_hit_box(r_lo, l_lo, c, grow) &&
+         segment_may_hit_box(r_hi, l_hi, c, grow);
 }
 
 bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
@@ -819,7 +846,9 @@ bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
 
 bool blocks_ray(const BlockerContext& ctx, const Surface& s, int ax, const Vec3d& r, const Vec3d& l) {
   double lo = std::min(r[ax], l[ax]), hi = std::max(r[ax], l[ax]);
-  if (!segment_may_hit_box(r, l, s.box, 0x1p-40 * ctx.scale)) return false;
+  // The patch boundaries are clamped to the ray's extent on the main axis below, so
+  // the early exit tests the box clamped the same way (see can_block_shaft).
+  if (!segment_may_hit_box(r, l, clamp_box(s.box, ax, lo, hi), 0x1p-40 * ctx.scale)) return false;
   TestPlanes tp = make_test_planes(r, l);
   for (const Patch& p : s.patches) {
     if (p.facing == Facing::Inconsistent && p.tri >= 0) {

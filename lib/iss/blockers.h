@@ -154,8 +154,14 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
 void compute_bounds(Surface& s, const ShaftGeometry& g);  // box and vertex centre
 bool all_edges_outside(const Surface& s);
 
+// `box` with its main-axis interval clamped into [lo, hi] (section 4.5 clamping moves
+// every boundary vertex into it; a box entirely beyond a clip plane becomes flat on it).
+AABBd clamp_box(const AABBd& box, int axis, double lo, double hi);
+// The same for the shaft's clip planes.
+AABBd clamped_box(const AABBd& box, const ShaftGeometry& g);
 // CAN-BLOCK-SHAFT (line 1 of Figure 4.18): false when a surface with this box cannot
-// meet every segment between the node boxes (it misses one of three such segments).
+// block the shaft: its box clamped to the clip planes misses one of three box-to-box
+// segments.
 bool can_block_shaft(const AABBd& box, const ShaftGeometry& g);
 // BLOCKS-SHAFT, Figure 4.18.
 bool blocks_shaft(const Surface& s, const ShaftGeometry& g);

@@ -417,13 +417,15 @@ class Traversal {
     std::vector<Surface>& temp = temp_;  // not re-entrant: no traversal in between
     temp.clear();
     for (Surface& ps : parent.surfaces) {
-      // Early exit (section 4.13): a surface whose box misses the sub-shaft has every
-      // edge outside it, cannot block it (its boundary cannot wind around the test line:
-      // a plane through that line separates the line from the clamped boundary) and has
-      // no loose edge to combine through, so SHAFT-TRAVERSE would remove it as redundant
-      // (section 4.7.8) right after the refinement. It is dropped before the copy; no
-      // removed-surface box is needed either, since no segment inside the shaft meets it.
-      if (!sub.g.may_intersect_box(ps.box)) {
+      // Early exit (section 4.13): a surface whose box, clamped to the sub-shaft's clip
+      // planes, misses the sub-shaft has every edge outside it, cannot block it (the
+      // clamped boundary lies in that box, and a plane through the test line separates
+      // them) nor any later sub-shaft (their clamped boxes miss them too: the receiver
+      // or light box of the sub-shaft lies between), and has no loose edge to combine
+      // through, so SHAFT-TRAVERSE would remove it as redundant (section 4.7.8) right
+      // after the refinement. It is dropped before the copy; no removed-surface box is
+      // needed either, since no segment inside the shaft meets it.
+      if (!sub.g.may_intersect_box(clamped_box(ps.box, sub.g))) {
         ++n_dropped_;
         continue;
       }
