@@ -335,6 +335,14 @@ TEST(IssShaft, SegmentTriangleTestExcludesEndpoints) {
   EXPECT_FALSE(iss::segment_hits_triangle_d(Vec3d(5, 0, -1), Vec3d(5, 0, 1), a, b, c));
   // Through an edge: touching counts as intersecting (DESIGN 3).
   EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, -1, -1), Vec3d(0, -1, 1), a, b, c));
+  // A sliver far smaller than its distance to the segment (fuzz_iss, corpus/iss/sliver):
+  // the triangle (0,0,0), (2^-149,0,0), (0,0,1) lies in y = 0 with z in [0, 1]; the
+  // segment (-1,-1,1) -> (1,1,2) crosses y = 0 at (0,0,1.5), half a unit above it:
+  // a miss. Lowered to cross y = 0 at (0,0,0.5), inside the sliver's x = 0 edge: a
+  // touch, which counts.
+  Vec3d sa(0, 0, 0), sb(0x1p-149, 0, 0), sc(0, 0, 1);
+  EXPECT_FALSE(iss::segment_hits_triangle_d(Vec3d(-1, -1, 1), Vec3d(1, 1, 2), sa, sb, sc));
+  EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(-1, -1, 0), Vec3d(1, 1, 1), sa, sb, sc));
 }
 
 // ---- radial pairing of non-manifold edges (radial_pairing.h) --------------------------------
