@@ -253,6 +253,13 @@ TEST(Raycast, VerifiedScenesRejectRobustModesCoplanarFalseHit) {
       EXPECT_TRUE(es.occluded(centroid - n, centroid + n)) << robust << verify;
     }
   EXPECT_EQ(verified.rejected_hits(), 1u);
+  // The packet path is verified as well: a fan whose lane 3 is that segment.
+  Vec3f fan[5] = {centroid + n, centroid + n, centroid + n, to, centroid + n};
+  bool out[5];
+  verified.occluded_fan(from, fan, 5, out);
+  EXPECT_FALSE(out[3]);
+  EXPECT_EQ(verified.rejected_hits(), 2u);
+  for (int k : {0, 1, 2, 4}) EXPECT_EQ(out[k], verified.occluded(from, fan[k])) << k;
 }
 
 TEST(Raycast, DoubleTestRejectsPointsBeyondASliver) {
@@ -327,6 +334,50 @@ TEST(Raycast, RangedQueriesTellEndpointHitsFromInteriorHits) {
   EXPECT_FALSE(ee.occluded(b, a, 0x1p-18f, 1.0f));
   EXPECT_TRUE(raycast::fallback_occluded(end, b, a, 0.0, 0.5));
   EXPECT_FALSE(raycast::fallback_occluded(end, b, a, 0x1p-18, 0.5));
+}
+
+TEST(Raycast, PacketFanAgreesWithSingleRays) {
+  // occluded_fan traces one 16-wide packet; every lane must give occluded()'s answer.
+  // Random soups in general position (ties have probability zero), fans of 1..20 rays
+  // (20: two packets), near and far from the origin, and a fan whose origin is beyond
+  // Embree's domain (every lane through the fallback), checked against the hand-worked
+  // answers of TriangleBetweenPointAndLightQuad.
+  for (float off : {0.0f, 4096.0f}) {
+    FamilyParams p;
+    p.seed = 5;
+    p.receivers = 64;
+    p.samples = 20;
+    auto scene = generate_family("random-soup", p);
+    ASSERT_TRUE(scene.ok());
+    Scene s = *scene;
+    for (auto& v : s.mesh.vertices) v.x += off;
+    for (auto& r : s.receivers) r.p.x += off;
+    raycast::EmbreeScene es(s.mesh, true);
+    const Light& l = s.lights[0];
+    size_t blocked = 0, lanes = 0;
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      int n = 1 + int(i % 20);
+      Vec3f to[20];
+      bool out[20];
+      for (int k = 0; k < n; ++k) to[k] = sample_position(l, k, i) + Vec3f(off, 0, 0);
+      es.occluded_fan(s.receivers[i].p, to, n, out);
+      for (int k = 0; k < n; ++k) {
+        EXPECT_EQ(out[k], es.occluded(s.receivers[i].p, to[k])) << "receiver " << i << " lane " << k;
+        blocked += out[k];
+        ++lanes;
+      }
+    }
+    EXPECT_GT(blocked, 0u);
+    EXPECT_LT(blocked, lanes);
+  }
+  Scene far = scaled_triangle_scene(std::ldexp(1.0f, 50));
+  raycast::EmbreeScene es(far.mesh, true);
+  const Vec3f* to = far.lights[0].explicit_samples.data();
+  bool out[16];
+  es.occluded_fan(far.receivers[0].p, to, 16, out);
+  for (int b = 0; b < 4; ++b)
+    for (int a = 0; a < 4; ++a) EXPECT_EQ(out[b * 4 + a], a >= 2 && b >= 2) << a << "," << b;
+  EXPECT_EQ(es.fallback_rays(), 16u);
 }
 
 TEST(Solver, OptionsAreChecked) {

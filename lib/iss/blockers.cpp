@@ -45,11 +45,6 @@ Vec3d clip_point(Vec3d p0, Vec3d p1, int ax, double c) {
   return x;
 }
 
-struct PolyVertex {
-  Vec3d p;
-  int32_t label;  // label of the edge that starts at this vertex
-};
-
 // One Sutherland-Hodgman pass keeping side * (x[ax] - c) >= 0.
 void clip_poly(const std::vector<PolyVertex>& in, std::vector<PolyVertex>& out, int ax, double c, double side) {
   out.clear();
@@ -148,14 +143,36 @@ void Workspace::reset_labels(size_t n) {
   ++stamp;
 }
 
+Surface Workspace::take_surface() {
+  if (spare.empty()) return Surface{};
+  Surface s = std::move(spare.back());
+  spare.pop_back();
+  return s;
+}
+
+void Workspace::recycle(Surface&& s) {
+  if (spare.size() >= kMaxSpare) return;
+  if (s.raw.capacity() == 0 && s.edges.capacity() == 0) return;  // a moved-from husk
+  if (s.raw.capacity() > kMaxSpareEdges || s.edges.capacity() > 2 * kMaxSpareEdges) return;  // let it go
+  s.raw.clear();
+  s.edges.clear();
+  s.patches.clear();
+  s.loose.clear();
+  s.box = AABBd{};
+  s.vsum = Vec3d(0, 0, 0);
+  s.vcount = 0;
+  s.refined = true;
+  s.unchanged = false;
+  spare.push_back(std::move(s));
+}
+
 Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws) {
-  Surface s;
+  Surface s = ws.take_surface();
   const mesh::PreparedMesh& m = *ctx.mesh;
   ws.reset_labels(m.edge_count());
-  std::vector<PolyVertex> poly, tmp;
-  poly.reserve(8);
-  tmp.reserve(8);
+  std::vector<PolyVertex>& poly = ws.poly;
+  std::vector<PolyVertex>& tmp = ws.poly_tmp;
   int ax = g.main_axis();
   for (uint32_t t : tris) {
     // Lines 6-8: a valid blocker intersects the shaft and neither node (cheapest test
@@ -229,15 +246,18 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
   return s;
 }
 
-void classify_edges(Surface& s, const ShaftGeometry& g) {
+size_t classify_edges(Surface& s, const ShaftGeometry& g) {
+  size_t left = 0;
   for (RawEdge& re : s.raw) {
     if (!re.inside) continue;  // line 3: outside the parent, outside the sub-shaft
     re.inside = g.may_intersect_segment(re.v[0], re.v[1]) ? 1 : 0;
     re.fresh = re.inside ? 0 : 1;
+    left += re.fresh;
   }
+  return left;
 }
 
-void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
+size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
   auto classify = [](const AABBd& b, const Plane4d& pl) {
     // CLASSIFY-AABB-PLANE: 0 FRONT, 1 BACK, 2 INTERSECTS (conservative with pl.tol).
     double mn = 1e300, mx = -1e300;
@@ -251,6 +271,7 @@ void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeom
     if (mx < -pl.tol) return 1;
     return 2;
   };
+  size_t changed = 0;
   for (Patch& p : s.patches) {
     if (p.facing != Facing::Inconsistent || p.tri < 0) continue;
     uint32_t t = uint32_t(p.tri);
@@ -264,7 +285,9 @@ void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeom
     else if (lr == 0) p.facing = Facing::TowardsLight;
     else if (lr == 1) p.facing = Facing::TowardsReceiver;
     else p.facing = Facing::Inconsistent;
+    changed += p.facing != Facing::Inconsistent;
   }
+  return changed;
 }
 
 void merge_patches(Surface& s, Workspace& ws) {
@@ -305,7 +328,8 @@ void merge_patches(Surface& s, Workspace& ws) {
   }
   for (size_t gi = 0; gi < size_t(ng); ++gi) cnt[gi + 1] += cnt[gi];
   ws.edge_tmp.resize(cnt[size_t(ng)]);
-  std::vector<uint32_t> fill(cnt.begin(), cnt.end() - 1);
+  std::vector<uint32_t>& fill = ws.fill;
+  fill.assign(cnt.begin(), cnt.end() - 1);
   for (size_t i = 0; i < np; ++i) {
     int32_t gi = group(int32_t(i));
     const Patch& p = s.patches[i];
@@ -561,8 +585,11 @@ void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws) {
     if (e.flipped && ws.remap[e.raw] >= 0) e.raw = uint32_t(ws.remap[e.raw]);
   // Distribute patches, edges and raw edges to the components.
   size_t base = out.size();
-  out.resize(base + size_t(nc));
-  std::vector<int32_t> local_patch(np), local_raw(s.raw.size(), -1);
+  for (int32_t c = 0; c < nc; ++c) out.push_back(ws.take_surface());
+  std::vector<int32_t>& local_patch = ws.local_patch;
+  std::vector<int32_t>& local_raw = ws.local_raw;
+  local_patch.assign(np, -1);
+  local_raw.assign(s.raw.size(), -1);
   for (size_t i = 0; i < np; ++i) {
     Surface& c = out[base + size_t(comp(int32_t(i)))];
     local_patch[i] = int32_t(c.patches.size());
@@ -590,6 +617,7 @@ void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws) {
       c.edges.push_back(e);
     }
   }
+  ws.recycle(std::move(s));
 }
 
 void compute_loose_edges(const BlockerContext& ctx, Surface& s) {
@@ -604,7 +632,8 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
                       const ShaftGeometry& g, Workspace& ws) {
   size_t ns = in.size();
   ws.reset_labels(ctx.mesh->edge_count());
-  std::vector<int32_t> suf(ns);
+  std::vector<int32_t>& suf = ws.sets;
+  suf.resize(ns);
   std::iota(suf.begin(), suf.end(), 0);
   bool any = false;
   for (size_t i = 0; i < ns; ++i) {
@@ -622,19 +651,27 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
     for (Surface& s : in) out.push_back(std::move(s));
     return;
   }
-  // Members of each set, in order.
-  std::vector<std::vector<int32_t>> sets(ns);
-  for (size_t i = 0; i < ns; ++i) sets[size_t(uf_find(suf, int32_t(i)))].push_back(int32_t(i));
+  // Members of each set in index order, grouped by a counting sort on the set's root
+  // (the smallest member, uf_union keeps the smaller index as the root).
+  std::vector<uint32_t>& start = ws.group_start;
+  std::vector<int32_t>& members = ws.members;
+  start.assign(ns + 1, 0);
+  members.resize(ns);
+  for (size_t i = 0; i < ns; ++i) ++start[size_t(uf_find(suf, int32_t(i))) + 1];
+  for (size_t r = 0; r < ns; ++r) start[r + 1] += start[r];
+  ws.fill.assign(start.begin(), start.end() - 1);
+  for (size_t i = 0; i < ns; ++i) members[ws.fill[size_t(uf_find(suf, int32_t(i)))]++] = int32_t(i);
   for (size_t r = 0; r < ns; ++r) {
-    if (sets[r].empty()) continue;
-    if (sets[r].size() == 1) {
-      out.push_back(std::move(in[size_t(sets[r][0])]));
+    uint32_t m0 = start[r], m1 = start[r + 1];
+    if (m0 == m1) continue;
+    if (m1 - m0 == 1) {
+      out.push_back(std::move(in[size_t(members[m0])]));
       continue;
     }
     // CONSTRUCT-COMBINED-SURFACE: concatenate, then unify matching loose edges.
-    Surface c;
-    for (int32_t si : sets[r]) {
-      Surface& s = in[size_t(si)];
+    Surface c = ws.take_surface();
+    for (uint32_t mi = m0; mi < m1; ++mi) {
+      Surface& s = in[size_t(members[mi])];
       uint32_t rb = uint32_t(c.raw.size()), eb = uint32_t(c.edges.size());
       int32_t pb = int32_t(c.patches.size());
       for (RawEdge re : s.raw) {
@@ -650,10 +687,13 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
         p.first += eb;
         c.patches.push_back(p);
       }
+      ws.recycle(std::move(s));
     }
     ws.reset_labels(ctx.mesh->edge_count());
-    std::vector<std::pair<int32_t, Edge>> extra;  // edges appended to a patch
-    std::vector<std::pair<uint32_t, Edge>> replace;  // raw B -> edge to use instead
+    auto& extra = ws.extra;      // edges appended to a patch
+    auto& replace = ws.replace;  // raw B -> edge to use instead
+    extra.clear();
+    replace.clear();
     size_t nraw0 = c.raw.size();
     for (size_t i = 0; i < nraw0; ++i) {
       RawEdge& b = c.raw[i];
@@ -702,7 +742,8 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
         if (ws.remap[e.raw] >= 0) e = replace[size_t(ws.remap[e.raw])].second;
     }
     if (!extra.empty()) {
-      std::vector<Edge> ne;
+      std::vector<Edge>& ne = ws.edge_tmp2;
+      ne.clear();
       ne.reserve(c.edges.size() + extra.size());
       for (size_t pi = 0; pi < c.patches.size(); ++pi) {
         Patch& p = c.patches[pi];
@@ -720,6 +761,7 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
     simplify_patches(c, g, ws);    // same with simplifying
     compute_loose_edges(ctx, c);
     if (!c.patches.empty()) out.push_back(std::move(c));
+    else ws.recycle(std::move(c));
   }
 }
 
@@ -743,14 +785,41 @@ bool all_edges_outside(const Surface& s) {
   return true;
 }
 
+AABBd clamp_box(const AABBd& box, int axis, double lo, double hi) {
+  AABBd c = box;
+  if (c.empty() || axis < 0) return c;
+  c.lo[axis] = std::min(hi, std::max(lo, box.lo[axis]));
+  c.hi[axis] = std::min(hi, std::max(lo, box.hi[axis]));
+  return c;
+}
+
+AABBd clamped_box(const AABBd& box, const ShaftGeometry& g) {
+  return clamp_box(box, g.main_axis(), g.clip_lo(), g.clip_hi());
+}
+
 bool can_block_shaft(const AABBd& box, const ShaftGeometry& g) {
-  // The surface must meet every box-to-box segment, so its box must overlap three such
-  // segments (grown by the plane tolerance of shaft.h).
+  // The winding number is computed for the boundary clamped to the slab between the
+  // clip planes (section 4.5), which lies in the clamped box. For every segment from
+  // the receiver box's outer face to the light box's outer face, the winding of the
+  // clamped boundary about it equals the (constant) intersection number of blockers.h,
+  // so a nonzero winding needs the clamped box to meet every such segment; three are
+  // tested: the test segment and the segments between the two faces' low corners and
+  // between their high corners, each grown by the plane tolerance of shaft.h.
+  // Neither the unclamped box nor segments from other corners of the node boxes will
+  // do: a boundary entirely below the receiver's clip plane, of a surface reaching up
+  // through the shaft, is clamped onto that plane around the test segment's end, and
+  // a segment from the top of the receiver box passes above it (corpus/iss/other,
+  // on-surface-110: a false-visible relation, since the surface was then removed).
+  AABBd c = clamped_box(box, g);
   Vec3d q1, q2;
   g.test_segment(q1, q2);
+  int ax = g.main_axis();
+  Vec3d r_lo = g.receiver().lo, r_hi = g.receiver().hi, l_lo = g.light().lo, l_hi = g.light().hi;
+  r_lo[ax] = r_hi[ax] = q1[ax];  // the outer faces, on the clip planes
+  l_lo[ax] = l_hi[ax] = q2[ax];
   double grow = 0x1p-40 * g.scale();
-  return segment_may_hit_box(q1, q2, box, grow) && segment_may_hit_box(g.receiver().lo, g.light().lo, box, grow) &&
-         segment_may_hit_box(g.receiver().hi, g.light().hi, box, grow);
+  return segment_may_hit_box(q1, q2, c, grow) && segment_may_hit_box(r_lo, l_lo, c, grow) &&
+         segment_may_hit_box(r_hi, l_hi, c, grow);
 }
 
 bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
@@ -777,7 +846,9 @@ bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
 
 bool blocks_ray(const BlockerContext& ctx, const Surface& s, int ax, const Vec3d& r, const Vec3d& l) {
   double lo = std::min(r[ax], l[ax]), hi = std::max(r[ax], l[ax]);
-  if (!segment_may_hit_box(r, l, s.box, 0x1p-40 * ctx.scale)) return false;
+  // The patch boundaries are clamped to the ray's extent on the main axis below, so
+  // the early exit tests the box clamped the same way (see can_block_shaft).
+  if (!segment_may_hit_box(r, l, clamp_box(s.box, ax, lo, hi), 0x1p-40 * ctx.scale)) return false;
   TestPlanes tp = make_test_planes(r, l);
   for (const Patch& p : s.patches) {
     if (p.facing == Facing::Inconsistent && p.tri >= 0) {

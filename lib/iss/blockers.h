@@ -77,6 +77,9 @@ struct Surface {
   Vec3d vsum{0, 0, 0};  // vertex centre data (section 4.7.9): sum and count of the
   double vcount = 0;    // endpoints of edges inside the shaft
   bool refined = true;  // false when postponed in the last construction
+  // Transient, set by the traversal: refinement found nothing to change (no edge left
+  // the shaft, no facing changed), so the loose edges and bounds are still current.
+  bool unchanged = false;
 
   size_t bytes() const {
     return raw.capacity() * sizeof(RawEdge) + edges.capacity() * sizeof(Edge) + patches.capacity() * sizeof(Patch) +
@@ -96,28 +99,52 @@ struct BlockerContext {
   double scale = 1.0;  // S of shaft.h
 };
 
-// Reusable scratch storage (section 4.13: no allocation in the inner loops).
+// A vertex of a triangle being clipped (CONSTRUCT-CLIPPED-PATCH) and the label of the
+// edge that starts at it.
+struct PolyVertex {
+  Vec3d p;
+  int32_t label;
+};
+
+// Reusable scratch storage (section 4.13: no allocation in the inner loops) and the
+// pool of surfaces (section 4.13: "a custom pool-based memory manager for data
+// structures that are allocated and deallocated often"): a surface that is no longer
+// needed is cleared and kept with its arrays' capacity, and the next surface a
+// construction needs is taken from the pool, so that copying a parent's surface into a
+// sub-shaft usually reuses memory instead of allocating four arrays.
 struct Workspace {
   std::vector<int32_t> label_slot;
   std::vector<uint32_t> label_stamp;
   uint32_t stamp = 0;
   std::vector<int32_t> uf, remap, remap2;
   std::vector<RawEdge> raw_tmp;
-  std::vector<Edge> edge_tmp;
+  std::vector<Edge> edge_tmp, edge_tmp2;
   std::vector<Patch> patch_tmp, patch_tmp2;
   std::vector<Edge> loop;
-  std::vector<uint32_t> order;
-  std::vector<int32_t> next;
+  std::vector<uint32_t> order, fill, group_start;
+  std::vector<int32_t> next, local_patch, local_raw, sets, members;
   std::vector<uint8_t> used, fail;
+  std::vector<PolyVertex> poly, poly_tmp;
+  std::vector<std::pair<int32_t, Edge>> extra;     // combine: edges appended to a patch
+  std::vector<std::pair<uint32_t, Edge>> replace;  // combine: raw edge -> edge instead
+  std::vector<Surface> spare;                      // the surface pool
   void reset_labels(size_t n);
+  // An empty surface, from the pool when it holds one.
+  Surface take_surface();
+  // Returns a surface to the pool (cleared; arrays above kMaxSpareEdges are freed, and
+  // the pool keeps at most kMaxSpare surfaces).
+  void recycle(Surface&& s);
+  static constexpr size_t kMaxSpare = 1024, kMaxSpareEdges = 4096;
 };
 
 // Section 4.7.1 / Figure 4.20: one clipped patch per triangle of `tris` that may
 // intersect the shaft and is in neither node's inside list; neighbours by edge label.
 Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws);
-void classify_edges(Surface& s, const ShaftGeometry& g);                       // Figure 4.21
-void update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);  // Figure 4.22
+// CLASSIFY-EDGES (Figure 4.21); returns the number of raw edges that left the shaft.
+size_t classify_edges(Surface& s, const ShaftGeometry& g);
+// UPDATE-PATCH-FACINGS (Figure 4.22); returns the number of patches that became consistent.
+size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);
 void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23
 void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws);     // section 4.7.5
 void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws);    // Figure 4.25
@@ -127,8 +154,14 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
 void compute_bounds(Surface& s, const ShaftGeometry& g);  // box and vertex centre
 bool all_edges_outside(const Surface& s);
 
+// `box` with its main-axis interval clamped into [lo, hi] (section 4.5 clamping moves
+// every boundary vertex into it; a box entirely beyond a clip plane becomes flat on it).
+AABBd clamp_box(const AABBd& box, int axis, double lo, double hi);
+// The same for the shaft's clip planes.
+AABBd clamped_box(const AABBd& box, const ShaftGeometry& g);
 // CAN-BLOCK-SHAFT (line 1 of Figure 4.18): false when a surface with this box cannot
-// meet every segment between the node boxes (it misses one of three such segments).
+// block the shaft: its box clamped to the clip planes misses one of three box-to-box
+// segments.
 bool can_block_shaft(const AABBd& box, const ShaftGeometry& g);
 // BLOCKS-SHAFT, Figure 4.18.
 bool blocks_shaft(const Surface& s, const ShaftGeometry& g);

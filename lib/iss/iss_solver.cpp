@@ -11,8 +11,10 @@
 
 #include "lib/geom/check.h"
 #include "lib/iss/blockers.h"
+#include "lib/iss/radial_pairing.h"
 #include "lib/iss/shaft.h"
 #include "lib/iss/tree.h"
+#include "lib/iss/triangle_bvh.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_solver.h"
 
@@ -28,16 +30,17 @@ bool g_validate = true;
 
 using Clock = std::chrono::steady_clock;
 
-// Time breakdown of Table 5.4 (plus the steps the table folds elsewhere).
+// Time breakdown of Table 5.4, one timer per row of the table (plus the blocker probe,
+// which the thesis does not have); "miscellaneous" is the rest of the traversal.
 enum TimerId {
   kTree, kShaftGeometry, kTriangleSurface, kCopy, kClassify, kFacings, kMerge, kSimplify, kSplit,
-  kLooseCombine, kBlocking, kRays, kProbe, kTimerCount
+  kCombine, kLoose, kBounds, kBlocking, kRays, kProbe, kTimerCount
 };
 const char* const kTimerNames[kTimerCount] = {
     "time_tree_construction", "time_shaft_geometry", "time_triangle_surface", "time_copying_surfaces",
     "time_classifying_edges", "time_updating_facings", "time_merging_patches", "time_simplifying_patches",
-    "time_splitting_surfaces", "time_loose_and_combine", "time_blocking_tests", "time_ray_casting",
-    "time_probe"};
+    "time_splitting_surfaces", "time_combining_surfaces", "time_computing_loose_edges",
+    "time_computing_surface_aabbs", "time_blocking_tests", "time_ray_casting", "time_probe"};
 
 // Timer ticks: the time-stamp counter where available. The breakdown timers run around
 // every refinement step of every surface, and steady_clock (clock_gettime, a system call
@@ -73,9 +76,15 @@ struct Shaft {
 
 enum class SplitMode { Receiver, Light };
 
+// Leaf sizes (section 4.3; the thesis sets them per scene, Table 5.1, SODA 16/16).
+// Defaults measured with `visgate bench iss` and CPU-time A/B runs (README, ISS):
+// 16 receivers, because the shafts of the rooms family are decided by walls only once
+// the receiver nodes are a few grid cells wide; 256 samples, i.e. a light of up to 256
+// samples is one light-tree leaf and never split: light splits decided few relations on
+// rooms and none on columns, and their leaf rays go 16 per Embree packet anyway.
 struct Params {
-  int leaf_receivers = 64;
-  int leaf_samples = 16;
+  int leaf_receivers = 16;
+  int leaf_samples = 256;
   bool custom_rays = false;
   bool postpone = true;
 };
@@ -97,15 +106,22 @@ class Traversal {
       for (int k = 0; k < 3; ++k) tb.extend(m.corner(t2, k));
       tri_boxes_[t2] = tb;
     }
+    bvh_ = std::make_unique<TriangleBvh>(tri_boxes_);
     std::vector<AABB> boxes;
     std::vector<Vec3f> centers;
     for (const Receiver& r : scene.receivers) {
       boxes.emplace_back(r.p, r.p);
       centers.push_back(r.p);
     }
-    rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_);
+    std::vector<uint32_t> cand;
+    bvh_->query_box(PointTree::bounds_of(boxes), cand);
+    rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_,
+                                         &cand);
     // Probe candidates (see probe_blocked): per main axis, the triangles ordered by
-    // their smaller box extent across that axis, largest first.
+    // their smaller box extent across that axis, largest first (ties by index). The
+    // probe never takes more than max(64, triangles / 16) of them, so only that many
+    // plus one are kept: a full prefix then says "more than the cap".
+    size_t keep = std::min(m.triangles.size(), std::max<size_t>(64, m.triangles.size() / 16) + 1);
     for (int a = 0; a < 3; ++a) {
       std::vector<uint32_t>& w = wide_[a];
       w.resize(m.triangles.size());
@@ -115,10 +131,15 @@ class Traversal {
         Vec3f e = tri_boxes_[t2].extent();
         cross_[t2] = std::min(e[(a + 1) % 3], e[(a + 2) % 3]);
       }
-      std::stable_sort(w.begin(), w.end(), [&](uint32_t x, uint32_t y) { return cross_[x] > cross_[y]; });
+      auto wider = [&](uint32_t x, uint32_t y) { return cross_[x] != cross_[y] ? cross_[x] > cross_[y] : x < y; };
+      std::nth_element(w.begin(), w.begin() + long(keep) - (keep > 0), w.end(), wider);
+      w.resize(keep);
+      std::sort(w.begin(), w.end(), wider);
       wide_extent_[a].resize(w.size());
       for (size_t k = 0; k < w.size(); ++k) wide_extent_[a][k] = cross_[w[k]];
     }
+    cross_ = {};
+    wide_truncated_ = keep < m.triangles.size();
   }
 
   void run_light(size_t li) {
@@ -130,12 +151,30 @@ class Traversal {
       std::vector<AABB> boxes(light_->jitter_boxes);
       std::vector<Vec3f> centers;
       for (const AABB& b : boxes) centers.push_back(b.center());
-      ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p_.leaf_samples, mesh_, tri_boxes_);
+      std::vector<uint32_t> cand;
+      bvh_->query_box(PointTree::bounds_of(boxes), cand);
+      ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p_.leaf_samples, mesh_, tri_boxes_,
+                                           &cand);
     }
-    // COMPUTE-SHADOWS (Figure 4.32).
-    std::vector<uint32_t> tris(mesh_.triangles.size());
-    for (uint32_t t = 0; t < tris.size(); ++t) tris[t] = t;
-    pre_traverse(rtree_->root(), ltree_->root(), tris);
+    // COMPUTE-SHADOWS (Figure 4.32), with the triangle array restricted to the
+    // triangles whose box may meet the root shaft (triangle_bvh.h) instead of all. The
+    // root's blocker probe runs first: when it decides the light no array is needed.
+    int r0 = rtree_->root(), l0 = ltree_->root();
+    if (!rn(r0).box.overlaps(ln(l0).box)) {
+      MainAxis ax = choose_main_axis(rn(r0).box, ln(l0).box);
+      if (ax.axis >= 0 && probe_blocked(r0, l0, ax, mesh_.triangles.size())) {
+        record_blocked(r0, l0);
+        light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
+        ltree_.reset();
+        return;
+      }
+    }
+    std::vector<uint32_t> tris;
+    {
+      ScopedTimer t(times_[kTriangleSurface]);
+      bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);
+    }
+    pre_traverse(r0, l0, tris, false);
     light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
     ltree_.reset();
   }
@@ -157,18 +196,30 @@ class Traversal {
     st.set("surfaces_removed", n_removed_);
     st.set("surfaces_postponed", n_postponed_);
     st.set("surfaces_combined", n_combined_);
+    st.set("surfaces_unchanged", n_unchanged_);
+    st.set("surfaces_dropped_outside", n_dropped_);
     st.set("embree_fallback_rays", n_fallback_);
     st.set("initial_shafts_blocked_by_probe", n_probe_blocked_);
     st.set("leaf_rays_with_surfaces", n_leaf_surfaces_);
     st.set("leaf_rays_with_removed_only", n_leaf_ghosts_);
     st.set("leaf_rays_empty_with_node_triangles", n_leaf_node_tris_);
-    double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_);
+    double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes());
     st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
     st.set("receiver_tree_nodes", double(rtree_->node_count()));
     double secs = std::chrono::duration<double>(Clock::now() - clock0_).count();
     double tick_count = double(ticks() - tick0_);
     double per_tick = tick_count > 0 ? secs / tick_count : 0.0;
-    for (int i = 0; i < kTimerCount; ++i) st.set(kTimerNames[i], times_[i] * per_tick);
+    double timed = 0;
+    for (int i = 0; i < kTimerCount; ++i) {
+      st.set(kTimerNames[i], times_[i] * per_tick);
+      timed += times_[i] * per_tick;
+    }
+    // Table 5.4's top rows: shaft operations against ray casting, over the traversal.
+    st.set("time_miscellaneous", std::max(0.0, secs - timed));
+    st.set("time_traversal", secs);
+    double rays = times_[kRays] * per_tick;
+    st.set("percent_time_ray_casting", secs > 0 ? 100.0 * rays / secs : 0.0);
+    st.set("percent_time_shaft_operations", secs > 0 ? 100.0 * (secs - rays) / secs : 0.0);
   }
 
  private:
@@ -194,7 +245,26 @@ class Traversal {
     peak_bytes_ = std::max(peak_bytes_, live_bytes_);
     ++n_shafts_;
   }
-  void release(Shaft& sh) { live_bytes_ -= sh.bytes; }
+  // The shaft is done: its surfaces, and its two arrays, go back to the pools (section
+  // 4.13), so that the next shaft's arrays need no allocation.
+  void release(Shaft& sh) {
+    live_bytes_ -= sh.bytes;
+    for (Surface& s : sh.surfaces) ws_.recycle(std::move(s));
+    sh.surfaces.clear();
+    sh.ghosts.clear();
+    if (surface_lists_.size() < 256) {
+      surface_lists_.push_back(std::move(sh.surfaces));
+      ghost_lists_.push_back(std::move(sh.ghosts));
+    }
+  }
+  // A shaft with pooled (empty) arrays.
+  void init_shaft(Shaft& sh) {
+    if (surface_lists_.empty()) return;
+    sh.surfaces = std::move(surface_lists_.back());
+    sh.ghosts = std::move(ghost_lists_.back());
+    surface_lists_.pop_back();
+    ghost_lists_.pop_back();
+  }
 
   void record_blocked(int r, int l) { n_blocked_shaft_ += double(rn(r).size()) * double(ln(l).size()); }
 
@@ -219,19 +289,37 @@ class Traversal {
     const TreeNode& L = ln(l);
     const auto& ro = rtree_->order();
     const auto& lo = ltree_->order();
+    size_t blocked = 0;
     for (uint32_t a = R.begin; a < R.end; ++a) {
       uint32_t i = ro[a];
       ReceiverResult& rr = result_.receivers[i];
       const Vec3f& rp = scene_.receivers[i].p;
-      for (uint32_t b = L.begin; b < L.end; ++b) {
-        int j = int(lo[b]);
-        const Vec3f& lp = sample_position(*light_, j, i);
-        bool occ = p_.custom_rays ? custom_occluded(rp, lp, R, L, sh, tris) : embree_->occluded(rp, lp);
-        rr.set_visible(light_offset_ + size_t(j), !occ);
-        n_rays_ += 1;
-        if (occ) n_rays_blocked_ += 1;
+      if (p_.custom_rays) {
+        for (uint32_t b = L.begin; b < L.end; ++b) {
+          int j = int(lo[b]);
+          bool occ = custom_occluded(rp, sample_position(*light_, j, i), R, L, sh, tris);
+          rr.set_visible(light_offset_ + size_t(j), !occ);
+          n_rays_blocked_ += occ;
+        }
+        continue;
+      }
+      // The standard caster: the receiver's segments to the leaf's samples form a
+      // coherent fan, traced 16 at a time as one Embree packet (occluded_fan).
+      for (uint32_t b0 = L.begin; b0 < L.end; b0 += 16) {
+        int n = int(std::min<uint32_t>(16, L.end - b0));
+        Vec3f to[16];
+        bool occ[16];
+        for (int k = 0; k < n; ++k) to[k] = leaf_sample_position(*light_, int(lo[b0 + uint32_t(k)]), i);
+        embree_->occluded_fan(rp, to, n, occ);
+        for (int k = 0; k < n; ++k) {
+          // Bits start blocked (make_empty_result): only visible ones are written.
+          if (!occ[k]) rr.set_visible(light_offset_ + size_t(lo[b0 + uint32_t(k)]), true);
+          blocked += occ[k];
+        }
       }
     }
+    n_rays_ += double(R.size()) * double(L.size());
+    n_rays_blocked_ += double(blocked);
   }
 
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
@@ -262,11 +350,26 @@ class Traversal {
   }
 
   // ---- section 4.7: sub-shaft construction ---------------------------------------------
-  void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out) {
-    { ScopedTimer t(times_[kClassify]); classify_edges(s, g); }
+  // Lines 14-18 of Figure 4.19 for one surface. `settled`: the surface is as the parent
+  // shaft's construction left it (merged, simplified, one component), not a new triangle
+  // surface and not postponed there.
+  void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out, bool settled) {
+    size_t left, became;
+    { ScopedTimer t(times_[kClassify]); left = classify_edges(s, g); }
     check(s, "classify_edges");
-    { ScopedTimer t(times_[kFacings]); update_patch_facings(ctx_, s, g); }
+    { ScopedTimer t(times_[kFacings]); became = update_patch_facings(ctx_, s, g); }
     check(s, "update_patch_facings");
+    // Early exit (section 4.13). Merging needs a patch whose facing just became
+    // consistent (inside edges only ever leave, facings only ever settle), simplifying
+    // an edge that just left the shaft (the fresh marks), splitting a connecting edge
+    // that just left; with none of them the three passes would reproduce the surface.
+    if (settled && left == 0 && became == 0) {
+      s.unchanged = true;
+      ++n_unchanged_;
+      out.push_back(std::move(s));
+      return;
+    }
+    s.unchanged = false;
     { ScopedTimer t(times_[kMerge]); merge_patches(s, ws_); }
     check(s, "merge_patches");
     { ScopedTimer t(times_[kSimplify]); simplify_patches(s, g, ws_); }
@@ -281,12 +384,21 @@ class Traversal {
 
   void finish_surfaces(Shaft& sh, std::vector<Surface>& temp) {
     {
-      ScopedTimer t(times_[kLooseCombine]);
-      for (Surface& s : temp) compute_loose_edges(ctx_, s);
+      ScopedTimer t(times_[kLoose]);
+      for (Surface& s : temp)
+        if (!s.unchanged) compute_loose_edges(ctx_, s);  // unchanged: still current
+    }
+    {
+      ScopedTimer t(times_[kCombine]);
       size_t before = temp.size();
+      sh.surfaces.reserve(before);
       combine_surfaces(ctx_, temp, sh.surfaces, sh.g, ws_);
       if (sh.surfaces.size() < before) n_combined_ += double(before - sh.surfaces.size());
-      for (Surface& s : sh.surfaces) compute_bounds(s, sh.g);
+    }
+    {
+      ScopedTimer t(times_[kBounds]);
+      for (Surface& s : sh.surfaces)
+        if (!s.unchanged) compute_bounds(s, sh.g);
     }
     for (const Surface& s : sh.surfaces) check(s, "combine_surfaces");
   }
@@ -295,31 +407,50 @@ class Traversal {
   // child and moved into the second (section 4.13: no needless copies).
   Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent) {
     Shaft sub;
+    init_shaft(sub);
     sub.r = r;
     sub.l = l;
     MainAxis ax{parent.g.main_axis(), parent.g.dir()};
     sub.g = geometry(r, l, ax);
     for (const AABBd& gb : parent.ghosts)
       if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
-    std::vector<Surface> temp;
-    temp.reserve(parent.surfaces.size() + 4);
+    std::vector<Surface>& temp = temp_;  // not re-entrant: no traversal in between
+    temp.clear();
     for (Surface& ps : parent.surfaces) {
+      // Early exit (section 4.13): a surface whose box, clamped to the sub-shaft's clip
+      // planes, misses the sub-shaft has every edge outside it, cannot block it (the
+      // clamped boundary lies in that box, and a plane through the test line separates
+      // them) nor any later sub-shaft (their clamped boxes miss them too: the receiver
+      // or light box of the sub-shaft lies between), and has no loose edge to combine
+      // through, so SHAFT-TRAVERSE would remove it as redundant (section 4.7.8) right
+      // after the refinement. It is dropped before the copy; no removed-surface box is
+      // needed either, since no segment inside the shaft meets it.
+      if (!sub.g.may_intersect_box(clamped_box(ps.box, sub.g))) {
+        ++n_dropped_;
+        continue;
+      }
       Surface s;
       {
         ScopedTimer t(times_[kCopy]);
-        if (move_parent) s = std::move(ps);
-        else s = ps;
+        if (move_parent) {
+          s = std::move(ps);
+        } else {
+          s = ws_.take_surface();
+          s = ps;  // DUPLICATE-SURFACE into pooled arrays: no allocation when they fit
+        }
       }
       // Section 4.7.9: postpone the refinement when the vertex centre stays inside and
       // the surface cannot block the shaft yet.
       if (p_.postpone && s.vcount > 0 && sub.g.may_contain_point(s.vsum * (1.0 / s.vcount)) &&
           !can_block_shaft(s.box, sub.g)) {
         s.refined = false;
+        s.unchanged = true;  // loose edges and bounds stay as computed for the parent
         ++n_postponed_;
         temp.push_back(std::move(s));
         continue;
       }
-      refine(std::move(s), sub.g, temp);
+      bool settled = s.refined;
+      refine(std::move(s), sub.g, temp, settled);
     }
     Surface nt;
     {
@@ -327,8 +458,10 @@ class Traversal {
       nt = construct_triangle_surface(ctx_, split_node.gone, sub.g, rn(r), ln(l), ws_);
     }
     check(nt, "construct_triangle_surface");
-    if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp);
+    if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp, false);
+    else ws_.recycle(std::move(nt));
     finish_surfaces(sub, temp);
+    temp.clear();
     account(sub);
     return sub;
   }
@@ -351,31 +484,39 @@ class Traversal {
     Vec3f re = R.box.extent(), le = L.box.extent();
     float thr = std::min(std::min(re[b], le[b]), std::min(re[c], le[c]));
     const std::vector<float>& ext = wide_extent_[a];
-    // Number of triangles with cross extent >= thr (ext is descending).
+    // Number of triangles with cross extent >= thr (ext is descending; a full prefix
+    // means more than any cap).
     size_t n = size_t(std::lower_bound(ext.begin(), ext.end(), thr, [](float x, float v) { return x >= v; }) - ext.begin());
     size_t cap = std::max<size_t>(64, n_tris / 16);
-    if (n == 0 || n > cap) return false;
+    if (n == 0 || n > cap || (wide_truncated_ && n == ext.size())) return false;
     probe_tris_.assign(wide_[a].begin(), wide_[a].begin() + long(n));
     ShaftGeometry g = geometry(r, l, ax);
     Surface s = construct_triangle_surface(ctx_, probe_tris_, g, R, L, ws_);
     check(s, "construct_triangle_surface (probe)");
-    if (s.patches.empty()) return false;
+    if (s.patches.empty()) {
+      ws_.recycle(std::move(s));
+      return false;
+    }
     probe_out_.clear();
-    refine(std::move(s), g, probe_out_);
+    refine(std::move(s), g, probe_out_, false);
+    bool blocked = false;
     for (Surface& ps : probe_out_) {
       compute_bounds(ps, g);
       ++n_blocking_tests_;
-      if (blocks_shaft(ps, g)) {
+      if (!blocked && blocks_shaft(ps, g)) {
         ++n_probe_blocked_;
-        return true;
+        blocked = true;
       }
+      ws_.recycle(std::move(ps));
     }
-    return false;
+    probe_out_.clear();
+    return blocked;
   }
 
   // CONSTRUCT-INITIAL-SHAFT (Figure 4.31).
   Shaft construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris) {
     Shaft sh;
+    init_shaft(sh);
     sh.r = r;
     sh.l = l;
     sh.g = geometry(r, l, ax);
@@ -386,7 +527,7 @@ class Traversal {
     }
     check(s, "construct_triangle_surface");
     std::vector<Surface> temp;
-    if (!s.patches.empty()) refine(std::move(s), sh.g, temp);
+    if (!s.patches.empty()) refine(std::move(s), sh.g, temp, false);
     finish_surfaces(sh, temp);
     account(sh);
     return sh;
@@ -506,6 +647,7 @@ class Traversal {
       if (all_edges_outside(s)) {
         sh.ghosts.push_back(s.box);
         ++n_removed_;
+        ws_.recycle(std::move(s));
         if (k + 1 != sh.surfaces.size()) sh.surfaces[k] = std::move(sh.surfaces.back());
         sh.surfaces.pop_back();
         continue;
@@ -570,13 +712,14 @@ class Traversal {
   }
 
   // PRE-TRAVERSE (Figure 4.32).
-  void pre_traverse(int r, int l, const std::vector<uint32_t>& tris) {
+  // `probe`: run the blocker probe before an initial shaft (false when the caller did).
+  void pre_traverse(int r, int l, const std::vector<uint32_t>& tris, bool probe = true) {
     TreeNode& R = rn(r);
     TreeNode& L = ln(l);
     if (!R.box.overlaps(L.box)) {
       MainAxis ax = choose_main_axis(R.box, L.box);
       if (ax.axis >= 0) {
-        if (probe_blocked(r, l, ax, tris.size())) {
+        if (probe && probe_blocked(r, l, ax, tris.size())) {
           record_blocked(r, l);
           return;
         }
@@ -633,6 +776,7 @@ class Traversal {
   BlockerContext ctx_;
   double scale_ = 1.0;
   std::vector<AABB> tri_boxes_;
+  std::unique_ptr<TriangleBvh> bvh_;
   std::unique_ptr<PointTree> rtree_, ltree_;
   const Light* light_ = nullptr;
   size_t light_offset_ = 0;
@@ -642,12 +786,15 @@ class Traversal {
   Clock::time_point clock0_ = Clock::now();
   uint64_t tick0_ = ticks();
   double n_blocked_shaft_ = 0, n_empty_ = 0, n_rays_ = 0, n_rays_blocked_ = 0, n_shafts_ = 0, n_blocking_tests_ = 0;
-  double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0;
+  double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0, n_unchanged_ = 0, n_dropped_ = 0;
   double n_leaf_surfaces_ = 0, n_leaf_ghosts_ = 0, n_leaf_node_tris_ = 0, n_probe_blocked_ = 0;
   std::vector<uint32_t> wide_[3];
   std::vector<float> wide_extent_[3], cross_;
+  bool wide_truncated_ = false;
   std::vector<uint32_t> probe_tris_;
-  std::vector<Surface> probe_out_;
+  std::vector<Surface> probe_out_, temp_;
+  std::vector<std::vector<Surface>> surface_lists_;
+  std::vector<std::vector<AABBd>> ghost_lists_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
 };
 
@@ -658,8 +805,8 @@ bool validate_all() { return g_validate; }
 
 std::vector<OptionSpec> IssSolver::options() const {
   return {
-      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 64)", {}},
-      {"leaf_samples", "maximum light samples in a light-tree leaf (default 16)", {}},
+      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 16)", {}},
+      {"leaf_samples", "maximum light samples in a light-tree leaf (default 256)", {}},
       {"ray_caster", "leaf relations by Embree rays or the custom shaft ray caster of section 4.10", {"embree", "custom"}},
       {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
   };
@@ -675,6 +822,7 @@ SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
 
   auto tp0 = Clock::now();
   mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);
+  size_t paired = pair_nonmanifold_edges(m);  // radial_pairing.h: part of preparation
   auto t0 = Clock::now();
   SolveResult result = make_empty_result(scene);
   // The Embree scene (robust flags) is needed for leaf rays, and by the custom caster
@@ -687,11 +835,12 @@ SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
   tr.set_embree(&es);
   for (size_t l = 0; l < scene.lights.size(); ++l) tr.run_light(l);
   auto t1 = Clock::now();
+  tr.finish_stats(result.stats);  // before the fractions: the breakdown covers the traversal
   fractions_from_bits(scene, result);
   result.seconds = std::chrono::duration<double>(t1 - t0).count();
-  tr.finish_stats(result.stats);
   result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
   result.stats.set("time_embree_build", embree_build);
+  result.stats.set("nonmanifold_edges_paired", double(paired));
   result.stats.set("leaf_receivers", p.leaf_receivers);
   result.stats.set("leaf_samples", p.leaf_samples);
   return result;

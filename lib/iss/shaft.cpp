@@ -259,14 +259,27 @@ void ShaftGeometry::test_segment(Vec3d& q_receiver, Vec3d& q_light) const {
 }
 
 bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  auto orient = [](const Vec3d& u, const Vec3d& v, const Vec3d& w, const Vec3d& x) {
-    return dot(cross(v - u, w - u), x - u);
-  };
-  double s1 = orient(a, b, c, p), s2 = orient(a, b, c, q);
-  // The plane must be crossed strictly inside the open segment.
+  // The plane must be crossed strictly inside the open segment. The normal comes from
+  // the triangle alone, so its relative error is ~1e-16 whatever the endpoints' distance.
+  Vec3d n = cross(b - a, c - a);
+  double s1 = dot(n, p - a), s2 = dot(n, q - a);
   if (!((s1 > 0 && s2 < 0) || (s1 < 0 && s2 > 0))) return false;
-  double o1 = orient(p, q, a, b), o2 = orient(p, q, b, c), o3 = orient(p, q, c, a);
-  return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
+  // The crossing point, from the endpoint nearer to the plane (its error is then ~1e-16
+  // of that endpoint's distance), then a closed point-in-triangle test in the
+  // projection that drops n's dominant axis, with every difference taken from a
+  // triangle vertex. Orientations of the segment against the edges, det(q - p, a - p,
+  // b - p), would take differences from p instead: for a triangle much smaller than
+  // its distance to p they round to zero (a 1e-45-wide sliver 1.4 units away, fuzz_iss)
+  // and the test took every such triangle as touched.
+  Vec3d x = std::abs(s1) <= std::abs(s2) ? p + (q - p) * (s1 / (s1 - s2)) : q + (p - q) * (s2 / (s2 - s1));
+  Vec3d an = vabs(n);
+  int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+  int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
+    return (e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]);
+  };
+  double w0 = edge(a, b), w1 = edge(b, c), w2 = edge(c, a);
+  return (w0 >= 0 && w1 >= 0 && w2 >= 0) || (w0 <= 0 && w1 <= 0 && w2 <= 0);
 }
 
 bool segment_may_hit_box(const Vec3d& p, const Vec3d& q, const AABBd& box, double grow) {

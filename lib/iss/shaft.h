@@ -102,8 +102,11 @@ Plane4d plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double sca
 
 // Open-segment / triangle test in double (touching the interior of the segment counts
 // as a hit, an endpoint on the triangle does not), used by the custom ray caster for
-// node triangles and inconsistent patches. Float-exact inputs, double evaluation:
-// wrong only for relations within double rounding of a degenerate configuration.
+// node triangles and inconsistent patches: plane sides from the triangle's normal, the
+// crossing point from the nearer endpoint, a closed 2D point-in-triangle test relative
+// to the vertices. Float-exact inputs, double evaluation: wrong only for relations
+// within double rounding (~1e-16 of the segment, relative) of a degenerate
+// configuration, also for triangles far smaller than their distance to the segment.
 bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 // Segment / box overlap (slab test) with the box grown by `grow`.
 bool segment_may_hit_box(const Vec3d& p, const Vec3d& q, const AABBd& box, double grow);

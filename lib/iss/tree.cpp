@@ -42,7 +42,8 @@ double point_spacing(const Vec3f& e, uint32_t n) {
 bool TreeNode::contains_triangle(uint32_t t) const { return std::binary_search(inside.begin(), inside.end(), t); }
 
 PointTree::PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int max_points_in_leaf,
-                     const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes)
+                     const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes,
+                     const std::vector<uint32_t>* root_candidates)
     : boxes_(std::move(boxes)), centers_(std::move(centers)), max_leaf_(std::max(1, max_points_in_leaf)),
       mesh_(mesh), tri_boxes_(triangle_boxes) {
   order_.resize(boxes_.size());
@@ -51,10 +52,20 @@ PointTree::PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int ma
   TreeNode& r = nodes_.back();
   r.begin = 0;
   r.end = uint32_t(order_.size());
-  std::vector<uint32_t> all(mesh_.triangles.size());
-  std::iota(all.begin(), all.end(), 0u);
-  finish_node(r, all);
+  if (root_candidates) {
+    finish_node(r, *root_candidates);
+  } else {
+    std::vector<uint32_t> all(mesh_.triangles.size());
+    std::iota(all.begin(), all.end(), 0u);
+    finish_node(r, all);
+  }
   r.gone.clear();
+}
+
+AABB PointTree::bounds_of(const std::vector<AABB>& boxes) {
+  AABB b;
+  for (const AABB& x : boxes) b.extend(x);
+  return b;
 }
 
 void PointTree::finish_node(TreeNode& n, const std::vector<uint32_t>& parent_triangles) {
@@ -93,27 +104,84 @@ void PointTree::split(int i) {
       std::nth_element(ord + b, ord + mid, ord + e, [&](uint32_t p, uint32_t q) { return centers_[p][ax] < centers_[q][ax]; });
     }
   } else {
-    // Otherwise minimise N_left * A_left + N_right * A_right over every axis.
+    // Otherwise minimise the cost of tree.h's file comment over every axis and every
+    // split between distinct centres.
     double best = 1e300;
     int best_ax = -1;
     uint32_t best_mid = 0;
-    scratch_area_.resize(cnt + 1);
+    scratch_pre_.resize(cnt + 1);
+    scratch_suf_.resize(cnt + 1);
+    scratch_cl_.resize(cnt + 2);
+    scratch_cr_.resize(cnt + 2);
     AABB cb;
     for (uint32_t k = b; k < e; ++k) cb.extend(centers_[ord[k]]);
     double pad = point_spacing(cb.extent(), cnt);
+    // The node's large blockers: inside triangles whose box spans at least half of the
+    // node box on an axis where the node has extent (a wall through a floor node; not a
+    // table leg). Their boxes are what the split tries to keep out of the children.
+    big_.clear();
+    Vec3f ne = n->box.extent();
+    for (uint32_t t : n->inside) {
+      Vec3f te = tri_boxes_[t].extent();
+      for (int a = 0; a < 3; ++a)
+        if (ne[a] > 0.0f && te[a] >= 0.5f * ne[a]) {
+          big_.push_back(t);
+          break;
+        }
+    }
     for (int ax = 0; ax < 3; ++ax) {
-      std::sort(ord + b, ord + e, [&](uint32_t p, uint32_t q) { return centers_[p][ax] < centers_[q][ax]; });
-      AABB acc;
-      for (uint32_t k = cnt; k-- > 0;) {
-        acc.extend(boxes_[ord[b + k]]);
-        scratch_area_[k] = split_area(acc, pad);
+      // The points in centre order on this axis (ties by index): (key, index) pairs
+      // sort without indirection; the order is kept for the final split.
+      std::vector<std::pair<float, uint32_t>>& keyed = scratch_keyed_;
+      keyed.resize(cnt);
+      for (uint32_t k = 0; k < cnt; ++k) keyed[k] = {centers_[ord[b + k]][ax], ord[b + k]};
+      std::sort(keyed.begin(), keyed.end());
+      scratch_axis_ord_[ax].resize(cnt);
+      uint32_t* sorted = scratch_axis_ord_[ax].data();
+      for (uint32_t k = 0; k < cnt; ++k) sorted[k] = keyed[k].second;
+      // pre[k]: box of the first k points; suf[k]: box of the points from k on.
+      scratch_pre_[0] = AABB{};
+      for (uint32_t k = 0; k < cnt; ++k) {
+        scratch_pre_[k + 1] = scratch_pre_[k];
+        scratch_pre_[k + 1].extend(boxes_[sorted[k]]);
       }
-      acc = AABB{};
+      scratch_suf_[cnt] = AABB{};
+      for (uint32_t k = cnt; k-- > 0;) {
+        scratch_suf_[k] = scratch_suf_[k + 1];
+        scratch_suf_[k].extend(boxes_[sorted[k]]);
+      }
+      // Large blockers per side: overlap with pre[k] only grows with k and overlap with
+      // suf[k] only shrinks, so each triangle's first (last) overlapping k is a binary
+      // search; histograms and prefix sums give the counts for every k.
+      std::fill(scratch_cl_.begin(), scratch_cl_.end(), 0u);
+      std::fill(scratch_cr_.begin(), scratch_cr_.end(), 0u);
+      for (uint32_t t : big_) {
+        const AABB& tb = tri_boxes_[t];
+        uint32_t lo = 1, hi = cnt + 1;  // first k in [1, cnt] with overlap, cnt + 1: none
+        while (lo < hi) {
+          uint32_t mid2 = (lo + hi) / 2;
+          if (tb.overlaps(scratch_pre_[mid2])) hi = mid2;
+          else lo = mid2 + 1;
+        }
+        ++scratch_cl_[lo];
+        lo = 0;
+        hi = cnt;  // first k in [0, cnt) without overlap with suf[k]
+        while (lo < hi) {
+          uint32_t mid2 = (lo + hi) / 2;
+          if (tb.overlaps(scratch_suf_[mid2])) lo = mid2 + 1;
+          else hi = mid2;
+        }
+        ++scratch_cr_[lo];  // overlaps suf[k] exactly for k < lo
+      }
+      for (uint32_t k = 1; k <= cnt + 1; ++k) scratch_cl_[k] += scratch_cl_[k - 1];  // cl[k]: first overlap <= k
+      for (uint32_t k = cnt + 1; k-- > 0;) scratch_cr_[k] += scratch_cr_[k + 1];  // cr[k]: first k without overlap >= k
       for (uint32_t k = 1; k < cnt; ++k) {
-        acc.extend(boxes_[ord[b + k - 1]]);
         // Only split between distinct centres so that the split is a plane.
-        if (!(centers_[ord[b + k - 1]][ax] < centers_[ord[b + k]][ax])) continue;
-        double c = double(k) * split_area(acc, pad) + double(cnt - k) * scratch_area_[k];
+        if (!(keyed[k - 1].first < keyed[k].first)) continue;
+        // Triangles overlapping suf[k]: those whose first k without overlap is > k.
+        double tl = double(scratch_cl_[k]), tr = double(scratch_cr_[k + 1]);
+        double c = double(k) * split_area(scratch_pre_[k], pad) * (1.0 + tl) +
+                   double(cnt - k) * split_area(scratch_suf_[k], pad) * (1.0 + tr);
         if (c < best) { best = c; best_ax = ax; best_mid = b + k; }
       }
     }
@@ -121,7 +189,7 @@ void PointTree::split(int i) {
       n->is_leaf = true;
       return;
     }
-    std::sort(ord + b, ord + e, [&](uint32_t p, uint32_t q) { return centers_[p][best_ax] < centers_[q][best_ax]; });
+    std::copy(scratch_axis_ord_[best_ax].begin(), scratch_axis_ord_[best_ax].begin() + cnt, ord + b);
     mid = best_mid;
   }
   int li = int(nodes_.size());

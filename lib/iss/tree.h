@@ -12,10 +12,25 @@
 // after a split: sub-shaft construction asks "is this triangle in the other node" by
 // membership rather than by re-testing geometry, which keeps the exclusion rule of
 // section 4.4.2 exactly consistent with the gone lists.
+//
+// FIND-SPLIT-PLANE (section 4.3): above 1024 points the midpoint of the longest side, as
+// in the thesis; otherwise the split between two distinct centres on any axis that
+// minimises the thesis's N_left A_left + N_right A_right with two changes. A is the area
+// of the box grown by the point spacing (tree.cpp: no strips of collinear points), and
+// each side's term is multiplied by (1 + B_side), B_side the number of the node's large
+// inside triangles (box at least half the node's extent on an axis where the node has
+// extent) whose box meets that side's box. Section 4.4.2 excludes a triangle that meets
+// a node from every blocker surface of that node's shafts, so a node with points on
+// both sides of a wall never has a shaft blocked by that wall; the factor makes splits
+// follow walls (on rooms both faces of a wall: the receivers buried in the wall become
+// nodes of their own, whose shafts the wall's faces block). The thesis notes that no
+// work went into this metric and that better ones may exist. Only the tree's shape
+// depends on it, never a guarantee.
 #pragma once
 
 #include <cstdint>
 #include <deque>
+#include <utility>
 #include <vector>
 
 #include "lib/geom/aabb.h"
@@ -47,9 +62,14 @@ struct TreeNode {
 
 class PointTree {
  public:
-  // `boxes[i]` is the box of point i, `centers[i]` its split position.
+  // `boxes[i]` is the box of point i, `centers[i]` its split position. The root's
+  // inside list is filtered from `root_candidates` (sorted; every triangle whose box
+  // meets the root box must be in it) or, when null, from every triangle.
   PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int max_points_in_leaf,
-            const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes);
+            const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes,
+            const std::vector<uint32_t>* root_candidates = nullptr);
+  // Box of a set of point boxes (the root box a tree over them will have).
+  static AABB bounds_of(const std::vector<AABB>& boxes);
 
   TreeNode& node(int i) { return nodes_[size_t(i)]; }
   const TreeNode& node(int i) const { return nodes_[size_t(i)]; }
@@ -70,7 +90,9 @@ class PointTree {
   int max_leaf_;
   const mesh::PreparedMesh& mesh_;
   const std::vector<AABB>& tri_boxes_;
-  std::vector<double> scratch_area_;
+  std::vector<AABB> scratch_pre_, scratch_suf_;
+  std::vector<uint32_t> scratch_cl_, scratch_cr_, big_, scratch_axis_ord_[3];
+  std::vector<std::pair<float, uint32_t>> scratch_keyed_;
   size_t list_bytes_ = 0;
 };
 

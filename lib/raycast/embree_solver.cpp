@@ -124,6 +124,7 @@ struct VerifyContext {
   Vec3f from, to;
   double t0 = 0.0, t1 = 1.0;
   bool ranged = false;       // false: the segment test, t in (0, 1]
+  const Vec3f* fan_to = nullptr;  // a packet from `from`: lane k (ray id k) ends at fan_to[k]
   const TriangleSoup* soup = nullptr;
   size_t rejected = 0;
 };
@@ -138,8 +139,9 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const auto& t = vc->soup->triangles[prim];
     const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
-    const bool confirmed = vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, vc->to, vc->t0, vc->t1)
-                                      : segment_hits_triangle(a, b, c, vc->from, vc->to);
+    const Vec3f& to = vc->fan_to ? vc->fan_to[RTCRayN_id(args->ray, args->N, i)] : vc->to;
+    const bool confirmed = vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
+                                      : segment_hits_triangle(a, b, c, vc->from, to);
     if (!confirmed) {
       args->valid[i] = 0;
       ++vc->rejected;
@@ -224,6 +226,64 @@ bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnea
   rtcOccluded1(static_cast<RTCScene>(scene_), &vc.base, &ray);
   if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
   return ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* out) const {
+  if (n <= 0) return;
+  if (n > 16) {
+    occluded_fan(from, to, 16, out);
+    occluded_fan(from, to + 16, n - 16, out + 16);
+    return;
+  }
+  if (!mesh_in_bound_ || !within_embree_bound(from)) {
+    for (int k = 0; k < n; ++k) out[k] = occluded(from, to[k]);
+    return;
+  }
+  // A per-thread packet whose constant fields (tnear, time, mask, id, flags) are set
+  // once; each call writes the origin, the directions, tfar and the lane mask.
+  struct alignas(64) Packet {
+    RTCRay16 ray;
+    alignas(64) int valid[16];
+    Packet() {
+      for (int k = 0; k < 16; ++k) {
+        ray.tnear[k] = 0.0f;
+        ray.time[k] = 0.0f;
+        ray.mask[k] = 0xFFFFFFFFu;
+        ray.id[k] = unsigned(k);
+        ray.flags[k] = 0;
+        ray.dir_x[k] = ray.dir_y[k] = 0.0f;
+        ray.dir_z[k] = 1.0f;  // inactive lanes keep a valid direction
+      }
+    }
+  };
+  thread_local Packet pk;
+  RTCRay16& ray = pk.ray;
+  int* valid = pk.valid;
+  for (int k = 0; k < 16; ++k) {
+    ray.org_x[k] = from.x;
+    ray.org_y[k] = from.y;
+    ray.org_z[k] = from.z;
+    ray.tfar[k] = 1.0f;
+    valid[k] = 0;
+  }
+  for (int k = 0; k < n; ++k) {
+    if (!within_embree_bound(to[k])) continue;
+    valid[k] = -1;
+    Vec3f d = to[k] - from;
+    ray.dir_x[k] = d.x;
+    ray.dir_y[k] = d.y;
+    ray.dir_z[k] = d.z;
+  }
+  // The verification filter reads a VerifyContext (lane k's end point is to[k]).
+  VerifyContext vc;
+  rtcInitIntersectContext(&vc.base);
+  vc.from = from;
+  vc.fan_to = to;
+  vc.soup = soup_;
+  rtcOccluded16(valid, static_cast<RTCScene>(scene_), &vc.base, &ray);
+  if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
+  for (int k = 0; k < n; ++k)
+    out[k] = valid[k] ? ray.tfar[k] == -std::numeric_limits<float>::infinity() : occluded(from, to[k]);
 }
 
 SolveResult EmbreeSolver::solve(const Scene& scene, const SolveOptions& opt) {

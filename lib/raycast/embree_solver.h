@@ -93,6 +93,14 @@ class EmbreeScene {
   // near an endpoint from hits inside the segment (SSV's reference ray).
   bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const;
 
+  // occluded(from, to[k]) for k < n (n <= 16), traced as one Embree packet
+  // (rtcOccluded16, rays set up exactly as occluded() does, inactive lanes masked):
+  // segments from one point to nearby points are coherent and a packet traverses the
+  // BVH once for all of them. Segments outside Embree's domain go to fallback_occluded
+  // one by one. Embree's packet and single-ray kernels may disagree only where its own
+  // float tests are at a tie (robust scenes: watertight in both).
+  void occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* out) const;
+
   // Queries answered by fallback_occluded so far.
   size_t fallback_rays() const { return fallback_rays_.load(std::memory_order_relaxed); }
   // Candidate hits the verification filter rejected so far.

@@ -116,6 +116,79 @@ struct Config {
   double light_scale;  // x light side (area scale squared)
 };
 
+// The issue-5 target configuration (README, ISS results): rooms at 500k+ triangles
+// with 256x256 receivers and 64 samples per light, the same with twice the receivers
+// and with twice the samples per light, and columns at its paper size; single-threaded
+// only, ISS and embree on the very same scene one after the other. Ratios: embree / ISS
+// time, and each doubled row's ISS (embree) time over the base row's. --quick shrinks
+// every scene (rooms 30k triangles, 32x32 receivers, 16 samples; columns 16x16).
+Status run_iss_target(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  Table t{"target", "issue 5 targets: ISS against embree single-threaded on rooms 500k (256x256, 64 samples), "
+                    "its doublings, and columns",
+          {"scene", "config", "triangles", "lights", "receivers", "samples_per_receiver", "relations_M",
+           "iss_seconds_1t", "embree_seconds_1t", "ratio_1t", "iss_time_vs_base", "embree_time_vs_base",
+           "decided_by_shafts_pct", "ray_cast_pct", "iss_peak_mb", "iss_reported_peak_mb", "embree_peak_mb",
+           "iss_runs", "embree_runs"}, {}};
+  Table st{"target-stats", "every figure the ISS solver reports on the target rows", {"scene", "config", "stat", "value"}, {}};
+  struct Row {
+    std::string family, config;
+    long triangles, receivers, samples;
+  };
+  long tri = o.quick ? 30000 : 500000, rec = o.quick ? 1024 : 65536, smp = o.quick ? 16 : 64;
+  std::vector<Row> rows = {{"rooms", "target", tri, rec, smp},
+                           {"rooms", "2x receivers", tri, 2 * rec, smp},
+                           {"rooms", "2x samples", tri, rec, 2 * smp},
+                           {"columns", "paper size", -1, o.quick ? 256 : 4096, o.quick ? 16 : 256}};
+  MeasureConfig cfg = ctx.measure_config();
+  cfg.all = false;  // the targets are single-threaded
+  double base_iss = kNaN, base_emb = kNaN;
+  Json cj = Json::array();
+  for (const auto& r : rows) {
+    if (!is_family(r.family)) continue;
+    FamilyParams p;
+    p.seed = o.seed;
+    p.triangles = r.triangles;
+    p.receivers = r.receivers;
+    p.samples = r.samples;
+    auto scene = ctx.scene(r.family, p);
+    if (!scene) return scene.error();
+    const Scene& s = *scene;
+    cj.push_back({{"family", r.family}, {"config", r.config}, {"triangles", r.triangles}, {"receivers", r.receivers},
+                  {"samples", r.samples}, {"scene", scene_summary(s)}});
+    auto iss = ctx.solver("iss"), emb = ctx.solver("embree");
+    SolveOptions so;
+    so.seed = o.seed;
+    ctx.progress.step("iss " + r.family + " " + r.config);
+    Measured mi = measure_solve(*iss, s, so, cfg);
+    ctx.progress.step("embree " + r.family + " " + r.config);
+    Measured me = measure_solve(*emb, s, so, cfg);
+    bool base = r.family == "rooms" && r.config == "target";
+    if (base) {
+      base_iss = mi.seconds_1t;
+      base_emb = me.seconds_1t;
+    }
+    bool doubled = r.family == "rooms" && !base;
+    double vi = doubled ? ratio(mi.seconds_1t, base_iss) : kNaN, ve = doubled ? ratio(me.seconds_1t, base_emb) : kNaN;
+    t.add_row({r.family, r.config, s.mesh.size(), s.lights.size(), s.receivers.size(), s.samples_per_receiver(),
+               double(s.relation_count()) / 1e6, mi.seconds_1t, me.seconds_1t, ratio(me.seconds_1t, mi.seconds_1t), vi, ve,
+               stat_or_nan(mi.stats, {"percent_decided_by_shafts"}), stat_or_nan(mi.stats, {"percent_ray_cast"}),
+               mi.peak_mb, stat_or_nan(mi.stats, {"peak_memory_mb"}), me.peak_mb, mi.runs_1t, me.runs_1t});
+    add_stat_rows(st, {r.family, r.config}, mi.stats);
+    char b[320];
+    std::snprintf(b, sizeof b,
+                  "target %s %s: iss %.3f s, embree %.3f s, ratio %.2f; %.2f%% decided by shafts; iss peak %.1f MB%s",
+                  r.family.c_str(), r.config.c_str(), mi.seconds_1t, me.seconds_1t, ratio(me.seconds_1t, mi.seconds_1t),
+                  stat_or_nan(mi.stats, {"percent_decided_by_shafts"}), mi.peak_mb,
+                  doubled ? (", iss time x" + fmt_g(std::round(vi * 1000) / 1000) + " the target row's").c_str() : "");
+    ctx.note(b);
+  }
+  ctx.report.options["target_rows"] = cj;
+  ctx.report.tables.push_back(std::move(t));
+  ctx.report.tables.push_back(std::move(st));
+  return {};
+}
+
 Status run_iss(BenchContext& ctx) {
   const auto& o = ctx.opt;
   auto fams = ctx.families({"columns", "foliage", "rooms"});
@@ -180,6 +253,10 @@ Status run_iss(BenchContext& ctx) {
   ctx.report.options["iss_options"] = Json::object();  // the method's defaults
   ctx.report.tables.push_back(std::move(t));
   ctx.report.tables.push_back(std::move(st));
+  if (have_iss && have_embree) {
+    Status ts = run_iss_target(ctx);
+    if (!ts) return ts;
+  }
   return {};
 }
 

@@ -1,0 +1,54 @@
+// A static bounding volume hierarchy over the triangle boxes of the prepared mesh, built
+// once per solve and shared by every light. It answers the two queries that otherwise
+// scan the whole mesh once per light (paper 000 sections 4.3 and 4.8): the triangles
+// whose box meets a light tree's root box (the root's inside list, Figure 4.2) and the
+// triangles whose box may meet the root shaft (the triangle array that COMPUTE-SHADOWS,
+// Figure 4.32, starts PRE-TRAVERSE with, which the thesis fills with every triangle).
+//
+// Build: Morton order of the box centres (radix sort), then balanced halving of that
+// order down to leaves of 8; linear in the triangle count.
+//
+// Guarantee: both queries return a superset, sorted by index, of what they select:
+// a triangle is left out only when its box (float32, exact) is disjoint from the query
+// box, or when a node box that contains it is outside a shaft plane by more than the
+// plane's tolerance (ShaftGeometry::may_intersect_box, conservative; the shaft query
+// returns whole leaves). Every consumer
+// re-tests each returned triangle exactly as it tested the whole mesh before, so the
+// results do not change, only the cost.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lib/geom/aabb.h"
+#include "lib/iss/shaft.h"
+
+namespace visgate::iss {
+
+class TriangleBvh {
+ public:
+  explicit TriangleBvh(const std::vector<AABB>& triangle_boxes);
+
+  // Triangles whose box overlaps `box` (closed boxes).
+  void query_box(const AABB& box, std::vector<uint32_t>& out) const;
+  // Triangles whose box may intersect the shaft `g` (and others of the same leaves).
+  void query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out) const;
+
+  size_t node_count() const { return nodes_.size(); }
+  size_t memory_bytes() const { return nodes_.size() * sizeof(Node) + index_.size() * sizeof(uint32_t); }
+
+ private:
+  struct Node {
+    AABB box;
+    uint32_t first = 0;  // leaf: range in index_; inner: index of the left child
+    uint32_t count = 0;  // leaf: triangle count; inner: 0 (right child = left + 1)
+  };
+  template <class Pred>
+  void collect(Pred&& visit, bool test_leaf_triangles, std::vector<uint32_t>& out) const;
+
+  const std::vector<AABB>& boxes_;
+  std::vector<Node> nodes_;
+  std::vector<uint32_t> index_;
+};
+
+}  // namespace visgate::iss
