@@ -4,6 +4,7 @@
 // fragments inside the light, fraction = fragment area, reproducible seeds).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "lib/geom/predicates.h"
@@ -13,6 +14,8 @@
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
 #include "lib/plucker/plucker_solver.h"
+#include "lib/plucker/shaft.h"
+#include "lib/plucker/triangle_tree.h"
 #include "lib/scene/families.h"
 #include "lib/scene/rng.h"
 #include "lib/scene/shapes.h"
@@ -713,4 +716,172 @@ TEST(PluckerSolver, MinimisedSampleFarOffTheLightPlane) {
   SolveResult r = run(s);
   EXPECT_FALSE(r.receivers[0].visible(0));
   EXPECT_EQ(r.stats.get("segment_relations"), 1.0);
+}
+
+// ---- Speed structures: each must give the answers of the plain computation ----
+
+TEST(PluckerGeometry, EdgeFanAgreesWithTheVvsetOrientation) {
+  // EdgeFan (lines.h) evaluates side(x -> p_k, a -> b) as (x - a) . ((p_k - a) x (b - a)):
+  // checked against the determinant in double, and its decided orientations against
+  // vvset_orientation's (both conservative, so a decided pair never disagrees).
+  Rng rng(21);
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  int both = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    Vec3f o[3];
+    for (auto& v : o) v = Vec3f(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5)));
+    Vec3f a(Vec3d(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(0, 2)));
+    Vec3f b(Vec3d(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(0, 2)));
+    EdgeFan fan;
+    fan.set(a, b, light, 4);
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 4; ++k) {
+        double want = orient3d(to_double(o[i]), to_double(light[k]), to_double(a), to_double(b));
+        double got = double(dot(o[i] - a, fan.w[size_t(k)]));
+        EXPECT_NEAR(got, want, 1e-5 * (1 + std::abs(want)));
+      }
+    Vec3f dir[12];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j) dir[i * 4 + j] = light[j] - o[i];
+    Orientation f = fan.orientation(o, 3, true), v = vvset_orientation(o, 3, dir, 4, a, b);
+    if (f != Orientation::Mixed && v != Orientation::Mixed) {
+      ++both;
+      EXPECT_EQ(f, v);
+    }
+    // Reversed lines (p_k -> x): the opposite orientation.
+    Orientation r = fan.orientation(o, 3, false);
+    if (f == Orientation::Positive) EXPECT_EQ(r, Orientation::Negative);
+    if (f == Orientation::Negative) EXPECT_EQ(r, Orientation::Positive);
+  }
+  EXPECT_GT(both, 50);
+}
+
+TEST(PluckerFragment, ShadowBoxHoldsTheCentralProjection) {
+  // shadow_box (fragment.h) against points of the polygon projected in double from r onto
+  // the light plane z = 2 (local frame: the plane n . x = 0 after moving the origin).
+  Rng rng(5);
+  LightPlane lp;
+  lp.n = Vec3f(0, 0, -1);
+  lp.plane_tol = 0;
+  lp.extent = 2;
+  lp.frame = PlaneFrame::from_normal(lp.n);
+  for (int trial = 0; trial < 300; ++trial) {
+    // Local frame: the light plane is z = 0, the receiver below at z = -2.
+    Vec3f r(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), -2));
+    Vec3f q[3];
+    for (auto& v : q) v = Vec3f(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1.9, -0.1)));
+    Box2 b = shadow_box(lp, r, q, 3);
+    for (int k = 0; k < 30; ++k) {
+      double u = rng.uniform(), w = rng.uniform() * (1 - u);
+      Vec3d x = to_double(q[0]) + (to_double(q[1]) - to_double(q[0])) * u + (to_double(q[2]) - to_double(q[0])) * w;
+      Vec3d rd = to_double(r);
+      double t = -rd.z / (x.z - rd.z);
+      Vec3d y = rd + (x - rd) * t;
+      EXPECT_TRUE(b.contains(float(y[lp.frame.u]), float(y[lp.frame.v])));
+    }
+  }
+  // A vertex at the receiver's height (or behind it): no useful bound.
+  Vec3f r(0, 0, -2);
+  Vec3f q[3] = {Vec3f(0.5f, 0, -2), Vec3f(1, 0, -1), Vec3f(0, 1, -1)};
+  Box2 b = shadow_box(lp, r, q, 3);
+  EXPECT_TRUE(b.contains(1e30f, -1e30f));
+}
+
+namespace {
+double region_area(const FragmentList& out) {
+  double a = 0;
+  for (size_t k = 0; k < out.size(); ++k) a += polygon_area(out.data(k), out.count(k));
+  return a;
+}
+}  // namespace
+
+TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
+  // Both ways of developing a leaf (bsp.h Choice) answer every query with the same
+  // visible area, with and without coherence, on random occluder soups; the relevant
+  // choice returns fragments from undefined leaves that no occluder of theirs meets.
+  Rng rng(8);
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  uint64_t lazy = 0;
+  for (int scene = 0; scene < 20; ++scene) {
+    std::vector<Occluder> occ;
+    for (int k = 0; k < 12; ++k) {
+      Occluder o;
+      o.n = 3;
+      Vec3d c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5));
+      for (int i = 0; i < 3; ++i) o.v[i] = Vec3f(c + Vec3d(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 0));
+      if (orient3d(to_double(o.v[0]), to_double(o.v[1]), to_double(o.v[2]), Vec3d(0, 0, -10)) > 0)
+        std::swap(o.v[0], o.v[1]);  // receivers below on the negative side (bsp.h)
+      occ.push_back(o);
+    }
+    LazyBsp relevant(light, 4, occ, 9), random(light, 4, occ, 9);
+    random.set_choice(LazyBsp::Choice::Random);
+    FragmentList a, b;
+    for (int q = 0; q < 10; ++q) {
+      Vec3f r(Vec3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0));
+      relevant.query(r, a);
+      random.query(r, b);
+      EXPECT_NEAR(region_area(a), region_area(b), 1e-5);
+      if (q % 3 == 0) {
+        relevant.reset();
+        random.reset();
+      }
+    }
+    lazy += relevant.counters().lazy_visible;
+  }
+  EXPECT_GT(lazy, 0u);
+}
+
+TEST(PluckerBsp, HidesAllWhenOneOccluderCoversTheLight) {
+  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Occluder big, small;
+  big.n = small.n = 4;
+  // A 3 x 3 square at z = 1 (normal +z): from (0, 0, 0) its shadow covers [-3, 3]^2.
+  big.v[0] = Vec3f(-1.5f, -1.5f, 1), big.v[1] = Vec3f(1.5f, -1.5f, 1), big.v[2] = Vec3f(1.5f, 1.5f, 1),
+  big.v[3] = Vec3f(-1.5f, 1.5f, 1);
+  small.v[0] = Vec3f(-0.1f, -0.1f, 1.5f), small.v[1] = Vec3f(0.1f, -0.1f, 1.5f), small.v[2] = Vec3f(0.1f, 0.1f, 1.5f),
+  small.v[3] = Vec3f(-0.1f, 0.1f, 1.5f);
+  LazyBsp bsp(light, 4, {small, big}, 2);
+  EXPECT_TRUE(bsp.hides_all(Vec3f(0, 0, 0)));
+  FragmentList out;
+  bsp.query(Vec3f(0, 0, 0), out);
+  EXPECT_EQ(out.size(), 0u);
+  // From (5, 0, 0) the big square hides only part of the light: not all.
+  EXPECT_FALSE(bsp.hides_all(Vec3f(5, 0, 0)));
+  LazyBsp only_small(light, 4, {small}, 2);
+  EXPECT_FALSE(only_small.hides_all(Vec3f(0, 0, 0)));
+}
+
+TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
+  // TriangleTree::candidates (triangle_tree.h) returns, in increasing order, a superset of
+  // the triangles Shaft::culls keeps, for shafts in local frames far from the world origin.
+  FamilyParams p;
+  p.seed = 4;
+  p.triangles = 600;
+  auto scene = generate_family("random-soup", p);
+  ASSERT_TRUE(scene.ok());
+  Scene s = *scene;
+  for (Vec3f& v : s.mesh.vertices) v = Vec3f(to_double(v) + Vec3d(1e5, -3e5, 2e5));
+  TriangleTree tree(s.mesh);
+  Rng rng(6);
+  std::vector<uint32_t> cand;
+  for (int trial = 0; trial < 50; ++trial) {
+    Vec3f origin = s.mesh.vertices[size_t(rng.below(s.mesh.vertices.size()))];
+    AABB sb = s.mesh.bounds();
+    auto pick = [&]() {
+      Vec3d lo = to_double(sb.lo), hi = to_double(sb.hi);
+      Vec3d c(rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y), rng.uniform(lo.z, hi.z));
+      Vec3d e(rng.uniform(0, 1), rng.uniform(0, 1), rng.uniform(0, 1));
+      return AABB(Vec3f(c - e) - origin, Vec3f(c + e) - origin);
+    };
+    Shaft shaft(pick(), pick());
+    tree.candidates(shaft, origin, cand);
+    EXPECT_TRUE(std::is_sorted(cand.begin(), cand.end()));
+    size_t kept = 0;
+    for (size_t t = 0; t < s.mesh.size(); ++t) {
+      if (shaft.culls(s.mesh.corner(t, 0) - origin, s.mesh.corner(t, 1) - origin, s.mesh.corner(t, 2) - origin)) continue;
+      ++kept;
+      EXPECT_TRUE(std::binary_search(cand.begin(), cand.end(), uint32_t(t))) << t;
+    }
+    EXPECT_LE(kept, cand.size());
+  }
 }

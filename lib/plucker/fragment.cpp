@@ -1,7 +1,10 @@
 // Light fragments (paper 002 section 4.2, Figure 6); see fragment.h.
 #include "lib/plucker/fragment.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <span>
 
 #include "lib/plucker/lines.h"
 
@@ -130,6 +133,58 @@ PlaneFrame PlaneFrame::from_normal(const Vec3f& n) {
   return f;
 }
 
+Box2 Box2::of(const PlaneFrame& f, const Vec3f* poly, int n) {
+  Box2 b;
+  if (n <= 0) return b;
+  b.ulo = b.uhi = poly[0][f.u];
+  b.vlo = b.vhi = poly[0][f.v];
+  for (int k = 1; k < n; ++k) {
+    b.ulo = std::min(b.ulo, poly[k][f.u]);
+    b.uhi = std::max(b.uhi, poly[k][f.u]);
+    b.vlo = std::min(b.vlo, poly[k][f.v]);
+    b.vhi = std::max(b.vhi, poly[k][f.v]);
+  }
+  return b;
+}
+
+Box2 Box2::everything() {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  return Box2{-inf, inf, -inf, inf};
+}
+
+void Box2::extend(const Box2& b) {
+  if (b.ulo > b.uhi) return;
+  if (ulo > uhi) {
+    *this = b;
+    return;
+  }
+  ulo = std::min(ulo, b.ulo);
+  uhi = std::max(uhi, b.uhi);
+  vlo = std::min(vlo, b.vlo);
+  vhi = std::max(vhi, b.vhi);
+}
+
+Box2 shadow_box(const LightPlane& lp, const Vec3f& r, const Vec3f* q, size_t n) {
+  const Vec3d nd = to_double(lp.n), rd = to_double(r);
+  const double hr = dot(nd, rd);
+  if (!(std::abs(hr) > 0.0)) return Box2::everything();
+  const int fu = lp.frame.u, fv = lp.frame.v;
+  double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    Vec3d p = to_double(q[k]);
+    double hp = dot(nd, p);
+    if (!(hp / hr <= 1.0 - 0x1p-10)) return Box2::everything();
+    double t = hr / (hr - hp);
+    Vec3d x = rd + (p - rd) * t;
+    double u = x[fu], v = x[fv];
+    ulo = std::min(ulo, u), uhi = std::max(uhi, u), vlo = std::min(vlo, v), vhi = std::max(vhi, v);
+    spread = std::max(spread, (std::abs(u - rd[fu]) + std::abs(v - rd[fv])) / std::abs(hr));
+  }
+  double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
+  double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
+  return Box2{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+}
+
 bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p) {
   // 2D orientation (b - a) x (p - a) in float: 2 differences per factor, 2 products,
   // 1 subtraction, < 5.01 u of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
@@ -151,16 +206,28 @@ bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3
 
 double lambert_irradiance(const Vec3f& r, const Vec3f& nr, const Vec3f* poly, int n) {
   // Clip to the receiver's upper half-space, in double relative to r.
+  // Each vertex emits at most two (itself and a crossing), so 2n bounds the clipped
+  // polygon even for a fragment that rounding made slightly non-convex; kept on the
+  // stack for the usual small fragments.
   Vec3d nd = to_double(nr);
-  std::vector<Vec3d> q;
-  q.reserve(size_t(n) + 2);
-  for (int k = 0; k < n; ++k) {
-    Vec3d p0 = to_double(poly[k]) - to_double(r), p1 = to_double(poly[(k + 1) % n]) - to_double(r);
-    double s0 = dot(nd, p0), s1 = dot(nd, p1);
-    if (s0 >= 0.0) q.push_back(p0);
-    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) q.push_back(p0 + (p1 - p0) * (s0 / (s0 - s1)));
+  constexpr int kStack = 64;
+  Vec3d qbuf[kStack];
+  std::vector<Vec3d> qheap;
+  Vec3d* qv = qbuf;
+  if (2 * n > kStack) {
+    qheap.resize(2 * size_t(n));
+    qv = qheap.data();
   }
-  if (q.size() < 3) return 0.0;
+  int qn = 0;
+  const Vec3d rd = to_double(r);
+  for (int k = 0; k < n; ++k) {
+    Vec3d p0 = to_double(poly[k]) - rd, p1 = to_double(poly[(k + 1) % n]) - rd;
+    double s0 = dot(nd, p0), s1 = dot(nd, p1);
+    if (s0 >= 0.0) qv[qn++] = p0;
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) qv[qn++] = p0 + (p1 - p0) * (s0 / (s0 - s1));
+  }
+  if (qn < 3) return 0.0;
+  std::span<const Vec3d> q(qv, size_t(qn));
   // E = 1/2 sum_k theta_k (nr . gamma_k), gamma_k the unit normal of (q_k, q_k+1) seen
   // from r; the sign makes a polygon counter-clockwise about its emitting normal (facing
   // r) positive, and the absolute value makes the result independent of the winding.

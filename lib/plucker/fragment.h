@@ -52,6 +52,40 @@ struct PlaneFrame {
   static PlaneFrame from_normal(const Vec3f& n);
 };
 
+// A 2D box in a PlaneFrame (coordinates u, v of the 3D points). Used only to skip work
+// that cannot change a result: two fragments whose boxes are disjoint are disjoint.
+struct Box2 {
+  float ulo = 0, uhi = -1, vlo = 0, vhi = -1;  // empty by default
+  static Box2 of(const PlaneFrame& f, const Vec3f* poly, int n);
+  static Box2 everything();
+  bool overlaps(const Box2& b) const { return ulo <= b.uhi && b.ulo <= uhi && vlo <= b.vhi && b.vlo <= vhi; }
+  bool contains(float u, float v) const { return u >= ulo && u <= uhi && v >= vlo && v <= vhi; }
+  void extend(const Box2& b);
+};
+
+// The light's plane in a local frame: n . x = 0 (the frame's origin is a light vertex),
+// the light's own vertices within plane_tol of it, `extent` its largest box side.
+struct LightPlane {
+  Vec3f n{};
+  float plane_tol = 0.0f;
+  float extent = 0.0f;
+  PlaneFrame frame;
+};
+
+// A box holding the shadow of the convex polygon q (n vertices) cast from r onto the
+// light, in the light's PlaneFrame, or Box2::everything() when a vertex of q is not
+// between r and the light plane by at least 2^-10 of r's height (its projection is then
+// unbounded or too far out to bound usefully). Central projection onto n . x = 0:
+// x = r + (p - r) t, t = h(r) / (h(r) - h(p)) with h(x) = n . x, computed in double from
+// the float vertices, accepted when h(p) / h(r) <= 1 - 2^-10 (so 0 < t <= 2^10).
+// Margin: the fragments lie on the float light polygon, within plane_tol of that plane,
+// so a ray meets them within plane_tol (1 + |x - r|_1 / |h(r)|) of x (the in-plane
+// offset of a height change along the ray), doubled twice; plus 2^-16 of the coordinates
+// for the double rounding (about 1e-16 relative, times t <= 2^10). Conservative: it only
+// makes the box larger than the shadow. Used to skip a polygon whose shadow cannot meet
+// a fragment (two disjoint boxes: disjoint convex sets).
+Box2 shadow_box(const LightPlane& lp, const Vec3f& r, const Vec3f* q, size_t n);
+
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
 // accepted when >= -bound with the float bound of a 2D orientation (see fragment.cpp).

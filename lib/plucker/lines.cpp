@@ -34,6 +34,38 @@ Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, 
   return pos ? Orientation::Positive : Orientation::Negative;
 }
 
+void EdgeFan::set(const Vec3f& a_, const Vec3f& b, const Vec3f* p, int m) {
+  a = a_;
+  Vec3f ab = b - a;
+  float nab = norm1(ab);
+  w.resize(size_t(m));
+  scale.resize(size_t(m));
+  for (int k = 0; k < m; ++k) {
+    Vec3f pa = p[k] - a;
+    w[size_t(k)] = cross(pa, ab);
+    scale[size_t(k)] = kDetErr * norm1(pa) * nab;
+  }
+}
+
+Orientation EdgeFan::orientation(const Vec3f* x, int n, bool toward) const {
+  bool pos = false, neg = false;
+  const size_t m = w.size();
+  for (int i = 0; i < n; ++i) {
+    Vec3f d = x[i] - a;
+    float nd = norm1(d);
+    for (size_t k = 0; k < m; ++k) {
+      float s = dot(d, w[k]);
+      if (!toward) s = -s;
+      float bound = scale[k] * nd;
+      if (s > bound) pos = true;
+      else if (s < -bound) neg = true;
+      else return Orientation::Mixed;
+      if (pos && neg) return Orientation::Mixed;
+    }
+  }
+  return pos ? Orientation::Positive : Orientation::Negative;
+}
+
 bool segment_blocked(const Vec3f& r, const Vec3f& s, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
   // Plane sides: det[r - a, b - a, c - a] and det[s - a, b - a, c - a].
   Sign sr = side_sign(a, r, b, c);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "lib/geom/plucker.h"
 #include "lib/geom/vec.h"
@@ -88,6 +89,26 @@ bool line_stabs_polygon(const Plucker& line, const Vec3f* poly, int n);
 // is strictly negative, Mixed otherwise (including any value within the error bound):
 // conservative, never Positive or Negative for a set that has a line of the other sign.
 enum class Orientation : uint8_t { Positive, Negative, Mixed };
+
+// Theorem 1 against one fixed line a -> b, its part computed once (bsp.cpp develop: every
+// occluder of a leaf is tested against the same few edge lines of the merged occluder).
+// For fixed points p_k (the light's vertices, or the corners of a receiver region) let
+// W_k = (p_k - a) x (b - a). With every point taken relative to a (x' = x - a, ...),
+//   side(x -> p_k, a -> b) = det[p_k - x, a - x, b - x] = det[p'_k - x', -x', b' - x']
+//                          = -det[p'_k, x', b'] = x' . (p'_k x b') = (x - a) . W_k,
+// and side(p_k -> x, a -> b) = -(x - a) . W_k. The value has the form d . (u x v) of
+// kDetErr with d = x - a, u = p_k - a, v = b - a: its sign is decided against
+// kDetErr |x - a|_1 |p_k - a|_1 |b - a|_1, as vvset_orientation decides its own.
+struct EdgeFan {
+  Vec3f a{};
+  std::vector<Vec3f> w;      // W_k
+  std::vector<float> scale;  // kDetErr |p_k - a|_1 |b - a|_1
+  void set(const Vec3f& a, const Vec3f& b, const Vec3f* p, int m);
+  // The orientation of the lines x_i -> p_k (toward = true) or p_k -> x_i (toward =
+  // false), i < n, against a -> b: Positive / Negative when every value is strictly of
+  // that sign beyond its bound, else Mixed (conservative, like vvset_orientation).
+  Orientation orientation(const Vec3f* x, int n, bool toward) const;
+};
 
 // DESIGN section 3 for one triangle: the open segment r -> s crosses the triangle
 // (a, b, c) properly, i.e. r and s are strictly on opposite sides of its plane and the

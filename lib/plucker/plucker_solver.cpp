@@ -14,6 +14,7 @@
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
 #include "lib/plucker/shaft.h"
+#include "lib/plucker/triangle_tree.h"
 #include "lib/scene/rng.h"
 
 namespace visgate::plucker {
@@ -36,7 +37,9 @@ struct LightFrame {
   Vec3f n{}, p0{}, centroid{};
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
   AABB box;                // local
+  float extent = 0.0f;     // largest side of box
   PlaneFrame frame;
+  LightPlane plane;        // n, plane_tol, extent, frame: for shadow boxes (fragment.h)
   std::vector<Vec3f> samples;     // local jitter points, parallel to light.jitter_points
   std::vector<uint8_t> on_light;  // per jitter point: on the light polygon (fragment test)
 };
@@ -58,6 +61,8 @@ LightFrame make_frame(const Light& light) {
     f.plane_tol = std::max(f.plane_tol, h);
   }
   f.frame = PlaneFrame::from_normal(f.n);
+  f.extent = max_component(f.box.extent());
+  f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame};
   Vec3d c(0, 0, 0);
   for (const Vec3f& v : f.poly) c += to_double(v);
   f.centroid = Vec3f(c / double(f.poly.size()));
@@ -112,6 +117,7 @@ struct Totals {
     bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
     bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
+    bsp.occlusion_tests += o.bsp.occlusion_tests; bsp.lazy_visible += o.bsp.lazy_visible;
     bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area;
   }
 };
@@ -133,16 +139,33 @@ struct Context {
   SolveResult* result;
   std::vector<double>* irradiance;
   bool coherence;
+  LazyBsp::Choice choice;
+  const TriangleTree* tree;
   uint64_t seed;
   MemoryMeter* memory;
 };
 
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
-void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const FragmentList& in, FragmentList& out,
-                      std::vector<Vec3f>& cur, std::vector<Vec3f>& pos, std::vector<Vec3f>& neg, BspCounters& c) {
+// `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
+// is disjoint from the shadow and kept whole. `boxes` is parallel to `in`, `out_boxes`
+// to `out`.
+void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const Box2& qbox, const PlaneFrame& frame,
+                      const FragmentList& in, const std::vector<Box2>& boxes, FragmentList& out,
+                      std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur, std::vector<Vec3f>& pos,
+                      std::vector<Vec3f>& neg, BspCounters& c) {
   out.clear();
+  out_boxes.clear();
+  auto keep = [&](const Vec3f* p, size_t n) {
+    out.add(p, n);
+    out_boxes.push_back(Box2::of(frame, p, int(n)));
+  };
   for (size_t f = 0; f < in.size(); ++f) {
+    if (!qbox.overlaps(boxes[f])) {
+      out.add(in.data(f), size_t(in.count(f)));
+      out_boxes.push_back(boxes[f]);
+      continue;
+    }
     // A fragment entirely on the negative side of one edge plane misses q: kept whole,
     // without the splits the walk below would make before reaching that edge.
     bool misses = false;
@@ -152,6 +175,7 @@ void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const FragmentList
     }
     if (misses) {
       out.add(in.data(f), size_t(in.count(f)));
+      out_boxes.push_back(boxes[f]);
       continue;
     }
     cur.assign(in.data(f), in.data(f) + in.count(f));
@@ -161,11 +185,11 @@ void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const FragmentList
       switch (s) {
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
-        case SplitResult::Negative: out.add(cur.data(), cur.size()); alive = false; break;
+        case SplitResult::Negative: keep(cur.data(), cur.size()); alive = false; break;
         case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
         case SplitResult::Both:
           ++c.splits;
-          if (!neg.empty()) out.add(neg.data(), neg.size());
+          if (!neg.empty()) keep(neg.data(), neg.size());
           if (pos.empty()) alive = false;
           else cur.swap(pos);
           break;
@@ -277,7 +301,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<Vec3f> near_verts;
   std::vector<Vec3f> poly0, lower, upper;
   std::vector<float> vals;
-  for (size_t t = 0; t < scene.mesh.size(); ++t) {
+  std::vector<uint32_t> cand;
+  ctx.tree->candidates(shaft, lf.origin, cand);
+  for (uint32_t t : cand) {
     Vec3f tri[3] = {to_local(scene.mesh.corner(t, 0), lf.origin), to_local(scene.mesh.corner(t, 1), lf.origin),
                     to_local(scene.mesh.corner(t, 2), lf.origin)};
     if (shaft.culls(tri[0], tri[1], tri[2])) continue;
@@ -342,6 +368,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   for (const Vec3f& c : corners)
     if (std::find(region.begin(), region.end(), c) == region.end()) region.push_back(c);
   LazyBsp bsp(lf.poly.data(), int(lf.poly.size()), std::move(occluders), tree_seed, region.data(), int(region.size()));
+  bsp.set_choice(ctx.choice);
+  bsp.set_light_plane(lf.plane);
   ++tot.trees;
   tot.init_s += seconds_since(t0);
   int64_t reported = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
@@ -349,6 +377,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
 
   // --- Queries (Figure 8 "Q"): every receiver of the group, in grid order ---
   FragmentList frags, tmp;
+  std::vector<Box2> boxes, tmp_boxes;
   std::vector<Vec3f> pyramid;
   std::vector<Vec3f> cur, pos, neg, q;
   BspCounters near_counters;
@@ -359,8 +388,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     const Receiver& rec = scene.receivers[i];
     const Vec3f& r = rloc[gk];
     Clock::time_point tq = Clock::now();
-    bsp.query(r, frags);
-    tot.bsp_query_s += seconds_since(tq);
+    // A light the tree hides as a whole from r needs nothing else (LazyBsp::hides_all:
+    // a walk without splits). Otherwise the near polygons first, subtracted from the
+    // whole light: they are the closest to r, so their shadows are the largest, and the
+    // BSP is then walked (and developed) only for what they leave visible. Measured
+    // (callgrind, 1024 receivers): columns 1.90e9 instructions against 2.75e9 with the
+    // BSP first; rooms needs the hides_all walk (lights on other storeys).
+    frags.clear();
+    if (!bsp.hides_all(r)) frags.add(lf.poly.data(), lf.poly.size());
     // Side planes of the pyramid (r, light), oriented so the light's centroid is
     // positive: a near polygon entirely on the negative side of one misses every
     // segment from r to the light. The margin (a relative 2^-16 of |N| |d|, far above
@@ -372,9 +407,23 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       if (dot(nrm, lf.centroid - r) < 0.0f) nrm = -nrm;
       pyramid[j] = nrm;
     }
+    boxes.clear();
+    Box2 all;
+    for (size_t f = 0; f < frags.size(); ++f) {
+      boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
+      all.extend(boxes.back());
+    }
     for (const NearPoly& np : near) {
       if (frags.size() == 0) break;
       const Vec3f* pv = near_verts.data() + np.begin;
+      // This receiver's slab: g . p > g . r somewhere, else at or behind its g-plane.
+      vals.resize(np.count);
+      float maxv = -1.0f;
+      for (uint32_t k = 0; k < np.count; ++k) {
+        vals[k] = dot(g, pv[k] - r);
+        maxv = std::max(maxv, vals[k]);
+      }
+      if (maxv <= 0.0f) continue;
       bool outside = false;
       for (size_t j = 0; j < m && !outside; ++j) {
         outside = true;
@@ -385,14 +434,6 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         }
       }
       if (outside) continue;
-      // Clip to this receiver's slab: g . p > g . r.
-      vals.resize(np.count);
-      float maxv = -1.0f;
-      for (uint32_t k = 0; k < np.count; ++k) {
-        vals[k] = dot(g, pv[k] - r);
-        maxv = std::max(maxv, vals[k]);
-      }
-      if (maxv <= 0.0f) continue;  // at or behind the receiver's g-plane
       clip_by_values(pv, vals.data(), int(np.count), true, q);
       if (q.empty()) continue;
       // Side of r against the triangle's plane: on it, the triangle cannot meet an open
@@ -401,9 +442,25 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       float s = dot(nrm, d), bound = kDetErr * norm1(np.e1) * norm1(np.e2) * norm1(d);
       if (std::abs(s) <= bound) continue;
       if (s > 0.0f) std::reverse(q.begin(), q.end());
-      subtract_polygon(r, q.data(), int(q.size()), frags, tmp, cur, pos, neg, near_counters);
+      // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
+      Box2 qbox = shadow_box(lf.plane, r, q.data(), q.size());
+      if (!qbox.overlaps(all)) continue;
+      subtract_polygon(r, q.data(), int(q.size()), qbox, lf.frame, frags, boxes, tmp, tmp_boxes, cur, pos, neg,
+                       near_counters);
+      std::swap(frags, tmp);
+      std::swap(boxes, tmp_boxes);
+      all = Box2{};
+      for (const Box2& b : boxes) all.extend(b);
+    }
+    // Algorithm 1 on the pieces the near polygons left visible.
+    Clock::time_point tb = Clock::now();
+    if (frags.size() > 0) {
+      bsp.query(r, frags, tmp);
       std::swap(frags, tmp);
     }
+    tot.bsp_query_s += seconds_since(tb);
+    boxes.clear();
+    for (size_t f = 0; f < frags.size(); ++f) boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
     // Fragments, fraction, bits by point-in-fragment, irradiance.
     ReceiverResult& rr = ctx.result->receivers[i];
     auto& out = rr.fragments[li];
@@ -418,12 +475,19 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
     }
     rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
+    // Boxes grown by 2^-18 of the light's extent, far above point_in_fragment's boundary
+    // acceptance (8 u of the edge length): a sample outside a grown box is outside
+    // the fragment for point_in_fragment too.
+    const float grow = lf.extent * 0x1p-18f;
+    for (Box2& b : boxes) b = Box2{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
     for (int j = 0; j < light.samples; ++j) {
       size_t k = sample_index(light, j, i);
       bool vis = false;
       if (lf.on_light[k]) {
         const Vec3f& sp = lf.samples[k];
-        for (size_t f = 0; f < frags.size() && !vis; ++f) vis = point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp);
+        const float su = sp[lf.frame.u], sv = sp[lf.frame.v];
+        for (size_t f = 0; f < frags.size() && !vis; ++f)
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp);
       } else {
         // Off the light polygon (explicit samples): the segment r -> sample itself.
         vis = !segment_blocked_by_scene(scene, lf.origin, r, lf.samples[k]);
@@ -448,6 +512,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   tot.bsp.nodes_created += c.nodes_created;
   tot.bsp.developments += c.developments;
   tot.bsp.insert_tests += c.insert_tests;
+  tot.bsp.occlusion_tests += c.occlusion_tests;
+  tot.bsp.lazy_visible += c.lazy_visible;
   tot.bsp.splits += c.splits + near_counters.splits;
   tot.bsp.on_line += c.on_line + near_counters.on_line;
   tot.bsp.zero_area += c.zero_area + near_counters.zero_area;
@@ -509,8 +575,14 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   if (irradiance) irradiance->assign(scene.receivers.size() * scene.lights.size(), 0.0);
   bool coherence = opt.get_bool("coherence", true);
   int tile = int(opt.get_int("tile", 8));
+  LazyBsp::Choice choice = opt.get("choice", "relevant") == "random" ? LazyBsp::Choice::Random : LazyBsp::Choice::Relevant;
   MemoryMeter memory;
-  Context ctx{&scene, &result, irradiance, coherence, opt.seed, &memory};
+  // The triangle hierarchy for occluder selection, built once (counted as selection).
+  Clock::time_point tt = Clock::now();
+  TriangleTree tree(scene.mesh);
+  double tree_s = seconds_since(tt);
+  memory.change(int64_t(tree.memory_bytes()));
+  Context ctx{&scene, &result, irradiance, coherence, choice, &tree, opt.seed, &memory};
   auto groups = receiver_groups(scene, tile);
   Totals totals;
   std::mutex merge_mutex;
@@ -541,6 +613,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     });
   }
 
+  totals.select_s += tree_s;
   result.seconds = seconds_since(start);
   Stats& st = result.stats;
   st.set("relations", double(scene.relation_count()));
@@ -554,6 +627,8 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("bsp_nodes_max", double(totals.bsp_nodes_max));
   st.set("developments", double(totals.bsp.developments));
   st.set("insert_tests", double(totals.bsp.insert_tests));
+  st.set("occlusion_tests", double(totals.bsp.occlusion_tests));
+  st.set("lazy_visible", double(totals.bsp.lazy_visible));
   st.set("splits", double(totals.bsp.splits));
   st.set("degenerate_on_line", double(totals.bsp.on_line));
   st.set("degenerate_zero_area", double(totals.bsp.zero_area));
@@ -578,7 +653,9 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
 
 std::vector<OptionSpec> PluckerSolver::options() const {
   return {{"coherence", "on: queries reuse the tree; off: reset between queries (paper 002 section 5.1)", {"on", "off"}},
-          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}}};
+          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}},
+          {"choice", "relevant: develop with an occluder the query sees (bsp.h); random: the paper's random occluder",
+           {"relevant", "random"}}};
 }
 
 SolveResult PluckerSolver::solve(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }
