@@ -787,6 +787,22 @@ TEST(PluckerFragment, ShadowBoxHoldsTheCentralProjection) {
   EXPECT_TRUE(b.contains(1e30f, -1e30f));
 }
 
+TEST(PluckerFragment, PointInFragmentToleratesANoiseEdge) {
+  // A fragment of columns seed 2 (receiver 2330): two computed vertices 1.6e-6 apart make
+  // a "noise" edge whose line has a random direction; the sample 1e-3 inside the
+  // fragment is on the wrong side of that line. With the vertex slack (fragment.h) it is
+  // inside; a point outside the fragment by 1e-3 stays outside.
+  const Vec3f poly[4] = {Vec3f(-1.16099763f, -0.739767432f, 6.03390026f), Vec3f(-0.859376073f, 0.703119755f, 6.0640626f),
+                         Vec3f(-0.859375f, 0.703125f, 6.0640626f), Vec3f(-0.63122803f, 0.532933354f, 6.08687735f)};
+  PlaneFrame f = PlaneFrame::from_normal(Vec3f(0.0995037f, 0, -0.995037f));
+  const Vec3f inside(-1.09503269f, -0.433688283f, 6.04049683f);
+  EXPECT_FALSE(point_in_fragment(f, poly, 4, inside));
+  const float slack = 3.0f * 0x1p-20f;  // as plucker_solver.cpp: 2^-20 of the light's extent
+  EXPECT_TRUE(point_in_fragment(f, poly, 4, inside, slack));
+  const Vec3f outside(-1.09503269f - 0.01f, -0.433688283f, 6.04049683f);
+  EXPECT_FALSE(point_in_fragment(f, poly, 4, outside, slack));
+}
+
 namespace {
 double region_area(const FragmentList& out) {
   double a = 0;

@@ -185,7 +185,7 @@ Box2 shadow_box(const LightPlane& lp, const Vec3f& r, const Vec3f* q, size_t n) 
   return Box2{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
 }
 
-bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p) {
+bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p, float slack) {
   // 2D orientation (b - a) x (p - a) in float: 2 differences per factor, 2 products,
   // 1 subtraction, < 5.01 u of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
   // 8 u accepts points on the boundary (shared edges of neighbouring fragments are the
@@ -198,7 +198,8 @@ bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3
     float pu = p[f.u] - a[f.u], pv = p[f.v] - a[f.v];
     float o = eu * pv - ev * pu;
     if (f.flip) o = -o;
-    float bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu));
+    float bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu)) +
+                  slack * (2.0f * (std::abs(pu) + std::abs(pv)) + std::abs(eu) + std::abs(ev));
     if (o < -bound) return false;
   }
   return true;

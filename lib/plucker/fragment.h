@@ -89,7 +89,16 @@ Box2 shadow_box(const LightPlane& lp, const Vec3f& r, const Vec3f* q, size_t n);
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
 // accepted when >= -bound with the float bound of a 2D orientation (see fragment.cpp).
-bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p);
+// `slack` is the position uncertainty of the fragment's vertices (absolute, per
+// coordinate; 0 for exact input polygons): fragment vertices are float interpolations,
+// so a convex fragment is stored convex only up to slack, and where two computed
+// vertices nearly coincide their edge's direction is noise (measured: a 6e-6 long edge
+// of a columns fragment, whose line put a sample 1e-3 inside the fragment "outside").
+// The bound then grows by the orientation's change under such a move,
+// 2 slack (|p_u - a_u| + |p_v - a_v|) + slack (|e_u| + |e_v|): a short edge's line
+// constrains only points near it. Far from every edge the answer is unchanged; callers
+// that need a tight outer limit test a box first (plucker_solver.cpp).
+bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p, float slack = 0.0f);
 
 // Lambert irradiance at r with unit normal nr from a uniformly emitting polygon of unit
 // radiance (Nishita-Nakamae: E = 1/2 sum_k theta_k (nr . gamma_k)), the polygon first

@@ -475,10 +475,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
     }
     rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
-    // Boxes grown by 2^-18 of the light's extent, far above point_in_fragment's boundary
-    // acceptance (8 u of the edge length): a sample outside a grown box is outside
-    // the fragment for point_in_fragment too.
+    // A sample is visible when it lies in the box of a fragment grown by 2^-18 of the
+    // light's extent and in the fragment by point_in_fragment with a vertex slack of
+    // 2^-20 of the extent (fragment.h: about 30 ulps of the coordinates, far above the
+    // rounding of the interpolated vertices, far below tau). The box bounds what the
+    // slack accepts near short edges; together they accept exactly the points within
+    // about 2^-18 of the extent of a fragment.
     const float grow = lf.extent * 0x1p-18f;
+    const float slack = lf.extent * 0x1p-20f;
     for (Box2& b : boxes) b = Box2{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
     for (int j = 0; j < light.samples; ++j) {
       size_t k = sample_index(light, j, i);
@@ -487,7 +491,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         const Vec3f& sp = lf.samples[k];
         const float su = sp[lf.frame.u], sv = sp[lf.frame.v];
         for (size_t f = 0; f < frags.size() && !vis; ++f)
-          vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp);
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
       } else {
         // Off the light polygon (explicit samples): the segment r -> sample itself.
         vis = !segment_blocked_by_scene(scene, lf.origin, r, lf.samples[k]);
