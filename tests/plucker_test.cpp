@@ -901,3 +901,22 @@ TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
     EXPECT_LE(kept, cand.size());
   }
 }
+
+TEST(PluckerSolver, ReceiverFarFromTheLight) {
+  // fuzz_plucker 597a1279...: a receiver 7e22 from a light of size 1. Lines from it are
+  // parallel to rounding, and the side of a light point against the plane through the
+  // receiver and an occluder edge must be evaluated through the edge (fragment.cpp): as
+  // (x - r) . N it cancels and overflows float. Here from (0, 0, -2^76) the half-light
+  // occluder at z = 1 hides half of the light (parallel projection), as the region
+  // oracle says exactly.
+  Scene s = light_scene({Vec3f(0, 0, -0x1p76f)});
+  shapes::add_quad(s.mesh, Vec3d(0, -1.5, 1), Vec3d(1.5, -1.5, 1), Vec3d(1.5, 1.5, 1), Vec3d(0, 1.5, 1));
+  SolveResult r = run(s);
+  double exact = oracle::visible_region(s, 0, 0).visible_fraction;
+  EXPECT_NEAR(exact, 0.5, 1e-9);
+  EXPECT_NEAR(r.receivers[0].visible_fraction[0], exact, 1e-4);
+  for (int j = 0; j < s.lights[0].samples; ++j) {
+    Vec3f p = sample_position(s.lights[0], j, 0);
+    if (std::abs(p.x) > 1e-3f) EXPECT_EQ(r.receivers[0].visible(size_t(j)), p.x < 0) << j;
+  }
+}

@@ -16,9 +16,15 @@ constexpr int kMaxStack = 64;
 // through r and the line is only known to the angle kCrossErr s / |N|, s the product of
 // the 1-norms of the two shortest of a - r, b - r, b - a (lines.h edge_plane_normal),
 // which is the float method's inherent uncertainty, see bsp.h), and only the evaluation
-// of d . N is bounded: 1 rounding in d = x - r, 1 per product, 2 in the sum, < 4.01 u
+// of d . N is bounded: 1 rounding in d = x - a, 1 per product, 2 in the sum, < 4.01 u
 // sum |d_i N_i| <= 4.01 u |d|_1 |N|_inf; doubled. Every fragment is thus split
 // consistently by one plane, and "zero area" means inside that plane up to evaluation.
+// The plane is evaluated through a, not r: (x - a) . N = (x - r) . N because N is
+// orthogonal to a - r, and d = x - a is short when the occluder is near the light, so
+// the plane is held to the rounding of N's direction times |x - a| rather than
+// |x - r|. For a receiver far from the light (fuzz_plucker 597a1279...: 7e22 away)
+// x - r is -r to within rounding and (x - r) . N cancels catastrophically (and
+// overflows: |r|^2 |b - a| > 3.4e38), while (x - a) . N keeps every digit.
 constexpr float kDotErr = 8.0f * kUnitRoundoff;
 }
 
@@ -32,7 +38,7 @@ SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, co
   bool pos = false, neg = false;
   float dot_scale = kDotErr * max_component(vabs(nrm));
   for (int k = 0; k < n; ++k) {
-    Vec3f d = poly[k] - r;
+    Vec3f d = poly[k] - a;
     float s = dot(d, nrm);
     float bound = dot_scale * norm1(d);
     pos |= s > bound;
@@ -67,7 +73,7 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
   int npos = 0, nneg = 0;
   float dot_scale = kDotErr * max_component(vabs(nrm));
   for (int k = 0; k < n; ++k) {
-    Vec3f d = poly[k] - r;
+    Vec3f d = poly[k] - a;
     float s = dot(d, nrm);
     float bound = dot_scale * norm1(d);
     if (s > bound) ++npos;

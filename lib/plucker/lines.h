@@ -67,9 +67,11 @@ enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
 
 // side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
 // sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
-// their relative precision.
+// their relative precision. Evaluated as (x - a) . N with N = edge_plane_normal(p, a, b)
+// (equal to det[x - p, a - p, b - p]: subtract the second column from the first), so a
+// point p far from the other three costs no precision (fragment.cpp, kDotErr).
 inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3f& b) {
-  Vec3f d = x - p;
+  Vec3f d = x - a;
   float scale = 0.0f;
   float s = dot(d, edge_plane_normal(p, a, b, scale));
   float bound = kDetErr * norm1(d) * scale;
