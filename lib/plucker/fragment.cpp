@@ -19,11 +19,11 @@ constexpr int kMaxStack = 64;
 // of d . N is bounded: 1 rounding in d = x - a, 1 per product, 2 in the sum, < 4.01 u
 // sum |d_i N_i| <= 4.01 u |d|_1 |N|_inf; doubled. Every fragment is thus split
 // consistently by one plane, and "zero area" means inside that plane up to evaluation.
-// The plane is evaluated through a, not r: (x - a) . N = (x - r) . N because N is
-// orthogonal to a - r, and d = x - a is short when the occluder is near the light, so
-// the plane is held to the rounding of N's direction times |x - a| rather than
-// |x - r|. For a receiver far from the light (fuzz_plucker 597a1279...: 7e22 away)
-// x - r is -r to within rounding and (x - r) . N cancels catastrophically (and
+// The plane is evaluated through the one of r, a, b nearest to the fragment
+// (lines.h nearest_base; (x - a) . N = (x - r) . N because N is orthogonal to a - r),
+// chosen on the fragment's first vertex, so every vertex of one fragment is judged
+// against the same plane. For a receiver far from the light (fuzz_plucker 597a1279...:
+// 7e22 away) x - r is -r to within rounding and (x - r) . N cancels catastrophically (and
 // overflows: |r|^2 |b - a| > 3.4e38), while (x - a) . N keeps every digit.
 constexpr float kDotErr = 8.0f * kUnitRoundoff;
 }
@@ -36,9 +36,10 @@ SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, co
   if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)
     return SplitResult::OnLine;
   bool pos = false, neg = false;
+  const Vec3f& base = nearest_base(r, a, b, poly[0]);
   float dot_scale = kDotErr * max_component(vabs(nrm));
   for (int k = 0; k < n; ++k) {
-    Vec3f d = poly[k] - a;
+    Vec3f d = poly[k] - base;
     float s = dot(d, nrm);
     float bound = dot_scale * norm1(d);
     pos |= s > bound;
@@ -71,9 +72,10 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
     val = val_heap.data();
   }
   int npos = 0, nneg = 0;
+  const Vec3f& base = nearest_base(r, a, b, poly[0]);
   float dot_scale = kDotErr * max_component(vabs(nrm));
   for (int k = 0; k < n; ++k) {
-    Vec3f d = poly[k] - a;
+    Vec3f d = poly[k] - base;
     float s = dot(d, nrm);
     float bound = dot_scale * norm1(d);
     if (s > bound) ++npos;
@@ -106,19 +108,29 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
   return SplitResult::Both;
 }
 
-void clip_by_values(const Vec3f* poly, const float* values, int n, bool keep_nonneg, std::vector<Vec3f>& out) {
+void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3f>& out,
+                    std::vector<uint8_t>* on_plane) {
   out.clear();
+  if (on_plane) on_plane->clear();
   for (int k = 0; k < n; ++k) {
     int k1 = (k + 1 == n) ? 0 : k + 1;
-    float s0 = keep_nonneg ? values[k] : -values[k];
-    float s1 = keep_nonneg ? values[k1] : -values[k1];
-    if (s0 >= 0.0f) out.push_back(poly[k]);
-    if ((s0 > 0.0f && s1 < 0.0f) || (s0 < 0.0f && s1 > 0.0f)) {
-      float t = s0 / (s0 - s1);
-      out.push_back(poly[k] + (poly[k1] - poly[k]) * t);
+    double s0 = keep_nonneg ? values[k] : -values[k];
+    double s1 = keep_nonneg ? values[k1] : -values[k1];
+    if (s0 >= 0.0) {
+      out.push_back(poly[k]);
+      if (on_plane) on_plane->push_back(s0 == 0.0);
+    }
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
+      double t = s0 / (s0 - s1);
+      Vec3d p0 = to_double(poly[k]), p1 = to_double(poly[k1]);
+      out.push_back(Vec3f(p0 + (p1 - p0) * t));
+      if (on_plane) on_plane->push_back(1);
     }
   }
-  if (out.size() < 3) out.clear();
+  if (out.size() < 3) {
+    out.clear();
+    if (on_plane) on_plane->clear();
+  }
 }
 
 double polygon_area(const Vec3f* poly, int n) {

@@ -63,15 +63,29 @@ inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, f
   return cross(pb, ab);
 }
 
+// The base point for evaluating det[x - p, a - p, b - p] = (x - base) . N with
+// N = edge_plane_normal(p, a, b): any of p, a, b gives the same determinant (N is
+// orthogonal to a - p, b - p and b - a), and the computed plane is held to the rounding
+// of N's direction times |x - base|, so the one nearest to x (1-norm, x a representative
+// point of those evaluated) is used. Measured: a receiver 7e22 from the light needs a or b
+// (fuzz_plucker 597a1279...: (x - p) . N cancels and overflows), an occluder vertex 6e5
+// from the light needs p or the other vertex (dfb33fdd...: (x - a) . N put the plane
+// 0.04 off at the light).
+inline const Vec3f& nearest_base(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& x) {
+  float dp = norm1(x - p), da = norm1(x - a), db = norm1(x - b);
+  if (dp <= da && dp <= db) return p;
+  return da <= db ? a : b;
+}
+
 enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
 
 // side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
 // sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
-// their relative precision. Evaluated as (x - a) . N with N = edge_plane_normal(p, a, b)
-// (equal to det[x - p, a - p, b - p]: subtract the second column from the first), so a
-// point p far from the other three costs no precision (fragment.cpp, kDotErr).
+// their relative precision. Evaluated as (x - base) . N with N = edge_plane_normal(p, a,
+// b) and the base of nearest_base, so a point far from the other three costs no
+// precision (fragment.cpp, kDotErr).
 inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3f& b) {
-  Vec3f d = x - a;
+  Vec3f d = x - nearest_base(p, a, b, x);
   float scale = 0.0f;
   float s = dot(d, edge_plane_normal(p, a, b, scale));
   float bound = kDetErr * norm1(d) * scale;

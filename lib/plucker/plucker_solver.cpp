@@ -11,6 +11,7 @@
 
 #include "lib/geom/check.h"
 #include "lib/plucker/bsp.h"
+#include "lib/plucker/exact_orient.h"
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
 #include "lib/plucker/shaft.h"
@@ -99,8 +100,29 @@ bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec
 }
 
 // A triangle part handled per receiver (plucker_solver.h "near" polygons).
+// Side of x against the plane of the triangle t (world coordinates, the inputs as
+// given: the local frame's rounding moves points by u |x - o|, which is enough to put a
+// receiver 6e-9 below a face above it, fuzz_plucker 68d82337...): the sign of
+// det[t1 - t0, t2 - t0, x - t0] = orient3d(t0, t1, t2, x). In float as (x - base) . N
+// with N = edge_plane_normal(t0, t1, t2) (the cross product of its two shortest edges)
+// and base the vertex nearest to x (lines.h nearest_base), decided against kDetErr;
+// when the bound leaves it open, 0, or with `exact` the exact sign (exact_orient.h).
+// The textbook (t1 - t0) x (t2 - t0) . (x - t0) loses the plane of a sliver with a vertex
+// 6e5 away (fuzz_plucker dfb33fdd...: both long edges, their cross product's rounding
+// larger than the triangle's area) and called receivers beside it "on the plane".
+int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
+  float scale = 0.0f;
+  Vec3f nrm = edge_plane_normal(t[0], t[1], t[2], scale);
+  const Vec3f& base = nearest_base(t[0], t[1], t[2], x);
+  Vec3f d = x - base;
+  float s = dot(d, nrm), bound = kDetErr * norm1(d) * scale;
+  if (s > bound) return 1;
+  if (s < -bound) return -1;
+  return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
+}
+
 struct NearPoly {
-  Vec3f v0, e1, e2;  // the triangle's plane: v0 and its edge vectors
+  uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
   uint32_t begin, count;
 };
 
@@ -150,10 +172,13 @@ struct Context {
 // `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
 // is disjoint from the shadow and kept whole. `boxes` is parallel to `in`, `out_boxes`
 // to `out`.
-void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const Box2& qbox, const PlaneFrame& frame,
-                      const FragmentList& in, const std::vector<Box2>& boxes, FragmentList& out,
-                      std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur, std::vector<Vec3f>& pos,
-                      std::vector<Vec3f>& neg, BspCounters& c) {
+// Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows every
+// light line from r is on their inner side (the edge q has at r's own level, see the
+// near-polygon loop in shade_group).
+void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const uint8_t* skip, const Box2& qbox,
+                      const PlaneFrame& frame, const FragmentList& in, const std::vector<Box2>& boxes,
+                      FragmentList& out, std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur,
+                      std::vector<Vec3f>& pos, std::vector<Vec3f>& neg, BspCounters& c) {
   out.clear();
   out_boxes.clear();
   auto keep = [&](const Vec3f* p, size_t n) {
@@ -170,6 +195,7 @@ void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const Box2& qbox, 
     // without the splits the walk below would make before reaching that edge.
     bool misses = false;
     for (int m = 0; m < nq && !misses; ++m) {
+      if (skip[m]) continue;
       SplitResult s = classify_fragment(r, q[m], q[(m + 1) % nq], in.data(f), in.count(f));
       misses = s == SplitResult::Negative || s == SplitResult::OnLine;
     }
@@ -181,6 +207,7 @@ void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const Box2& qbox, 
     cur.assign(in.data(f), in.data(f) + in.count(f));
     bool alive = true;
     for (int m = 0; m < nq && alive; ++m) {
+      if (skip[m]) continue;
       SplitResult s = split_fragment(r, q[m], q[(m + 1) % nq], cur.data(), int(cur.size()), pos, neg);
       switch (s) {
         case SplitResult::Positive: break;
@@ -235,7 +262,6 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
                  uint64_t tree_seed, Totals& tot) {
   const Scene& scene = *ctx.scene;
   const Light& light = scene.lights[li];
-  auto height = [&](const Vec3f& x) { return sigma * dot(lf.n, x - lf.p0); };
 
   // --- Occluder selection (Figure 8 "SC") ---
   Clock::time_point t0 = Clock::now();
@@ -292,6 +318,12 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     }
   }
   const float delta = 16.0f * kUnitRoundoff * norm1(g) * 3.0f * coord_max;
+  // World corners of the receivers' box, for the one-sided test (plane_side).
+  AABB wbox;
+  for (uint32_t i : group) wbox.extend(scene.receivers[i].p);
+  Vec3f wcorners[8];
+  for (int c = 0; c < 8; ++c)
+    wcorners[c] = Vec3f((c & 1) ? wbox.hi.x : wbox.lo.x, (c & 2) ? wbox.hi.y : wbox.lo.y, (c & 4) ? wbox.hi.z : wbox.lo.z);
   Vec3f corners[8];
   for (int c = 0; c < 8; ++c)
     corners[c] = Vec3f((c & 1) ? rbox.hi.x : rbox.lo.x, (c & 2) ? rbox.hi.y : rbox.lo.y, (c & 4) ? rbox.hi.z : rbox.lo.z);
@@ -300,42 +332,47 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<NearPoly> near;
   std::vector<Vec3f> near_verts;
   std::vector<Vec3f> poly0, lower, upper;
-  std::vector<float> vals;
+  std::vector<double> vals;
+  const Vec3d nd = to_double(lf.n), gd = to_double(g), refd = to_double(ref);
+  const double gcut = double(gmax) + double(delta);
   std::vector<uint32_t> cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
   for (uint32_t t : cand) {
     Vec3f tri[3] = {to_local(scene.mesh.corner(t, 0), lf.origin), to_local(scene.mesh.corner(t, 1), lf.origin),
                     to_local(scene.mesh.corner(t, 2), lf.origin)};
     if (shaft.culls(tri[0], tri[1], tri[2])) continue;
-    float h[3] = {height(tri[0]), height(tri[1]), height(tri[2])};
+    // Heights over the light plane and g-values in double on the float vertices (the
+    // clipping below interpolates in double, fragment.h clip_by_values).
+    double h[3], gv[3];
+    for (int k = 0; k < 3; ++k) {
+      Vec3d x = to_double(tri[k]);
+      h[k] = double(sigma) * dot(nd, x);
+      gv[k] = dot(gd, x - refd);
+    }
     // Beyond, or lying in, the light plane: it never meets an open segment (occluders
     // touching the light plane with a vertex or an edge are kept).
-    if (std::max(h[0], std::max(h[1], h[2])) <= lf.plane_tol) continue;
+    if (std::max(h[0], std::max(h[1], h[2])) <= double(lf.plane_tol)) continue;
     // Behind every receiver's g-plane.
-    float gv[3] = {gval(g, tri[0]), gval(g, tri[1]), gval(g, tri[2])};
-    if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
+    if (std::max(gv[0], std::max(gv[1], gv[2])) <= double(gmin) - double(delta)) continue;
     // Clip to the light side h >= 0.
     clip_by_values(tri, h, 3, true, poly0);
     if (poly0.empty()) continue;
     // Split at gmax + delta: beyond it, between every receiver and the light (tree);
     // the rest per receiver.
     vals.resize(poly0.size());
-    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = gval(g, poly0[k]) - (gmax + delta);
+    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = dot(gd, to_double(poly0[k]) - refd) - gcut;
     clip_by_values(poly0.data(), vals.data(), int(poly0.size()), true, lower);
     clip_by_values(poly0.data(), vals.data(), int(poly0.size()), false, upper);
-    Vec3f e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
     if (!lower.empty()) {
       // Orientation (bsp.h Occluder): receivers strictly on one side of the triangle's
-      // plane (decided on the corners of their box) give a one-sided occluder, else
-      // two-sided.
-      Vec3f nrm = cross(e1, e2);
-      float scale = kDetErr * norm1(e1) * norm1(e2);
+      // plane (decided in float on the corners of their box; undecided counts for
+      // neither) give a one-sided occluder, else two-sided.
       int npos = 0, nneg = 0;
-      for (const Vec3f& c : corners) {
-        Vec3f d = c - tri[0];
-        float sd = dot(nrm, d), bound = scale * norm1(d);
-        npos += sd > bound;
-        nneg += sd < -bound;
+      const Vec3f wtri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
+      for (const Vec3f& c : wcorners) {
+        int sd = plane_side(wtri, c, false);
+        npos += sd > 0;
+        nneg += sd < 0;
       }
       VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
       Occluder o;
@@ -346,14 +383,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Measured on columns (1024 receivers, 64 samples): two-sided occluders in the
         // tree are mixed against most hyperplanes and multiply the developments by ~25;
         // per receiver they cost one subtraction. So they go to the near list.
-        near.push_back(NearPoly{tri[0], e1, e2, uint32_t(near_verts.size()), uint32_t(lower.size())});
+        near.push_back(NearPoly{t, uint32_t(near_verts.size()), uint32_t(lower.size())});
         near_verts.insert(near_verts.end(), lower.begin(), lower.end());
       } else {
         occluders.push_back(o);
       }
     }
     if (!upper.empty()) {
-      near.push_back(NearPoly{tri[0], e1, e2, uint32_t(near_verts.size()), uint32_t(upper.size())});
+      near.push_back(NearPoly{t, uint32_t(near_verts.size()), uint32_t(upper.size())});
       near_verts.insert(near_verts.end(), upper.begin(), upper.end());
     }
   }
@@ -380,6 +417,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<Box2> boxes, tmp_boxes;
   std::vector<Vec3f> pyramid;
   std::vector<Vec3f> cur, pos, neg, q;
+  std::vector<uint8_t> on_level, skip;
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
@@ -418,12 +456,13 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       const Vec3f* pv = near_verts.data() + np.begin;
       // This receiver's slab: g . p > g . r somewhere, else at or behind its g-plane.
       vals.resize(np.count);
-      float maxv = -1.0f;
+      double maxv = -1.0;
+      const Vec3d rd = to_double(r);
       for (uint32_t k = 0; k < np.count; ++k) {
-        vals[k] = dot(g, pv[k] - r);
+        vals[k] = dot(gd, to_double(pv[k]) - rd);
         maxv = std::max(maxv, vals[k]);
       }
-      if (maxv <= 0.0f) continue;
+      if (maxv <= 0.0) continue;
       bool outside = false;
       for (size_t j = 0; j < m && !outside; ++j) {
         outside = true;
@@ -434,19 +473,35 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         }
       }
       if (outside) continue;
-      clip_by_values(pv, vals.data(), int(np.count), true, q);
+      clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
       if (q.empty()) continue;
-      // Side of r against the triangle's plane: on it, the triangle cannot meet an open
-      // segment from r properly (it only touches it or contains it): skipped.
-      Vec3f nrm = cross(np.e1, np.e2), d = r - np.v0;
-      float s = dot(nrm, d), bound = kDetErr * norm1(np.e1) * norm1(np.e2) * norm1(d);
-      if (std::abs(s) <= bound) continue;
-      if (s > 0.0f) std::reverse(q.begin(), q.end());
+      // Side of r against the triangle's plane, exactly when float cannot tell (a
+      // receiver within rounding of a face is on one side, and the face then hides the
+      // light from it: fuzz_plucker 68d82337...). On the plane the triangle cannot meet
+      // an open segment from r properly (it only touches or contains it): skipped.
+      const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
+                             scene.mesh.corner(np.triangle, 2)};
+      int side_r = plane_side(wtri, rec.p, true);
+      if (side_r == 0) continue;
+      if (side_r > 0) {
+        std::reverse(q.begin(), q.end());
+        std::reverse(on_level.begin(), on_level.end());
+      }
+      // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies
+      // in the level plane through r, so the plane through r and that edge is the
+      // level plane itself, and every light point is strictly beyond it, on q's side:
+      // the edge cannot cut a light line away and is skipped. Testing it would be
+      // wrong near degeneracy: when r is within rounding of the triangle's plane, the
+      // edge passes within rounding of r, float calls r "on its line" and the whole
+      // polygon was dropped (fuzz_plucker 68d82337...: a receiver 6e-9 below a face,
+      // fraction 1 instead of 0).
+      skip.assign(q.size(), 0);
+      for (size_t k = 0; k < q.size(); ++k) skip[k] = on_level[k] && on_level[(k + 1) % q.size()];
       // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
       Box2 qbox = shadow_box(lf.plane, r, q.data(), q.size());
       if (!qbox.overlaps(all)) continue;
-      subtract_polygon(r, q.data(), int(q.size()), qbox, lf.frame, frags, boxes, tmp, tmp_boxes, cur, pos, neg,
-                       near_counters);
+      subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, frags, boxes, tmp, tmp_boxes, cur,
+                       pos, neg, near_counters);
       std::swap(frags, tmp);
       std::swap(boxes, tmp_boxes);
       all = Box2{};
