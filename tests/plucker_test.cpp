@@ -1034,3 +1034,32 @@ TEST(PluckerGeometry, ExactOrientationAgreesWithRationalArithmetic) {
   EXPECT_GT(zero, 200);
   EXPECT_GT(nonzero, 1000);
 }
+
+TEST(PluckerSolver, ReceiverFarBesideTheLightAndASliverReachingAway) {
+  // fuzz_plucker seed-mode07-1 (sliver-soup, two coordinates replaced): a receiver 2^17
+  // beside a unit light sees it nearly edge-on, through a sliver triangle that reaches
+  // from the light to 1.3e10. The planes through the receiver and the sliver's far
+  // edges are 5e-9 rad from its line of sight: the cross product's 1-norm bound called
+  // the receiver "on the line" and the sliver was dropped (fraction 1 against the
+  // region oracle's 0.728); the per-component bound (lines.h edge_plane_normal_err)
+  // resolves them.
+  Scene s;
+  s.name = "far-beside";
+  Light l;
+  l.polygon = {Vec3f(-0.5f, -0.5f, 2), Vec3f(-0.5f, 0.5f, 2), Vec3f(0.5f, 0.5f, 2), Vec3f(0x1p-97f, -0.5f, 2)};
+  l.samples = 16;
+  l.seed = 5;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(-0x1.8ddf58p-1f, -0x1.f50838p-4f, 0x1.04a126p+1f),
+                     Vec3f(-0x1.903f9ap+33f, -0x1.574646p+0f, 0x1.1f8004p-1f),
+                     Vec3f(-0x1.395f7p-1f, -0x1.25dc36p+0f, 0x1.9744c4p-1f)};
+  s.mesh.triangles = {{0, 1, 2}};
+  s.receivers.push_back({Vec3f(-0x1p+17f, -0x1.29a4b8p-5f, 0x1.425efp-2f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  double exact = oracle::visible_region(s, 0, 0).visible_fraction;
+  EXPECT_NEAR(exact, 0.7278345, 1e-6);
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    EXPECT_NEAR(r.receivers[0].visible_fraction[0], exact, 1e-4) << coherence;
+  }
+}

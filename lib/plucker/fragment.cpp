@@ -30,11 +30,9 @@ constexpr float kDotErr = 8.0f * kUnitRoundoff;
 
 SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n) {
   // Same signs as split_fragment below.
-  float scale = 0.0f;
-  Vec3f nrm = edge_plane_normal(r, a, b, scale);
-  float cross_bound = kCrossErr * scale;
-  if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)
-    return SplitResult::OnLine;
+  Vec3f err;
+  Vec3f nrm = edge_plane_normal_err(r, a, b, err);
+  if (on_line(nrm, err)) return SplitResult::OnLine;
   bool pos = false, neg = false;
   const Vec3f& base = nearest_base(r, a, b, poly[0]);
   float dot_scale = kDotErr * max_component(vabs(nrm));
@@ -57,12 +55,10 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
   // normal N = (a - r) x (b - r), and for x on the light det[x - r, a - r, b - r] =
   // (x - r) . N = side(line(r, x), line(a, b)), N computed from the two shortest of
   // a - r, b - r, b - a (lines.h edge_plane_normal).
-  float scale = 0.0f;
-  Vec3f nrm = edge_plane_normal(r, a, b, scale);
-  // Query point on the node's line: N vanishes within the cross-product error bound.
-  float cross_bound = kCrossErr * scale;
-  if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)
-    return SplitResult::OnLine;
+  Vec3f err;
+  Vec3f nrm = edge_plane_normal_err(r, a, b, err);
+  // Query point on the node's line: N vanishes within its error bound (lines.h).
+  if (on_line(nrm, err)) return SplitResult::OnLine;
 
   float val_buf[kMaxStack];
   std::vector<float> val_heap;

@@ -63,6 +63,44 @@ inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, f
   return cross(pb, ab);
 }
 
+// The same normal with a per-component error bound: err_i = kCrossErr times the
+// permanent of component i of u x v (|u_y v_z| + |u_z v_y| for x, ...), for the two
+// vectors u, v actually crossed. |u|_1 |v|_1 bounds every permanent, but for two long,
+// nearly parallel vectors (an edge far from p and nearly in line with it) it is
+// dominated by the product of their long components, which no cross component holds:
+// measured on fuzz_plucker seed-mode07-1, an edge 3e8 away and 5e-9 rad off the line to
+// the receiver: |N| 8e9 against a |u|_1 |v|_1 bound of 8e11 (so "r on the line") and a
+// permanent bound of about 1e3.
+inline Vec3f edge_plane_normal_err(const Vec3f& p, const Vec3f& a, const Vec3f& b, Vec3f& err) {
+  Vec3f pa = a - p, pb = b - p, ab = b - a;
+  float na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
+  const Vec3f* u = &pa;
+  const Vec3f* v = &pb;
+  if (!(nab >= na && nab >= nb)) {
+    if (nb >= na) v = &ab;
+    else u = &pb, v = &ab;
+  }
+  err = Vec3f(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
+              std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
+        kCrossErr;
+  return cross(*u, *v);
+}
+
+// The error bound of d . N for d a float difference and N from edge_plane_normal_err:
+// N's component errors times |d_i|, plus the rounding of d and of the dot product
+// (5 roundings of sum |d_i N_i|, counted as 8 u).
+inline float dot_err(const Vec3f& d, const Vec3f& nrm, const Vec3f& err) {
+  return std::abs(d.x) * (err.x + 8.0f * kUnitRoundoff * std::abs(nrm.x)) +
+         std::abs(d.y) * (err.y + 8.0f * kUnitRoundoff * std::abs(nrm.y)) +
+         std::abs(d.z) * (err.z + 8.0f * kUnitRoundoff * std::abs(nrm.z));
+}
+
+// r on the line a -> b within rounding: every component of the computed normal within
+// its error bound.
+inline bool on_line(const Vec3f& nrm, const Vec3f& err) {
+  return std::abs(nrm.x) <= err.x && std::abs(nrm.y) <= err.y && std::abs(nrm.z) <= err.z;
+}
+
 // The base point for evaluating det[x - p, a - p, b - p] = (x - base) . N with
 // N = edge_plane_normal(p, a, b): any of p, a, b gives the same determinant (N is
 // orthogonal to a - p, b - p and b - a), and the computed plane is held to the rounding
@@ -81,14 +119,15 @@ enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
 
 // side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
 // sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
-// their relative precision. Evaluated as (x - base) . N with N = edge_plane_normal(p, a,
-// b) and the base of nearest_base, so a point far from the other three costs no
-// precision (fragment.cpp, kDotErr).
+// their relative precision. Evaluated as (x - base) . N with N = edge_plane_normal_err(p,
+// a, b) and the base of nearest_base, so a point far from the other three costs no
+// precision (fragment.cpp, kDotErr), decided against dot_err.
 inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3f& b) {
   Vec3f d = x - nearest_base(p, a, b, x);
-  float scale = 0.0f;
-  float s = dot(d, edge_plane_normal(p, a, b, scale));
-  float bound = kDetErr * norm1(d) * scale;
+  Vec3f err;
+  Vec3f nrm = edge_plane_normal_err(p, a, b, err);
+  float s = dot(d, nrm);
+  float bound = dot_err(d, nrm, err);
   return s > bound ? Sign::Positive : (s < -bound ? Sign::Negative : Sign::Zero);
 }
 

@@ -104,18 +104,19 @@ bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec
 // given: the local frame's rounding moves points by u |x - o|, which is enough to put a
 // receiver 6e-9 below a face above it, fuzz_plucker 68d82337...): the sign of
 // det[t1 - t0, t2 - t0, x - t0] = orient3d(t0, t1, t2, x). In float as (x - base) . N
-// with N = edge_plane_normal(t0, t1, t2) (the cross product of its two shortest edges)
-// and base the vertex nearest to x (lines.h nearest_base), decided against kDetErr;
+// with N = edge_plane_normal_err(t0, t1, t2) (the cross product of its two shortest
+// edges) and base the vertex nearest to x (lines.h nearest_base), decided against
+// dot_err;
 // when the bound leaves it open, 0, or with `exact` the exact sign (exact_orient.h).
 // The textbook (t1 - t0) x (t2 - t0) . (x - t0) loses the plane of a sliver with a vertex
 // 6e5 away (fuzz_plucker dfb33fdd...: both long edges, their cross product's rounding
 // larger than the triangle's area) and called receivers beside it "on the plane".
 int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
-  float scale = 0.0f;
-  Vec3f nrm = edge_plane_normal(t[0], t[1], t[2], scale);
+  Vec3f err;
+  Vec3f nrm = edge_plane_normal_err(t[0], t[1], t[2], err);
   const Vec3f& base = nearest_base(t[0], t[1], t[2], x);
   Vec3f d = x - base;
-  float s = dot(d, nrm), bound = kDetErr * norm1(d) * scale;
+  float s = dot(d, nrm), bound = dot_err(d, nrm, err);
   if (s > bound) return 1;
   if (s < -bound) return -1;
   return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
@@ -416,6 +417,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   FragmentList frags, tmp;
   std::vector<Box2> boxes, tmp_boxes;
   std::vector<Vec3f> pyramid;
+  std::vector<Vec3f> pyramid_err;
   std::vector<Vec3f> cur, pos, neg, q;
   std::vector<uint8_t> on_level, skip;
   BspCounters near_counters;
@@ -436,14 +438,22 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     if (!bsp.hides_all(r)) frags.add(lf.poly.data(), lf.poly.size());
     // Side planes of the pyramid (r, light), oriented so the light's centroid is
     // positive: a near polygon entirely on the negative side of one misses every
-    // segment from r to the light. The margin (a relative 2^-16 of |N| |d|, far above
-    // the float evaluation error of 4.01 u) keeps the rejection conservative.
+    // segment from r to the light. Each plane through r and light edge (l_j, l_j+1)
+    // has N = edge_plane_normal (its two shortest of l_j - r, l_j+1 - r, l_j+1 - l_j:
+    // for a receiver far from a small light the textbook (l_j - r) x (l_j+1 - r) is
+    // the cross product of two nearly parallel long vectors: its rounding u |l - r|^2
+    // against |N| ~ |l - r| |l_j+1 - l_j| is 1% for a receiver 1e5 light sizes away, as
+    // in fuzz_plucker seed-mode07-1) and is evaluated through l_j: (x - l_j) . N,
+    // rejected only below -16 dot_err (16 times its error bound).
     size_t m = lf.poly.size();
     pyramid.resize(m);
+    pyramid_err.resize(m);
     for (size_t j = 0; j < m; ++j) {
-      Vec3f nrm = cross(lf.poly[j] - r, lf.poly[(j + 1) % m] - r);
-      if (dot(nrm, lf.centroid - r) < 0.0f) nrm = -nrm;
+      Vec3f err;
+      Vec3f nrm = edge_plane_normal_err(r, lf.poly[j], lf.poly[(j + 1) % m], err);
+      if (dot(nrm, lf.centroid - lf.poly[j]) < 0.0f) nrm = -nrm;
       pyramid[j] = nrm;
+      pyramid_err[j] = err;
     }
     boxes.clear();
     Box2 all;
@@ -466,10 +476,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       bool outside = false;
       for (size_t j = 0; j < m && !outside; ++j) {
         outside = true;
-        float nn = norm1(pyramid[j]);
         for (uint32_t k = 0; k < np.count && outside; ++k) {
-          Vec3f d = pv[k] - r;
-          outside = dot(pyramid[j], d) < -0x1p-16f * nn * norm1(d);
+          Vec3f d = pv[k] - lf.poly[j];
+          outside = dot(pyramid[j], d) < -16.0f * dot_err(d, pyramid[j], pyramid_err[j]);
         }
       }
       if (outside) continue;
