@@ -1063,3 +1063,27 @@ TEST(PluckerSolver, ReceiverFarBesideTheLightAndASliverReachingAway) {
     EXPECT_NEAR(r.receivers[0].visible_fraction[0], exact, 1e-4) << coherence;
   }
 }
+
+TEST(PluckerSolver, ReceiverASubnormalDistanceFromAFace) {
+  // fuzz_plucker f95fbc59... (on-surface, z replaced by -2^-148): a receiver a subnormal
+  // distance below the floor. In the light's local frame it is on the floor, and float
+  // cannot resolve the planes through it and the floor's edges; the exact near-plane
+  // path (subtract_triangle_exact) decides every side on world coordinates. Under the
+  // floor triangle everything beyond the floor is hidden (fraction 0); beside it the
+  // triangle hides only a sliver; above it, nothing. All against the region oracle.
+  Scene s = light_scene({Vec3f(0.2f, 0.1f, -0x1p-148f), Vec3f(-0.6f, 0.3f, -0x1p-148f), Vec3f(0.2f, 0.1f, 0x1p-148f)});
+  s.mesh.vertices = {Vec3f(0, -1.5f, 0), Vec3f(0, 0, 0), Vec3f(-1.5f, 0, 0)};
+  s.mesh.triangles = {{0, 1, 2}};
+  s.receivers[0].p = Vec3f(-0.2f, -0.1f, -0x1p-148f);  // foot inside the triangle
+  ASSERT_TRUE(finish_scene(s).ok());
+  double want[3] = {0.0, 1.0, 1.0};
+  for (size_t i = 0; i < 3; ++i) EXPECT_NEAR(oracle::visible_region(s, i, 0).visible_fraction, want[i], 1e-9) << i;
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    for (size_t i = 0; i < 3; ++i) {
+      double exact = oracle::visible_region(s, i, 0).visible_fraction;
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact, 1e-4) << i << " " << coherence;
+    }
+    EXPECT_GE(r.stats.get("exact_triangles"), 1.0);
+  }
+}

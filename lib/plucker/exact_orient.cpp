@@ -8,6 +8,8 @@ namespace visgate::plucker {
 
 namespace {
 
+using Expansion = std::vector<double>;  // nonoverlapping, increasing magnitude, no zeros
+
 // Two-Sum: a + b = x + y exactly, x = fl(a + b) (Knuth; valid in round-to-nearest).
 inline void two_sum(double a, double b, double& x, double& y) {
   x = a + b;
@@ -16,16 +18,15 @@ inline void two_sum(double a, double b, double& x, double& y) {
   y = (a - av) + (b - bv);
 }
 
-// Two-Product: a * b = x + y exactly, with the fused multiply-add giving the roundoff
-// (std::fma is exact: it rounds a * b - x once, and that value is representable).
+// Two-Product: a * b = x + y exactly; the fused multiply-add rounds a * b - x once, and
+// that value is representable.
 inline void two_product(double a, double b, double& x, double& y) {
   x = a * b;
   y = std::fma(a, b, -x);
 }
 
-// Grow-Expansion: adds b to the nonoverlapping expansion e (increasing magnitude),
-// keeping it nonoverlapping; zero components are dropped.
-void grow(std::vector<double>& e, double b) {
+// Grow-Expansion: e += b, keeping e nonoverlapping; zero components are dropped.
+void grow(Expansion& e, double b) {
   double q = b;
   size_t out = 0;
   for (size_t i = 0; i < e.size(); ++i) {
@@ -38,38 +39,59 @@ void grow(std::vector<double>& e, double b) {
   if (q != 0.0) e.push_back(q);
 }
 
+// The exact difference of two points' coordinates k as an expansion: (a.hi + a.lo) -
+// (b.hi + b.lo), four floats summed exactly.
+Expansion difference(const SumPoint& a, const SumPoint& b, int k) {
+  Expansion e;
+  grow(e, double(a.hi[k]));
+  grow(e, double(a.lo[k]));
+  grow(e, -double(b.hi[k]));
+  grow(e, -double(b.lo[k]));
+  return e;
+}
+
 }  // namespace
 
-int orient3d_exact_sign(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const Vec3f& df) {
-  // Differences u = b - a, v = c - a, w = d - a as exact two-term expansions.
-  double u[3][2], v[3][2], w[3][2];
+ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d) {
+  Expansion u[3], v[3], w[3];
   for (int k = 0; k < 3; ++k) {
-    two_sum(double(bf[k]), -double(af[k]), u[k][0], u[k][1]);
-    two_sum(double(cf[k]), -double(af[k]), v[k][0], v[k][1]);
-    two_sum(double(df[k]), -double(af[k]), w[k][0], w[k][1]);
+    u[k] = difference(b, a, k);
+    v[k] = difference(c, a, k);
+    w[k] = difference(d, a, k);
   }
-  // det[u, v, w] = sum over the permutations (i, j, k) of sign * u_i v_j w_k.
+  // det[u, v, w] = sum over the permutations (i, j, k) of sign * u_i v_j w_k, each
+  // product expanded over the components.
   static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
-  std::vector<double> sum;
+  Expansion sum;
   sum.reserve(64);
   for (int p = 0; p < 6; ++p) {
     const double sign = p < 3 ? 1.0 : -1.0;
-    const int i = perm[p][0], j = perm[p][1], k = perm[p][2];
-    for (int a = 0; a < 2; ++a)
-      for (int b = 0; b < 2; ++b)
-        for (int c = 0; c < 2; ++c) {
-          double x, y;
-          two_product(u[i][a], v[j][b], x, y);
+    const Expansion &ui = u[perm[p][0]], &vj = v[perm[p][1]], &wk = w[perm[p][2]];
+    for (double x0 : ui)
+      for (double y0 : vj) {
+        double x, y;
+        two_product(x0, y0, x, y);
+        for (double z0 : wk) {
           double t[4];
-          two_product(x, w[k][c], t[0], t[1]);
-          two_product(y, w[k][c], t[2], t[3]);
+          two_product(x, z0, t[0], t[1]);
+          two_product(y, z0, t[2], t[3]);
           for (double term : t)
             if (term != 0.0) grow(sum, sign * term);
         }
+      }
   }
-  // The largest component of a nonoverlapping expansion carries its sign.
-  if (sum.empty()) return 0;
-  return sum.back() > 0.0 ? 1 : (sum.back() < 0.0 ? -1 : 0);
+  ExactOrient r;
+  if (sum.empty()) return r;
+  // The largest component of a nonoverlapping expansion carries its sign; summing the
+  // components from the smallest rounds the value to within a few ulps (each component
+  // is below an ulp of the next).
+  r.sign = sum.back() > 0.0 ? 1 : -1;
+  for (double x : sum) r.value += x;
+  return r;
+}
+
+int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
+  return orient3d_exact(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign;
 }
 
 }  // namespace visgate::plucker

@@ -1,27 +1,45 @@
-// Exact sign of the 3D orientation of four float32 points, for the few decisions of
-// plucker-bsp that a float error bound leaves open and that change a whole region
-// rather than a sliver of it: which side of a blocker's plane a receiver lies on when it
-// is within rounding of that plane (fuzz_plucker 68d82337...: a receiver 6e-9 below a
-// face, every segment to the light blocked; the float test called it "on the face" and
-// skipped the face, fraction 1 instead of 0).
+// Exact 3D orientation of float32 points, for the decisions of plucker-bsp that float
+// rounding cannot make and that change a whole region rather than a sliver of it: which
+// side of a blocker's plane a receiver lies on when it is within rounding of that plane
+// (fuzz_plucker 68d82337...: a receiver 6e-9 below a face, every segment to the light
+// blocked; float called it "on the face" and skipped the face), and, for such a receiver,
+// which light points the face hides (plucker_solver.cpp, exact near-plane path).
 //
-// Guarantee: exact for every finite float input. Shewchuk's expansion arithmetic ("Adaptive
-// precision floating-point arithmetic and fast robust geometric predicates", 1997) in
-// double: each difference is an exact two-term expansion (Two-Diff), each product of
-// three such components an exact four-term expansion (Two-Product twice), and the 192
-// terms of det[b - a, c - a, d - a] are summed exactly (Grow-Expansion). Float inputs keep
-// every intermediate inside double's range: |products| <= 2^387 and nonzero
-// products and their roundoff terms >= 2^-500, far from overflow and underflow.
-// No CGAL (DESIGN section 1: lib never includes it); costs microseconds, so callers
-// use it only where the float bound is undecided.
+// Guarantee: exact for every finite float input. Shewchuk's expansion arithmetic
+// ("Adaptive precision floating-point arithmetic and fast robust geometric predicates",
+// 1997) in double: a point is the exact sum hi + lo of two float vectors (lo = 0 for an
+// input point; a fragment vertex in a light's local frame is origin + local, summed
+// exactly), each coordinate difference is an exact expansion (Two-Sum), each product of
+// three components an exact expansion (Two-Product by fused multiply-add), and the terms
+// of det[b - a, c - a, d - a] are summed exactly (Grow-Expansion). Float inputs keep every
+// intermediate inside double's range: products of three differences of floats are below
+// 2^390, and nonzero products and their roundoff terms above 2^-500, far from overflow
+// and underflow. No CGAL (DESIGN section 1: lib never includes it). Costs microseconds:
+// callers use it only where a float bound leaves a decision open.
 #pragma once
 
 #include "lib/geom/vec.h"
 
 namespace visgate::plucker {
 
-// Sign of det[b - a, c - a, d - a] (+1, 0, -1): positive when d lies on the side of the
-// plane (a, b, c) that (b - a) x (c - a) points to (lib/geom/predicates.h orient3d).
+// A point as the exact sum of two float vectors.
+struct SumPoint {
+  Vec3f hi{}, lo{};
+  SumPoint() = default;
+  SumPoint(const Vec3f& h) : hi(h) {}  // NOLINT: an input point is its own sum
+  SumPoint(const Vec3f& h, const Vec3f& l) : hi(h), lo(l) {}
+};
+
+struct ExactOrient {
+  int sign = 0;        // sign of det[b - a, c - a, d - a]: exact
+  double value = 0.0;  // the determinant rounded to double (within a few ulps)
+};
+
+// det[b - a, c - a, d - a], positive when d lies on the side of the plane (a, b, c)
+// that (b - a) x (c - a) points to (lib/geom/predicates.h orient3d).
+ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d);
+
+// Its sign for plain float points.
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d);
 
 }  // namespace visgate::plucker

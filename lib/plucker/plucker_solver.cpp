@@ -130,6 +130,7 @@ struct NearPoly {
 struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
+  uint64_t exact_triangles = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -137,6 +138,7 @@ struct Totals {
     irradiance += o.irradiance;
     trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
+    exact_triangles += o.exact_triangles;
     bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
     bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
@@ -224,6 +226,69 @@ void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const uint8_t* ski
       }
     }
     // A piece positive against every edge stabs q: blocked, dropped.
+  }
+}
+
+// The exact near-plane path: removes from the fragments (local coordinates relative to
+// `origin`) the light points x whose open segment from rw crosses the triangle tw
+// properly (DESIGN section 3), with rw on side sigma (exact, nonzero) of tw's plane:
+// x strictly on the other side of the plane, and the line rw -> x strictly on the
+// stabbing side of every edge line (lines.h: side(rw -> x, t_e -> t_e+1) has the sign
+// -sigma for lines crossing from side sigma). Then the crossing point lies strictly
+// inside the triangle and strictly between rw and x, so no slab clipping is needed.
+// Every sign is exact (orient3d_exact on world coordinates, x as origin + local summed
+// exactly); new vertices are interpolated in double from the rounded exact values and
+// rounded to float, so only points within rounding of a plane can be misjudged. Used for
+// receivers within float rounding of the triangle's plane, where float cannot tell which
+// way the planes through rw and the edges lean.
+void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
+                             const PlaneFrame& frame, const FragmentList& in, FragmentList& out,
+                             std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur) {
+  out.clear();
+  out_boxes.clear();
+  std::vector<double> w;
+  std::vector<Vec3f> inside, outside;
+  // w > 0 inside plane k's half-space of the blocked set.
+  auto value = [&](int k, const Vec3f& x) {
+    SumPoint xs(origin, x);
+    ExactOrient o = k == 0 ? orient3d_exact(SumPoint(tw[0]), SumPoint(tw[1]), SumPoint(tw[2]), xs)
+                           : orient3d_exact(SumPoint(rw), xs, SumPoint(tw[k - 1]), SumPoint(tw[k % 3]));
+    if (o.sign == 0) return 0.0;
+    double v = std::abs(o.value);
+    if (!(v > 0.0)) v = std::numeric_limits<double>::min();
+    return -double(sigma) * double(o.sign) * v;
+  };
+  for (size_t f = 0; f < in.size(); ++f) {
+    cur.assign(in.data(f), in.data(f) + in.count(f));
+    bool blocked = true;
+    for (int k = 0; k < 4; ++k) {
+      w.resize(cur.size());
+      bool pos = false, neg = false;
+      for (size_t j = 0; j < cur.size(); ++j) {
+        w[j] = value(k, cur[j]);
+        pos |= w[j] > 0.0;
+        neg |= w[j] < 0.0;
+      }
+      if (!pos) {  // all of it outside this half-space: not hidden
+        blocked = false;
+        break;
+      }
+      if (!neg) continue;
+      // Split: the outside part is kept, the inside part goes on to the next plane.
+      clip_by_values(cur.data(), w.data(), int(cur.size()), false, outside);
+      clip_by_values(cur.data(), w.data(), int(cur.size()), true, inside);
+      if (!outside.empty()) {
+        out.add(outside.data(), outside.size());
+        out_boxes.push_back(Box2::of(frame, outside.data(), int(outside.size())));
+      }
+      cur.swap(inside);
+      if (cur.empty()) break;
+    }
+    if (!blocked) {
+      out.add(cur.data(), cur.size());
+      out_boxes.push_back(Box2::of(frame, cur.data(), int(cur.size())));
+    }
+    // Otherwise what is left is inside all four half-spaces: hidden, dropped.
   }
 }
 
@@ -420,6 +485,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<Vec3f> pyramid_err;
   std::vector<Vec3f> cur, pos, neg, q;
   std::vector<uint8_t> on_level, skip;
+  std::vector<uint32_t> exact_done;  // triangles subtracted exactly for this receiver
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
@@ -461,37 +527,65 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
       all.extend(boxes.back());
     }
+    exact_done.clear();
+    const Vec3d rd = to_double(r);
+    const float rmax = max_component(vabs(r));
     for (const NearPoly& np : near) {
       if (frags.size() == 0) break;
       const Vec3f* pv = near_verts.data() + np.begin;
-      // This receiver's slab: g . p > g . r somewhere, else at or behind its g-plane.
+      // Cheap rejections first, conservative also against the rounding of the local
+      // frame (a point moves by u |x| when translated; see the exact path below):
+      // this receiver's slab (g . p > g . r somewhere, else the polygon is at or behind
+      // its g-plane), then the side planes of its pyramid.
       vals.resize(np.count);
-      double maxv = -1.0;
-      const Vec3d rd = to_double(r);
+      double maxv = -1.0, pmax = 0.0;
       for (uint32_t k = 0; k < np.count; ++k) {
         vals[k] = dot(gd, to_double(pv[k]) - rd);
         maxv = std::max(maxv, vals[k]);
+        pmax = std::max(pmax, double(max_component(vabs(pv[k]))));
       }
-      if (maxv <= 0.0) continue;
+      if (maxv < -2.0 * double(kUnitRoundoff) * double(norm1(g)) * (pmax + double(rmax))) continue;
       bool outside = false;
       for (size_t j = 0; j < m && !outside; ++j) {
         outside = true;
+        const float shift = 2.0f * kUnitRoundoff * norm1(pyramid[j]) * (float(pmax) + lf.extent + rmax);
         for (uint32_t k = 0; k < np.count && outside; ++k) {
           Vec3f d = pv[k] - lf.poly[j];
-          outside = dot(pyramid[j], d) < -16.0f * dot_err(d, pyramid[j], pyramid_err[j]);
+          outside = dot(pyramid[j], d) < -16.0f * dot_err(d, pyramid[j], pyramid_err[j]) - shift;
         }
       }
       if (outside) continue;
-      clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
-      if (q.empty()) continue;
-      // Side of r against the triangle's plane, exactly when float cannot tell (a
-      // receiver within rounding of a face is on one side, and the face then hides the
-      // light from it: fuzz_plucker 68d82337...). On the plane the triangle cannot meet
-      // an open segment from r properly (it only touches or contains it): skipped.
+      // The side of r against the triangle's plane, on world coordinates. A receiver
+      // within float rounding of the plane (but not on it) sees the triangle across a
+      // sliver of space that float cannot resolve, and what the triangle hides can be
+      // the whole light (fuzz_plucker 68d82337..., f95fbc59...: a receiver 6e-9 and
+      // 2^-148 below a face): such a triangle is subtracted exactly, whole, once per
+      // receiver (subtract_triangle_exact). Exactly on the plane the triangle cannot
+      // meet an open segment from r properly (it only touches or contains it): skipped.
+      // The float path below works on local coordinates, so it is used only when the
+      // side is decided there too, and the same way (the translation rounds: the
+      // receiver 2^-148 below a face is on it locally).
       const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
                              scene.mesh.corner(np.triangle, 2)};
-      int side_r = plane_side(wtri, rec.p, true);
-      if (side_r == 0) continue;
+      int side_r = plane_side(wtri, rec.p, false);
+      const Vec3f ltri[3] = {to_local(wtri[0], lf.origin), to_local(wtri[1], lf.origin), to_local(wtri[2], lf.origin)};
+      if (side_r == 0 || plane_side(ltri, r, false) != side_r) {
+        if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
+        exact_done.push_back(np.triangle);
+        int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
+        if (side_exact == 0) continue;
+        ++tot.exact_triangles;
+        subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
+        std::swap(frags, tmp);
+        std::swap(boxes, tmp_boxes);
+        all = Box2{};
+        for (const Box2& b : boxes) all.extend(b);
+        continue;
+      }
+      if (maxv <= 0.0) continue;  // float path: at or behind r's g-plane
+      clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
+      if (q.empty()) continue;
+      // Oriented so that r is on the negative side (bsp.h Occluder).
       if (side_r > 0) {
         std::reverse(q.begin(), q.end());
         std::reverse(on_level.begin(), on_level.end());
@@ -702,6 +796,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("degenerate_zero_area", double(totals.bsp.zero_area));
   st.set("fallback_receivers", double(totals.fallback));
   st.set("segment_relations", double(totals.segment_relations));
+  st.set("exact_triangles", double(totals.exact_triangles));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
   st.set("occluder_selection_seconds", totals.select_s);
