@@ -7,7 +7,7 @@
 
 namespace visgate::plucker {
 
-LazyBsp::LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3f* receivers,
+LazyBsp::LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers,
                  int nr)
     : light_(light, light + m), occ_(std::move(occluders)), recv_(receivers, receivers + nr), rng_(seed) {
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
@@ -137,7 +137,7 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
   }
 }
 
-void LazyBsp::begin_query(const Vec3f& r) {
+void LazyBsp::begin_query(const Vec3d& r) {
   if (!have_plane_) return;
   if (stamp_ != 0 && r.x == shadow_r_.x && r.y == shadow_r_.y && r.z == shadow_r_.z) return;
   shadow_r_ = r;
@@ -151,7 +151,7 @@ void LazyBsp::begin_query(const Vec3f& r) {
   }
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3f& r, const Vec3f* f, int n, const Box2& fbox) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n, const Box2& fbox) {
   if (have_plane_) {
     if (shadow_stamp_[id] != stamp_) {
       shadow_box_[id] = shadow_box(plane_, r, occ_[id].v, size_t(occ_[id].n));
@@ -162,7 +162,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3f& r, const Vec3f* 
   return occlusion(id, r, f, n);
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3f& r, const Vec3f* f, int n) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n) {
   const Occluder& o = occ_[id];
   // One-sided: a line stabs o iff it is positive against every edge line (lines.h).
   // Two-sided: iff it is positive against every edge or negative against every edge;
@@ -186,7 +186,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3f& r, const Vec3f* 
   return all_pos ? Occlusion::Cover : Occlusion::Partial;
 }
 
-bool LazyBsp::hides_all(const Vec3f& r) {
+bool LazyBsp::hides_all(const Vec3d& r) {
   begin_query(r);
   const Vec3f* f = light_.data();
   const int n = int(light_.size());
@@ -214,13 +214,13 @@ bool LazyBsp::hides_all(const Vec3f& r) {
   }
 }
 
-void LazyBsp::query(const Vec3f& r, FragmentList& out) {
+void LazyBsp::query(const Vec3d& r, FragmentList& out) {
   FragmentList whole;
   whole.add(light_.data(), light_.size());
   query(r, whole, out);
 }
 
-void LazyBsp::query(const Vec3f& r, const FragmentList& in, FragmentList& out) {
+void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   begin_query(r);
   out.clear();
   work_.clear();

@@ -15,14 +15,18 @@
 // others, and returns the fragments reaching visible leaves. Iterative, with an explicit
 // stack (section 4.4, implementation details).
 //
-// Guarantee: float32 as in the paper, "exact" in the paper's sense (analytic fragments,
-// no sampling); with exact arithmetic the fragments are exactly the visible region.
-// What is float and what is bounded: insertion signs (Theorem 1) are decided against the
-// forward error bound of lines.h (undecided counts as mixed: costs time, never
-// correctness). Fragment splits use the computed plane through r and the node's line,
-// with only the evaluation of each vertex's side bounded (fragment.cpp): the computed
-// plane (lines.h edge_plane_normal) differs from the true one by an angle of about
-// u / sin(angle between the edge and the direction to r), so lines within that angle of a node's hyperplane may be sent to the wrong
+// Guarantee: "exact" in the paper's sense (analytic fragments, no sampling); with exact
+// arithmetic the fragments are exactly the visible region. Precision (the paper used
+// float32 throughout): fragments are float32 points of the light in its local frame;
+// query points and occluders are double local coordinates computed from the float
+// inputs (exact unless exponents differ by more than 29); planes and insertion tests are
+// evaluated in double with forward error bounds. Insertion signs (Theorem 1) undecided
+// within the bound count as mixed (costs time, never correctness). Fragment splits use
+// the computed plane through r and the node's line (fragment.cpp node_plane), with the
+// evaluation of each vertex's side bounded and vertices within their own float rounding
+// of the plane taken as on it; the computed plane differs from the true one by an angle
+// of about u_d / sin(angle between the edge and the direction to r), so lines within
+// that angle of a node's hyperplane may be sent to the wrong
 // side (false visible/blocked slivers of that width; measured: no mismatch above the
 // harness's tau on random-soup and columns). Degenerate cases, handled explicitly:
 //  - query point on a node's line (SplitResult::OnLine): every line r -> x meets the
@@ -59,8 +63,11 @@ constexpr int kMaxOccluderVertices = 6;
 // group's receivers lie on both sides of its plane, so lines stab it in both directions;
 // bsp(o) then has two invisible leaves, all-positive and all-negative (an extension of
 // Figure 4: the first edge's right child starts a second chain for the negative class).
+// Vertices in double: the solver's local coordinates of a clipped triangle, computed in
+// double from the float input and not rounded (fragment.cpp: in float a node's plane
+// moved shadow edges of a small light by more than the fraction tolerance).
 struct Occluder {
-  Vec3f v[kMaxOccluderVertices];
+  Vec3d v[kMaxOccluderVertices];
   int n = 0;
   bool two_sided = false;
 };
@@ -109,7 +116,7 @@ class LazyBsp {
   // combines vertices with barycentric weights). insertOccluder takes the first decided
   // orientation of the two vvsets: still conservative, and far fewer mixed insertions
   // for occluders close to the receivers.
-  LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3f* receivers = nullptr,
+  LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers = nullptr,
           int nr = 0);
 
   // How an undefined leaf is developed (Algorithm 1 line 31).
@@ -139,18 +146,18 @@ class LazyBsp {
 
   // Algorithm 1 BSP_query(root, L, r): appends the visible fragments of the light seen
   // from r to `out` (cleared first).
-  void query(const Vec3f& r, FragmentList& out);
+  void query(const Vec3d& r, FragmentList& out);
   // The same query for parts of the light only: `in` holds disjoint convex pieces of the
   // light polygon (each walked from the root as L in Algorithm 1); `out` receives the
   // visible parts of them.
-  void query(const Vec3f& r, const FragmentList& in, FragmentList& out);
+  void query(const Vec3d& r, const FragmentList& in, FragmentList& out);
 
   // True when the tree shows that every line from r to the light is blocked: the whole
   // light polygon, walked without splitting, reaches an invisible class (a node whose
   // plane splits it, a visible class or an undefined leaf without an occluder hiding
   // all of it give false; with Choice::Relevant such an occluder is merged, as the
   // query would). A cheap first step of a query (plucker_solver.cpp).
-  bool hides_all(const Vec3f& r);
+  bool hides_all(const Vec3d& r);
 
   // The paper's "modified version" (section 5.1): back to the root holding every
   // occluder, so the next query cannot reuse anything.
@@ -165,7 +172,7 @@ class LazyBsp {
  private:
   enum Kind : uint8_t { kInner, kLeaf, kInvisible };
   struct Node {
-    Vec3f a, b;                // inner: the line a -> b
+    Vec3d a, b;                // inner: the line a -> b
     int32_t left = -1, right = -1;
     uint32_t occ_begin = 0, occ_count = 0;  // leaf: occluder list (undefined when count > 0)
     Kind kind = kLeaf;
@@ -186,15 +193,15 @@ class LazyBsp {
   // stabs it properly), Cover (every edge has the fragment on its stabbing side: every
   // line stabs its closure) or Partial. Signs from classify_fragment (fragment.h).
   enum class Occlusion : uint8_t { Miss, Partial, Cover };
-  Occlusion occlusion(uint32_t id, const Vec3f& r, const Vec3f* f, int n);
+  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n);
   // occlusion() preceded by the shadow-box test against the fragment's box `fbox`.
-  Occlusion occlusion(uint32_t id, const Vec3f& r, const Vec3f* f, int n, const Box2& fbox);
+  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n, const Box2& fbox);
   // The per-query cache of shadow boxes: valid for query point shadow_r_.
-  void begin_query(const Vec3f& r);
+  void begin_query(const Vec3d& r);
 
   std::vector<Vec3f> light_;
   std::vector<Occluder> occ_;
-  std::vector<Vec3f> recv_;     // receiver region corners
+  std::vector<Vec3d> recv_;     // receiver region corners
   // insertOccluder's orientation test (Theorem 1) of occluder id against edge `edge` of
   // the occluder being merged, through the fans below.
   Orientation orientation(uint32_t id, int edge) const;
@@ -217,7 +224,7 @@ class LazyBsp {
   Choice choice_ = Choice::Relevant;
   LightPlane plane_;
   bool have_plane_ = false;
-  Vec3f shadow_r_{};
+  Vec3d shadow_r_{};
   uint32_t stamp_ = 0;
   std::vector<uint32_t> shadow_stamp_;  // per occluder: stamp_ when shadow_box_ is valid
   std::vector<Box2> shadow_box_;

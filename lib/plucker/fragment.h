@@ -3,10 +3,13 @@
 // soft-shadow framework takes on them (section 4.4): area, point-in-fragment and the
 // analytic Lambert irradiance [NN85].
 //
-// Precision: float32 vertices; split signs decided with the kDetErr bound of lines.h
-// (a vertex within the bound lies "on" the plane and goes to both pieces). New vertices
-// are interpolated in float, so a fragment's vertices are off the light plane by
-// rounding (about 1e-7 relative); areas and irradiance accumulate in double.
+// Precision: float32 fragment vertices (points of the light, in its local frame); the
+// planes through a query point and a node's line are computed and evaluated in double
+// from double query points and occluders (the solver's local coordinates), with
+// forward error bounds (a vertex within the bound lies "on" the plane and goes to both
+// pieces). New vertices are interpolated in double and rounded once, so a fragment's
+// vertices are off the light plane by rounding (about 1e-7 relative); areas and
+// irradiance accumulate in double.
 #pragma once
 
 #include <cstdint>
@@ -30,11 +33,12 @@ enum class SplitResult : uint8_t {
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or
 // empty when rounding leaves fewer; a piece of fewer than 3 vertices has zero area).
-SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n,
+// r, a, b in double (the solver's local coordinates), the fragment in float.
+SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f* poly, int n,
                            std::vector<Vec3f>& pos, std::vector<Vec3f>& neg);
 
 // The classification of split_fragment without building the pieces (Both: mixed).
-SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n);
+SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f* poly, int n);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to
@@ -47,6 +51,10 @@ SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, co
 // With `on_plane`, on_plane[k] tells whether output vertex k lies on the plane value = 0
 // (an interpolated vertex, or an input vertex whose value is exactly 0).
 void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3f>& out,
+                    std::vector<uint8_t>* on_plane = nullptr);
+// The same for polygons in double (occluders in the solver's local coordinates): new
+// vertices are not rounded.
+void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3d>& out,
                     std::vector<uint8_t>* on_plane = nullptr);
 
 // Area of a planar polygon (Newell, double).
@@ -92,7 +100,7 @@ struct LightPlane {
 // for the double rounding (about 1e-16 relative, times t <= 2^10). Conservative: it only
 // makes the box larger than the shadow. Used to skip a polygon whose shadow cannot meet
 // a fragment (two disjoint boxes: disjoint convex sets).
-Box2 shadow_box(const LightPlane& lp, const Vec3f& r, const Vec3f* q, size_t n);
+Box2 shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
@@ -111,6 +119,6 @@ bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3
 // Lambert irradiance at r with unit normal nr from a uniformly emitting polygon of unit
 // radiance (Nishita-Nakamae: E = 1/2 sum_k theta_k (nr . gamma_k)), the polygon first
 // clipped to the receiver's upper half-space nr . (x - r) >= 0. Double precision.
-double lambert_irradiance(const Vec3f& r, const Vec3f& nr, const Vec3f* poly, int n);
+double lambert_irradiance(const Vec3d& r, const Vec3f& nr, const Vec3f* poly, int n);
 
 }  // namespace visgate::plucker

@@ -8,10 +8,12 @@
 // (v1 - v0) x (v2 - v0) points towards the light side iff side(line, line(vk, vk+1)) > 0
 // for every edge k (section 3.2, Figure 2).
 //
-// Precision: float32 throughout (as the paper). Every sign is decided with a forward
-// error bound (kDetErr below): a value within the bound is classified Zero, never given a
-// sign it may not have. Signs outside the bound are exact for the float inputs; Zero means
-// "undecided in float" and callers treat it conservatively (Theorem 1 insertion: mixed).
+// Precision: the float32 forms (side_sign, segment_blocked, vvset_orientation) decide
+// every sign with a forward error bound (kDetErr below): a value within the bound is
+// classified Zero, never given a sign it may not have. Signs outside the bound are exact
+// for the float inputs; Zero means "undecided in float" and callers treat it
+// conservatively. The double forms (EdgeFan, the Vec3d edge_plane_normal_err) are the
+// same with double's unit roundoff, for the solver's double local coordinates.
 #pragma once
 
 #include <cstdint>
@@ -86,6 +88,31 @@ inline Vec3f edge_plane_normal_err(const Vec3f& p, const Vec3f& a, const Vec3f& 
   return cross(*u, *v);
 }
 
+// The same in double (points in the solver's double local coordinates): u_d for u.
+inline Vec3d edge_plane_normal_err(const Vec3d& p, const Vec3d& a, const Vec3d& b, Vec3d& err) {
+  Vec3d pa = a - p, pb = b - p, ab = b - a;
+  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  double na = n1(pa), nb = n1(pb), nab = n1(ab);
+  const Vec3d* u = &pa;
+  const Vec3d* v = &pb;
+  if (!(nab >= na && nab >= nb)) {
+    if (nb >= na) v = &ab;
+    else u = &pb, v = &ab;
+  }
+  err = Vec3d(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
+              std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
+        (8.0 * 0x1p-53);
+  return cross(*u, *v);
+}
+inline double dot_err(const Vec3d& d, const Vec3d& nrm, const Vec3d& err) {
+  constexpr double k = 8.0 * 0x1p-53;
+  return std::abs(d.x) * (err.x + k * std::abs(nrm.x)) + std::abs(d.y) * (err.y + k * std::abs(nrm.y)) +
+         std::abs(d.z) * (err.z + k * std::abs(nrm.z));
+}
+inline bool on_line(const Vec3d& nrm, const Vec3d& err) {
+  return std::abs(nrm.x) <= err.x && std::abs(nrm.y) <= err.y && std::abs(nrm.z) <= err.z;
+}
+
 // The error bound of d . N for d a float difference and N from edge_plane_normal_err:
 // N's component errors times |d_i|, plus the rounding of d and of the dot product
 // (5 roundings of sum |d_i N_i|, counted as 8 u).
@@ -109,8 +136,11 @@ inline bool on_line(const Vec3f& nrm, const Vec3f& err) {
 // (fuzz_plucker 597a1279...: (x - p) . N cancels and overflows), an occluder vertex 6e5
 // from the light needs p or the other vertex (dfb33fdd...: (x - a) . N put the plane
 // 0.04 off at the light).
-inline const Vec3f& nearest_base(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& x) {
-  float dp = norm1(x - p), da = norm1(x - a), db = norm1(x - b);
+template <class T, class U>
+inline const Vec3<T>& nearest_base(const Vec3<T>& p, const Vec3<T>& a, const Vec3<T>& b, const Vec3<U>& xu) {
+  Vec3<T> x(xu);
+  auto n1 = [](const Vec3<T>& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  T dp = n1(x - p), da = n1(x - a), db = n1(x - b);
   if (dp <= da && dp <= db) return p;
   return da <= db ? a : b;
 }
@@ -154,15 +184,19 @@ enum class Orientation : uint8_t { Positive, Negative, Mixed };
 // and side(p_k -> x, a -> b) = -(x - a) . W_k. The value has the form d . (u x v) of
 // kDetErr with d = x - a, u = p_k - a, v = b - a: its sign is decided against
 // kDetErr |x - a|_1 |p_k - a|_1 |b - a|_1, as vvset_orientation decides its own.
+// Evaluated in double on double points (the solver's local coordinates, bsp.h), with the
+// bound kDetErr scaled to double's unit roundoff.
 struct EdgeFan {
-  Vec3f a{};
-  std::vector<Vec3f> w;      // W_k
-  std::vector<float> scale;  // kDetErr |p_k - a|_1 |b - a|_1
-  void set(const Vec3f& a, const Vec3f& b, const Vec3f* p, int m);
+  Vec3d a{};
+  std::vector<Vec3d> w;       // W_k
+  std::vector<double> scale;  // 12 u_d |p_k - a|_1 |b - a|_1
+  void set(const Vec3d& a, const Vec3d& b, const Vec3d* p, int m);
+  // The light's vertices as points.
+  void set(const Vec3d& a, const Vec3d& b, const Vec3f* p, int m);
   // The orientation of the lines x_i -> p_k (toward = true) or p_k -> x_i (toward =
   // false), i < n, against a -> b: Positive / Negative when every value is strictly of
   // that sign beyond its bound, else Mixed (conservative, like vvset_orientation).
-  Orientation orientation(const Vec3f* x, int n, bool toward) const;
+  Orientation orientation(const Vec3d* x, int n, bool toward) const;
 };
 
 // DESIGN section 3 for one triangle: the open segment r -> s crosses the triangle

@@ -46,6 +46,9 @@ struct LightFrame {
 };
 
 Vec3f to_local(const Vec3f& x, const Vec3f& origin) { return x - origin; }
+// The same in double: exact whenever the exponents of x and origin differ by at most 29
+// (the difference of two floats then fits in 53 bits), else rounded once at u_d.
+Vec3d to_local_d(const Vec3f& x, const Vec3f& origin) { return to_double(x) - to_double(origin); }
 
 LightFrame make_frame(const Light& light) {
   LightFrame f;
@@ -122,6 +125,16 @@ int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
   return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
 }
 
+// plane_side on double points (the local frame), error bounds in double.
+int plane_side_d(const Vec3d t[3], const Vec3d& x) {
+  Vec3d err;
+  Vec3d nrm = edge_plane_normal_err(t[0], t[1], t[2], err);
+  const Vec3d& base = nearest_base(t[0], t[1], t[2], x);
+  Vec3d d = x - base;
+  double s = dot(d, nrm), bound = dot_err(d, nrm, err);
+  return s > bound ? 1 : (s < -bound ? -1 : 0);
+}
+
 struct NearPoly {
   uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
   uint32_t begin, count;
@@ -178,7 +191,7 @@ struct Context {
 // Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows every
 // light line from r is on their inner side (the edge q has at r's own level, see the
 // near-polygon loop in shade_group).
-void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const uint8_t* skip, const Box2& qbox,
+void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
                       const PlaneFrame& frame, const FragmentList& in, const std::vector<Box2>& boxes,
                       FragmentList& out, std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur,
                       std::vector<Vec3f>& pos, std::vector<Vec3f>& neg, BspCounters& c) {
@@ -333,43 +346,48 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   Clock::time_point t0 = Clock::now();
   // Everything below is in the light's local frame (plucker_solver.h): the group's
   // receivers are translated here, the triangles as they are selected.
-  std::vector<Vec3f> rloc(group.size());
-  AABB rbox;
+  std::vector<Vec3d> rloc(group.size());
+  AABB rbox;  // float box for the shaft (its margin covers the rounding)
+  Vec3d dlo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity());
+  Vec3d dhi = -dlo;
   for (size_t k = 0; k < group.size(); ++k) {
-    rloc[k] = to_local(scene.receivers[group[k]].p, lf.origin);
-    rbox.extend(rloc[k]);
+    rloc[k] = to_local_d(scene.receivers[group[k]].p, lf.origin);
+    rbox.extend(Vec3f(rloc[k]));
+    dlo = vmin(dlo, rloc[k]);
+    dhi = vmax(dhi, rloc[k]);
   }
   // g-values are taken relative to a reference receiver (g . p keeps the digits of the
   // differences, not those of the local coordinates).
-  const Vec3f ref = rloc[0];
+  const Vec3d ref = rloc[0];
   AABB both = rbox;
   both.extend(lf.box);
-  float coord_max = max_component(vmax(vabs(both.lo - ref), vabs(both.hi - ref)));
-  auto gval = [&](const Vec3f& g, const Vec3f& p) { return dot(g, p - ref); };
-  auto group_plane = [&](const Vec3f& g, float& gmin, float& gmax) {
-    gmin = std::numeric_limits<float>::infinity();
+  double coord_max = max_component(vmax(vabs(to_double(both.lo) - ref), vabs(to_double(both.hi) - ref)));
+  auto gval = [&](const Vec3d& g, const Vec3d& p) { return dot(g, p - ref); };
+  auto group_plane = [&](const Vec3d& g, double& gmin, double& gmax) {
+    gmin = std::numeric_limits<double>::infinity();
     gmax = -gmin;
-    for (const Vec3f& p : rloc) {
-      float v = gval(g, p);
+    for (const Vec3d& p : rloc) {
+      double v = gval(g, p);
       gmin = std::min(gmin, v);
       gmax = std::max(gmax, v);
     }
   };
-  // delta: g . (p - ref) in float has error < 5.01 u |g|_1 |p - ref|_1 (difference, 3
-  // products, 2 sums); with |p - ref|_inf <= coord_max inside the shaft,
-  // 16 u |g|_1 3 coord_max separates the tree occluders from every receiver plane by
-  // more than the rounding of both sides.
-  Vec3f g = lf.n * (-sigma);
-  float gmin = 0, gmax = 0;
+  // delta: a separation of the tree occluders from every receiver's g-plane far above
+  // the rounding of g . (p - ref) (in float it had error < 5.01 u |g|_1 |p - ref|_1;
+  // now in double, the float-sized delta is kept as a wide, conservative band): with
+  // |p - ref|_inf <= coord_max inside the shaft, 16 u |g|_1 3 coord_max.
+  Vec3d g = to_double(lf.n) * double(-sigma);
+  double gmin = 0, gmax = 0;
   group_plane(g, gmin, gmax);
   if (scene.grid) {
-    Vec3f gn = normalize(scene.grid->normal);
-    float nmin = 0, nmax = 0;
+    Vec3d gn = to_double(normalize(scene.grid->normal));
+    double nmin = 0, nmax = 0;
     group_plane(gn, nmin, nmax);
-    float dlt = 16.0f * kUnitRoundoff * norm1(gn) * 3.0f * coord_max;
+    double dlt = 16.0 * double(kUnitRoundoff) * (std::abs(gn.x) + std::abs(gn.y) + std::abs(gn.z)) * 3.0 * coord_max;
     bool beyond = true, below = true;
     for (const Vec3f& v : lf.poly) {
-      float gv = gval(gn, v);
+      double gv = gval(gn, to_double(v));
       beyond &= gv > nmax + 2 * dlt;
       below &= gv < nmin - 2 * dlt;
     }
@@ -383,35 +401,35 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       gmax = nmax;
     }
   }
-  const float delta = 16.0f * kUnitRoundoff * norm1(g) * 3.0f * coord_max;
+  const double delta = 16.0 * double(kUnitRoundoff) * (std::abs(g.x) + std::abs(g.y) + std::abs(g.z)) * 3.0 * coord_max;
   // World corners of the receivers' box, for the one-sided test (plane_side).
   AABB wbox;
   for (uint32_t i : group) wbox.extend(scene.receivers[i].p);
   Vec3f wcorners[8];
   for (int c = 0; c < 8; ++c)
     wcorners[c] = Vec3f((c & 1) ? wbox.hi.x : wbox.lo.x, (c & 2) ? wbox.hi.y : wbox.lo.y, (c & 4) ? wbox.hi.z : wbox.lo.z);
-  Vec3f corners[8];
+  Vec3d corners[8];
   for (int c = 0; c < 8; ++c)
-    corners[c] = Vec3f((c & 1) ? rbox.hi.x : rbox.lo.x, (c & 2) ? rbox.hi.y : rbox.lo.y, (c & 4) ? rbox.hi.z : rbox.lo.z);
+    corners[c] = Vec3d((c & 1) ? dhi.x : dlo.x, (c & 2) ? dhi.y : dlo.y, (c & 4) ? dhi.z : dlo.z);
   Shaft shaft(rbox, lf.box);
   std::vector<Occluder> occluders;
   std::vector<NearPoly> near;
-  std::vector<Vec3f> near_verts;
-  std::vector<Vec3f> poly0, lower, upper;
+  std::vector<Vec3d> near_verts;
+  std::vector<Vec3d> poly0, lower, upper;
   std::vector<double> vals;
-  const Vec3d nd = to_double(lf.n), gd = to_double(g), refd = to_double(ref);
-  const double gcut = double(gmax) + double(delta);
+  const Vec3d nd = to_double(lf.n), gd = g, refd = ref;
+  const double gcut = gmax + delta;
   std::vector<uint32_t> cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
   for (uint32_t t : cand) {
-    Vec3f tri[3] = {to_local(scene.mesh.corner(t, 0), lf.origin), to_local(scene.mesh.corner(t, 1), lf.origin),
-                    to_local(scene.mesh.corner(t, 2), lf.origin)};
-    if (shaft.culls(tri[0], tri[1], tri[2])) continue;
+    Vec3d tri[3] = {to_local_d(scene.mesh.corner(t, 0), lf.origin), to_local_d(scene.mesh.corner(t, 1), lf.origin),
+                    to_local_d(scene.mesh.corner(t, 2), lf.origin)};
+    if (shaft.culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
     // Heights over the light plane and g-values in double on the float vertices (the
     // clipping below interpolates in double, fragment.h clip_by_values).
     double h[3], gv[3];
     for (int k = 0; k < 3; ++k) {
-      Vec3d x = to_double(tri[k]);
+      const Vec3d& x = tri[k];
       h[k] = double(sigma) * dot(nd, x);
       gv[k] = dot(gd, x - refd);
     }
@@ -419,14 +437,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // touching the light plane with a vertex or an edge are kept).
     if (std::max(h[0], std::max(h[1], h[2])) <= double(lf.plane_tol)) continue;
     // Behind every receiver's g-plane.
-    if (std::max(gv[0], std::max(gv[1], gv[2])) <= double(gmin) - double(delta)) continue;
+    if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
     // Clip to the light side h >= 0.
     clip_by_values(tri, h, 3, true, poly0);
     if (poly0.empty()) continue;
     // Split at gmax + delta: beyond it, between every receiver and the light (tree);
     // the rest per receiver.
     vals.resize(poly0.size());
-    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = dot(gd, to_double(poly0[k]) - refd) - gcut;
+    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = dot(gd, poly0[k] - refd) - gcut;
     clip_by_values(poly0.data(), vals.data(), int(poly0.size()), true, lower);
     clip_by_values(poly0.data(), vals.data(), int(poly0.size()), false, upper);
     if (!lower.empty()) {
@@ -467,23 +485,23 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   tot.occluders += occluders.size();
   tot.near += near.size();
   // The receiver region for the second vvset (bsp.h): the distinct corners of the box.
-  std::vector<Vec3f> region;
-  for (const Vec3f& c : corners)
+  std::vector<Vec3d> region;
+  for (const Vec3d& c : corners)
     if (std::find(region.begin(), region.end(), c) == region.end()) region.push_back(c);
   LazyBsp bsp(lf.poly.data(), int(lf.poly.size()), std::move(occluders), tree_seed, region.data(), int(region.size()));
   bsp.set_choice(ctx.choice);
   bsp.set_light_plane(lf.plane);
   ++tot.trees;
   tot.init_s += seconds_since(t0);
-  int64_t reported = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
+  int64_t reported = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3d) + near.capacity() * sizeof(NearPoly));
   ctx.memory->change(reported);
 
   // --- Queries (Figure 8 "Q"): every receiver of the group, in grid order ---
   FragmentList frags, tmp;
   std::vector<Box2> boxes, tmp_boxes;
-  std::vector<Vec3f> pyramid;
-  std::vector<Vec3f> pyramid_err;
-  std::vector<Vec3f> cur, pos, neg, q;
+  std::vector<Vec3d> pyramid, pyramid_err;
+  std::vector<Vec3f> cur, pos, neg;
+  std::vector<Vec3d> q;
   std::vector<uint8_t> on_level, skip;
   std::vector<uint32_t> exact_done;  // triangles subtracted exactly for this receiver
   BspCounters near_counters;
@@ -492,7 +510,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   for (size_t gk = 0; gk < group.size(); ++gk) {
     const uint32_t i = group[gk];
     const Receiver& rec = scene.receivers[i];
-    const Vec3f& r = rloc[gk];
+    const Vec3d& r = rloc[gk];
     Clock::time_point tq = Clock::now();
     // A light the tree hides as a whole from r needs nothing else (LazyBsp::hides_all:
     // a walk without splits). Otherwise the near polygons first, subtracted from the
@@ -515,9 +533,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     pyramid.resize(m);
     pyramid_err.resize(m);
     for (size_t j = 0; j < m; ++j) {
-      Vec3f err;
-      Vec3f nrm = edge_plane_normal_err(r, lf.poly[j], lf.poly[(j + 1) % m], err);
-      if (dot(nrm, lf.centroid - lf.poly[j]) < 0.0f) nrm = -nrm;
+      Vec3d err;
+      Vec3d nrm = edge_plane_normal_err(r, to_double(lf.poly[j]), to_double(lf.poly[(j + 1) % m]), err);
+      if (dot(nrm, to_double(lf.centroid) - to_double(lf.poly[j])) < 0.0) nrm = -nrm;
       pyramid[j] = nrm;
       pyramid_err[j] = err;
     }
@@ -528,11 +546,11 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       all.extend(boxes.back());
     }
     exact_done.clear();
-    const Vec3d rd = to_double(r);
-    const float rmax = max_component(vabs(r));
+    const Vec3d& rd = r;
+    const double rmax = max_component(vabs(r));
     for (const NearPoly& np : near) {
       if (frags.size() == 0) break;
-      const Vec3f* pv = near_verts.data() + np.begin;
+      const Vec3d* pv = near_verts.data() + np.begin;
       // Cheap rejections first, conservative also against the rounding of the local
       // frame (a point moves by u |x| when translated; see the exact path below):
       // this receiver's slab (g . p > g . r somewhere, else the polygon is at or behind
@@ -540,18 +558,25 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       vals.resize(np.count);
       double maxv = -1.0, pmax = 0.0;
       for (uint32_t k = 0; k < np.count; ++k) {
-        vals[k] = dot(gd, to_double(pv[k]) - rd);
+        vals[k] = dot(gd, pv[k] - rd);
         maxv = std::max(maxv, vals[k]);
-        pmax = std::max(pmax, double(max_component(vabs(pv[k]))));
+        pmax = std::max(pmax, max_component(vabs(pv[k])));
       }
-      if (maxv < -2.0 * double(kUnitRoundoff) * double(norm1(g)) * (pmax + double(rmax))) continue;
+      // The translation to the local frame is exact in double unless exponents differ by
+      // more than 29, else rounded at u_d: 4 u_d of the coordinates is far above it.
+      constexpr double kUd = 0x1p-53;
+      const double gn1 = std::abs(g.x) + std::abs(g.y) + std::abs(g.z);
+      if (maxv < -4.0 * kUd * gn1 * (pmax + rmax)) continue;
       bool outside = false;
       for (size_t j = 0; j < m && !outside; ++j) {
         outside = true;
-        const float shift = 2.0f * kUnitRoundoff * norm1(pyramid[j]) * (float(pmax) + lf.extent + rmax);
+        const Vec3d& pn = pyramid[j];
+        const double shift = 4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) *
+                             (pmax + double(lf.extent) + rmax);
+        const Vec3d lj = to_double(lf.poly[j]);
         for (uint32_t k = 0; k < np.count && outside; ++k) {
-          Vec3f d = pv[k] - lf.poly[j];
-          outside = dot(pyramid[j], d) < -16.0f * dot_err(d, pyramid[j], pyramid_err[j]) - shift;
+          Vec3d d = pv[k] - lj;
+          outside = dot(pn, d) < -16.0 * dot_err(d, pn, pyramid_err[j]) - shift;
         }
       }
       if (outside) continue;
@@ -568,8 +593,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
                              scene.mesh.corner(np.triangle, 2)};
       int side_r = plane_side(wtri, rec.p, false);
-      const Vec3f ltri[3] = {to_local(wtri[0], lf.origin), to_local(wtri[1], lf.origin), to_local(wtri[2], lf.origin)};
-      if (side_r == 0 || plane_side(ltri, r, false) != side_r) {
+      const Vec3d ltri[3] = {to_local_d(wtri[0], lf.origin), to_local_d(wtri[1], lf.origin),
+                             to_local_d(wtri[2], lf.origin)};
+      if (side_r == 0 || plane_side_d(ltri, r) != side_r) {
         if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
         exact_done.push_back(np.triangle);
         int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
@@ -652,7 +678,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
       } else {
         // Off the light polygon (explicit samples): the segment r -> sample itself.
-        vis = !segment_blocked_by_scene(scene, lf.origin, r, lf.samples[k]);
+        vis = !segment_blocked_by_scene(scene, lf.origin, to_local(rec.p, lf.origin), lf.samples[k]);
         ++tot.segment_relations;
       }
       rr.set_visible(off + size_t(j), vis);
@@ -662,7 +688,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     tot.fragments += frags.size();
     ++tot.queries;
     tot.query_s += seconds_since(tq);
-    int64_t now = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
+    int64_t now = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3d) + near.capacity() * sizeof(NearPoly));
     ctx.memory->change(now - reported);
     reported = now;
     // The paper's modified version: reset between queries, excluded from the timings.
