@@ -1125,3 +1125,24 @@ TEST(PluckerSolver, SmallLightSeenPastDistantOccluders) {
   }
   EXPECT_GE(partial, 2);
 }
+
+TEST(PluckerSolver, ReceiverAtAGrazingAngle) {
+  // fuzz_plucker 0108e691... (pouch, y replaced by 4.5e28): a receiver 2 below the light's
+  // plane and 4.5e28 along it sees the light edge-on. Float called it "on the light
+  // plane" (the fall-back, fraction from 10 samples), and double planes through it are
+  // off by more than the tolerance; its side is now exact (planar light) and it takes the
+  // exact path. Here a wall across the light's plane at y = 0.9 hides the lines to light
+  // points with x in [-0.2, 0.3] behind it (y < 0.9): a quarter of the x range over 0.95
+  // of the y range of the light [-1, 1]^2.
+  Scene s = light_scene({Vec3f(0, 4.5e28f, 0)}, 16, Vec3d(0, 0, 2));
+  shapes::add_quad(s.mesh, Vec3d(-0.2, 0.9, 1.5), Vec3d(0.3, 0.9, 1.5), Vec3d(0.3, 0.9, 2.5), Vec3d(-0.2, 0.9, 2.5));
+  ASSERT_TRUE(finish_scene(s).ok());
+  double exact = oracle::visible_region(s, 0, 0).visible_fraction;
+  EXPECT_NEAR(exact, 1.0 - 0.25 * 0.95, 1e-7);  // 0.9, 0.3, -0.2 rounded to float
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    EXPECT_NEAR(r.receivers[0].visible_fraction[0], exact, 1e-4) << coherence;
+    EXPECT_EQ(r.stats.get("exact_receivers"), 1.0);
+    EXPECT_EQ(r.stats.get("fallback_receivers"), 0.0);
+  }
+}

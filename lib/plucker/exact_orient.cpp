@@ -90,6 +90,25 @@ ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint&
   return r;
 }
 
+ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
+  constexpr double kU = 0x1p-53;
+  Vec3d a = to_double(af);
+  Vec3d u = to_double(bf) - a, v = to_double(cf) - a;
+  Vec3d dd = to_double(d.hi) + to_double(d.lo);
+  Vec3d w = dd - a;
+  Vec3d uv = cross(u, v);
+  double val = dot(uv, w);
+  double perm = std::abs(w.x) * (std::abs(u.y * v.z) + std::abs(u.z * v.y)) +
+                std::abs(w.y) * (std::abs(u.z * v.x) + std::abs(u.x * v.z)) +
+                std::abs(w.z) * (std::abs(u.x * v.y) + std::abs(u.y * v.x));
+  // The differences u, v, w are exact or rounded once (relative u each); the rounding
+  // of dd (u |dd|_inf per coordinate) enters through the first-order term.
+  double bound = 2.0 * (7.0 + 56.0 * kU) * kU * perm +
+                 2.0 * (std::abs(uv.x) + std::abs(uv.y) + std::abs(uv.z)) * kU * max_component(vabs(dd));
+  if (std::abs(val) > bound) return ExactOrient{val > 0.0 ? 1 : -1, val};
+  return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
+}
+
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
   return orient3d_exact(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign;
 }

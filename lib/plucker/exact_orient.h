@@ -39,6 +39,13 @@ struct ExactOrient {
 // that (b - a) x (c - a) points to (lib/geom/predicates.h orient3d).
 ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d);
 
+// The same, filtered: evaluated first in double (d rounded to double from hi + lo)
+// against a forward error bound (twice Shewchuk's orient3d errboundA (7 + 56 u) u of the
+// permanent, plus the rounding of d moved through |(b - a) x (c - a)|_1), exact only
+// when that leaves the sign open. Same sign as orient3d_exact; the value is then the
+// double evaluation (within its bound of the exact one).
+ExactOrient orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& d);
+
 // Its sign for plain float points.
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d);
 
