@@ -174,8 +174,8 @@ TEST(PluckerGeometry, Theorem1OrientationBoundsEveryStabbingLine) {
 }
 
 TEST(PluckerFragment, SplitHalvesAndDegenerateCases) {
-  std::vector<Vec3f> sq = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
-  std::vector<Vec3f> pos, neg;
+  std::vector<Vec3d> sq = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  std::vector<Vec3d> pos, neg;
   // Plane through the origin and the line x = 0, z = 1 (along y): splits at x = 0.
   SplitResult s = split_fragment(Vec3d(0, 0, 0), Vec3d(0, -1, 1), Vec3d(0, 1, 1), sq.data(), 4, pos, neg);
   ASSERT_EQ(s, SplitResult::Both);
@@ -184,18 +184,18 @@ TEST(PluckerFragment, SplitHalvesAndDegenerateCases) {
   // The query point on the node's line.
   EXPECT_EQ(split_fragment(Vec3d(0, 0, 0), Vec3d(0, 0, 1), Vec3d(0, 0, 3), sq.data(), 4, pos, neg), SplitResult::OnLine);
   // A zero-area fragment (a segment) on the splitting plane.
-  std::vector<Vec3f> seg = {Vec3f(0, -1, 2), Vec3f(0, 0, 2), Vec3f(0, 1, 2)};
+  std::vector<Vec3d> seg = {Vec3d(0, -1, 2), Vec3d(0, 0, 2), Vec3d(0, 1, 2)};
   EXPECT_EQ(split_fragment(Vec3d(0, 0, 0), Vec3d(0, -1, 1), Vec3d(0, 1, 1), seg.data(), 3, pos, neg),
             SplitResult::ZeroArea);
   // A vertex on the plane goes to both pieces.
-  std::vector<Vec3f> tri = {Vec3f(0, -1, 2), Vec3f(1, 1, 2), Vec3f(-1, 1, 2)};
+  std::vector<Vec3d> tri = {Vec3d(0, -1, 2), Vec3d(1, 1, 2), Vec3d(-1, 1, 2)};
   ASSERT_EQ(split_fragment(Vec3d(0, 0, 0), Vec3d(0, -1, 1), Vec3d(0, 1, 1), tri.data(), 3, pos, neg), SplitResult::Both);
   EXPECT_EQ(pos.size(), 3u);
   EXPECT_EQ(neg.size(), 3u);
 }
 
 TEST(PluckerBsp, EmptyTreeReturnsTheLight) {
-  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   LazyBsp bsp(light, 4, {}, 1);
   FragmentList out;
   bsp.query(Vec3d(0, 0, 0), out);
@@ -205,7 +205,7 @@ TEST(PluckerBsp, EmptyTreeReturnsTheLight) {
 
 TEST(PluckerBsp, SingleOccluderHasFourLeaves) {
   // bsp(o) (Figure 4): three inner nodes, three visible leaves, one invisible leaf.
-  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Occluder o;
   o.n = 3;
   o.v[0] = Vec3d(-0.25f, -0.25f, 1);
@@ -497,7 +497,7 @@ TEST(PluckerSolver, RegisteredWithOptions) {
 TEST(PluckerBsp, TwoSidedOccluderHidesFromBothSides) {
   // A two-sided occluder (bsp.h) answers queries from either side of its plane like the
   // one-sided occluder oriented for that side.
-  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Occluder o;
   o.n = 3;
   o.v[0] = Vec3d(0, -0.5, 0.5);  // vertical triangle in the plane x = 0
@@ -803,14 +803,16 @@ TEST(PluckerFragment, PointInFragmentToleratesANoiseEdge) {
   // a "noise" edge whose line has a random direction; the sample 1e-3 inside the
   // fragment is on the wrong side of that line. With the vertex slack (fragment.h) it is
   // inside; a point outside the fragment by 1e-3 stays outside.
-  const Vec3f poly[4] = {Vec3f(-1.16099763f, -0.739767432f, 6.03390026f), Vec3f(-0.859376073f, 0.703119755f, 6.0640626f),
-                         Vec3f(-0.859375f, 0.703125f, 6.0640626f), Vec3f(-0.63122803f, 0.532933354f, 6.08687735f)};
+  const Vec3d poly[4] = {to_double(Vec3f(-1.16099763f, -0.739767432f, 6.03390026f)),
+                         to_double(Vec3f(-0.859376073f, 0.703119755f, 6.0640626f)),
+                         to_double(Vec3f(-0.859375f, 0.703125f, 6.0640626f)),
+                         to_double(Vec3f(-0.63122803f, 0.532933354f, 6.08687735f))};
   PlaneFrame f = PlaneFrame::from_normal(Vec3f(0.0995037f, 0, -0.995037f));
-  const Vec3f inside(-1.09503269f, -0.433688283f, 6.04049683f);
+  const Vec3d inside = to_double(Vec3f(-1.09503269f, -0.433688283f, 6.04049683f));
   EXPECT_FALSE(point_in_fragment(f, poly, 4, inside));
-  const float slack = 3.0f * 0x1p-20f;  // as plucker_solver.cpp: 2^-20 of the light's extent
+  const double slack = 3.0 * 0x1p-20;  // as plucker_solver.cpp had for float fragments
   EXPECT_TRUE(point_in_fragment(f, poly, 4, inside, slack));
-  const Vec3f outside(-1.09503269f - 0.01f, -0.433688283f, 6.04049683f);
+  const Vec3d outside = to_double(Vec3f(-1.09503269f - 0.01f, -0.433688283f, 6.04049683f));
   EXPECT_FALSE(point_in_fragment(f, poly, 4, outside, slack));
 }
 
@@ -827,7 +829,7 @@ TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
   // visible area, with and without coherence, on random occluder soups; the relevant
   // choice returns fragments from undefined leaves that no occluder of theirs meets.
   Rng rng(8);
-  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   uint64_t lazy = 0;
   for (int scene = 0; scene < 20; ++scene) {
     std::vector<Occluder> occ;
@@ -859,7 +861,7 @@ TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
 }
 
 TEST(PluckerBsp, HidesAllWhenOneOccluderCoversTheLight) {
-  Vec3f light[4] = {Vec3f(-1, -1, 2), Vec3f(-1, 1, 2), Vec3f(1, 1, 2), Vec3f(1, -1, 2)};
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Occluder big, small;
   big.n = small.n = 4;
   // A 3 x 3 square at z = 1 (normal +z): from (0, 0, 0) its shadow covers [-3, 3]^2.
@@ -1145,4 +1147,42 @@ TEST(PluckerSolver, ReceiverAtAGrazingAngle) {
     EXPECT_EQ(r.stats.get("exact_receivers"), 1.0);
     EXPECT_EQ(r.stats.get("fallback_receivers"), 0.0);
   }
+}
+
+TEST(PluckerSolver, LongThinLight) {
+  // fuzz_plucker f71e1b21... (far-origin shared-edge-fan, one light vertex replaced by a
+  // subnormal x): a light 4e5 long and 4 wide, long slivers 1 below it. With the local
+  // origin at the far tip and float fragments, shadow boundaries moved by u |x| = 0.015
+  // there, over 1% of the light (fractions 0.897 against the region oracle's 0.885); the
+  // origin is now the light vertex nearest the receivers and the fragments are double.
+  Scene s;
+  s.name = "long-light";
+  Light l;
+  l.polygon = {Vec3f(0x1.44p-142f, 0x1.c851p+17f, 0x1.d0c44p+18f), Vec3f(0x1.8450cp+18f, 0x1.c853p+17f, 0x1.d0c44p+18f),
+               Vec3f(0x1.8451cp+18f, 0x1.c853p+17f, 0x1.d0c44p+18f), Vec3f(0x1.8451cp+18f, 0x1.c851p+17f, 0x1.d0c44p+18f)};
+  l.samples = 16;
+  l.seed = 2;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(-0x1.fffffep+0f, 0x1.c85192p+17f, 0x1.d0c4p+18f),
+                     Vec3f(0x1.84514cp+18f, 0x1.c8518ep+17f, 0x1.d0c3fep+18f),
+                     Vec3f(0x1.84514cp+18f, 0x1.c8519ep+17f, 0x1.d0c3fep+18f),
+                     Vec3f(0x1.84513ep+18f, 0x1.c851ap+17f, 0x1.d0c4p+18f),
+                     Vec3f(0x1.84513ep+18f, 0x1.c851bp+17f, 0x1.d0c4p+18f),
+                     Vec3f(0x0p+0f, 0x1.c851aep+17f, 0x1.d0c3fep+18f),
+                     Vec3f(0x1.84515ep+18f, 0x1.c851aap+17f, 0x1.d0c3fcp+18f),
+                     Vec3f(0x1.84514ep+18f, 0x1.c851bcp+17f, 0x1.d0c3fep+18f)};
+  s.mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {2, 6, 5}, {4, 5, 7}};
+  s.receivers.push_back({Vec3f(0x1.8451acp+18f, 0x1.c8522cp+17f, 0x1.d0c3cp+18f), Vec3f(0, 0, 1)});
+  s.receivers.push_back({Vec3f(0x1.8451aep+18f, 0x1.c8508ep+17f, 0x1.d0c3b8p+18f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  int partial = 0;
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      double exact = oracle::visible_region(s, i, 0).visible_fraction;
+      partial += exact > 0.01 && exact < 0.99;
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact, 1e-5) << i << " " << coherence;
+    }
+  }
+  EXPECT_EQ(partial, 4);
 }

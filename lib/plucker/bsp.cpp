@@ -7,7 +7,7 @@
 
 namespace visgate::plucker {
 
-LazyBsp::LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers,
+LazyBsp::LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers,
                  int nr)
     : light_(light, light + m), occ_(std::move(occluders)), recv_(receivers, receivers + nr), rng_(seed) {
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
@@ -38,7 +38,7 @@ void LazyBsp::reset() {
 
 size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
-         (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3f) +
+         (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
          stack_.capacity() * sizeof(Work) + shadow_stamp_.capacity() * sizeof(uint32_t) +
          shadow_box_.capacity() * sizeof(Box2);
 }
@@ -151,7 +151,7 @@ void LazyBsp::begin_query(const Vec3d& r) {
   }
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n, const Box2& fbox) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox) {
   if (have_plane_) {
     if (shadow_stamp_[id] != stamp_) {
       shadow_box_[id] = shadow_box(plane_, r, occ_[id].v, size_t(occ_[id].n));
@@ -162,7 +162,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3f* 
   return occlusion(id, r, f, n);
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n) {
   const Occluder& o = occ_[id];
   // One-sided: a line stabs o iff it is positive against every edge line (lines.h).
   // Two-sided: iff it is positive against every edge or negative against every edge;
@@ -188,7 +188,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3f* 
 
 bool LazyBsp::hides_all(const Vec3d& r) {
   begin_query(r);
-  const Vec3f* f = light_.data();
+  const Vec3d* f = light_.data();
   const int n = int(light_.size());
   int32_t node = 0;
   for (;;) {

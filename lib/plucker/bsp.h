@@ -74,14 +74,14 @@ struct Occluder {
 
 // Convex polygons stored back to back.
 struct FragmentList {
-  std::vector<Vec3f> verts;
+  std::vector<Vec3d> verts;
   std::vector<std::pair<uint32_t, uint32_t>> polys;  // (first vertex, count)
 
   void clear() { verts.clear(); polys.clear(); }
   size_t size() const { return polys.size(); }
-  const Vec3f* data(size_t k) const { return verts.data() + polys[k].first; }
+  const Vec3d* data(size_t k) const { return verts.data() + polys[k].first; }
   int count(size_t k) const { return int(polys[k].second); }
-  void add(const Vec3f* p, size_t n) {
+  void add(const Vec3d* p, size_t n) {
     polys.emplace_back(uint32_t(verts.size()), uint32_t(n));
     verts.insert(verts.end(), p, p + n);
   }
@@ -116,7 +116,7 @@ class LazyBsp {
   // combines vertices with barycentric weights). insertOccluder takes the first decided
   // orientation of the two vvsets: still conservative, and far fewer mixed insertions
   // for occluders close to the receivers.
-  LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers = nullptr,
+  LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers = nullptr,
           int nr = 0);
 
   // How an undefined leaf is developed (Algorithm 1 line 31).
@@ -193,13 +193,13 @@ class LazyBsp {
   // stabs it properly), Cover (every edge has the fragment on its stabbing side: every
   // line stabs its closure) or Partial. Signs from classify_fragment (fragment.h).
   enum class Occlusion : uint8_t { Miss, Partial, Cover };
-  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n);
+  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n);
   // occlusion() preceded by the shadow-box test against the fragment's box `fbox`.
-  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3f* f, int n, const Box2& fbox);
+  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox);
   // The per-query cache of shadow boxes: valid for query point shadow_r_.
   void begin_query(const Vec3d& r);
 
-  std::vector<Vec3f> light_;
+  std::vector<Vec3d> light_;
   std::vector<Occluder> occ_;
   std::vector<Vec3d> recv_;     // receiver region corners
   // insertOccluder's orientation test (Theorem 1) of occluder id against edge `edge` of
@@ -215,7 +215,7 @@ class LazyBsp {
   BspCounters counters_;
 
   // Scratch reused across queries.
-  std::vector<Vec3f> work_, cur_, pos_, neg_;
+  std::vector<Vec3d> work_, cur_, pos_, neg_;
   std::vector<Work> stack_;
   std::vector<uint32_t> list_scratch_;
   std::vector<uint32_t> leaf_lists_[2 * kMaxOccluderVertices];

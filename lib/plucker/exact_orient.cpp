@@ -40,7 +40,7 @@ void grow(Expansion& e, double b) {
 }
 
 // The exact difference of two points' coordinates k as an expansion: (a.hi + a.lo) -
-// (b.hi + b.lo), four floats summed exactly.
+// (b.hi + b.lo), four doubles summed exactly.
 Expansion difference(const SumPoint& a, const SumPoint& b, int k) {
   Expansion e;
   grow(e, double(a.hi[k]));
@@ -94,7 +94,7 @@ ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf,
   constexpr double kU = 0x1p-53;
   Vec3d a = to_double(af);
   Vec3d u = to_double(bf) - a, v = to_double(cf) - a;
-  Vec3d dd = to_double(d.hi) + to_double(d.lo);
+  Vec3d dd = to_double(d.hi) + d.lo;
   Vec3d w = dd - a;
   Vec3d uv = cross(u, v);
   double val = dot(uv, w);

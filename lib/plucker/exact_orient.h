@@ -7,9 +7,9 @@
 //
 // Guarantee: exact for every finite float input. Shewchuk's expansion arithmetic
 // ("Adaptive precision floating-point arithmetic and fast robust geometric predicates",
-// 1997) in double: a point is the exact sum hi + lo of two float vectors (lo = 0 for an
-// input point; a fragment vertex in a light's local frame is origin + local, summed
-// exactly), each coordinate difference is an exact expansion (Two-Sum), each product of
+// 1997) in double: a point is the exact sum hi + lo of a float and a double vector (lo =
+// 0 for an input point; a fragment vertex in a light's local frame is origin + local,
+// summed exactly), each coordinate difference is an exact expansion (Two-Sum), each product of
 // three components an exact expansion (Two-Product by fused multiply-add), and the terms
 // of det[b - a, c - a, d - a] are summed exactly (Grow-Expansion). Float inputs keep every
 // intermediate inside double's range: products of three differences of floats are below
@@ -22,12 +22,14 @@
 
 namespace visgate::plucker {
 
-// A point as the exact sum of two float vectors.
+// A point as the exact sum of a float vector and a double vector (an input point:
+// lo = 0; a fragment vertex: the light's local origin plus its local coordinates).
 struct SumPoint {
-  Vec3f hi{}, lo{};
+  Vec3f hi{};
+  Vec3d lo{};
   SumPoint() = default;
   SumPoint(const Vec3f& h) : hi(h) {}  // NOLINT: an input point is its own sum
-  SumPoint(const Vec3f& h, const Vec3f& l) : hi(h), lo(l) {}
+  SumPoint(const Vec3f& h, const Vec3d& l) : hi(h), lo(l) {}
 };
 
 struct ExactOrient {

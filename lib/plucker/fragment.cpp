@@ -35,39 +35,39 @@ constexpr double kUd = 0x1p-53;
 // plane: for a receiver far from the light (fuzz_plucker 597a1279...: 7e22 away) x - r
 // is -r to within rounding and (x - r) . N cancels catastrophically.
 // The bound of d . N is dot_scale |d|_1 (its evaluation) plus vertex_scale |x|_inf: a
-// fragment vertex x is a float, rounded (when it was interpolated) by up to u |x_i| per
+// fragment vertex x was rounded (when it was interpolated) by up to u |x_i| per
 // coordinate, so a vertex within that of the plane is on it. Without this term, vertices
 // that lie on a plane only to float precision (shared boundaries of earlier splits) were
 // split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
 struct NodePlane {
   Vec3d n, base;
   double dot_scale = 0.0;     // 8 u_d |N|_inf
-  double vertex_scale = 0.0;  // 2 u |N|_1 (u = 2^-24, float)
+  double vertex_scale = 0.0;  // 2 u_d |N|_1
   bool on_line = false;
 };
 
-NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f& x0) {
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0) {
   NodePlane p;
   Vec3d err;
   p.n = edge_plane_normal_err(r, a, b, err);
   p.on_line = on_line(p.n, err);
   p.base = nearest_base(r, a, b, x0);
   p.dot_scale = 8.0 * kUd * max_component(vabs(p.n));
-  p.vertex_scale = 2.0 * double(kUnitRoundoff) * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z));
+  p.vertex_scale = 2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z));
   return p;
 }
 }  // namespace
 
-SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f* poly, int n) {
+SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n) {
   // Same signs as split_fragment below.
   NodePlane pl = node_plane(r, a, b, poly[0]);
   if (pl.on_line) return SplitResult::OnLine;
   bool pos = false, neg = false;
   for (int k = 0; k < n; ++k) {
-    Vec3d d = to_double(poly[k]) - pl.base;
+    Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
     double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) +
-                   pl.vertex_scale * double(max_component(vabs(poly[k])));
+                   pl.vertex_scale * max_component(vabs(poly[k]));
     pos |= s > bound;
     neg |= s < -bound;
   }
@@ -77,14 +77,14 @@ SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, co
   return SplitResult::ZeroArea;
 }
 
-SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f* poly, int n,
-                           std::vector<Vec3f>& pos, std::vector<Vec3f>& neg) {
+SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
+                           std::vector<Vec3d>& pos, std::vector<Vec3d>& neg) {
   // det[x - r, a - r, b - r] = (x - base) . N = side(line(r, x), line(a, b)) (node_plane).
   NodePlane pl = node_plane(r, a, b, poly[0]);
   // Query point on the node's line: N vanishes within its error bound.
   if (pl.on_line) return SplitResult::OnLine;
 
-  double val_buf[kMaxStack];
+  double val_buf[kMaxStack];  // NOLINT
   std::vector<double> val_heap;
   double* val = val_buf;
   if (n > kMaxStack) {
@@ -93,10 +93,10 @@ SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const
   }
   int npos = 0, nneg = 0;
   for (int k = 0; k < n; ++k) {
-    Vec3d d = to_double(poly[k]) - pl.base;
+    Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
     double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) +
-                   pl.vertex_scale * double(max_component(vabs(poly[k])));
+                   pl.vertex_scale * max_component(vabs(poly[k]));
     if (s > bound) ++npos;
     else if (s < -bound) ++nneg;
     else s = 0.0;  // on the plane within the error bound: belongs to both pieces
@@ -118,8 +118,7 @@ SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const
     if (s0 <= 0.0) neg.push_back(poly[k]);
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
       double t = s0 / (s0 - s1);
-      Vec3d p0 = to_double(poly[k]), p1 = to_double(poly[k1]);
-      Vec3f x(p0 + (p1 - p0) * t);
+      Vec3d x = poly[k] + (poly[k1] - poly[k]) * t;
       pos.push_back(x);
       neg.push_back(x);
     }
@@ -167,10 +166,10 @@ void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_no
   clip_values_impl(poly, values, n, keep_nonneg, out, on_plane);
 }
 
-double polygon_area(const Vec3f* poly, int n) {
+double polygon_area(const Vec3d* poly, int n) {
   if (n < 3) return 0.0;
-  Vec3d o = to_double(poly[0]), acc(0, 0, 0);
-  for (int k = 1; k + 1 < n; ++k) acc += cross(to_double(poly[k]) - o, to_double(poly[k + 1]) - o);
+  Vec3d o = poly[0], acc(0, 0, 0);
+  for (int k = 1; k + 1 < n; ++k) acc += cross(poly[k] - o, poly[k + 1] - o);
   return 0.5 * length(acc);
 }
 
@@ -185,7 +184,7 @@ PlaneFrame PlaneFrame::from_normal(const Vec3f& n) {
   return f;
 }
 
-Box2 Box2::of(const PlaneFrame& f, const Vec3f* poly, int n) {
+Box2 Box2::of(const PlaneFrame& f, const Vec3d* poly, int n) {
   Box2 b;
   if (n <= 0) return b;
   b.ulo = b.uhi = poly[0][f.u];
@@ -200,7 +199,7 @@ Box2 Box2::of(const PlaneFrame& f, const Vec3f* poly, int n) {
 }
 
 Box2 Box2::everything() {
-  constexpr float inf = std::numeric_limits<float>::infinity();
+  constexpr double inf = std::numeric_limits<double>::infinity();
   return Box2{-inf, inf, -inf, inf};
 }
 
@@ -237,27 +236,27 @@ Box2 shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n)
   return Box2{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
 }
 
-bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p, float slack) {
-  // 2D orientation (b - a) x (p - a) in float: 2 differences per factor, 2 products,
-  // 1 subtraction, < 5.01 u of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
-  // 8 u accepts points on the boundary (shared edges of neighbouring fragments are the
-  // same float segment, so no sample falls between them).
-  const float bound_k = 8.0f * kUnitRoundoff;
+bool point_in_fragment(const PlaneFrame& f, const Vec3d* poly, int n, const Vec3d& p, double slack) {
+  // 2D orientation (b - a) x (p - a) in double: 2 differences per factor, 2 products,
+  // 1 subtraction, < 5.01 u_d of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
+  // 8 u_d accepts points on the boundary (shared edges of neighbouring fragments are the
+  // same segment, so no sample falls between them).
+  const double bound_k = 8.0 * 0x1p-53;
   for (int k = 0; k < n; ++k) {
-    const Vec3f& a = poly[k];
-    const Vec3f& b = poly[(k + 1 == n) ? 0 : k + 1];
-    float eu = b[f.u] - a[f.u], ev = b[f.v] - a[f.v];
-    float pu = p[f.u] - a[f.u], pv = p[f.v] - a[f.v];
-    float o = eu * pv - ev * pu;
+    const Vec3d& a = poly[k];
+    const Vec3d& b = poly[(k + 1 == n) ? 0 : k + 1];
+    double eu = b[f.u] - a[f.u], ev = b[f.v] - a[f.v];
+    double pu = p[f.u] - a[f.u], pv = p[f.v] - a[f.v];
+    double o = eu * pv - ev * pu;
     if (f.flip) o = -o;
-    float bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu)) +
-                  slack * (2.0f * (std::abs(pu) + std::abs(pv)) + std::abs(eu) + std::abs(ev));
+    double bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu)) +
+                   slack * (2.0 * (std::abs(pu) + std::abs(pv)) + std::abs(eu) + std::abs(ev));
     if (o < -bound) return false;
   }
   return true;
 }
 
-double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3f* poly, int n) {
+double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, int n) {
   // Clip to the receiver's upper half-space, in double relative to r.
   // Each vertex emits at most two (itself and a crossing), so 2n bounds the clipped
   // polygon even for a fragment that rounding made slightly non-convex; kept on the
@@ -273,7 +272,7 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3f* poly, i
   }
   int qn = 0;
   for (int k = 0; k < n; ++k) {
-    Vec3d p0 = to_double(poly[k]) - rd, p1 = to_double(poly[(k + 1) % n]) - rd;
+    Vec3d p0 = poly[k] - rd, p1 = poly[(k + 1) % n] - rd;
     double s0 = dot(nd, p0), s1 = dot(nd, p1);
     if (s0 >= 0.0) qv[qn++] = p0;
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) qv[qn++] = p0 + (p1 - p0) * (s0 / (s0 - s1));

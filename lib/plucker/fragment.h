@@ -3,13 +3,13 @@
 // soft-shadow framework takes on them (section 4.4): area, point-in-fragment and the
 // analytic Lambert irradiance [NN85].
 //
-// Precision: float32 fragment vertices (points of the light, in its local frame); the
-// planes through a query point and a node's line are computed and evaluated in double
-// from double query points and occluders (the solver's local coordinates), with
-// forward error bounds (a vertex within the bound lies "on" the plane and goes to both
-// pieces). New vertices are interpolated in double and rounded once, so a fragment's
-// vertices are off the light plane by rounding (about 1e-7 relative); areas and
-// irradiance accumulate in double.
+// Precision: double throughout, on double local coordinates computed from the float32
+// inputs (fragment vertices are points of the light in its local frame; query points and
+// occluders the solver's local coordinates). Float fragments were not enough: a light
+// 4e5 long had its shadow boundaries moved by u |x| = 0.015 at its far end, 1% of its
+// area (fuzz_plucker f71e1b21...). Planes through a query point and a node's line are
+// evaluated against forward error bounds (a vertex within the bound lies "on" the plane
+// and goes to both pieces).
 #pragma once
 
 #include <cstdint>
@@ -34,11 +34,11 @@ enum class SplitResult : uint8_t {
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or
 // empty when rounding leaves fewer; a piece of fewer than 3 vertices has zero area).
 // r, a, b in double (the solver's local coordinates), the fragment in float.
-SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f* poly, int n,
-                           std::vector<Vec3f>& pos, std::vector<Vec3f>& neg);
+SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
+                           std::vector<Vec3d>& pos, std::vector<Vec3d>& neg);
 
 // The classification of split_fragment without building the pieces (Both: mixed).
-SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3f* poly, int n);
+SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to
@@ -58,7 +58,7 @@ void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_no
                     std::vector<uint8_t>* on_plane = nullptr);
 
 // Area of a planar polygon (Newell, double).
-double polygon_area(const Vec3f* poly, int n);
+double polygon_area(const Vec3d* poly, int n);
 
 // A 2D frame on the light plane: drop the axis where the light normal is largest; `flip`
 // makes counter-clockwise (about the light normal) polygons positive in 2D.
@@ -71,11 +71,11 @@ struct PlaneFrame {
 // A 2D box in a PlaneFrame (coordinates u, v of the 3D points). Used only to skip work
 // that cannot change a result: two fragments whose boxes are disjoint are disjoint.
 struct Box2 {
-  float ulo = 0, uhi = -1, vlo = 0, vhi = -1;  // empty by default
-  static Box2 of(const PlaneFrame& f, const Vec3f* poly, int n);
+  double ulo = 0, uhi = -1, vlo = 0, vhi = -1;  // empty by default
+  static Box2 of(const PlaneFrame& f, const Vec3d* poly, int n);
   static Box2 everything();
   bool overlaps(const Box2& b) const { return ulo <= b.uhi && b.ulo <= uhi && vlo <= b.vhi && b.vlo <= vhi; }
-  bool contains(float u, float v) const { return u >= ulo && u <= uhi && v >= vlo && v <= vhi; }
+  bool contains(double u, double v) const { return u >= ulo && u <= uhi && v >= vlo && v <= vhi; }
   void extend(const Box2& b);
 };
 
@@ -106,7 +106,7 @@ Box2 shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 // normal), boundary included: orientation of p against each edge in the 2D frame,
 // accepted when >= -bound with the float bound of a 2D orientation (see fragment.cpp).
 // `slack` is the position uncertainty of the fragment's vertices (absolute, per
-// coordinate; 0 for exact input polygons): fragment vertices are float interpolations,
+// coordinate; 0 for exact input polygons): fragment vertices are interpolations,
 // so a convex fragment is stored convex only up to slack, and where two computed
 // vertices nearly coincide their edge's direction is noise (measured: a 6e-6 long edge
 // of a columns fragment, whose line put a sample 1e-3 inside the fragment "outside").
@@ -114,11 +114,11 @@ Box2 shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 // 2 slack (|p_u - a_u| + |p_v - a_v|) + slack (|e_u| + |e_v|): a short edge's line
 // constrains only points near it. Far from every edge the answer is unchanged; callers
 // that need a tight outer limit test a box first (plucker_solver.cpp).
-bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p, float slack = 0.0f);
+bool point_in_fragment(const PlaneFrame& f, const Vec3d* poly, int n, const Vec3d& p, double slack = 0.0);
 
 // Lambert irradiance at r with unit normal nr from a uniformly emitting polygon of unit
 // radiance (Nishita-Nakamae: E = 1/2 sum_k theta_k (nr . gamma_k)), the polygon first
 // clipped to the receiver's upper half-space nr . (x - r) >= 0. Double precision.
-double lambert_irradiance(const Vec3d& r, const Vec3f& nr, const Vec3f* poly, int n);
+double lambert_irradiance(const Vec3d& r, const Vec3f& nr, const Vec3d* poly, int n);
 
 }  // namespace visgate::plucker

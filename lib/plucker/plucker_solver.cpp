@@ -33,9 +33,10 @@ constexpr float kDotErr = 8.0f * kUnitRoundoff;
 // relative to `origin`, the light's first vertex.
 struct LightFrame {
   const Light* light = nullptr;
-  Vec3f origin{};          // world position of the local origin (light vertex 0)
-  std::vector<Vec3f> poly;  // local
-  Vec3f n{}, p0{}, centroid{};
+  Vec3f origin{};          // world position of the local origin (a light vertex)
+  std::vector<Vec3d> poly;  // local (double: exact x - origin for float x, see to_local_d)
+  Vec3f n{}, p0{};
+  Vec3d centroid{};
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
   AABB box;                // local
   float extent = 0.0f;     // largest side of box
@@ -47,7 +48,7 @@ struct LightFrame {
   // orient3d(v0, v_p1, v_p2, x) for x on the emitting side.
   bool planar = false;
   int p1 = 1, p2 = 2, emit_sign = 1;
-  std::vector<Vec3f> samples;     // local jitter points, parallel to light.jitter_points
+  std::vector<Vec3d> samples;     // local jitter points, parallel to light.jitter_points
   std::vector<uint8_t> on_light;  // per jitter point: on the light polygon (fragment test)
 };
 
@@ -56,17 +57,27 @@ Vec3f to_local(const Vec3f& x, const Vec3f& origin) { return x - origin; }
 // (the difference of two floats then fits in 53 bits), else rounded once at u_d.
 Vec3d to_local_d(const Vec3f& x, const Vec3f& origin) { return to_double(x) - to_double(origin); }
 
-LightFrame make_frame(const Light& light) {
+// The origin: the light vertex nearest to `focus` (the centre of the receivers' box).
+// Fragments are float points relative to it, resolved to u times their distance from it:
+// the light part the receivers look at should be near it (fuzz_plucker f71e1b21...: a
+// light 4e5 long whose far tip was vertex 0; its fragments where the receivers and
+// occluders are had a float spacing of 0.03 and lost a shadow band 0.017 wide).
+LightFrame make_frame(const Light& light, const Vec3d& focus) {
   LightFrame f;
   f.light = &light;
   f.origin = light.polygon[0];
+  double best = std::numeric_limits<double>::infinity();
+  for (const Vec3f& v : light.polygon) {
+    double d = max_component(vabs(to_double(v) - focus));
+    if (d < best) best = d, f.origin = v;
+  }
   f.poly.reserve(light.polygon.size());
-  for (const Vec3f& v : light.polygon) f.poly.push_back(to_local(v, f.origin));
+  for (const Vec3f& v : light.polygon) f.poly.push_back(to_local_d(v, f.origin));
   f.n = light.normal;
-  f.p0 = f.poly[0];  // (0, 0, 0)
-  for (const Vec3f& v : f.poly) {
-    f.box.extend(v);
-    Vec3f d = v - f.p0;
+  f.p0 = Vec3f(0, 0, 0);  // the origin vertex, on the light
+  for (const Vec3f& v : light.polygon) {
+    Vec3f d = to_local(v, f.origin);
+    f.box.extend(d);
     float h = std::abs(dot(f.n, d)) + kDotErr * norm1(f.n) * norm1(d);
     f.plane_tol = std::max(f.plane_tol, h);
   }
@@ -75,11 +86,11 @@ LightFrame make_frame(const Light& light) {
   {
     // The vertex pair spanning the largest float area with vertex 0, then exactness.
     const auto& v = light.polygon;
-    float best = 0.0f;
+    float widest = 0.0f;
     for (size_t a = 1; a < v.size(); ++a)
       for (size_t b = a + 1; b < v.size(); ++b) {
         float ar = norm1(cross(v[a] - v[0], v[b] - v[0]));
-        if (ar > best) best = ar, f.p1 = int(a), f.p2 = int(b);
+        if (ar > widest) widest = ar, f.p1 = int(a), f.p2 = int(b);
       }
     Vec3f c = cross(v[size_t(f.p1)] - v[0], v[size_t(f.p2)] - v[0]);
     float cn = dot(c, f.n), bound = 16.0f * kUnitRoundoff * norm1(v[size_t(f.p1)] - v[0]) * norm1(v[size_t(f.p2)] - v[0]);
@@ -90,8 +101,8 @@ LightFrame make_frame(const Light& light) {
   }
   f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame};
   Vec3d c(0, 0, 0);
-  for (const Vec3f& v : f.poly) c += to_double(v);
-  f.centroid = Vec3f(c / double(f.poly.size()));
+  for (const Vec3d& v : f.poly) c += v;
+  f.centroid = c / double(f.poly.size());
   // Light points (DESIGN section 6 allows explicit samples anywhere): a point on the
   // light's plane (|h| within the rounding bound used for receivers) and inside the
   // light polygon (point_in_fragment's boundary bound) is decided by point-in-fragment;
@@ -99,12 +110,11 @@ LightFrame make_frame(const Light& light) {
   f.samples.resize(light.jitter_points.size());
   f.on_light.resize(light.jitter_points.size());
   for (size_t k = 0; k < light.jitter_points.size(); ++k) {
-    Vec3f q = to_local(light.jitter_points[k], f.origin);
-    f.samples[k] = q;
-    Vec3f d = q - f.p0;
+    f.samples[k] = to_local_d(light.jitter_points[k], f.origin);
+    Vec3f d = to_local(light.jitter_points[k], f.origin) - f.p0;
     float h = dot(f.n, d);
     float tol = f.plane_tol + kDotErr * norm1(f.n) * norm1(d);
-    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.frame, f.poly.data(), int(f.poly.size()), q);
+    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.frame, f.poly.data(), int(f.poly.size()), f.samples[k]);
   }
   return f;
 }
@@ -216,11 +226,11 @@ struct Context {
 // near-polygon loop in shade_group).
 void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
                       const PlaneFrame& frame, const FragmentList& in, const std::vector<Box2>& boxes,
-                      FragmentList& out, std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur,
-                      std::vector<Vec3f>& pos, std::vector<Vec3f>& neg, BspCounters& c) {
+                      FragmentList& out, std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur,
+                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   out.clear();
   out_boxes.clear();
-  auto keep = [&](const Vec3f* p, size_t n) {
+  auto keep = [&](const Vec3d* p, size_t n) {
     out.add(p, n);
     out_boxes.push_back(Box2::of(frame, p, int(n)));
   };
@@ -279,13 +289,13 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
 // way the planes through rw and the edges lean.
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
                              const PlaneFrame& frame, const FragmentList& in, FragmentList& out,
-                             std::vector<Box2>& out_boxes, std::vector<Vec3f>& cur) {
+                             std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur) {
   out.clear();
   out_boxes.clear();
   std::vector<double> w;
-  std::vector<Vec3f> inside, outside;
+  std::vector<Vec3d> inside, outside;
   // w > 0 inside plane k's half-space of the blocked set.
-  auto value = [&](int k, const Vec3f& x) {
+  auto value = [&](int k, const Vec3d& x) {
     // det[x - rw, t_e - rw, t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x) (cyclic columns).
     SumPoint xs(origin, x);
     ExactOrient o = k == 0 ? orient3d_filtered(tw[0], tw[1], tw[2], xs) : orient3d_filtered(rw, tw[k - 1], tw[k % 3], xs);
@@ -338,7 +348,7 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
   const Vec3f r = to_local(scene.receivers[i].p, lf.origin);
   int vis = 0;
   for (int j = 0; j < light.samples; ++j) {
-    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, lf.samples[sample_index(light, j, i)]);
+    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, Vec3f(lf.samples[sample_index(light, j, i)]));
     rr.set_visible(off + size_t(j), !blocked);
     vis += !blocked;
   }
@@ -409,8 +419,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     group_plane(gn, nmin, nmax);
     double dlt = 16.0 * double(kUnitRoundoff) * (std::abs(gn.x) + std::abs(gn.y) + std::abs(gn.z)) * 3.0 * coord_max;
     bool beyond = true, below = true;
-    for (const Vec3f& v : lf.poly) {
-      double gv = gval(gn, to_double(v));
+    for (const Vec3d& v : lf.poly) {
+      double gv = gval(gn, v);
       beyond &= gv > nmax + 2 * dlt;
       below &= gv < nmin - 2 * dlt;
     }
@@ -523,7 +533,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   FragmentList frags, tmp;
   std::vector<Box2> boxes, tmp_boxes;
   std::vector<Vec3d> pyramid, pyramid_err;
-  std::vector<Vec3f> cur, pos, neg;
+  std::vector<Vec3d> cur, pos, neg;
   std::vector<Vec3d> q;
   std::vector<uint8_t> on_level, skip;
   std::vector<uint32_t> exact_done;  // triangles subtracted exactly for this receiver
@@ -543,7 +553,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // by the exact path alone: every candidate triangle of the group subtracted exactly
     // (subtract_triangle_exact), no tree and no near polygons.
     const double hr = double(sigma) * dot(nd, r);
-    const double far = std::max(max_component(vabs(r - to_double(lf.centroid))), double(lf.extent));
+    const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
     const bool extreme = !(far <= 0x1p20 * hr);
     if (extreme) {
       ++tot.exact_receivers;
@@ -583,8 +593,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       pyramid_err.resize(m);
       for (size_t j = 0; j < m; ++j) {
         Vec3d err;
-        Vec3d nrm = edge_plane_normal_err(r, to_double(lf.poly[j]), to_double(lf.poly[(j + 1) % m]), err);
-        if (dot(nrm, to_double(lf.centroid) - to_double(lf.poly[j])) < 0.0) nrm = -nrm;
+        Vec3d nrm = edge_plane_normal_err(r, lf.poly[j], lf.poly[(j + 1) % m], err);
+        if (dot(nrm, lf.centroid - lf.poly[j]) < 0.0) nrm = -nrm;
         pyramid[j] = nrm;
         pyramid_err[j] = err;
       }
@@ -622,7 +632,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           const Vec3d& pn = pyramid[j];
           const double shift = 4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) *
                                (pmax + double(lf.extent) + rmax);
-          const Vec3d lj = to_double(lf.poly[j]);
+          const Vec3d& lj = lf.poly[j];
           for (uint32_t k = 0; k < np.count && outside; ++k) {
             Vec3d d = pv[k] - lj;
             outside = dot(pn, d) < -16.0 * dot_err(d, pn, pyramid_err[j]) - shift;
@@ -703,32 +713,35 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     double area = 0.0, irr = 0.0;
     for (size_t f = 0; f < frags.size(); ++f) {
       // Reported in world coordinates: one float rounding per vertex (plucker_solver.h).
-      auto& wf = out.emplace_back(frags.data(f), frags.data(f) + frags.count(f));
-      for (Vec3f& v : wf) v = v + lf.origin;
+      const Vec3d od = to_double(lf.origin);
+      auto& wf = out.emplace_back();
+      wf.reserve(size_t(frags.count(f)));
+      for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
       area += polygon_area(frags.data(f), frags.count(f));
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
     }
     rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
-    // A sample is visible when it lies in the box of a fragment grown by 2^-18 of the
+    // A sample is visible when it lies in the box of a fragment grown by 2^-38 of the
     // light's extent and in the fragment by point_in_fragment with a vertex slack of
-    // 2^-20 of the extent (fragment.h: about 30 ulps of the coordinates, far above the
-    // rounding of the interpolated vertices, far below tau). The box bounds what the
+    // 2^-40 of the extent (fragment.h: the fragments are double, so this is about 2^13
+    // ulps of the coordinates, far above the rounding of the interpolated vertices and
+    // far below tau; with float fragments it was 2^-20 and 2^-18). The box bounds what the
     // slack accepts near short edges; together they accept exactly the points within
-    // about 2^-18 of the extent of a fragment.
-    const float grow = lf.extent * 0x1p-18f;
-    const float slack = lf.extent * 0x1p-20f;
+    // about 2^-38 of the extent of a fragment.
+    const double grow = double(lf.extent) * 0x1p-38;
+    const double slack = double(lf.extent) * 0x1p-40;
     for (Box2& b : boxes) b = Box2{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
     for (int j = 0; j < light.samples; ++j) {
       size_t k = sample_index(light, j, i);
       bool vis = false;
       if (lf.on_light[k]) {
-        const Vec3f& sp = lf.samples[k];
-        const float su = sp[lf.frame.u], sv = sp[lf.frame.v];
+        const Vec3d& sp = lf.samples[k];
+        const double su = sp[lf.frame.u], sv = sp[lf.frame.v];
         for (size_t f = 0; f < frags.size() && !vis; ++f)
           vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
       } else {
         // Off the light polygon (explicit samples): the segment r -> sample itself.
-        vis = !segment_blocked_by_scene(scene, lf.origin, to_local(rec.p, lf.origin), lf.samples[k]);
+        vis = !segment_blocked_by_scene(scene, lf.origin, to_local(rec.p, lf.origin), Vec3f(lf.samples[k]));
         ++tot.segment_relations;
       }
       rr.set_visible(off + size_t(j), vis);
@@ -822,12 +835,15 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   memory.change(int64_t(tree.memory_bytes()));
   Context ctx{&scene, &result, irradiance, coherence, choice, &tree, opt.seed, &memory};
   auto groups = receiver_groups(scene, tile);
+  AABB rbox_all;
+  for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
+  const Vec3d focus = scene.receivers.empty() ? Vec3d(0, 0, 0) : (to_double(rbox_all.lo) + to_double(rbox_all.hi)) * 0.5;
   Totals totals;
   std::mutex merge_mutex;
 
   // Multiple lights in turn (Algorithm 2 line 2); groups of one light in parallel.
   for (size_t li = 0; li < scene.lights.size(); ++li) {
-    LightFrame lf = make_frame(scene.lights[li]);
+    LightFrame lf = make_frame(scene.lights[li], focus);
     tbb::parallel_for(size_t(0), groups.size(), [&](size_t g) {
       Totals tot;
       // Split the group by the side of the light plane; receivers on it fall back.
