@@ -11,6 +11,8 @@ LazyBsp::LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uin
                  int nr)
     : light_(light, light + m), occ_(std::move(occluders)), recv_(receivers, receivers + nr), rng_(seed) {
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
+  for (const Vec3d& v : light_) light_centroid_ += v;
+  if (m > 0) light_centroid_ = light_centroid_ / double(m);
   reset();
   counters_.nodes_created = 1;
 }
@@ -40,7 +42,8 @@ size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
          (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
          stack_.capacity() * sizeof(Work) + shadow_stamp_.capacity() * sizeof(uint32_t) +
-         shadow_box_.capacity() * sizeof(Box2);
+         shadow_box_.capacity() * sizeof(Box2) + plane_stamp_.capacity() * sizeof(uint32_t) +
+         plane_cache_.capacity() * sizeof(NodePlane);
 }
 
 void LazyBsp::develop(int32_t leaf, int64_t forced) {
@@ -71,8 +74,7 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
     Node& in = nodes_[size_t(id)];
     in.kind = kInner;
     in.edge = uint8_t(m);
-    in.a = o.v[m];
-    in.b = o.v[(m + 1) % k];
+    in.occ = ro;
     in.left = left;
     in.right = right;
     in.occ_begin = in.occ_count = 0;
@@ -138,17 +140,31 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
 }
 
 void LazyBsp::begin_query(const Vec3d& r) {
-  if (!have_plane_) return;
   if (stamp_ != 0 && r.x == shadow_r_.x && r.y == shadow_r_.y && r.z == shadow_r_.z) return;
   shadow_r_ = r;
   if (++stamp_ == 0) {  // wrapped: invalidate every entry
     std::fill(shadow_stamp_.begin(), shadow_stamp_.end(), 0u);
+    std::fill(plane_stamp_.begin(), plane_stamp_.end(), 0u);
     stamp_ = 1;
   }
-  if (shadow_stamp_.size() != occ_.size()) {
+  if (have_plane_ && shadow_stamp_.size() != occ_.size()) {
     shadow_stamp_.assign(occ_.size(), 0u);
     shadow_box_.resize(occ_.size());
   }
+  if (plane_stamp_.size() != occ_.size() * size_t(kMaxOccluderVertices)) {
+    plane_stamp_.assign(occ_.size() * size_t(kMaxOccluderVertices), 0u);
+    plane_cache_.resize(occ_.size() * size_t(kMaxOccluderVertices));
+  }
+}
+
+const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
+  size_t slot = size_t(id) * size_t(kMaxOccluderVertices) + size_t(edge);
+  if (plane_stamp_[slot] != stamp_) {
+    const Occluder& o = occ_[id];
+    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_centroid_);
+    plane_stamp_[slot] = stamp_;
+  }
+  return plane_cache_[slot];
 }
 
 LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox) {
@@ -169,8 +185,9 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
   // it misses when one edge has the fragment on its non-positive side and another (or
   // the same, on-line) on its non-negative side.
   bool all_pos = true, all_neg = true, some_nonpos = false, some_nonneg = false;
+  (void)r;  // the edge planes are those of the current query point (begin_query)
   for (int m = 0; m < o.n; ++m) {
-    SplitResult s = classify_fragment(r, o.v[m], o.v[(m + 1) % o.n], f, n);
+    SplitResult s = classify_fragment(edge_plane(id, m), f, n);
     bool nonpos = s == SplitResult::Negative || s == SplitResult::OnLine;
     bool nonneg = s == SplitResult::Positive || s == SplitResult::OnLine;
     if (nonpos && !o.two_sided) return Occlusion::Miss;
@@ -195,7 +212,7 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     const Node& nd = nodes_[size_t(node)];
     if (nd.kind == kInvisible) return true;
     if (nd.kind == kInner) {
-      SplitResult s = classify_fragment(r, nd.a, nd.b, f, n);
+      SplitResult s = classify_fragment(edge_plane(nd.occ, nd.edge), f, n);
       if (s == SplitResult::Positive) node = nd.left;
       else if (s == SplitResult::Negative || s == SplitResult::OnLine) node = nd.right;
       else return false;
@@ -238,7 +255,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.kind == kInner) {
         // Lines 17-27: position of the fragment against makePlane(xyz, hyperplane).
-        SplitResult s = split_fragment(r, nd.a, nd.b, cur_.data(), int(cur_.size()), pos_, neg_);
+        SplitResult s = split_fragment(edge_plane(nd.occ, nd.edge), cur_.data(), int(cur_.size()), pos_, neg_);
         if (s == SplitResult::Positive) {
           node = nd.left;
         } else if (s == SplitResult::Negative) {

@@ -39,12 +39,8 @@ constexpr double kUd = 0x1p-53;
 // coordinate, so a vertex within that of the plane is on it. Without this term, vertices
 // that lie on a plane only to float precision (shared boundaries of earlier splits) were
 // split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
-struct NodePlane {
-  Vec3d n, base;
-  double dot_scale = 0.0;     // 8 u_d |N|_inf
-  double vertex_scale = 0.0;  // 2 u_d |N|_1
-  bool on_line = false;
-};
+
+}  // namespace
 
 NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0) {
   NodePlane p;
@@ -56,11 +52,9 @@ NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d
   p.vertex_scale = 2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z));
   return p;
 }
-}  // namespace
 
-SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n) {
+SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
   // Same signs as split_fragment below.
-  NodePlane pl = node_plane(r, a, b, poly[0]);
   if (pl.on_line) return SplitResult::OnLine;
   bool pos = false, neg = false;
   for (int k = 0; k < n; ++k) {
@@ -77,10 +71,18 @@ SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, co
   return SplitResult::ZeroArea;
 }
 
+SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n) {
+  return classify_fragment(node_plane(r, a, b, poly[0]), poly, n);
+}
+
 SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
                            std::vector<Vec3d>& pos, std::vector<Vec3d>& neg) {
+  return split_fragment(node_plane(r, a, b, poly[0]), poly, n, pos, neg);
+}
+
+SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
+                           std::vector<Vec3d>& neg) {
   // det[x - r, a - r, b - r] = (x - base) . N = side(line(r, x), line(a, b)) (node_plane).
-  NodePlane pl = node_plane(r, a, b, poly[0]);
   // Query point on the node's line: N vanishes within its error bound.
   if (pl.on_line) return SplitResult::OnLine;
 

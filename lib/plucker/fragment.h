@@ -30,6 +30,21 @@ enum class SplitResult : uint8_t {
   ZeroArea,   // degenerate: every vertex lies on the plane, the fragment is a segment
 };
 
+// The plane through a query point r and a node's line a -> b, computed once and used for
+// many fragments (bsp.cpp caches it per query and occluder edge). The construction and
+// its bounds are derived in fragment.cpp: the normal N from the two shortest of a - r,
+// b - r, b - a with per-component error bounds (r on the line when every component is
+// within its bound), evaluated as (x - base) . N through the one of r, a, b nearest to
+// the point x0 (a point of the light).
+struct NodePlane {
+  Vec3d n, base;
+  double dot_scale = 0.0;     // 8 u_d |N|_inf
+  double vertex_scale = 0.0;  // 2 u_d |N|_1
+  bool on_line = false;
+};
+
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0);
+
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or
 // empty when rounding leaves fewer; a piece of fewer than 3 vertices has zero area).
@@ -39,6 +54,11 @@ SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const
 
 // The classification of split_fragment without building the pieces (Both: mixed).
 SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n);
+
+// The same against a precomputed plane (node_plane).
+SplitResult split_fragment(const NodePlane& plane, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
+                           std::vector<Vec3d>& neg);
+SplitResult classify_fragment(const NodePlane& plane, const Vec3d* poly, int n);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to

@@ -225,11 +225,23 @@ struct Context {
 // light line from r is on their inner side (the edge q has at r's own level, see the
 // near-polygon loop in shade_group).
 void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
-                      const PlaneFrame& frame, const FragmentList& in, const std::vector<Box2>& boxes,
-                      FragmentList& out, std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur,
-                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
+                      const PlaneFrame& frame, const Vec3d& light_centroid, const FragmentList& in,
+                      const std::vector<Box2>& boxes, FragmentList& out, std::vector<Box2>& out_boxes,
+                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   out.clear();
   out_boxes.clear();
+  // The planes through r and q's edges, once for every fragment (fragment.h node_plane).
+  NodePlane planes[2 * kMaxOccluderVertices + 2];
+  VG_CHECK(nq <= int(std::size(planes)));
+  bool have_planes = false;
+  auto plane = [&](int m) -> const NodePlane& {
+    if (!have_planes) {
+      for (int k = 0; k < nq; ++k)
+        if (!skip[k]) planes[k] = node_plane(r, q[k], q[(k + 1) % nq], light_centroid);
+      have_planes = true;
+    }
+    return planes[m];
+  };
   auto keep = [&](const Vec3d* p, size_t n) {
     out.add(p, n);
     out_boxes.push_back(Box2::of(frame, p, int(n)));
@@ -245,7 +257,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     bool misses = false;
     for (int m = 0; m < nq && !misses; ++m) {
       if (skip[m]) continue;
-      SplitResult s = classify_fragment(r, q[m], q[(m + 1) % nq], in.data(f), in.count(f));
+      SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
       misses = s == SplitResult::Negative || s == SplitResult::OnLine;
     }
     if (misses) {
@@ -257,7 +269,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     bool alive = true;
     for (int m = 0; m < nq && alive; ++m) {
       if (skip[m]) continue;
-      SplitResult s = split_fragment(r, q[m], q[(m + 1) % nq], cur.data(), int(cur.size()), pos, neg);
+      SplitResult s = split_fragment(plane(m), cur.data(), int(cur.size()), pos, neg);
       switch (s) {
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
@@ -688,8 +700,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
         Box2 qbox = shadow_box(lf.plane, r, q.data(), q.size());
         if (!qbox.overlaps(all)) continue;
-        subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, frags, boxes, tmp, tmp_boxes, cur,
-                         pos, neg, near_counters);
+        subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, lf.centroid, frags, boxes, tmp,
+                         tmp_boxes, cur, pos, neg, near_counters);
         std::swap(frags, tmp);
         std::swap(boxes, tmp_boxes);
         all = Box2{};
