@@ -157,25 +157,37 @@ int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
   return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
 }
 
-// plane_side on double points (the local frame), error bounds in double.
-int plane_side_d(const Vec3d t[3], const Vec3d& x) {
-  Vec3d err;
-  Vec3d nrm = edge_plane_normal_err(t[0], t[1], t[2], err);
-  const Vec3d& base = nearest_base(t[0], t[1], t[2], x);
-  Vec3d d = x - base;
-  double s = dot(d, nrm), bound = dot_err(d, nrm, err);
-  return s > bound ? 1 : (s < -bound ? -1 : 0);
-}
-
 struct NearPoly {
   uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
   uint32_t begin, count;
+  // Group-level data for the per-receiver tests: the polygon's box, and its triangle in
+  // double local coordinates with the plane normal N = edge_plane_normal_err(t0, t1, t2)
+  // (and N's error bound) and the 1-norms of two edges (near_side).
+  Vec3d lo, hi;
+  Vec3d t[3], n, err;
+  double e1 = 0, e2 = 0, tmax = 0;
 };
+
+// Side of the (local, double) point r against a near polygon's triangle plane: +1, -1, or
+// 0 when undecided. Decided against dot_err plus the rounding of the local frame: every
+// local point is within u_d |x|_inf of its exact translation (to_local_d), which moves
+// det[t1 - t0, t2 - t0, r - t0] by at most 2 delta (|e1|_1 |e2|_1 + (|e1|_1 + |e2|_1)
+// |r - base|_1) with delta = 2 u_d max |coordinate|, so a decided sign is the sign of
+// the exact world configuration (the inputs as given).
+int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
+  const Vec3d& base = nearest_base(np.t[0], np.t[1], np.t[2], r);
+  Vec3d d = r - base;
+  double s = dot(d, np.n);
+  double d1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  double delta = 2.0 * 0x1p-53 * std::max(rmax, np.tmax);
+  double bound = dot_err(d, np.n, np.err) + 2.0 * delta * (np.e1 * np.e2 + (np.e1 + np.e2) * d1);
+  return s > bound ? 1 : (s < -bound ? -1 : 0);
+}
 
 struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
-  uint64_t exact_triangles = 0, exact_receivers = 0;
+  uint64_t exact_triangles = 0, exact_receivers = 0, unreported_slivers = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -185,6 +197,7 @@ struct Totals {
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
     exact_triangles += o.exact_triangles;
     exact_receivers += o.exact_receivers;
+    unreported_slivers += o.unreported_slivers;
     bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
     bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
@@ -464,6 +477,21 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<double> vals;
   const Vec3d nd = to_double(lf.n), gd = g, refd = ref;
   const double gcut = gmax + delta;
+  auto make_near = [&](uint32_t t, const Vec3d tri[3], const std::vector<Vec3d>& part) {
+    NearPoly np;
+    np.triangle = t;
+    np.begin = uint32_t(near_verts.size());
+    np.count = uint32_t(part.size());
+    np.lo = np.hi = part[0];
+    for (const Vec3d& v : part) np.lo = vmin(np.lo, v), np.hi = vmax(np.hi, v);
+    for (int k = 0; k < 3; ++k) np.t[k] = tri[k];
+    np.n = edge_plane_normal_err(tri[0], tri[1], tri[2], np.err);
+    Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
+    np.e1 = std::abs(e1.x) + std::abs(e1.y) + std::abs(e1.z);
+    np.e2 = std::abs(e2.x) + std::abs(e2.y) + std::abs(e2.z);
+    np.tmax = std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2]))));
+    return np;
+  };
   std::vector<uint32_t> cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
   for (uint32_t t : cand) {
@@ -512,14 +540,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Measured on columns (1024 receivers, 64 samples): two-sided occluders in the
         // tree are mixed against most hyperplanes and multiply the developments by ~25;
         // per receiver they cost one subtraction. So they go to the near list.
-        near.push_back(NearPoly{t, uint32_t(near_verts.size()), uint32_t(lower.size())});
+        near.push_back(make_near(t, tri, lower));
         near_verts.insert(near_verts.end(), lower.begin(), lower.end());
       } else {
         occluders.push_back(o);
       }
     }
     if (!upper.empty()) {
-      near.push_back(NearPoly{t, uint32_t(near_verts.size()), uint32_t(upper.size())});
+      near.push_back(make_near(t, tri, upper));
       near_verts.insert(near_verts.end(), upper.begin(), upper.end());
     }
   }
@@ -619,8 +647,19 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       exact_done.clear();
       const Vec3d& rd = r;
       const double rmax = max_component(vabs(r));
+      // The box of this receiver's pyramid (r and the light), grown by 2^-20 of its
+      // size: a near polygon whose box misses it misses every segment from r to the light.
+      Vec3d plo = vmin(r, to_double(lf.box.lo)), phi = vmax(r, to_double(lf.box.hi));
+      {
+        const double grow_p = 0x1p-20 * (max_component(phi - plo) + max_component(vmax(vabs(plo), vabs(phi))));
+        plo = plo - Vec3d(grow_p, grow_p, grow_p);
+        phi = phi + Vec3d(grow_p, grow_p, grow_p);
+      }
       for (const NearPoly& np : near) {
         if (frags.size() == 0) break;
+        if (np.hi.x < plo.x || np.lo.x > phi.x || np.hi.y < plo.y || np.lo.y > phi.y || np.hi.z < plo.z ||
+            np.lo.z > phi.z)
+          continue;
         const Vec3d* pv = near_verts.data() + np.begin;
         // Cheap rejections first, conservative also against the rounding of the local
         // frame (a point moves by u |x| when translated; see the exact path below):
@@ -651,24 +690,21 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           }
         }
         if (outside) continue;
-        // The side of r against the triangle's plane, on world coordinates. A receiver
-        // within float rounding of the plane (but not on it) sees the triangle across a
-        // sliver of space that float cannot resolve, and what the triangle hides can be
-        // the whole light (fuzz_plucker 68d82337..., f95fbc59...: a receiver 6e-9 and
-        // 2^-148 below a face): such a triangle is subtracted exactly, whole, once per
-        // receiver (subtract_triangle_exact). Exactly on the plane the triangle cannot
-        // meet an open segment from r properly (it only touches or contains it): skipped.
-        // The float path below works on local coordinates, so it is used only when the
-        // side is decided there too, and the same way (the translation rounds: the
-        // receiver 2^-148 below a face is on it locally).
-        const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
-                               scene.mesh.corner(np.triangle, 2)};
-        int side_r = plane_side(wtri, rec.p, false);
-        const Vec3d ltri[3] = {to_local_d(wtri[0], lf.origin), to_local_d(wtri[1], lf.origin),
-                               to_local_d(wtri[2], lf.origin)};
-        if (side_r == 0 || plane_side_d(ltri, r) != side_r) {
+        // The side of r against the triangle's plane (near_side: decided on the local
+        // double coordinates with a bound that covers their rounding, so it is the side
+        // in the inputs as given). A receiver within rounding of the plane (but not on
+        // it) sees the triangle across a sliver of space that rounding cannot resolve,
+        // and what the triangle hides can be the whole light (fuzz_plucker 68d82337...,
+        // f95fbc59...: a receiver 6e-9 and 2^-148 below a face): such a triangle is
+        // subtracted exactly, whole, once per receiver (subtract_triangle_exact). Exactly
+        // on the plane the triangle cannot meet an open segment from r properly (it only
+        // touches or contains it): skipped.
+        int side_r = near_side(np, r, rmax);
+        if (side_r == 0) {
           if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
           exact_done.push_back(np.triangle);
+          const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
+                                 scene.mesh.corner(np.triangle, 2)};
           int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
           if (side_exact == 0) continue;
           ++tot.exact_triangles;
@@ -723,14 +759,32 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     out.clear();
     out.reserve(frags.size());
     double area = 0.0, irr = 0.0;
+    const Vec3d od = to_double(lf.origin);
     for (size_t f = 0; f < frags.size(); ++f) {
-      // Reported in world coordinates: one float rounding per vertex (plucker_solver.h).
-      const Vec3d od = to_double(lf.origin);
-      auto& wf = out.emplace_back();
-      wf.reserve(size_t(frags.count(f)));
-      for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
       area += polygon_area(frags.data(f), frags.count(f));
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
+      // Reported in world coordinates: one float rounding per vertex (plucker_solver.h).
+      // A fragment thinner than the float spacing there is not reported when its rounded
+      // polygon no longer holds its own interior point (the centroid of its largest fan
+      // triangle, as the comparator takes it): measured on far-origin scenes (spacing
+      // 1/16 at 6.8e5), rounded slivers put that point up to 0.03 into blocked space,
+      // far beyond tau (fuzz_plucker 719086e3...). The fraction and the bits use the
+      // double fragments and are unaffected.
+      Polygon3f wf;
+      wf.reserve(size_t(frags.count(f)));
+      for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
+      double best = 0.0;
+      Vec3d inside{};
+      for (size_t k = 1; k + 1 < wf.size(); ++k) {
+        Vec3d a = to_double(wf[0]), b = to_double(wf[k]), c = to_double(wf[k + 1]);
+        double ar = length(cross(b - a, c - a));
+        if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+      }
+      if (best > 0.0 && point_in_fragment(lf.frame, frags.data(f), frags.count(f), inside - od)) {
+        out.push_back(std::move(wf));
+      } else {
+        ++tot.unreported_slivers;
+      }
     }
     rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
     // A sample is visible when it lies in the box of a fragment grown by 2^-38 of the
@@ -911,6 +965,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("segment_relations", double(totals.segment_relations));
   st.set("exact_triangles", double(totals.exact_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
+  st.set("unreported_slivers", double(totals.unreported_slivers));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
   st.set("occluder_selection_seconds", totals.select_s);
