@@ -139,26 +139,33 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   if (cmp.mismatch_count() > 0 && cmp.mismatches.empty())
     findings += "comparator counted " + std::to_string(cmp.mismatch_count()) + " mismatches without records\n";
 
-  // Fragment methods: the visible fraction against the region oracle.
+  // Fragment methods: the visible fractions against the region oracle and one interior
+  // point per fragment against the relation oracle, by the comparator's own rules
+  // (oracle/comparator.h compare_regions: receivers exactly on a light's plane, where
+  // the region oracle reports edge_on and computes no region, are skipped).
   if (t.solver->reports_fragments()) {
-    for (size_t i = 0; i < scene.receivers.size(); ++i)
-      for (size_t l = 0; l < scene.lights.size(); ++l) {
-        double exact_fraction = 0.0;
-        try {
-          exact_fraction = oracle::visible_region(scene, i, l).visible_fraction;
-        } catch (const std::exception& e) {
-          report_and_abort(target, "region oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
-        }
-        const double got = result.receivers[i].visible_fraction[l];
-        if (!(std::abs(got - exact_fraction) <= kFractionTolerance)) {
-          char line[256];
-          std::snprintf(line, sizeof line,
-                        "mismatch: receiver %zu light %zu direction fraction exact_fraction %.17g method_fraction "
-                        "%.17g (tolerance %g)\n",
-                        i, l, exact_fraction, got, kFractionTolerance);
-          findings += line;
-        }
-      }
+    std::vector<size_t> all(scene.receivers.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    oracle::Comparison reg;
+    try {
+      reg = oracle::compare_regions(scene, result, all, kTau);
+    } catch (const std::exception& e) {
+      report_and_abort(target, "region oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
+    }
+    for (const auto& m : reg.mismatches) {
+      char line[320];
+      if (m.direction == oracle::Direction::FractionError)
+        std::snprintf(line, sizeof line,
+                      "mismatch: receiver %zu light %zu direction fraction exact_fraction %.17g method_fraction "
+                      "%.17g (tolerance %g)\n",
+                      m.receiver, m.light, m.exact_fraction, m.method_fraction, kFractionTolerance);
+      else
+        std::snprintf(line, sizeof line,
+                      "mismatch: receiver %zu light %zu direction %s: a fragment's interior point is blocked, "
+                      "margin %.17g\n",
+                      m.receiver, m.light, oracle::direction_name(m.direction), m.margin);
+      findings += line;
+    }
   }
   if (!findings.empty()) report_and_abort(target, t.method, opt, scene, findings);
   return 0;

@@ -1,9 +1,11 @@
 // The differential check shared by fuzz_iss, fuzz_ssv, fuzz_plucker and fuzz_embree
 // (DESIGN section 5): decode a small scene (fuzz/decoder.h), solve it with the method
 // under the options the input selects, classify every relation with the exact relation
-// oracle, and, for fragment methods, compute every receiver's exact visible fraction with
-// the region oracle. A mismatch (a non-degenerate relation with margin >= tau the method
-// gets wrong, or a visible fraction off by more than 1e-4) is printed with the method,
+// oracle, and, for fragment methods, compare every receiver's visible fraction with the
+// region oracle and one interior point of every fragment with the relation oracle
+// (oracle/comparator.h compare_regions). A mismatch (a non-degenerate relation with
+// margin >= tau the method gets wrong, a visible fraction off by more than 1e-4, or a
+// fragment holding a point blocked with margin >= tau) is printed with the method,
 // its options, the relation, the exact class, the margin and the scene in hex-float
 // (write_scene_json with hex = true), then the process aborts so libFuzzer keeps the
 // input. An exception escaping the method (a failed VG_CHECK) is reported the same way.

@@ -204,6 +204,75 @@ Cull make_cull(const LightFrame& f, const Vec3f& rf, double coord_scale) {
   return c;
 }
 
+// The double-precision pre-pass (region_oracle.h "Fast paths"). Every value is a
+// polynomial of exactly representable inputs (float coordinates, and the light's exact
+// plane and lifted vertices rounded to the nearest double) evaluated in double, and its
+// sign is trusted only beyond a forward error bound; anything not certain is Unknown and
+// goes to the exact path, so the pre-pass never changes an answer.
+//
+// Bounds (u = 2^-53): g(x) = n . x - d0 from n and d0 rounded once (relative u each):
+// 3 products and 3 sums, |err| < 8u (|n|_1 |x|_inf + |d0|) (rounding of the inputs
+// included, generously). orient(p, q, x) = det[p - r, q - r, x - r] from double
+// differences: Shewchuk's orient3d errboundA (7 + 56u) u of the permanent
+// |p-r|_1-style sum; a light vertex x rounded by at most u |x|_inf moves it by at most
+// |(p - r) x (q - r)|_1 u |x|_inf. Both are doubled below.
+struct FastPass {
+  Vec3d r, n;
+  double d0 = 0, sgn = 1, gr = 0, gr_err = 0;
+  std::vector<Vec3d> L;  // the exact light's hull vertices, rounded to double
+  double lmax = 0;       // largest |coordinate| of L
+
+  double g(const Vec3d& x, double& err) const {
+    double v = sgn * (dot(n, x) - d0);
+    err = 16.0 * 0x1p-53 * ((std::abs(n.x) + std::abs(n.y) + std::abs(n.z)) * max_component(vabs(x)) + std::abs(d0));
+    return v;
+  }
+  // det[p - r, q - r, x - r] and its error bound; `x_rounded` adds the light-vertex term.
+  double orient(const Vec3d& p, const Vec3d& q, const Vec3d& x, bool x_rounded, double& err) const {
+    Vec3d a = p - r, b = q - r, c = x - r;
+    Vec3d ab = cross(a, b);
+    double v = dot(ab, c);
+    double perm = std::abs(c.x) * (std::abs(a.y * b.z) + std::abs(a.z * b.y)) +
+                  std::abs(c.y) * (std::abs(a.z * b.x) + std::abs(a.x * b.z)) +
+                  std::abs(c.z) * (std::abs(a.x * b.y) + std::abs(a.y * b.x));
+    err = 2.0 * (7.0 + 56.0 * 0x1p-53) * 0x1p-53 * perm;
+    if (x_rounded)
+      err += 2.0 * (std::abs(ab.x) + std::abs(ab.y) + std::abs(ab.z)) * 0x1p-53 * max_component(vabs(x));
+    return v;
+  }
+};
+
+enum class Fast : uint8_t { Miss, Cover, Unknown };
+
+// One triangle against the light as seen from r: Miss when its shadow certainly has no
+// interior point in common with the light, Cover when it certainly hides every light
+// point (every segment from r to the light crosses its interior strictly between the
+// endpoints), else Unknown. Only triangles certainly strictly inside the open slab
+// (0 < g < g_r at every vertex) are decided: their shadow is the central projection of
+// the whole triangle, the wedge of the three planes through r and an edge.
+Fast fast_classify(const FastPass& fp, const Vec3d tri[3]) {
+  for (int k = 0; k < 3; ++k) {
+    double e = 0, v = fp.g(tri[k], e);
+    if (!(v > e) || !(fp.gr - v > e + fp.gr_err)) return Fast::Unknown;
+  }
+  bool cover = true;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d &p = tri[k], &q = tri[(k + 1) % 3], &w = tri[(k + 2) % 3];
+    double ew = 0, sw = fp.orient(p, q, w, false, ew);
+    if (!(std::abs(sw) > ew)) return Fast::Unknown;  // r (nearly) in the triangle's plane
+    bool all_out = true;
+    for (const Vec3d& l : fp.L) {
+      double el = 0, sl = fp.orient(p, q, l, true, el);
+      bool in = sw > 0 ? sl > el : sl < -el;
+      bool out = sw > 0 ? sl < -el : sl > el;
+      all_out &= out;
+      cover &= in;
+    }
+    if (all_out) return Fast::Miss;
+  }
+  return cover ? Fast::Cover : Fast::Unknown;
+}
+
 // Lambert's polygon formula (region_oracle.h) for one polygon seen from r with normal nr,
 // after clipping to the receiver's upper half-space; double precision.
 double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d& nr) {
@@ -229,7 +298,7 @@ double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d&
 
 }  // namespace
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index) {
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
   const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
   VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
   const Light& light = scene.lights[light_index];
@@ -270,12 +339,44 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
   Cull cull = make_cull(f, rec.p, std::max(coord_scale, 1e-30));
   const IK::Point_3 rp = ipt(rec.p);
 
-  std::vector<Poly> shadows;
+  // Fast paths (region_oracle.h): the culled triangles classified in double with
+  // error bounds; Miss ones are dropped, one Cover hides the whole light, and only the
+  // Unknown ones go to the exact projection and the Boolean operations.
+  FastPass fp;
+  fp.r = to_double(rec.p);
+  fp.n = approx(f.n);
+  fp.d0 = to_double_exact(f.d0);
+  fp.sgn = side == CGAL::POSITIVE ? 1.0 : -1.0;
+  fp.gr = fp.g(fp.r, fp.gr_err);
+  for (const V3& x : f.lifted) {
+    fp.L.push_back(approx(x));
+    fp.lmax = std::max(fp.lmax, max_component(vabs(fp.L.back())));
+  }
+  std::vector<uint32_t> unknown;
   const TriangleSoup& mesh = scene.mesh;
-  for (size_t t = 0; t < mesh.size(); ++t) {
+  bool covered = false;
+  for (size_t t = 0; t < mesh.size() && !covered; ++t) {
     const Vec3f &af = mesh.corner(t, 0), &bf = mesh.corner(t, 1), &cf = mesh.corner(t, 2);
+    const Vec3d tri[3] = {to_double(af), to_double(bf), to_double(cf)};
     // Cull: outside the pyramid (double, conservative).
-    if (cull.outside(to_double(af), to_double(bf), to_double(cf))) continue;
+    if (cull.outside(tri[0], tri[1], tri[2])) continue;
+    Fast c = opt.fast_paths ? fast_classify(fp, tri) : Fast::Unknown;
+    if (c == Fast::Miss) continue;
+    if (c == Fast::Cover) covered = true;
+    else unknown.push_back(uint32_t(t));
+  }
+  if (opt.fast_paths && (covered || unknown.empty())) {
+    ans.fast_path = true;
+    if (covered) {
+      ans.visible_fraction = 0.0;
+      ans.visible_area = 0.0;
+      return ans;
+    }
+  }
+
+  std::vector<Poly> shadows;
+  for (uint32_t t : unknown) {
+    const Vec3f &af = mesh.corner(t, 0), &bf = mesh.corner(t, 1), &cf = mesh.corner(t, 2);
     // Zero-area projections: collinear triangles, planes through the receiver (exact).
     IK::Point_3 ai = ipt(af), bi = ipt(bf), ci = ipt(cf);
     if (CGAL::collinear(ai, bi, ci) || CGAL::orientation(ai, bi, ci, rp) == CGAL::COPLANAR) continue;
@@ -312,14 +413,16 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
   ans.blockers_projected = shadows.size();
 
   // Visible region = light minus the union of the shadows.
-  PolySet vis(f.polygon);
-  if (!shadows.empty()) {
+  std::vector<PolyH> parts;
+  if (shadows.empty()) {
+    parts.emplace_back(f.polygon);  // nothing to subtract: no arrangement needed
+  } else {
+    PolySet vis(f.polygon);
     PolySet blocked;
     blocked.join(shadows.begin(), shadows.end());
     vis.difference(blocked);
+    vis.polygons_with_holes(std::back_inserter(parts));
   }
-  std::vector<PolyH> parts;
-  vis.polygons_with_holes(std::back_inserter(parts));
   FT area2 = 0;
   for (const PolyH& p : parts) {
     area2 += p.outer_boundary().area();

@@ -26,6 +26,17 @@
 //   - otherwise (reaching the receiver's level): first clipped to the receiver-light
 //     pyramid (planes through the receiver and the lifted light edges), which leaves only
 //     points with g > 0 apart from the receiver itself, then clipped to g >= 0.
+// Fast paths (no Boolean operations, same exact answer). After the double cull, every
+// triangle is classified in double with forward error bounds (region_oracle.cpp
+// FastPass): a triangle certainly strictly inside the open slab (0 < g < g_r at every
+// vertex) whose shadow, the wedge of the planes through r and its edges, certainly has
+// the whole light outside one edge plane is a Miss and is dropped; one whose wedge
+// certainly holds every light vertex strictly inside is a Cover: every segment from r
+// to the light crosses its interior strictly between the endpoints, the fraction is 0.
+// Anything not certain in double (near-degenerate, crossing a slab plane, partial) is
+// Unknown and goes to the exact path, so the answers are those of the exact path (checked
+// bit for bit against RegionOptions{false} in tests/oracle_test.cpp). With no Unknown
+// triangle the region is the light polygon itself, without an arrangement.
 // Receiver on the light plane (g_r = 0): edge_on = true, no region is computed
 // (fraction 0, no polygons, irradiance 0); the comparator skips such pairs.
 //
@@ -56,8 +67,13 @@ struct RegionAnswer {
   double light_area = 0.0;          // 3D area of the exact light polygon (double)
   size_t blockers_projected = 0;    // triangles that survived culling and were projected
   bool edge_on = false;             // receiver exactly on the light plane: nothing computed
+  bool fast_path = false;           // decided without Boolean operations (see "Fast paths")
 };
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light);
+struct RegionOptions {
+  bool fast_paths = true;  // false: every culled triangle goes to the exact path (tests)
+};
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {});
 
 }  // namespace visgate::oracle

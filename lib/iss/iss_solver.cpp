@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "lib/geom/check.h"
+#include "lib/geom/float_mode.h"
 #include "lib/iss/blockers.h"
 #include "lib/iss/radial_pairing.h"
 #include "lib/iss/shaft.h"
@@ -814,6 +815,7 @@ std::vector<OptionSpec> IssSolver::options() const {
 
 SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
+  const IeeeFloatMode ieee;  // the caller may be a TBB worker with FTZ/DAZ on (lib/geom/float_mode.h)
   Params p;
   p.leaf_receivers = int(std::max(1L, opt.get_int("leaf_receivers", p.leaf_receivers)));
   p.leaf_samples = int(std::max(1L, opt.get_int("leaf_samples", p.leaf_samples)));

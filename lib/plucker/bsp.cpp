@@ -7,29 +7,24 @@
 
 namespace visgate::plucker {
 
-LazyBsp::LazyBsp(const Vec3f* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3f* receivers,
+LazyBsp::LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers,
                  int nr)
     : light_(light, light + m), occ_(std::move(occluders)), recv_(receivers, receivers + nr), rng_(seed) {
-  // vvset of each occluder against the light (section 3.3): the directions l_j - o_i.
-  vvbegin_.reserve(occ_.size());
-  for (const Occluder& o : occ_) {
-    VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
-    vvbegin_.push_back(uint32_t(vvdir_.size()));
-    for (int i = 0; i < o.n; ++i)
-      for (int j = 0; j < m; ++j) vvdir_.push_back(light_[size_t(j)] - o.v[i]);
-    rvbegin_.push_back(uint32_t(rvdir_.size()));
-    for (const Vec3f& c : recv_)
-      for (int j = 0; j < o.n; ++j) rvdir_.push_back(o.v[j] - c);
-  }
+  for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
+  for (const Vec3d& v : light_) light_centroid_ += v;
+  if (m > 0) light_centroid_ = light_centroid_ / double(m);
   reset();
   counters_.nodes_created = 1;
 }
 
-Orientation LazyBsp::orientation(uint32_t id, const Vec3f& a, const Vec3f& b) const {
+Orientation LazyBsp::orientation(uint32_t id, int edge) const {
+  // Theorem 1 (section 3.3) on the vvset occluder-light (lines o_i -> l_j), then on the
+  // vvset receiver region-occluder (lines c -> o_j, bsp.h), both through the edge's
+  // precomputed EdgeFan (lines.h): the first decided orientation.
   const Occluder& q = occ_[id];
-  Orientation s = vvset_orientation(q.v, q.n, vvdir_.data() + vvbegin_[id], int(light_.size()), a, b);
+  Orientation s = light_fans_[size_t(edge)].orientation(q.v, q.n, true);
   if (s != Orientation::Mixed || recv_.empty()) return s;
-  return vvset_orientation(recv_.data(), int(recv_.size()), rvdir_.data() + rvbegin_[id], q.n, a, b);
+  return region_fans_[size_t(edge)].orientation(q.v, q.n, false);
 }
 
 void LazyBsp::reset() {
@@ -45,20 +40,19 @@ void LazyBsp::reset() {
 
 size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
-         (vvdir_.capacity() + rvdir_.capacity()) * sizeof(Vec3f) +
-         (vvbegin_.capacity() + rvbegin_.capacity()) * sizeof(uint32_t) +
-         (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3f) +
-         stack_.capacity() * sizeof(Work);
+         (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
+         stack_.capacity() * sizeof(Work) + shadow_stamp_.capacity() * sizeof(uint32_t) +
+         shadow_box_.capacity() * sizeof(Box2) + plane_stamp_.capacity() * sizeof(uint32_t) +
+         plane_cache_.capacity() * sizeof(NodePlane);
 }
 
-void LazyBsp::develop(int32_t leaf) {
+void LazyBsp::develop(int32_t leaf, int64_t forced) {
   ++counters_.developments;
   // Copy the leaf's list: the lists arena grows below.
   const Node& lf = nodes_[size_t(leaf)];
   list_scratch_.assign(lists_.begin() + lf.occ_begin, lists_.begin() + lf.occ_begin + lf.occ_count);
-  // Line 31: random occluder, seeded (reproducible).
-  size_t pick = size_t(rng_.below(list_scratch_.size()));
-  uint32_t ro = list_scratch_[pick];
+  // Line 31: the chosen occluder, or a random one, seeded (reproducible).
+  uint32_t ro = forced >= 0 ? uint32_t(forced) : list_scratch_[size_t(rng_.below(list_scratch_.size()))];
   const Occluder& o = occ_[ro];
   int k = o.n;
 
@@ -79,8 +73,8 @@ void LazyBsp::develop(int32_t leaf) {
   auto set_inner = [&](int32_t id, int m, int32_t left, int32_t right) {
     Node& in = nodes_[size_t(id)];
     in.kind = kInner;
-    in.a = o.v[m];
-    in.b = o.v[(m + 1) % k];
+    in.edge = uint8_t(m);
+    in.occ = ro;
     in.left = left;
     in.right = right;
     in.occ_begin = in.occ_count = 0;
@@ -114,6 +108,10 @@ void LazyBsp::develop(int32_t leaf) {
   // 1-13): positive goes left, negative right, mixed both; leaves store q unless
   // invisible. bsp(ro) is at most 2k - 1 nodes deep; walked with an explicit stack.
   for (size_t s = 0; s < new_leaves_.size(); ++s) leaf_lists_[s].clear();
+  for (int m = 0; m < k; ++m) {
+    light_fans_[size_t(m)].set(o.v[m], o.v[(m + 1) % k], light_.data(), int(light_.size()));
+    if (!recv_.empty()) region_fans_[size_t(m)].set(o.v[m], o.v[(m + 1) % k], recv_.data(), int(recv_.size()));
+  }
   int32_t walk[4 * kMaxOccluderVertices];
   for (uint32_t id : list_scratch_) {
     if (id == ro) continue;
@@ -127,7 +125,7 @@ void LazyBsp::develop(int32_t leaf) {
         continue;
       }
       ++counters_.insert_tests;
-      Orientation s = orientation(id, nd.a, nd.b);
+      Orientation s = orientation(id, nd.edge);
       if (s != Orientation::Negative) walk[top++] = nd.left;
       if (s != Orientation::Positive) walk[top++] = nd.right;
     }
@@ -141,11 +139,113 @@ void LazyBsp::develop(int32_t leaf) {
   }
 }
 
-void LazyBsp::query(const Vec3f& r, FragmentList& out) {
+void LazyBsp::begin_query(const Vec3d& r) {
+  if (stamp_ != 0 && r.x == shadow_r_.x && r.y == shadow_r_.y && r.z == shadow_r_.z) return;
+  shadow_r_ = r;
+  if (++stamp_ == 0) {  // wrapped: invalidate every entry
+    std::fill(shadow_stamp_.begin(), shadow_stamp_.end(), 0u);
+    std::fill(plane_stamp_.begin(), plane_stamp_.end(), 0u);
+    stamp_ = 1;
+  }
+  if (have_plane_ && shadow_stamp_.size() != occ_.size()) {
+    shadow_stamp_.assign(occ_.size(), 0u);
+    shadow_box_.resize(occ_.size());
+  }
+  if (plane_stamp_.size() != occ_.size() * size_t(kMaxOccluderVertices)) {
+    plane_stamp_.assign(occ_.size() * size_t(kMaxOccluderVertices), 0u);
+    plane_cache_.resize(occ_.size() * size_t(kMaxOccluderVertices));
+  }
+}
+
+const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
+  size_t slot = size_t(id) * size_t(kMaxOccluderVertices) + size_t(edge);
+  if (plane_stamp_[slot] != stamp_) {
+    const Occluder& o = occ_[id];
+    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_centroid_);
+    plane_stamp_[slot] = stamp_;
+  }
+  return plane_cache_[slot];
+}
+
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox) {
+  if (have_plane_) {
+    if (shadow_stamp_[id] != stamp_) {
+      shadow_box_[id] = shadow_box(plane_, r, occ_[id].v, size_t(occ_[id].n));
+      shadow_stamp_[id] = stamp_;
+    }
+    if (!shadow_box_[id].overlaps(fbox)) return Occlusion::Miss;
+  }
+  return occlusion(id, r, f, n);
+}
+
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n) {
+  const Occluder& o = occ_[id];
+  // One-sided: a line stabs o iff it is positive against every edge line (lines.h).
+  // Two-sided: iff it is positive against every edge or negative against every edge;
+  // it misses when one edge has the fragment on its non-positive side and another (or
+  // the same, on-line) on its non-negative side.
+  bool all_pos = true, all_neg = true, some_nonpos = false, some_nonneg = false;
+  (void)r;  // the edge planes are those of the current query point (begin_query)
+  for (int m = 0; m < o.n; ++m) {
+    SplitResult s = classify_fragment(edge_plane(id, m), f, n);
+    bool nonpos = s == SplitResult::Negative || s == SplitResult::OnLine;
+    bool nonneg = s == SplitResult::Positive || s == SplitResult::OnLine;
+    if (nonpos && !o.two_sided) return Occlusion::Miss;
+    some_nonpos |= nonpos;
+    some_nonneg |= nonneg;
+    all_pos &= s == SplitResult::Positive;
+    all_neg &= s == SplitResult::Negative;
+  }
+  if (o.two_sided) {
+    if (some_nonpos && some_nonneg) return Occlusion::Miss;
+    return (all_pos || all_neg) ? Occlusion::Cover : Occlusion::Partial;
+  }
+  return all_pos ? Occlusion::Cover : Occlusion::Partial;
+}
+
+bool LazyBsp::hides_all(const Vec3d& r) {
+  begin_query(r);
+  const Vec3d* f = light_.data();
+  const int n = int(light_.size());
+  int32_t node = 0;
+  for (;;) {
+    const Node& nd = nodes_[size_t(node)];
+    if (nd.kind == kInvisible) return true;
+    if (nd.kind == kInner) {
+      SplitResult s = classify_fragment(edge_plane(nd.occ, nd.edge), f, n);
+      if (s == SplitResult::Positive) node = nd.left;
+      else if (s == SplitResult::Negative || s == SplitResult::OnLine) node = nd.right;
+      else return false;
+      continue;
+    }
+    if (nd.occ_count == 0 || choice_ == Choice::Random) return false;
+    int64_t cover = -1;
+    const Box2 fbox = have_plane_ ? Box2::of(plane_.frame, f, n) : Box2::everything();
+    for (uint32_t k = 0; k < nd.occ_count && cover < 0; ++k) {
+      uint32_t id = lists_[nd.occ_begin + k];
+      ++counters_.occlusion_tests;
+      if (occlusion(id, r, f, n, fbox) == Occlusion::Cover) cover = id;
+    }
+    if (cover < 0) return false;
+    develop(node, cover);
+  }
+}
+
+void LazyBsp::query(const Vec3d& r, FragmentList& out) {
+  FragmentList whole;
+  whole.add(light_.data(), light_.size());
+  query(r, whole, out);
+}
+
+void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
+  begin_query(r);
   out.clear();
-  work_.assign(light_.begin(), light_.end());
+  work_.clear();
   stack_.clear();
-  stack_.push_back(Work{0, 0, uint32_t(light_.size())});
+  for (size_t f = in.size(); f-- > 0;) {
+    stack_.push_back(Work{0, uint32_t(work_.size()), uint32_t(in.count(f))});
+    work_.insert(work_.end(), in.data(f), in.data(f) + in.count(f));
+  }
   while (!stack_.empty()) {
     Work w = stack_.back();
     stack_.pop_back();
@@ -155,7 +255,7 @@ void LazyBsp::query(const Vec3f& r, FragmentList& out) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.kind == kInner) {
         // Lines 17-27: position of the fragment against makePlane(xyz, hyperplane).
-        SplitResult s = split_fragment(r, nd.a, nd.b, cur_.data(), int(cur_.size()), pos_, neg_);
+        SplitResult s = split_fragment(edge_plane(nd.occ, nd.edge), cur_.data(), int(cur_.size()), pos_, neg_);
         if (s == SplitResult::Positive) {
           node = nd.left;
         } else if (s == SplitResult::Negative) {
@@ -190,7 +290,33 @@ void LazyBsp::query(const Vec3f& r, FragmentList& out) {
         out.add(cur_.data(), cur_.size());
         break;
       }
-      develop(node);  // lines 31-35, then continue from the root of bsp(ro)
+      // Lines 31-35, then continue from the root of bsp(ro).
+      if (choice_ == Choice::Random) {
+        develop(node);
+        continue;
+      }
+      // Choice::Relevant (see bsp.h): an occluder hiding all of the fragment, else a
+      // random one among those hiding part of it, else the fragment is visible.
+      int64_t cover = -1;
+      candidates_.clear();
+      const Box2 fbox = have_plane_ ? Box2::of(plane_.frame, cur_.data(), int(cur_.size())) : Box2::everything();
+      for (uint32_t k = 0; k < nd.occ_count; ++k) {
+        uint32_t id = lists_[nd.occ_begin + k];
+        ++counters_.occlusion_tests;
+        Occlusion oc = occlusion(id, r, cur_.data(), int(cur_.size()), fbox);
+        if (oc == Occlusion::Cover) {
+          cover = id;
+          break;
+        }
+        if (oc == Occlusion::Partial) candidates_.push_back(id);
+      }
+      if (cover < 0 && candidates_.empty()) {
+        ++counters_.lazy_visible;
+        out.add(cur_.data(), cur_.size());
+        break;
+      }
+      if (cover < 0) cover = candidates_[size_t(rng_.below(candidates_.size()))];
+      develop(node, cover);
     }
   }
 }

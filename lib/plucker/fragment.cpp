@@ -1,7 +1,10 @@
 // Light fragments (paper 002 section 4.2, Figure 6); see fragment.h.
 #include "lib/plucker/fragment.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <span>
 
 #include "lib/plucker/lines.h"
 
@@ -9,29 +12,56 @@ namespace visgate::plucker {
 
 namespace {
 constexpr int kMaxStack = 64;
-// Signs against the computed plane: N = (a - r) x (b - r) is taken as exact (the plane
-// through r and the line is only known to the angle kCrossErr s / |N|, s the product of
-// the 1-norms of the two shortest of a - r, b - r, b - a (lines.h edge_plane_normal),
-// which is the float method's inherent uncertainty, see bsp.h), and only the evaluation
-// of d . N is bounded: 1 rounding in d = x - r, 1 per product, 2 in the sum, < 4.01 u
-// sum |d_i N_i| <= 4.01 u |d|_1 |N|_inf; doubled. Every fragment is thus split
+// Unit roundoff of double.
+constexpr double kUd = 0x1p-53;
+
+// makePlane(xyz, hyperplane) (Algorithm 1 line 18) in double: the plane through r and
+// the line a -> b, N = (a - r) x (b - r), from the float inputs in double (the data stay
+// float32; the plane is evaluated in double, as ISS evaluates its predicates: in float a
+// node's plane is known only to u = 6e-8 of the distance from its base to the light, which
+// for a light 1e-3 across seen past occluders 1 away moved shadow edges by 1e-4 of the
+// light and fractions by more than the tolerance, fuzz_plucker crash-8426a007...).
+// N is the cross product of the two shortest of a - r, b - r, b - a (lines.h
+// edge_plane_normal: (a - r) x (b - r) = (a - r) x (b - a) = (b - r) x (b - a)), with a
+// per-component error bound 8 u_d times the component's permanent (lines.h
+// edge_plane_normal_err): r is on the node's line when every component is within it.
+// Signs against the computed plane: N is taken as exact and only the evaluation of
+// d . N is bounded (1 rounding in d, 1 per product, 2 in the sum: < 4.01 u_d
+// sum |d_i N_i| <= 4.01 u_d |d|_1 |N|_inf; doubled), so every fragment is split
 // consistently by one plane, and "zero area" means inside that plane up to evaluation.
-constexpr float kDotErr = 8.0f * kUnitRoundoff;
+// The plane is evaluated through the one of r, a, b nearest to the fragment (lines.h
+// nearest_base; (x - a) . N = (x - r) . N because N is orthogonal to a - r), chosen on the
+// fragment's first vertex, so every vertex of one fragment is judged against the same
+// plane: for a receiver far from the light (fuzz_plucker 597a1279...: 7e22 away) x - r
+// is -r to within rounding and (x - r) . N cancels catastrophically.
+// The bound of d . N is dot_scale |d|_1 (its evaluation) plus vertex_scale |x|_inf: a
+// fragment vertex x was rounded (when it was interpolated) by up to u |x_i| per
+// coordinate, so a vertex within that of the plane is on it. Without this term, vertices
+// that lie on a plane only to float precision (shared boundaries of earlier splits) were
+// split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
+
+}  // namespace
+
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0) {
+  NodePlane p;
+  Vec3d err;
+  p.n = edge_plane_normal_err(r, a, b, err);
+  p.on_line = on_line(p.n, err);
+  p.base = nearest_base(r, a, b, x0);
+  p.dot_scale = 8.0 * kUd * max_component(vabs(p.n));
+  p.vertex_scale = 2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z));
+  return p;
 }
 
-SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n) {
+SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
   // Same signs as split_fragment below.
-  float scale = 0.0f;
-  Vec3f nrm = edge_plane_normal(r, a, b, scale);
-  float cross_bound = kCrossErr * scale;
-  if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)
-    return SplitResult::OnLine;
+  if (pl.on_line) return SplitResult::OnLine;
   bool pos = false, neg = false;
-  float dot_scale = kDotErr * max_component(vabs(nrm));
   for (int k = 0; k < n; ++k) {
-    Vec3f d = poly[k] - r;
-    float s = dot(d, nrm);
-    float bound = dot_scale * norm1(d);
+    Vec3d d = poly[k] - pl.base;
+    double s = dot(d, pl.n);
+    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) +
+                   pl.vertex_scale * max_component(vabs(poly[k]));
     pos |= s > bound;
     neg |= s < -bound;
   }
@@ -41,35 +71,37 @@ SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, co
   return SplitResult::ZeroArea;
 }
 
-SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n,
-                           std::vector<Vec3f>& pos, std::vector<Vec3f>& neg) {
-  // makePlane(xyz, hyperplane) (Algorithm 1 line 18): the plane through r and a -> b has
-  // normal N = (a - r) x (b - r), and for x on the light det[x - r, a - r, b - r] =
-  // (x - r) . N = side(line(r, x), line(a, b)), N computed from the two shortest of
-  // a - r, b - r, b - a (lines.h edge_plane_normal).
-  float scale = 0.0f;
-  Vec3f nrm = edge_plane_normal(r, a, b, scale);
-  // Query point on the node's line: N vanishes within the cross-product error bound.
-  float cross_bound = kCrossErr * scale;
-  if (std::abs(nrm.x) <= cross_bound && std::abs(nrm.y) <= cross_bound && std::abs(nrm.z) <= cross_bound)
-    return SplitResult::OnLine;
+SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n) {
+  return classify_fragment(node_plane(r, a, b, poly[0]), poly, n);
+}
 
-  float val_buf[kMaxStack];
-  std::vector<float> val_heap;
-  float* val = val_buf;
+SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
+                           std::vector<Vec3d>& pos, std::vector<Vec3d>& neg) {
+  return split_fragment(node_plane(r, a, b, poly[0]), poly, n, pos, neg);
+}
+
+SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
+                           std::vector<Vec3d>& neg) {
+  // det[x - r, a - r, b - r] = (x - base) . N = side(line(r, x), line(a, b)) (node_plane).
+  // Query point on the node's line: N vanishes within its error bound.
+  if (pl.on_line) return SplitResult::OnLine;
+
+  double val_buf[kMaxStack];  // NOLINT
+  std::vector<double> val_heap;
+  double* val = val_buf;
   if (n > kMaxStack) {
     val_heap.resize(size_t(n));
     val = val_heap.data();
   }
   int npos = 0, nneg = 0;
-  float dot_scale = kDotErr * max_component(vabs(nrm));
   for (int k = 0; k < n; ++k) {
-    Vec3f d = poly[k] - r;
-    float s = dot(d, nrm);
-    float bound = dot_scale * norm1(d);
+    Vec3d d = poly[k] - pl.base;
+    double s = dot(d, pl.n);
+    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) +
+                   pl.vertex_scale * max_component(vabs(poly[k]));
     if (s > bound) ++npos;
     else if (s < -bound) ++nneg;
-    else s = 0.0f;  // on the plane within the error bound: belongs to both pieces
+    else s = 0.0;  // on the plane within the error bound: belongs to both pieces
     val[k] = s;
   }
   if (nneg == 0 && npos == 0) return SplitResult::ZeroArea;
@@ -77,17 +109,18 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
   if (npos == 0) return SplitResult::Negative;
 
   // Line 25: L cap p+ and L cap p-; vertices on the plane go to both, edges crossing
-  // strictly get one interpolated vertex shared by both pieces.
+  // strictly get one vertex, interpolated in double and rounded once, shared by both
+  // pieces.
   pos.clear();
   neg.clear();
   for (int k = 0; k < n; ++k) {
     int k1 = (k + 1 == n) ? 0 : k + 1;
-    float s0 = val[k], s1 = val[k1];
-    if (s0 >= 0.0f) pos.push_back(poly[k]);
-    if (s0 <= 0.0f) neg.push_back(poly[k]);
-    if ((s0 > 0.0f && s1 < 0.0f) || (s0 < 0.0f && s1 > 0.0f)) {
-      float t = s0 / (s0 - s1);
-      Vec3f x = poly[k] + (poly[k1] - poly[k]) * t;
+    double s0 = val[k], s1 = val[k1];
+    if (s0 >= 0.0) pos.push_back(poly[k]);
+    if (s0 <= 0.0) neg.push_back(poly[k]);
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
+      double t = s0 / (s0 - s1);
+      Vec3d x = poly[k] + (poly[k1] - poly[k]) * t;
       pos.push_back(x);
       neg.push_back(x);
     }
@@ -97,25 +130,48 @@ SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const
   return SplitResult::Both;
 }
 
-void clip_by_values(const Vec3f* poly, const float* values, int n, bool keep_nonneg, std::vector<Vec3f>& out) {
+namespace {
+template <class P>
+void clip_values_impl(const P* poly, const double* values, int n, bool keep_nonneg, std::vector<P>& out,
+                      std::vector<uint8_t>* on_plane) {
   out.clear();
+  if (on_plane) on_plane->clear();
   for (int k = 0; k < n; ++k) {
     int k1 = (k + 1 == n) ? 0 : k + 1;
-    float s0 = keep_nonneg ? values[k] : -values[k];
-    float s1 = keep_nonneg ? values[k1] : -values[k1];
-    if (s0 >= 0.0f) out.push_back(poly[k]);
-    if ((s0 > 0.0f && s1 < 0.0f) || (s0 < 0.0f && s1 > 0.0f)) {
-      float t = s0 / (s0 - s1);
-      out.push_back(poly[k] + (poly[k1] - poly[k]) * t);
+    double s0 = keep_nonneg ? values[k] : -values[k];
+    double s1 = keep_nonneg ? values[k1] : -values[k1];
+    if (s0 >= 0.0) {
+      out.push_back(poly[k]);
+      if (on_plane) on_plane->push_back(s0 == 0.0);
+    }
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
+      double t = s0 / (s0 - s1);
+      Vec3d p0(poly[k]), p1(poly[k1]);
+      out.push_back(P(p0 + (p1 - p0) * t));
+      if (on_plane) on_plane->push_back(1);
     }
   }
-  if (out.size() < 3) out.clear();
+  if (out.size() < 3) {
+    out.clear();
+    if (on_plane) on_plane->clear();
+  }
+}
+}  // namespace
+
+void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3d>& out,
+                    std::vector<uint8_t>* on_plane) {
+  clip_values_impl(poly, values, n, keep_nonneg, out, on_plane);
 }
 
-double polygon_area(const Vec3f* poly, int n) {
+void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3f>& out,
+                    std::vector<uint8_t>* on_plane) {
+  clip_values_impl(poly, values, n, keep_nonneg, out, on_plane);
+}
+
+double polygon_area(const Vec3d* poly, int n) {
   if (n < 3) return 0.0;
-  Vec3d o = to_double(poly[0]), acc(0, 0, 0);
-  for (int k = 1; k + 1 < n; ++k) acc += cross(to_double(poly[k]) - o, to_double(poly[k + 1]) - o);
+  Vec3d o = poly[0], acc(0, 0, 0);
+  for (int k = 1; k + 1 < n; ++k) acc += cross(poly[k] - o, poly[k + 1] - o);
   return 0.5 * length(acc);
 }
 
@@ -130,37 +186,101 @@ PlaneFrame PlaneFrame::from_normal(const Vec3f& n) {
   return f;
 }
 
-bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p) {
-  // 2D orientation (b - a) x (p - a) in float: 2 differences per factor, 2 products,
-  // 1 subtraction, < 5.01 u of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
-  // 8 u accepts points on the boundary (shared edges of neighbouring fragments are the
-  // same float segment, so no sample falls between them).
-  const float bound_k = 8.0f * kUnitRoundoff;
+Box2 Box2::of(const PlaneFrame& f, const Vec3d* poly, int n) {
+  Box2 b;
+  if (n <= 0) return b;
+  b.ulo = b.uhi = poly[0][f.u];
+  b.vlo = b.vhi = poly[0][f.v];
+  for (int k = 1; k < n; ++k) {
+    b.ulo = std::min(b.ulo, poly[k][f.u]);
+    b.uhi = std::max(b.uhi, poly[k][f.u]);
+    b.vlo = std::min(b.vlo, poly[k][f.v]);
+    b.vhi = std::max(b.vhi, poly[k][f.v]);
+  }
+  return b;
+}
+
+Box2 Box2::everything() {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  return Box2{-inf, inf, -inf, inf};
+}
+
+void Box2::extend(const Box2& b) {
+  if (b.ulo > b.uhi) return;
+  if (ulo > uhi) {
+    *this = b;
+    return;
+  }
+  ulo = std::min(ulo, b.ulo);
+  uhi = std::max(uhi, b.uhi);
+  vlo = std::min(vlo, b.vlo);
+  vhi = std::max(vhi, b.vhi);
+}
+
+Box2 shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
+  const Vec3d nd = to_double(lp.n);
+  const double hr = dot(nd, rd);
+  if (!(std::abs(hr) > 0.0)) return Box2::everything();
+  const int fu = lp.frame.u, fv = lp.frame.v;
+  double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    const Vec3d& p = q[k];
+    double hp = dot(nd, p);
+    if (!(hp / hr <= 1.0 - 0x1p-10)) return Box2::everything();
+    double t = hr / (hr - hp);
+    Vec3d x = rd + (p - rd) * t;
+    double u = x[fu], v = x[fv];
+    ulo = std::min(ulo, u), uhi = std::max(uhi, u), vlo = std::min(vlo, v), vhi = std::max(vhi, v);
+    spread = std::max(spread, (std::abs(u - rd[fu]) + std::abs(v - rd[fv])) / std::abs(hr));
+  }
+  double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
+  double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
+  return Box2{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+}
+
+bool point_in_fragment(const PlaneFrame& f, const Vec3d* poly, int n, const Vec3d& p, double slack) {
+  // 2D orientation (b - a) x (p - a) in double: 2 differences per factor, 2 products,
+  // 1 subtraction, < 5.01 u_d of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
+  // 8 u_d accepts points on the boundary (shared edges of neighbouring fragments are the
+  // same segment, so no sample falls between them).
+  const double bound_k = 8.0 * 0x1p-53;
   for (int k = 0; k < n; ++k) {
-    const Vec3f& a = poly[k];
-    const Vec3f& b = poly[(k + 1 == n) ? 0 : k + 1];
-    float eu = b[f.u] - a[f.u], ev = b[f.v] - a[f.v];
-    float pu = p[f.u] - a[f.u], pv = p[f.v] - a[f.v];
-    float o = eu * pv - ev * pu;
+    const Vec3d& a = poly[k];
+    const Vec3d& b = poly[(k + 1 == n) ? 0 : k + 1];
+    double eu = b[f.u] - a[f.u], ev = b[f.v] - a[f.v];
+    double pu = p[f.u] - a[f.u], pv = p[f.v] - a[f.v];
+    double o = eu * pv - ev * pu;
     if (f.flip) o = -o;
-    float bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu));
+    double bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu)) +
+                   slack * (2.0 * (std::abs(pu) + std::abs(pv)) + std::abs(eu) + std::abs(ev));
     if (o < -bound) return false;
   }
   return true;
 }
 
-double lambert_irradiance(const Vec3f& r, const Vec3f& nr, const Vec3f* poly, int n) {
+double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, int n) {
   // Clip to the receiver's upper half-space, in double relative to r.
+  // Each vertex emits at most two (itself and a crossing), so 2n bounds the clipped
+  // polygon even for a fragment that rounding made slightly non-convex; kept on the
+  // stack for the usual small fragments.
   Vec3d nd = to_double(nr);
-  std::vector<Vec3d> q;
-  q.reserve(size_t(n) + 2);
-  for (int k = 0; k < n; ++k) {
-    Vec3d p0 = to_double(poly[k]) - to_double(r), p1 = to_double(poly[(k + 1) % n]) - to_double(r);
-    double s0 = dot(nd, p0), s1 = dot(nd, p1);
-    if (s0 >= 0.0) q.push_back(p0);
-    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) q.push_back(p0 + (p1 - p0) * (s0 / (s0 - s1)));
+  constexpr int kStack = 64;
+  Vec3d qbuf[kStack];
+  std::vector<Vec3d> qheap;
+  Vec3d* qv = qbuf;
+  if (2 * n > kStack) {
+    qheap.resize(2 * size_t(n));
+    qv = qheap.data();
   }
-  if (q.size() < 3) return 0.0;
+  int qn = 0;
+  for (int k = 0; k < n; ++k) {
+    Vec3d p0 = poly[k] - rd, p1 = poly[(k + 1) % n] - rd;
+    double s0 = dot(nd, p0), s1 = dot(nd, p1);
+    if (s0 >= 0.0) qv[qn++] = p0;
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) qv[qn++] = p0 + (p1 - p0) * (s0 / (s0 - s1));
+  }
+  if (qn < 3) return 0.0;
+  std::span<const Vec3d> q(qv, size_t(qn));
   // E = 1/2 sum_k theta_k (nr . gamma_k), gamma_k the unit normal of (q_k, q_k+1) seen
   // from r; the sign makes a polygon counter-clockwise about its emitting normal (facing
   // r) positive, and the absolute value makes the result independent of the winding.

@@ -3,10 +3,13 @@
 // soft-shadow framework takes on them (section 4.4): area, point-in-fragment and the
 // analytic Lambert irradiance [NN85].
 //
-// Precision: float32 vertices; split signs decided with the kDetErr bound of lines.h
-// (a vertex within the bound lies "on" the plane and goes to both pieces). New vertices
-// are interpolated in float, so a fragment's vertices are off the light plane by
-// rounding (about 1e-7 relative); areas and irradiance accumulate in double.
+// Precision: double throughout, on double local coordinates computed from the float32
+// inputs (fragment vertices are points of the light in its local frame; query points and
+// occluders the solver's local coordinates). Float fragments were not enough: a light
+// 4e5 long had its shadow boundaries moved by u |x| = 0.015 at its far end, 1% of its
+// area (fuzz_plucker f71e1b21...). Planes through a query point and a node's line are
+// evaluated against forward error bounds (a vertex within the bound lies "on" the plane
+// and goes to both pieces).
 #pragma once
 
 #include <cstdint>
@@ -27,22 +30,55 @@ enum class SplitResult : uint8_t {
   ZeroArea,   // degenerate: every vertex lies on the plane, the fragment is a segment
 };
 
+// The plane through a query point r and a node's line a -> b, computed once and used for
+// many fragments (bsp.cpp caches it per query and occluder edge). The construction and
+// its bounds are derived in fragment.cpp: the normal N from the two shortest of a - r,
+// b - r, b - a with per-component error bounds (r on the line when every component is
+// within its bound), evaluated as (x - base) . N through the one of r, a, b nearest to
+// the point x0 (a point of the light).
+struct NodePlane {
+  Vec3d n, base;
+  double dot_scale = 0.0;     // 8 u_d |N|_inf
+  double vertex_scale = 0.0;  // 2 u_d |N|_1
+  bool on_line = false;
+};
+
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0);
+
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or
 // empty when rounding leaves fewer; a piece of fewer than 3 vertices has zero area).
-SplitResult split_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n,
-                           std::vector<Vec3f>& pos, std::vector<Vec3f>& neg);
+// r, a, b in double (the solver's local coordinates), the fragment in float.
+SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
+                           std::vector<Vec3d>& pos, std::vector<Vec3d>& neg);
 
 // The classification of split_fragment without building the pieces (Both: mixed).
-SplitResult classify_fragment(const Vec3f& r, const Vec3f& a, const Vec3f& b, const Vec3f* poly, int n);
+SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n);
+
+// The same against a precomputed plane (node_plane).
+SplitResult split_fragment(const NodePlane& plane, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
+                           std::vector<Vec3d>& neg);
+SplitResult classify_fragment(const NodePlane& plane, const Vec3d* poly, int n);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to
-// the slab between a receiver and the light (DESIGN section 3).
-void clip_by_values(const Vec3f* poly, const float* values, int n, bool keep_nonneg, std::vector<Vec3f>& out);
+// the slab between a receiver and the light (DESIGN section 3). Values and the new
+// vertices are computed in double (callers evaluate the affine function in double on
+// the float vertices) and each new vertex is rounded once to float: a float
+// interpolation along an edge of length E errs by u E, which for an edge from a vertex
+// 6e5 away put the clipped occluder 0.04 off at a light of size 2 (fuzz_plucker
+// dfb33fdd...).
+// With `on_plane`, on_plane[k] tells whether output vertex k lies on the plane value = 0
+// (an interpolated vertex, or an input vertex whose value is exactly 0).
+void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3f>& out,
+                    std::vector<uint8_t>* on_plane = nullptr);
+// The same for polygons in double (occluders in the solver's local coordinates): new
+// vertices are not rounded.
+void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3d>& out,
+                    std::vector<uint8_t>* on_plane = nullptr);
 
 // Area of a planar polygon (Newell, double).
-double polygon_area(const Vec3f* poly, int n);
+double polygon_area(const Vec3d* poly, int n);
 
 // A 2D frame on the light plane: drop the axis where the light normal is largest; `flip`
 // makes counter-clockwise (about the light normal) polygons positive in 2D.
@@ -52,14 +88,57 @@ struct PlaneFrame {
   static PlaneFrame from_normal(const Vec3f& n);
 };
 
+// A 2D box in a PlaneFrame (coordinates u, v of the 3D points). Used only to skip work
+// that cannot change a result: two fragments whose boxes are disjoint are disjoint.
+struct Box2 {
+  double ulo = 0, uhi = -1, vlo = 0, vhi = -1;  // empty by default
+  static Box2 of(const PlaneFrame& f, const Vec3d* poly, int n);
+  static Box2 everything();
+  bool overlaps(const Box2& b) const { return ulo <= b.uhi && b.ulo <= uhi && vlo <= b.vhi && b.vlo <= vhi; }
+  bool contains(double u, double v) const { return u >= ulo && u <= uhi && v >= vlo && v <= vhi; }
+  void extend(const Box2& b);
+};
+
+// The light's plane in a local frame: n . x = 0 (the frame's origin is a light vertex),
+// the light's own vertices within plane_tol of it, `extent` its largest box side.
+struct LightPlane {
+  Vec3f n{};
+  float plane_tol = 0.0f;
+  float extent = 0.0f;
+  PlaneFrame frame;
+};
+
+// A box holding the shadow of the convex polygon q (n vertices) cast from r onto the
+// light, in the light's PlaneFrame, or Box2::everything() when a vertex of q is not
+// between r and the light plane by at least 2^-10 of r's height (its projection is then
+// unbounded or too far out to bound usefully). Central projection onto n . x = 0:
+// x = r + (p - r) t, t = h(r) / (h(r) - h(p)) with h(x) = n . x, computed in double from
+// the float vertices, accepted when h(p) / h(r) <= 1 - 2^-10 (so 0 < t <= 2^10).
+// Margin: the fragments lie on the float light polygon, within plane_tol of that plane,
+// so a ray meets them within plane_tol (1 + |x - r|_1 / |h(r)|) of x (the in-plane
+// offset of a height change along the ray), doubled twice; plus 2^-16 of the coordinates
+// for the double rounding (about 1e-16 relative, times t <= 2^10). Conservative: it only
+// makes the box larger than the shadow. Used to skip a polygon whose shadow cannot meet
+// a fragment (two disjoint boxes: disjoint convex sets).
+Box2 shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
+
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
 // accepted when >= -bound with the float bound of a 2D orientation (see fragment.cpp).
-bool point_in_fragment(const PlaneFrame& f, const Vec3f* poly, int n, const Vec3f& p);
+// `slack` is the position uncertainty of the fragment's vertices (absolute, per
+// coordinate; 0 for exact input polygons): fragment vertices are interpolations,
+// so a convex fragment is stored convex only up to slack, and where two computed
+// vertices nearly coincide their edge's direction is noise (measured: a 6e-6 long edge
+// of a columns fragment, whose line put a sample 1e-3 inside the fragment "outside").
+// The bound then grows by the orientation's change under such a move,
+// 2 slack (|p_u - a_u| + |p_v - a_v|) + slack (|e_u| + |e_v|): a short edge's line
+// constrains only points near it. Far from every edge the answer is unchanged; callers
+// that need a tight outer limit test a box first (plucker_solver.cpp).
+bool point_in_fragment(const PlaneFrame& f, const Vec3d* poly, int n, const Vec3d& p, double slack = 0.0);
 
 // Lambert irradiance at r with unit normal nr from a uniformly emitting polygon of unit
 // radiance (Nishita-Nakamae: E = 1/2 sum_k theta_k (nr . gamma_k)), the polygon first
 // clipped to the receiver's upper half-space nr . (x - r) >= 0. Double precision.
-double lambert_irradiance(const Vec3f& r, const Vec3f& nr, const Vec3f* poly, int n);
+double lambert_irradiance(const Vec3d& r, const Vec3f& nr, const Vec3d* poly, int n);
 
 }  // namespace visgate::plucker

@@ -34,6 +34,51 @@ Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, 
   return pos ? Orientation::Positive : Orientation::Negative;
 }
 
+void EdgeFan::set(const Vec3d& a_, const Vec3d& b, const Vec3d* p, int m) {
+  constexpr double kDetErrD = 12.0 * 0x1p-53;
+  a = a_;
+  Vec3d ab = b - a;
+  double nab = std::abs(ab.x) + std::abs(ab.y) + std::abs(ab.z);
+  w.resize(size_t(m));
+  scale.resize(size_t(m));
+  for (int k = 0; k < m; ++k) {
+    Vec3d pa = p[k] - a;
+    w[size_t(k)] = cross(pa, ab);
+    scale[size_t(k)] = kDetErrD * (std::abs(pa.x) + std::abs(pa.y) + std::abs(pa.z)) * nab;
+  }
+}
+
+void EdgeFan::set(const Vec3d& a_, const Vec3d& b, const Vec3f* p, int m) {
+  Vec3d buf[16];
+  std::vector<Vec3d> heap;
+  Vec3d* q = buf;
+  if (m > 16) {
+    heap.resize(size_t(m));
+    q = heap.data();
+  }
+  for (int k = 0; k < m; ++k) q[k] = to_double(p[k]);
+  set(a_, b, q, m);
+}
+
+Orientation EdgeFan::orientation(const Vec3d* x, int n, bool toward) const {
+  bool pos = false, neg = false;
+  const size_t m = w.size();
+  for (int i = 0; i < n; ++i) {
+    Vec3d d = x[i] - a;
+    double nd = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+    for (size_t k = 0; k < m; ++k) {
+      double s = dot(d, w[k]);
+      if (!toward) s = -s;
+      double bound = scale[k] * nd;
+      if (s > bound) pos = true;
+      else if (s < -bound) neg = true;
+      else return Orientation::Mixed;
+      if (pos && neg) return Orientation::Mixed;
+    }
+  }
+  return pos ? Orientation::Positive : Orientation::Negative;
+}
+
 bool segment_blocked(const Vec3f& r, const Vec3f& s, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
   // Plane sides: det[r - a, b - a, c - a] and det[s - a, b - a, c - a].
   Sign sr = side_sign(a, r, b, c);

@@ -8,13 +8,16 @@
 // (v1 - v0) x (v2 - v0) points towards the light side iff side(line, line(vk, vk+1)) > 0
 // for every edge k (section 3.2, Figure 2).
 //
-// Precision: float32 throughout (as the paper). Every sign is decided with a forward
-// error bound (kDetErr below): a value within the bound is classified Zero, never given a
-// sign it may not have. Signs outside the bound are exact for the float inputs; Zero means
-// "undecided in float" and callers treat it conservatively (Theorem 1 insertion: mixed).
+// Precision: the float32 forms (side_sign, segment_blocked, vvset_orientation) decide
+// every sign with a forward error bound (kDetErr below): a value within the bound is
+// classified Zero, never given a sign it may not have. Signs outside the bound are exact
+// for the float inputs; Zero means "undecided in float" and callers treat it
+// conservatively. The double forms (EdgeFan, the Vec3d edge_plane_normal_err) are the
+// same with double's unit roundoff, for the solver's double local coordinates.
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "lib/geom/plucker.h"
 #include "lib/geom/vec.h"
@@ -62,16 +65,99 @@ inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, f
   return cross(pb, ab);
 }
 
+// The same normal with a per-component error bound: err_i = kCrossErr times the
+// permanent of component i of u x v (|u_y v_z| + |u_z v_y| for x, ...), for the two
+// vectors u, v actually crossed. |u|_1 |v|_1 bounds every permanent, but for two long,
+// nearly parallel vectors (an edge far from p and nearly in line with it) it is
+// dominated by the product of their long components, which no cross component holds:
+// measured on fuzz_plucker seed-mode07-1, an edge 3e8 away and 5e-9 rad off the line to
+// the receiver: |N| 8e9 against a |u|_1 |v|_1 bound of 8e11 (so "r on the line") and a
+// permanent bound of about 1e3.
+inline Vec3f edge_plane_normal_err(const Vec3f& p, const Vec3f& a, const Vec3f& b, Vec3f& err) {
+  Vec3f pa = a - p, pb = b - p, ab = b - a;
+  float na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
+  const Vec3f* u = &pa;
+  const Vec3f* v = &pb;
+  if (!(nab >= na && nab >= nb)) {
+    if (nb >= na) v = &ab;
+    else u = &pb, v = &ab;
+  }
+  err = Vec3f(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
+              std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
+        kCrossErr;
+  return cross(*u, *v);
+}
+
+// The same in double (points in the solver's double local coordinates): u_d for u.
+inline Vec3d edge_plane_normal_err(const Vec3d& p, const Vec3d& a, const Vec3d& b, Vec3d& err) {
+  Vec3d pa = a - p, pb = b - p, ab = b - a;
+  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  double na = n1(pa), nb = n1(pb), nab = n1(ab);
+  const Vec3d* u = &pa;
+  const Vec3d* v = &pb;
+  if (!(nab >= na && nab >= nb)) {
+    if (nb >= na) v = &ab;
+    else u = &pb, v = &ab;
+  }
+  err = Vec3d(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
+              std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
+        (8.0 * 0x1p-53);
+  return cross(*u, *v);
+}
+inline double dot_err(const Vec3d& d, const Vec3d& nrm, const Vec3d& err) {
+  constexpr double k = 8.0 * 0x1p-53;
+  return std::abs(d.x) * (err.x + k * std::abs(nrm.x)) + std::abs(d.y) * (err.y + k * std::abs(nrm.y)) +
+         std::abs(d.z) * (err.z + k * std::abs(nrm.z));
+}
+inline bool on_line(const Vec3d& nrm, const Vec3d& err) {
+  return std::abs(nrm.x) <= err.x && std::abs(nrm.y) <= err.y && std::abs(nrm.z) <= err.z;
+}
+
+// The error bound of d . N for d a float difference and N from edge_plane_normal_err:
+// N's component errors times |d_i|, plus the rounding of d and of the dot product
+// (5 roundings of sum |d_i N_i|, counted as 8 u).
+inline float dot_err(const Vec3f& d, const Vec3f& nrm, const Vec3f& err) {
+  return std::abs(d.x) * (err.x + 8.0f * kUnitRoundoff * std::abs(nrm.x)) +
+         std::abs(d.y) * (err.y + 8.0f * kUnitRoundoff * std::abs(nrm.y)) +
+         std::abs(d.z) * (err.z + 8.0f * kUnitRoundoff * std::abs(nrm.z));
+}
+
+// r on the line a -> b within rounding: every component of the computed normal within
+// its error bound.
+inline bool on_line(const Vec3f& nrm, const Vec3f& err) {
+  return std::abs(nrm.x) <= err.x && std::abs(nrm.y) <= err.y && std::abs(nrm.z) <= err.z;
+}
+
+// The base point for evaluating det[x - p, a - p, b - p] = (x - base) . N with
+// N = edge_plane_normal(p, a, b): any of p, a, b gives the same determinant (N is
+// orthogonal to a - p, b - p and b - a), and the computed plane is held to the rounding
+// of N's direction times |x - base|, so the one nearest to x (1-norm, x a representative
+// point of those evaluated) is used. Measured: a receiver 7e22 from the light needs a or b
+// (fuzz_plucker 597a1279...: (x - p) . N cancels and overflows), an occluder vertex 6e5
+// from the light needs p or the other vertex (dfb33fdd...: (x - a) . N put the plane
+// 0.04 off at the light).
+template <class T, class U>
+inline const Vec3<T>& nearest_base(const Vec3<T>& p, const Vec3<T>& a, const Vec3<T>& b, const Vec3<U>& xu) {
+  Vec3<T> x(xu);
+  auto n1 = [](const Vec3<T>& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  T dp = n1(x - p), da = n1(x - a), db = n1(x - b);
+  if (dp <= da && dp <= db) return p;
+  return da <= db ? a : b;
+}
+
 enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
 
 // side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
 // sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
-// their relative precision.
+// their relative precision. Evaluated as (x - base) . N with N = edge_plane_normal_err(p,
+// a, b) and the base of nearest_base, so a point far from the other three costs no
+// precision (fragment.cpp, kDotErr), decided against dot_err.
 inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3f& b) {
-  Vec3f d = x - p;
-  float scale = 0.0f;
-  float s = dot(d, edge_plane_normal(p, a, b, scale));
-  float bound = kDetErr * norm1(d) * scale;
+  Vec3f d = x - nearest_base(p, a, b, x);
+  Vec3f err;
+  Vec3f nrm = edge_plane_normal_err(p, a, b, err);
+  float s = dot(d, nrm);
+  float bound = dot_err(d, nrm, err);
   return s > bound ? Sign::Positive : (s < -bound ? Sign::Negative : Sign::Zero);
 }
 
@@ -88,6 +174,30 @@ bool line_stabs_polygon(const Plucker& line, const Vec3f* poly, int n);
 // is strictly negative, Mixed otherwise (including any value within the error bound):
 // conservative, never Positive or Negative for a set that has a line of the other sign.
 enum class Orientation : uint8_t { Positive, Negative, Mixed };
+
+// Theorem 1 against one fixed line a -> b, its part computed once (bsp.cpp develop: every
+// occluder of a leaf is tested against the same few edge lines of the merged occluder).
+// For fixed points p_k (the light's vertices, or the corners of a receiver region) let
+// W_k = (p_k - a) x (b - a). With every point taken relative to a (x' = x - a, ...),
+//   side(x -> p_k, a -> b) = det[p_k - x, a - x, b - x] = det[p'_k - x', -x', b' - x']
+//                          = -det[p'_k, x', b'] = x' . (p'_k x b') = (x - a) . W_k,
+// and side(p_k -> x, a -> b) = -(x - a) . W_k. The value has the form d . (u x v) of
+// kDetErr with d = x - a, u = p_k - a, v = b - a: its sign is decided against
+// kDetErr |x - a|_1 |p_k - a|_1 |b - a|_1, as vvset_orientation decides its own.
+// Evaluated in double on double points (the solver's local coordinates, bsp.h), with the
+// bound kDetErr scaled to double's unit roundoff.
+struct EdgeFan {
+  Vec3d a{};
+  std::vector<Vec3d> w;       // W_k
+  std::vector<double> scale;  // 12 u_d |p_k - a|_1 |b - a|_1
+  void set(const Vec3d& a, const Vec3d& b, const Vec3d* p, int m);
+  // The light's vertices as points.
+  void set(const Vec3d& a, const Vec3d& b, const Vec3f* p, int m);
+  // The orientation of the lines x_i -> p_k (toward = true) or p_k -> x_i (toward =
+  // false), i < n, against a -> b: Positive / Negative when every value is strictly of
+  // that sign beyond its bound, else Mixed (conservative, like vvset_orientation).
+  Orientation orientation(const Vec3d* x, int n, bool toward) const;
+};
 
 // DESIGN section 3 for one triangle: the open segment r -> s crosses the triangle
 // (a, b, c) properly, i.e. r and s are strictly on opposite sides of its plane and the

@@ -10,10 +10,13 @@
 #include <mutex>
 
 #include "lib/geom/check.h"
+#include "lib/geom/float_mode.h"
 #include "lib/plucker/bsp.h"
+#include "lib/plucker/exact_orient.h"
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
 #include "lib/plucker/shaft.h"
+#include "lib/plucker/triangle_tree.h"
 #include "lib/scene/rng.h"
 
 namespace visgate::plucker {
@@ -31,36 +34,76 @@ constexpr float kDotErr = 8.0f * kUnitRoundoff;
 // relative to `origin`, the light's first vertex.
 struct LightFrame {
   const Light* light = nullptr;
-  Vec3f origin{};          // world position of the local origin (light vertex 0)
-  std::vector<Vec3f> poly;  // local
-  Vec3f n{}, p0{}, centroid{};
+  Vec3f origin{};          // world position of the local origin (a light vertex)
+  std::vector<Vec3d> poly;  // local (double: exact x - origin for float x, see to_local_d)
+  Vec3f n{}, p0{};
+  Vec3d centroid{};
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
   AABB box;                // local
+  float extent = 0.0f;     // largest side of box
   PlaneFrame frame;
-  std::vector<Vec3f> samples;     // local jitter points, parallel to light.jitter_points
+  LightPlane plane;        // n, plane_tol, extent, frame: for shadow boxes (fragment.h)
+  // Exactly planar light (every vertex exactly on the plane of vertices 0, p1, p2, which
+  // are not collinear; true of every axis-aligned light): the side of a point is then
+  // decided exactly, as the region oracle decides it. emit_sign: the sign of
+  // orient3d(v0, v_p1, v_p2, x) for x on the emitting side.
+  bool planar = false;
+  int p1 = 1, p2 = 2, emit_sign = 1;
+  std::vector<Vec3d> samples;     // local jitter points, parallel to light.jitter_points
   std::vector<uint8_t> on_light;  // per jitter point: on the light polygon (fragment test)
 };
 
 Vec3f to_local(const Vec3f& x, const Vec3f& origin) { return x - origin; }
+// The same in double: exact whenever the exponents of x and origin differ by at most 29
+// (the difference of two floats then fits in 53 bits), else rounded once at u_d.
+Vec3d to_local_d(const Vec3f& x, const Vec3f& origin) { return to_double(x) - to_double(origin); }
 
-LightFrame make_frame(const Light& light) {
+// The origin: the light vertex nearest to `focus` (the centre of the receivers' box).
+// Fragments are float points relative to it, resolved to u times their distance from it:
+// the light part the receivers look at should be near it (fuzz_plucker f71e1b21...: a
+// light 4e5 long whose far tip was vertex 0; its fragments where the receivers and
+// occluders are had a float spacing of 0.03 and lost a shadow band 0.017 wide).
+LightFrame make_frame(const Light& light, const Vec3d& focus) {
   LightFrame f;
   f.light = &light;
   f.origin = light.polygon[0];
+  double best = std::numeric_limits<double>::infinity();
+  for (const Vec3f& v : light.polygon) {
+    double d = max_component(vabs(to_double(v) - focus));
+    if (d < best) best = d, f.origin = v;
+  }
   f.poly.reserve(light.polygon.size());
-  for (const Vec3f& v : light.polygon) f.poly.push_back(to_local(v, f.origin));
+  for (const Vec3f& v : light.polygon) f.poly.push_back(to_local_d(v, f.origin));
   f.n = light.normal;
-  f.p0 = f.poly[0];  // (0, 0, 0)
-  for (const Vec3f& v : f.poly) {
-    f.box.extend(v);
-    Vec3f d = v - f.p0;
+  f.p0 = Vec3f(0, 0, 0);  // the origin vertex, on the light
+  for (const Vec3f& v : light.polygon) {
+    Vec3f d = to_local(v, f.origin);
+    f.box.extend(d);
     float h = std::abs(dot(f.n, d)) + kDotErr * norm1(f.n) * norm1(d);
     f.plane_tol = std::max(f.plane_tol, h);
   }
   f.frame = PlaneFrame::from_normal(f.n);
+  f.extent = max_component(f.box.extent());
+  {
+    // The vertex pair spanning the largest float area with vertex 0, then exactness.
+    const auto& v = light.polygon;
+    float widest = 0.0f;
+    for (size_t a = 1; a < v.size(); ++a)
+      for (size_t b = a + 1; b < v.size(); ++b) {
+        float ar = norm1(cross(v[a] - v[0], v[b] - v[0]));
+        if (ar > widest) widest = ar, f.p1 = int(a), f.p2 = int(b);
+      }
+    Vec3f c = cross(v[size_t(f.p1)] - v[0], v[size_t(f.p2)] - v[0]);
+    float cn = dot(c, f.n), bound = 16.0f * kUnitRoundoff * norm1(v[size_t(f.p1)] - v[0]) * norm1(v[size_t(f.p2)] - v[0]);
+    f.planar = std::abs(cn) > bound;
+    f.emit_sign = cn > 0.0f ? 1 : -1;
+    for (size_t k = 0; k < v.size() && f.planar; ++k)
+      f.planar = orient3d_exact_sign(v[0], v[size_t(f.p1)], v[size_t(f.p2)], v[k]) == 0;
+  }
+  f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame};
   Vec3d c(0, 0, 0);
-  for (const Vec3f& v : f.poly) c += to_double(v);
-  f.centroid = Vec3f(c / double(f.poly.size()));
+  for (const Vec3d& v : f.poly) c += v;
+  f.centroid = c / double(f.poly.size());
   // Light points (DESIGN section 6 allows explicit samples anywhere): a point on the
   // light's plane (|h| within the rounding bound used for receivers) and inside the
   // light polygon (point_in_fragment's boundary bound) is decided by point-in-fragment;
@@ -68,12 +111,11 @@ LightFrame make_frame(const Light& light) {
   f.samples.resize(light.jitter_points.size());
   f.on_light.resize(light.jitter_points.size());
   for (size_t k = 0; k < light.jitter_points.size(); ++k) {
-    Vec3f q = to_local(light.jitter_points[k], f.origin);
-    f.samples[k] = q;
-    Vec3f d = q - f.p0;
+    f.samples[k] = to_local_d(light.jitter_points[k], f.origin);
+    Vec3f d = to_local(light.jitter_points[k], f.origin) - f.p0;
     float h = dot(f.n, d);
     float tol = f.plane_tol + kDotErr * norm1(f.n) * norm1(d);
-    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.frame, f.poly.data(), int(f.poly.size()), q);
+    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.frame, f.poly.data(), int(f.poly.size()), f.samples[k]);
   }
   return f;
 }
@@ -94,14 +136,59 @@ bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec
 }
 
 // A triangle part handled per receiver (plucker_solver.h "near" polygons).
+// Side of x against the plane of the triangle t (world coordinates, the inputs as
+// given: the local frame's rounding moves points by u |x - o|, which is enough to put a
+// receiver 6e-9 below a face above it, fuzz_plucker 68d82337...): the sign of
+// det[t1 - t0, t2 - t0, x - t0] = orient3d(t0, t1, t2, x). In float as (x - base) . N
+// with N = edge_plane_normal_err(t0, t1, t2) (the cross product of its two shortest
+// edges) and base the vertex nearest to x (lines.h nearest_base), decided against
+// dot_err;
+// when the bound leaves it open, 0, or with `exact` the exact sign (exact_orient.h).
+// The textbook (t1 - t0) x (t2 - t0) . (x - t0) loses the plane of a sliver with a vertex
+// 6e5 away (fuzz_plucker dfb33fdd...: both long edges, their cross product's rounding
+// larger than the triangle's area) and called receivers beside it "on the plane".
+int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
+  Vec3f err;
+  Vec3f nrm = edge_plane_normal_err(t[0], t[1], t[2], err);
+  const Vec3f& base = nearest_base(t[0], t[1], t[2], x);
+  Vec3f d = x - base;
+  float s = dot(d, nrm), bound = dot_err(d, nrm, err);
+  if (s > bound) return 1;
+  if (s < -bound) return -1;
+  return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
+}
+
 struct NearPoly {
-  Vec3f v0, e1, e2;  // the triangle's plane: v0 and its edge vectors
+  uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
   uint32_t begin, count;
+  // Group-level data for the per-receiver tests: the polygon's box, and its triangle in
+  // double local coordinates with the plane normal N = edge_plane_normal_err(t0, t1, t2)
+  // (and N's error bound) and the 1-norms of two edges (near_side).
+  Vec3d lo, hi;
+  Vec3d t[3], n, err;
+  double e1 = 0, e2 = 0, tmax = 0;
 };
+
+// Side of the (local, double) point r against a near polygon's triangle plane: +1, -1, or
+// 0 when undecided. Decided against dot_err plus the rounding of the local frame: every
+// local point is within u_d |x|_inf of its exact translation (to_local_d), which moves
+// det[t1 - t0, t2 - t0, r - t0] by at most 2 delta (|e1|_1 |e2|_1 + (|e1|_1 + |e2|_1)
+// |r - base|_1) with delta = 2 u_d max |coordinate|, so a decided sign is the sign of
+// the exact world configuration (the inputs as given).
+int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
+  const Vec3d& base = nearest_base(np.t[0], np.t[1], np.t[2], r);
+  Vec3d d = r - base;
+  double s = dot(d, np.n);
+  double d1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  double delta = 2.0 * 0x1p-53 * std::max(rmax, np.tmax);
+  double bound = dot_err(d, np.n, np.err) + 2.0 * delta * (np.e1 * np.e2 + (np.e1 + np.e2) * d1);
+  return s > bound ? 1 : (s < -bound ? -1 : 0);
+}
 
 struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
+  uint64_t exact_triangles = 0, exact_receivers = 0, unreported_slivers = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -109,9 +196,13 @@ struct Totals {
     irradiance += o.irradiance;
     trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
+    exact_triangles += o.exact_triangles;
+    exact_receivers += o.exact_receivers;
+    unreported_slivers += o.unreported_slivers;
     bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
     bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
+    bsp.occlusion_tests += o.bsp.occlusion_tests; bsp.lazy_visible += o.bsp.lazy_visible;
     bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area;
   }
 };
@@ -133,45 +224,143 @@ struct Context {
   SolveResult* result;
   std::vector<double>* irradiance;
   bool coherence;
+  LazyBsp::Choice choice;
+  const TriangleTree* tree;
   uint64_t seed;
   MemoryMeter* memory;
 };
 
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
-void subtract_polygon(const Vec3f& r, const Vec3f* q, int nq, const FragmentList& in, FragmentList& out,
-                      std::vector<Vec3f>& cur, std::vector<Vec3f>& pos, std::vector<Vec3f>& neg, BspCounters& c) {
+// `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
+// is disjoint from the shadow and kept whole. `boxes` is parallel to `in`, `out_boxes`
+// to `out`.
+// Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows every
+// light line from r is on their inner side (the edge q has at r's own level, see the
+// near-polygon loop in shade_group).
+void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
+                      const PlaneFrame& frame, const Vec3d& light_centroid, const FragmentList& in,
+                      const std::vector<Box2>& boxes, FragmentList& out, std::vector<Box2>& out_boxes,
+                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   out.clear();
+  out_boxes.clear();
+  // The planes through r and q's edges, once for every fragment (fragment.h node_plane).
+  NodePlane planes[2 * kMaxOccluderVertices + 2];
+  VG_CHECK(nq <= int(std::size(planes)));
+  bool have_planes = false;
+  auto plane = [&](int m) -> const NodePlane& {
+    if (!have_planes) {
+      for (int k = 0; k < nq; ++k)
+        if (!skip[k]) planes[k] = node_plane(r, q[k], q[(k + 1) % nq], light_centroid);
+      have_planes = true;
+    }
+    return planes[m];
+  };
+  auto keep = [&](const Vec3d* p, size_t n) {
+    out.add(p, n);
+    out_boxes.push_back(Box2::of(frame, p, int(n)));
+  };
   for (size_t f = 0; f < in.size(); ++f) {
+    if (!qbox.overlaps(boxes[f])) {
+      out.add(in.data(f), size_t(in.count(f)));
+      out_boxes.push_back(boxes[f]);
+      continue;
+    }
     // A fragment entirely on the negative side of one edge plane misses q: kept whole,
     // without the splits the walk below would make before reaching that edge.
     bool misses = false;
     for (int m = 0; m < nq && !misses; ++m) {
-      SplitResult s = classify_fragment(r, q[m], q[(m + 1) % nq], in.data(f), in.count(f));
+      if (skip[m]) continue;
+      SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
       misses = s == SplitResult::Negative || s == SplitResult::OnLine;
     }
     if (misses) {
       out.add(in.data(f), size_t(in.count(f)));
+      out_boxes.push_back(boxes[f]);
       continue;
     }
     cur.assign(in.data(f), in.data(f) + in.count(f));
     bool alive = true;
     for (int m = 0; m < nq && alive; ++m) {
-      SplitResult s = split_fragment(r, q[m], q[(m + 1) % nq], cur.data(), int(cur.size()), pos, neg);
+      if (skip[m]) continue;
+      SplitResult s = split_fragment(plane(m), cur.data(), int(cur.size()), pos, neg);
       switch (s) {
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
-        case SplitResult::Negative: out.add(cur.data(), cur.size()); alive = false; break;
+        case SplitResult::Negative: keep(cur.data(), cur.size()); alive = false; break;
         case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
         case SplitResult::Both:
           ++c.splits;
-          if (!neg.empty()) out.add(neg.data(), neg.size());
+          if (!neg.empty()) keep(neg.data(), neg.size());
           if (pos.empty()) alive = false;
           else cur.swap(pos);
           break;
       }
     }
     // A piece positive against every edge stabs q: blocked, dropped.
+  }
+}
+
+// The exact near-plane path: removes from the fragments (local coordinates relative to
+// `origin`) the light points x whose open segment from rw crosses the triangle tw
+// properly (DESIGN section 3), with rw on side sigma (exact, nonzero) of tw's plane:
+// x strictly on the other side of the plane, and the line rw -> x strictly on the
+// stabbing side of every edge line (lines.h: side(rw -> x, t_e -> t_e+1) has the sign
+// -sigma for lines crossing from side sigma). Then the crossing point lies strictly
+// inside the triangle and strictly between rw and x, so no slab clipping is needed.
+// Every sign is exact (orient3d_exact on world coordinates, x as origin + local summed
+// exactly); new vertices are interpolated in double from the rounded exact values and
+// rounded to float, so only points within rounding of a plane can be misjudged. Used for
+// receivers within float rounding of the triangle's plane, where float cannot tell which
+// way the planes through rw and the edges lean.
+void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
+                             const PlaneFrame& frame, const FragmentList& in, FragmentList& out,
+                             std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur) {
+  out.clear();
+  out_boxes.clear();
+  std::vector<double> w;
+  std::vector<Vec3d> inside, outside;
+  // w > 0 inside plane k's half-space of the blocked set.
+  auto value = [&](int k, const Vec3d& x) {
+    // det[x - rw, t_e - rw, t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x) (cyclic columns).
+    SumPoint xs(origin, x);
+    ExactOrient o = k == 0 ? orient3d_filtered(tw[0], tw[1], tw[2], xs) : orient3d_filtered(rw, tw[k - 1], tw[k % 3], xs);
+    if (o.sign == 0) return 0.0;
+    double v = std::abs(o.value);
+    if (!(v > 0.0)) v = std::numeric_limits<double>::min();
+    return -double(sigma) * double(o.sign) * v;
+  };
+  for (size_t f = 0; f < in.size(); ++f) {
+    cur.assign(in.data(f), in.data(f) + in.count(f));
+    bool blocked = true;
+    for (int k = 0; k < 4; ++k) {
+      w.resize(cur.size());
+      bool pos = false, neg = false;
+      for (size_t j = 0; j < cur.size(); ++j) {
+        w[j] = value(k, cur[j]);
+        pos |= w[j] > 0.0;
+        neg |= w[j] < 0.0;
+      }
+      if (!pos) {  // all of it outside this half-space: not hidden
+        blocked = false;
+        break;
+      }
+      if (!neg) continue;
+      // Split: the outside part is kept, the inside part goes on to the next plane.
+      clip_by_values(cur.data(), w.data(), int(cur.size()), false, outside);
+      clip_by_values(cur.data(), w.data(), int(cur.size()), true, inside);
+      if (!outside.empty()) {
+        out.add(outside.data(), outside.size());
+        out_boxes.push_back(Box2::of(frame, outside.data(), int(outside.size())));
+      }
+      cur.swap(inside);
+      if (cur.empty()) break;
+    }
+    if (!blocked) {
+      out.add(cur.data(), cur.size());
+      out_boxes.push_back(Box2::of(frame, cur.data(), int(cur.size())));
+    }
+    // Otherwise what is left is inside all four half-spaces: hidden, dropped.
   }
 }
 
@@ -185,7 +374,7 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
   const Vec3f r = to_local(scene.receivers[i].p, lf.origin);
   int vis = 0;
   for (int j = 0; j < light.samples; ++j) {
-    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, lf.samples[sample_index(light, j, i)]);
+    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, Vec3f(lf.samples[sample_index(light, j, i)]));
     rr.set_visible(off + size_t(j), !blocked);
     vis += !blocked;
   }
@@ -211,49 +400,53 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
                  uint64_t tree_seed, Totals& tot) {
   const Scene& scene = *ctx.scene;
   const Light& light = scene.lights[li];
-  auto height = [&](const Vec3f& x) { return sigma * dot(lf.n, x - lf.p0); };
 
   // --- Occluder selection (Figure 8 "SC") ---
   Clock::time_point t0 = Clock::now();
   // Everything below is in the light's local frame (plucker_solver.h): the group's
   // receivers are translated here, the triangles as they are selected.
-  std::vector<Vec3f> rloc(group.size());
-  AABB rbox;
+  std::vector<Vec3d> rloc(group.size());
+  AABB rbox;  // float box for the shaft (its margin covers the rounding)
+  Vec3d dlo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity());
+  Vec3d dhi = -dlo;
   for (size_t k = 0; k < group.size(); ++k) {
-    rloc[k] = to_local(scene.receivers[group[k]].p, lf.origin);
-    rbox.extend(rloc[k]);
+    rloc[k] = to_local_d(scene.receivers[group[k]].p, lf.origin);
+    rbox.extend(Vec3f(rloc[k]));
+    dlo = vmin(dlo, rloc[k]);
+    dhi = vmax(dhi, rloc[k]);
   }
   // g-values are taken relative to a reference receiver (g . p keeps the digits of the
   // differences, not those of the local coordinates).
-  const Vec3f ref = rloc[0];
+  const Vec3d ref = rloc[0];
   AABB both = rbox;
   both.extend(lf.box);
-  float coord_max = max_component(vmax(vabs(both.lo - ref), vabs(both.hi - ref)));
-  auto gval = [&](const Vec3f& g, const Vec3f& p) { return dot(g, p - ref); };
-  auto group_plane = [&](const Vec3f& g, float& gmin, float& gmax) {
-    gmin = std::numeric_limits<float>::infinity();
+  double coord_max = max_component(vmax(vabs(to_double(both.lo) - ref), vabs(to_double(both.hi) - ref)));
+  auto gval = [&](const Vec3d& g, const Vec3d& p) { return dot(g, p - ref); };
+  auto group_plane = [&](const Vec3d& g, double& gmin, double& gmax) {
+    gmin = std::numeric_limits<double>::infinity();
     gmax = -gmin;
-    for (const Vec3f& p : rloc) {
-      float v = gval(g, p);
+    for (const Vec3d& p : rloc) {
+      double v = gval(g, p);
       gmin = std::min(gmin, v);
       gmax = std::max(gmax, v);
     }
   };
-  // delta: g . (p - ref) in float has error < 5.01 u |g|_1 |p - ref|_1 (difference, 3
-  // products, 2 sums); with |p - ref|_inf <= coord_max inside the shaft,
-  // 16 u |g|_1 3 coord_max separates the tree occluders from every receiver plane by
-  // more than the rounding of both sides.
-  Vec3f g = lf.n * (-sigma);
-  float gmin = 0, gmax = 0;
+  // delta: a separation of the tree occluders from every receiver's g-plane far above
+  // the rounding of g . (p - ref) (in float it had error < 5.01 u |g|_1 |p - ref|_1;
+  // now in double, the float-sized delta is kept as a wide, conservative band): with
+  // |p - ref|_inf <= coord_max inside the shaft, 16 u |g|_1 3 coord_max.
+  Vec3d g = to_double(lf.n) * double(-sigma);
+  double gmin = 0, gmax = 0;
   group_plane(g, gmin, gmax);
   if (scene.grid) {
-    Vec3f gn = normalize(scene.grid->normal);
-    float nmin = 0, nmax = 0;
+    Vec3d gn = to_double(normalize(scene.grid->normal));
+    double nmin = 0, nmax = 0;
     group_plane(gn, nmin, nmax);
-    float dlt = 16.0f * kUnitRoundoff * norm1(gn) * 3.0f * coord_max;
+    double dlt = 16.0 * double(kUnitRoundoff) * (std::abs(gn.x) + std::abs(gn.y) + std::abs(gn.z)) * 3.0 * coord_max;
     bool beyond = true, below = true;
-    for (const Vec3f& v : lf.poly) {
-      float gv = gval(gn, v);
+    for (const Vec3d& v : lf.poly) {
+      double gv = gval(gn, v);
       beyond &= gv > nmax + 2 * dlt;
       below &= gv < nmin - 2 * dlt;
     }
@@ -267,26 +460,57 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       gmax = nmax;
     }
   }
-  const float delta = 16.0f * kUnitRoundoff * norm1(g) * 3.0f * coord_max;
-  Vec3f corners[8];
+  const double delta = 16.0 * double(kUnitRoundoff) * (std::abs(g.x) + std::abs(g.y) + std::abs(g.z)) * 3.0 * coord_max;
+  // World corners of the receivers' box, for the one-sided test (plane_side).
+  AABB wbox;
+  for (uint32_t i : group) wbox.extend(scene.receivers[i].p);
+  Vec3f wcorners[8];
   for (int c = 0; c < 8; ++c)
-    corners[c] = Vec3f((c & 1) ? rbox.hi.x : rbox.lo.x, (c & 2) ? rbox.hi.y : rbox.lo.y, (c & 4) ? rbox.hi.z : rbox.lo.z);
+    wcorners[c] = Vec3f((c & 1) ? wbox.hi.x : wbox.lo.x, (c & 2) ? wbox.hi.y : wbox.lo.y, (c & 4) ? wbox.hi.z : wbox.lo.z);
+  Vec3d corners[8];
+  for (int c = 0; c < 8; ++c)
+    corners[c] = Vec3d((c & 1) ? dhi.x : dlo.x, (c & 2) ? dhi.y : dlo.y, (c & 4) ? dhi.z : dlo.z);
   Shaft shaft(rbox, lf.box);
   std::vector<Occluder> occluders;
   std::vector<NearPoly> near;
-  std::vector<Vec3f> near_verts;
-  std::vector<Vec3f> poly0, lower, upper;
-  std::vector<float> vals;
-  for (size_t t = 0; t < scene.mesh.size(); ++t) {
-    Vec3f tri[3] = {to_local(scene.mesh.corner(t, 0), lf.origin), to_local(scene.mesh.corner(t, 1), lf.origin),
-                    to_local(scene.mesh.corner(t, 2), lf.origin)};
-    if (shaft.culls(tri[0], tri[1], tri[2])) continue;
-    float h[3] = {height(tri[0]), height(tri[1]), height(tri[2])};
+  std::vector<Vec3d> near_verts;
+  std::vector<Vec3d> poly0, lower, upper;
+  std::vector<double> vals;
+  const Vec3d nd = to_double(lf.n), gd = g, refd = ref;
+  const double gcut = gmax + delta;
+  auto make_near = [&](uint32_t t, const Vec3d tri[3], const std::vector<Vec3d>& part) {
+    NearPoly np;
+    np.triangle = t;
+    np.begin = uint32_t(near_verts.size());
+    np.count = uint32_t(part.size());
+    np.lo = np.hi = part[0];
+    for (const Vec3d& v : part) np.lo = vmin(np.lo, v), np.hi = vmax(np.hi, v);
+    for (int k = 0; k < 3; ++k) np.t[k] = tri[k];
+    np.n = edge_plane_normal_err(tri[0], tri[1], tri[2], np.err);
+    Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
+    np.e1 = std::abs(e1.x) + std::abs(e1.y) + std::abs(e1.z);
+    np.e2 = std::abs(e2.x) + std::abs(e2.y) + std::abs(e2.z);
+    np.tmax = std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2]))));
+    return np;
+  };
+  std::vector<uint32_t> cand;
+  ctx.tree->candidates(shaft, lf.origin, cand);
+  for (uint32_t t : cand) {
+    Vec3d tri[3] = {to_local_d(scene.mesh.corner(t, 0), lf.origin), to_local_d(scene.mesh.corner(t, 1), lf.origin),
+                    to_local_d(scene.mesh.corner(t, 2), lf.origin)};
+    if (shaft.culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
+    // Heights over the light plane and g-values in double on the float vertices (the
+    // clipping below interpolates in double, fragment.h clip_by_values).
+    double h[3], gv[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d& x = tri[k];
+      h[k] = double(sigma) * dot(nd, x);
+      gv[k] = dot(gd, x - refd);
+    }
     // Beyond, or lying in, the light plane: it never meets an open segment (occluders
     // touching the light plane with a vertex or an edge are kept).
-    if (std::max(h[0], std::max(h[1], h[2])) <= lf.plane_tol) continue;
+    if (std::max(h[0], std::max(h[1], h[2])) <= double(lf.plane_tol)) continue;
     // Behind every receiver's g-plane.
-    float gv[3] = {gval(g, tri[0]), gval(g, tri[1]), gval(g, tri[2])};
     if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
     // Clip to the light side h >= 0.
     clip_by_values(tri, h, 3, true, poly0);
@@ -294,22 +518,19 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // Split at gmax + delta: beyond it, between every receiver and the light (tree);
     // the rest per receiver.
     vals.resize(poly0.size());
-    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = gval(g, poly0[k]) - (gmax + delta);
+    for (size_t k = 0; k < poly0.size(); ++k) vals[k] = dot(gd, poly0[k] - refd) - gcut;
     clip_by_values(poly0.data(), vals.data(), int(poly0.size()), true, lower);
     clip_by_values(poly0.data(), vals.data(), int(poly0.size()), false, upper);
-    Vec3f e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
     if (!lower.empty()) {
       // Orientation (bsp.h Occluder): receivers strictly on one side of the triangle's
-      // plane (decided on the corners of their box) give a one-sided occluder, else
-      // two-sided.
-      Vec3f nrm = cross(e1, e2);
-      float scale = kDetErr * norm1(e1) * norm1(e2);
+      // plane (decided in float on the corners of their box; undecided counts for
+      // neither) give a one-sided occluder, else two-sided.
       int npos = 0, nneg = 0;
-      for (const Vec3f& c : corners) {
-        Vec3f d = c - tri[0];
-        float sd = dot(nrm, d), bound = scale * norm1(d);
-        npos += sd > bound;
-        nneg += sd < -bound;
+      const Vec3f wtri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
+      for (const Vec3f& c : wcorners) {
+        int sd = plane_side(wtri, c, false);
+        npos += sd > 0;
+        nneg += sd < 0;
       }
       VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
       Occluder o;
@@ -320,14 +541,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Measured on columns (1024 receivers, 64 samples): two-sided occluders in the
         // tree are mixed against most hyperplanes and multiply the developments by ~25;
         // per receiver they cost one subtraction. So they go to the near list.
-        near.push_back(NearPoly{tri[0], e1, e2, uint32_t(near_verts.size()), uint32_t(lower.size())});
+        near.push_back(make_near(t, tri, lower));
         near_verts.insert(near_verts.end(), lower.begin(), lower.end());
       } else {
         occluders.push_back(o);
       }
     }
     if (!upper.empty()) {
-      near.push_back(NearPoly{tri[0], e1, e2, uint32_t(near_verts.size()), uint32_t(upper.size())});
+      near.push_back(make_near(t, tri, upper));
       near_verts.insert(near_verts.end(), upper.begin(), upper.end());
     }
   }
@@ -338,95 +559,256 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   tot.occluders += occluders.size();
   tot.near += near.size();
   // The receiver region for the second vvset (bsp.h): the distinct corners of the box.
-  std::vector<Vec3f> region;
-  for (const Vec3f& c : corners)
+  std::vector<Vec3d> region;
+  for (const Vec3d& c : corners)
     if (std::find(region.begin(), region.end(), c) == region.end()) region.push_back(c);
   LazyBsp bsp(lf.poly.data(), int(lf.poly.size()), std::move(occluders), tree_seed, region.data(), int(region.size()));
+  bsp.set_choice(ctx.choice);
+  bsp.set_light_plane(lf.plane);
   ++tot.trees;
   tot.init_s += seconds_since(t0);
-  int64_t reported = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
+  int64_t reported = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3d) + near.capacity() * sizeof(NearPoly));
   ctx.memory->change(reported);
 
   // --- Queries (Figure 8 "Q"): every receiver of the group, in grid order ---
   FragmentList frags, tmp;
-  std::vector<Vec3f> pyramid;
-  std::vector<Vec3f> cur, pos, neg, q;
+  std::vector<Box2> boxes, tmp_boxes;
+  std::vector<Vec3d> pyramid, pyramid_err;
+  std::vector<Vec3d> cur, pos, neg;
+  std::vector<Vec3d> q;
+  std::vector<uint8_t> on_level, skip;
+  std::vector<uint32_t> exact_done;  // triangles subtracted exactly for this receiver
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
   for (size_t gk = 0; gk < group.size(); ++gk) {
     const uint32_t i = group[gk];
     const Receiver& rec = scene.receivers[i];
-    const Vec3f& r = rloc[gk];
+    const Vec3d& r = rloc[gk];
     Clock::time_point tq = Clock::now();
-    bsp.query(r, frags);
-    tot.bsp_query_s += seconds_since(tq);
-    // Side planes of the pyramid (r, light), oriented so the light's centroid is
-    // positive: a near polygon entirely on the negative side of one misses every
-    // segment from r to the light. The margin (a relative 2^-16 of |N| |d|, far above
-    // the float evaluation error of 4.01 u) keeps the rejection conservative.
-    size_t m = lf.poly.size();
-    pyramid.resize(m);
-    for (size_t j = 0; j < m; ++j) {
-      Vec3f nrm = cross(lf.poly[j] - r, lf.poly[(j + 1) % m] - r);
-      if (dot(nrm, lf.centroid - r) < 0.0f) nrm = -nrm;
-      pyramid[j] = nrm;
-    }
-    for (const NearPoly& np : near) {
-      if (frags.size() == 0) break;
-      const Vec3f* pv = near_verts.data() + np.begin;
-      bool outside = false;
-      for (size_t j = 0; j < m && !outside; ++j) {
-        outside = true;
-        float nn = norm1(pyramid[j]);
-        for (uint32_t k = 0; k < np.count && outside; ++k) {
-          Vec3f d = pv[k] - r;
-          outside = dot(pyramid[j], d) < -0x1p-16f * nn * norm1(d);
+    // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
+    // from the light than from its plane, fuzz_plucker 0108e691...: 4.5e28 along the
+    // light's plane and 2 below it), where even double planes through r move shadow edges
+    // by more than the tolerance (a clipped vertex rounded by 1e-17 in height, seen from
+    // 4.5e28, shifts a line on the light by 1e11 times that). Such a receiver is shaded
+    // by the exact path alone: every candidate triangle of the group subtracted exactly
+    // (subtract_triangle_exact), no tree and no near polygons.
+    const double hr = double(sigma) * dot(nd, r);
+    const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
+    const bool extreme = !(far <= 0x1p20 * hr);
+    if (extreme) {
+      ++tot.exact_receivers;
+      frags.clear();
+      frags.add(lf.poly.data(), lf.poly.size());
+      boxes.assign(1, Box2::of(lf.frame, lf.poly.data(), int(lf.poly.size())));
+      for (uint32_t t : cand) {
+        if (frags.size() == 0) break;
+        const Vec3f wtri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
+        int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
+        if (side_exact == 0) continue;
+        ++tot.exact_triangles;
+        subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
+        std::swap(frags, tmp);
+        std::swap(boxes, tmp_boxes);
+      }
+    } else {
+      // A light the tree hides as a whole from r needs nothing else (LazyBsp::hides_all:
+      // a walk without splits). Otherwise the near polygons first, subtracted from the
+      // whole light: they are the closest to r, so their shadows are the largest, and the
+      // BSP is then walked (and developed) only for what they leave visible. Measured
+      // (callgrind, 1024 receivers): columns 1.90e9 instructions against 2.75e9 with the
+      // BSP first; rooms needs the hides_all walk (lights on other storeys).
+      frags.clear();
+      if (!bsp.hides_all(r)) frags.add(lf.poly.data(), lf.poly.size());
+      // Side planes of the pyramid (r, light), oriented so the light's centroid is
+      // positive: a near polygon entirely on the negative side of one misses every
+      // segment from r to the light. Each plane through r and light edge (l_j, l_j+1)
+      // has N = edge_plane_normal (its two shortest of l_j - r, l_j+1 - r, l_j+1 - l_j:
+      // for a receiver far from a small light the textbook (l_j - r) x (l_j+1 - r) is
+      // the cross product of two nearly parallel long vectors: its rounding u |l - r|^2
+      // against |N| ~ |l - r| |l_j+1 - l_j| is 1% for a receiver 1e5 light sizes away, as
+      // in fuzz_plucker seed-mode07-1) and is evaluated through l_j: (x - l_j) . N,
+      // rejected only below -16 dot_err (16 times its error bound).
+      size_t m = lf.poly.size();
+      pyramid.resize(m);
+      pyramid_err.resize(m);
+      for (size_t j = 0; j < m; ++j) {
+        Vec3d err;
+        Vec3d nrm = edge_plane_normal_err(r, lf.poly[j], lf.poly[(j + 1) % m], err);
+        if (dot(nrm, lf.centroid - lf.poly[j]) < 0.0) nrm = -nrm;
+        pyramid[j] = nrm;
+        pyramid_err[j] = err;
+      }
+      boxes.clear();
+      Box2 all;
+      for (size_t f = 0; f < frags.size(); ++f) {
+        boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
+        all.extend(boxes.back());
+      }
+      exact_done.clear();
+      const Vec3d& rd = r;
+      const double rmax = max_component(vabs(r));
+      // The box of this receiver's pyramid (r and the light), grown by 2^-20 of its
+      // size: a near polygon whose box misses it misses every segment from r to the light.
+      Vec3d plo = vmin(r, to_double(lf.box.lo)), phi = vmax(r, to_double(lf.box.hi));
+      {
+        const double grow_p = 0x1p-20 * (max_component(phi - plo) + max_component(vmax(vabs(plo), vabs(phi))));
+        plo = plo - Vec3d(grow_p, grow_p, grow_p);
+        phi = phi + Vec3d(grow_p, grow_p, grow_p);
+      }
+      for (const NearPoly& np : near) {
+        if (frags.size() == 0) break;
+        if (np.hi.x < plo.x || np.lo.x > phi.x || np.hi.y < plo.y || np.lo.y > phi.y || np.hi.z < plo.z ||
+            np.lo.z > phi.z)
+          continue;
+        const Vec3d* pv = near_verts.data() + np.begin;
+        // Cheap rejections first, conservative also against the rounding of the local
+        // frame (a point moves by u |x| when translated; see the exact path below):
+        // this receiver's slab (g . p > g . r somewhere, else the polygon is at or behind
+        // its g-plane), then the side planes of its pyramid.
+        vals.resize(np.count);
+        double maxv = -1.0, pmax = 0.0;
+        for (uint32_t k = 0; k < np.count; ++k) {
+          vals[k] = dot(gd, pv[k] - rd);
+          maxv = std::max(maxv, vals[k]);
+          pmax = std::max(pmax, max_component(vabs(pv[k])));
         }
+        // The translation to the local frame is exact in double unless exponents differ by
+        // more than 29, else rounded at u_d: 4 u_d of the coordinates is far above it.
+        constexpr double kUd = 0x1p-53;
+        const double gn1 = std::abs(g.x) + std::abs(g.y) + std::abs(g.z);
+        if (maxv < -4.0 * kUd * gn1 * (pmax + rmax)) continue;
+        bool outside = false;
+        for (size_t j = 0; j < m && !outside; ++j) {
+          outside = true;
+          const Vec3d& pn = pyramid[j];
+          const double shift = 4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) *
+                               (pmax + double(lf.extent) + rmax);
+          const Vec3d& lj = lf.poly[j];
+          for (uint32_t k = 0; k < np.count && outside; ++k) {
+            Vec3d d = pv[k] - lj;
+            outside = dot(pn, d) < -16.0 * dot_err(d, pn, pyramid_err[j]) - shift;
+          }
+        }
+        if (outside) continue;
+        // The side of r against the triangle's plane (near_side: decided on the local
+        // double coordinates with a bound that covers their rounding, so it is the side
+        // in the inputs as given). A receiver within rounding of the plane (but not on
+        // it) sees the triangle across a sliver of space that rounding cannot resolve,
+        // and what the triangle hides can be the whole light (fuzz_plucker 68d82337...,
+        // f95fbc59...: a receiver 6e-9 and 2^-148 below a face): such a triangle is
+        // subtracted exactly, whole, once per receiver (subtract_triangle_exact). Exactly
+        // on the plane the triangle cannot meet an open segment from r properly (it only
+        // touches or contains it): skipped.
+        int side_r = near_side(np, r, rmax);
+        if (side_r == 0) {
+          if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
+          exact_done.push_back(np.triangle);
+          const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
+                                 scene.mesh.corner(np.triangle, 2)};
+          int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
+          if (side_exact == 0) continue;
+          ++tot.exact_triangles;
+          subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
+          std::swap(frags, tmp);
+          std::swap(boxes, tmp_boxes);
+          all = Box2{};
+          for (const Box2& b : boxes) all.extend(b);
+          continue;
+        }
+        if (maxv <= 0.0) continue;  // float path: at or behind r's g-plane
+        clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
+        if (q.empty()) continue;
+        // Oriented so that r is on the negative side (bsp.h Occluder).
+        if (side_r > 0) {
+          std::reverse(q.begin(), q.end());
+          std::reverse(on_level.begin(), on_level.end());
+        }
+        // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies
+        // in the level plane through r, so the plane through r and that edge is the
+        // level plane itself, and every light point is strictly beyond it, on q's side:
+        // the edge cannot cut a light line away and is skipped. Testing it would be
+        // wrong near degeneracy: when r is within rounding of the triangle's plane, the
+        // edge passes within rounding of r, float calls r "on its line" and the whole
+        // polygon was dropped (fuzz_plucker 68d82337...: a receiver 6e-9 below a face,
+        // fraction 1 instead of 0).
+        skip.assign(q.size(), 0);
+        for (size_t k = 0; k < q.size(); ++k) skip[k] = on_level[k] && on_level[(k + 1) % q.size()];
+        // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
+        Box2 qbox = shadow_box(lf.plane, r, q.data(), q.size());
+        if (!qbox.overlaps(all)) continue;
+        subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, lf.centroid, frags, boxes, tmp,
+                         tmp_boxes, cur, pos, neg, near_counters);
+        std::swap(frags, tmp);
+        std::swap(boxes, tmp_boxes);
+        all = Box2{};
+        for (const Box2& b : boxes) all.extend(b);
       }
-      if (outside) continue;
-      // Clip to this receiver's slab: g . p > g . r.
-      vals.resize(np.count);
-      float maxv = -1.0f;
-      for (uint32_t k = 0; k < np.count; ++k) {
-        vals[k] = dot(g, pv[k] - r);
-        maxv = std::max(maxv, vals[k]);
+      // Algorithm 1 on the pieces the near polygons left visible.
+      Clock::time_point tb = Clock::now();
+      if (frags.size() > 0) {
+        bsp.query(r, frags, tmp);
+        std::swap(frags, tmp);
       }
-      if (maxv <= 0.0f) continue;  // at or behind the receiver's g-plane
-      clip_by_values(pv, vals.data(), int(np.count), true, q);
-      if (q.empty()) continue;
-      // Side of r against the triangle's plane: on it, the triangle cannot meet an open
-      // segment from r properly (it only touches it or contains it): skipped.
-      Vec3f nrm = cross(np.e1, np.e2), d = r - np.v0;
-      float s = dot(nrm, d), bound = kDetErr * norm1(np.e1) * norm1(np.e2) * norm1(d);
-      if (std::abs(s) <= bound) continue;
-      if (s > 0.0f) std::reverse(q.begin(), q.end());
-      subtract_polygon(r, q.data(), int(q.size()), frags, tmp, cur, pos, neg, near_counters);
-      std::swap(frags, tmp);
+      tot.bsp_query_s += seconds_since(tb);
     }
+    boxes.clear();
+    for (size_t f = 0; f < frags.size(); ++f) boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
     // Fragments, fraction, bits by point-in-fragment, irradiance.
     ReceiverResult& rr = ctx.result->receivers[i];
     auto& out = rr.fragments[li];
     out.clear();
     out.reserve(frags.size());
     double area = 0.0, irr = 0.0;
+    const Vec3d od = to_double(lf.origin);
     for (size_t f = 0; f < frags.size(); ++f) {
-      // Reported in world coordinates: one float rounding per vertex (plucker_solver.h).
-      auto& wf = out.emplace_back(frags.data(f), frags.data(f) + frags.count(f));
-      for (Vec3f& v : wf) v = v + lf.origin;
       area += polygon_area(frags.data(f), frags.count(f));
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
+      // Reported in world coordinates: one float rounding per vertex (plucker_solver.h).
+      // A fragment thinner than the float spacing there is not reported when its rounded
+      // polygon no longer holds its own interior point (the centroid of its largest fan
+      // triangle, as the comparator takes it): measured on far-origin scenes (spacing
+      // 1/16 at 6.8e5), rounded slivers put that point up to 0.03 into blocked space,
+      // far beyond tau (fuzz_plucker 719086e3...). The fraction and the bits use the
+      // double fragments and are unaffected.
+      Polygon3f wf;
+      wf.reserve(size_t(frags.count(f)));
+      for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
+      double best = 0.0;
+      Vec3d inside{};
+      for (size_t k = 1; k + 1 < wf.size(); ++k) {
+        Vec3d a = to_double(wf[0]), b = to_double(wf[k]), c = to_double(wf[k + 1]);
+        double ar = length(cross(b - a, c - a));
+        if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+      }
+      if (best > 0.0 && point_in_fragment(lf.frame, frags.data(f), frags.count(f), inside - od)) {
+        out.push_back(std::move(wf));
+      } else {
+        ++tot.unreported_slivers;
+      }
     }
     rr.visible_fraction[li] = float(std::min(1.0, area / light.area));
+    // A sample is visible when it lies in the box of a fragment grown by 2^-38 of the
+    // light's extent and in the fragment by point_in_fragment with a vertex slack of
+    // 2^-40 of the extent (fragment.h: the fragments are double, so this is about 2^13
+    // ulps of the coordinates, far above the rounding of the interpolated vertices and
+    // far below tau; with float fragments it was 2^-20 and 2^-18). The box bounds what the
+    // slack accepts near short edges; together they accept exactly the points within
+    // about 2^-38 of the extent of a fragment.
+    const double grow = double(lf.extent) * 0x1p-38;
+    const double slack = double(lf.extent) * 0x1p-40;
+    for (Box2& b : boxes) b = Box2{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
     for (int j = 0; j < light.samples; ++j) {
       size_t k = sample_index(light, j, i);
       bool vis = false;
       if (lf.on_light[k]) {
-        const Vec3f& sp = lf.samples[k];
-        for (size_t f = 0; f < frags.size() && !vis; ++f) vis = point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp);
+        const Vec3d& sp = lf.samples[k];
+        const double su = sp[lf.frame.u], sv = sp[lf.frame.v];
+        for (size_t f = 0; f < frags.size() && !vis; ++f)
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
       } else {
         // Off the light polygon (explicit samples): the segment r -> sample itself.
-        vis = !segment_blocked_by_scene(scene, lf.origin, r, lf.samples[k]);
+        vis = !segment_blocked_by_scene(scene, lf.origin, to_local(rec.p, lf.origin), Vec3f(lf.samples[k]));
         ++tot.segment_relations;
       }
       rr.set_visible(off + size_t(j), vis);
@@ -436,7 +818,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     tot.fragments += frags.size();
     ++tot.queries;
     tot.query_s += seconds_since(tq);
-    int64_t now = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3f) + near.capacity() * sizeof(NearPoly));
+    int64_t now = int64_t(bsp.memory_bytes() + near_verts.capacity() * sizeof(Vec3d) + near.capacity() * sizeof(NearPoly));
     ctx.memory->change(now - reported);
     reported = now;
     // The paper's modified version: reset between queries, excluded from the timings.
@@ -448,6 +830,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   tot.bsp.nodes_created += c.nodes_created;
   tot.bsp.developments += c.developments;
   tot.bsp.insert_tests += c.insert_tests;
+  tot.bsp.occlusion_tests += c.occlusion_tests;
+  tot.bsp.lazy_visible += c.lazy_visible;
   tot.bsp.splits += c.splits + near_counters.splits;
   tot.bsp.on_line += c.on_line + near_counters.on_line;
   tot.bsp.zero_area += c.zero_area + near_counters.zero_area;
@@ -509,16 +893,26 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   if (irradiance) irradiance->assign(scene.receivers.size() * scene.lights.size(), 0.0);
   bool coherence = opt.get_bool("coherence", true);
   int tile = int(opt.get_int("tile", 8));
+  LazyBsp::Choice choice = opt.get("choice", "relevant") == "random" ? LazyBsp::Choice::Random : LazyBsp::Choice::Relevant;
   MemoryMeter memory;
-  Context ctx{&scene, &result, irradiance, coherence, opt.seed, &memory};
+  // The triangle hierarchy for occluder selection, built once (counted as selection).
+  Clock::time_point tt = Clock::now();
+  TriangleTree tree(scene.mesh);
+  double tree_s = seconds_since(tt);
+  memory.change(int64_t(tree.memory_bytes()));
+  Context ctx{&scene, &result, irradiance, coherence, choice, &tree, opt.seed, &memory};
   auto groups = receiver_groups(scene, tile);
+  AABB rbox_all;
+  for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
+  const Vec3d focus = scene.receivers.empty() ? Vec3d(0, 0, 0) : (to_double(rbox_all.lo) + to_double(rbox_all.hi)) * 0.5;
   Totals totals;
   std::mutex merge_mutex;
 
   // Multiple lights in turn (Algorithm 2 line 2); groups of one light in parallel.
   for (size_t li = 0; li < scene.lights.size(); ++li) {
-    LightFrame lf = make_frame(scene.lights[li]);
+    LightFrame lf = make_frame(scene.lights[li], focus);
     tbb::parallel_for(size_t(0), groups.size(), [&](size_t g) {
+      const IeeeFloatMode ieee;  // TBB workers run with FTZ/DAZ once Embree exists (lib/geom/float_mode.h)
       Totals tot;
       // Split the group by the side of the light plane; receivers on it fall back.
       std::vector<uint32_t> side[2];
@@ -526,8 +920,17 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
         Vec3f d = to_local(scene.receivers[i].p, lf.origin) - lf.p0;
         float h = dot(lf.n, d);
         float tol = lf.plane_tol + kDotErr * norm1(lf.n) * norm1(d);
-        if (h > tol) side[0].push_back(i);
-        else if (h < -tol) side[1].push_back(i);
+        int sd = h > tol ? 1 : (h < -tol ? -1 : 0);
+        // Undecided in float: exactly, for an exactly planar light (a receiver far away
+        // at a grazing height, fuzz_plucker 0108e691...: 4.5e28 along the light's plane
+        // and 2 below it, is not on the plane).
+        if (sd == 0 && lf.planar) {
+          const auto& v = scene.lights[li].polygon;
+          sd = lf.emit_sign *
+               orient3d_exact_sign(v[0], v[size_t(lf.p1)], v[size_t(lf.p2)], scene.receivers[i].p);
+        }
+        if (sd > 0) side[0].push_back(i);
+        else if (sd < 0) side[1].push_back(i);
         else shade_fallback(ctx, li, lf, i, tot);
       }
       for (int s = 0; s < 2; ++s) {
@@ -541,6 +944,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     });
   }
 
+  totals.select_s += tree_s;
   result.seconds = seconds_since(start);
   Stats& st = result.stats;
   st.set("relations", double(scene.relation_count()));
@@ -554,11 +958,16 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("bsp_nodes_max", double(totals.bsp_nodes_max));
   st.set("developments", double(totals.bsp.developments));
   st.set("insert_tests", double(totals.bsp.insert_tests));
+  st.set("occlusion_tests", double(totals.bsp.occlusion_tests));
+  st.set("lazy_visible", double(totals.bsp.lazy_visible));
   st.set("splits", double(totals.bsp.splits));
   st.set("degenerate_on_line", double(totals.bsp.on_line));
   st.set("degenerate_zero_area", double(totals.bsp.zero_area));
   st.set("fallback_receivers", double(totals.fallback));
   st.set("segment_relations", double(totals.segment_relations));
+  st.set("exact_triangles", double(totals.exact_triangles));
+  st.set("exact_receivers", double(totals.exact_receivers));
+  st.set("unreported_slivers", double(totals.unreported_slivers));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
   st.set("occluder_selection_seconds", totals.select_s);
@@ -578,7 +987,9 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
 
 std::vector<OptionSpec> PluckerSolver::options() const {
   return {{"coherence", "on: queries reuse the tree; off: reset between queries (paper 002 section 5.1)", {"on", "off"}},
-          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}}};
+          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}},
+          {"choice", "relevant: develop with an occluder the query sees (bsp.h); random: the paper's random occluder",
+           {"relevant", "random"}}};
 }
 
 SolveResult PluckerSolver::solve(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

@@ -45,9 +45,12 @@
 // vertex: far from the origin they move by up to half the float spacing there);
 // the fraction, the bits and the irradiance are computed on the local fragments.
 //
-// Guarantee: float32 (the paper's precision) with the error-bounded signs of lines.h;
-// what is float and what is decided against a bound is listed in bsp.h. Exact in the
-// paper's sense: no sampling noise; the fraction is an area, not a sample count.
+// Guarantee: float32 data (inputs, fragments) with receivers, occluders and near
+// polygons in double local coordinates and planes evaluated in double against forward
+// error bounds (bsp.h lists what is bounded); the receiver's side of a near triangle's
+// plane, and for a receiver within rounding of that plane the whole triangle, exactly
+// (exact_orient.h, the near-plane path). Exact in the paper's sense: no sampling noise;
+// the fraction is an area, not a sample count.
 // Light points (DESIGN section 6 allows explicit samples anywhere; the relation is the
 // open segment receiver -> sample): a sample on the light's plane (|h| within the
 // plane's rounding bound) and inside the light polygon (point_in_fragment's bound) is

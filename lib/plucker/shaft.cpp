@@ -61,4 +61,15 @@ bool Shaft::culls(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) const {
   return false;
 }
 
+bool Shaft::culls_box(const Vec3f& lo, const Vec3f& hi) const {
+  Vec3d l = to_double(lo), h = to_double(hi);
+  for (int ax = 0; ax < 3; ++ax)
+    if (h[ax] < lo_[ax] - margin_ || l[ax] > hi_[ax] + margin_) return true;
+  for (const PlaneD& p : planes_) {
+    Vec3d c(p.n.x >= 0 ? l.x : h.x, p.n.y >= 0 ? l.y : h.y, p.n.z >= 0 ? l.z : h.z);
+    if (dot(p.n, c) - p.d > margin_) return true;
+  }
+  return false;
+}
+
 }  // namespace visgate::plucker

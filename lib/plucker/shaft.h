@@ -23,6 +23,11 @@ class Shaft {
   Shaft(const AABB& a, const AABB& b);
   // True when the triangle certainly misses the convex hull of the two boxes.
   bool culls(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) const;
+  // True when the box [lo, hi] certainly misses the convex hull of the two boxes: outside
+  // the bounding box, or all of it outside one plane (its corner nearest the plane's
+  // inner side), with the same margin as culls(). A box that is not culled may still hold
+  // only culled triangles.
+  bool culls_box(const Vec3f& lo, const Vec3f& hi) const;
   size_t plane_count() const { return planes_.size(); }
 
  private:

@@ -179,10 +179,10 @@ void classify_split(const Wedge& w, const WedgeState& s, const SplitBoxes& b, fl
     // Outside: on the front side of both triangles or on the back side of both.
     // Contains: on the front side of exactly one (the silhouette region, "XOR").
     auto both = [](uint8_t r, uint8_t x, uint8_t y) { return (r & x) && (r & y); };
-    out_l = both(rl, kPos1, kPos2) | both(rl, kNeg1, kNeg2);
-    out_r = both(rr, kPos1, kPos2) | both(rr, kNeg1, kNeg2);
-    contains_l = both(rl, kPos1, kNeg2) | both(rl, kNeg1, kPos2);
-    contains_r = both(rr, kPos1, kNeg2) | both(rr, kNeg1, kPos2);
+    out_l = both(rl, kPos1, kPos2) || both(rl, kNeg1, kNeg2);
+    out_r = both(rr, kPos1, kPos2) || both(rr, kNeg1, kNeg2);
+    contains_l = both(rl, kPos1, kNeg2) || both(rl, kNeg1, kPos2);
+    contains_r = both(rr, kPos1, kNeg2) || both(rr, kNeg1, kPos2);
     left.region = rl;
     right.region = rr;
   }

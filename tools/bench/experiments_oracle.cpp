@@ -2,9 +2,11 @@
 //   speed-accuracy  seconds against RMS error of the visible fraction (region oracle)
 //                   for N = 4..1024 samples; fragment methods (plucker-bsp) as their
 //                   exact point; the Pareto chart on log axes;
-//   plucker         the analogue of paper 002 section 5, Figures 7-10: equal time and
-//                   equal quality against embree, light area x1 to x100, 2 to 36 lights,
-//                   the coherence falloff factor (Figure 8, columns MV and FO);
+//   plucker         the analogue of paper 002 section 5, Figures 7-10 on columns and
+//                   rooms: equal quality against embree (the smallest N whose RMS error
+//                   over the penumbra pairs is at most 0.5%), memory, time split and the
+//                   coherence falloff factor (Figure 8, columns MV and FO), light area x1
+//                   to x100 and 2 to 36 lights with peak memory;
 //   stability       disagreements with the relation oracle per margin decade, every
 //                   method on every family (DESIGN section 5);
 //   oracle          throughput of the relation and region oracles.
@@ -14,6 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <optional>
 
 #include "oracle/comparator.h"
 #include "oracle/region_oracle.h"
@@ -188,174 +192,227 @@ Status set_light_count(Scene& s, int count, int samples) {
   return {};
 }
 
+// Root mean square error of the visible fraction over the penumbra pairs: (receiver,
+// light) pairs whose exact fraction is strictly between 0.001 and 0.999. `count`
+// receives their number. NaN when there is none.
+double penumbra_rms(const std::vector<double>& got, const std::vector<double>& exact, size_t* count) {
+  double sum = 0.0;
+  size_t n = 0;
+  for (size_t k = 0; k < got.size() && k < exact.size(); ++k) {
+    if (!(exact[k] > 0.001 && exact[k] < 0.999)) continue;
+    double d = got[k] - exact[k];
+    sum += d * d;
+    ++n;
+  }
+  if (count) *count = n;
+  return n ? std::sqrt(sum / double(n)) : kNaN;
+}
+
+// Scene sizes of the plucker experiment: columns at the family's own 64 x 64 receivers,
+// rooms (27 lights) at 32 x 32 so that the region oracle (every receiver and light) and
+// embree at 1024 samples per light stay within minutes; --quick: 16 x 16 and a smaller
+// rooms.
+FamilyParams plucker_params(const BenchOptions& o, const std::string& fam) {
+  FamilyParams p;
+  p.seed = o.seed;
+  if (fam == "rooms") {
+    p.receivers = o.quick ? 16 * 16 : 32 * 32;
+    if (o.quick) p.triangles = 7000;
+  } else {
+    p.receivers = o.quick ? 16 * 16 : 64 * 64;
+  }
+  return p;
+}
+
 Status run_plucker(BenchContext& ctx) {
   const auto& o = ctx.opt;
   const std::string P = "plucker-bsp";
   bool have_p = ctx.has_method(P, "the plucker-bsp figures (the embree side is still measured)");
   bool have_e = ctx.has_method("embree", "the embree comparison");
-  std::vector<std::string> wanted = o.families.empty() ? std::vector<std::string>{"rooms"} : o.families;
-  auto fams = ctx.families(wanted);
+  auto fams = ctx.families(o.families.empty() ? std::vector<std::string>{"columns", "rooms"} : o.families);
   if (fams.empty()) return Error{"plucker: no registered family to measure"};
-  const std::string fam = fams.front();
-  const double quality = 0.01;  // "comparable quality": RMS error of the visible fraction <= 1%
-  std::vector<long> ns = o.quick ? std::vector<long>{4, 16, 64} : std::vector<long>{4, 16, 64, 256, 1024};
-  ctx.report.options["family"] = fam;
-  ctx.report.options["equal_quality_rms"] = quality;
+  // Equal quality (issue 6): the smallest N at which embree's RMS error of the visible
+  // fraction over the penumbra pairs is at most 0.5%.
+  const double quality = 0.005;
+  std::vector<long> ns = o.quick ? std::vector<long>{16, 64, 256, 1024} : std::vector<long>{16, 64, 256, 512, 1024, 2048};
+  ctx.report.options["families"] = fams;
+  ctx.report.options["equal_quality_penumbra_rms"] = quality;
+  ctx.report.options["penumbra"] = "exact fraction strictly between 0.001 and 0.999";
   ctx.report.options["embree_samples"] = ns;
+  Json sizes = Json::object();
 
-  // Figure 7: equal time and equal quality.
-  FamilyParams p = accuracy_params(o, fam);
-  p.samples = ns.front();
-  auto base = ctx.scene(fam, p);
-  if (!base) return base.error();
-  ctx.report.options["scene"] = scene_summary(*base);
-  ctx.progress.step(fam + ": region oracle");
-  std::vector<double> exact = exact_fractions(*base, o.threads);
+  Table f7{"fig7", "paper 002 Figure 7 analogue: embree at N samples per light against the exact method",
+           {"family", "method", "samples", "seconds_1t", "seconds_all", "penumbra_rms", "rms_all", "max_abs_error"}, {}};
+  Table eq{"equal", "equal quality: the smallest N with embree's penumbra RMS <= equal_quality_penumbra_rms",
+           {"family", "penumbra_pairs", "embree_samples", "embree_seconds_1t", "embree_seconds_all", "embree_penumbra_rms",
+            "plucker_seconds_1t", "plucker_seconds_all", "plucker_penumbra_rms", "speedup_1t", "speedup_all"}, {}};
+  Table f8{"fig8", "paper 002 Figure 8 analogue: memory, time split and the coherence falloff factor FO (off / on)",
+           {"family", "coherence", "seconds_1t", "seconds_all", "method_peak_kb", "process_peak_mb", "bsp_nodes",
+            "developments", "selection_pct", "init_pct", "queries_pct", "falloff_factor_1t", "falloff_factor_all"}, {}};
+  Table st{"stats", "every figure plucker-bsp reports", {"family", "run", "stat", "value"}, {}};
+  std::map<std::string, long> eq_samples;  // family -> equal-quality N
 
-  Table f7{"fig7", "paper 002 Figure 7 analogue: embree shadow rays at N samples against the exact method",
-           {"method", "samples", "seconds_1t", "seconds_all", "rms_error", "max_abs_error"}, {}};
-  Table eq{"equal", "equal time and equal quality (RMS <= equal_quality_rms) against plucker-bsp",
-           {"comparison", "embree_samples", "embree_seconds_1t", "embree_rms_error", "plucker_seconds_1t",
-            "plucker_rms_error", "embree_over_plucker"}, {}};
-  double tp = kNaN, rp = kNaN;
-  if (have_p) {
-    auto r = run_method(ctx, P, *base, "fig7");
-    if (r) {
-      auto got = method_fractions(*base, r->result);
-      tp = r->seconds_1t;
-      rp = rms_error(got, exact);
-      f7.add_row({P, "exact", r->seconds_1t, r->seconds_all, rp, max_abs_error(got, exact)});
+  for (const std::string& fam : fams) {
+    FamilyParams p = plucker_params(o, fam);
+    p.samples = ns.front();
+    auto base = ctx.scene(fam, p);
+    if (!base) return base.error();
+    sizes[fam] = scene_summary(*base);
+    ctx.progress.step(fam + ": region oracle");
+    std::vector<double> exact = exact_fractions(*base, o.threads);
+    size_t pen = 0;
+    penumbra_rms(exact, exact, &pen);
+
+    // The exact method (Figure 7 point) and Figure 8: coherence on and off.
+    std::optional<Measured> on, off;
+    double p_rms = kNaN;
+    if (have_p) {
+      on = run_method(ctx, P, *base, fam + " coherence on", nullptr, 0.0, {{"coherence", "on"}});
+      if (on) {
+        auto got = method_fractions(*base, on->result);
+        p_rms = penumbra_rms(got, exact, nullptr);
+        f7.add_row({fam, P, "exact", on->seconds_1t, on->seconds_all, p_rms, rms_error(got, exact),
+                    max_abs_error(got, exact)});
+        add_stat_rows(st, {fam, "coherence on"}, on->stats);
+      }
+      if (has_option(P, "coherence")) {
+        off = run_method(ctx, P, *base, fam + " coherence off", nullptr, 0.0, {{"coherence", "off"}});
+        if (off) add_stat_rows(st, {fam, "coherence off"}, off->stats);
+      } else {
+        ctx.note("plucker-bsp has no option coherence: the falloff factor (Figure 8) is not measured");
+      }
+      for (const auto* m : {&on, &off}) {
+        if (!*m) continue;
+        const Stats& ss = (*m)->stats;
+        bool is_on = m == &on;
+        f8.add_row({fam, is_on ? "on" : "off", (*m)->seconds_1t, (*m)->seconds_all, ss.get("peak_memory_kb"),
+                    (*m)->peak_mb, ss.get("bsp_nodes"), ss.get("developments"), ss.get("occluder_selection_percent"),
+                    ss.get("tree_init_percent"), ss.get("query_percent"),
+                    is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_1t, on->seconds_1t)),
+                    is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_all, on->seconds_all))});
+      }
     }
-  }
-  std::vector<std::pair<long, std::pair<double, double>>> emb;  // N -> (seconds, rms)
-  if (have_e) {
-    SweepGuard guard(o.budget);
-    for (long n : ns) {
-      p.samples = n;
-      auto s = ctx.scene(fam, p);
-      if (!s) return s.error();
-      auto r = run_method(ctx, "embree", *s, "fig7 N=" + std::to_string(n), &guard, double(n));
-      if (!r) continue;
-      auto got = method_fractions(*s, r->result);
-      double rms = rms_error(got, exact);
-      f7.add_row({"embree", n, r->seconds_1t, r->seconds_all, rms, max_abs_error(got, exact)});
-      emb.push_back({n, {r->seconds_1t, rms}});
-    }
-  }
-  if (!emb.empty() && !std::isnan(tp)) {
-    // Equal time: the largest N whose time does not exceed the exact method's (else the smallest N).
-    auto et = emb.front();
-    for (const auto& e : emb)
-      if (e.second.first <= tp) et = e;
-    eq.add_row({"equal time", et.first, et.second.first, et.second.second, tp, rp, ratio(et.second.first, tp)});
-    // Equal quality: the smallest N reaching the RMS target.
-    const std::pair<long, std::pair<double, double>>* eqq = nullptr;
-    for (const auto& e : emb)
-      if (!eqq && e.second.second <= quality) eqq = &e;
-    if (eqq) eq.add_row({"equal quality", eqq->first, eqq->second.first, eqq->second.second, tp, rp,
-                         ratio(eqq->second.first, tp)});
-    else ctx.note("no embree sample count up to " + std::to_string(ns.back()) + " reached RMS " + fmt_g(quality) +
-                  ": no equal-quality row");
-  }
-  {
-    Chart c{"plucker-fig7", "Equal time / equal quality on " + fam + " (label: samples N)",
-            "time, single thread (s)", "RMS error of visible fraction (0 drawn at 1e-7)", true, true, {}};
+
+    // Embree from the smallest N up to the first that reaches the quality.
     Series se{"embree", {}, {}, {}};
-    for (const auto& e : emb) {
-      se.x.push_back(e.second.first);
-      se.y.push_back(std::max(e.second.second, kLogFloor));
-      se.labels.push_back("N=" + std::to_string(e.first));
+    const Measured* eqm = nullptr;
+    std::optional<Measured> eq_run;
+    long eq_n = 0;
+    double eq_rms = kNaN;
+    if (have_e) {
+      SweepGuard guard(o.budget);
+      for (long n : ns) {
+        p.samples = n;
+        auto s = ctx.scene(fam, p);
+        if (!s) return s.error();
+        auto r = run_method(ctx, "embree", *s, fam + " embree N=" + std::to_string(n), &guard, double(n));
+        if (!r) continue;
+        auto got = method_fractions(*s, r->result);
+        double rms = penumbra_rms(got, exact, nullptr);
+        f7.add_row({fam, "embree", n, r->seconds_1t, r->seconds_all, rms, rms_error(got, exact), max_abs_error(got, exact)});
+        se.x.push_back(r->seconds());
+        se.y.push_back(std::max(rms, kLogFloor));
+        se.labels.push_back("N=" + std::to_string(n));
+        if (rms <= quality) {
+          eq_run = std::move(r);
+          eqm = &*eq_run;
+          eq_n = n;
+          eq_rms = rms;
+          break;
+        }
+      }
     }
+    if (eqm && on) {
+      eq.add_row({fam, pen, eq_n, eqm->seconds_1t, eqm->seconds_all, eq_rms, on->seconds_1t, on->seconds_all, p_rms,
+                  ratio(eqm->seconds_1t, on->seconds_1t), ratio(eqm->seconds_all, on->seconds_all)});
+      eq_samples[fam] = eq_n;
+    } else if (have_e) {
+      ctx.note(fam + ": no embree sample count up to " + std::to_string(ns.back()) + " (within the budget) reached a " +
+               "penumbra RMS of " + fmt_g(quality) + ": no equal-quality row");
+    }
+    Chart c{"plucker-fig7-" + fam, "Penumbra RMS against time on " + fam + " (label: samples N; exact drawn at 1e-7)",
+            "time, single thread (s)", "RMS error of the visible fraction over the penumbra", true, true, {}};
     c.series.push_back(std::move(se));
-    if (!std::isnan(tp)) c.series.push_back({P, {tp}, {std::max(rp, kLogFloor)}, {"exact"}});
+    if (on) c.series.push_back({P, {on->seconds()}, {std::max(p_rms, kLogFloor)}, {"exact"}});
     ctx.report.charts.push_back(std::move(c));
   }
+  ctx.report.options["scenes"] = sizes;
 
-  // Figure 8: figures of the exact method and the coherence falloff factor (MV: every
-  // query without the coherence of the previous ones; FO = MV time / time).
-  Table f8{"fig8", "paper 002 Figure 8 analogue: coherence on and off, falloff factor FO",
-           {"coherence", "seconds_1t", "seconds_all", "peak_mb", "falloff_factor_1t"}, {}};
-  Table st{"stats", "every figure plucker-bsp reports", {"run", "stat", "value"}, {}};
-  if (have_p) {
-    if (has_option(P, "coherence")) {
-      auto on = run_method(ctx, P, *base, "coherence on", nullptr, 0.0, {{"coherence", "on"}});
-      auto off = run_method(ctx, P, *base, "coherence off", nullptr, 0.0, {{"coherence", "off"}});
-      if (on && off) {
-        f8.add_row({"on", on->seconds_1t, on->seconds_all, on->peak_mb, 1.0});
-        f8.add_row({"off", off->seconds_1t, off->seconds_all, off->peak_mb, ratio(off->seconds_1t, on->seconds_1t)});
-        add_stat_rows(st, {"coherence on"}, on->stats);
-        add_stat_rows(st, {"coherence off"}, off->stats);
-      }
-    } else {
-      ctx.note("plucker-bsp has no option coherence: the falloff factor (Figure 8) is not measured");
-    }
-  }
-
-  // Figure 9: light area x1 to x100 (side x1 to x10).
-  std::vector<double> areas = o.quick ? std::vector<double>{1, 16, 100} : std::vector<double>{1, 4, 16, 36, 64, 100};
-  const long f9_samples = 64;  // embree's sample count in Figures 9 and 10
-  Table f9{"fig9", "paper 002 Figure 9 analogue: time and peak memory as the light area grows",
-           {"area_factor", "method", "samples", "seconds_1t", "seconds_all", "peak_mb"}, {}};
-  Chart c9t{"plucker-fig9-time", "Time against light area on " + fam, "light area (x the original)",
+  // Figure 9: light area x1 to x100 (side x1 to x10), on columns (or the first family).
+  const std::string f9fam = std::find(fams.begin(), fams.end(), "columns") != fams.end() ? "columns" : fams.front();
+  std::vector<double> areas = o.quick ? std::vector<double>{1, 16} : std::vector<double>{1, 4, 16, 36, 64, 100};
+  const long f9n = eq_samples.count(f9fam) ? eq_samples[f9fam] : 256;
+  Table f9{"fig9", "paper 002 Figure 9 analogue: time and peak memory as the light area grows (" + f9fam + ")",
+           {"area_factor", "method", "samples", "seconds_1t", "seconds_all", "method_peak_kb", "process_peak_mb",
+            "bsp_nodes", "fragments"}, {}};
+  Chart c9t{"plucker-fig9-time", "Time against light area on " + f9fam, "light area (x the original)",
             "time, single thread (s)", true, true, {}};
-  Chart c9m{"plucker-fig9-memory", "Peak memory against light area on " + fam, "light area (x the original)",
-            "peak memory (MiB)", true, false, {}};
+  Chart c9m{"plucker-fig9-memory", "Peak memory of plucker-bsp's trees against light area on " + f9fam,
+            "light area (x the original)", "peak memory of the trees (KiB)", true, false, {}};
   for (const std::string& m : {P, std::string("embree")}) {
     if ((m == P && !have_p) || (m != P && !have_e)) continue;
     Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
     SweepGuard guard(o.budget);
     for (double a : areas) {
-      FamilyParams q = accuracy_params(o, fam);
-      q.samples = f9_samples;
+      FamilyParams q = plucker_params(o, f9fam);
+      q.samples = f9n;
       q.light_scale = std::sqrt(a);
-      auto s = ctx.scene(fam, q);
+      auto s = ctx.scene(f9fam, q);
       if (!s) return s.error();
-      auto r = run_method(ctx, m, *s, "light area x" + fmt_g(a), &guard, a);
+      auto r = run_method(ctx, m, *s, f9fam + " light area x" + fmt_g(a) + " " + m, &guard, a);
       if (!r) continue;
-      f9.add_row({a, m, m == P ? Json("exact") : Json(f9_samples), r->seconds_1t, r->seconds_all, r->peak_mb});
-      ts.x.push_back(a), ts.y.push_back(r->seconds_1t);
-      ms.x.push_back(a), ms.y.push_back(r->peak_mb);
+      bool pm = m == P;
+      f9.add_row({a, m, pm ? Json("exact") : Json(f9n), r->seconds_1t, r->seconds_all,
+                  pm ? Json(r->stats.get("peak_memory_kb")) : Json(kNaN), r->peak_mb,
+                  pm ? Json(r->stats.get("bsp_nodes")) : Json(kNaN), pm ? Json(r->stats.get("fragments")) : Json(kNaN)});
+      ts.x.push_back(a), ts.y.push_back(r->seconds());
+      if (pm) ms.x.push_back(a), ms.y.push_back(r->stats.get("peak_memory_kb"));
     }
     c9t.series.push_back(std::move(ts));
-    c9m.series.push_back(std::move(ms));
+    if (m == P) c9m.series.push_back(std::move(ms));
   }
   ctx.report.charts.push_back(std::move(c9t));
   ctx.report.charts.push_back(std::move(c9m));
 
-  // Figure 10: 2 to 36 lights of one size.
-  std::vector<int> counts = o.quick ? std::vector<int>{2, 4} : std::vector<int>{2, 4, 8, 16, 36};
-  const int f10_samples = 16;
-  Table f10{"fig10", "paper 002 Figure 10 analogue: time and peak memory against the number of lights",
-            {"lights", "method", "samples_per_light", "seconds_1t", "seconds_all", "peak_mb"}, {}};
-  Chart c10t{"plucker-fig10-time", "Time against the number of lights on " + fam, "lights", "time, single thread (s)",
+  // Figure 10: 2 to 36 lights of one size, on rooms (or the first family).
+  const std::string f10fam = std::find(fams.begin(), fams.end(), "rooms") != fams.end() ? "rooms" : fams.front();
+  std::vector<int> counts = o.quick ? std::vector<int>{2, 8} : std::vector<int>{2, 4, 8, 16, 36};
+  const long f10n = eq_samples.count(f10fam) ? eq_samples[f10fam] : 256;
+  Table f10{"fig10", "paper 002 Figure 10 analogue: time and peak memory against the number of lights (" + f10fam + ")",
+            {"lights", "method", "samples_per_light", "seconds_1t", "seconds_all", "method_peak_kb", "process_peak_mb",
+             "bsp_nodes"}, {}};
+  Chart c10t{"plucker-fig10-time", "Time against the number of lights on " + f10fam, "lights", "time, single thread (s)",
              true, true, {}};
-  Chart c10m{"plucker-fig10-memory", "Peak memory against the number of lights on " + fam, "lights",
-             "peak memory (MiB)", true, false, {}};
+  Chart c10m{"plucker-fig10-memory", "Peak memory of plucker-bsp's trees against the number of lights on " + f10fam,
+             "lights", "peak memory of the trees (KiB)", true, false, {}};
   for (const std::string& m : {P, std::string("embree")}) {
     if ((m == P && !have_p) || (m != P && !have_e)) continue;
     Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
     SweepGuard guard(o.budget);
     for (int k : counts) {
-      FamilyParams q = accuracy_params(o, fam);
-      q.samples = f10_samples;
-      auto s = ctx.scene(fam, q);
+      FamilyParams q = plucker_params(o, f10fam);
+      q.samples = f10n;
+      auto s = ctx.scene(f10fam, q);
       if (!s) return s.error();
-      Status ls = set_light_count(*s, k, f10_samples);
+      Status ls = set_light_count(*s, k, int(f10n));
       if (!ls) return ls.error();
-      auto r = run_method(ctx, m, *s, std::to_string(k) + " lights", &guard, double(k));
+      auto r = run_method(ctx, m, *s, f10fam + " " + std::to_string(k) + " lights " + m, &guard, double(k));
       if (!r) continue;
-      f10.add_row({k, m, m == P ? Json("exact") : Json(f10_samples), r->seconds_1t, r->seconds_all, r->peak_mb});
-      ts.x.push_back(k), ts.y.push_back(r->seconds_1t);
-      ms.x.push_back(k), ms.y.push_back(r->peak_mb);
+      bool pm = m == P;
+      f10.add_row({k, m, pm ? Json("exact") : Json(f10n), r->seconds_1t, r->seconds_all,
+                   pm ? Json(r->stats.get("peak_memory_kb")) : Json(kNaN), r->peak_mb,
+                   pm ? Json(r->stats.get("bsp_nodes")) : Json(kNaN)});
+      ts.x.push_back(k), ts.y.push_back(r->seconds());
+      if (pm) ms.x.push_back(k), ms.y.push_back(r->stats.get("peak_memory_kb"));
     }
     c10t.series.push_back(std::move(ts));
-    c10m.series.push_back(std::move(ms));
+    if (m == P) c10m.series.push_back(std::move(ms));
   }
   ctx.report.charts.push_back(std::move(c10t));
   ctx.report.charts.push_back(std::move(c10m));
 
-  ctx.report.tables.push_back(std::move(f7));
   ctx.report.tables.push_back(std::move(eq));
+  ctx.report.tables.push_back(std::move(f7));
   if (!f8.rows.empty()) ctx.report.tables.push_back(std::move(f8));
   ctx.report.tables.push_back(std::move(f9));
   ctx.report.tables.push_back(std::move(f10));

@@ -256,6 +256,31 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
       rec.kind = "oracle";
       report.mismatches.push_back(rec);
     }
+    // Fragment methods: fractions and fragments against the region and relation oracles.
+    if (solver->reports_fragments() && cfg.region_pairs > 0 && !scene.lights.empty()) {
+      const size_t n = scene.receivers.size(), per = scene.lights.size();
+      const size_t fit = std::max<size_t>(1, cfg.region_pairs / per);
+      const size_t stride = n <= fit ? 1 : (n + fit - 1) / fit;
+      std::vector<size_t> pick;
+      for (size_t i = 0; i < n; i += stride) pick.push_back(i);
+      oracle::Comparison reg = oracle::compare_regions(scene, res, pick, cfg.tau);
+      row.fraction += reg.fraction_mismatches;
+      row.fragment += reg.fragment_mismatches;
+      size_t kept_r = 0;
+      for (const auto& mm : reg.mismatches) {
+        if (++kept_r > kMaxRecords) break;
+        MismatchRecord rec = base_record(m.name, m.options, scene, origin);
+        rec.receiver = mm.receiver;
+        rec.light = mm.light;
+        rec.sample = -1;
+        rec.exact = mm.direction == oracle::Direction::FragmentBlocked ? 'b' : 'v';
+        rec.method_visible = mm.method_visible;
+        rec.margin = mm.margin;
+        rec.direction = oracle::direction_name(mm.direction);
+        rec.kind = "oracle";
+        report.mismatches.push_back(rec);
+      }
+    }
     if (!cfg.metamorphic) continue;
 
     // Metamorphic: scale (every bit unchanged) and exact translation (bits may change only
@@ -517,8 +542,9 @@ std::string format_table(const CheckReport& r) {
   std::string out;
   char buf[512];
   // Decades shown: those below tau (the disagreements that do not fail).
-  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s  %-40s %9s\n", "family", "method", "scenes",
-                "relations", "degen", "mismatch", "f-vis", "f-blk", "meta", "disagreements below tau per decade", "seconds");
+  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s %9s\n", "family", "method",
+                "scenes", "relations", "degen", "mismatch", "f-vis", "f-blk", "frac", "frag", "meta",
+                "disagreements below tau per decade", "seconds");
   out += buf;
   std::string hdr;
   for (size_t d = 0; d < kDecades; ++d) {
@@ -527,8 +553,8 @@ std::string format_table(const CheckReport& r) {
     if (!hdr.empty()) hdr += ' ';
     hdr += decade_label(d);
   }
-  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s  %-40s\n", "", "", "", "", "", "", "", "", "",
-                ("[" + hdr + "]").c_str());
+  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s\n", "", "", "", "", "", "", "",
+                "", "", "", "", ("[" + hdr + "]").c_str());
   out += buf;
   for (const auto& [key, row] : r.rows) {
     std::string dec;
@@ -538,9 +564,10 @@ std::string format_table(const CheckReport& r) {
       if (!dec.empty()) dec += ' ';
       dec += std::to_string(row.disagreements[d]);
     }
-    std::snprintf(buf, sizeof buf, "%-18s %-14s %6zu %10zu %8zu %9zu %6zu %6zu %6zu  %-40s %9.3f\n", key.first.c_str(),
-                  key.second.c_str(), row.scenes, row.relations, row.degenerate, row.mismatches(), row.false_visible,
-                  row.false_blocked, row.metamorphic, ("[" + dec + "]").c_str(), row.seconds);
+    std::snprintf(buf, sizeof buf, "%-18s %-14s %6zu %10zu %8zu %9zu %6zu %6zu %6zu %6zu %6zu  %-40s %9.3f\n",
+                  key.first.c_str(), key.second.c_str(), row.scenes, row.relations, row.degenerate, row.mismatches(),
+                  row.false_visible, row.false_blocked, row.fraction, row.fragment, row.metamorphic,
+                  ("[" + dec + "]").c_str(), row.seconds);
     out += buf;
   }
   std::snprintf(buf, sizeof buf, "total: %zu scenes, %zu mismatches, %zu errors\n", r.scenes.size(), r.mismatch_count(),

@@ -96,6 +96,11 @@ struct CheckConfig {
   double tau = 1e-5;
   int threads = 0;
   bool metamorphic = true;
+  // Fragment methods (plucker-bsp): visible fractions against the region oracle and one
+  // interior point per fragment against the relation oracle (oracle::compare_regions,
+  // DESIGN section 5), on at most this many (receiver, light) pairs per scene: every
+  // receiver when receivers x lights fits, else every k-th receiver. 0: none.
+  size_t region_pairs = 4096;
 };
 
 // Where a scene came from (for records and minimisation provenance).

@@ -1,0 +1,116 @@
+// Exact orientation of float points by expansion arithmetic; see exact_orient.h.
+#include "lib/plucker/exact_orient.h"
+
+#include <cmath>
+#include <vector>
+
+namespace visgate::plucker {
+
+namespace {
+
+using Expansion = std::vector<double>;  // nonoverlapping, increasing magnitude, no zeros
+
+// Two-Sum: a + b = x + y exactly, x = fl(a + b) (Knuth; valid in round-to-nearest).
+inline void two_sum(double a, double b, double& x, double& y) {
+  x = a + b;
+  double bv = x - a;
+  double av = x - bv;
+  y = (a - av) + (b - bv);
+}
+
+// Two-Product: a * b = x + y exactly; the fused multiply-add rounds a * b - x once, and
+// that value is representable.
+inline void two_product(double a, double b, double& x, double& y) {
+  x = a * b;
+  y = std::fma(a, b, -x);
+}
+
+// Grow-Expansion: e += b, keeping e nonoverlapping; zero components are dropped.
+void grow(Expansion& e, double b) {
+  double q = b;
+  size_t out = 0;
+  for (size_t i = 0; i < e.size(); ++i) {
+    double x, y;
+    two_sum(q, e[i], x, y);
+    q = x;
+    if (y != 0.0) e[out++] = y;
+  }
+  e.resize(out);
+  if (q != 0.0) e.push_back(q);
+}
+
+// The exact difference of two points' coordinates k as an expansion: (a.hi + a.lo) -
+// (b.hi + b.lo), four doubles summed exactly.
+Expansion difference(const SumPoint& a, const SumPoint& b, int k) {
+  Expansion e;
+  grow(e, double(a.hi[k]));
+  grow(e, double(a.lo[k]));
+  grow(e, -double(b.hi[k]));
+  grow(e, -double(b.lo[k]));
+  return e;
+}
+
+}  // namespace
+
+ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d) {
+  Expansion u[3], v[3], w[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = difference(b, a, k);
+    v[k] = difference(c, a, k);
+    w[k] = difference(d, a, k);
+  }
+  // det[u, v, w] = sum over the permutations (i, j, k) of sign * u_i v_j w_k, each
+  // product expanded over the components.
+  static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+  Expansion sum;
+  sum.reserve(64);
+  for (int p = 0; p < 6; ++p) {
+    const double sign = p < 3 ? 1.0 : -1.0;
+    const Expansion &ui = u[perm[p][0]], &vj = v[perm[p][1]], &wk = w[perm[p][2]];
+    for (double x0 : ui)
+      for (double y0 : vj) {
+        double x, y;
+        two_product(x0, y0, x, y);
+        for (double z0 : wk) {
+          double t[4];
+          two_product(x, z0, t[0], t[1]);
+          two_product(y, z0, t[2], t[3]);
+          for (double term : t)
+            if (term != 0.0) grow(sum, sign * term);
+        }
+      }
+  }
+  ExactOrient r;
+  if (sum.empty()) return r;
+  // The largest component of a nonoverlapping expansion carries its sign; summing the
+  // components from the smallest rounds the value to within a few ulps (each component
+  // is below an ulp of the next).
+  r.sign = sum.back() > 0.0 ? 1 : -1;
+  for (double x : sum) r.value += x;
+  return r;
+}
+
+ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
+  constexpr double kU = 0x1p-53;
+  Vec3d a = to_double(af);
+  Vec3d u = to_double(bf) - a, v = to_double(cf) - a;
+  Vec3d dd = to_double(d.hi) + d.lo;
+  Vec3d w = dd - a;
+  Vec3d uv = cross(u, v);
+  double val = dot(uv, w);
+  double perm = std::abs(w.x) * (std::abs(u.y * v.z) + std::abs(u.z * v.y)) +
+                std::abs(w.y) * (std::abs(u.z * v.x) + std::abs(u.x * v.z)) +
+                std::abs(w.z) * (std::abs(u.x * v.y) + std::abs(u.y * v.x));
+  // The differences u, v, w are exact or rounded once (relative u each); the rounding
+  // of dd (u |dd|_inf per coordinate) enters through the first-order term.
+  double bound = 2.0 * (7.0 + 56.0 * kU) * kU * perm +
+                 2.0 * (std::abs(uv.x) + std::abs(uv.y) + std::abs(uv.z)) * kU * max_component(vabs(dd));
+  if (std::abs(val) > bound) return ExactOrient{val > 0.0 ? 1 : -1, val};
+  return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
+}
+
+int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
+  return orient3d_exact(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign;
+}
+
+}  // namespace visgate::plucker
