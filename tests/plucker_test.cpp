@@ -1186,3 +1186,54 @@ TEST(PluckerSolver, LongThinLight) {
   }
   EXPECT_EQ(partial, 4);
 }
+
+TEST(PluckerFragment, ClippedCrossingIsInterpolatedFromTheNearEnd) {
+  // fuzz_plucker crash-8f6fea11... (columns with a vertex moved to z = 7e22): clipping a
+  // triangle at the light plane, the crossing on the edge walked from the far vertex was
+  // p_far + (p_near - p_far) t with t rounded to 1: 0.34 below the plane. The crossing is
+  // now interpolated from the end nearer the plane, in either walking direction.
+  const Vec3d near(1.5, 0.0, -0.9), far(1.5, 1.0, 0x1p73);
+  auto h = [](const Vec3d& p) { return 0.1 * p.x - p.z; };  // a tilted plane, h > 0 below it
+  for (int dir = 0; dir < 2; ++dir) {
+    std::vector<Vec3d> tri = {Vec3d(1.5, -1.0, -0.9), dir ? far : near, dir ? near : far};
+    double vals[3] = {h(tri[0]), h(tri[1]), h(tri[2])};
+    std::vector<Vec3d> out;
+    clip_by_values(tri.data(), vals, 3, true, out);
+    ASSERT_EQ(out.size(), 4u) << dir;
+    int crossings = 0;
+    for (const Vec3d& p : out) {
+      if (p == tri[0] || p == near) continue;
+      ++crossings;
+      EXPECT_NEAR(p.z, 0.15, 1e-12) << dir;  // on the plane z = 0.1 x
+      EXPECT_NEAR(p.x, 1.5, 1e-12) << dir;
+    }
+    EXPECT_EQ(crossings, 2) << dir;
+  }
+}
+
+TEST(PluckerSolver, WallReachingThroughATiltedLightFromAFarVertex) {
+  // The scene form of the case above: a wall x = 0.5 from z = 1 up to a vertex 2^73
+  // above, through a tilted light (z = 2 + 0.1 x). Its clipped top edge lay below the
+  // light plane and a wedge of its shadow was reported visible.
+  Scene s;
+  s.name = "wall-to-far-vertex";
+  Light l;
+  l.polygon = {Vec3f(-1, -1, 1.9f), Vec3f(1, -1, 2.1f), Vec3f(1, 1, 2.1f), Vec3f(-1, 1, 1.9f)};
+  l.samples = 16;
+  l.seed = 3;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(0.5f, -1, 1), Vec3f(0.5f, 1, 1), Vec3f(0.5f, 0, 0x1p73f)};
+  s.mesh.triangles = {{0, 1, 2}};
+  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+  s.receivers.push_back({Vec3f(0.2f, 0.3f, 0.5f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      double exact = oracle::visible_region(s, i, 0).visible_fraction;
+      EXPECT_GT(exact, 0.01);
+      EXPECT_LT(exact, 0.99);
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact, 1e-5) << i << " " << coherence;
+    }
+  }
+}
