@@ -234,14 +234,14 @@ void Box2::extend(const Box2& b) {
 }
 
 Box2 shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
-  const Vec3d nd = to_double(lp.n);
-  const double hr = dot(nd, rd);
+  const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
+  const double hr = dot(nd, rd) - lp.h0;
   if (!(std::abs(hr) > 0.0)) return Box2::everything();
   const int fu = lp.frame.u, fv = lp.frame.v;
   double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
   for (size_t k = 0; k < n; ++k) {
     const Vec3d& p = q[k];
-    double hp = dot(nd, p);
+    double hp = dot(nd, p) - lp.h0;
     if (!(hp / hr <= 1.0 - 0x1p-10)) return Box2::everything();
     double t = hr / (hr - hp);
     Vec3d x = rd + (p - rd) * t;
