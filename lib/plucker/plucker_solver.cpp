@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <mutex>
 
@@ -626,6 +627,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<Vec3d> q;
   std::vector<uint8_t> on_level, skip;
   std::vector<uint32_t> exact_done;  // triangles subtracted exactly for this receiver
+  std::vector<uint32_t> cell_start, cell_items, cell_fill;  // the samples' fragment grid
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
@@ -846,14 +848,65 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     const double grow = double(lf.extent) * 0x1p-38;
     const double slack = double(lf.extent) * 0x1p-40;
     for (Box2& b : boxes) b = Box2{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
+    // Many samples and fragments: the fragments bucketed by a G x G grid over their
+    // boxes, so a sample tests only the fragments whose (grown) box overlaps its cell
+    // (measured, columns 4096 receivers at 1024 samples, ~50 fragments per receiver,
+    // CPU: the solve 0.78 s before, 0.69 s after; bits and fractions bit-identical on
+    // columns and foliage). The same test on a subset that contains every fragment whose
+    // box holds the sample: cell indices floor((x - x0) / w), clamped, are monotone in x,
+    // so a point inside a box falls in a cell of the box's cell range.
+    const size_t nf = frags.size();
+    int grid = 0;
+    double gu0 = 0, gv0 = 0, gwu = 0, gwv = 0;
+    if (nf > 8 && light.samples > 32) {
+      Box2 gb;
+      for (const Box2& b : boxes) gb.extend(b);
+      grid = std::clamp(int(std::sqrt(double(nf))), 2, 16);
+      gu0 = gb.ulo, gv0 = gb.vlo;
+      gwu = (gb.uhi - gb.ulo) / grid, gwv = (gb.vhi - gb.vlo) / grid;
+      if (!(gwu > 0.0) || !(gwv > 0.0)) grid = 0;
+    }
+    auto cell = [](double x, double x0, double w, int n) {
+      double c = std::floor((x - x0) / w);
+      return c < 0.0 ? 0 : (c >= double(n - 1) ? n - 1 : int(c));
+    };
+    if (grid > 0) {
+      cell_start.assign(size_t(grid) * size_t(grid) + 1, 0u);
+      for (int pass = 0; pass < 2; ++pass) {
+        for (size_t f = 0; f < nf; ++f) {
+          const Box2& b = boxes[f];
+          int u0 = cell(b.ulo, gu0, gwu, grid), u1 = cell(b.uhi, gu0, gwu, grid);
+          int v0 = cell(b.vlo, gv0, gwv, grid), v1 = cell(b.vhi, gv0, gwv, grid);
+          for (int cv = v0; cv <= v1; ++cv)
+            for (int cu = u0; cu <= u1; ++cu) {
+              size_t c = size_t(cv) * size_t(grid) + size_t(cu);
+              if (pass == 0) ++cell_start[c + 1];
+              else cell_items[cell_fill[c]++] = uint32_t(f);
+            }
+        }
+        if (pass == 0) {
+          for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+          cell_items.resize(cell_start.back());
+          cell_fill.assign(cell_start.begin(), cell_start.end() - 1);
+        }
+      }
+    }
     for (int j = 0; j < light.samples; ++j) {
       size_t k = sample_index(light, j, i);
       bool vis = false;
       if (lf.on_light[k]) {
         const Vec3d& sp = lf.samples[k];
         const double su = sp[lf.frame.u], sv = sp[lf.frame.v];
-        for (size_t f = 0; f < frags.size() && !vis; ++f)
-          vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
+        if (grid > 0) {
+          size_t c = size_t(cell(sv, gv0, gwv, grid)) * size_t(grid) + size_t(cell(su, gu0, gwu, grid));
+          for (uint32_t e = cell_start[c]; e < cell_start[c + 1] && !vis; ++e) {
+            uint32_t f = cell_items[e];
+            vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
+          }
+        } else {
+          for (size_t f = 0; f < nf && !vis; ++f)
+            vis = boxes[f].contains(su, sv) && point_in_fragment(lf.frame, frags.data(f), frags.count(f), sp, slack);
+        }
       } else {
         // Off the light polygon (explicit samples): the segment r -> sample itself.
         vis = !segment_blocked_by_scene(scene, lf.origin, to_local(rec.p, lf.origin), Vec3f(lf.samples[k]));
