@@ -350,6 +350,15 @@ void add_core_experiments(std::vector<Experiment>& out) {
   out.push_back({"complexity", "seconds against receivers, samples and triangles per method, with log-log slopes",
                  run_complexity});
   out.push_back({"iss", "paper 000 Tables 5.2/5.3 analogue: ISS against embree", run_iss});
+  // The target rows of `iss` alone (the tables before them take several minutes), for
+  // measuring the issue-5 targets repeatedly.
+  out.push_back({"iss-target", "the issue-5 target rows of `iss` only: rooms 500k and its doublings, columns",
+                 [](BenchContext& ctx) -> Status {
+                   if (!ctx.has_method("iss", "the iss-target experiment") ||
+                       !ctx.has_method("embree", "the iss-target experiment"))
+                     return Error{"iss-target needs the iss and embree methods"};
+                   return run_iss_target(ctx);
+                 }});
   out.push_back({"ssv", "paper 001 Tables 1, 3, 4 analogue: SSV against embree", run_ssv});
 }
 
