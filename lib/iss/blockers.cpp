@@ -78,16 +78,37 @@ void compact_raw(Surface& s, Workspace& ws) {
 // Clamps the directed edge p0 -> p1 to the slab lo <= x[ax] <= hi (section 4.5): split
 // where it pierces a clip plane, project the outside parts orthogonally onto the plane.
 int clamp_edge(const Vec3d& p0, const Vec3d& p1, int ax, double lo, double hi, Vec3d* out) {
-  double ts[2];
+  double ts[2], cs[2];
   int nt = 0;
   double a0 = p0[ax], a1 = p1[ax];
-  for (double c : {lo, hi}) {
-    if ((a0 < c && a1 > c) || (a0 > c && a1 < c)) ts[nt++] = (c - a0) / (a1 - a0);
+  // The planes in the order the edge meets them: by its direction, not by the rounded
+  // parameters, which tie when both planes are within an ulp of an endpoint (t = 1 for
+  // both): the split points were then emitted lower plane first on a descending edge,
+  // a zig-zag through the slab.
+  double first = a0 <= a1 ? lo : hi, second = a0 <= a1 ? hi : lo;
+  for (double c : {first, second}) {
+    if ((a0 < c && a1 > c) || (a0 > c && a1 < c)) {
+      ts[nt] = (c - a0) / (a1 - a0);
+      cs[nt++] = c;
+    }
   }
-  if (nt == 2 && ts[0] > ts[1]) std::swap(ts[0], ts[1]);
   int n = 0;
   out[n++] = p0;
-  for (int i = 0; i < nt; ++i) out[n++] = p0 + (p1 - p0) * ts[i];
+  for (int i = 0; i < nt; ++i) {
+    // The split point lies on its clip plane by definition, so its main-axis coordinate
+    // is the plane's, not that of p0 + (p1 - p0) t evaluated in double: for t within an
+    // ulp of 1 (a clip plane 1e-33 from an endpoint, relative to the edge's length:
+    // a light node 3e-33 above the receivers' plane) that expression is the endpoint
+    // itself, the clamp below kept it on the far side of the slab, and the clamped
+    // boundary cut diagonally through the slab, which changed its winding number about
+    // the test line: a false-blocked relation (corpus/iss/other, grid-snapped-19532).
+    // The cross coordinates come from the endpoint nearer to the plane, so their error
+    // is a few ulps of that endpoint's distance from it.
+    double c = cs[i];
+    Vec3d x = ts[i] <= 0.5 ? p0 + (p1 - p0) * ts[i] : p1 + (p0 - p1) * ((c - a1) / (a0 - a1));
+    x[ax] = c;
+    out[n++] = x;
+  }
   out[n++] = p1;
   for (int i = 0; i < n; ++i) out[i][ax] = std::min(hi, std::max(lo, out[i][ax]));
   return n;

@@ -129,7 +129,7 @@ Status run_iss_target(BenchContext& ctx) {
           {"scene", "config", "triangles", "lights", "receivers", "samples_per_receiver", "relations_M",
            "iss_seconds_1t", "embree_seconds_1t", "ratio_1t", "iss_time_vs_base", "embree_time_vs_base",
            "decided_by_shafts_pct", "ray_cast_pct", "iss_peak_mb", "iss_reported_peak_mb", "embree_peak_mb",
-           "iss_runs", "embree_runs"}, {}};
+           "iss_runs", "embree_runs", "iss_cpu_1t", "embree_cpu_1t", "cpu_ratio_1t", "iss_cpu_vs_base"}, {}};
   Table st{"target-stats", "every figure the ISS solver reports on the target rows", {"scene", "config", "stat", "value"}, {}};
   struct Row {
     std::string family, config;
@@ -142,7 +142,7 @@ Status run_iss_target(BenchContext& ctx) {
                            {"columns", "paper size", -1, o.quick ? 256 : 4096, o.quick ? 16 : 256}};
   MeasureConfig cfg = ctx.measure_config();
   cfg.all = false;  // the targets are single-threaded
-  double base_iss = kNaN, base_emb = kNaN;
+  double base_iss = kNaN, base_emb = kNaN, base_iss_cpu = kNaN;
   Json cj = Json::array();
   for (const auto& r : rows) {
     if (!is_family(r.family)) continue;
@@ -167,20 +167,27 @@ Status run_iss_target(BenchContext& ctx) {
     if (base) {
       base_iss = mi.seconds_1t;
       base_emb = me.seconds_1t;
+      base_iss_cpu = mi.cpu_1t;
     }
     bool doubled = r.family == "rooms" && !base;
     double vi = doubled ? ratio(mi.seconds_1t, base_iss) : kNaN, ve = doubled ? ratio(me.seconds_1t, base_emb) : kNaN;
     t.add_row({r.family, r.config, s.mesh.size(), s.lights.size(), s.receivers.size(), s.samples_per_receiver(),
                double(s.relation_count()) / 1e6, mi.seconds_1t, me.seconds_1t, ratio(me.seconds_1t, mi.seconds_1t), vi, ve,
                stat_or_nan(mi.stats, {"percent_decided_by_shafts"}), stat_or_nan(mi.stats, {"percent_ray_cast"}),
-               mi.peak_mb, stat_or_nan(mi.stats, {"peak_memory_mb"}), me.peak_mb, mi.runs_1t, me.runs_1t});
+               mi.peak_mb, stat_or_nan(mi.stats, {"peak_memory_mb"}), me.peak_mb, mi.runs_1t, me.runs_1t, mi.cpu_1t,
+               me.cpu_1t, ratio(me.cpu_1t, mi.cpu_1t), doubled ? ratio(mi.cpu_1t, base_iss_cpu) : kNaN});
     add_stat_rows(st, {r.family, r.config}, mi.stats);
-    char b[320];
+    char b[480];
     std::snprintf(b, sizeof b,
-                  "target %s %s: iss %.3f s, embree %.3f s, ratio %.2f; %.2f%% decided by shafts; iss peak %.1f MB%s",
+                  "target %s %s: iss %.3f s, embree %.3f s, ratio %.2f (CPU %.3f s / %.3f s, ratio %.2f); %.2f%% "
+                  "decided by shafts; iss peak %.1f MB%s",
                   r.family.c_str(), r.config.c_str(), mi.seconds_1t, me.seconds_1t, ratio(me.seconds_1t, mi.seconds_1t),
+                  mi.cpu_1t, me.cpu_1t, ratio(me.cpu_1t, mi.cpu_1t),
                   stat_or_nan(mi.stats, {"percent_decided_by_shafts"}), mi.peak_mb,
-                  doubled ? (", iss time x" + fmt_g(std::round(vi * 1000) / 1000) + " the target row's").c_str() : "");
+                  doubled ? (", iss time x" + fmt_g(std::round(vi * 1000) / 1000) + " (CPU x" +
+                             fmt_g(std::round(ratio(mi.cpu_1t, base_iss_cpu) * 1000) / 1000) + ") the target row's")
+                                .c_str()
+                          : "");
     ctx.note(b);
   }
   ctx.report.options["target_rows"] = cj;
@@ -350,6 +357,15 @@ void add_core_experiments(std::vector<Experiment>& out) {
   out.push_back({"complexity", "seconds against receivers, samples and triangles per method, with log-log slopes",
                  run_complexity});
   out.push_back({"iss", "paper 000 Tables 5.2/5.3 analogue: ISS against embree", run_iss});
+  // The target rows of `iss` alone (the tables before them take several minutes), for
+  // measuring the issue-5 targets repeatedly.
+  out.push_back({"iss-target", "the issue-5 target rows of `iss` only: rooms 500k and its doublings, columns",
+                 [](BenchContext& ctx) -> Status {
+                   if (!ctx.has_method("iss", "the iss-target experiment") ||
+                       !ctx.has_method("embree", "the iss-target experiment"))
+                     return Error{"iss-target needs the iss and embree methods"};
+                   return run_iss_target(ctx);
+                 }});
   out.push_back({"ssv", "paper 001 Tables 1, 3, 4 analogue: SSV against embree", run_ssv});
 }
 

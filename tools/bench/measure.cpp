@@ -2,6 +2,9 @@
 #include "tools/bench/measure.h"
 
 #include <cmath>
+#include <ctime>
+
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -44,6 +47,14 @@ const char* peak_memory_mode() {
 double rss_mb() { return status_mb("VmRSS"); }
 double hwm_mb() { return status_mb("VmHWM"); }
 
+namespace {
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+}  // namespace
+
 Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& base, const MeasureConfig& cfg) {
   Measured m;
   int all_threads = cfg.all_threads > 0 ? cfg.all_threads : int(std::max(1u, std::thread::hardware_concurrency()));
@@ -54,8 +65,11 @@ Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& b
       bool reset = reset_peak_memory();
       double before = rss_mb();
       auto t0 = std::chrono::steady_clock::now();
+      double c0 = process_cpu_seconds();
       SolveResult res = solver.solve(scene, so);
+      double cpu = process_cpu_seconds() - c0;
       double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (threads == 1) m.cpu_1t = std::isnan(m.cpu_1t) ? cpu : std::min(m.cpu_1t, cpu);
       double peak = reset ? hwm_mb() - before : hwm_mb();
       m.peak_mb = std::max(m.peak_mb, peak);
       double s = res.seconds > 0 ? res.seconds : wall;

@@ -41,6 +41,11 @@ struct Measured {
   double seconds_1t = std::numeric_limits<double>::quiet_NaN();   // min over runs
   double seconds_all = std::numeric_limits<double>::quiet_NaN();  // min over runs
   int runs_1t = 0, runs_all = 0;
+  // Process CPU seconds of the whole solve() call (CLOCK_PROCESS_CPUTIME_ID; includes
+  // what `seconds` leaves out, e.g. ISS's mesh preparation), min over the single-
+  // threaded runs. On a machine shared with other work, wall time includes the time
+  // slices other processes take; CPU time of a single-threaded run does not.
+  double cpu_1t = std::numeric_limits<double>::quiet_NaN();
   double peak_mb = 0.0;  // max over runs of the run's own peak (see file comment)
   SolveResult result;    // the first run's answer (bits, fractions, fragments)
   Stats stats;           // the first run's stats
