@@ -16,9 +16,11 @@
 // oracle does (ssv_solver.cpp).
 // Beyond the paper, a check ray to a class above the minimum must find it blocked. The
 // reference point is kept clear of every projected piece and in general position, and
-// hits within 2^-18 of either end of its segment are told apart from interior hits
-// (ssv_solver.cpp, "Reference rays"): one ray decides a whole class, so it must never be
-// a near-degenerate relation. A receiver is answered by one ray per sample instead when
+// hits within 2^-18 of either end of its segment are told apart from interior hits; a
+// miss for which lib/raycast's hit verification rejected a candidate (the segment runs
+// within Embree's rounding of a triangle's boundary, such as an interior edge) is not
+// conclusive either (ssv_solver.cpp, "Reference rays"): one ray decides a whole class,
+// so it must never be a near-degenerate relation. A receiver is answered by one ray per sample instead when
 // its integration met an edge through the receiver (doubtful), when no reference among
 // the first 8 clear samples of the minimum class is conclusive (doubtful), or when the
 // check finds a class above the minimum unblocked (inconsistent); all counted in stats.
