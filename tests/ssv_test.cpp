@@ -772,6 +772,53 @@ TEST(SsvDegenerate, ReferenceRayAlongAnInteriorEdgeIsNotConclusive) {
   }
 }
 
+TEST(SsvDegenerate, ReceiverGrazingTheLightPlaneIsAnsweredByRays) {
+  // fuzz_ssv b190d0b6 (double-surface, minimised): the light's plane is z = (10/3) y
+  // (a quad tilted from z = -2 to z = 2), the receiver (-0.5, 2^-98, 0) lies in it up to
+  // a height of 3e-30, so its segments to the samples lie in the light's plane. Each of
+  // the two triangles crosses that plane along a cut segment, and a segment is blocked
+  // iff it crosses a cut segment. The counters, built on a pyramid of height 3e-30 whose
+  // frame heights are rounding noise, put visible and blocked samples in one class
+  // (false-blocked, margins 6e-4 .. 1e-3). Against the exact oracle, both settings.
+  Scene s;
+  s.name = "grazing-receiver";
+  Light l;
+  l.polygon = {Vec3f(-0.6f, -0.6f, -2), Vec3f(-0.6f, 0.6f, 2), Vec3f(0.6f, 0.6f, 2), Vec3f(0.6f, -0.6f, -2)};
+  l.samples = 16;
+  l.jitter = 4;
+  l.seed = 65535;
+  l.pattern = SamplePattern::Stratified;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(0, 0, 0), Vec3f(0, 0.5f, 0), Vec3f(-0.5f, 0, 1), Vec3f(0, 0, 1)};
+  s.mesh.triangles = {{0, 1, 2}, {3, 1, 2}};
+  s.receivers.push_back({Vec3f(-0.5f, 0x1p-98f, 0), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+  ASSERT_NE(ex.classes[0].find('v'), std::string::npos);
+  ASSERT_NE(ex.classes[0].find('b'), std::string::npos);
+  for (bool regions : {true, false}) {
+    SolveResult r = run_ssv(s, regions);
+    EXPECT_EQ(expect_matches_oracle(s, ex, r, regions ? "regions on" : "regions off"), 16u);
+    EXPECT_EQ(r.stats.get("fallback_relations"), 16.0);
+  }
+  // The threshold: a receiver under the light [-1,1]^2 at z = 2 (extent E = 2 sqrt 2)
+  // at (0.25, -0.25) and height h = k 2^-20 E below it: its scale S = E + 0.5 + h lies
+  // between E and 2 E, so it is counted at k = 2 (h > 2^-20 S) and answered by rays at
+  // k = 1/2 (the rounding of z, 1.2e-7, is far from the threshold 3e-6 either way);
+  // visible either way.
+  for (double k : {2.0, 0.5}) {
+    Scene q;
+    q.name = "near-light-plane";
+    q.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 1.0, 16, 3));
+    const float z = float(2.0 - k * 0x1p-20 * 2.0 * std::sqrt(2.0));
+    q.receivers.push_back({Vec3f(0.25f, -0.25f, z), Vec3f(0, 0, 1)});
+    ASSERT_TRUE(finish_scene(q).ok());
+    SolveResult r = run_ssv(q, true);
+    for (int j = 0; j < 16; ++j) EXPECT_TRUE(r.receivers[0].visible(size_t(j))) << "k " << k << " sample " << j;
+    EXPECT_EQ(r.stats.get("fallback_relations"), k > 1.0 ? 0.0 : 16.0) << "k " << k;
+  }
+}
+
 TEST(SsvLightFrame, NearlyCoincidentVerticesAreDropped) {
   // fuzz_ssv 0741b915 / 51dac59d: a light vertex within 1e-17..1e-44 of the next. The
   // frame keeps a triangle (the short edge is gone), stays usable, and every side plane

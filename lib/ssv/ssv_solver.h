@@ -43,8 +43,9 @@
 // within the counter's margin (1e-6 of the light-plane magnitudes) of a projected piece
 // may be miscounted by that piece's weight, and its relation may still be decided far
 // from degeneracy by another triangle: each such sample gets its own ray (stat
-// unclear_relations; 12 of 1M relations on columns). Receivers on
-// or behind the light plane (frame height <= 0), and every receiver of a light whose
+// unclear_relations; 12 of 1M relations on columns). Receivers on,
+// behind or grazing the light plane (frame height at most 2^-20 of their distance
+// scale, where heights are rounding noise: ssv_solver.cpp), and every receiver of a light whose
 // jitter points lie off its plane by more than 1e-5 of its extent or far outside its
 // polygon (light_frame.h), are answered by one Embree ray per relation instead (counted
 // in stats as fallback_relations).
