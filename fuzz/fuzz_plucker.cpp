@@ -10,6 +10,15 @@
 
 #include "fuzz/differential.h"
 
+// ASan records a stack trace for every allocation (malloc_context_size, default 30);
+// the region oracle's Epeck Boolean operations allocate so much that recording them was
+// 18% of the samples (perf, clang-14 -O1 ASan+UBSan, 2026-12-01) and 1000 runs took 20%
+// more CPU time (33.7 s against 30.3 s, -seed=5 -runs=1000). Error detection is
+// unchanged; only the allocation and free stacks of heap-error reports are left out (set
+// ASAN_OPTIONS=malloc_context_size=30 to get them when a report needs them; ASAN_OPTIONS
+// overrides this default).
+extern "C" const char* __asan_default_options() { return "malloc_context_size=0"; }
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   return visgate::fuzz::run_differential("fuzz_plucker", data, size);
 }

@@ -21,6 +21,7 @@
 #include "lib/plucker/triangle_tree.h"
 #include "lib/scene/families.h"
 #include "lib/scene/rng.h"
+#include "lib/scene/scene_json.h"
 #include "lib/scene/shapes.h"
 #include "lib/solver.h"
 
@@ -1185,4 +1186,176 @@ TEST(PluckerSolver, LongThinLight) {
     }
   }
   EXPECT_EQ(partial, 4);
+}
+
+TEST(PluckerFragment, ClippedCrossingIsInterpolatedFromTheNearEnd) {
+  // fuzz_plucker crash-8f6fea11... (columns with a vertex moved to z = 7e22): clipping a
+  // triangle at the light plane, the crossing on the edge walked from the far vertex was
+  // p_far + (p_near - p_far) t with t rounded to 1: 0.34 below the plane. The crossing is
+  // now interpolated from the end nearer the plane, in either walking direction.
+  const Vec3d near(1.5, 0.0, -0.9), far(1.5, 1.0, 0x1p73);
+  auto h = [](const Vec3d& p) { return 0.1 * p.x - p.z; };  // a tilted plane, h > 0 below it
+  for (int dir = 0; dir < 2; ++dir) {
+    std::vector<Vec3d> tri = {Vec3d(1.5, -1.0, -0.9), dir ? far : near, dir ? near : far};
+    double vals[3] = {h(tri[0]), h(tri[1]), h(tri[2])};
+    std::vector<Vec3d> out;
+    clip_by_values(tri.data(), vals, 3, true, out);
+    ASSERT_EQ(out.size(), 4u) << dir;
+    int crossings = 0;
+    for (const Vec3d& p : out) {
+      if (p == tri[0] || p == near) continue;
+      ++crossings;
+      EXPECT_NEAR(p.z, 0.15, 1e-12) << dir;  // on the plane z = 0.1 x
+      EXPECT_NEAR(p.x, 1.5, 1e-12) << dir;
+    }
+    EXPECT_EQ(crossings, 2) << dir;
+  }
+}
+
+TEST(PluckerSolver, WallReachingThroughATiltedLightFromAFarVertex) {
+  // The scene form of the case above: a wall x = 0.5 from z = 1 up to a vertex 2^73
+  // above, through a tilted light (z = 2 + 0.1 x). Its clipped top edge lay below the
+  // light plane and a wedge of its shadow was reported visible.
+  Scene s;
+  s.name = "wall-to-far-vertex";
+  Light l;
+  l.polygon = {Vec3f(-1, -1, 1.9f), Vec3f(1, -1, 2.1f), Vec3f(1, 1, 2.1f), Vec3f(-1, 1, 1.9f)};
+  l.samples = 16;
+  l.seed = 3;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(0.5f, -1, 1), Vec3f(0.5f, 1, 1), Vec3f(0.5f, 0, 0x1p73f)};
+  s.mesh.triangles = {{0, 1, 2}};
+  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
+  s.receivers.push_back({Vec3f(0.2f, 0.3f, 0.5f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      double exact = oracle::visible_region(s, i, 0).visible_fraction;
+      EXPECT_GT(exact, 0.01);
+      EXPECT_LT(exact, 0.99);
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact, 1e-5) << i << " " << coherence;
+    }
+  }
+}
+
+TEST(PluckerGeometry, NewellSideAgreesWithRationalArithmetic) {
+  // newell_side_exact: the sign of N . (m x - sum v_i), N the Newell normal, against GMP
+  // rationals, for non-planar quads (one vertex off by a few ulps or by 2^-72) and
+  // points at, near and far from their plane.
+  Rng rng(11);
+  auto rational_side = [](const std::vector<Vec3f>& P, const Vec3f& x) {
+    mpq_t n[3], d[3], t, acc;
+    for (int k = 0; k < 3; ++k) mpq_init(n[k]), mpq_init(d[k]);
+    mpq_init(t);
+    mpq_init(acc);
+    auto q = [&](mpq_t out, float f) { mpq_set_d(out, double(f)); };
+    const size_t m = P.size();
+    mpq_t a, b;
+    mpq_init(a);
+    mpq_init(b);
+    for (int k = 0; k < 3; ++k) {
+      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      for (size_t i = 0; i < m; ++i) {
+        q(a, P[i][k1]), q(b, P[(i + 1) % m][k2]), mpq_mul(t, a, b), mpq_add(n[k], n[k], t);
+        q(a, P[i][k2]), q(b, P[(i + 1) % m][k1]), mpq_mul(t, a, b), mpq_sub(n[k], n[k], t);
+        q(a, P[i][k]), mpq_sub(d[k], d[k], a);
+      }
+      q(a, x[k]);
+      mpq_set_ui(b, unsigned(m), 1);
+      mpq_mul(t, a, b);
+      mpq_add(d[k], d[k], t);
+      mpq_mul(t, n[k], d[k]);
+      mpq_add(acc, acc, t);
+    }
+    int s = mpq_sgn(acc);
+    for (int k = 0; k < 3; ++k) mpq_clear(n[k]), mpq_clear(d[k]);
+    mpq_clear(t), mpq_clear(acc), mpq_clear(a), mpq_clear(b);
+    return s;
+  };
+  int zero = 0, nonzero = 0;
+  for (int it = 0; it < 400; ++it) {
+    std::vector<Vec3f> P = {Vec3f(-0.5f, -0.5f, 2), Vec3f(-0.5f, 0.5f, 2), Vec3f(5.5e6f, 0.5f, 2), Vec3f(0.5f, -0.5f, 2)};
+    if (it % 2) P[1].z = std::nextafter(2.0f, 0.0f);
+    if (it % 3 == 0) P[3].z = 0x1p-72f;
+    if (it % 5 == 0) P = {Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(1, 1, 1), Vec3f(0, 1, 1)};
+    Vec3f x(float(rng.uniform() * 4 - 2), float(rng.uniform() * 4 - 2), float(rng.uniform() * 4 - 1));
+    if (it % 4 == 0) x.z = P[0].z;
+    if (it % 7 == 0) x.z = std::nextafter(x.z, 10.0f);
+    int want = rational_side(P, x);
+    EXPECT_EQ(newell_side_exact(P.data(), int(P.size()), x), want) << it;
+    (want == 0 ? zero : nonzero)++;
+  }
+  EXPECT_GT(zero, 0);
+  EXPECT_GT(nonzero, 0);
+}
+
+TEST(PluckerSolver, ReceiverBelowALongLightUndecidedInFloat) {
+  // fuzz_plucker crash-61c69374...: a light 5.5e6 long (one vertex replaced) has a float
+  // plane bound above 2 near its base, so receivers 2 below it were "on the light
+  // plane" and shaded by the fallback's sample counts: fraction 1 for a receiver 2^-149
+  // under a horizontal face (exact 0). Their side is now decided exactly against the
+  // oracle's plane of the light.
+  Scene s;
+  s.name = "long-light-receiver-under-a-face";
+  Light l;
+  l.polygon = {Vec3f(-0.5f, -0.5f, 2), Vec3f(-0.5f, 0.5f, 0x1.fffffep+0f), Vec3f(0x1.4fd17ep+22f, 0.5f, 2),
+               Vec3f(0.5f, -0.5f, 2)};
+  l.samples = 16;
+  l.seed = 5;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(0, 0, 0), Vec3f(1.5f, 1.5f, 0), Vec3f(0, 1.5f, 0), Vec3f(0.9f, -0.3f, 1), Vec3f(1.2f, -0.2f, 1),
+                     Vec3f(1.0f, 0.2f, 1.2f)};
+  s.mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+  s.receivers.push_back({Vec3f(0x1.58cbb2p-2f, 0x1.596cc2p+0f, -0x1p-149f), Vec3f(0, 0, 1)});
+  s.receivers.push_back({Vec3f(0.8f, -0.4f, 0.0f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  EXPECT_EQ(oracle::visible_region(s, 0, 0).visible_fraction, 0.0);
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(s, {{"coherence", coherence}});
+    EXPECT_EQ(r.stats.get("fallback_receivers"), 0.0) << coherence;
+    for (size_t i = 0; i < s.receivers.size(); ++i)
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], oracle::visible_region(s, i, 0).visible_fraction, 1e-4)
+          << i << " " << coherence;
+  }
+}
+
+TEST(PluckerSolver, NonPlanarLightIsTheOraclesLiftedPolygon) {
+  // fuzz_plucker crash-d5cc89fd... (a light 0.003 wide whose float vertices lie 0.0015
+  // off its Newell plane) and crash-ac8bb51f... (a light 2.6e5 long, vertices 0.84 off
+  // it, receivers 0.4 to 1.6 from it), both within DESIGN's planarity tolerance of 1e-5
+  // of the extent: the region oracle's light is the polygon lifted onto the Newell plane.
+  // The fragments now start from it and the slab tests use that plane in double (a
+  // blocker between the float and the lifted planes was culled as beyond the light).
+  // The scenes as the fuzz decoder wrote them (hex-float JSON).
+  const char* scenes[] = {R"JSON({"format":"visgate-scene","version":1,"name":"columns-33293",
+"meshes":[{"vertices":[["-0x1.a3a16p+0","0x1.bd2bbcp+0","0x0p+0"],["-0x1.14a032p+1","0x1.63e356p+0","0x0p+0"],["-0x1.14a032p+1","0x1.63e356p+0","0x1.e059f4p+1"],["0x0p+0","0x1.bd2bbcp+0","0x1.e059f4p+1"],["-0x1.414466p+1","0x1.bc88a2p-1","0x0p+0"],["-0x1.414466p+1","0x1.b9e024p-30","0x1.e059f4p+1"],["-0x1.50f172p+1","0x1.02998ap-2","0x0p+0"],["-0x1.50f172p+1","0x1.02998ap-2","0x1.e059f4p+1"],["-0x1.414466p+1","-0x1.73de3p-2","0x0p+0"],["-0x1.414466p+1","-0x1.73de3p-2","0x1.e059f4p+1"],["-0x1.14a032p+1","-0x1.c52d22p-1","0x0p+0"],["-0x1.14a032p+1","-0x1.c52d22p-1","0x1.e059f4p+1"],["-0x1.a3a16p+0","-0x1.3bdef8p+0","0x0p+0"],["-0x1.a3a16p+0","-0x1.3bdef8p+0","0x1.e059f4p+1"],["-0x1.060372p+0","-0x1.5b3912p+0","0x0p+0"],["-0x1.060372p+0","-0x1.5b3912p+0","0x1.e059f4p+1"],["-0x1.a1960ap-2","-0x1.3bdef8p+0","0x0p+0"],["-0x1.a1960ap-2","-0x1.3bdef8p+0","0x1.e059f4p+1"],["0x1.d39828p-4","0x1.c52d22p-1","0x0p+0"],["0x1.d39828p-4","-0x1.c52d22p-1","0x1.e059f4p+1"],["0x1.da07a4p-2","-0x1.73de3p-2","0x0p+0"],["0x1.da07a4p-2","-0x1.73de3p-2","0x1.e059f4p+1"],["0x1.2bb806p-1","0x1.02998ap-2","0x0p+0"],["0x1.2bb806p-1","0x1.02998ap-2","0x1.e059f4p+1"],["0x1.da07a4p-2","0x1.bc88a2p-1","0x1.e059f4p+1"],["0x1.d39828p-4","0x1.63e356p+0","0x1.e059f4p+1"],["0x1.d39828p-4","0x1.63e356p+0","0x0p+0"],["0x1.da07a4p-2","0x1.bc88a2p-1","0x0p+0"],["-0x1.a1960ap-2","0x1.bd2bbcp+0","0x1.e059f4p+1"],["-0x1.a1960ap-2","0x1.bd2bbcp+0","0x0p+0"],["-0x1.060372p+0","0x1.dc85d6p+0","0x1.e059f4p+1"],["-0x1.06036ap+0","0x1.dc85d6p+0","0x0p+0"]],
+"triangles":[[0,1,2],[0,2,3],[1,4,5],[1,5,2],[4,6,7],[4,7,5],[6,8,9],[6,9,7],[8,10,11],[8,11,9],[10,12,13],[10,13,11],[12,14,15],[12,15,13],[14,16,17],[14,17,15],[16,18,19],[16,19,17],[18,20,21],[18,21,19],[20,22,23],[20,23,21],[23,24,25],[22,26,27],[23,25,28],[22,29,26],[23,28,30],[22,31,29],[23,30,3],[22,0,31],[23,3,2],[22,1,0],[23,2,5],[22,4,1],[23,5,7],[22,6,4],[23,7,9],[22,8,6],[23,9,11],[22,10,8],[23,11,13],[22,12,10],[23,13,15],[22,14,12],[23,15,17],[22,16,14],[23,17,19],[22,18,16]]}],
+"lights":[{"polygon":[["-0x1.89374cp-10","-0x1.89374cp-11","0x1.899724p+2"],["-0x1.89374cp-10","0x1.89374cp-11","0x1.899724p+2"],["0x1.89374cp-10","0x1.89374cp-11","-0x1p+13"],["0x1.89374cp-10","-0x1.89374cp-11","0x1.304p-138"]],"samples":4,"pattern":"stratified","jitter":4,"seed":33293}],
+"receivers":[{"p":["-0x1.4p+1","-0x1.4p+1","0x1.0624dep-10"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x1.4p+1","-0x1.4p+1","0x1.0624dep-10"],"n":["0x0p+0","0x1.78p-142","0x1p+0"]},
+{"p":["-0x1.4p+1","0x1.4p+1","0x1.0624dep-10"],"n":["0x0p+0","-0x0p+0","0x1p+0"]},
+{"p":["0x1.4p+1","0x1.4p+1","0x1.0624dep-10"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON",
+                          R"JSON({"format":"visgate-scene","version":1,"name":"far-origin-38750-random-soup",
+"meshes":[{"vertices":[["0x1.fde192p+17","-0x1.3bedc4p+18","-0x1.8ca95p+17"],["0x1.fde1b6p+17","-0x1.3bedcap+18","-0x1.8ca95ep+17"],["0x1.fde18p+17","-0x1.3beda6p+18","-0x1.8ca94ap+17"],["0x1.fde12ep+17","-0x1.3bed3ap+18","-0x1.8ca962p+17"],["0x0p+0","-0x1.3bed4p+18","-0x1.8ca964p+17"],["0x1.fde12cp+17","-0x1.3bed48p+18","-0x1.8ca97p+17"],["0x1.fde19ep+17","-0x1.3bedacp+18","-0x1.8ca9bp+17"],["0x1.fde198p+17","-0x1.3bedaep+18","-0x1.8ca9b4p+17"],["0x1.fde18ep+17","-0x1.3bedb2p+18","-0x1.8ca9c6p+17"],["0x1.fde1a6p+17","-0x1.3bed76p+18","-0x1.8ca99ap+17"],["0x1.fde19p+17","-0x1.3bed78p+18","-0x1.8ca99cp+17"],["0x1.fde194p+17","-0x1.3bed76p+18","-0x1.8ca992p+17"],["0x1.fde1f6p+17","-0x1.3bed4p+18","-0x1.8ca9cp+17"],["0x1.fde1e4p+17","-0x1.3bed44p+18","-0x1.8ca9bcp+17"],["0x1.fde20cp+17","-0x1.3bed54p+18","-0x1.8ca9dp+17"],["0x1.fde1cap+17","-0x1.3bed46p+18","-0x1.8ca9d4p+17"],["0x1.fde1b6p+17","-0x1.3bed5p+18","-0x1.8ca9dcp+17"],["0x1.fde1bcp+17","-0x1.3bed4cp+18","-0x1.8ca9bcp+17"],["0x1.fde1a4p+17","-0x1.3bed56p+18","-0x1.8ca9acp+17"],["0x1.fde1a8p+17","-0x1.3bed52p+18","-0x1.8ca988p+17"],["0x1.fde19p+17","-0x1.3bed4ep+18","-0x1.8ca962p+17"],["0x1.fde112p+17","-0x1.3bed4cp+18","-0x1.8ca968p+17"],["0x1.fde0f8p+17","-0x1.3bed5ap+18","-0x1.8ca924p+17"],["0x1.fde12p+17","-0x1.3bed6cp+18","-0x1.8ca966p+17"],["0x1.fde1e4p+17","-0x1.3bed8cp+18","-0x1.8ca95ep+17"],["0x1.fde1bep+17","-0x1.3bedaap+18","-0x1.8ca932p+17"],["0x1.fde1bcp+17","-0x1.3beda8p+18","-0x1.8ca91ap+17"],["0x1.fde19ap+17","-0x1.3bed6cp+18","-0x1.8ca92cp+17"],["0x1.fde17ap+17","-0x1.3bed72p+18","-0x1.8ca958p+17"],["0x1.fde1acp+17","-0x1.3bed7p+18","-0x1.8ca93ap+17"],["0x1.fde196p+17","-0x1.3bed6cp+18","-0x1.8ca984p+17"],["0x1.fde1a2p+17","-0x1.3bed66p+18","-0x1.8ca984p+17"],["0x1.fde194p+17","-0x1.3bed68p+18","-0x1.8ca94p+17"],["0x1.fde1f2p+17","-0x1.3bed7cp+18","-0x1.8ca94ap+17"],["0x1.fde202p+17","-0x1.3bed74p+18","-0x1.8ca922p+17"],["0x1.fde1e6p+17","-0x1.3bed7p+18","-0x1.8ca94ap+17"],["0x1.fde174p+17","-0x1.3beda2p+18","-0x1.8ca982p+17"],["0x1.fde166p+17","-0x1.3bed9ap+18","-0x1.8ca976p+17"],["0x1.fde17cp+17","-0x1.3bed98p+18","-0x1.8ca992p+17"],["0x1.fde11ap+17","-0x1.3bed94p+18","-0x1.8ca9a8p+17"],["0x1.fde0fcp+17","-0x1.3bed94p+18","-0x1.8ca9b6p+17"],["0x1.fde11cp+17","-0x1.3bed92p+18","-0x1.8ca99p+17"],["0x1.fde1dep+17","-0x1.3bedaep+18","-0x1.8ca952p+17"],["0x1.fde1dep+17","-0x1.3bedc4p+18","-0x1.8ca932p+17"],["0x1.fde218p+17","-0x1.3bedccp+18","-0x1.8ca944p+17"],["0x1.fde172p+17","-0x1.3bed4cp+18","-0x1.8ca9bap+17"],["0x1.fde184p+17","-0x1.3bed44p+18","-0x1.8ca9c4p+17"],["0x1.fde17cp+17","-0x1.3bed4cp+18","-0x1.8ca9dap+17"],["0x1.fde126p+17","-0x1.3bed62p+18","-0x1.8ca9c6p+17"],["0x1.fde12ep+17","-0x1.3bed68p+18","-0x1.8ca9dp+17"],["0x1.fde13p+17","-0x1.3bed6ap+18","-0x1.8ca9d2p+17"],["0x1.fde1fap+17","-0x1.3bedbap+18","-0x1.8ca9b8p+17"],["0x1.fde1dp+17","-0x1.3bedb2p+18","-0x1.8ca9bp+17"],["0x1.fde1e4p+17","-0x1.3beda6p+18","-0x1.8ca99ap+17"]],
+"triangles":[[0,1,2],[3,4,5],[6,7,8],[9,10,11],[12,13,14],[15,16,17],[18,19,20],[21,22,23],[24,25,26],[27,28,29],[30,31,32],[33,34,35],[36,37,38],[39,40,41],[42,43,44],[45,46,47],[48,49,50],[51,52,53]]}],
+"lights":[{"polygon":[["0x1.fde1p+17","-0x1.3bedcp+18","-0x1.8ca9p+17"],["-0x1p-32","-0x1.3bed4p+18","0x1.8ca9p+17"],["0x1.fde2p+17","0x1p+0","-0x1.8ca9p+17"],["0x1.fde2p+17","-0x1.3bedcp+18","-0x1.8ca9p+17"]],"samples":6,"pattern":"stratified","jitter":4,"seed":38750}],
+"receivers":[{"p":["0x1.fde132p+17","-0x1.3beda6p+18","-0x1.8caap+17"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x1.fde1ccp+17","-0x1.3beda6p+18","-0x1.8caap+17"],"n":["0x0p+0","-0x1.8caap+17","0x1p-134"]},
+{"p":["0x1.fde1e6p+17","-0x1.3bed58p+18","-0x1.8caap+17"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x1.fde1ccp+17","-0x1.3bed58p+18","-0x1.8caap+17"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON"};
+  for (const char* text : scenes) {
+    auto s = read_scene_json(text, "fuzz", ".");
+    ASSERT_TRUE(s.ok()) << s.error().message;
+    int partial = 0;
+    for (const char* coherence : {"on", "off"}) {
+      SolveResult r = run(*s, {{"coherence", coherence}});
+      for (size_t i = 0; i < s->receivers.size(); ++i) {
+        double exact = oracle::visible_region(*s, i, 0).visible_fraction;
+        partial += exact > 0.001 && exact < 0.99999;
+        EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact, 1e-4) << s->name << " " << i << " " << coherence;
+      }
+    }
+    EXPECT_GT(partial, 0) << s->name;
+  }
 }

@@ -113,4 +113,35 @@ int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Ve
   return orient3d_exact(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign;
 }
 
+int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x) {
+  // N_k = sum_i (v_i[k1] v_(i+1)[k2] - v_i[k2] v_(i+1)[k1]): products of two floats are
+  // exact in double (48 bits), summed exactly. d_k = m x_k - sum_i v_i[k]: m x_k is exact
+  // (24 + 29 bits), summed exactly. N . d: every product of two components by
+  // Two-Product, summed exactly. Magnitudes stay within double's range for float inputs
+  // (|N_k| < 2^260, |d_k| < 2^160; nonzero terms above 2^-600).
+  Expansion n[3], d[3];
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    for (int i = 0; i < m; ++i) {
+      const Vec3f& a = poly[i];
+      const Vec3f& b = poly[(i + 1) % m];
+      grow(n[k], double(a[k1]) * double(b[k2]));
+      grow(n[k], -double(a[k2]) * double(b[k1]));
+      grow(d[k], -double(a[k]));
+    }
+    grow(d[k], double(m) * double(x[k]));
+  }
+  Expansion sum;
+  for (int k = 0; k < 3; ++k)
+    for (double p : n[k])
+      for (double q : d[k]) {
+        double hi, lo;
+        two_product(p, q, hi, lo);
+        if (hi != 0.0) grow(sum, hi);
+        if (lo != 0.0) grow(sum, lo);
+      }
+  if (sum.empty()) return 0;
+  return sum.back() > 0.0 ? 1 : -1;
+}
+
 }  // namespace visgate::plucker

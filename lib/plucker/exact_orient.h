@@ -51,4 +51,14 @@ ExactOrient orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, co
 // Its sign for plain float points.
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d);
 
+// The exact side of x against the plane the region oracle takes as a light's plane
+// (oracle/region_oracle.h "Exact frame": the Newell normal N = sum v_i x v_(i+1) of the m
+// float vertices, through their exact centroid c): the sign of N . (x - c), computed as
+// the sign of N . (m x - sum v_i), exactly (the same expansions; m x is exact for m <
+// 2^29). For a light that is not exactly planar this is the side the oracle's fraction
+// is defined on; plane tests in float cannot decide it for a receiver within the
+// light's rounding bound (a light 5.5e6 long has a bound above 2 at its base, fuzz_plucker
+// crash-61c69374...).
+int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x);
+
 }  // namespace visgate::plucker

@@ -40,6 +40,25 @@ constexpr double kUd = 0x1p-53;
 // that lie on a plane only to float precision (shared boundaries of earlier splits) were
 // split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
 
+// The point where the edge p0 -> p1 crosses value 0, given the values s0, s1 of an
+// affine function at its ends (opposite signs): interpolated from the end nearer the
+// plane (smaller |s|), p_near + (p_far - p_near) s_near / (s_near - s_far). From the far
+// end, p0 + (p1 - p0) t with t = s0 / (s0 - s1) close to 1 loses everything below u_d of
+// the edge's length: a triangle with a vertex 7e22 away, clipped at the light plane,
+// got its crossing 0.34 below it (t rounded to 1, z = 7e22 - 7e22 = 0), which moved a
+// shadow edge by 6% of the light (fuzz_plucker crash-8f6fea11...). From the near end the
+// error is u_d times the distance to the crossing. The choice depends only on the two
+// ends, not on the direction the edge is walked in (ties broken by the coordinates), so
+// the two polygons sharing an edge get the same point.
+template <class P>
+Vec3d edge_crossing(const P& a, const P& b, double sa, double sb) {
+  const double aa = std::abs(sa), ab = std::abs(sb);
+  bool from_a = aa < ab;
+  if (aa == ab) from_a = a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z <= b.z)));
+  const Vec3d pa(a), pb(b);
+  return from_a ? pa + (pb - pa) * (sa / (sa - sb)) : pb + (pa - pb) * (sb / (sb - sa));
+}
+
 }  // namespace
 
 NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0) {
@@ -119,8 +138,7 @@ SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::v
     if (s0 >= 0.0) pos.push_back(poly[k]);
     if (s0 <= 0.0) neg.push_back(poly[k]);
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
-      double t = s0 / (s0 - s1);
-      Vec3d x = poly[k] + (poly[k1] - poly[k]) * t;
+      Vec3d x = edge_crossing(poly[k], poly[k1], s0, s1);
       pos.push_back(x);
       neg.push_back(x);
     }
@@ -145,9 +163,7 @@ void clip_values_impl(const P* poly, const double* values, int n, bool keep_nonn
       if (on_plane) on_plane->push_back(s0 == 0.0);
     }
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
-      double t = s0 / (s0 - s1);
-      Vec3d p0(poly[k]), p1(poly[k1]);
-      out.push_back(P(p0 + (p1 - p0) * t));
+      out.push_back(P(edge_crossing(poly[k], poly[k1], s0, s1)));
       if (on_plane) on_plane->push_back(1);
     }
   }
@@ -218,14 +234,14 @@ void Box2::extend(const Box2& b) {
 }
 
 Box2 shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
-  const Vec3d nd = to_double(lp.n);
-  const double hr = dot(nd, rd);
+  const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
+  const double hr = dot(nd, rd) - lp.h0;
   if (!(std::abs(hr) > 0.0)) return Box2::everything();
   const int fu = lp.frame.u, fv = lp.frame.v;
   double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
   for (size_t k = 0; k < n; ++k) {
     const Vec3d& p = q[k];
-    double hp = dot(nd, p);
+    double hp = dot(nd, p) - lp.h0;
     if (!(hp / hr <= 1.0 - 0x1p-10)) return Box2::everything();
     double t = hr / (hr - hp);
     Vec3d x = rd + (p - rd) * t;

@@ -106,6 +106,12 @@ struct LightPlane {
   float plane_tol = 0.0f;
   float extent = 0.0f;
   PlaneFrame frame;
+  // The plane in double: nd . x = h0, nd = n in double and h0 = 0 when it passes through
+  // the local origin (a light vertex). A light whose float vertices are not coplanar is
+  // lifted onto its Newell plane: nd is then its unit Newell normal in double and h0
+  // that of the lifted origin vertex (plucker_solver.cpp make_frame). Zero nd: n.
+  Vec3d nd{0, 0, 0};
+  double h0 = 0.0;
 };
 
 // A box holding the shadow of the convex polygon q (n vertices) cast from r onto the

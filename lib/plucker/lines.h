@@ -40,6 +40,7 @@ constexpr float kDetErr = 12.0f * kUnitRoundoff;
 constexpr float kCrossErr = 8.0f * kUnitRoundoff;
 
 inline float norm1(const Vec3f& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); }
+inline double norm1(const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); }
 
 // The normal of the plane through p and the line a -> b, (a - p) x (b - p), computed as
 // the cross product of the two shortest of a - p, b - p and b - a (in exact arithmetic

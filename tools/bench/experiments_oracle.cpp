@@ -245,10 +245,12 @@ Status run_plucker(BenchContext& ctx) {
            {"family", "method", "samples", "seconds_1t", "seconds_all", "penumbra_rms", "rms_all", "max_abs_error"}, {}};
   Table eq{"equal", "equal quality: the smallest N with embree's penumbra RMS <= equal_quality_penumbra_rms",
            {"family", "penumbra_pairs", "embree_samples", "embree_seconds_1t", "embree_seconds_all", "embree_penumbra_rms",
-            "plucker_seconds_1t", "plucker_seconds_all", "plucker_penumbra_rms", "speedup_1t", "speedup_all"}, {}};
+            "plucker_seconds_1t", "plucker_seconds_all", "plucker_penumbra_rms", "speedup_1t", "speedup_all",
+            "embree_cpu_1t", "plucker_cpu_1t", "speedup_cpu_1t"}, {}};
   Table f8{"fig8", "paper 002 Figure 8 analogue: memory, time split and the coherence falloff factor FO (off / on)",
            {"family", "coherence", "seconds_1t", "seconds_all", "method_peak_kb", "process_peak_mb", "bsp_nodes",
-            "developments", "selection_pct", "init_pct", "queries_pct", "falloff_factor_1t", "falloff_factor_all"}, {}};
+            "developments", "selection_pct", "init_pct", "queries_pct", "falloff_factor_1t", "falloff_factor_all",
+            "cpu_1t", "falloff_factor_cpu_1t"}, {}};
   Table st{"stats", "every figure plucker-bsp reports", {"family", "run", "stat", "value"}, {}};
   std::map<std::string, long> eq_samples;  // family -> equal-quality N
 
@@ -289,7 +291,8 @@ Status run_plucker(BenchContext& ctx) {
                     (*m)->peak_mb, ss.get("bsp_nodes"), ss.get("developments"), ss.get("occluder_selection_percent"),
                     ss.get("tree_init_percent"), ss.get("query_percent"),
                     is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_1t, on->seconds_1t)),
-                    is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_all, on->seconds_all))});
+                    is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_all, on->seconds_all)), (*m)->cpu_1t,
+                    is_on || !on ? Json(1.0) : Json(ratio((*m)->cpu_1t, on->cpu_1t))});
       }
     }
 
@@ -324,7 +327,8 @@ Status run_plucker(BenchContext& ctx) {
     }
     if (eqm && on) {
       eq.add_row({fam, pen, eq_n, eqm->seconds_1t, eqm->seconds_all, eq_rms, on->seconds_1t, on->seconds_all, p_rms,
-                  ratio(eqm->seconds_1t, on->seconds_1t), ratio(eqm->seconds_all, on->seconds_all)});
+                  ratio(eqm->seconds_1t, on->seconds_1t), ratio(eqm->seconds_all, on->seconds_all), eqm->cpu_1t,
+                  on->cpu_1t, ratio(eqm->cpu_1t, on->cpu_1t)});
       eq_samples[fam] = eq_n;
     } else if (have_e) {
       ctx.note(fam + ": no embree sample count up to " + std::to_string(ns.back()) + " (within the budget) reached a " +
