@@ -262,6 +262,40 @@ TEST(Raycast, VerifiedScenesRejectRobustModesCoplanarFalseHit) {
   for (int k : {0, 1, 2, 4}) EXPECT_EQ(out[k], verified.occluded(from, fan[k])) << k;
 }
 
+TEST(Raycast, MissesWithARejectedHitAreReportedAsDisputed) {
+  // The coplanar false hit above: the ranged query misses and says its verification
+  // rejected a hit; a clean miss and a hit say nothing.
+  {
+    TriangleSoup soup;
+    soup.vertices = {Vec3f(-0.0f, -0.5f, 1.5f), Vec3f(-0.5f, -1, 1), Vec3f(0, -1, 1)};
+    soup.triangles = {{0, 1, 2}};
+    raycast::EmbreeScene verified(soup, true);
+    bool disputed = false;
+    EXPECT_FALSE(verified.occluded(Vec3f(-2, -0.50000006f, 1.5f), Vec3f(-0.0f, 0, 2), 0.0f, 1.0f, disputed));
+    EXPECT_TRUE(disputed);
+    EXPECT_FALSE(verified.occluded(Vec3f(5, 5, 0), Vec3f(5, 5, 2), 0.0f, 1.0f, disputed));
+    EXPECT_FALSE(disputed);
+    const Vec3f centroid(-1.0f / 6, -2.5f / 3, 3.5f / 3), n(0, -1, 1);
+    EXPECT_TRUE(verified.occluded(centroid - n, centroid + n, 0.0f, 1.0f, disputed));
+    EXPECT_FALSE(disputed);
+  }
+  // fuzz_ssv cfbec7f8 (tests/ssv_test.cpp, ReferenceRayAlongAnInteriorEdgeIsNotConclusive):
+  // a segment 2e-8 from the interior edge 0-1 of a disk, crossing triangle 1 just inside
+  // that edge by the double-precision test. Embree's watertight test gave the crossing
+  // to triangle 0 and the verification rejected it: the verified query missed. Whichever
+  // triangle Embree reports, the query never ends as a miss without a dispute.
+  TriangleSoup disk;
+  disk.vertices = {Vec3f(-0.737304688f, -0.0493164062f, 1.12841797f), Vec3f(-0.647599995f, 0.0830169916f, 1.1089114f),
+                   Vec3f(-1, 0, 1), Vec3f(-0.5f, 0, 1), Vec3f(-0.5f, 0.25f, 1)};
+  disk.triangles = {{0, 1, 2}, {0, 3, 1}, {2, 1, 4}, {1, 3, 4}};
+  const Vec3f r(-1.36551249f, 0.0683776736f, 0.21782279f), q(0.0703040287f, 0.0976455733f, 2);
+  EXPECT_TRUE(raycast::segment_hits_triangle(disk.vertices[0], disk.vertices[3], disk.vertices[1], r, q));
+  raycast::EmbreeScene es(disk, true);
+  bool disputed = false;
+  const bool hit = es.occluded(r, q, 0.0f, 1.0f + 0x1p-18f, disputed);
+  EXPECT_TRUE(hit || disputed);
+}
+
 TEST(Raycast, DoubleTestRejectsPointsBeyondASliver) {
   // corpus/embree-robust/sliver/: a sliver of area 4e-25 in the plane z = 1 (its long
   // edges on the line y = -x) and a segment crossing that plane at (-0.5, 0.5, 1), on

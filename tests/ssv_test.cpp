@@ -701,6 +701,124 @@ TEST(SsvDegenerate, LightPointOnATriangleInTheLightPlaneIsNotTheReference) {
   }
 }
 
+// The minimised fuzz_ssv finding cfbec7f8 (corpus/ssv/other/59df1244...): a four-triangle
+// disk (boundary loop 2 -> 0 -> 3 -> 4, interior vertex 1) between a receiver and a
+// quad light, 8 explicit samples.
+Scene interior_edge_scene() {
+  Scene s;
+  s.name = "interior-edge-reference";
+  Light l;
+  l.polygon = {Vec3f(-0.125f, -0.125f, 2), Vec3f(-0.125f, 0.125f, 2), Vec3f(0.125f, 0.125f, 2), Vec3f(0.09765625f, -0.125f, 2)};
+  l.samples = 8;
+  l.jitter = 1;
+  l.seed = 154;
+  l.pattern = SamplePattern::Explicit;
+  l.explicit_samples = {Vec3f(0.0703125f, 0.09765625f, 2),  Vec3f(-0.1015625f, 0.1171875f, 2),
+                        Vec3f(0.046875f, -0.046875f, 2),    Vec3f(0.0390625f, -0.0625f, 2),
+                        Vec3f(-0.05078125f, 0.046875f, 2),  Vec3f(0.0234375f, 0.08984375f, 2),
+                        Vec3f(0.109375f, 0.05078125f, 2),   Vec3f(0.12109375f, 0.046875f, 2)};
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(-0.737304688f, -0.0493164062f, 1.12841797f), Vec3f(-0.647599995f, 0.0830169916f, 1.1089114f),
+                     Vec3f(-1, 0, 1), Vec3f(-0.5f, 0, 1), Vec3f(-0.5f, 0.25f, 1)};
+  s.mesh.triangles = {{0, 1, 2}, {0, 3, 1}, {2, 1, 4}, {1, 3, 4}};
+  s.receivers.push_back({Vec3f(-1.36551249f, 0.0683776736f, 0.21782279f), Vec3f(0, 0, 1)});
+  EXPECT_TRUE(finish_scene(s).ok());
+  return s;
+}
+
+TEST(SsvDegenerate, ReferenceRayAlongAnInteriorEdgeIsNotConclusive) {
+  // fuzz_ssv cfbec7f8 (shared-edge-fan). Every segment from the receiver r to a sample
+  // is blocked: the disk lies at heights 1 .. 1.13, strictly between r (0.22) and the
+  // light (2), so its central projection from r onto z = 2 is defined, and the
+  // projection of a disk covers every point inside the projection of its boundary loop
+  // when that is a simple polygon (here the convex quadrilateral P2 P0 P3 P4). All 8
+  // samples lie inside it by at least 1e-3, checked below in double. The integration
+  // gives all samples one class (depth 1). Sample 0 projects onto the interior vertex 1
+  // (6e-8 away), and its reference point, offset by a quarter of the clearance in a
+  // direction hashed from (receiver, sample), lies along the projection of the interior
+  // edge 0-1 (2e-8 from it): Embree's watertight test gave the crossing to triangle 0,
+  // the double-precision verification rejected it and confirmed only triangle 1, which
+  // Embree never reported. The verified ray missed, and the whole class was answered
+  // visible (margins 1e-3 .. 1e-2). A miss with a rejected hit is now not conclusive:
+  // the next sample decides.
+  const Scene s = interior_edge_scene();
+  const Vec3d r = to_double(s.receivers[0].p);
+  auto project = [&](const Vec3f& p) {
+    const Vec3d x = to_double(p);
+    const double t = (2.0 - r.z) / (x.z - r.z);
+    return std::array<double, 2>{r.x + (x.x - r.x) * t, r.y + (x.y - r.y) * t};
+  };
+  std::vector<std::array<double, 2>> loop;
+  for (uint32_t v : {2u, 0u, 3u, 4u}) loop.push_back(project(s.mesh.vertices[v]));
+  double area2 = 0.0;
+  for (size_t k = 0; k < 4; ++k)
+    area2 += loop[k][0] * loop[(k + 1) % 4][1] - loop[(k + 1) % 4][0] * loop[k][1];
+  for (int j = 0; j < 8; ++j) {
+    const Vec3f q = sample_position(s.lights[0], j, 0);
+    const std::array<double, 2> x{double(q.x), double(q.y)};
+    for (size_t k = 0; k < 4; ++k) {
+      const auto &a = loop[k], &b = loop[(k + 1) % 4];
+      const double eu = b[0] - a[0], ev = b[1] - a[1];
+      const double inside = (area2 > 0 ? 1.0 : -1.0) * (eu * (x[1] - a[1]) - ev * (x[0] - a[0])) / std::hypot(eu, ev);
+      ASSERT_GT(inside, 1e-3) << "sample " << j << " loop edge " << k;
+    }
+  }
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+  ASSERT_EQ(ex.classes[0], "bbbbbbbb");
+  for (bool regions : {true, false}) {
+    SolveResult res = run_ssv(s, regions);
+    for (int j = 0; j < 8; ++j) EXPECT_FALSE(res.receivers[0].visible(size_t(j))) << "sample " << j << (regions ? " regions on" : " regions off");
+    EXPECT_EQ(res.stats.get("fallback_relations"), 0.0) << "decided by the next reference, not by rays";
+  }
+}
+
+TEST(SsvDegenerate, ReceiverGrazingTheLightPlaneIsAnsweredByRays) {
+  // fuzz_ssv b190d0b6 (double-surface, minimised): the light's plane is z = (10/3) y
+  // (a quad tilted from z = -2 to z = 2), the receiver (-0.5, 2^-98, 0) lies in it up to
+  // a height of 3e-30, so its segments to the samples lie in the light's plane. Each of
+  // the two triangles crosses that plane along a cut segment, and a segment is blocked
+  // iff it crosses a cut segment. The counters, built on a pyramid of height 3e-30 whose
+  // frame heights are rounding noise, put visible and blocked samples in one class
+  // (false-blocked, margins 6e-4 .. 1e-3). Against the exact oracle, both settings.
+  Scene s;
+  s.name = "grazing-receiver";
+  Light l;
+  l.polygon = {Vec3f(-0.6f, -0.6f, -2), Vec3f(-0.6f, 0.6f, 2), Vec3f(0.6f, 0.6f, 2), Vec3f(0.6f, -0.6f, -2)};
+  l.samples = 16;
+  l.jitter = 4;
+  l.seed = 65535;
+  l.pattern = SamplePattern::Stratified;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(0, 0, 0), Vec3f(0, 0.5f, 0), Vec3f(-0.5f, 0, 1), Vec3f(0, 0, 1)};
+  s.mesh.triangles = {{0, 1, 2}, {3, 1, 2}};
+  s.receivers.push_back({Vec3f(-0.5f, 0x1p-98f, 0), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+  ASSERT_NE(ex.classes[0].find('v'), std::string::npos);
+  ASSERT_NE(ex.classes[0].find('b'), std::string::npos);
+  for (bool regions : {true, false}) {
+    SolveResult r = run_ssv(s, regions);
+    EXPECT_EQ(expect_matches_oracle(s, ex, r, regions ? "regions on" : "regions off"), 16u);
+    EXPECT_EQ(r.stats.get("fallback_relations"), 16.0);
+  }
+  // The threshold: a receiver under the light [-1,1]^2 at z = 2 (extent E = 2 sqrt 2)
+  // at (0.25, -0.25) and height h = k 2^-20 E below it: its scale S = E + 0.5 + h lies
+  // between E and 2 E, so it is counted at k = 2 (h > 2^-20 S) and answered by rays at
+  // k = 1/2 (the rounding of z, 1.2e-7, is far from the threshold 3e-6 either way);
+  // visible either way.
+  for (double k : {2.0, 0.5}) {
+    Scene q;
+    q.name = "near-light-plane";
+    q.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 1.0, 16, 3));
+    const float z = float(2.0 - k * 0x1p-20 * 2.0 * std::sqrt(2.0));
+    q.receivers.push_back({Vec3f(0.25f, -0.25f, z), Vec3f(0, 0, 1)});
+    ASSERT_TRUE(finish_scene(q).ok());
+    SolveResult r = run_ssv(q, true);
+    for (int j = 0; j < 16; ++j) EXPECT_TRUE(r.receivers[0].visible(size_t(j))) << "k " << k << " sample " << j;
+    EXPECT_EQ(r.stats.get("fallback_relations"), k > 1.0 ? 0.0 : 16.0) << "k " << k;
+  }
+}
+
 TEST(SsvLightFrame, NearlyCoincidentVerticesAreDropped) {
   // fuzz_ssv 0741b915 / 51dac59d: a light vertex within 1e-17..1e-44 of the next. The
   // frame keeps a triangle (the short edge is gone), stays usable, and every side plane

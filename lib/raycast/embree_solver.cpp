@@ -200,7 +200,21 @@ bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to, float tnear, floa
   return occluded_embree(from, to, tnear, tfar, true);
 }
 
-bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged) const {
+bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool& disputed) const {
+  VG_CHECK(tnear >= 0.0f && tnear <= tfar);
+  disputed = false;
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to, tnear, tfar);
+  }
+  size_t rejected = 0;
+  const bool hit = occluded_embree(from, to, tnear, tfar, true, &rejected);
+  disputed = rejected > 0;
+  return hit;
+}
+
+bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged,
+                                  size_t* rejected) const {
   VerifyContext vc;
   rtcInitIntersectContext(&vc.base);
   vc.from = from;
@@ -225,6 +239,7 @@ bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnea
   ray.flags = 0;
   rtcOccluded1(static_cast<RTCScene>(scene_), &vc.base, &ray);
   if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
+  if (rejected) *rejected = vc.rejected;
   return ray.tfar == -std::numeric_limits<float>::infinity();
 }
 

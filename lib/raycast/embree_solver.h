@@ -92,6 +92,15 @@ class EmbreeScene {
   // ray range: 0 <= tnear <= tfar, tfar may exceed 1), for methods that must tell hits
   // near an endpoint from hits inside the segment (SSV's reference ray).
   bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const;
+  // The same, also telling whether the verification rejected a candidate hit of this
+  // query (`disputed`; always false without verification and for the fallback). A miss
+  // with a dispute is not watertight: the segment passes within Embree's rounding of the
+  // rejected triangle's boundary, and where that boundary is an edge shared with a
+  // neighbour, Embree's watertight test may give the crossing to the rejected triangle
+  // while the double-precision test gives it to the neighbour, which Embree never
+  // reported (fuzz_ssv cfbec7f8: a segment along an interior edge of a fan). Callers that
+  // let one ray stand for other relations must not trust such a miss.
+  bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool& disputed) const;
 
   // occluded(from, to[k]) for k < n (n <= 16), traced as one Embree packet
   // (rtcOccluded16, rays set up exactly as occluded() does, inactive lanes masked):
@@ -108,7 +117,8 @@ class EmbreeScene {
 
  private:
   // ranged: the filter confirms with the ranged test, else with segment_hits_triangle.
-  bool occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged) const;
+  bool occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged,
+                       size_t* rejected = nullptr) const;
 
   const TriangleSoup* soup_;
   bool verify_;

@@ -16,9 +16,11 @@
 // oracle does (ssv_solver.cpp).
 // Beyond the paper, a check ray to a class above the minimum must find it blocked. The
 // reference point is kept clear of every projected piece and in general position, and
-// hits within 2^-18 of either end of its segment are told apart from interior hits
-// (ssv_solver.cpp, "Reference rays"): one ray decides a whole class, so it must never be
-// a near-degenerate relation. A receiver is answered by one ray per sample instead when
+// hits within 2^-18 of either end of its segment are told apart from interior hits; a
+// miss for which lib/raycast's hit verification rejected a candidate (the segment runs
+// within Embree's rounding of a triangle's boundary, such as an interior edge) is not
+// conclusive either (ssv_solver.cpp, "Reference rays"): one ray decides a whole class,
+// so it must never be a near-degenerate relation. A receiver is answered by one ray per sample instead when
 // its integration met an edge through the receiver (doubtful), when no reference among
 // the first 8 clear samples of the minimum class is conclusive (doubtful), or when the
 // check finds a class above the minimum unblocked (inconsistent); all counted in stats.
@@ -41,8 +43,9 @@
 // within the counter's margin (1e-6 of the light-plane magnitudes) of a projected piece
 // may be miscounted by that piece's weight, and its relation may still be decided far
 // from degeneracy by another triangle: each such sample gets its own ray (stat
-// unclear_relations; 12 of 1M relations on columns). Receivers on
-// or behind the light plane (frame height <= 0), and every receiver of a light whose
+// unclear_relations; 12 of 1M relations on columns). Receivers on,
+// behind or grazing the light plane (frame height at most 2^-20 of their distance
+// scale, where heights are rounding noise: ssv_solver.cpp), and every receiver of a light whose
 // jitter points lie off its plane by more than 1e-5 of its extent or far outside its
 // polygon (light_frame.h), are answered by one Embree ray per relation instead (counted
 // in stats as fallback_relations).
