@@ -279,9 +279,13 @@ std::string prescan_obj(std::istream& in) {
     } else if (kw == "f") {
       // Face references `v`, `v/vt`, `v//vn` or `v/vt/vn`, each an integer: OpenMesh 9's
       // OBJ reader asserts (`!vhandles.empty()`, OBJReader.cc:633) on a reference with an
-      // empty vertex part such as `/1`.
+      // empty vertex part such as `/1`, when that leaves the face without a vertex: it
+      // reads every token of the line (a `#` does not end it) and skips those whose
+      // vertex part is not a number. So a face needs a valid reference before any `#`
+      // (`f   #4 /1(f0` asserted; `f #4 1 2 3` reads a triangle but is refused here too).
       ++faces;
-      for (std::string t; ss >> t;) {
+      size_t refs = 0;
+      for (std::string t; ss >> t; ++refs) {
         if (t[0] == '#') break;
         size_t part = 0, start = 0;
         bool ok = true;
@@ -299,6 +303,7 @@ std::string prescan_obj(std::istream& in) {
           return "line " + std::to_string(lineno) + ": face " + std::to_string(faces - 1) + ": bad vertex reference '" +
                  t.substr(0, 32) + "'";
       }
+      if (refs == 0) return "line " + std::to_string(lineno) + ": face " + std::to_string(faces - 1) + ": no vertex references";
     }
   }
   return {};
