@@ -644,8 +644,13 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // by the exact path alone: every candidate triangle of the group subtracted exactly
     // (subtract_triangle_exact), no tree and no near polygons.
     const double hr = double(sigma) * (dot(nd, r) - lf.h0);
+    // Far receivers too (fuzz_plucker c02d4e53...: r = (0, 5e22, 7.8e26) above a unit
+    // light, a pouch between): every double quantity through r (r + t (v - r), planes
+    // through r) carries an absolute rounding of about 2^-53 |r - origin|, which stays
+    // below 2^-33 of the light's extent, far under the fraction tolerance, only while r
+    // is within 2^20 extents of the light. Beyond that the exact path answers.
     const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
-    const bool extreme = !(far <= 0x1p20 * hr);
+    const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * double(lf.extent));
     if (extreme) {
       ++tot.exact_receivers;
       frags.clear();
