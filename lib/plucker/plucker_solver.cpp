@@ -648,9 +648,13 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // light, a pouch between): every double quantity through r (r + t (v - r), planes
     // through r) carries an absolute rounding of about 2^-53 |r - origin|, which stays
     // below 2^-33 of the light's extent, far under the fraction tolerance, only while r
-    // is within 2^20 extents of the light. Beyond that the exact path answers.
+    // is within 2^20 extents of the light. Beyond that the exact path answers. The
+    // extent that counts is the light's width (area over its longest side) when that
+    // is smaller: a sliver light 5.4e8 long and 6e-4 wide seen from 1.07e8 below
+    // (fuzz_plucker e49b6000...) was answered fully visible, exactly hidden.
     const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
-    const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * double(lf.extent));
+    const double width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
+    const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * width);
     if (extreme) {
       ++tot.exact_receivers;
       frags.clear();
