@@ -631,6 +631,21 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
+  // The light's width for the far-receiver bound below: its longest side, or its area over
+  // that side when that is smaller.
+  const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
+  // Subtracts triangle t exactly from frags (boxes follow); false, subtracting nothing,
+  // when rec lies in its plane.
+  auto subtract_exact = [&](uint32_t t, const Receiver& rec) {
+    const Vec3f wtri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
+    const int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
+    if (side_exact == 0) return false;
+    ++tot.exact_triangles;
+    subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
+    std::swap(frags, tmp);
+    std::swap(boxes, tmp_boxes);
+    return true;
+  };
   for (size_t gk = 0; gk < group.size(); ++gk) {
     const uint32_t i = group[gk];
     const Receiver& rec = scene.receivers[i];
@@ -653,8 +668,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // is smaller: a sliver light 5.4e8 long and 6e-4 wide seen from 1.07e8 below
     // (fuzz_plucker e49b6000...) was answered fully visible, exactly hidden.
     const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
-    const double width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
-    const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * width);
+    const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * light_width);
     if (extreme) {
       ++tot.exact_receivers;
       frags.clear();
@@ -662,13 +676,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       boxes.assign(1, Box2::of(lf.frame, lf.poly.data(), int(lf.poly.size())));
       for (uint32_t t : cand) {
         if (frags.size() == 0) break;
-        const Vec3f wtri[3] = {scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)};
-        int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
-        if (side_exact == 0) continue;
-        ++tot.exact_triangles;
-        subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
-        std::swap(frags, tmp);
-        std::swap(boxes, tmp_boxes);
+        subtract_exact(t, rec);
       }
     } else {
       // A light the tree hides as a whole from r needs nothing else (LazyBsp::hides_all:
@@ -763,14 +771,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         if (side_r == 0) {
           if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
           exact_done.push_back(np.triangle);
-          const Vec3f wtri[3] = {scene.mesh.corner(np.triangle, 0), scene.mesh.corner(np.triangle, 1),
-                                 scene.mesh.corner(np.triangle, 2)};
-          int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
-          if (side_exact == 0) continue;
-          ++tot.exact_triangles;
-          subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
-          std::swap(frags, tmp);
-          std::swap(boxes, tmp_boxes);
+          if (!subtract_exact(np.triangle, rec)) continue;
           all = Box2{};
           for (const Box2& b : boxes) all.extend(b);
           continue;
