@@ -1359,3 +1359,37 @@ TEST(PluckerSolver, NonPlanarLightIsTheOraclesLiftedPolygon) {
     EXPECT_GT(partial, 0) << s->name;
   }
 }
+
+TEST(PluckerSolver, OccluderEdgeUndecidedInFloatIsShadedExactly) {
+  // fuzz_plucker 944ae82f... minimised (one triangle of 45): a far-origin scene at
+  // (-4.6e5, -4.1e5, -1.5e5) whose triangle reaches 2^78 away at the receiver's own
+  // level. Clipped at the receivers' level far out, it left a tree occluder edge 2^78
+  // away whose plane through the receiver float could not orient (on_line); the walk took
+  // that as "outside the edge" and returned the triangle's shadow band visible: fraction
+  // 1 against the exact 0.955. Such a receiver is now shaded again by the exact path.
+  Scene s;
+  s.name = "far-origin-edge-undecided";
+  Light l;
+  l.polygon = {Vec3f(-0x1.c18d0cp+18f, -0x1.91bdd4p+18f, -0x1.1ce7p+17f),
+               Vec3f(-0x1.c18d0cp+18f, -0x1.91bd94p+18f, -0x1.1ce7p+17f),
+               Vec3f(-0x1.c18c98p+18f, -0x1.91bd94p+18f, -0x1.1ce7p+17f),
+               Vec3f(-0x1.c18cccp+18f, -0x1.91bdd4p+18f, -0x1.1ce7p+17f)};
+  l.samples = 4;
+  l.seed = 57701;
+  s.lights.push_back(l);
+  s.mesh.vertices = {Vec3f(0x1.fffffep+78f, 0x1.fffffep+78f, -0x1.1ce88p+17f),
+                     Vec3f(-0x1.c18d02p+18f, -0x1.91bdbcp+18f, -0x1.1ce80cp+17f),
+                     Vec3f(-0x1.c18dp+18f, -0x1.91bdbcp+18f, -0x1.1ce80cp+17f)};
+  s.mesh.triangles = {{0, 1, 2}};
+  s.receivers.push_back({Vec3f(-0x1.c18cdp+18f, -0x1.91bd9p+18f, -0x1.1ce88p+17f), Vec3f(0, -0x1.91bdfp+18f, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  const double exact = oracle::visible_region(s, 0, 0).visible_fraction;
+  EXPECT_GT(exact, 0.95);
+  EXPECT_LT(exact, 0.96);
+  for (const char* choice : {"random", "relevant"})
+    for (const char* coherence : {"on", "off"}) {
+      SolveResult r = run(s, {{"choice", choice}, {"coherence", coherence}, {"tile", "5"}});
+      EXPECT_NEAR(r.receivers[0].visible_fraction[0], exact, 1e-4) << choice << " " << coherence;
+      EXPECT_GE(r.stats.get("undecided_receivers") + r.stats.get("exact_receivers"), 1.0) << choice << " " << coherence;
+    }
+}

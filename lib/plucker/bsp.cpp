@@ -188,6 +188,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
   (void)r;  // the edge planes are those of the current query point (begin_query)
   for (int m = 0; m < o.n; ++m) {
     SplitResult s = classify_fragment(edge_plane(id, m), f, n);
+    if (s == SplitResult::OnLine) ++counters_.on_line;  // undecided: the solver re-shades r exactly
     bool nonpos = s == SplitResult::Negative || s == SplitResult::OnLine;
     bool nonneg = s == SplitResult::Positive || s == SplitResult::OnLine;
     if (nonpos && !o.two_sided) return Occlusion::Miss;
@@ -214,8 +215,12 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     if (nd.kind == kInner) {
       SplitResult s = classify_fragment(edge_plane(nd.occ, nd.edge), f, n);
       if (s == SplitResult::Positive) node = nd.left;
-      else if (s == SplitResult::Negative || s == SplitResult::OnLine) node = nd.right;
-      else return false;
+      else if (s == SplitResult::Negative) node = nd.right;
+      else {
+        // Undecided (on_line, counted: the solver then re-shades r exactly) or split.
+        if (s == SplitResult::OnLine) ++counters_.on_line;
+        return false;
+      }
       continue;
     }
     if (nd.occ_count == 0 || choice_ == Choice::Random) return false;

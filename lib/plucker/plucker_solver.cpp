@@ -237,7 +237,7 @@ int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
 struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
-  uint64_t exact_triangles = 0, exact_receivers = 0, unreported_slivers = 0;
+  uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -247,6 +247,7 @@ struct Totals {
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
     exact_triangles += o.exact_triangles;
     exact_receivers += o.exact_receivers;
+    undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
     bsp_nodes_max = std::max(bsp_nodes_max, o.bsp_nodes_max);
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
@@ -321,6 +322,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     for (int m = 0; m < nq && !misses; ++m) {
       if (skip[m]) continue;
       SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
+      if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
       misses = s == SplitResult::Negative || s == SplitResult::OnLine;
     }
     if (misses) {
@@ -669,7 +671,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // (fuzz_plucker e49b6000...) was answered fully visible, exactly hidden.
     const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
     const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * light_width);
-    if (extreme) {
+    auto shade_exact = [&]() {
       ++tot.exact_receivers;
       frags.clear();
       frags.add(lf.poly.data(), lf.poly.size());
@@ -678,6 +680,12 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         if (frags.size() == 0) break;
         subtract_exact(t, rec);
       }
+    };
+    // Plane tests this receiver's float path could not decide (on_line: r within rounding
+    // of the line of an occluder's or near polygon's edge) before and after it.
+    const uint64_t undecided0 = bsp.counters().on_line + near_counters.on_line;
+    if (extreme) {
+      shade_exact();
     } else {
       // A light the tree hides as a whole from r needs nothing else (LazyBsp::hides_all:
       // a walk without splits). Otherwise the near polygons first, subtracted from the
@@ -811,6 +819,19 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         std::swap(frags, tmp);
       }
       tot.bsp_query_s += seconds_since(tb);
+      // An undecided plane was taken as "outside that edge" (bsp.cpp, subtract_polygon):
+      // right when r is exactly on the edge's line (the line lies in the triangle's
+      // plane, so r does too and the triangle is edge-on to it, hiding nothing), but a
+      // guess within rounding of it. fuzz_plucker 944ae82f...: a triangle reaching 2^78
+      // from a light 3 units wide, clipped at the receivers' level far out, left an
+      // occluder edge 2^78 away whose plane through r float could not orient; the
+      // fragment it shadows was returned visible (fraction 1.0 against 0.955). Such a
+      // receiver is shaded again by the exact path (rare: for tree occluders the group's
+      // receivers are strictly on one side of the plane, so only rounding gets here).
+      if (bsp.counters().on_line + near_counters.on_line != undecided0) {
+        ++tot.undecided_receivers;
+        shade_exact();
+      }
     }
     boxes.clear();
     for (size_t f = 0; f < frags.size(); ++f) boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
@@ -1084,6 +1105,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("segment_relations", double(totals.segment_relations));
   st.set("exact_triangles", double(totals.exact_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
+  st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
