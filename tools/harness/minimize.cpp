@@ -6,6 +6,8 @@
 #include <functional>
 #include <numeric>
 
+#include "oracle/comparator.h"
+
 namespace visgate::harness {
 
 namespace {
@@ -79,6 +81,92 @@ Result<Scene> isolate_relation(const Scene& src, size_t receiver, size_t light, 
   s.lights.push_back(std::move(l));
   s.receivers.push_back(src.receivers[receiver]);
   return s;
+}
+
+Result<Scene> light_lattice_scene(const Scene& src, size_t receiver, size_t light, int grid) {
+  if (receiver >= src.receivers.size() || light >= src.lights.size())
+    return Error{src.name + ": pair (" + std::to_string(receiver) + ", " + std::to_string(light) + ") out of range"};
+  if (grid < 1 || grid > 1024) return Error{"lattice size " + std::to_string(grid) + ": expected 1..1024"};
+  const Light& L = src.lights[light];
+  const size_t m = L.polygon.size();
+  // Newell normal and the dropped axis (coordinates relative to the first vertex, so a
+  // light far from the origin keeps its precision).
+  const Vec3d o = to_double(L.polygon[0]);
+  std::vector<Vec3d> p(m);
+  for (size_t i = 0; i < m; ++i) p[i] = to_double(L.polygon[i]) - o;
+  Vec3d n(0, 0, 0);
+  for (size_t i = 0; i < m; ++i) {
+    const Vec3d& a = p[i];
+    const Vec3d& b = p[(i + 1) % m];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  int k = 0;
+  for (int j = 1; j < 3; ++j)
+    if (std::abs(n[j]) > std::abs(n[k])) k = j;
+  if (!(std::abs(n[k]) > 0.0)) return Error{src.name + ": lights[" + std::to_string(light) + "]: zero area"};
+  const int i1 = (k + 1) % 3, i2 = (k + 2) % 3;
+  double lo1 = p[0][i1], hi1 = lo1, lo2 = p[0][i2], hi2 = lo2;
+  for (const Vec3d& q : p) {
+    lo1 = std::min(lo1, q[i1]), hi1 = std::max(hi1, q[i1]);
+    lo2 = std::min(lo2, q[i2]), hi2 = std::max(hi2, q[i2]);
+  }
+  // Orientation of the projected polygon, for the strictly-inside test.
+  const double orient = n[k] > 0 ? 1.0 : -1.0;
+  std::vector<Vec3f> pts;
+  for (int a = 0; a < grid; ++a)
+    for (int b = 0; b < grid; ++b) {
+      const double u = lo1 + (hi1 - lo1) * (a + 0.5) / grid, v = lo2 + (hi2 - lo2) * (b + 0.5) / grid;
+      bool inside = true;
+      for (size_t i = 0; i < m && inside; ++i) {
+        const Vec3d& e0 = p[i];
+        const Vec3d& e1 = p[(i + 1) % m];
+        const double c = (e1[i1] - e0[i1]) * (v - e0[i2]) - (e1[i2] - e0[i2]) * (u - e0[i1]);
+        inside = orient * c > 0.0;
+      }
+      if (!inside) continue;
+      Vec3d x;
+      x[i1] = u;
+      x[i2] = v;
+      x[k] = -(n[i1] * u + n[i2] * v) / n[k];  // on the plane through the first vertex
+      pts.push_back(Vec3f(x + o));
+    }
+  if (pts.empty()) return Error{src.name + ": lights[" + std::to_string(light) + "]: no lattice point inside"};
+  Scene s;
+  s.name = src.name;
+  s.mesh = src.mesh;
+  Light l;
+  l.polygon = L.polygon;
+  l.samples = int(pts.size());
+  l.jitter = 1;
+  l.seed = L.seed;
+  l.pattern = SamplePattern::Explicit;
+  l.explicit_samples = std::move(pts);
+  Status st = prepare_light(l, s.name + ": lights[0]");
+  if (!st) return st.error();
+  s.lights.push_back(std::move(l));
+  s.receivers.push_back(src.receivers[receiver]);
+  return s;
+}
+
+std::optional<FractionWitness> find_fraction_witness(const Scene& scene, Solver& solver, const SolveOptions& options,
+                                                     size_t receiver, size_t light, double tau, int grid) {
+  auto w = light_lattice_scene(scene, receiver, light, grid);
+  if (!w) return std::nullopt;
+  SolveResult res = solver.solve(*w, options);
+  oracle::RelationOracleResult exact = oracle::run_relation_oracle(*w, 1);
+  oracle::Comparison cmp = oracle::compare_relations(*w, res, exact, tau);
+  for (const auto& mm : cmp.mismatches)
+    if (mm.direction == oracle::Direction::FalseVisible || mm.direction == oracle::Direction::FalseBlocked) {
+      FractionWitness f;
+      f.sample = mm.sample;
+      f.margin = mm.margin;
+      f.direction = oracle::direction_name(mm.direction);
+      f.scene = std::move(*w);
+      return f;
+    }
+  return std::nullopt;
 }
 
 Result<RelationVerdict> judge_relation(const Scene& scene, const CaseSpec& spec) {

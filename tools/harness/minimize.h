@@ -14,6 +14,7 @@
 // is oracle::classify_segment.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "lib/solver.h"
@@ -55,5 +56,28 @@ Result<MinimizeResult> minimize_case(const Scene& scene, const CaseSpec& spec);
 
 // Step 1 alone: the isolated one-receiver, one-sample scene of a relation.
 Result<Scene> isolate_relation(const Scene& scene, size_t receiver, size_t light, long sample);
+
+// Fraction mismatches of fragment methods (DESIGN section 5: a visible fraction off by
+// more than 1e-4 of the light area) are turned into relation mismatches, which the
+// corpus stores: a fraction that far off means the method's fragments are wrong over at
+// least that share of the light, so some light point is answered wrongly (the per-sample
+// bits of a fragment method come from its fragments). The witness scene is relation
+// (receiver, light) alone with the light's samples replaced by explicit points of a
+// grid x grid lattice over the light's bounding rectangle in its plane (cell centres
+// strictly inside the polygon, lifted onto the plane of the first vertex and the Newell
+// normal in double, rounded to float).
+Result<Scene> light_lattice_scene(const Scene& scene, size_t receiver, size_t light, int grid);
+
+struct FractionWitness {
+  Scene scene;       // light_lattice_scene of the pair
+  long sample = 0;   // the first lattice point the method answers wrongly (margin >= tau)
+  double margin = 0.0;
+  std::string direction;  // false-visible or false-blocked
+};
+// The method on the lattice scene against the relation oracle; nullopt when every lattice
+// point is answered correctly (a fraction error on a sliver thinner than the lattice, or a
+// fraction computed otherwise than from the fragments).
+std::optional<FractionWitness> find_fraction_witness(const Scene& scene, Solver& solver, const SolveOptions& options,
+                                                     size_t receiver, size_t light, double tau, int grid = 64);
 
 }  // namespace visgate::harness

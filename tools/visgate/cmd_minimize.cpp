@@ -1,7 +1,10 @@
 // visgate minimize scene.json --method M [--receiver I --light L --sample J] [--tau T]
 //                  [--opt k=v]... -o DIR
 // Minimises one mismatching relation (the given one, the entry's own relation for a
-// corpus entry, else the first mismatch found) and writes the corpus entry
+// corpus entry, else the first mismatch found; for a fragment method with no relation
+// mismatch but a visible-fraction or fragment mismatch, the first light point of a 64 x 64
+// lattice that its fragments answer wrongly, tools/harness/minimize.h FractionWitness;
+// the entry's provenance then names the pair with sample -1) and writes the corpus entry
 // DIR/<method>/<class>/<sha1>.json (DESIGN section 8). Re-minimising an entry writes the
 // identical entry. Exit: 0 stored (or no mismatch to minimise), 2 bad input, 3 internal.
 //
@@ -126,13 +129,51 @@ int run_minimize(const MinimizeOpts& o) {
         found = true;
         break;
       }
+    // Fragment methods: a visible-fraction or fragment mismatch becomes the relation
+    // mismatch of a light point its fragments get wrong (minimize.h FractionWitness).
+    if (!found && solver->reports_fragments()) {
+      std::vector<size_t> all(scene.receivers.size());
+      for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+      auto reg = oracle::compare_regions(scene, res, all, spec.tau);
+      for (const auto& m : reg.mismatches) {
+        auto w = find_fraction_witness(scene, *solver, spec.options, m.receiver, m.light, spec.tau);
+        if (!w) {
+          std::fprintf(stderr, "%s: %s mismatch of receiver %zu light %zu (fraction %.6g, exact %.6g): no lattice point "
+                       "of the light is answered wrongly\n", o.scene.c_str(), oracle::direction_name(m.direction),
+                       m.receiver, m.light, m.method_fraction, m.exact_fraction);
+          continue;
+        }
+        char note[512];
+        std::snprintf(note, sizeof note,
+                      "%s: visible fraction %.6g where the exact fraction is %.6g (%s mismatch, receiver %zu light "
+                      "%zu of %s, %zu triangles); stored as the %s relation of light point %ld of a 64 x 64 lattice",
+                      o.method.c_str(), m.method_fraction, m.exact_fraction, oracle::direction_name(m.direction),
+                      m.receiver, m.light, base.source_scene.c_str(), scene.mesh.size(), w->direction.c_str(),
+                      w->sample);
+        if (base.note.empty()) base.note = note;
+        base.source_receiver = m.receiver;
+        base.source_light = m.light;
+        base.source_sample = -1;
+        base.source_triangles = scene.mesh.size();
+        scene = std::move(w->scene);
+        spec.receiver = 0;
+        spec.light = 0;
+        spec.sample = w->sample;
+        spec.direction = w->direction;
+        std::fprintf(stderr, "%s: %s mismatch of receiver %zu light %zu: witness light point %ld (%s, margin %.3g)\n",
+                     o.scene.c_str(), oracle::direction_name(m.direction), m.receiver, m.light, w->sample,
+                     w->direction.c_str(), w->margin);
+        found = true;
+        break;
+      }
+    }
     if (!found) {
       std::fprintf(stderr, "%s: no relation mismatch of %s at tau %g: nothing to minimise\n", o.scene.c_str(),
                    o.method.c_str(), spec.tau);
       return kOk;
     }
   }
-  if (base.method.empty()) {
+  if (base.method.empty() && base.source_sample >= 0) {
     base.source_receiver = spec.receiver;
     base.source_light = spec.light;
     base.source_sample = spec.sample;
