@@ -448,6 +448,17 @@ class Traversal {
         ++n_dropped_;
         continue;
       }
+      // A surface beyond a clip plane (the outer faces of the node boxes on the main
+      // axis) meets no segment of the shaft, and one touching it meets only segments'
+      // end points there (the boxes are disjoint along the main axis, so every segment
+      // leaves that plane at once), which do not block (DESIGN 3). Clamping would instead
+      // flatten it onto the plane, where the receiver is: fuzz_iss 621ee63f..., a
+      // triangle reaching z = 0.5 below a leaf whose receiver is at z = 0.5, 2^-149 beside
+      // its plane, was clamped into a sliver through the receiver and blocked the shaft.
+      if (beyond_clip_planes(ps.box, sub.g)) {
+        ++n_dropped_;
+        continue;
+      }
       Surface s;
       {
         ScopedTimer t(times_[kCopy]);
