@@ -127,10 +127,22 @@ bool ShaftGeometry::may_contain_point(const Vec3d& p) const {
 bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const {
   // Cyrus-Beck clipping of the parameter interval against every plane, each plane
   // moved outwards by its tolerance.
+  // The first six planes are the common box's faces, n = +e_k then -e_k (constructor),
+  // for which n.p - d is exactly p_k - d or -p_k - d: the products by 0 and 1 are exact
+  // and adding the zeros changes nothing, so the shortcut gives the same bits as eval().
   double t0 = 0.0, t1 = 1.0;
   for (int i = 0; i < count_; ++i) {
     const Plane4d& p = planes_[size_t(i)];
-    double ea = p.eval(a) - p.tol, eb = p.eval(b) - p.tol;
+    double ea, eb;
+    if (i < 6) {
+      int k = i >> 1;
+      double s = i & 1 ? -1.0 : 1.0;
+      ea = (s * a[k] - p.d) - p.tol;
+      eb = (s * b[k] - p.d) - p.tol;
+    } else {
+      ea = p.eval(a) - p.tol;
+      eb = p.eval(b) - p.tol;
+    }
     if (ea > 0 && eb > 0) return false;
     if (ea <= 0 && eb <= 0) continue;
     double t = ea / (ea - eb);
