@@ -296,78 +296,113 @@ double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d&
   return -sum / (2.0 * std::numbers::pi);
 }
 
-}  // namespace
+// Everything visible_region and visible_fraction_bound share: the exact frame, the
+// receiver's side, the pyramid planes, the double cull and the fast-path classification.
+struct Prepared {
+  LightFrame f;
+  FT light_area2;
+  V3 r;
+  FT h_r, g_r;
+  CGAL::Sign side = CGAL::ZERO;
+  std::vector<std::pair<V3, FT>> sides;  // pyramid side planes, inwards
+  V3 gn;                                 // the light plane as the half-space g >= 0
+  FT ge;
+  FastPass fp;
+  std::vector<uint32_t> unknown;  // culled triangles the fast paths left undecided
+  bool covered = false;           // a Cover triangle: fraction 0
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
-  const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
-  VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  FT g_of(const V3& x) const { return side == CGAL::POSITIVE ? f.height(x) : -f.height(x); }
+};
+
+// Fills `p` up to the fast-path classification; false when the receiver is on the light
+// plane (edge_on: nothing else is filled).
+bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_paths, Prepared& p) {
   const Light& light = scene.lights[light_index];
   const Receiver& rec = scene.receivers[receiver];
-  RegionAnswer ans;
-  LightFrame f = make_frame(light);
-  FT light_area2 = f.polygon.area();
-  ans.light_area = to_double_exact(light_area2) * f.scale;
-
-  const V3 r = exact3(rec.p);
-  const FT h_r = f.height(r);
-  const CGAL::Sign side = CGAL::sign(h_r);
-  if (side == CGAL::ZERO) {
-    ans.edge_on = true;
-    return ans;
-  }
+  p.f = make_frame(light);
+  LightFrame& f = p.f;
+  p.light_area2 = f.polygon.area();
+  p.r = exact3(rec.p);
+  const V3& r = p.r;
+  p.h_r = f.height(r);
+  p.side = CGAL::sign(p.h_r);
+  if (p.side == CGAL::ZERO) return false;
   // g = side * height: positive on the receiver's side; g_r = |h_r|.
-  const FT g_r = CGAL::abs(h_r);
-  auto g_of = [&](const V3& x) { return side == CGAL::POSITIVE ? f.height(x) : -f.height(x); };
+  p.g_r = CGAL::abs(p.h_r);
 
   // Pyramid side planes through r and consecutive hull vertices, oriented inwards.
-  std::vector<std::pair<V3, FT>> sides;
   size_t hn = f.lifted.size();
   for (size_t j = 0; j < hn; ++j) {
     V3 m = cross(f.lifted[j] - r, f.lifted[(j + 1) % hn] - r);
     if (CGAL::sign(dot(m, f.lifted[(j + 2) % hn] - r)) == CGAL::NEGATIVE) m = -m;
     for (int a = 0; a < 3; ++a) m[a] = squash(m[a]);
-    sides.emplace_back(m, squash(dot(m, r)));
+    p.sides.emplace_back(m, squash(dot(m, r)));
   }
-  // The light plane as the half-space g >= 0.
-  V3 gn = side == CGAL::POSITIVE ? f.n : -f.n;
-  FT ge = side == CGAL::POSITIVE ? f.d0 : -f.d0;
+  p.gn = p.side == CGAL::POSITIVE ? f.n : -f.n;
+  p.ge = p.side == CGAL::POSITIVE ? f.d0 : -f.d0;
 
   AABB sb = scene.bounds();
   double coord_scale = std::max(max_component(vabs(to_double(sb.lo))), max_component(vabs(to_double(sb.hi))));
   coord_scale = std::max(coord_scale, max_component(vabs(to_double(rec.p))));
   for (const Vec3f& v : light.polygon) coord_scale = std::max(coord_scale, max_component(vabs(to_double(v))));
   Cull cull = make_cull(f, rec.p, std::max(coord_scale, 1e-30));
-  const IK::Point_3 rp = ipt(rec.p);
 
   // Fast paths (region_oracle.h): the culled triangles classified in double with
   // error bounds; Miss ones are dropped, one Cover hides the whole light, and only the
   // Unknown ones go to the exact projection and the Boolean operations.
-  FastPass fp;
+  FastPass& fp = p.fp;
   fp.r = to_double(rec.p);
   fp.n = approx(f.n);
   fp.d0 = to_double_exact(f.d0);
-  fp.sgn = side == CGAL::POSITIVE ? 1.0 : -1.0;
+  fp.sgn = p.side == CGAL::POSITIVE ? 1.0 : -1.0;
   fp.gr = fp.g(fp.r, fp.gr_err);
   for (const V3& x : f.lifted) {
     fp.L.push_back(approx(x));
     fp.lmax = std::max(fp.lmax, max_component(vabs(fp.L.back())));
   }
-  std::vector<uint32_t> unknown;
   const TriangleSoup& mesh = scene.mesh;
-  bool covered = false;
-  for (size_t t = 0; t < mesh.size() && !covered; ++t) {
+  for (size_t t = 0; t < mesh.size() && !p.covered; ++t) {
     const Vec3f &af = mesh.corner(t, 0), &bf = mesh.corner(t, 1), &cf = mesh.corner(t, 2);
     const Vec3d tri[3] = {to_double(af), to_double(bf), to_double(cf)};
     // Cull: outside the pyramid (double, conservative).
     if (cull.outside(tri[0], tri[1], tri[2])) continue;
-    Fast c = opt.fast_paths ? fast_classify(fp, tri) : Fast::Unknown;
+    Fast c = fast_paths ? fast_classify(fp, tri) : Fast::Unknown;
     if (c == Fast::Miss) continue;
-    if (c == Fast::Cover) covered = true;
-    else unknown.push_back(uint32_t(t));
+    if (c == Fast::Cover) p.covered = true;
+    else p.unknown.push_back(uint32_t(t));
   }
-  if (opt.fast_paths && (covered || unknown.empty())) {
+  return true;
+}
+
+}  // namespace
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
+  const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
+  VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  const Receiver& rec = scene.receivers[receiver];
+  RegionAnswer ans;
+  Prepared pre;
+  bool off_plane = prepare(scene, receiver, light_index, opt.fast_paths, pre);
+  const LightFrame& f = pre.f;
+  const FT& light_area2 = pre.light_area2;
+  ans.light_area = to_double_exact(light_area2) * f.scale;
+  if (!off_plane) {
+    ans.edge_on = true;
+    return ans;
+  }
+  const V3& r = pre.r;
+  const FT& g_r = pre.g_r;
+  const CGAL::Sign side = pre.side;
+  auto g_of = [&](const V3& x) { return pre.g_of(x); };
+  const auto& sides = pre.sides;
+  const V3& gn = pre.gn;
+  const FT& ge = pre.ge;
+  const IK::Point_3 rp = ipt(rec.p);
+  const std::vector<uint32_t>& unknown = pre.unknown;
+  const TriangleSoup& mesh = scene.mesh;
+  if (opt.fast_paths && (pre.covered || unknown.empty())) {
     ans.fast_path = true;
-    if (covered) {
+    if (pre.covered) {
       ans.visible_fraction = 0.0;
       ans.visible_area = 0.0;
       return ans;
