@@ -76,4 +76,26 @@ struct RegionOptions {
 
 RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {});
 
+// Certified enclosure of the visible fraction, without Boolean operations (for the
+// comparator: most pairs are decided by it, the rest by visible_region). When
+// `certified`, lo <= hi are doubles with lo <= A / A_L <= hi for the exact area ratio
+// of visible_region (so also lo <= its visible_fraction <= hi: rounding is monotone).
+// Method: the exact path's frame, cull and fast paths (prepare in region_oracle.cpp);
+// every undecided triangle must be certainly strictly inside the open slab (no clipping)
+// or exactly outside it or of zero projected area, else not certified. The shadows are
+// projected in interval arithmetic (vertex errors delta), and the area of the light
+// minus the union of the double shadow triangles is computed by a boundary integral
+// whose side decisions are exact orientations on the doubles (shared and collinear
+// edges included) and whose rounded cut parameters enter with error bounds; the
+// Hausdorff/Steiner bound sum (delta per + pi delta^2) covers the vertex errors.
+struct FractionBound {
+  bool edge_on = false;     // receiver exactly on the light plane (as RegionAnswer)
+  bool certified = false;   // [lo, hi] holds the exact fraction
+  double lo = 0.0, hi = 1.0;
+  size_t unknown_triangles = 0;  // left undecided by the fast paths
+  size_t shadows = 0;            // double shadow triangles in the boundary integral
+  const char* why = "";          // when not certified and not edge-on: the reason
+};
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light);
+
 }  // namespace visgate::oracle
