@@ -520,7 +520,12 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
 
 namespace {
 
-using I = CGAL::Interval_nt<false>;  // sets the rounding mode itself, operation by operation
+// Interval_nt<false> needs the rounding mode set upwards around every operation: each
+// block of interval arithmetic below runs under a Protect_FPU_rounding guard, which
+// restores the caller's mode (the exact predicates and the double error bounds of the
+// fast paths assume round-to-nearest and stay outside those blocks).
+using I = CGAL::Interval_nt<false>;
+using Upward = CGAL::Protect_FPU_rounding<true>;
 using P2d = IK::Point_2;
 
 // One polygon of the certified check: a convex CCW polygon with double vertices.
@@ -564,9 +569,14 @@ Span edge_span(const P2d& a, const P2d& b, const CPoly& q) {
       s.hi_l = s.hi_r = -1;
       continue;
     }
-    I ha = det2(c, d, a), hb = det2(c, d, b);
-    I t = ha / (ha - hb);
-    double tm = 0.5 * (t.inf() + t.sup()), w = t.sup() - t.inf();
+    double tm, w;
+    {
+      Upward up;
+      I ha = det2(c, d, a), hb = det2(c, d, b);
+      I t = ha / (ha - hb);
+      tm = 0.5 * (t.inf() + t.sup());
+      w = t.sup() - t.inf();
+    }
     if (!(w >= 0) || !std::isfinite(w)) w = 2.0;  // useless enclosure: the bound fails later
     if (sa == CGAL::POSITIVE) {  // inside for t < t*
       if (tm < s.hi_l) s.hi_l = tm;
@@ -636,11 +646,12 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
         if (left && !right) m += t1 - t0;
         else if (right && !left) m -= t1 - t0;
       }
-      I c = (I(a.x()) - o.x()) * (I(b.y()) - a.y()) - (I(a.y()) - o.y()) * (I(b.x()) - a.x());
       // Each span end moved by at most its error changes the counted set on at most
       // 2 err of each span (left and right), where the signed indicator changes by at
       // most 2; plus the rounding of the sum of lengths.
       double e = 8.0 * err + double(cuts.size()) * 0x1p-50;
+      Upward up;
+      I c = (I(a.x()) - o.x()) * (I(b.y()) - a.y()) - (I(a.y()) - o.y()) * (I(b.x()) - a.x());
       I mi = I(m) + I(-e, e);
       area += c * mi * I(0.5);
     }
@@ -695,7 +706,11 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
   I d0I = pre.f.d0.approx();
   I sg(fp.sgn);
   I rI[3] = {I(double(rf.x)), I(double(rf.y)), I(double(rf.z))};
-  I grI = sg * (nI[0] * rI[0] + nI[1] * rI[1] + nI[2] * rI[2] - d0I);
+  I grI;
+  {
+    Upward up;
+    grI = sg * (nI[0] * rI[0] + nI[1] * rI[1] + nI[2] * rI[2] - d0I);
+  }
   I perturb(0);
   for (uint32_t t : pre.unknown) {
     const Vec3f cf[3] = {mesh.corner(t, 0), mesh.corner(t, 1), mesh.corner(t, 2)};
@@ -731,6 +746,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       return true;
     };
     if (inside) {  // no clipping: the three vertices projected in interval arithmetic
+      Upward up;
       for (int k = 0; k < 3; ++k) {
         const Vec3f& x = cf[k];
         I xI[3] = {I(double(x.x)), I(double(x.y)), I(double(x.z))};
@@ -761,6 +777,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     // S' = the convex hull of the double vertices (exact predicates): within delta of S.
     CPoly s;
     CGAL::convex_hull_2(vs.begin(), vs.end(), std::back_inserter(s.v));
+    Upward up;
     double per = 0;
     for (size_t k = 0; k < s.v.size() && s.v.size() >= 2; ++k) {
       const P2d &p0 = s.v[k], &p1 = s.v[(k + 1) % s.v.size()];
@@ -777,14 +794,18 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     polys.push_back(std::move(s));
   }
   out.shadows = polys.size() - 1;
-  I light2(0);
   const P2d o = polys[0].v[0];
-  for (size_t k = 1; k + 1 < ln; ++k) light2 += det2(o, polys[0].v[k], polys[0].v[k + 1]) * I(0.5);
   I area = region_area(polys, o);
-  I pmax = perturb.sup();
-  area = area + I(-pmax.sup(), pmax.sup());
-  I frac = area / light2;
-  double lo = std::max(frac.inf(), 0.0), hi = std::min(frac.sup(), 1.0);
+  double lo, hi;
+  {
+    Upward up;
+    I light2(0);
+    for (size_t k = 1; k + 1 < ln; ++k) light2 += det2(o, polys[0].v[k], polys[0].v[k + 1]) * I(0.5);
+    area = area + I(-perturb.sup(), perturb.sup());
+    I frac = area / light2;
+    lo = std::max(frac.inf(), 0.0);
+    hi = std::min(frac.sup(), 1.0);
+  }
   if (!(lo <= hi)) {
     out.why = "empty enclosure";
     return out;

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cfenv>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -931,6 +932,7 @@ TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
     for (size_t i = 0; i < sc.receivers.size(); ++i)
       for (size_t l = 0; l < sc.lights.size(); ++l) {
         FractionBound b = visible_fraction_bound(sc, i, l);
+        ASSERT_EQ(std::fegetround(), FE_TONEAREST) << "the interval blocks restore the rounding mode";
         RegionAnswer a = visible_region(sc, i, l);
         ++pairs;
         ASSERT_EQ(a.edge_on, b.edge_on) << s << " " << i << " " << l;
