@@ -4,6 +4,7 @@
 #include "oracle/comparator.h"
 
 #include <cmath>
+#include <memory>
 
 #include "oracle/region_oracle.h"
 
@@ -117,6 +118,7 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
                            double tau) {
   Comparison c;
   VG_CHECK(method.receivers.size() == scene.receivers.size());
+  std::unique_ptr<BlockedSegmentTest> blocked;  // built at the first fragment
   for (size_t i : receivers) {
     VG_CHECK(i < scene.receivers.size());
     const ReceiverResult& rr = method.receivers[i];
@@ -140,7 +142,9 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
       for (const Polygon3f& frag : rr.fragments[l]) {
         Vec3f x;
         if (!interior_point(frag, x)) continue;
-        RelationAnswer a = classify_segment(scene, scene.receivers[i].p, x);
+        if (!blocked) blocked = std::make_unique<BlockedSegmentTest>(scene);
+        if (!blocked->blocked(scene.receivers[i].p, x, tau)) continue;
+        RelationAnswer a = classify_segment(scene, scene.receivers[i].p, x);  // the record's margin
         if (a.cls != RelationClass::Blocked || !(a.margin >= tau)) continue;
         Mismatch mm;
         mm.receiver = i;

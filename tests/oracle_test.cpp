@@ -996,4 +996,38 @@ TEST(RegionOracle, ComparatorVerdictsEqualTheExactOnes) {
   EXPECT_GT(mism, 100u);
 }
 
+TEST(RelationOracle, BlockedSegmentTestEqualsClassifySegment) {
+  // The comparator's fragment test: BlockedSegmentTest::blocked must be exactly
+  // "classify_segment is Blocked with margin >= tau", also at tau equal to the margin
+  // and just above it, on segments from receivers to light points and random points.
+  size_t segments = 0, blocked = 0;
+  std::mt19937 rng(7);
+  for (const char* fam : {"random-soup", "grid-snapped", "shared-edge-fan", "on-surface", "pouch", "columns"}) {
+    FamilyParams p;
+    p.seed = 3;
+    p.receivers = 9;
+    p.samples = 4;
+    p.triangles = 80;
+    auto scene = generate_family(fam, p);
+    ASSERT_TRUE(scene.ok()) << fam;
+    BlockedSegmentTest test(*scene);
+    AABB b = scene->bounds();
+    std::uniform_real_distribution<float> ux(b.lo.x, b.hi.x), uy(b.lo.y, b.hi.y), uz(b.lo.z, b.hi.z);
+    for (size_t i = 0; i < scene->receivers.size(); ++i)
+      for (int k = 0; k < 40; ++k) {
+        Vec3f from = scene->receivers[i].p;
+        Vec3f to = k % 2 ? Vec3f(ux(rng), uy(rng), uz(rng))
+                         : sample_position(scene->lights[size_t(k) % scene->lights.size()], k / 2 % 4, i);
+        RelationAnswer a = classify_segment(*scene, from, to);
+        for (double tau : {1e-5, 1e-3, a.margin, std::nextafter(a.margin, 1.0)}) {
+          bool expect = a.cls == RelationClass::Blocked && a.margin >= tau;
+          EXPECT_EQ(test.blocked(from, to, tau), expect) << fam << " " << i << " " << k << " " << tau;
+        }
+        ++segments;
+        blocked += a.cls == RelationClass::Blocked;
+      }
+  }
+  EXPECT_GT(blocked, segments / 10);
+}
+
 }  // namespace visgate::oracle
