@@ -550,6 +550,7 @@ bool same_direction(const P2d& a, const P2d& b, const P2d& c, const P2d& d) {
 // (a, b)). `err` bounds the distance of every computed end to its exact value.
 struct Span {
   double lo_l = 0, hi_l = 1, lo_r = 0, hi_r = 1, err = 0;
+  bool r_out = false;  // exact: no point just right of the edge is in q
 };
 
 Span edge_span(const P2d& a, const P2d& b, const CPoly& q) {
@@ -560,13 +561,18 @@ Span edge_span(const P2d& a, const P2d& b, const CPoly& q) {
     const P2d &c = q.v[k], &d = q.v[(k + 1) % n];
     CGAL::Sign sa = orient2(c, d, a), sb = orient2(c, d, b);
     if (sa == CGAL::ZERO && sb == CGAL::ZERO) {  // (a, b) on the line of edge (c, d)
-      if (same_direction(a, b, c, d)) s.hi_r = -1;  // q's interior on the left only
-      else s.hi_l = -1;
+      if (same_direction(a, b, c, d)) {  // q's interior on the left only
+        s.hi_r = -1;
+        s.r_out = true;
+      } else {
+        s.hi_l = -1;
+      }
       continue;
     }
     if (sa != CGAL::NEGATIVE && sb != CGAL::NEGATIVE) continue;  // whole edge inside
     if (sa != CGAL::POSITIVE && sb != CGAL::POSITIVE) {          // outside
       s.hi_l = s.hi_r = -1;
+      s.r_out = true;
       continue;
     }
     double tm, w;
@@ -608,15 +614,28 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
     const CPoly& P = polys[p];
     for (size_t k = 0; k < P.v.size(); ++k) {
       const P2d &a = P.v[k], &b = P.v[(k + 1) % P.v.size()];
+      // A shadow edge counts only where the point just right of it is in L: within L's
+      // span on it, widened by that span's error (exactly nothing when an exact side
+      // decision puts the whole edge outside L). Span errors matter only there: the
+      // counted set changes on at most min(2 err_q, |window|) for span q. (A far shadow's
+      // long edges have large cross products; without the window their cut errors far
+      // from L made the bound useless.)
+      double window = 1.0;
+      if (p != 0) {
+        spans[0] = edge_span(a, b, polys[0]);
+        const Span& sl = spans[0];
+        if (sl.r_out) continue;  // exactly outside L (or on L's edge with L on the left)
+        window = std::max(0.0, std::min(1.0, sl.hi_r + sl.err) - std::max(0.0, sl.lo_r - sl.err));
+      }
       double err = 0;
       cuts.assign({0.0, 1.0});
       for (size_t q = 0; q < polys.size(); ++q) {
         if (q == p) continue;
-        spans[q] = edge_span(a, b, polys[q]);
+        if (q != 0 || p == 0) spans[q] = edge_span(a, b, polys[q]);
         const Span& s = spans[q];
         for (double x : {s.lo_l, s.hi_l, s.lo_r, s.hi_r})
           if (x > 0 && x < 1) cuts.push_back(x);
-        err += s.err;
+        err += std::min(2.0 * s.err, window);
       }
       std::sort(cuts.begin(), cuts.end());
       double m = 0;  // signed measure of the counted part of [0, 1]
@@ -647,9 +666,10 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
         else if (right && !left) m -= t1 - t0;
       }
       // Each span end moved by at most its error changes the counted set on at most
-      // 2 err of each span (left and right), where the signed indicator changes by at
-      // most 2; plus the rounding of the sum of lengths.
-      double e = 8.0 * err + double(cuts.size()) * 0x1p-50;
+      // 2 err_q (left and right spans share their cuts) inside the window, where the
+      // signed indicator changes by at most 2 (doubled again for safety); plus the
+      // rounding of the sum of lengths.
+      double e = 4.0 * err + double(cuts.size()) * 0x1p-50;
       Upward up;
       I c = (I(a.x()) - o.x()) * (I(b.y()) - a.y()) - (I(a.y()) - o.y()) * (I(b.x()) - a.x());
       I mi = I(m) + I(-e, e);
@@ -698,6 +718,15 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
   // changes by at most sum (delta per + pi delta^2) (Steiner's formula for the
   // delta-neighbourhood of a convex set). Any other triangle (clipped by a slab plane or
   // the pyramid) makes the bound give up.
+  double light_per = 0;  // perimeter of L, rounded up
+  {
+    Upward up;
+    for (size_t k = 0; k < ln; ++k) {
+      const P2d &p0 = polys[0].v[k], &p1 = polys[0].v[(k + 1) % ln];
+      I dx = I(p0.x()) - p1.x(), dy = I(p0.y()) - p1.y();
+      light_per += CGAL::sqrt(dx * dx + dy * dy).sup();
+    }
+  }
   const TriangleSoup& mesh = scene.mesh;
   const FastPass& fp = pre.fp;
   const IK::Point_3 rp = ipt(scene.receivers[receiver].p);
@@ -745,19 +774,30 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       vs.emplace_back(um, wm);
       return true;
     };
+    // A vertex interval wider than 2^-40 of its magnitude (or not finite) is not used
+    // from the plain interval projection: the triangle then takes the lazy path below.
+    auto narrow = [](const I& v) {
+      return std::isfinite(v.inf()) && std::isfinite(v.sup()) &&
+             v.sup() - v.inf() <= 0x1p-40 * std::max(std::abs(v.inf()), std::abs(v.sup()));
+    };
+    bool projected = false;
     if (inside) {  // no clipping: the three vertices projected in interval arithmetic
       Upward up;
-      for (int k = 0; k < 3; ++k) {
+      projected = true;
+      for (int k = 0; k < 3 && projected; ++k) {
         const Vec3f& x = cf[k];
         I xI[3] = {I(double(x.x)), I(double(x.y)), I(double(x.z))};
         I den = sg * (nI[0] * (rI[0] - xI[0]) + nI[1] * (rI[1] - xI[1]) + nI[2] * (rI[2] - xI[2]));  // g_r - g(x)
         I sc = grI / den;
-        if (!add_vertex(rI[f.i1] + (xI[f.i1] - rI[f.i1]) * sc, rI[f.i2] + (xI[f.i2] - rI[f.i2]) * sc)) {
-          out.why = "projection not finite";
-          return out;
-        }
+        I u = rI[f.i1] + (xI[f.i1] - rI[f.i1]) * sc, w = rI[f.i2] + (xI[f.i2] - rI[f.i2]) * sc;
+        projected = narrow(u) && narrow(w) && add_vertex(u, w);
       }
-    } else {  // the exact path's clipping with lazy exact numbers: exact signs, interval points
+      if (!projected) {
+        vs.clear();
+        delta = 0;
+      }
+    }
+    if (!projected) {  // the exact path's clipping with lazy exact numbers: exact signs, interval points
       std::vector<V3> poly = {exact3(cf[0]), exact3(cf[1]), exact3(cf[2])};
       bool reaches_receiver = false;
       for (const V3& x : poly) reaches_receiver |= pre.g_of(x) >= pre.g_r;
@@ -765,10 +805,18 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
         for (const auto& [m, e] : pre.sides) poly = clip_lazy(poly, m, e);
       poly = clip_lazy(poly, pre.gn, pre.ge);
       if (poly.size() < 3) continue;
+      // A wide lazy interval (a point next to the receiver's level: a small g_r - g) is
+      // made tight by computing that coordinate exactly (the exact path computes every
+      // one) and taking the exact value's interval.
+      auto tight = [&](const FT& v) {
+        I a0 = v.approx();
+        if (narrow(a0)) return a0;
+        return I(CGAL::to_interval(v.exact()));
+      };
       for (const V3& x : poly) {
         FT sc = pre.g_r / (pre.g_r - pre.g_of(x));
         FT u = pre.r[f.i1] + (x[f.i1] - pre.r[f.i1]) * sc, w = pre.r[f.i2] + (x[f.i2] - pre.r[f.i2]) * sc;
-        if (!add_vertex(u.approx(), w.approx())) {
+        if (!add_vertex(tight(u), tight(w))) {
           out.why = "clipped projection not finite";
           return out;
         }
@@ -788,8 +836,12 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     // area(X + B_delta) - area(X) = delta per(X) + pi delta^2 for convex X, and
     // per(S) <= per(S' + B_delta) = per(S') + 2 pi delta: so delta per(S') + 3 pi delta^2
     // bounds the change for S and S' alike.
+    // Only the change inside L counts: a point of L within delta of S but not in S has
+    // its nearest point of S in S n (L + B_delta), so the change is at most
+    // delta per(S n (L + B_delta)) + pi delta^2 <= delta min(per(S), per(L) + 2 pi delta)
+    // + pi delta^2 (perimeters grow with convex sets).
     I dI(delta);
-    perturb += dI * I(per) + I(9.4248) * dI * dI;
+    perturb += dI * I(std::min(per, light_per)) + I(9.4248) * dI * dI;
     if (s.v.size() < 3) continue;  // a segment or point: no area (its perturbation term is kept)
     polys.push_back(std::move(s));
   }
