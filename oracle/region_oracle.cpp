@@ -10,9 +10,11 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_2.h>
 #include <CGAL/Polygon_set_2.h>
+#include <CGAL/Interval_nt.h>
 #include <CGAL/Polygon_with_holes_2.h>
 #include <CGAL/convex_hull_2.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -147,6 +149,28 @@ std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e) {
       for (int a = 0; a < 3; ++a) x[a] = squash(x[a]);
       out.push_back(x);
     }
+  }
+  return out;
+}
+
+// clip without collapsing the new points' lazy DAGs: for the certified bound, which
+// needs their intervals (and exact signs where the intervals do not decide), not their
+// exact values.
+std::vector<V3> clip_lazy(const std::vector<V3>& poly, const V3& m, const FT& e) {
+  std::vector<V3> out;
+  size_t n = poly.size();
+  if (n == 0) return out;
+  std::vector<FT> val(n);
+  std::vector<CGAL::Sign> sg(n);
+  for (size_t i = 0; i < n; ++i) {
+    val[i] = dot(m, poly[i]) - e;
+    sg[i] = CGAL::sign(val[i]);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    size_t j = (i + 1) % n;
+    if (sg[i] != CGAL::NEGATIVE) out.push_back(poly[i]);
+    if ((sg[i] == CGAL::POSITIVE && sg[j] == CGAL::NEGATIVE) || (sg[i] == CGAL::NEGATIVE && sg[j] == CGAL::POSITIVE))
+      out.push_back(poly[i] + (poly[j] - poly[i]) * (val[i] / (val[i] - val[j])));
   }
   return out;
 }
@@ -296,78 +320,113 @@ double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d&
   return -sum / (2.0 * std::numbers::pi);
 }
 
-}  // namespace
+// Everything visible_region and visible_fraction_bound share: the exact frame, the
+// receiver's side, the pyramid planes, the double cull and the fast-path classification.
+struct Prepared {
+  LightFrame f;
+  FT light_area2;
+  V3 r;
+  FT h_r, g_r;
+  CGAL::Sign side = CGAL::ZERO;
+  std::vector<std::pair<V3, FT>> sides;  // pyramid side planes, inwards
+  V3 gn;                                 // the light plane as the half-space g >= 0
+  FT ge;
+  FastPass fp;
+  std::vector<uint32_t> unknown;  // culled triangles the fast paths left undecided
+  bool covered = false;           // a Cover triangle: fraction 0
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
-  const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
-  VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  FT g_of(const V3& x) const { return side == CGAL::POSITIVE ? f.height(x) : -f.height(x); }
+};
+
+// Fills `p` up to the fast-path classification; false when the receiver is on the light
+// plane (edge_on: nothing else is filled).
+bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_paths, Prepared& p) {
   const Light& light = scene.lights[light_index];
   const Receiver& rec = scene.receivers[receiver];
-  RegionAnswer ans;
-  LightFrame f = make_frame(light);
-  FT light_area2 = f.polygon.area();
-  ans.light_area = to_double_exact(light_area2) * f.scale;
-
-  const V3 r = exact3(rec.p);
-  const FT h_r = f.height(r);
-  const CGAL::Sign side = CGAL::sign(h_r);
-  if (side == CGAL::ZERO) {
-    ans.edge_on = true;
-    return ans;
-  }
+  p.f = make_frame(light);
+  LightFrame& f = p.f;
+  p.light_area2 = f.polygon.area();
+  p.r = exact3(rec.p);
+  const V3& r = p.r;
+  p.h_r = f.height(r);
+  p.side = CGAL::sign(p.h_r);
+  if (p.side == CGAL::ZERO) return false;
   // g = side * height: positive on the receiver's side; g_r = |h_r|.
-  const FT g_r = CGAL::abs(h_r);
-  auto g_of = [&](const V3& x) { return side == CGAL::POSITIVE ? f.height(x) : -f.height(x); };
+  p.g_r = CGAL::abs(p.h_r);
 
   // Pyramid side planes through r and consecutive hull vertices, oriented inwards.
-  std::vector<std::pair<V3, FT>> sides;
   size_t hn = f.lifted.size();
   for (size_t j = 0; j < hn; ++j) {
     V3 m = cross(f.lifted[j] - r, f.lifted[(j + 1) % hn] - r);
     if (CGAL::sign(dot(m, f.lifted[(j + 2) % hn] - r)) == CGAL::NEGATIVE) m = -m;
     for (int a = 0; a < 3; ++a) m[a] = squash(m[a]);
-    sides.emplace_back(m, squash(dot(m, r)));
+    p.sides.emplace_back(m, squash(dot(m, r)));
   }
-  // The light plane as the half-space g >= 0.
-  V3 gn = side == CGAL::POSITIVE ? f.n : -f.n;
-  FT ge = side == CGAL::POSITIVE ? f.d0 : -f.d0;
+  p.gn = p.side == CGAL::POSITIVE ? f.n : -f.n;
+  p.ge = p.side == CGAL::POSITIVE ? f.d0 : -f.d0;
 
   AABB sb = scene.bounds();
   double coord_scale = std::max(max_component(vabs(to_double(sb.lo))), max_component(vabs(to_double(sb.hi))));
   coord_scale = std::max(coord_scale, max_component(vabs(to_double(rec.p))));
   for (const Vec3f& v : light.polygon) coord_scale = std::max(coord_scale, max_component(vabs(to_double(v))));
   Cull cull = make_cull(f, rec.p, std::max(coord_scale, 1e-30));
-  const IK::Point_3 rp = ipt(rec.p);
 
   // Fast paths (region_oracle.h): the culled triangles classified in double with
   // error bounds; Miss ones are dropped, one Cover hides the whole light, and only the
   // Unknown ones go to the exact projection and the Boolean operations.
-  FastPass fp;
+  FastPass& fp = p.fp;
   fp.r = to_double(rec.p);
   fp.n = approx(f.n);
   fp.d0 = to_double_exact(f.d0);
-  fp.sgn = side == CGAL::POSITIVE ? 1.0 : -1.0;
+  fp.sgn = p.side == CGAL::POSITIVE ? 1.0 : -1.0;
   fp.gr = fp.g(fp.r, fp.gr_err);
   for (const V3& x : f.lifted) {
     fp.L.push_back(approx(x));
     fp.lmax = std::max(fp.lmax, max_component(vabs(fp.L.back())));
   }
-  std::vector<uint32_t> unknown;
   const TriangleSoup& mesh = scene.mesh;
-  bool covered = false;
-  for (size_t t = 0; t < mesh.size() && !covered; ++t) {
+  for (size_t t = 0; t < mesh.size() && !p.covered; ++t) {
     const Vec3f &af = mesh.corner(t, 0), &bf = mesh.corner(t, 1), &cf = mesh.corner(t, 2);
     const Vec3d tri[3] = {to_double(af), to_double(bf), to_double(cf)};
     // Cull: outside the pyramid (double, conservative).
     if (cull.outside(tri[0], tri[1], tri[2])) continue;
-    Fast c = opt.fast_paths ? fast_classify(fp, tri) : Fast::Unknown;
+    Fast c = fast_paths ? fast_classify(fp, tri) : Fast::Unknown;
     if (c == Fast::Miss) continue;
-    if (c == Fast::Cover) covered = true;
-    else unknown.push_back(uint32_t(t));
+    if (c == Fast::Cover) p.covered = true;
+    else p.unknown.push_back(uint32_t(t));
   }
-  if (opt.fast_paths && (covered || unknown.empty())) {
+  return true;
+}
+
+}  // namespace
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
+  const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
+  VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  const Receiver& rec = scene.receivers[receiver];
+  RegionAnswer ans;
+  Prepared pre;
+  bool off_plane = prepare(scene, receiver, light_index, opt.fast_paths, pre);
+  const LightFrame& f = pre.f;
+  const FT& light_area2 = pre.light_area2;
+  ans.light_area = to_double_exact(light_area2) * f.scale;
+  if (!off_plane) {
+    ans.edge_on = true;
+    return ans;
+  }
+  const V3& r = pre.r;
+  const FT& g_r = pre.g_r;
+  const CGAL::Sign side = pre.side;
+  auto g_of = [&](const V3& x) { return pre.g_of(x); };
+  const auto& sides = pre.sides;
+  const V3& gn = pre.gn;
+  const FT& ge = pre.ge;
+  const IK::Point_3 rp = ipt(rec.p);
+  const std::vector<uint32_t>& unknown = pre.unknown;
+  const TriangleSoup& mesh = scene.mesh;
+  if (opt.fast_paths && (pre.covered || unknown.empty())) {
     ans.fast_path = true;
-    if (covered) {
+    if (pre.covered) {
       ans.visible_fraction = 0.0;
       ans.visible_area = 0.0;
       return ans;
@@ -457,6 +516,356 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
   // The light emits only to the side its Newell normal points to.
   ans.irradiance = side == CGAL::POSITIVE ? ff : 0.0;
   return ans;
+}
+
+namespace {
+
+// Interval_nt<false> needs the rounding mode set upwards around every operation: each
+// block of interval arithmetic below runs under a Protect_FPU_rounding guard, which
+// restores the caller's mode (the exact predicates and the double error bounds of the
+// fast paths assume round-to-nearest and stay outside those blocks).
+using I = CGAL::Interval_nt<false>;
+using Upward = CGAL::Protect_FPU_rounding<true>;
+using P2d = IK::Point_2;
+
+// One polygon of the certified check: a convex CCW polygon with double vertices.
+struct CPoly {
+  std::vector<P2d> v;
+};
+
+CGAL::Sign orient2(const P2d& a, const P2d& b, const P2d& c) { return CGAL::orientation(a, b, c); }
+// det[b - a, c - a] enclosed (a, b, c exact doubles).
+I det2(const P2d& a, const P2d& b, const P2d& c) {
+  return (I(b.x()) - a.x()) * (I(c.y()) - a.y()) - (I(b.y()) - a.y()) * (I(c.x()) - a.x());
+}
+// Exact sign of the dot product of two collinear vectors b - a and d - c (both non-zero).
+bool same_direction(const P2d& a, const P2d& b, const P2d& c, const P2d& d) {
+  if (a.x() != b.x()) return (b.x() > a.x()) == (d.x() > c.x());
+  return (b.y() > a.y()) == (d.y() > c.y());
+}
+
+// The part of edge (a, b) next to convex polygon q, as parameters t in [0, 1]: points
+// just left of the edge are in q for t in [lo_l, hi_l], points just right for
+// [lo_r, hi_r] (up to finitely many t; they differ only on an edge of q collinear with
+// (a, b)). `err` bounds the distance of every computed end to its exact value.
+struct Span {
+  double lo_l = 0, hi_l = 1, lo_r = 0, hi_r = 1, err = 0;
+  bool r_out = false;  // exact: no point just right of the edge is in q
+};
+
+Span edge_span(const P2d& a, const P2d& b, const CPoly& q) {
+  Span s;
+  double err_lo = 0, err_hi = 0;
+  size_t n = q.v.size();
+  for (size_t k = 0; k < n; ++k) {
+    const P2d &c = q.v[k], &d = q.v[(k + 1) % n];
+    CGAL::Sign sa = orient2(c, d, a), sb = orient2(c, d, b);
+    if (sa == CGAL::ZERO && sb == CGAL::ZERO) {  // (a, b) on the line of edge (c, d)
+      if (same_direction(a, b, c, d)) {  // q's interior on the left only
+        s.hi_r = -1;
+        s.r_out = true;
+      } else {
+        s.hi_l = -1;
+      }
+      continue;
+    }
+    if (sa != CGAL::NEGATIVE && sb != CGAL::NEGATIVE) continue;  // whole edge inside
+    if (sa != CGAL::POSITIVE && sb != CGAL::POSITIVE) {          // outside
+      s.hi_l = s.hi_r = -1;
+      s.r_out = true;
+      continue;
+    }
+    double tm, w;
+    {
+      Upward up;
+      I ha = det2(c, d, a), hb = det2(c, d, b);
+      I t = ha / (ha - hb);
+      tm = 0.5 * (t.inf() + t.sup());
+      w = t.sup() - t.inf();
+    }
+    if (!(w >= 0) || !std::isfinite(w)) w = 2.0;  // useless enclosure: the bound fails later
+    if (sa == CGAL::POSITIVE) {  // inside for t < t*
+      if (tm < s.hi_l) s.hi_l = tm;
+      if (tm < s.hi_r) s.hi_r = tm;
+      err_hi = std::max(err_hi, w);
+    } else {
+      if (tm > s.lo_l) s.lo_l = tm;
+      if (tm > s.lo_r) s.lo_r = tm;
+      err_lo = std::max(err_lo, w);
+    }
+  }
+  s.err = err_lo + err_hi;
+  return s;
+}
+
+// Area of L \ (S_1 u ... u S_m) for the convex polygons polys[0] = L, polys[1..m] = S_j,
+// by the boundary integral: a point x of an edge of polygon p is on the region's
+// boundary, region on the left (right), when the point just left (right) of x is in
+// the region and the one just right (left) is not; a boundary piece carried by edges of
+// several polygons is counted on the one of lowest index. Every side decision is exact
+// (CGAL's exact orientation on the doubles); only the cut parameters are rounded, and
+// moving a cut by e moves the measure of the counted set by at most 2e. The result
+// encloses the exact area of the region of these double polygons.
+I region_area(const std::vector<CPoly>& polys, const P2d& o) {
+  I area(0);
+  std::vector<Span> spans(polys.size());
+  std::vector<double> cuts;
+  for (size_t p = 0; p < polys.size(); ++p) {
+    const CPoly& P = polys[p];
+    for (size_t k = 0; k < P.v.size(); ++k) {
+      const P2d &a = P.v[k], &b = P.v[(k + 1) % P.v.size()];
+      // A shadow edge counts only where the point just right of it is in L: within L's
+      // span on it, widened by that span's error (exactly nothing when an exact side
+      // decision puts the whole edge outside L). Span errors matter only there: the
+      // counted set changes on at most min(2 err_q, |window|) for span q. (A far shadow's
+      // long edges have large cross products; without the window their cut errors far
+      // from L made the bound useless.)
+      double window = 1.0;
+      if (p != 0) {
+        spans[0] = edge_span(a, b, polys[0]);
+        const Span& sl = spans[0];
+        if (sl.r_out) continue;  // exactly outside L (or on L's edge with L on the left)
+        window = std::max(0.0, std::min(1.0, sl.hi_r + sl.err) - std::max(0.0, sl.lo_r - sl.err));
+      }
+      double err = 0;
+      cuts.assign({0.0, 1.0});
+      for (size_t q = 0; q < polys.size(); ++q) {
+        if (q == p) continue;
+        if (q != 0 || p == 0) spans[q] = edge_span(a, b, polys[q]);
+        const Span& s = spans[q];
+        for (double x : {s.lo_l, s.hi_l, s.lo_r, s.hi_r})
+          if (x > 0 && x < 1) cuts.push_back(x);
+        err += std::min(2.0 * s.err, window);
+      }
+      std::sort(cuts.begin(), cuts.end());
+      double m = 0;  // signed measure of the counted part of [0, 1]
+      for (size_t c = 0; c + 1 < cuts.size(); ++c) {
+        double t0 = cuts[c], t1 = cuts[c + 1];
+        if (!(t1 > t0)) continue;
+        double t = 0.5 * (t0 + t1);
+        // Membership of the points just left / right of x(t).
+        // Polygon p: the point just left of x(t) is in p, the one just right is not. The
+        // region's membership: L's edges have the region (if anywhere) on their left,
+        // shadow edges on their right (their left is in the shadow).
+        bool in_l = p == 0, in_r = false, tie = false;  // in L, in no shadow
+        for (size_t q = 0; q < polys.size(); ++q) {
+          if (q == p) continue;
+          const Span& s = spans[q];
+          bool ql = s.lo_l < t && t < s.hi_l, qr = s.lo_r < t && t < s.hi_r;
+          if (q == 0) {
+            in_r = qr;  // shadow edge: the right point must be in L
+          } else {
+            if (ql) in_l = false;
+            if (qr) in_r = false;
+          }
+          if (q < p && ql != qr) tie = true;  // the piece lies on an edge of q too
+        }
+        if (tie) continue;
+        bool left = in_l, right = in_r;
+        if (left && !right) m += t1 - t0;
+        else if (right && !left) m -= t1 - t0;
+      }
+      // Each span end moved by at most its error changes the counted set on at most
+      // 2 err_q (left and right spans share their cuts) inside the window, where the
+      // signed indicator changes by at most 2 (doubled again for safety); plus the
+      // rounding of the sum of lengths.
+      double e = 4.0 * err + double(cuts.size()) * 0x1p-50;
+      Upward up;
+      I c = (I(a.x()) - o.x()) * (I(b.y()) - a.y()) - (I(a.y()) - o.y()) * (I(b.x()) - a.x());
+      I mi = I(m) + I(-e, e);
+      area += c * mi * I(0.5);
+    }
+  }
+  return area;
+}
+
+}  // namespace
+
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light_index) {
+  const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
+  VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  FractionBound out;
+  Prepared pre;
+  if (!prepare(scene, receiver, light_index, true, pre)) {
+    out.edge_on = true;
+    return out;
+  }
+  out.unknown_triangles = pre.unknown.size();
+  if (pre.covered || pre.unknown.empty()) {  // the exact path's own fast answers
+    out.certified = true;
+    out.lo = out.hi = pre.covered ? 0.0 : 1.0;
+    return out;
+  }
+  const LightFrame& f = pre.f;
+  // The light in the frame: float coordinates, exact doubles; the certified area needs a
+  // convex light (DESIGN: lights are convex; anything else goes to the exact path).
+  std::vector<CPoly> polys(1);
+  for (auto v = f.polygon.vertices_begin(); v != f.polygon.vertices_end(); ++v)
+    polys[0].v.emplace_back(to_double_exact(v->x()), to_double_exact(v->y()));
+  const size_t ln = polys[0].v.size();
+  for (size_t k = 0; k < ln; ++k)
+    if (orient2(polys[0].v[k], polys[0].v[(k + 1) % ln], polys[0].v[(k + 2) % ln]) != CGAL::POSITIVE) {
+      out.why = "light not strictly convex";
+      return out;
+    }
+
+  // Shadows of the undecided triangles. The exact path's exact skips (zero-area
+  // projections, triangles outside the open slab) are decided exactly here too; a
+  // triangle certainly strictly inside the slab is projected with interval arithmetic:
+  // its shadow S is the triangle of the exact projected vertices, the double triangle S'
+  // has every vertex within delta of them, so S' lies within delta of S and S within
+  // delta of S' (Hausdorff, both convex), and the area of the light minus the union
+  // changes by at most sum (delta per + pi delta^2) (Steiner's formula for the
+  // delta-neighbourhood of a convex set). Any other triangle (clipped by a slab plane or
+  // the pyramid) makes the bound give up.
+  double light_per = 0;  // perimeter of L, rounded up
+  {
+    Upward up;
+    for (size_t k = 0; k < ln; ++k) {
+      const P2d &p0 = polys[0].v[k], &p1 = polys[0].v[(k + 1) % ln];
+      I dx = I(p0.x()) - p1.x(), dy = I(p0.y()) - p1.y();
+      light_per += CGAL::sqrt(dx * dx + dy * dy).sup();
+    }
+  }
+  const TriangleSoup& mesh = scene.mesh;
+  const FastPass& fp = pre.fp;
+  const IK::Point_3 rp = ipt(scene.receivers[receiver].p);
+  const Vec3f& rf = scene.receivers[receiver].p;
+  I nI[3] = {pre.f.n[0].approx(), pre.f.n[1].approx(), pre.f.n[2].approx()};
+  I d0I = pre.f.d0.approx();
+  I sg(fp.sgn);
+  I rI[3] = {I(double(rf.x)), I(double(rf.y)), I(double(rf.z))};
+  I grI;
+  {
+    Upward up;
+    grI = sg * (nI[0] * rI[0] + nI[1] * rI[1] + nI[2] * rI[2] - d0I);
+  }
+  I perturb(0);
+  for (uint32_t t : pre.unknown) {
+    const Vec3f cf[3] = {mesh.corner(t, 0), mesh.corner(t, 1), mesh.corner(t, 2)};
+    IK::Point_3 ai = ipt(cf[0]), bi = ipt(cf[1]), ci = ipt(cf[2]);
+    if (CGAL::collinear(ai, bi, ci) || CGAL::orientation(ai, bi, ci, rp) == CGAL::COPLANAR) continue;
+    bool inside = true, maybe_beyond = false, maybe_behind = false;
+    for (int k = 0; k < 3; ++k) {
+      double e = 0, v = fp.g(to_double(cf[k]), e);
+      bool pos = v > e, below = fp.gr - v > e + fp.gr_err;
+      if (!pos || !below) inside = false;
+      if (!pos) maybe_beyond = true;
+      if (!below) maybe_behind = true;
+    }
+    if (!inside) {
+      // Outside the open slab, exactly (as the exact path): all g <= 0 or all g >= g_r.
+      bool all_beyond = maybe_beyond, all_behind = maybe_behind;
+      for (int k = 0; k < 3 && (all_beyond || all_behind); ++k) {
+        FT g = pre.g_of(exact3(cf[k]));
+        if (CGAL::is_positive(g)) all_beyond = false;
+        if (g < pre.g_r) all_behind = false;
+      }
+      if (all_beyond || all_behind) continue;
+    }
+    // Shadow vertices as intervals (midpoint, and the sum of the two widths as delta).
+    std::vector<P2d> vs;
+    double delta = 0;
+    auto add_vertex = [&](const I& u, const I& w) {
+      double um = 0.5 * (u.inf() + u.sup()), wm = 0.5 * (w.inf() + w.sup());
+      double dk = (u.sup() - u.inf()) + (w.sup() - w.inf());
+      if (!std::isfinite(um) || !std::isfinite(wm) || !(dk >= 0) || !std::isfinite(dk)) return false;
+      delta = std::max(delta, dk);
+      vs.emplace_back(um, wm);
+      return true;
+    };
+    // A vertex interval wider than 2^-40 of its magnitude (or not finite) is not used
+    // from the plain interval projection: the triangle then takes the lazy path below.
+    auto narrow = [](const I& v) {
+      return std::isfinite(v.inf()) && std::isfinite(v.sup()) &&
+             v.sup() - v.inf() <= 0x1p-40 * std::max(std::abs(v.inf()), std::abs(v.sup()));
+    };
+    bool projected = false;
+    if (inside) {  // no clipping: the three vertices projected in interval arithmetic
+      Upward up;
+      projected = true;
+      for (int k = 0; k < 3 && projected; ++k) {
+        const Vec3f& x = cf[k];
+        I xI[3] = {I(double(x.x)), I(double(x.y)), I(double(x.z))};
+        I den = sg * (nI[0] * (rI[0] - xI[0]) + nI[1] * (rI[1] - xI[1]) + nI[2] * (rI[2] - xI[2]));  // g_r - g(x)
+        I sc = grI / den;
+        I u = rI[f.i1] + (xI[f.i1] - rI[f.i1]) * sc, w = rI[f.i2] + (xI[f.i2] - rI[f.i2]) * sc;
+        projected = narrow(u) && narrow(w) && add_vertex(u, w);
+      }
+      if (!projected) {
+        vs.clear();
+        delta = 0;
+      }
+    }
+    if (!projected) {  // the exact path's clipping with lazy exact numbers: exact signs, interval points
+      std::vector<V3> poly = {exact3(cf[0]), exact3(cf[1]), exact3(cf[2])};
+      bool reaches_receiver = false;
+      for (const V3& x : poly) reaches_receiver |= pre.g_of(x) >= pre.g_r;
+      if (reaches_receiver)
+        for (const auto& [m, e] : pre.sides) poly = clip_lazy(poly, m, e);
+      poly = clip_lazy(poly, pre.gn, pre.ge);
+      if (poly.size() < 3) continue;
+      // A wide lazy interval (a point next to the receiver's level: a small g_r - g) is
+      // made tight by computing that coordinate exactly (the exact path computes every
+      // one) and taking the exact value's interval.
+      auto tight = [&](const FT& v) {
+        I a0 = v.approx();
+        if (narrow(a0)) return a0;
+        return I(CGAL::to_interval(v.exact()));
+      };
+      for (const V3& x : poly) {
+        FT sc = pre.g_r / (pre.g_r - pre.g_of(x));
+        FT u = pre.r[f.i1] + (x[f.i1] - pre.r[f.i1]) * sc, w = pre.r[f.i2] + (x[f.i2] - pre.r[f.i2]) * sc;
+        if (!add_vertex(tight(u), tight(w))) {
+          out.why = "clipped projection not finite";
+          return out;
+        }
+      }
+    }
+    // S' = the convex hull of the double vertices (exact predicates): within delta of S.
+    CPoly s;
+    CGAL::convex_hull_2(vs.begin(), vs.end(), std::back_inserter(s.v));
+    Upward up;
+    double per = 0;
+    for (size_t k = 0; k < s.v.size() && s.v.size() >= 2; ++k) {
+      const P2d &p0 = s.v[k], &p1 = s.v[(k + 1) % s.v.size()];
+      I dx = I(p0.x()) - p1.x(), dy = I(p0.y()) - p1.y();
+      per += CGAL::sqrt(dx * dx + dy * dy).sup();
+    }
+    // (A segment's perimeter is twice its length: both directions are summed above.)
+    // area(X + B_delta) - area(X) = delta per(X) + pi delta^2 for convex X, and
+    // per(S) <= per(S' + B_delta) = per(S') + 2 pi delta: so delta per(S') + 3 pi delta^2
+    // bounds the change for S and S' alike.
+    // Only the change inside L counts: a point of L within delta of S but not in S has
+    // its nearest point of S in S n (L + B_delta), so the change is at most
+    // delta per(S n (L + B_delta)) + pi delta^2 <= delta min(per(S), per(L) + 2 pi delta)
+    // + pi delta^2 (perimeters grow with convex sets).
+    I dI(delta);
+    perturb += dI * I(std::min(per, light_per)) + I(9.4248) * dI * dI;
+    if (s.v.size() < 3) continue;  // a segment or point: no area (its perturbation term is kept)
+    polys.push_back(std::move(s));
+  }
+  out.shadows = polys.size() - 1;
+  const P2d o = polys[0].v[0];
+  I area = region_area(polys, o);
+  double lo, hi;
+  {
+    Upward up;
+    I light2(0);
+    for (size_t k = 1; k + 1 < ln; ++k) light2 += det2(o, polys[0].v[k], polys[0].v[k + 1]) * I(0.5);
+    area = area + I(-perturb.sup(), perturb.sup());
+    I frac = area / light2;
+    lo = std::max(frac.inf(), 0.0);
+    hi = std::min(frac.sup(), 1.0);
+  }
+  if (!(lo <= hi)) {
+    out.why = "empty enclosure";
+    return out;
+  }
+  out.certified = true;
+  out.lo = lo;
+  out.hi = hi;
+  return out;
 }
 
 }  // namespace visgate::oracle

@@ -76,4 +76,31 @@ struct RegionOptions {
 
 RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {});
 
+// Certified enclosure of the visible fraction, without Boolean operations (for the
+// comparator: most pairs are decided by it, the rest by visible_region). When
+// `certified`, lo <= hi are doubles with lo <= A / A_L <= hi for the exact area ratio
+// of visible_region (so also lo <= its visible_fraction <= hi: rounding is monotone).
+// Method: the exact path's frame, cull and fast paths (prepare in region_oracle.cpp),
+// and its exact skips (zero projected area, outside the open slab). A triangle certainly
+// strictly inside the slab is projected in interval arithmetic; any other (or one whose
+// intervals come out wide) goes through the exact path's clipping with lazy exact
+// numbers (exact signs), its projected vertices taken as intervals, computed exactly
+// where those are wide. Each shadow S' is the convex hull of the interval midpoints
+// (vertex errors delta). The area of the light minus the union of the S' is computed by
+// a boundary integral whose side decisions are exact orientations on the doubles (shared
+// and collinear edges included) and whose rounded cut parameters enter with error
+// bounds; sum (delta min(per S', per L) + 3 pi delta^2) covers the vertex errors
+// (Hausdorff distance and Steiner's formula). The enclosure may be wide (up to [0, 1]):
+// nearly collinear edges of different shadows make cut parameters ill-conditioned.
+// Interval arithmetic runs only inside rounding-mode guards; the caller's mode is kept.
+struct FractionBound {
+  bool edge_on = false;     // receiver exactly on the light plane (as RegionAnswer)
+  bool certified = false;   // [lo, hi] holds the exact fraction
+  double lo = 0.0, hi = 1.0;
+  size_t unknown_triangles = 0;  // left undecided by the fast paths
+  size_t shadows = 0;            // double shadow triangles in the boundary integral
+  const char* why = "";          // when not certified and not edge-on: the reason (rare)
+};
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light);
+
 }  // namespace visgate::oracle

@@ -468,6 +468,36 @@ RelationAnswer classify_segment(const Scene& scene, const Vec3f& from, const Vec
   return finish(acc, diag, cap);
 }
 
+struct BlockedSegmentTest::Impl {
+  double diag = 1.0, cap = 0.0;
+  std::vector<Tri> tris;
+};
+
+BlockedSegmentTest::BlockedSegmentTest(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  const IeeeFloatMode ieee;
+  scene_scale(scene, impl_->diag, impl_->cap);
+  impl_->tris.reserve(scene.mesh.size());
+  for (size_t t = 0; t < scene.mesh.size(); ++t)
+    impl_->tris.push_back(make_tri(scene.mesh.corner(t, 0), scene.mesh.corner(t, 1), scene.mesh.corner(t, 2)));
+}
+
+BlockedSegmentTest::~BlockedSegmentTest() = default;
+
+bool BlockedSegmentTest::blocked(const Vec3f& from, const Vec3f& to, double tau) const {
+  const IeeeFloatMode ieee;
+  if (from == to) return false;
+  Segment s = make_segment(from, to);
+  // classify_segment's margin is max over crossing triangles of blocked_distance / diag;
+  // division by diag is monotone, so it reaches tau iff one triangle's quotient does.
+  for (const Tri& t : impl_->tris) {
+    if (!segment_meets_box(s, t.lo, t.hi, impl_->cap)) continue;
+    bool flat = false;
+    if (classify_exact(s.P, s.Q, t.A, t.B, t.C, &flat) != Hit::Cross) continue;
+    if (blocked_distance(s.p, s.q, t.a, t.b, t.c) / impl_->diag >= tau) return true;
+  }
+  return false;
+}
+
 RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<size_t>& receivers, int threads) {
   auto t0 = std::chrono::steady_clock::now();
   RelationOracleResult res;

@@ -50,6 +50,7 @@
 // proxies for "how far a vertex must move"), not a certified bound.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -76,6 +77,25 @@ RelationClass classify_segment_triangle(const Vec3f& p, const Vec3f& q, const Ve
 // acceleration structure: every triangle). For tests, the minimiser and fuzzers.
 // Gives the same class and margin as run_relation_oracle.
 RelationAnswer classify_segment(const Scene& scene, const Vec3f& from, const Vec3f& to);
+
+// The comparator's fragment test for many segments of one scene: blocked(from, to, tau)
+// equals classify_segment(scene, from, to).cls == Blocked && margin >= tau, exactly (the
+// same box and exact triangle tests on the same triangles), but prepares the scene's
+// scale and triangles once, skips the visible margins the question does not need and
+// stops at the first crossing triangle whose margin reaches tau. The scene must outlive
+// the object.
+class BlockedSegmentTest {
+ public:
+  explicit BlockedSegmentTest(const Scene& scene);
+  ~BlockedSegmentTest();
+  BlockedSegmentTest(const BlockedSegmentTest&) = delete;
+  BlockedSegmentTest& operator=(const BlockedSegmentTest&) = delete;
+  bool blocked(const Vec3f& from, const Vec3f& to, double tau) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 struct RelationOracleResult {
   // Per receiver: one character per relation, light-major then sample ('v', 'b', 'd'),

@@ -15,9 +15,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cfenv>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
 #include <numbers>
 #include <random>
 
+#include "fuzz/decoder.h"
 #include "lib/scene/families.h"
 #include "lib/scene/scene_json.h"
 #include "oracle/comparator.h"
@@ -872,4 +878,156 @@ TEST(OracleJson, RegionsFollowTheDesignLayoutAndReadBackBitExactly) {
 }
 
 }  // namespace
+}  // namespace visgate::oracle
+
+namespace visgate::oracle {
+namespace {
+// Scenes for the certified fraction bound: the families of the fast-path test and every
+// decoded seed of fuzz_plucker plus every 8th of fuzz_iss (the same decoder).
+std::vector<Scene> bound_scenes() {
+  std::vector<Scene> out;
+  for (const char* fam : {"random-soup", "grid-snapped", "sliver-soup", "on-surface", "far-origin", "shared-edge-fan",
+                          "torus", "pouch", "columns"})
+    for (uint64_t seed = 1; seed <= 2; ++seed) {
+      FamilyParams p;
+      p.seed = seed;
+      p.receivers = 9;
+      p.samples = 4;
+      p.triangles = 60;
+      auto scene = generate_family(fam, p);
+      if (scene.ok()) out.push_back(std::move(*scene));
+    }
+  const char* src = std::getenv("VISGATE_SOURCE_DIR");
+  if (!src) return out;
+  for (const char* dir : {"corpus/fuzz/fuzz_plucker", "corpus/fuzz/fuzz_iss"}) {
+    std::filesystem::path d = std::filesystem::path(src) / dir;
+    if (!std::filesystem::is_directory(d)) continue;
+    std::vector<std::filesystem::path> files;
+    for (const auto& e : std::filesystem::directory_iterator(d)) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    size_t step = std::string(dir).find("iss") != std::string::npos ? 8 : 1;
+    for (size_t k = 0; k < files.size(); k += step) {
+      std::ifstream in(files[k], std::ios::binary);
+      std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      auto c = visgate::fuzz::decode_case(bytes.data(), bytes.size(), visgate::fuzz::DecodeLimits{});
+      if (c) out.push_back(std::move(c->scene));
+    }
+  }
+  return out;
+}
+}  // namespace
+
+TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
+  // visible_fraction_bound (region_oracle.h) must never contradict the exact path: when
+  // certified, lo <= visible_region's fraction <= hi, and edge_on agrees. The comparator
+  // decides "within tolerance" from [lo, hi] alone, so this is its correctness. The
+  // certified share is the comparator's saving; it is printed, and must stay large.
+  std::vector<Scene> scenes = bound_scenes();
+  ASSERT_GT(scenes.size(), 100u);
+  size_t pairs = 0, certified = 0, edge_on = 0, narrow = 0;
+  std::map<std::string, size_t> why;
+  double widest = 0;
+  for (size_t s = 0; s < scenes.size(); ++s) {
+    const Scene& sc = scenes[s];
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t l = 0; l < sc.lights.size(); ++l) {
+        FractionBound b = visible_fraction_bound(sc, i, l);
+        ASSERT_EQ(std::fegetround(), FE_TONEAREST) << "the interval blocks restore the rounding mode";
+        RegionAnswer a = visible_region(sc, i, l);
+        ++pairs;
+        ASSERT_EQ(a.edge_on, b.edge_on) << s << " " << i << " " << l;
+        if (a.edge_on) {
+          ++edge_on;
+          continue;
+        }
+        if (!b.certified) {
+          ++why[b.why];
+          continue;
+        }
+        ++certified;
+        narrow += b.hi - b.lo < 1e-6;
+        widest = std::max(widest, b.hi - b.lo);
+        EXPECT_LE(b.lo, a.visible_fraction) << "scene " << s << " receiver " << i << " light " << l;
+        EXPECT_GE(b.hi, a.visible_fraction) << "scene " << s << " receiver " << i << " light " << l;
+      }
+  }
+  std::printf("certified fraction bound: %zu of %zu pairs certified (%zu edge-on), %zu narrower than 1e-6, widest %.3g\n",
+              certified, pairs, edge_on, narrow, widest);
+  for (const auto& [w, n] : why) std::printf("  not certified: %s: %zu\n", w.c_str(), n);
+  EXPECT_GT(certified, (pairs - edge_on) / 2);
+}
+
+TEST(RegionOracle, ComparatorVerdictsEqualTheExactOnes) {
+  // compare_regions decides most pairs from the certified bound; its fraction verdicts
+  // must be those of the exact test !(|mf - exact| <= 1e-4), also for method fractions
+  // just inside and just outside the tolerance.
+  std::vector<Scene> scenes = bound_scenes();
+  size_t checked = 0, mism = 0;
+  for (size_t s = 0; s < scenes.size(); s += 3) {
+    const Scene& sc = scenes[s];
+    std::vector<std::vector<double>> exact(sc.receivers.size(), std::vector<double>(sc.lights.size()));
+    std::vector<std::vector<bool>> on(sc.receivers.size(), std::vector<bool>(sc.lights.size()));
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t l = 0; l < sc.lights.size(); ++l) {
+        RegionAnswer a = visible_region(sc, i, l);
+        exact[i][l] = a.visible_fraction;
+        on[i][l] = a.edge_on;
+      }
+    for (double off : {0.0, 3e-5, -9.99e-5, 1e-4, -1e-4, 1.0001e-4, -2e-4, 0.3}) {
+      SolveResult m;
+      m.receivers.resize(sc.receivers.size());
+      std::vector<size_t> all;
+      size_t expect = 0;
+      for (size_t i = 0; i < sc.receivers.size(); ++i) {
+        all.push_back(i);
+        for (size_t l = 0; l < sc.lights.size(); ++l) {
+          float mf = float(exact[i][l] + off);
+          m.receivers[i].visible_fraction.push_back(mf);
+          if (!on[i][l] && !(std::abs(double(mf) - exact[i][l]) <= kFractionTolerance)) ++expect;
+        }
+      }
+      Comparison c = compare_regions(sc, m, all, 1e-5);
+      EXPECT_EQ(c.fraction_mismatches, expect) << "scene " << s << " offset " << off;
+      checked += sc.receivers.size() * sc.lights.size();
+      mism += expect;
+    }
+  }
+  EXPECT_GT(checked, 1000u);
+  EXPECT_GT(mism, 100u);
+}
+
+TEST(RelationOracle, BlockedSegmentTestEqualsClassifySegment) {
+  // The comparator's fragment test: BlockedSegmentTest::blocked must be exactly
+  // "classify_segment is Blocked with margin >= tau", also at tau equal to the margin
+  // and just above it, on segments from receivers to light points and random points.
+  size_t segments = 0, blocked = 0;
+  std::mt19937 rng(7);
+  for (const char* fam : {"random-soup", "grid-snapped", "shared-edge-fan", "on-surface", "pouch", "columns"}) {
+    FamilyParams p;
+    p.seed = 3;
+    p.receivers = 9;
+    p.samples = 4;
+    p.triangles = 80;
+    auto scene = generate_family(fam, p);
+    ASSERT_TRUE(scene.ok()) << fam;
+    BlockedSegmentTest test(*scene);
+    AABB b = scene->bounds();
+    std::uniform_real_distribution<float> ux(b.lo.x, b.hi.x), uy(b.lo.y, b.hi.y), uz(b.lo.z, b.hi.z);
+    for (size_t i = 0; i < scene->receivers.size(); ++i)
+      for (int k = 0; k < 40; ++k) {
+        Vec3f from = scene->receivers[i].p;
+        Vec3f to = k % 2 ? Vec3f(ux(rng), uy(rng), uz(rng))
+                         : sample_position(scene->lights[size_t(k) % scene->lights.size()], k / 2 % 4, i);
+        RelationAnswer a = classify_segment(*scene, from, to);
+        for (double tau : {1e-5, 1e-3, a.margin, std::nextafter(a.margin, 1.0)}) {
+          bool expect = a.cls == RelationClass::Blocked && a.margin >= tau;
+          EXPECT_EQ(test.blocked(from, to, tau), expect) << fam << " " << i << " " << k << " " << tau;
+        }
+        ++segments;
+        blocked += a.cls == RelationClass::Blocked;
+      }
+  }
+  EXPECT_GT(blocked, segments / 10);
+}
+
 }  // namespace visgate::oracle

@@ -369,8 +369,11 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
                              std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur) {
   out.clear();
   out_boxes.clear();
-  std::vector<double> w;
-  std::vector<Vec3d> inside, outside;
+  // Scratch reused across calls (one set per thread): the exact path runs once per
+  // candidate triangle and fragment list, and these three allocations were a visible
+  // part of fuzz_plucker's ASan allocator time.
+  thread_local std::vector<double> w;
+  thread_local std::vector<Vec3d> inside, outside;
   // w > 0 inside plane k's half-space of the blocked set.
   auto value = [&](int k, const Vec3d& x) {
     // det[x - rw, t_e - rw, t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x) (cyclic columns).
