@@ -146,7 +146,9 @@ Result<Scene> light_lattice_scene(const Scene& src, size_t receiver, size_t ligh
   Status st = prepare_light(l, s.name + ": lights[0]");
   if (!st) return st.error();
   s.lights.push_back(std::move(l));
-  s.receivers.push_back(src.receivers[receiver]);
+  // Every receiver is kept (the pair's one is `receiver` still): with coherence the
+  // fragments of one receiver depend on the tree the others developed.
+  s.receivers = src.receivers;
   return s;
 }
 
@@ -158,7 +160,8 @@ std::optional<FractionWitness> find_fraction_witness(const Scene& scene, Solver&
   oracle::RelationOracleResult exact = oracle::run_relation_oracle(*w, 1);
   oracle::Comparison cmp = oracle::compare_relations(*w, res, exact, tau);
   for (const auto& mm : cmp.mismatches)
-    if (mm.direction == oracle::Direction::FalseVisible || mm.direction == oracle::Direction::FalseBlocked) {
+    if (mm.receiver == receiver &&
+        (mm.direction == oracle::Direction::FalseVisible || mm.direction == oracle::Direction::FalseBlocked)) {
       FractionWitness f;
       f.sample = mm.sample;
       f.margin = mm.margin;

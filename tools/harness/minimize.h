@@ -61,8 +61,9 @@ Result<Scene> isolate_relation(const Scene& scene, size_t receiver, size_t light
 // more than 1e-4 of the light area) are turned into relation mismatches, which the
 // corpus stores: a fraction that far off means the method's fragments are wrong over at
 // least that share of the light, so some light point is answered wrongly (the per-sample
-// bits of a fragment method come from its fragments). The witness scene is relation
-// (receiver, light) alone with the light's samples replaced by explicit points of a
+// bits of a fragment method come from its fragments). The witness scene is the scene's
+// receivers (same indices: with coherence one receiver's fragments depend on the tree the
+// others developed) and that light alone, its samples replaced by explicit points of a
 // grid x grid lattice over the light's bounding rectangle in its plane (cell centres
 // strictly inside the polygon, lifted onto the plane of the first vertex and the Newell
 // normal in double, rounded to float).

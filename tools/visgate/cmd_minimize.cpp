@@ -156,7 +156,7 @@ int run_minimize(const MinimizeOpts& o) {
         base.source_sample = -1;
         base.source_triangles = scene.mesh.size();
         scene = std::move(w->scene);
-        spec.receiver = 0;
+        spec.receiver = m.receiver;
         spec.light = 0;
         spec.sample = w->sample;
         spec.direction = w->direction;
