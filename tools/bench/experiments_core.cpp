@@ -210,6 +210,11 @@ Status run_iss(BenchContext& ctx) {
   Table st{"stats", "every figure the ISS solver reports, per row of the table", {"scene", "config", "stat", "value"}, {}};
   Json configs = Json::object();
   for (const auto& fam : fams) {
+    // One chart per family: time against relations for ISS and embree, a point per
+    // configuration (its label).
+    Chart chart{"iss-" + fam, "ISS and embree on " + fam + " (label: configuration)", "relations (millions)",
+                "time, single thread (s)", true, true, {}};
+    Series iss_series{"iss", {}, {}, {}}, embree_series{"embree", {}, {}, {}};
     // The medium resolution: 64x64 receivers (rooms, with 27 lights: 32x32); --quick: 8x8.
     int med = o.quick ? 8 : (fam == "rooms" ? 32 : 64);
     long samples = o.quick ? 16 : -1;  // family default otherwise (columns 256, rooms 64 per light)
@@ -253,8 +258,16 @@ Status run_iss(BenchContext& ctx) {
                  double(s.relation_count()) / 1e6, blocked, i1, ia, ray_pct, iss ? iss->peak_mb : kNaN,
                  iss ? stat_or_nan(iss->stats, {"peak_memory_mb", "memory_mb"}) : kNaN, e1, ea,
                  ratio(e1, i1), ratio(ea, ia)});
+      const double mrel = double(s.relation_count()) / 1e6;
+      if (iss) iss_series.x.push_back(mrel), iss_series.y.push_back(i1), iss_series.labels.push_back(c.name);
+      if (emb) embree_series.x.push_back(mrel), embree_series.y.push_back(e1), embree_series.labels.push_back(c.name);
     }
     configs[fam] = cj;
+    sort_by_x(iss_series);
+    chart.series.push_back(std::move(iss_series));
+    sort_by_x(embree_series);
+    chart.series.push_back(std::move(embree_series));
+    ctx.report.charts.push_back(std::move(chart));
   }
   ctx.report.options["configs"] = configs;
   ctx.report.options["iss_options"] = Json::object();  // the method's defaults
@@ -302,6 +315,10 @@ Status run_ssv(BenchContext& ctx) {
             "wedges_reported", "wedges_validated", "acceptance_ratio", "bsp_nodes", "peak_mb"},
            {}};
   Table st{"stats", "every figure the SSV solver reports", {"scene", "silhouette_regions", "stat", "value"}, {}};
+  // Table 1 as a chart: time against relations, a point per scene (its label).
+  Chart chart{"ssv-table1", "SSV and embree, Table 1 scenes (label: scene)", "relations (millions)",
+              "time, single thread (s)", true, true, {}};
+  Series ssv_series{"ssv", {}, {}, {}}, ssv_off_series{"ssv-without-SR", {}, {}, {}}, embree_series{"embree", {}, {}, {}};
   for (const auto& fam : fams) {
     FamilyParams p;
     p.seed = o.seed;
@@ -318,6 +335,12 @@ Status run_ssv(BenchContext& ctx) {
     const Measured* any = ssv ? &*ssv : emb ? &*emb : nullptr;
     double e1 = emb ? emb->seconds_1t : kNaN, ea = emb ? emb->seconds_all : kNaN;
     double s1 = ssv ? ssv->seconds_1t : kNaN, sa = ssv ? ssv->seconds_all : kNaN;
+    {
+      const double mrel = double(s.relation_count()) / 1e6;
+      if (ssv) ssv_series.x.push_back(mrel), ssv_series.y.push_back(s1), ssv_series.labels.push_back(fam);
+      if (off) ssv_off_series.x.push_back(mrel), ssv_off_series.y.push_back(off->seconds_1t), ssv_off_series.labels.push_back(fam);
+      if (emb) embree_series.x.push_back(mrel), embree_series.y.push_back(e1), embree_series.labels.push_back(fam);
+    }
     t1.add_row({fam, s.receivers.size(), s.samples_per_receiver(), s.mesh.size(), double(s.relation_count()) / 1e6,
                 any ? 100.0 * blocked_share(s, any->result) : kNaN, e1, ea, emb ? emb->peak_mb : kNaN, s1, sa,
                 ssv ? ssv->peak_mb : kNaN, ratio(e1, s1), ratio(ea, sa)});
@@ -344,6 +367,13 @@ Status run_ssv(BenchContext& ctx) {
       }
     }
   }
+  sort_by_x(ssv_series);
+    chart.series.push_back(std::move(ssv_series));
+  sort_by_x(ssv_off_series);
+    chart.series.push_back(std::move(ssv_off_series));
+  sort_by_x(embree_series);
+    chart.series.push_back(std::move(embree_series));
+  ctx.report.charts.push_back(std::move(chart));
   ctx.report.tables.push_back(std::move(t1));
   if (have_ssv) ctx.report.tables.push_back(std::move(t3));
   if (have_sr) ctx.report.tables.push_back(std::move(t4));

@@ -547,6 +547,9 @@ Status run_oracle(BenchContext& ctx) {
           {"family", "triangles", "relations", "relation_seconds_1t", "relation_seconds_all", "relations_per_s_1t",
            "relations_per_s_all", "relation_peak_mb", "degenerate", "region_pairs", "region_seconds_1t",
            "region_seconds_all", "regions_per_s_1t", "regions_per_s_all", "region_peak_mb"}, {}};
+  Chart chart{"oracle-throughput", "Exact oracle throughput per family (label: family)", "scene triangles",
+              "answers per second, single thread (relations or regions /s)", true, true, {}};
+  Series rel_series{"relation-oracle", {}, {}, {}}, reg_series{"region-oracle", {}, {}, {}};
   for (const auto& fam : fams) {
     FamilyParams p;
     p.seed = o.seed;
@@ -582,7 +585,15 @@ Status run_oracle(BenchContext& ctx) {
     t.add_row({fam, s->mesh.size(), s->relation_count(), r1.seconds, ra.seconds, ratio(rel, r1.seconds),
                ratio(rel, ra.seconds), std::max(r1.peak_mb, ra.peak_mb), degenerate, pairs, g1.seconds, ga.seconds,
                ratio(double(pairs), g1.seconds), ratio(double(pairs), ga.seconds), std::max(g1.peak_mb, ga.peak_mb)});
+    const double tris = double(s->mesh.size());
+    rel_series.x.push_back(tris), rel_series.y.push_back(ratio(rel, r1.seconds)), rel_series.labels.push_back(fam);
+    reg_series.x.push_back(tris), reg_series.y.push_back(ratio(double(pairs), g1.seconds)), reg_series.labels.push_back(fam);
   }
+  sort_by_x(rel_series);
+    chart.series.push_back(std::move(rel_series));
+  sort_by_x(reg_series);
+    chart.series.push_back(std::move(reg_series));
+  ctx.report.charts.push_back(std::move(chart));
   ctx.report.tables.push_back(std::move(t));
   return {};
 }

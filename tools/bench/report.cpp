@@ -1,5 +1,6 @@
 // Benchmark reports: machine and commit records, CSV/JSON/Markdown tables, gnuplot
 // charts, log-log slope fits and RMS errors (see report.h).
+#include <algorithm>
 #include "tools/bench/report.h"
 
 #include <fcntl.h>
@@ -205,6 +206,19 @@ std::string table_markdown(const Table& t, int digits) {
     out += "\n";
   }
   return out;
+}
+
+void sort_by_x(Series& s) {
+  std::vector<size_t> idx(std::min(s.x.size(), s.y.size()));
+  for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+  std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
+  Series out{s.name, {}, {}, {}};
+  for (size_t i : idx) {
+    out.x.push_back(s.x[i]);
+    out.y.push_back(s.y[i]);
+    out.labels.push_back(i < s.labels.size() ? s.labels[i] : std::string());
+  }
+  s = std::move(out);
 }
 
 std::string chart_data(const Chart& c, std::vector<std::string>& names) {

@@ -58,6 +58,10 @@ struct Series {
   std::vector<double> x, y;
   std::vector<std::string> labels;  // optional point labels (e.g. "N=64")
 };
+// Orders a series' points (and labels) by x, for charts whose points come in another
+// order (configurations, families) and are drawn as one line.
+void sort_by_x(Series& s);
+
 struct Chart {
   std::string name;  // file stem
   std::string title, xlabel, ylabel;  // labels carry units, e.g. "time (s)"
