@@ -129,8 +129,10 @@ LightFrame make_frame(const Light& light) {
 }
 
 // Sutherland-Hodgman step, exact: keeps the part of the convex polygon with
-// dot(m, x) - e >= 0.
-std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e) {
+// dot(m, x) - e >= 0. New points are squashed (their lazy DAGs collapsed to exact values)
+// unless `squash_new` is false: the certified bound needs their intervals (and exact
+// signs where the intervals do not decide), not their exact values.
+std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool squash_new = true) {
   std::vector<V3> out;
   size_t n = poly.size();
   if (n == 0) return out;
@@ -146,31 +148,10 @@ std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e) {
     if ((sg[i] == CGAL::POSITIVE && sg[j] == CGAL::NEGATIVE) || (sg[i] == CGAL::NEGATIVE && sg[j] == CGAL::POSITIVE)) {
       FT t = val[i] / (val[i] - val[j]);
       V3 x = poly[i] + (poly[j] - poly[i]) * t;
-      for (int a = 0; a < 3; ++a) x[a] = squash(x[a]);
+      if (squash_new)
+        for (int a = 0; a < 3; ++a) x[a] = squash(x[a]);
       out.push_back(x);
     }
-  }
-  return out;
-}
-
-// clip without collapsing the new points' lazy DAGs: for the certified bound, which
-// needs their intervals (and exact signs where the intervals do not decide), not their
-// exact values.
-std::vector<V3> clip_lazy(const std::vector<V3>& poly, const V3& m, const FT& e) {
-  std::vector<V3> out;
-  size_t n = poly.size();
-  if (n == 0) return out;
-  std::vector<FT> val(n);
-  std::vector<CGAL::Sign> sg(n);
-  for (size_t i = 0; i < n; ++i) {
-    val[i] = dot(m, poly[i]) - e;
-    sg[i] = CGAL::sign(val[i]);
-  }
-  for (size_t i = 0; i < n; ++i) {
-    size_t j = (i + 1) % n;
-    if (sg[i] != CGAL::NEGATIVE) out.push_back(poly[i]);
-    if ((sg[i] == CGAL::POSITIVE && sg[j] == CGAL::NEGATIVE) || (sg[i] == CGAL::NEGATIVE && sg[j] == CGAL::POSITIVE))
-      out.push_back(poly[i] + (poly[j] - poly[i]) * (val[i] / (val[i] - val[j])));
   }
   return out;
 }
@@ -802,8 +783,8 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       bool reaches_receiver = false;
       for (const V3& x : poly) reaches_receiver |= pre.g_of(x) >= pre.g_r;
       if (reaches_receiver)
-        for (const auto& [m, e] : pre.sides) poly = clip_lazy(poly, m, e);
-      poly = clip_lazy(poly, pre.gn, pre.ge);
+        for (const auto& [m, e] : pre.sides) poly = clip(poly, m, e, false);
+      poly = clip(poly, pre.gn, pre.ge, false);
       if (poly.size() < 3) continue;
       // A wide lazy interval (a point next to the receiver's level: a small g_r - g) is
       // made tight by computing that coordinate exactly (the exact path computes every

@@ -850,12 +850,7 @@ bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
   // rounding (fuzz_iss c2dffefa...: a light sample 6.4e-44 above a flat receiver box, the
   // products of such differences underflow, and a sliver 0.5 beside the shaft counted as
   // blocking). Its relations go to the rays.
-  {
-    const int a = g.main_axis();
-    if (a < 0) return false;
-    const double gap = g.dir() > 0 ? g.light().lo[a] - g.receiver().hi[a] : g.receiver().lo[a] - g.light().hi[a];
-    if (!(gap > 0x1p-30 * g.scale())) return false;
-  }
+  if (g.main_axis() < 0 || !(main_axis_gap(g) > 0x1p-30 * g.scale())) return false;
   // Line 1, CAN-BLOCK-SHAFT.
   if (!can_block_shaft(s.box, g)) return false;
   Vec3d q1, q2;
@@ -877,14 +872,21 @@ bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
   return winding != 0;
 }
 
+bool misses_slab(const AABBd& box, int axis, double lo, double hi, bool touching_misses) {
+  const double blo = box.lo[axis], bhi = box.hi[axis];
+  return bhi < lo || blo > hi || (touching_misses && (bhi <= lo || blo >= hi));
+}
+
+double main_axis_gap(const ShaftGeometry& g) {
+  const int a = g.main_axis();
+  // Receiver below the light when dir > 0.
+  return g.dir() > 0 ? g.light().lo[a] - g.receiver().hi[a] : g.receiver().lo[a] - g.light().hi[a];
+}
+
 bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g) {
   const int a = g.main_axis();
   if (a < 0 || box.empty()) return false;
-  const double lo = g.clip_lo(), hi = g.clip_hi();
-  if (box.hi[a] < lo || box.lo[a] > hi) return true;
-  // The gap between the boxes on the main axis (receiver below the light when dir > 0).
-  const double gap = g.dir() > 0 ? g.light().lo[a] - g.receiver().hi[a] : g.receiver().lo[a] - g.light().hi[a];
-  return gap > 0.0 && (box.hi[a] <= lo || box.lo[a] >= hi);
+  return misses_slab(box, a, g.clip_lo(), g.clip_hi(), main_axis_gap(g) > 0.0);
 }
 
 bool blocks_ray(const BlockerContext& ctx, const Surface& s, int ax, const Vec3d& r, const Vec3d& l) {

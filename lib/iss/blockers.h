@@ -159,9 +159,15 @@ bool all_edges_outside(const Surface& s);
 AABBd clamp_box(const AABBd& box, int axis, double lo, double hi);
 // The same for the shaft's clip planes.
 AABBd clamped_box(const AABBd& box, const ShaftGeometry& g);
+// True when a box's extent on `axis` ends before lo or starts after hi, or, with
+// `touching_misses`, only reaches lo or hi (for a slab whose segments leave its end
+// planes at once, so a box touching one meets them only at their end points).
+bool misses_slab(const AABBd& box, int axis, double lo, double hi, bool touching_misses);
+// The gap between the shaft's boxes along the main axis (negative when they overlap).
+double main_axis_gap(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
-// its main-axis extent ends before the near clip plane or starts after the far one, or
-// only touches one of them while the boxes have a gap on the main axis.
+// misses_slab between the clip planes, touching counting as missing when the boxes have
+// a gap on the main axis.
 bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g);
 // CAN-BLOCK-SHAFT (line 1 of Figure 4.18): false when a surface with this box cannot
 // block the shaft: its box clamped to the clip planes misses one of three box-to-box

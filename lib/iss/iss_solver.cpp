@@ -352,9 +352,8 @@ class Traversal {
     const int ax = sh->g.main_axis();
     const double lo = std::min(rp[ax], lp[ax]), hi = std::max(rp[ax], lp[ax]);
     for (const Surface& s : sh->surfaces) {
-      const double blo = s.box.lo[ax], bhi = s.box.hi[ax];
-      if (bhi < lo || blo > hi || (lo < hi && (bhi <= lo || blo >= hi))) continue;
-      if (blo < lo || bhi > hi) {
+      if (misses_slab(s.box, ax, lo, hi, lo < hi)) continue;
+      if (s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
         ++n_fallback_;
         return embree_->occluded(rpf, lpf);
       }

@@ -95,13 +95,7 @@ Result<Scene> light_lattice_scene(const Scene& src, size_t receiver, size_t ligh
   std::vector<Vec3d> p(m);
   for (size_t i = 0; i < m; ++i) p[i] = to_double(L.polygon[i]) - o;
   Vec3d n(0, 0, 0);
-  for (size_t i = 0; i < m; ++i) {
-    const Vec3d& a = p[i];
-    const Vec3d& b = p[(i + 1) % m];
-    n.x += (a.y - b.y) * (a.z + b.z);
-    n.y += (a.z - b.z) * (a.x + b.x);
-    n.z += (a.x - b.x) * (a.y + b.y);
-  }
+  for (size_t i = 0; i < m; ++i) n += cross(p[i], p[(i + 1) % m]);  // as prepare_light, relative to o
   int k = 0;
   for (int j = 1; j < 3; ++j)
     if (std::abs(n[j]) > std::abs(n[k])) k = j;
