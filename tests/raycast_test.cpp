@@ -9,6 +9,9 @@
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "lib/solver.h"
+#include "oracle/relation_oracle.h"
+
+#include <random>
 
 using namespace visgate;
 
@@ -333,6 +336,61 @@ TEST(Raycast, VerifiedHitsAreConfirmedByTheDoubleTest) {
     }
   EXPECT_LE(differ, verified.rejected_hits());  // a rejected candidate may hide behind a true hit
   EXPECT_LT(differ * 100, total) << differ << " of " << total;
+}
+
+TEST(Raycast, CertainCrossingsAreExactHits) {
+  // Property against the exact oracle: whenever certainly_crosses_interior proves a
+  // crossing, the exact class of the open segment against the closed triangle is
+  // Blocked and the double-precision test confirms it. Inputs: general position,
+  // grid-snapped (exact coplanarity and segments through edges and vertices), slivers,
+  // segments nearly in the triangle's plane, coordinates far from the origin and tiny.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> grid(-2, 2);
+  size_t certain = 0, general = 0, general_certain = 0;
+  for (int it = 0; it < 200000; ++it) {
+    const int kind = it % 5;
+    auto pt = [&] {
+      if (kind == 1) return Vec3f(float(grid(rng)), float(grid(rng)), float(grid(rng)));
+      return Vec3f(u(rng), u(rng), u(rng));
+    };
+    Vec3f a = pt(), b = pt(), c = pt(), p = pt(), q = pt();
+    if (kind == 2) c = a + (b - a) * 0.5f + Vec3f(0, 0, 1e-7f * u(rng));  // a sliver
+    if (kind == 3) {  // end points within 1e-6 of the plane z = 0 of a flat triangle
+      a.z = b.z = c.z = 0.0f;
+      p.z = 1e-6f * u(rng);
+      q.z = 1e-6f * u(rng);
+    }
+    if (kind == 4) {  // far from the origin, or tiny
+      const float s = it % 2 ? 1e6f : 1e-30f;
+      for (Vec3f* v : {&a, &b, &c, &p, &q}) *v = *v * s + (it % 2 ? Vec3f(3e6f, 0, 0) : Vec3f());
+    }
+    const bool cert = raycast::certainly_crosses_interior(to_double(p), to_double(q), a, b, c);
+    if (kind == 0) {
+      ++general;
+      general_certain += cert;
+    }
+    if (!cert) continue;
+    ++certain;
+    EXPECT_EQ(oracle::classify_segment_triangle(p, q, a, b, c), oracle::RelationClass::Blocked) << it;
+    EXPECT_TRUE(raycast::segment_hits_triangle(a, b, c, p, q)) << it;
+  }
+  // It is a fast path, not a refusal: in general position almost every true crossing
+  // is proved (random segments cross a random triangle about 5% of the time).
+  EXPECT_GT(general_certain * 40, general) << general_certain << " of " << general;
+  EXPECT_GT(certain, general_certain);
+  // Hand-worked: the segment through the centroid of a unit triangle is proved, the
+  // ones through a vertex, along an edge, ending on the triangle or in its plane not.
+  const Vec3f a(0, 0, 1), b(3, 0, 1), c(0, 3, 1);
+  auto cert = [&](Vec3f p, Vec3f q) { return raycast::certainly_crosses_interior(to_double(p), to_double(q), a, b, c); };
+  EXPECT_TRUE(cert(Vec3f(1, 1, 0), Vec3f(1, 1, 2)));
+  EXPECT_TRUE(cert(Vec3f(1, 1, 2), Vec3f(1, 1, 0)));
+  EXPECT_FALSE(cert(Vec3f(0, 0, 0), Vec3f(0, 0, 2)));
+  EXPECT_FALSE(cert(Vec3f(1, 0, 0), Vec3f(1, 0, 2)));
+  EXPECT_FALSE(cert(Vec3f(1, 1, 0), Vec3f(1, 1, 1)));
+  EXPECT_FALSE(cert(Vec3f(1, 1, 1), Vec3f(1, 1, 2)));
+  EXPECT_FALSE(cert(Vec3f(-1, 1, 1), Vec3f(2, 1, 1)));
+  EXPECT_FALSE(cert(Vec3f(5, 5, 0), Vec3f(5, 5, 2)));
 }
 
 TEST(Raycast, RangedQueriesTellEndpointHitsFromInteriorHits) {

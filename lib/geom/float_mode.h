@@ -26,9 +26,20 @@ class IeeeFloatMode {
   IeeeFloatMode() : saved_(_mm_getcsr()) {
     if (saved_ & (kFlushToZero | kDenormalsAreZero)) _mm_setcsr(saved_ & ~(kFlushToZero | kDenormalsAreZero));
   }
+  // The same with the caller's MXCSR already read (`csr`, from current_csr() on this
+  // thread): hot callbacks skip the read (stmxcsr costs about as much as a small
+  // geometric test on some cores).
+  explicit IeeeFloatMode(unsigned csr) : saved_(csr) {
+    if (saved_ & (kFlushToZero | kDenormalsAreZero)) _mm_setcsr(saved_ & ~(kFlushToZero | kDenormalsAreZero));
+  }
+  static unsigned current_csr() { return _mm_getcsr(); }
   ~IeeeFloatMode() {
     if (saved_ & (kFlushToZero | kDenormalsAreZero)) _mm_setcsr(saved_);
   }
+#else
+  IeeeFloatMode() = default;
+  explicit IeeeFloatMode(unsigned) {}
+  static unsigned current_csr() { return 0; }
 #endif
   IeeeFloatMode(const IeeeFloatMode&) = delete;
   IeeeFloatMode& operator=(const IeeeFloatMode&) = delete;

@@ -100,6 +100,25 @@ bool segment_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, co
   return point_in_triangle_closed(a, b, c, n, x);
 }
 
+// Proof of a hit without the double-precision test (embree_solver.h).
+bool certainly_crosses_interior(const Vec3d& p, const Vec3d& q, const Vec3f& fa, const Vec3f& fb, const Vec3f& fc) {
+  const Vec3d d = q - p, A = to_double(fa) - p, B = to_double(fb) - p, C = to_double(fc) - p;
+  const double wa = dot(d, cross(B, C)), wb = dot(d, cross(C, A)), wc = dot(d, cross(A, B));
+  // One bound for all four products: with m the largest |coordinate| of A, B, C and
+  // n that of d, each permanent is at most 6 n m^2 (det's: 6 m^3), so 8 eps of it is
+  // below 48 eps n m^2.
+  const double m = max_component(vmax(vabs(A), vmax(vabs(B), vabs(C)))), n = max_component(vabs(d));
+  const double e = 48.0 * 0x1p-53 * n * m * m, edet = 48.0 * 0x1p-53 * m * m * m;
+  const bool pos = wa > e && wb > e && wc > e, neg = wa < -e && wb < -e && wc < -e;
+  if (!pos && !neg) return false;
+  const double det = dot(A, cross(B, C));
+  if (pos ? !(det > edet) : !(det < -edet)) return false;  // t > 0
+  // t < 1: |det| < |w_a + w_b + w_c| (one sign), which is at least the sum of the
+  // |w_i| less 3 e, less the rounding of the two additions (2 eps of the sum; 4 allowed).
+  const double sum = std::abs(wa) + std::abs(wb) + std::abs(wc);
+  return std::abs(det) + edet < sum - 3.0 * e - 4.0 * 0x1p-53 * sum;
+}
+
 bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
   const IeeeFloatMode ieee;
   for (const auto& t : soup.triangles)
@@ -126,20 +145,25 @@ struct VerifyContext {
   bool ranged = false;       // false: the segment test, t in (0, 1]
   const Vec3f* fan_to = nullptr;  // a packet from `from`: lane k (ray id k) ends at fan_to[k]
   const TriangleSoup* soup = nullptr;
+  unsigned csr = IeeeFloatMode::current_csr();  // the querying thread's MXCSR (the filter runs on it)
   size_t rejected = 0;
 };
 
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
-// precision test of the same query agrees (see embree_solver.h, "Hit verification").
+// precision test of the same query agrees (see embree_solver.h, "Hit verification"),
+// or, for segment queries, when certainly_crosses_interior proves it first.
 void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
-  const IeeeFloatMode ieee;  // this may run on a TBB worker with FTZ/DAZ on
+  // The filter runs on the querying thread, which may be a TBB worker with FTZ/DAZ on.
   auto* vc = reinterpret_cast<VerifyContext*>(args->context);
+  const IeeeFloatMode ieee(vc->csr);
+  const Vec3d p = to_double(vc->from);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const auto& t = vc->soup->triangles[prim];
     const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
     const Vec3f& to = vc->fan_to ? vc->fan_to[RTCRayN_id(args->ray, args->N, i)] : vc->to;
+    if (!vc->ranged && certainly_crosses_interior(p, to_double(to), a, b, c)) continue;
     const bool confirmed = vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
                                       : segment_hits_triangle(a, b, c, vc->from, to);
     if (!confirmed) {

@@ -59,6 +59,22 @@ bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f&
 // The test of fallback_occluded for one triangle (a, b, c), with the same conventions.
 bool segment_hits_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& from, const Vec3f& to);
 
+// True when the segment p q (float end points in double) certainly crosses the open
+// triangle (a, b, c) at a parameter strictly inside (0, 1): such a segment is blocked
+// under every endpoint and edge convention, and segment_hits_triangle confirms it. With
+// A = a - p, B = b - p, C = c - p and d = q - p (differences rounded in double, as in
+// Shewchuk's orient3d), the line crosses the triangle's interior exactly when the
+// triple products w_a = d.(B x C), w_b = d.(C x A), w_c = d.(A x B) share one strict
+// sign, and it crosses the plane at t = det(A, B, C) / (w_a + w_b + w_c). Each product
+// is within 8 eps of its permanent (Shewchuk's orient3d error bound A,
+// (7 + 56 eps) eps, eps = 2^-53), bounded here by the largest coordinates of the
+// differences; every sign and the comparison |det| < |sum| must clear those bounds,
+// else the answer is false (not certain; not a miss). The
+// verification filter accepts a segment query's candidate hit on it before running the
+// double-precision test: no division and no branch on a projection axis, about a third
+// of that test's cost. Exact answer whenever it is true.
+bool certainly_crosses_interior(const Vec3d& p, const Vec3d& q, const Vec3f& a, const Vec3f& b, const Vec3f& c);
+
 // A committed Embree scene over a triangle soup, for methods that cast rays (ISS leaves,
 // SSV's reference ray) as well as for the baseline itself. Thread-safe queries. All
 // scenes share one Embree device per process (created on first use, thread-safe, kept
@@ -76,7 +92,8 @@ bool segment_hits_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, const
 // with segment_hits_triangle (ranged queries: the ranged test of fallback_occluded)
 // and rejects the ones it does not confirm, so a hit needs
 // both Embree and the double-precision test; misses are Embree's alone (the filter sees
-// only candidates). The filter runs on hits only, which occlusion rays stop at.
+// only candidates). The filter runs on hits only, which occlusion rays stop at; a
+// segment query's hit that certainly_crosses_interior proves needs no further test.
 class EmbreeScene {
  public:
   EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits = true);
