@@ -119,8 +119,9 @@ class EmbreeScene {
   // let one ray stand for other relations must not trust such a miss.
   bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool& disputed) const;
 
-  // occluded(from, to[k]) for k < n (n <= 16), traced as one Embree packet
-  // (rtcOccluded16, rays set up exactly as occluded() does, inactive lanes masked):
+  // occluded(from, to[k]) for k < n (n <= 16), traced as Embree packets of the
+  // machine's native width (rtcOccluded16 with AVX-512, else two rtcOccluded8; rays set
+  // up exactly as occluded() does, inactive lanes masked):
   // segments from one point to nearby points are coherent and a packet traverses the
   // BVH once for all of them. Segments outside Embree's domain go to fallback_occluded
   // one by one. Embree's packet and single-ray kernels may disagree only where its own
