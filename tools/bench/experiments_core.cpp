@@ -159,10 +159,10 @@ Status run_iss_target(BenchContext& ctx) {
     auto iss = ctx.solver("iss"), emb = ctx.solver("embree");
     SolveOptions so;
     so.seed = o.seed;
-    ctx.progress.step("iss " + r.family + " " + r.config);
-    Measured mi = measure_solve(*iss, s, so, cfg);
-    ctx.progress.step("embree " + r.family + " " + r.config);
-    Measured me = measure_solve(*emb, s, so, cfg);
+    // Alternating runs (iss, embree, iss, ...): the ratio's two sides see the same
+    // phases of a shared machine.
+    ctx.progress.step("iss and embree " + r.family + " " + r.config);
+    auto [mi, me] = measure_alternating(*iss, *emb, s, so, cfg);
     bool base = r.family == "rooms" && r.config == "target";
     if (base) {
       base_iss = mi.seconds_1t;

@@ -89,6 +89,37 @@ Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& b
   return m;
 }
 
+std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Scene& scene, const SolveOptions& base,
+                                                  const MeasureConfig& cfg) {
+  MeasureConfig one = cfg;
+  one.repeat = 1;
+  one.single = true;
+  one.all = false;
+  std::pair<Measured, Measured> out;
+  auto merge = [](Measured& into, Measured&& run) {
+    if (into.runs_1t == 0) {
+      into = std::move(run);
+      return;
+    }
+    into.seconds_1t = std::min(into.seconds_1t, run.seconds_1t);
+    into.cpu_1t = std::min(into.cpu_1t, run.cpu_1t);
+    into.peak_mb = std::max(into.peak_mb, run.peak_mb);
+    into.runs_1t += run.runs_1t;
+  };
+  bool more_a = true, more_b = true;
+  for (int r = 0; r < std::max(1, cfg.repeat) && (more_a || more_b); ++r) {
+    if (more_a) {
+      merge(out.first, measure_solve(a, scene, base, one));
+      more_a = out.first.seconds_1t <= cfg.budget;
+    }
+    if (more_b) {
+      merge(out.second, measure_solve(b, scene, base, one));
+      more_b = out.second.seconds_1t <= cfg.budget;
+    }
+  }
+  return out;
+}
+
 bool SweepGuard::skip(const std::string& method, double size, std::string* why) const {
   auto it = last_.find(method);
   if (it == last_.end() || it->second.first <= 0) return false;

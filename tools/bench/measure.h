@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <limits>
+#include <utility>
 #include <map>
 #include <string>
 #include <vector>
@@ -58,6 +59,13 @@ struct Measured {
 // acceleration structures, excluding loading and mesh preparation); a method that
 // leaves it 0 is timed around the call instead.
 Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& base, const MeasureConfig& cfg);
+
+// Two solvers measured single-threaded in alternation (a, b, a, b, ...: cfg.repeat
+// rounds; a solver whose run exceeds cfg.budget is not run again), so that a slow
+// phase of a shared machine (another process's burst on the sibling hyperthread)
+// falls on both rather than on all runs of one. Same figures as measure_solve.
+std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Scene& scene, const SolveOptions& base,
+                                                  const MeasureConfig& cfg);
 
 // Times any callable the same way (min over `repeat` runs) and records its peak.
 struct Timed {
