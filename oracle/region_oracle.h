@@ -85,8 +85,13 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, c
 // strictly inside the slab is projected in interval arithmetic; any other (or one whose
 // intervals come out wide) goes through the exact path's clipping with lazy exact
 // numbers (exact signs), its projected vertices taken as intervals, computed exactly
-// where those are wide. Each shadow S' is the convex hull of the interval midpoints
-// (vertex errors delta). The area of the light minus the union of the S' is computed by
+// where those are wide. A shadow reaching beyond L's box grown by its own extent is taken
+// from the triangle clipped to the pyramid instead (its part inside L: the same region).
+// A triangle's own vertices are projected by one interval formula whichever way the
+// triangle goes, and a clip point on an edge is formed from the edge's lexicographically
+// smaller end, so shadows sharing a vertex or an edge get the same double points and
+// their shared edges are exactly collinear. Each shadow S' is the convex hull of the
+// interval midpoints (vertex errors delta). The area of the light minus the union of the S' is computed by
 // a boundary integral whose side decisions are exact orientations on the doubles (shared
 // and collinear edges included) and whose rounded cut parameters enter with error
 // bounds; sum (delta min(per S', per L) + 3 pi delta^2) covers the vertex errors
