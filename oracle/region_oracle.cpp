@@ -342,10 +342,11 @@ struct Prepared {
 
 // Fills `p` up to the fast-path classification; false when the receiver is on the light
 // plane (edge_on: nothing else is filled).
-bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_paths, Prepared& p) {
+bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_paths, Prepared& p,
+             const LightFrame* frame = nullptr) {
   const Light& light = scene.lights[light_index];
   const Receiver& rec = scene.receivers[receiver];
-  p.f = make_frame(light);
+  p.f = frame ? *frame : make_frame(light);
   LightFrame& f = p.f;
   p.light_area2 = f.polygon.area();
   p.r = exact3(rec.p);
@@ -402,13 +403,51 @@ bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_
 
 }  // namespace
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
+struct RegionCache::Impl {
+  const Scene* scene = nullptr;
+  std::vector<std::unique_ptr<LightFrame>> frames;  // per light, made at first use
+  // The last pair prepared with fast paths (visible_fraction_bound's), for the
+  // visible_region of the same pair that may follow.
+  Prepared last;
+  size_t last_receiver = SIZE_MAX, last_light = SIZE_MAX;
+  bool last_off_plane = false;
+
+  const LightFrame& frame(size_t l) {
+    if (frames[l] == nullptr) frames[l] = std::make_unique<LightFrame>(make_frame(scene->lights[l]));
+    return *frames[l];
+  }
+  // prepare() for (receiver, light), through the cache; the result stays in `last`.
+  bool prepare_last(size_t receiver, size_t light) {
+    if (receiver != last_receiver || light != last_light) {
+      last = Prepared{};
+      last_receiver = SIZE_MAX;  // until filled
+      last_off_plane = prepare(*scene, receiver, light, true, last, &frame(light));
+      last_receiver = receiver;
+      last_light = light;
+    }
+    return last_off_plane;
+  }
+};
+
+RegionCache::RegionCache(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  impl_->scene = &scene;
+  impl_->frames.resize(scene.lights.size());
+}
+RegionCache::~RegionCache() = default;
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt,
+                            RegionCache* cache) {
   const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
   VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  VG_CHECK(cache == nullptr || cache->impl().scene == &scene);
   const Receiver& rec = scene.receivers[receiver];
   RegionAnswer ans;
-  Prepared pre;
-  bool off_plane = prepare(scene, receiver, light_index, opt.fast_paths, pre);
+  Prepared local;
+  const bool cached = cache != nullptr && opt.fast_paths;
+  const bool off_plane = cached ? cache->impl().prepare_last(receiver, light_index)
+                                : prepare(scene, receiver, light_index, opt.fast_paths, local,
+                                          cache ? &cache->impl().frame(light_index) : nullptr);
+  const Prepared& pre = cached ? cache->impl().last : local;
   const LightFrame& f = pre.f;
   const FT& light_area2 = pre.light_area2;
   ans.light_area = to_double_exact(light_area2) * f.scale;
@@ -683,12 +722,16 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
 
 }  // namespace
 
-FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light_index) {
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light_index, RegionCache* cache) {
   const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
   VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  VG_CHECK(cache == nullptr || cache->impl().scene == &scene);
   FractionBound out;
-  Prepared pre;
-  if (!prepare(scene, receiver, light_index, true, pre)) {
+  Prepared local;
+  const bool off_plane = cache ? cache->impl().prepare_last(receiver, light_index)
+                               : prepare(scene, receiver, light_index, true, local);
+  const Prepared& pre = cache ? cache->impl().last : local;
+  if (!off_plane) {
     out.edge_on = true;
     return out;
   }

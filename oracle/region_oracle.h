@@ -49,6 +49,7 @@
 // Double precision, not exact.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "lib/scene/scene.h"
@@ -74,7 +75,28 @@ struct RegionOptions {
   bool fast_paths = true;  // false: every culled triangle goes to the exact path (tests)
 };
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {});
+// Work visible_fraction_bound and visible_region share within one scene, for a caller
+// that checks many pairs of it in one thread (the comparator): each light's exact frame
+// is made once, and the preparation of the last pair (the frame, the pyramid, the cull
+// and the fast-path classification) is kept for a visible_region of that pair that
+// follows its bound. Answers are the same with and without a cache (the same exact
+// values, only not computed again). Not thread-safe: one cache per thread; the scene
+// must outlive it and stay unchanged.
+class RegionCache {
+ public:
+  explicit RegionCache(const Scene& scene);
+  ~RegionCache();
+  RegionCache(const RegionCache&) = delete;
+  RegionCache& operator=(const RegionCache&) = delete;
+  struct Impl;  // region_oracle.cpp
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {},
+                            RegionCache* cache = nullptr);
 
 // Certified enclosure of the visible fraction, without Boolean operations (for the
 // comparator: most pairs are decided by it, the rest by visible_region). When
@@ -106,6 +128,6 @@ struct FractionBound {
   size_t shadows = 0;            // double shadow triangles in the boundary integral
   const char* why = "";          // when not certified and not edge-on: the reason (rare)
 };
-FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light);
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light, RegionCache* cache = nullptr);
 
 }  // namespace visgate::oracle
