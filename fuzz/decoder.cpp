@@ -298,6 +298,14 @@ Result<DecodedCase> decode_case(const uint8_t* data, size_t size, const DecodeLi
   return c;
 }
 
+DecodeLimits target_limits(const std::string& target) { return method_limits(target_method(target)); }
+
+DecodeLimits method_limits(const std::string& method) {
+  DecodeLimits lim;
+  if (method == "plucker-bsp") lim.max_triangles = 24;
+  return lim;
+}
+
 std::string target_method(const std::string& target) {
   if (target == "fuzz_iss") return "iss";
   if (target == "fuzz_ssv") return "ssv";

@@ -8,7 +8,7 @@
 // that wrote it:
 //
 //   auto bytes = read the crash file;
-//   auto c = visgate::fuzz::decode_case(bytes.data(), bytes.size(), visgate::fuzz::DecodeLimits{});
+//   auto c = visgate::fuzz::decode_case(bytes.data(), bytes.size(), visgate::fuzz::method_limits(method));
 //   if (!c) -> exit 2 with c.error().message;
 //   c->scene                                   the scene the target solved
 //   visgate::fuzz::decode_options(c->option_selector, solver->options())
@@ -48,7 +48,8 @@
 namespace visgate::fuzz {
 
 // Hard caps on the decoded scene. Defaults keep a differential run (method + relation
-// oracle) well under a millisecond for the ray-casting methods.
+// oracle) well under a millisecond for the ray-casting methods; target_limits gives
+// each target's own (smaller for fuzz_plucker).
 struct DecodeLimits {
   size_t max_triangles = 48;     // blocker triangles
   size_t max_receivers = 6;
@@ -57,6 +58,23 @@ struct DecodeLimits {
   size_t max_relations = 96;     // receivers * samples over all lights
   size_t max_perturbations = 12;
 };
+
+// The limits a differential target decodes with; every reader of that target's inputs
+// (the target, its replay build, `visgate minimize`) must use them, or a crash file
+// decodes to another scene. fuzz_plucker: at most 24 triangles. Its run is the exact
+// region check of every receiver-light pair (Epeck, CGAL's Boolean operations) and
+// plucker-bsp's exact paths, both growing faster than linearly with the triangles; with
+// 48 it made about a tenth of the other targets' runs per CPU-second (README "Speed
+// (exec/s) and campaigns"). The cap changes what a count byte decodes to (the value is
+// taken modulo the range), so seeds decode to other scenes, but the open finding
+// corpus/fuzz/open/fuzz_plucker/6339247d... (21 triangles) decodes to the same scene
+// under 24 (not under 16 to 23, checked) and still fails. Fewer receivers or lights
+// would lose it: with coherence on, dropping its receivers 3 and 4 hides the mismatch
+// at receiver 2. Every other target: DecodeLimits{}.
+DecodeLimits target_limits(const std::string& target);
+// The same for the target that exercises `method` (target_method's inverse):
+// "plucker-bsp" -> fuzz_plucker's limits; DecodeLimits{} for any other method.
+DecodeLimits method_limits(const std::string& method);
 
 // Decodes scene bytes (see the file comment). Errors: non-finite coordinates ("decoded
 // scene: mesh vertex 3: coordinate is NaN or infinite"), lights rejected by

@@ -64,7 +64,8 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   if (!t.solver) return 0;
   static ThreadLimit one_thread(1);  // tiny scenes: threads cost more than they save
 
-  auto decoded = decode_case(data, size, DecodeLimits{});
+  static const DecodeLimits limits = target_limits(target);  // one target per process
+  auto decoded = decode_case(data, size, limits);
   if (!decoded) return 0;  // malformed or non-finite input, rejected cleanly
   const Scene& scene = decoded->scene;
   SolveOptions opt;

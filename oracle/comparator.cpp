@@ -107,8 +107,8 @@ bool interior_point(const Polygon3f& poly, Vec3f& out) {
 // ratio rounded to double, so lo <= ef <= hi; fl(mf - ef) is monotone in ef, so
 // |mf - ef| in double is at most the larger of its values at lo and at hi. Anything else
 // (including every mismatch and NaN) goes to visible_region, which also makes the report.
-bool fraction_certainly_within(const Scene& scene, size_t i, size_t l, double mf) {
-  FractionBound b = visible_fraction_bound(scene, i, l);
+bool fraction_certainly_within(const Scene& scene, size_t i, size_t l, double mf, RegionCache& cache) {
+  FractionBound b = visible_fraction_bound(scene, i, l, &cache);
   if (b.edge_on) return true;
   return b.certified && std::abs(mf - b.lo) <= kFractionTolerance && std::abs(mf - b.hi) <= kFractionTolerance;
 }
@@ -119,12 +119,14 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
   Comparison c;
   VG_CHECK(method.receivers.size() == scene.receivers.size());
   std::unique_ptr<BlockedSegmentTest> blocked;  // built at the first fragment
+  RegionCache cache(scene);  // light frames made once; a pair's fallback reuses its bound's preparation
   for (size_t i : receivers) {
     VG_CHECK(i < scene.receivers.size());
     const ReceiverResult& rr = method.receivers[i];
     for (size_t l = 0; l < scene.lights.size(); ++l) {
-      if (l < rr.visible_fraction.size() && !fraction_certainly_within(scene, i, l, double(rr.visible_fraction[l]))) {
-        RegionAnswer exact = visible_region(scene, i, l);
+      if (l < rr.visible_fraction.size() &&
+          !fraction_certainly_within(scene, i, l, double(rr.visible_fraction[l]), cache)) {
+        RegionAnswer exact = visible_region(scene, i, l, RegionOptions{}, &cache);
         double mf = double(rr.visible_fraction[l]);
         if (!exact.edge_on && !(std::abs(mf - exact.visible_fraction) <= kFractionTolerance)) {
           Mismatch mm;

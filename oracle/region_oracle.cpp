@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 
 #include "lib/geom/float_mode.h"
 
@@ -132,10 +133,20 @@ LightFrame make_frame(const Light& light) {
 // dot(m, x) - e >= 0. New points are squashed (their lazy DAGs collapsed to exact values)
 // unless `squash_new` is false: the certified bound needs their intervals (and exact
 // signs where the intervals do not decide), not their exact values.
-std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool squash_new = true) {
+// `tags` (optional, parallel to poly, updated): kept vertices keep their tag (an index
+// into `tag_points`, the triangle's float vertices), new ones get -1. A new point on an
+// edge between two tagged vertices is formed from the lexicographically smaller one, so
+// two triangles sharing that edge form the same lazy expression for it (the same
+// interval, hence the same double point in the certified bound).
+std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool squash_new = true,
+                     std::vector<int>* tags = nullptr, const Vec3f* tag_points = nullptr) {
   std::vector<V3> out;
+  std::vector<int> out_tags;
   size_t n = poly.size();
-  if (n == 0) return out;
+  if (n == 0) {
+    if (tags) tags->clear();
+    return out;
+  }
   std::vector<FT> val(n);
   std::vector<CGAL::Sign> sg(n);
   for (size_t i = 0; i < n; ++i) {
@@ -144,15 +155,25 @@ std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool
   }
   for (size_t i = 0; i < n; ++i) {
     size_t j = (i + 1) % n;
-    if (sg[i] != CGAL::NEGATIVE) out.push_back(poly[i]);
+    if (sg[i] != CGAL::NEGATIVE) {
+      out.push_back(poly[i]);
+      if (tags) out_tags.push_back((*tags)[i]);
+    }
     if ((sg[i] == CGAL::POSITIVE && sg[j] == CGAL::NEGATIVE) || (sg[i] == CGAL::NEGATIVE && sg[j] == CGAL::POSITIVE)) {
-      FT t = val[i] / (val[i] - val[j]);
-      V3 x = poly[i] + (poly[j] - poly[i]) * t;
+      size_t from = i, to = j;
+      if (tags && tag_points && (*tags)[i] >= 0 && (*tags)[j] >= 0) {
+        const Vec3f &pi = tag_points[(*tags)[i]], &pj = tag_points[(*tags)[j]];
+        if (std::tie(pj.x, pj.y, pj.z) < std::tie(pi.x, pi.y, pi.z)) std::swap(from, to);
+      }
+      FT t = val[from] / (val[from] - val[to]);
+      V3 x = poly[from] + (poly[to] - poly[from]) * t;
       if (squash_new)
         for (int a = 0; a < 3; ++a) x[a] = squash(x[a]);
       out.push_back(x);
+      if (tags) out_tags.push_back(-1);
     }
   }
+  if (tags) *tags = std::move(out_tags);
   return out;
 }
 
@@ -321,10 +342,11 @@ struct Prepared {
 
 // Fills `p` up to the fast-path classification; false when the receiver is on the light
 // plane (edge_on: nothing else is filled).
-bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_paths, Prepared& p) {
+bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_paths, Prepared& p,
+             const LightFrame* frame = nullptr) {
   const Light& light = scene.lights[light_index];
   const Receiver& rec = scene.receivers[receiver];
-  p.f = make_frame(light);
+  p.f = frame ? *frame : make_frame(light);
   LightFrame& f = p.f;
   p.light_area2 = f.polygon.area();
   p.r = exact3(rec.p);
@@ -381,13 +403,51 @@ bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_
 
 }  // namespace
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt) {
+struct RegionCache::Impl {
+  const Scene* scene = nullptr;
+  std::vector<std::unique_ptr<LightFrame>> frames;  // per light, made at first use
+  // The last pair prepared with fast paths (visible_fraction_bound's), for the
+  // visible_region of the same pair that may follow.
+  Prepared last;
+  size_t last_receiver = SIZE_MAX, last_light = SIZE_MAX;
+  bool last_off_plane = false;
+
+  const LightFrame& frame(size_t l) {
+    if (frames[l] == nullptr) frames[l] = std::make_unique<LightFrame>(make_frame(scene->lights[l]));
+    return *frames[l];
+  }
+  // prepare() for (receiver, light), through the cache; the result stays in `last`.
+  bool prepare_last(size_t receiver, size_t light) {
+    if (receiver != last_receiver || light != last_light) {
+      last = Prepared{};
+      last_receiver = SIZE_MAX;  // until filled
+      last_off_plane = prepare(*scene, receiver, light, true, last, &frame(light));
+      last_receiver = receiver;
+      last_light = light;
+    }
+    return last_off_plane;
+  }
+};
+
+RegionCache::RegionCache(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  impl_->scene = &scene;
+  impl_->frames.resize(scene.lights.size());
+}
+RegionCache::~RegionCache() = default;
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_index, const RegionOptions& opt,
+                            RegionCache* cache) {
   const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
   VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  VG_CHECK(cache == nullptr || cache->impl().scene == &scene);
   const Receiver& rec = scene.receivers[receiver];
   RegionAnswer ans;
-  Prepared pre;
-  bool off_plane = prepare(scene, receiver, light_index, opt.fast_paths, pre);
+  Prepared local;
+  const bool cached = cache != nullptr && opt.fast_paths;
+  const bool off_plane = cached ? cache->impl().prepare_last(receiver, light_index)
+                                : prepare(scene, receiver, light_index, opt.fast_paths, local,
+                                          cache ? &cache->impl().frame(light_index) : nullptr);
+  const Prepared& pre = cached ? cache->impl().last : local;
   const LightFrame& f = pre.f;
   const FT& light_area2 = pre.light_area2;
   ans.light_area = to_double_exact(light_area2) * f.scale;
@@ -662,12 +722,16 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
 
 }  // namespace
 
-FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light_index) {
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light_index, RegionCache* cache) {
   const IeeeFloatMode ieee;  // Embree leaves FTZ/DAZ on in TBB workers (lib/geom/float_mode.h)
   VG_CHECK(receiver < scene.receivers.size() && light_index < scene.lights.size());
+  VG_CHECK(cache == nullptr || cache->impl().scene == &scene);
   FractionBound out;
-  Prepared pre;
-  if (!prepare(scene, receiver, light_index, true, pre)) {
+  Prepared local;
+  const bool off_plane = cache ? cache->impl().prepare_last(receiver, light_index)
+                               : prepare(scene, receiver, light_index, true, local);
+  const Prepared& pre = cache ? cache->impl().last : local;
+  if (!off_plane) {
     out.edge_on = true;
     return out;
   }
@@ -707,6 +771,18 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       I dx = I(p0.x()) - p1.x(), dy = I(p0.y()) - p1.y();
       light_per += CGAL::sqrt(dx * dx + dy * dy).sup();
     }
+  }
+  // L's frame box grown by its own extent on every side: a shadow vertex beyond it is
+  // "far" (below).
+  double near_lo[2], near_hi[2];
+  {
+    double lo[2] = {polys[0].v[0].x(), polys[0].v[0].y()}, hi[2] = {lo[0], lo[1]};
+    for (const P2d& v : polys[0].v) {
+      lo[0] = std::min(lo[0], v.x()), hi[0] = std::max(hi[0], v.x());
+      lo[1] = std::min(lo[1], v.y()), hi[1] = std::max(hi[1], v.y());
+    }
+    const double ext = std::max(hi[0] - lo[0], hi[1] - lo[1]);
+    for (int a = 0; a < 2; ++a) near_lo[a] = lo[a] - ext, near_hi[a] = hi[a] + ext;
   }
   const TriangleSoup& mesh = scene.mesh;
   const FastPass& fp = pre.fp;
@@ -755,37 +831,54 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       vs.emplace_back(um, wm);
       return true;
     };
+    // A shadow reaching far beyond L (a vertex next to the receiver's level projects far
+    // out) is replaced by its part inside L, the projection of the triangle clipped to
+    // the pyramid: L minus the union is the same set. Far vertices made the bound useless:
+    // their errors enter delta (Steiner's term grows with delta^2) and the cut parameters
+    // of their long edges cancel catastrophically.
+    auto far = [&](const std::vector<P2d>& pts) {
+      for (const P2d& v : pts)
+        if (!(v.x() >= near_lo[0] && v.x() <= near_hi[0] && v.y() >= near_lo[1] && v.y() <= near_hi[1])) return true;
+      return false;
+    };
     // A vertex interval wider than 2^-40 of its magnitude (or not finite) is not used
     // from the plain interval projection: the triangle then takes the lazy path below.
     auto narrow = [](const I& v) {
       return std::isfinite(v.inf()) && std::isfinite(v.sup()) &&
              v.sup() - v.inf() <= 0x1p-40 * std::max(std::abs(v.inf()), std::abs(v.sup()));
     };
+    // Projection of a triangle vertex (a float point strictly inside the slab) in interval
+    // arithmetic; false when the interval is not narrow. Both paths below project the
+    // triangle's own vertices with it, so a vertex shared by two triangles gets the same
+    // double point in both shadows whichever path each takes, and their shared edges are
+    // exactly collinear (edge_span's exact case) instead of nearly so, where the cut
+    // parameters are ill-conditioned and the bound came out wide.
+    auto project_vertex = [&](const Vec3f& x, I& u, I& w) {
+      Upward up;
+      I xI[3] = {I(double(x.x)), I(double(x.y)), I(double(x.z))};
+      I den = sg * (nI[0] * (rI[0] - xI[0]) + nI[1] * (rI[1] - xI[1]) + nI[2] * (rI[2] - xI[2]));  // g_r - g(x)
+      I sc = grI / den;
+      u = rI[f.i1] + (xI[f.i1] - rI[f.i1]) * sc;
+      w = rI[f.i2] + (xI[f.i2] - rI[f.i2]) * sc;
+      return narrow(u) && narrow(w);
+    };
     bool projected = false;
     if (inside) {  // no clipping: the three vertices projected in interval arithmetic
-      Upward up;
       projected = true;
       for (int k = 0; k < 3 && projected; ++k) {
-        const Vec3f& x = cf[k];
-        I xI[3] = {I(double(x.x)), I(double(x.y)), I(double(x.z))};
-        I den = sg * (nI[0] * (rI[0] - xI[0]) + nI[1] * (rI[1] - xI[1]) + nI[2] * (rI[2] - xI[2]));  // g_r - g(x)
-        I sc = grI / den;
-        I u = rI[f.i1] + (xI[f.i1] - rI[f.i1]) * sc, w = rI[f.i2] + (xI[f.i2] - rI[f.i2]) * sc;
-        projected = narrow(u) && narrow(w) && add_vertex(u, w);
+        I u, w;
+        projected = project_vertex(cf[k], u, w) && add_vertex(u, w);
       }
+      if (projected && far(vs)) projected = false;
       if (!projected) {
         vs.clear();
         delta = 0;
       }
     }
     if (!projected) {  // the exact path's clipping with lazy exact numbers: exact signs, interval points
-      std::vector<V3> poly = {exact3(cf[0]), exact3(cf[1]), exact3(cf[2])};
+      std::vector<V3> tri = {exact3(cf[0]), exact3(cf[1]), exact3(cf[2])};
       bool reaches_receiver = false;
-      for (const V3& x : poly) reaches_receiver |= pre.g_of(x) >= pre.g_r;
-      if (reaches_receiver)
-        for (const auto& [m, e] : pre.sides) poly = clip(poly, m, e, false);
-      poly = clip(poly, pre.gn, pre.ge, false);
-      if (poly.size() < 3) continue;
+      for (const V3& x : tri) reaches_receiver |= pre.g_of(x) >= pre.g_r;
       // A wide lazy interval (a point next to the receiver's level: a small g_r - g) is
       // made tight by computing that coordinate exactly (the exact path computes every
       // one) and taking the exact value's interval.
@@ -794,14 +887,37 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
         if (narrow(a0)) return a0;
         return I(CGAL::to_interval(v.exact()));
       };
-      for (const V3& x : poly) {
-        FT sc = pre.g_r / (pre.g_r - pre.g_of(x));
-        FT u = pre.r[f.i1] + (x[f.i1] - pre.r[f.i1]) * sc, w = pre.r[f.i2] + (x[f.i2] - pre.r[f.i2]) * sc;
-        if (!add_vertex(tight(u), tight(w))) {
-          out.why = "clipped projection not finite";
-          return out;
+      // Without the pyramid clip first; a far shadow is projected again from the part of
+      // the triangle inside the pyramid.
+      bool finite = true;
+      for (bool to_pyramid : {reaches_receiver, true}) {
+        std::vector<V3> poly = tri;
+        std::vector<int> tags = {0, 1, 2};  // which triangle vertex, -1 for a clip point
+        if (to_pyramid)
+          for (const auto& [m, e] : pre.sides) poly = clip(poly, m, e, false, &tags, cf);
+        poly = clip(poly, pre.gn, pre.ge, false, &tags, cf);
+        vs.clear();
+        delta = 0;
+        for (size_t k = 0; k < poly.size() && finite && poly.size() >= 3; ++k) {
+          const V3& x = poly[k];
+          I ui, wi;
+          // A kept triangle vertex has 0 <= g < g_r unless it is the receiver itself, whose
+          // projection has no finite enclosure either way.
+          if (tags[k] >= 0 && project_vertex(cf[tags[k]], ui, wi)) {
+            finite = add_vertex(ui, wi);
+            continue;
+          }
+          FT sc = pre.g_r / (pre.g_r - pre.g_of(x));
+          FT u = pre.r[f.i1] + (x[f.i1] - pre.r[f.i1]) * sc, w = pre.r[f.i2] + (x[f.i2] - pre.r[f.i2]) * sc;
+          finite = add_vertex(tight(u), tight(w));
         }
+        if (to_pyramid || !finite || !far(vs)) break;
       }
+      if (!finite) {
+        out.why = "clipped projection not finite";
+        return out;
+      }
+      if (vs.size() < 3) continue;
     }
     // S' = the convex hull of the double vertices (exact predicates): within delta of S.
     CPoly s;

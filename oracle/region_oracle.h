@@ -49,6 +49,7 @@
 // Double precision, not exact.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "lib/scene/scene.h"
@@ -74,7 +75,28 @@ struct RegionOptions {
   bool fast_paths = true;  // false: every culled triangle goes to the exact path (tests)
 };
 
-RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {});
+// Work visible_fraction_bound and visible_region share within one scene, for a caller
+// that checks many pairs of it in one thread (the comparator): each light's exact frame
+// is made once, and the preparation of the last pair (the frame, the pyramid, the cull
+// and the fast-path classification) is kept for a visible_region of that pair that
+// follows its bound. Answers are the same with and without a cache (the same exact
+// values, only not computed again). Not thread-safe: one cache per thread; the scene
+// must outlive it and stay unchanged.
+class RegionCache {
+ public:
+  explicit RegionCache(const Scene& scene);
+  ~RegionCache();
+  RegionCache(const RegionCache&) = delete;
+  RegionCache& operator=(const RegionCache&) = delete;
+  struct Impl;  // region_oracle.cpp
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, const RegionOptions& opt = {},
+                            RegionCache* cache = nullptr);
 
 // Certified enclosure of the visible fraction, without Boolean operations (for the
 // comparator: most pairs are decided by it, the rest by visible_region). When
@@ -85,8 +107,13 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light, c
 // strictly inside the slab is projected in interval arithmetic; any other (or one whose
 // intervals come out wide) goes through the exact path's clipping with lazy exact
 // numbers (exact signs), its projected vertices taken as intervals, computed exactly
-// where those are wide. Each shadow S' is the convex hull of the interval midpoints
-// (vertex errors delta). The area of the light minus the union of the S' is computed by
+// where those are wide. A shadow reaching beyond L's box grown by its own extent is taken
+// from the triangle clipped to the pyramid instead (its part inside L: the same region).
+// A triangle's own vertices are projected by one interval formula whichever way the
+// triangle goes, and a clip point on an edge is formed from the edge's lexicographically
+// smaller end, so shadows sharing a vertex or an edge get the same double points and
+// their shared edges are exactly collinear. Each shadow S' is the convex hull of the
+// interval midpoints (vertex errors delta). The area of the light minus the union of the S' is computed by
 // a boundary integral whose side decisions are exact orientations on the doubles (shared
 // and collinear edges included) and whose rounded cut parameters enter with error
 // bounds; sum (delta min(per S', per L) + 3 pi delta^2) covers the vertex errors
@@ -101,6 +128,6 @@ struct FractionBound {
   size_t shadows = 0;            // double shadow triangles in the boundary integral
   const char* why = "";          // when not certified and not edge-on: the reason (rare)
 };
-FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light);
+FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t light, RegionCache* cache = nullptr);
 
 }  // namespace visgate::oracle

@@ -250,6 +250,37 @@ TEST(FuzzDecoder, RandomInputsRespectCapsAndNeverYieldNonFiniteScenes) {
   EXPECT_GT(rejected_nonfinite, 0u);
 }
 
+TEST(FuzzDecoder, TargetLimitsArePerMethod) {
+  // fuzz_plucker's smaller triangle cap (decoder.h target_limits) reaches every reader
+  // through the method name as well as the target name; the other targets keep the
+  // defaults.
+  const DecodeLimits d;
+  const DecodeLimits p = fuzz::target_limits("fuzz_plucker");
+  EXPECT_EQ(p.max_triangles, 24u);
+  EXPECT_EQ(fuzz::method_limits("plucker-bsp").max_triangles, p.max_triangles);
+  EXPECT_EQ(p.max_receivers, d.max_receivers);
+  EXPECT_EQ(p.max_lights, d.max_lights);
+  EXPECT_EQ(p.max_samples, d.max_samples);
+  EXPECT_EQ(p.max_relations, d.max_relations);
+  EXPECT_EQ(p.max_perturbations, d.max_perturbations);
+  for (const char* t : {"fuzz_iss", "fuzz_ssv", "fuzz_embree", "fuzz_prepare"}) {
+    const DecodeLimits o = fuzz::target_limits(t);
+    EXPECT_EQ(o.max_triangles, d.max_triangles) << t;
+    EXPECT_EQ(o.max_receivers, d.max_receivers) << t;
+    EXPECT_EQ(o.max_relations, d.max_relations) << t;
+  }
+  // The cap holds on what fuzz_plucker decodes.
+  Rng rng(20261202);
+  for (int iter = 0; iter < 1000; ++iter) {
+    std::vector<uint8_t> b(rng.below(160));
+    for (auto& x : b) x = uint8_t(rng.next());
+    auto s = decode(b, p);
+    if (s) {
+      EXPECT_LE(s->mesh.size(), 24u);
+    }
+  }
+}
+
 TEST(FuzzDecoder, DecodeCaseSplitsTheOptionSelector) {
   Encoder e = raw_scene({{0, 0, 10}, {4, 0, 10}, {0, 4, 10}}, 1, -1, 3, 2);
   no_snap(e);

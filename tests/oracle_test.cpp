@@ -962,6 +962,39 @@ TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
   EXPECT_GT(certified, (pairs - edge_on) / 2);
 }
 
+TEST(RegionOracle, RegionCacheChangesNoAnswer) {
+  // RegionCache (region_oracle.h) only saves recomputation: bounds and regions with it
+  // equal the ones without, bit for bit, whether a region follows its pair's bound (the
+  // kept preparation) or another pair's (only the light's frame reused).
+  std::vector<Scene> scenes = bound_scenes();
+  size_t pairs = 0;
+  for (size_t s = 0; s < scenes.size(); s += 6) {
+    const Scene& sc = scenes[s];
+    RegionCache cache(sc);
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t l = 0; l < sc.lights.size(); ++l) {
+        FractionBound b0 = visible_fraction_bound(sc, i, l), b1 = visible_fraction_bound(sc, i, l, &cache);
+        ASSERT_EQ(b0.edge_on, b1.edge_on);
+        ASSERT_EQ(b0.certified, b1.certified);
+        EXPECT_EQ(b0.lo, b1.lo) << "scene " << s << " receiver " << i << " light " << l;
+        EXPECT_EQ(b0.hi, b1.hi) << "scene " << s << " receiver " << i << " light " << l;
+        // After its own bound, then for the first pair again after another pair's bound.
+        for (size_t k = 0; k < 2; ++k) {
+          const size_t ri = k == 0 ? i : 0, li = k == 0 ? l : 0;
+          RegionAnswer a0 = visible_region(sc, ri, li), a1 = visible_region(sc, ri, li, RegionOptions{}, &cache);
+          ASSERT_EQ(a0.edge_on, a1.edge_on);
+          EXPECT_EQ(a0.visible_fraction, a1.visible_fraction) << "scene " << s << " receiver " << ri << " light " << li;
+          EXPECT_EQ(a0.visible_area, a1.visible_area);
+          EXPECT_EQ(a0.irradiance, a1.irradiance);
+          EXPECT_EQ(a0.polygons, a1.polygons);
+          EXPECT_EQ(a0.hole, a1.hole);
+        }
+        ++pairs;
+      }
+  }
+  EXPECT_GT(pairs, 100u);
+}
+
 TEST(RegionOracle, ComparatorVerdictsEqualTheExactOnes) {
   // compare_regions decides most pairs from the certified bound; its fraction verdicts
   // must be those of the exact test !(|mf - exact| <= 1e-4), also for method fractions

@@ -93,7 +93,7 @@ int run_minimize(const MinimizeOpts& o) {
              (*text)[text->find_first_not_of(" \t\r\n")] != '{') {
     // A fuzzer input: [option selector][scene bytes], decoded as the target did.
     const auto* bytes = reinterpret_cast<const uint8_t*>(text->data());
-    auto c = fuzz::decode_case(bytes, text->size(), fuzz::DecodeLimits{});
+    auto c = fuzz::decode_case(bytes, text->size(), fuzz::method_limits(o.method));
     if (!c) return bad_input(o.scene + ": fuzzer input does not decode: " + c.error().message);
     scene = std::move(c->scene);
     if (o.opts.empty()) spec.options.opts = fuzz::decode_options(c->option_selector, solver->options());
