@@ -43,6 +43,16 @@ constexpr const char* kRegionFamilies[] = {"random-soup", "grid-snapped", "slive
 
 // ---------------------------------------------------------------- scene builders
 
+// A small generated scene of the region-oracle tests: 9 receivers, 4 samples per light.
+Result<Scene> small_family_scene(const char* fam, uint64_t seed, long triangles) {
+  FamilyParams p;
+  p.seed = seed;
+  p.receivers = 9;
+  p.samples = 4;
+  p.triangles = triangles;
+  return generate_family(fam, p);
+}
+
 Scene soup_scene(const std::vector<std::array<Vec3f, 3>>& tris) {
   Scene s;
   s.name = "test";
@@ -723,12 +733,7 @@ TEST(RegionOracle, FastPathsAgreeWithTheExactPath) {
   size_t pairs = 0, fast = 0;
   for (const char* fam : kRegionFamilies) {
     for (uint64_t seed = 1; seed <= 2; ++seed) {
-      FamilyParams p;
-      p.seed = seed;
-      p.receivers = 9;
-      p.samples = 4;
-      p.triangles = 120;
-      auto scene = generate_family(fam, p);
+      auto scene = small_family_scene(fam, seed, 120);
       ASSERT_TRUE(scene.ok()) << fam;
       for (size_t i = 0; i < scene->receivers.size(); ++i)
         for (size_t l = 0; l < scene->lights.size(); ++l) {
@@ -894,12 +899,7 @@ std::vector<Scene> bound_scenes() {
   std::vector<Scene> out;
   for (const char* fam : kRegionFamilies)
     for (uint64_t seed = 1; seed <= 2; ++seed) {
-      FamilyParams p;
-      p.seed = seed;
-      p.receivers = 9;
-      p.samples = 4;
-      p.triangles = 60;
-      auto scene = generate_family(fam, p);
+      auto scene = small_family_scene(fam, seed, 60);
       if (scene.ok()) out.push_back(std::move(*scene));
     }
   const char* src = std::getenv("VISGATE_SOURCE_DIR");
@@ -1041,12 +1041,7 @@ TEST(RelationOracle, BlockedSegmentTestEqualsClassifySegment) {
   size_t segments = 0, blocked = 0;
   std::mt19937 rng(7);
   for (const char* fam : {"random-soup", "grid-snapped", "shared-edge-fan", "on-surface", "pouch", "columns"}) {
-    FamilyParams p;
-    p.seed = 3;
-    p.receivers = 9;
-    p.samples = 4;
-    p.triangles = 80;
-    auto scene = generate_family(fam, p);
+    auto scene = small_family_scene(fam, 3, 80);
     ASSERT_TRUE(scene.ok()) << fam;
     BlockedSegmentTest test(*scene);
     AABB b = scene->bounds();

@@ -23,9 +23,7 @@ class IeeeFloatMode {
  public:
 #if defined(__SSE2__)
   static constexpr unsigned kFlushToZero = 0x8000u, kDenormalsAreZero = 0x0040u;
-  IeeeFloatMode() : saved_(_mm_getcsr()) {
-    if (saved_ & (kFlushToZero | kDenormalsAreZero)) _mm_setcsr(saved_ & ~(kFlushToZero | kDenormalsAreZero));
-  }
+  IeeeFloatMode() : IeeeFloatMode(current_csr()) {}
   // The same with the caller's MXCSR already read (`csr`, from current_csr() on this
   // thread): hot callbacks skip the read (stmxcsr costs about as much as a small
   // geometric test on some cores).
