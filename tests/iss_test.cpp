@@ -323,8 +323,11 @@ TEST(IssRays, LeafSamplePositionIsSamplePosition) {
     ASSERT_TRUE(finish_scene(s).ok());
     const Light& fl = s.lights[0];
     for (size_t i = 0; i < 2000; i += 7)
-      for (int j = 0; j < fl.samples; ++j)
+      for (int j = 0; j < fl.samples; ++j) {
         ASSERT_EQ(&iss::leaf_sample_position(fl, j, i), &sample_position(fl, j, i)) << "K " << k << " i " << i << " j " << j;
+        ASSERT_EQ(&iss::leaf_sample_at(fl, j, relation_hash_prefix(i, fl.seed)), &sample_position(fl, j, i))
+            << "K " << k << " i " << i << " j " << j;
+      }
   }
 }
 

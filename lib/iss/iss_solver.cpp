@@ -306,11 +306,12 @@ class Traversal {
       }
       // The standard caster: the receiver's segments to the leaf's samples form a
       // coherent fan, traced 16 at a time as one Embree packet (occluded_fan).
+      const uint64_t prefix = relation_hash_prefix(i, light_->seed);
       for (uint32_t b0 = L.begin; b0 < L.end; b0 += 16) {
         int n = int(std::min<uint32_t>(16, L.end - b0));
         Vec3f to[16];
         bool occ[16];
-        for (int k = 0; k < n; ++k) to[k] = leaf_sample_position(*light_, int(lo[b0 + uint32_t(k)]), i);
+        for (int k = 0; k < n; ++k) to[k] = leaf_sample_at(*light_, int(lo[b0 + uint32_t(k)]), prefix);
         embree_->occluded_fan(rp, to, n, occ);
         for (int k = 0; k < n; ++k) {
           // Bits start blocked (make_empty_result): only visible ones are written.
