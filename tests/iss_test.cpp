@@ -32,7 +32,7 @@ const auto* const kEnv = ::testing::AddGlobalTestEnvironment(new ValidateOn);
 const std::vector<std::map<std::string, std::string>> kOptionSets = {
     {},
     {{"ray_caster", "custom"}},
-    {{"postpone", "off"}, {"leaf_receivers", "4"}, {"leaf_samples", "1"}},
+    {{"postpone", "off"}, {"leaf_receivers", "4"}, {"leaf_samples", "1"}, {"auto_rays", "off"}},
     {{"ray_caster", "custom"}, {"postpone", "off"}, {"leaf_receivers", "64"}, {"leaf_samples", "16"}},
 };
 
@@ -713,6 +713,43 @@ TEST(Iss, RandomSoupsMatchTheReference) {
 }
 
 // ---- the exact oracle on the scene families ------------------------------------------------
+
+TEST(IssOracle, AutomaticRaysEngageOnColumnsAndMatchTheOracle) {
+  // Columns at 1024 receivers: every receiver node sees some column edge-on against the
+  // light, so shafts of 16..128 receivers decide nothing and the automatic rule
+  // (iss_solver.cpp, Params) casts their relations after the first few. Its answers
+  // must match the exact oracle like the full subdivision's, and with the rule off no
+  // shaft is skipped.
+  const double tau = 1e-5;
+  FamilyParams fp;
+  fp.seed = 3;
+  fp.receivers = 1024;
+  fp.samples = 64;
+  fp.triangles = 2500;
+  auto gen = generate_family("columns", fp);
+  ASSERT_TRUE(gen.ok());
+  Scene& s = gen.value();
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+  SolveResult on = run_iss(s, {}), off = run_iss(s, {{"auto_rays", "off"}});
+  EXPECT_GT(on.stats.get("auto_ray_shafts"), 0.0);
+  EXPECT_LT(on.stats.get("shafts_built"), off.stats.get("shafts_built"));
+  EXPECT_EQ(off.stats.get("auto_ray_shafts"), 0.0);
+  EXPECT_EQ(on.stats.get("relations_ray_cast") + on.stats.get("relations_blocked_by_shaft") +
+                on.stats.get("relations_visible_by_empty_shaft"),
+            double(s.relation_count()));
+  size_t bad_on = 0, bad_off = 0, checked = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      char cls = ex.classes[i][k];
+      if (cls == 'd' || ex.margins[i][k] < tau) continue;
+      ++checked;
+      bad_on += on.receivers[i].visible(k) != (cls == 'v');
+      bad_off += off.receivers[i].visible(k) != (cls == 'v');
+    }
+  EXPECT_GT(checked, s.relation_count() / 2);
+  EXPECT_EQ(bad_on, 0u);
+  EXPECT_EQ(bad_off, 0u);
+}
 
 TEST(IssOracle, FamiliesHaveNoMismatchAboveTau) {
   const double tau = 1e-5;
