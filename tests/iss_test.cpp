@@ -182,6 +182,33 @@ TEST(IssShaft, ObliquePlanesSurviveRoundingOfTheSupportTest) {
     }
 }
 
+TEST(IssShaft, ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue) {
+  // The constructor raises an oblique plane's d to the largest n.c over the eight
+  // rectangle corners of its projection as evaluated in double; it evaluates only the
+  // corner the signs of n pick (shaft.cpp). Bit for bit the same as all eight.
+  std::mt19937 rng(11);
+  for (double offset : {0.0, 1e5, 3e-3}) {
+    std::uniform_real_distribution<float> u(-5, 5);
+    for (int it = 0; it < 500; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      AABB r(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      AABB l(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
+      for (int k = 6; k < g.plane_count(); ++k) {
+        const iss::Plane4d& p = g.plane(k);
+        int i = p.n.x != 0 ? 0 : 1, j = p.n.z != 0 ? 2 : 1;
+        ASSERT_LT(i, j);
+        double best = -1e300;
+        for (const AABB* b : {&r, &l})
+          for (int c = 0; c < 4; ++c)
+            best = std::max(best, p.n[i] * double(c & 1 ? b->hi[i] : b->lo[i]) +
+                                      p.n[j] * double(c & 2 ? b->hi[j] : b->lo[j]));
+        ASSERT_EQ(p.d, best) << "plane " << k;
+      }
+    }
+  }
+}
+
 TEST(IssTree, GridLeavesAreCompactNotStrips) {
   // 32 x 32 receivers on a floor, leaves of 64: the N*A split must give square-ish
   // leaves (8 x 8), not strips of collinear points (zero box area, see tree.cpp).
