@@ -453,6 +453,38 @@ TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
   EXPECT_NE(iss::validate(broken, nullptr), "");
 }
 
+TEST(IssBlockers, BoxPlaneClassificationEqualsTheEightCorners) {
+  // classify_box_plane evaluates two corners; the reference evaluates all eight.
+  std::mt19937 rng(5);
+  size_t front = 0, back = 0;
+  for (double offset : {0.0, 1e5, 1e-3}) {
+    std::uniform_real_distribution<float> u(-5, 5);
+    std::uniform_int_distribution<int> zero(0, 5);
+    for (int it = 0; it < 3000; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      Vec3d a = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
+      Vec3d b = to_double(o + Vec3f(u(rng), u(rng), u(rng))), c = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
+      if (zero(rng) == 0) b.z = c.z = a.z;  // normal along z: n.x = n.y = 0
+      iss::Plane4d pl = iss::plane_through(a, b, c, 2e5);
+      AABB box(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      if (zero(rng) == 0) box.hi = box.lo;  // a point
+      iss::AABBd bd = iss::to_aabbd(box);
+      double mn = 1e300, mx = -1e300;
+      for (int i = 0; i < 8; ++i) {
+        Vec3d q(i & 1 ? bd.hi.x : bd.lo.x, i & 2 ? bd.hi.y : bd.lo.y, i & 4 ? bd.hi.z : bd.lo.z);
+        mn = std::min(mn, pl.eval(q));
+        mx = std::max(mx, pl.eval(q));
+      }
+      int expect = mn > pl.tol ? 0 : (mx < -pl.tol ? 1 : 2);
+      ASSERT_EQ(iss::classify_box_plane(bd, pl), expect) << "iteration " << it;
+      front += expect == 0;
+      back += expect == 1;
+    }
+  }
+  EXPECT_GT(front, 500u);
+  EXPECT_GT(back, 500u);
+}
+
 TEST(IssBlockers, CanBlockShaftUsesTheClampedBoxAndFaceToFaceSegments) {
   // Receiver box 1 x 1 x 0.5 at z in [1, 1.5] (outer face z = 1, the lower clip
   // plane), light face at z = 4. Hand-worked: the winding test clamps a boundary lying
