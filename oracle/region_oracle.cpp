@@ -530,6 +530,7 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
   }
   ans.visible_fraction = to_double_exact(area2 / light_area2);
   ans.visible_area = to_double_exact(area2) * f.scale;
+  if (!opt.outputs) return ans;
 
   // Output polygons (floats) and the irradiance (double, from the exact vertices).
   const Vec3d rd = to_double(rec.p), nr = to_double(rec.n);

@@ -73,6 +73,10 @@ struct RegionAnswer {
 
 struct RegionOptions {
   bool fast_paths = true;  // false: every culled triangle goes to the exact path (tests)
+  // false: only visible_fraction, the areas and the counts are filled; no polygons, hole
+  // flags or irradiance (the comparator, which reads the fraction only). The fraction is
+  // the same either way.
+  bool outputs = true;
 };
 
 // Work visible_fraction_bound and visible_region share within one scene, for a caller

@@ -182,6 +182,33 @@ TEST(IssShaft, ObliquePlanesSurviveRoundingOfTheSupportTest) {
     }
 }
 
+TEST(IssShaft, ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue) {
+  // The constructor raises an oblique plane's d to the largest n.c over the eight
+  // rectangle corners of its projection as evaluated in double; it evaluates only the
+  // corner the signs of n pick (shaft.cpp). Bit for bit the same as all eight.
+  std::mt19937 rng(11);
+  for (double offset : {0.0, 1e5, 3e-3}) {
+    std::uniform_real_distribution<float> u(-5, 5);
+    for (int it = 0; it < 500; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      AABB r(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      AABB l(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
+      for (int k = 6; k < g.plane_count(); ++k) {
+        const iss::Plane4d& p = g.plane(k);
+        int i = p.n.x != 0 ? 0 : 1, j = p.n.z != 0 ? 2 : 1;
+        ASSERT_LT(i, j);
+        double best = -1e300;
+        for (const AABB* b : {&r, &l})
+          for (int c = 0; c < 4; ++c)
+            best = std::max(best, p.n[i] * double(c & 1 ? b->hi[i] : b->lo[i]) +
+                                      p.n[j] * double(c & 2 ? b->hi[j] : b->lo[j]));
+        ASSERT_EQ(p.d, best) << "plane " << k;
+      }
+    }
+  }
+}
+
 TEST(IssTree, GridLeavesAreCompactNotStrips) {
   // 32 x 32 receivers on a floor, leaves of 64: the N*A split must give square-ish
   // leaves (8 x 8), not strips of collinear points (zero box area, see tree.cpp).
@@ -427,6 +454,38 @@ TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
   broken = s;
   broken.patches[0].facing = iss::Facing::Inconsistent;  // inconsistent needs its triangle
   EXPECT_NE(iss::validate(broken, nullptr), "");
+}
+
+TEST(IssBlockers, BoxPlaneClassificationEqualsTheEightCorners) {
+  // classify_box_plane evaluates two corners; the reference evaluates all eight.
+  std::mt19937 rng(5);
+  size_t front = 0, back = 0;
+  for (double offset : {0.0, 1e5, 1e-3}) {
+    std::uniform_real_distribution<float> u(-5, 5);
+    std::uniform_int_distribution<int> zero(0, 5);
+    for (int it = 0; it < 3000; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      Vec3d a = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
+      Vec3d b = to_double(o + Vec3f(u(rng), u(rng), u(rng))), c = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
+      if (zero(rng) == 0) b.z = c.z = a.z;  // normal along z: n.x = n.y = 0
+      iss::Plane4d pl = iss::plane_through(a, b, c, 2e5);
+      AABB box(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      if (zero(rng) == 0) box.hi = box.lo;  // a point
+      iss::AABBd bd = iss::to_aabbd(box);
+      double mn = 1e300, mx = -1e300;
+      for (int i = 0; i < 8; ++i) {
+        Vec3d q(i & 1 ? bd.hi.x : bd.lo.x, i & 2 ? bd.hi.y : bd.lo.y, i & 4 ? bd.hi.z : bd.lo.z);
+        mn = std::min(mn, pl.eval(q));
+        mx = std::max(mx, pl.eval(q));
+      }
+      int expect = mn > pl.tol ? 0 : (mx < -pl.tol ? 1 : 2);
+      ASSERT_EQ(iss::classify_box_plane(bd, pl), expect) << "iteration " << it;
+      front += expect == 0;
+      back += expect == 1;
+    }
+  }
+  EXPECT_GT(front, 500u);
+  EXPECT_GT(back, 500u);
 }
 
 TEST(IssBlockers, CanBlockShaftUsesTheClampedBoxAndFaceToFaceSegments) {

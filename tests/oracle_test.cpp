@@ -965,7 +965,8 @@ TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
 TEST(RegionOracle, RegionCacheChangesNoAnswer) {
   // RegionCache (region_oracle.h) only saves recomputation: bounds and regions with it
   // equal the ones without, bit for bit, whether a region follows its pair's bound (the
-  // kept preparation) or another pair's (only the light's frame reused).
+  // kept preparation) or another pair's (only the light's frame reused); the fraction-only
+  // region (RegionOptions::outputs false) has the same fraction and areas.
   std::vector<Scene> scenes = bound_scenes();
   size_t pairs = 0;
   for (size_t s = 0; s < scenes.size(); s += 6) {
@@ -988,6 +989,16 @@ TEST(RegionOracle, RegionCacheChangesNoAnswer) {
           EXPECT_EQ(a0.irradiance, a1.irradiance);
           EXPECT_EQ(a0.polygons, a1.polygons);
           EXPECT_EQ(a0.hole, a1.hole);
+          // Without the outputs (the comparator's fallback): the same fraction and areas.
+          RegionOptions fraction_only;
+          fraction_only.outputs = false;
+          RegionAnswer a2 = visible_region(sc, ri, li, fraction_only, &cache);
+          ASSERT_EQ(a0.edge_on, a2.edge_on);
+          EXPECT_EQ(a0.visible_fraction, a2.visible_fraction);
+          EXPECT_EQ(a0.visible_area, a2.visible_area);
+          EXPECT_EQ(a0.light_area, a2.light_area);
+          EXPECT_EQ(a0.fast_path, a2.fast_path);
+          EXPECT_TRUE(a2.polygons.empty());
         }
         ++pairs;
       }

@@ -278,20 +278,24 @@ size_t classify_edges(Surface& s, const ShaftGeometry& g) {
   return left;
 }
 
-size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
-  auto classify = [](const AABBd& b, const Plane4d& pl) {
-    // CLASSIFY-AABB-PLANE: 0 FRONT, 1 BACK, 2 INTERSECTS (conservative with pl.tol).
-    double mn = 1e300, mx = -1e300;
-    for (int i = 0; i < 8; ++i) {
-      Vec3d q(i & 1 ? b.hi.x : b.lo.x, i & 2 ? b.hi.y : b.lo.y, i & 4 ? b.hi.z : b.lo.z);
-      double e = pl.eval(q);
-      mn = std::min(mn, e);
-      mx = std::max(mx, e);
-    }
-    if (mn > pl.tol) return 0;
-    if (mx < -pl.tol) return 1;
-    return 2;
+int classify_box_plane(const AABBd& b, const Plane4d& pl) {
+  // The smallest and largest eval() over the eight corners, as evaluated: each rounded
+  // operation of n.q - d is monotone in its operands, so eval() is monotone in q_k
+  // (non-decreasing for n_k > 0, non-increasing for n_k < 0, constant up to the sign of
+  // a zero for n_k = 0), and the extremes are at the two corners the signs of n pick.
+  // The same values as evaluating all eight (a zero's sign aside, which no comparison
+  // below sees); test IssBlockers.BoxPlaneClassificationEqualsTheEightCorners.
+  auto corner = [&](bool high) {
+    auto pick = [&](double n, double lo, double hi) { return (n > 0) == high ? std::max(lo, hi) : std::min(lo, hi); };
+    return Vec3d(pick(pl.n.x, b.lo.x, b.hi.x), pick(pl.n.y, b.lo.y, b.hi.y), pick(pl.n.z, b.lo.z, b.hi.z));
   };
+  double mn = pl.eval(corner(false)), mx = pl.eval(corner(true));
+  if (mn > pl.tol) return 0;
+  if (mx < -pl.tol) return 1;
+  return 2;
+}
+
+size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
   size_t changed = 0;
   for (Patch& p : s.patches) {
     if (p.facing != Facing::Inconsistent || p.tri < 0) continue;
@@ -299,7 +303,7 @@ size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGe
     Plane4d pl = plane_through(corner_d(*ctx.mesh, t, 0), corner_d(*ctx.mesh, t, 1), corner_d(*ctx.mesh, t, 2),
                                g.scale());
     if (pl.n == Vec3d(0, 0, 0)) continue;  // zero-area triangle: stays inconsistent
-    int rr = classify(g.receiver(), pl), lr = classify(g.light(), pl);
+    int rr = classify_box_plane(g.receiver(), pl), lr = classify_box_plane(g.light(), pl);
     // Table 4.1.
     if (rr == 0) p.facing = Facing::TowardsReceiver;
     else if (rr == 1) p.facing = Facing::TowardsLight;

@@ -143,6 +143,10 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws);
 // CLASSIFY-EDGES (Figure 4.21); returns the number of raw edges that left the shaft.
 size_t classify_edges(Surface& s, const ShaftGeometry& g);
+// CLASSIFY-AABB-PLANE (Figure 4.22): 0 FRONT (every corner beyond pl.tol), 1 BACK (every
+// corner below -pl.tol), 2 INTERSECTS (conservative); from the two corners the signs of
+// pl.n pick, the same answer as from all eight.
+int classify_box_plane(const AABBd& b, const Plane4d& pl);
 // UPDATE-PATCH-FACINGS (Figure 4.22); returns the number of patches that became consistent.
 size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);
 void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23

@@ -39,15 +39,11 @@ void ShaftGeometry::add_plane(const Vec3d& n, double d) {
   p.n = n;
   p.d = d;
   p.tol = kTolFactor * l1(n) * scale_;
-  planes_[size_t(count_++)] = p;
+  planes_[size_t(count_++)].p = p;
 }
 
 ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis axis, double scale)
     : r_(to_aabbd(receiver)), l_(to_aabbd(light)), axis_(axis), scale_(scale) {
-  for (int i = 0; i < 8; ++i) {
-    corners_[size_t(i)] = Vec3d(i & 1 ? r_.hi.x : r_.lo.x, i & 2 ? r_.hi.y : r_.lo.y, i & 4 ? r_.hi.z : r_.lo.z);
-    corners_[size_t(8 + i)] = Vec3d(i & 1 ? l_.hi.x : l_.lo.x, i & 2 ? l_.hi.y : l_.lo.y, i & 4 ? l_.hi.z : l_.lo.z);
-  }
   // Axis-aligned planes: the common bounding box.
   AABBd all = r_;
   all.extend(l_);
@@ -64,8 +60,18 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
   // per product; a plane that fails it only makes the shaft larger (conservative).
   for (int i = 0; i < 3; ++i) {
     for (int j = i + 1; j < 3; ++j) {
+      // A duplicate can only come from this projection: planes of two projections have
+      // normals (n_i, n_j, 0) and (n_i', 0, n_k') (say) with every listed component a
+      // non-zero difference of floats, so their cross product has no zero component
+      // (products of such differences neither underflow nor overflow in double).
+      const int first_of_projection = count_;
       double rx[2] = {r_.lo[i], r_.hi[i]}, ry[2] = {r_.lo[j], r_.hi[j]};
       double lx[2] = {l_.lo[i], l_.hi[i]}, ly[2] = {l_.lo[j], l_.hi[j]};
+      // Each rectangle's smaller and larger coordinate on both axes (for dmax below).
+      const double rx0 = std::min(rx[0], rx[1]), rx1 = std::max(rx[0], rx[1]);
+      const double ry0 = std::min(ry[0], ry[1]), ry1 = std::max(ry[0], ry[1]);
+      const double lx0 = std::min(lx[0], lx[1]), lx1 = std::max(lx[0], lx[1]);
+      const double ly0 = std::min(ly[0], ly[1]), ly1 = std::max(ly[0], ly[1]);
       // The support point of either rectangle in an oblique outward direction is the
       // corner picked by the direction's signs, the same corner type for both, so only
       // corresponding corners can span an oblique hull edge.
@@ -84,20 +90,23 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
             // corners, so every corner is on the <= side as evaluated, and the plane
             // tolerance of eval() covers the rounding of n.c (file comment of shaft.h);
             // the plane stays conservative. The margin 2^-40 |n|_1 S is the same bound.
+            // The largest computed n.c over a rectangle's four corners is the one at the
+            // corner the signs of n pick (nx, ny != 0 here): fl(fl(nx x) + fl(ny y)) is
+            // monotone in x and in y, rounding being monotone, so no other corner gives a
+            // larger double. Bit for bit the maximum of all eight evaluations (test
+            // IssShaft.ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue).
             double d = nx * px + ny * py;
-            double dmax = d;
-            for (int c = 0; c < 4; ++c) {
-              dmax = std::max(dmax, nx * rx[c & 1] + ny * ry[c >> 1]);
-              dmax = std::max(dmax, nx * lx[c & 1] + ny * ly[c >> 1]);
-            }
+            const bool ux = nx > 0, uy = ny > 0;
+            double dmax = std::max({d, nx * (ux ? rx1 : rx0) + ny * (uy ? ry1 : ry0),
+                                    nx * (ux ? lx1 : lx0) + ny * (uy ? ly1 : ly0)});
             if (dmax - d > kTolFactor * (std::abs(nx) + std::abs(ny)) * scale_) continue;
             d = dmax;
             Vec3d n(0, 0, 0);
             n[i] = nx;
             n[j] = ny;
             bool dup = false;
-            for (int k = 6; k < count_; ++k) {
-              const Plane4d& o = planes_[size_t(k)];
+            for (int k = first_of_projection; k < count_; ++k) {
+              const Plane4d& o = planes_[size_t(k)].p;
               if (cross(o.n, n) == Vec3d(0, 0, 0) && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
             }
             if (!dup && count_ < int(planes_.size())) add_plane(n, d);
@@ -120,7 +129,7 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
 
 bool ShaftGeometry::may_contain_point(const Vec3d& p) const {
   for (int i = 0; i < count_; ++i)
-    if (planes_[size_t(i)].eval(p) > planes_[size_t(i)].tol) return false;
+    if (planes_[size_t(i)].p.eval(p) > planes_[size_t(i)].p.tol) return false;
   return true;
 }
 
@@ -130,18 +139,25 @@ bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const 
   // The first six planes are the common box's faces, n = +e_k then -e_k (constructor),
   // for which n.p - d is exactly p_k - d or -p_k - d: the products by 0 and 1 are exact
   // and adding the zeros changes nothing, so the shortcut gives the same bits as eval().
+  // The endpoints are read once into locals (the hot predicate of classify_edges: every
+  // load from memory is also an ASan check in the fuzz build); the expressions are those
+  // of eval(), in the same order, so the bits are the same.
+  const double ax = a.x, ay = a.y, az = a.z, bx = b.x, by = b.y, bz = b.z;
+  const double ak[3] = {ax, ay, az}, bk[3] = {bx, by, bz};
   double t0 = 0.0, t1 = 1.0;
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& p = planes_[size_t(i)];
+    const Plane4d& p = planes_[size_t(i)].p;
+    const double pd = p.d, tol = p.tol;
     double ea, eb;
     if (i < 6) {
       int k = i >> 1;
       double s = i & 1 ? -1.0 : 1.0;
-      ea = (s * a[k] - p.d) - p.tol;
-      eb = (s * b[k] - p.d) - p.tol;
+      ea = (s * ak[k] - pd) - tol;
+      eb = (s * bk[k] - pd) - tol;
     } else {
-      ea = p.eval(a) - p.tol;
-      eb = p.eval(b) - p.tol;
+      const double nx = p.n.x, ny = p.n.y, nz = p.n.z;
+      ea = (nx * ax + ny * ay + nz * az - pd) - tol;
+      eb = (nx * bx + ny * by + nz * bz - pd) - tol;
     }
     if (ea > 0 && eb > 0) return false;
     if (ea <= 0 && eb <= 0) continue;
@@ -160,7 +176,7 @@ bool ShaftGeometry::may_intersect_triangle(const Vec3d& a, const Vec3d& b, const
 
 bool ShaftGeometry::separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& p = planes_[size_t(i)];
+    const Plane4d& p = planes_[size_t(i)].p;
     if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
   }
   return false;
@@ -171,7 +187,10 @@ bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, 
   Plane4d tp = plane_through(a, b, c, scale_);
   if (tp.n == Vec3d(0, 0, 0)) return false;
   bool all_pos = true, all_neg = true;
-  for (const Vec3d& q : corners_) {
+  // Both boxes' corners, the receiver's first (bit i of the index: hi on axis i).
+  for (int i = 0; i < 16; ++i) {
+    const AABBd& box = i < 8 ? r_ : l_;
+    const Vec3d q(i & 1 ? box.hi.x : box.lo.x, i & 2 ? box.hi.y : box.lo.y, i & 4 ? box.hi.z : box.lo.z);
     double e = tp.eval(q);
     if (!(e > tp.tol)) all_pos = false;
     if (!(e < -tp.tol)) all_neg = false;
@@ -182,7 +201,7 @@ bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, 
 
 bool ShaftGeometry::may_intersect_box(const AABBd& b) const {
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& p = planes_[size_t(i)];
+    const Plane4d& p = planes_[size_t(i)].p;
     // Box corner nearest to the plane's inside.
     Vec3d q(p.n.x > 0 ? b.lo.x : b.hi.x, p.n.y > 0 ? b.lo.y : b.hi.y, p.n.z > 0 ? b.lo.z : b.hi.z);
     if (p.eval(q) > p.tol) return false;
@@ -250,7 +269,7 @@ double ShaftGeometry::boundary_distance(const Vec3d& p) const {
   double inside = 1e300, outside = 0.0;
   bool is_out = false;
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& pl = planes_[size_t(i)];
+    const Plane4d& pl = planes_[size_t(i)].p;
     double e = pl.eval(p) / length(pl.n);
     if (e > 0) {
       is_out = true;

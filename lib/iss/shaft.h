@@ -63,7 +63,7 @@ class ShaftGeometry {
   double clip_hi() const { return clip_hi_; }
   double scale() const { return scale_; }
   int plane_count() const { return count_; }
-  const Plane4d& plane(int i) const { return planes_[size_t(i)]; }
+  const Plane4d& plane(int i) const { return planes_[size_t(i)].p; }
 
   bool may_contain_point(const Vec3d& p) const;
   bool may_intersect_segment(const Vec3d& a, const Vec3d& b) const;
@@ -88,12 +88,20 @@ class ShaftGeometry {
   void add_plane(const Vec3d& n, double d);
   bool prism_may_intersect(const AABBd& face_box, int away_sign, const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
 
+  // One plane without a default value: a shaft is built per node pair (and several per
+  // split choice), and zero-filling all 18 planes (720 bytes, checked by ASan's memset in
+  // the fuzz build) cost more than the planes it fills. Only the first count_ are ever
+  // read; the constructor writes each before counting it.
+  union PlaneSlot {
+    PlaneSlot() {}
+    Plane4d p;
+  };
+
   AABBd r_, l_;
   MainAxis axis_;
   double scale_;
   double clip_lo_ = 0, clip_hi_ = 0;
-  std::array<Plane4d, 18> planes_{};  // 6 box planes + at most 4 oblique per projection
-  std::array<Vec3d, 16> corners_{};   // both boxes' corners
+  std::array<PlaneSlot, 18> planes_;  // 6 box planes + at most 4 oblique per projection
   int count_ = 0;
 };
 
