@@ -854,7 +854,7 @@ bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
   // rounding (fuzz_iss c2dffefa...: a light sample 6.4e-44 above a flat receiver box, the
   // products of such differences underflow, and a sliver 0.5 beside the shaft counted as
   // blocking). Its relations go to the rays.
-  if (g.main_axis() < 0 || !(main_axis_gap(g) > 0x1p-30 * g.scale())) return false;
+  if (shaft_too_thin(g)) return false;
   // Line 1, CAN-BLOCK-SHAFT.
   if (!can_block_shaft(s.box, g)) return false;
   Vec3d q1, q2;
@@ -885,6 +885,10 @@ double main_axis_gap(const ShaftGeometry& g) {
   const int a = g.main_axis();
   // Receiver below the light when dir > 0.
   return g.dir() > 0 ? g.light().lo[a] - g.receiver().hi[a] : g.receiver().lo[a] - g.light().hi[a];
+}
+
+bool shaft_too_thin(const ShaftGeometry& g) {
+  return g.main_axis() < 0 || !(main_axis_gap(g) > 0x1p-30 * g.scale());
 }
 
 bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g) {

@@ -169,6 +169,12 @@ AABBd clamped_box(const AABBd& box, const ShaftGeometry& g);
 bool misses_slab(const AABBd& box, int axis, double lo, double hi, bool touching_misses);
 // The gap between the shaft's boxes along the main axis (negative when they overlap).
 double main_axis_gap(const ShaftGeometry& g);
+// True when the shaft's boxes are closer on the main axis than 2^-30 of the scale (or it
+// has no main axis): thinner than its planes' tolerances (2^-40 of the scale) resolve.
+// Clipping to such a slab and the winding signs inside it are rounding, so neither the
+// blocking test nor the empty-shaft rule may decide its relations (blocks_shaft,
+// iss_solver.cpp): they go to sub-shafts and rays.
+bool shaft_too_thin(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
 // misses_slab between the clip planes, touching counting as missing when the boxes have
 // a gap on the main axis.
