@@ -112,6 +112,15 @@ void add_receiver_grid(Scene& s, double x0, double x1, double y0, double y1, dou
     }
 }
 
+// A box with two random corners o + [-5, 5]^3 (AABB orders them), for the shaft tests.
+AABB random_box(std::mt19937& rng, const Vec3f& o) {
+  std::uniform_real_distribution<float> u(-5, 5);
+  Vec3f a, b;
+  for (int k = 0; k < 3; ++k) a[k] = u(rng);
+  for (int k = 0; k < 3; ++k) b[k] = u(rng);
+  return AABB(o + a, o + b);
+}
+
 double count_visible(const Scene& s, const SolveResult& r) {
   double v = 0;
   for (size_t i = 0; i < s.receivers.size(); ++i)
@@ -126,11 +135,9 @@ double count_visible(const Scene& s, const SolveResult& r) {
 TEST(IssShaft, HullContainsEveryBoxToBoxSegment) {
   std::mt19937 rng(7);
   for (double offset : {0.0, 1e5}) {  // near and far from the origin
-    std::uniform_real_distribution<float> u(-5, 5);
     for (int it = 0; it < 200; ++it) {
       Vec3f o(float(offset), float(-offset), float(offset));
-      AABB r(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
-      AABB l(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      AABB r = random_box(rng, o), l = random_box(rng, o);
       iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
       for (int k = 0; k < 20; ++k) {
         std::uniform_real_distribution<double> t(0, 1);
@@ -188,11 +195,9 @@ TEST(IssShaft, ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue) {
   // corner the signs of n pick (shaft.cpp). Bit for bit the same as all eight.
   std::mt19937 rng(11);
   for (double offset : {0.0, 1e5, 3e-3}) {
-    std::uniform_real_distribution<float> u(-5, 5);
     for (int it = 0; it < 500; ++it) {
       Vec3f o(float(offset), float(-offset), float(offset));
-      AABB r(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
-      AABB l(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      AABB r = random_box(rng, o), l = random_box(rng, o);
       iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
       for (int k = 6; k < g.plane_count(); ++k) {
         const iss::Plane4d& p = g.plane(k);
@@ -469,7 +474,7 @@ TEST(IssBlockers, BoxPlaneClassificationEqualsTheEightCorners) {
       Vec3d b = to_double(o + Vec3f(u(rng), u(rng), u(rng))), c = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
       if (zero(rng) == 0) b.z = c.z = a.z;  // normal along z: n.x = n.y = 0
       iss::Plane4d pl = iss::plane_through(a, b, c, 2e5);
-      AABB box(o + Vec3f(u(rng), u(rng), u(rng)), o + Vec3f(u(rng), u(rng), u(rng)));
+      AABB box = random_box(rng, o);
       if (zero(rng) == 0) box.hi = box.lo;  // a point
       iss::AABBd bd = iss::to_aabbd(box);
       double mn = 1e300, mx = -1e300;

@@ -734,8 +734,8 @@ class Traversal {
     // 2ddae6b5..., a light with one sample 1.9e33 below the receivers left only the x
     // axis separating the boxes, by 1.9e-39; clipping the blockers to that slab lost the
     // fan that blocks receiver 0, and the empty shaft called it visible (margin 0.014).
-    if (sh.surfaces.empty() && !L.had_triangles && (!R.had_triangles || node_triangles_face_away(sh.r, L.box)) &&
-        !shaft_too_thin(sh.g)) {
+    if (sh.surfaces.empty() && !L.had_triangles && !shaft_too_thin(sh.g) &&
+        (!R.had_triangles || node_triangles_face_away(sh.r, L.box))) {
       record_visible(sh.r, sh.l);
       return;
     }
