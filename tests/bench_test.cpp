@@ -131,6 +131,21 @@ TEST(BenchRms, HandComputed) {
   EXPECT_EQ(rms_error({0.25, 0.5}, {0.25, 0.5}), 0.0);
 }
 
+TEST(BenchRoundRatios, HandComputedPairedRounds) {
+  // Rounds: 4/2 = 2, 3/2 = 1.5, 6/4 = 1.5, 10/4 = 2.5; sorted 1.5 1.5 2 2.5, median 1.75.
+  // Minima 3 and 2: 1.5 (a slow round of the base alone would move it, not the median).
+  RoundRatios r = round_ratios({2, 2, 4, 4}, {4, 3, 6, 10});
+  EXPECT_DOUBLE_EQ(r.of_minima, 1.5);
+  EXPECT_DOUBLE_EQ(r.median, 1.75);
+  EXPECT_DOUBLE_EQ(r.lo, 1.5);
+  EXPECT_DOUBLE_EQ(r.hi, 2.5);
+  RoundRatios odd = round_ratios({1, 2, 4}, {3, 2, 6});  // 3, 1, 1.5
+  EXPECT_DOUBLE_EQ(odd.median, 1.5);
+  EXPECT_DOUBLE_EQ(odd.of_minima, 2.0);
+  EXPECT_TRUE(std::isnan(round_ratios({}, {}).median));
+  EXPECT_TRUE(std::isnan(round_ratios({1, 2}, {1}).of_minima));
+}
+
 TEST(BenchSweepGuard, PredictsLinearlyFromTheLastPoint) {
   SweepGuard g(10.0);
   std::string why;

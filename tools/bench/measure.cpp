@@ -1,8 +1,11 @@
 // Measuring methods: repeated runs, per-run peak memory (see measure.h).
 #include "tools/bench/measure.h"
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <limits>
+#include <vector>
 
 #include <cmath>
 #include <cstdio>
@@ -118,6 +121,18 @@ std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Sc
     }
   }
   return out;
+}
+
+RoundRatios round_ratios(const std::vector<double>& base, const std::vector<double>& x) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  if (base.empty() || base.size() != x.size()) return {nan, nan, nan, nan};
+  std::vector<double> r(x.size());
+  for (size_t k = 0; k < x.size(); ++k) r[k] = x[k] / base[k];
+  std::sort(r.begin(), r.end());
+  const size_t h = r.size() / 2;
+  const double med = r.size() % 2 ? r[h] : 0.5 * (r[h - 1] + r[h]);
+  return {*std::min_element(x.begin(), x.end()) / *std::min_element(base.begin(), base.end()), med, r.front(),
+          r.back()};
 }
 
 bool SweepGuard::skip(const std::string& method, double size, std::string* why) const {

@@ -67,6 +67,15 @@ Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& b
 std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Scene& scene, const SolveOptions& base,
                                                   const MeasureConfig& cfg);
 
+// Ratios of paired runs: x[r] and base[r] measured in the same round r (seconds
+// apart), as the interleaved doubling rounds of the iss-target experiment make them.
+// of_minima = min(x) / min(base); median, lo and hi over the per-round ratios x[r] /
+// base[r]. NaN everywhere when the series are empty or of different lengths.
+struct RoundRatios {
+  double of_minima, median, lo, hi;
+};
+RoundRatios round_ratios(const std::vector<double>& base, const std::vector<double>& x);
+
 // Times any callable the same way (min over `repeat` runs) and records its peak.
 struct Timed {
   double seconds = std::numeric_limits<double>::quiet_NaN();
