@@ -71,12 +71,22 @@ SolveResult make_empty_result(const Scene& scene) {
   return r;
 }
 
+size_t ReceiverResult::count_visible(size_t begin, size_t end) const {
+  if (begin >= end) return 0;
+  const size_t w0 = begin >> 6, w1 = (end - 1) >> 6;
+  const uint64_t first = ~uint64_t(0) << (begin & 63);               // bits >= begin in word w0
+  const uint64_t last = ~uint64_t(0) >> (63 - ((end - 1) & 63));     // bits <= end - 1 in word w1
+  if (w0 == w1) return size_t(__builtin_popcountll(visible_bits[w0] & first & last));
+  size_t n = size_t(__builtin_popcountll(visible_bits[w0] & first)) + size_t(__builtin_popcountll(visible_bits[w1] & last));
+  for (size_t w = w0 + 1; w < w1; ++w) n += size_t(__builtin_popcountll(visible_bits[w]));
+  return n;
+}
+
 void fractions_from_bits(const Scene& scene, SolveResult& result) {
   for (auto& rr : result.receivers) {
     size_t off = 0;
     for (size_t l = 0; l < scene.lights.size(); ++l) {
-      size_t n = size_t(scene.lights[l].samples), vis = 0;
-      for (size_t j = 0; j < n; ++j) vis += rr.visible(off + j);
+      size_t n = size_t(scene.lights[l].samples), vis = rr.count_visible(off, off + n);
       rr.visible_fraction[l] = float(double(vis) / double(n));
       off += n;
     }

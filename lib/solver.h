@@ -55,6 +55,9 @@ struct ReceiverResult {
     if (v) visible_bits[bit >> 6] |= uint64_t(1) << (bit & 63);
     else visible_bits[bit >> 6] &= ~(uint64_t(1) << (bit & 63));
   }
+  // Visible bits in [begin, end), a popcount per 64-bit word (the bit-by-bit count was
+  // 16% of ISS's instructions on rooms: 616M relations, ~9 instructions each).
+  size_t count_visible(size_t begin, size_t end) const;
 };
 
 struct SolveResult {

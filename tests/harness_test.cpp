@@ -29,6 +29,24 @@ Scene family(const std::string& f, uint64_t seed, long tris = -1, long recv = -1
   return std::move(*r);
 }
 
+TEST(ReceiverBits, CountVisibleEqualsTheBitByBitCountOnEveryRange) {
+  // Every [begin, end) of 200 random bits (four words, ranges within one word, across
+  // word boundaries, empty) against counting visible(b) one bit at a time.
+  ReceiverResult rr;
+  rr.visible_bits.assign(4, 0);
+  uint64_t h = 0x9e3779b97f4a7c15ull;
+  for (size_t b = 0; b < 200; ++b) {
+    h ^= h << 13, h ^= h >> 7, h ^= h << 17;
+    rr.set_visible(b, (h & 3) != 0);
+  }
+  for (size_t begin = 0; begin <= 200; ++begin)
+    for (size_t end = begin; end <= 200; ++end) {
+      size_t n = 0;
+      for (size_t b = begin; b < end; ++b) n += rr.visible(b);
+      ASSERT_EQ(rr.count_visible(begin, end), n) << begin << " " << end;
+    }
+}
+
 TEST(Sha1, MatchesFips180TestVectors) {
   EXPECT_EQ(sha1_hex(""), "da39a3ee5e6b4b0d3255bfef95601890afd80709");
   EXPECT_EQ(sha1_hex("abc"), "a9993e364706816aba3e25717850c26c9cd0d89d");
