@@ -140,6 +140,17 @@ TEST(SceneJson, RejectsOutOfRangeIndicesAndBadLights) {
   ASSERT_FALSE(nonconvex.ok());
   EXPECT_NE(nonconvex.error().message.find("lights[0]"), std::string::npos);
   EXPECT_NE(nonconvex.error().message.find("not convex"), std::string::npos) << nonconvex.error().message;
+  // fuzz_plucker 9177ea83: a sliver 4 wide and 400k long whose fourth vertex turns
+  // against the normal by -16 exactly (within the float tolerance of -1e-9 |e0| |e1|);
+  // its frame polygon self-intersects, and the region oracle's frame check failed.
+  // Orientation by hand (z dropped): at vertex 0, (233635.59375 - 0, 0) x (397635 -
+  // 233635.59375, 4) = 233635.59375 * 4 > 0 but at vertex 1, (163999.40625, 4) x (4, 0) =
+  // -16 < 0, against the normal's +z.
+  auto sliver = light("[[233635.59375,233634,475921],[397635,233638,475920.9375],[397639,233638,475921],"
+                      "[0,233634,475921]]");
+  ASSERT_FALSE(sliver.ok());
+  EXPECT_NE(sliver.error().message.find("not convex"), std::string::npos) << sliver.error().message;
+  EXPECT_NE(sliver.error().message.find("lights[0]"), std::string::npos) << sliver.error().message;
   auto nonplanar = light("[[-1,-1,2],[-1,1,2],[1,1,2.5],[1,-1,2]]");
   ASSERT_FALSE(nonplanar.ok());
   EXPECT_NE(nonplanar.error().message.find("plane"), std::string::npos) << nonplanar.error().message;

@@ -7,6 +7,8 @@
 // oracle instantiates the same formula with CGAL's exact number type.
 #pragma once
 
+#include <cmath>
+
 #include "lib/geom/vec.h"
 
 namespace visgate {
@@ -18,6 +20,53 @@ T orient3d(const Vec3<T>& a, const Vec3<T>& b, const Vec3<T>& c, const Vec3<T>& 
 
 inline float orient3d_f32(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
   return orient3d<float>(a, b, c, d);
+}
+
+// The exact sign of the 2D orientation (b - a) x (c - a) of float points given by their
+// two coordinates (ax, ay), ...: positive for a counter-clockwise turn. Shewchuk's
+// expansion arithmetic in double: each difference of two floats is an exact Two-Sum
+// (hi + lo), each product of two such sums four exact Two-Products (by fused multiply-
+// add), the sixteen terms summed exactly (Grow-Expansion) and the sign read from the
+// largest component. Float inputs keep everything inside double's range (products below
+// 2^260, roundoff terms above 2^-360). For light validation (lib/scene prepare_light),
+// which must agree with the region oracle's exact frame polygon.
+inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx, float cy) {
+  auto two_sum = [](double a, double b, double& x, double& y) {
+    x = a + b;
+    const double bv = x - a, av = x - bv;
+    y = (a - av) + (b - bv);
+  };
+  double e[32];
+  int n = 0;
+  auto grow = [&](double q) {  // e += q, exactly (e nonoverlapping, increasing magnitude)
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      double x, y;
+      two_sum(q, e[i], x, y);
+      q = x;
+      if (y != 0.0) e[m++] = y;
+    }
+    if (q != 0.0) e[m++] = q;
+    n = m;
+  };
+  double d[4][2];  // bx - ax, cy - ay, by - ay, cx - ax as exact hi + lo
+  two_sum(double(bx), -double(ax), d[0][0], d[0][1]);
+  two_sum(double(cy), -double(ay), d[1][0], d[1][1]);
+  two_sum(double(by), -double(ay), d[2][0], d[2][1]);
+  two_sum(double(cx), -double(ax), d[3][0], d[3][1]);
+  for (int t = 0; t < 2; ++t) {
+    const double sg = t == 0 ? 1.0 : -1.0;
+    const double* u = d[2 * t];
+    const double* v = d[2 * t + 1];
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j) {
+        const double x = u[i] * v[j], y = std::fma(u[i], v[j], -x);
+        grow(sg * x);
+        grow(sg * y);
+      }
+  }
+  if (n == 0) return 0;
+  return e[n - 1] > 0.0 ? 1 : -1;
 }
 
 // Textbook Möller-Trumbore ("Fast, Minimum Storage Ray/Triangle Intersection", 1997) in

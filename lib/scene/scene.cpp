@@ -2,6 +2,8 @@
 // the relation hash of DESIGN section 3.
 #include "lib/scene/scene.h"
 
+#include "lib/geom/predicates.h"
+
 #include <cmath>
 #include <numbers>
 
@@ -109,6 +111,27 @@ Status prepare_light(Light& light, const std::string& where) {
   }
   if (std::abs(turning - 2 * std::numbers::pi) > 1e-3)
     return Error{where + ".polygon: not a simple convex polygon (winds " + std::to_string(turning / (2 * std::numbers::pi)) + " times)"};
+  // Convexity exactly, in the frame the region oracle uses (oracle/region_oracle.h "Exact
+  // frame": the float vertices with the axis of the largest Newell component dropped).
+  // The tolerance above admits a turn of -1e-9 |e0| |e1|; on a sliver light 4 wide and
+  // 400k long that let a vertex through whose frame polygon self-intersects (exact
+  // corner orientations -16, -16, +934542, +934542), and the oracle's frame check
+  // failed (fuzz_plucker 9177ea83). Every axis whose Newell component is within half of
+  // the largest is checked, so the oracle's exact choice is among them whatever double
+  // rounding did to the normal; a corner may be exactly straight (the oracle drops it),
+  // never turned against the normal.
+  {
+    const double big = std::max({std::abs(nn.x), std::abs(nn.y), std::abs(nn.z)});
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(nn[k]) < 0.5 * big) continue;
+      const int i1 = (k + 1) % 3, i2 = (k + 2) % 3, want = nn[k] > 0 ? 1 : -1;
+      for (size_t i = 0; i < n; ++i) {
+        const Vec3f &a = P[(i + n - 1) % n], &b = P[i], &d = P[(i + 1) % n];
+        if (orient2d_exact_sign(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]) == -want)
+          return Error{fmt_index(where, "polygon", i) + ": polygon is not convex (reflex vertex in exact arithmetic)"};
+      }
+    }
+  }
 
   light.normal = Vec3f(unit);
   light.area = 0.5 * twice_area;
