@@ -59,6 +59,11 @@ char class_char(oracle::RelationClass c) { return char(c); }
 
 }  // namespace
 
+std::vector<size_t> fraction_receivers(uint32_t selector_rest, size_t receivers) {
+  if (receivers == 0) return {};
+  return {size_t(selector_rest % receivers)};
+}
+
 int run_differential(const char* target, const uint8_t* data, size_t size) {
   Target& t = target_state(target);
   if (!t.solver) return 0;
@@ -143,13 +148,18 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   // Fragment methods: the visible fractions against the region oracle and one interior
   // point per fragment against the relation oracle, by the comparator's own rules
   // (oracle/comparator.h compare_regions: receivers exactly on a light's plane, where
-  // the region oracle reports edge_on and computes no region, are skipped).
+  // the region oracle reports edge_on and computes no region, are skipped). The
+  // fragment check runs on every receiver, the fraction check on the one receiver
+  // (every light) the input chooses (fraction_receivers, differential.h).
   if (t.solver->reports_fragments()) {
     std::vector<size_t> all(scene.receivers.size());
     for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    const std::vector<size_t> chosen =
+        fraction_receivers(selector_rest(decoded->option_selector, t.solver->options()), scene.receivers.size());
     oracle::Comparison reg;
     try {
-      reg = oracle::compare_regions(scene, result, all, kTau);
+      reg = oracle::compare_regions(scene, result, chosen, kTau, {true, false});
+      oracle::merge(reg, oracle::compare_regions(scene, result, all, kTau, {false, true}));
     } catch (const std::exception& e) {
       report_and_abort(target, "region oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
     }

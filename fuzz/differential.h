@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace visgate::fuzz {
 
@@ -26,5 +27,18 @@ constexpr double kFractionTolerance = 1e-4;
 // registered in this build (make_solver gives nullptr: the method has not landed yet);
 // the first such call prints one line saying so to stderr.
 int run_differential(const char* target, const uint8_t* data, size_t size);
+
+// Fragment methods (fuzz_plucker): the receivers whose visible fractions (every light)
+// are checked against the region oracle, from the option selector's unused bits
+// (decoder.h selector_rest): one receiver, rest % receivers. Every relation's bit and
+// every fragment's interior point are still checked for all receivers. Why one: the
+// exact region check (Epeck, CGAL's Boolean operations) was about 90% of a run's target
+// work with every receiver and light checked (3.3 pairs per run on average; README
+// "Speed (exec/s) and campaigns"); with one receiver chosen by the input, each run
+// costs a fraction of that and the fuzzer still reaches every receiver: mutating the
+// selector's high bytes changes the receiver and nothing else of the decoded case.
+// `visgate minimize` and `visgate check` check every receiver, so a finding found
+// here reproduces there.
+std::vector<size_t> fraction_receivers(uint32_t selector_rest, size_t receivers);
 
 }  // namespace visgate::fuzz

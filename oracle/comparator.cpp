@@ -115,7 +115,7 @@ bool fraction_certainly_within(const Scene& scene, size_t i, size_t l, double mf
 }  // namespace
 
 Comparison compare_regions(const Scene& scene, const SolveResult& method, const std::vector<size_t>& receivers,
-                           double tau) {
+                           double tau, RegionParts parts) {
   Comparison c;
   VG_CHECK(method.receivers.size() == scene.receivers.size());
   std::unique_ptr<BlockedSegmentTest> blocked;  // built at the first fragment
@@ -124,7 +124,7 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
     VG_CHECK(i < scene.receivers.size());
     const ReceiverResult& rr = method.receivers[i];
     for (size_t l = 0; l < scene.lights.size(); ++l) {
-      if (l < rr.visible_fraction.size() &&
+      if (parts.fractions && l < rr.visible_fraction.size() &&
           !fraction_certainly_within(scene, i, l, double(rr.visible_fraction[l]), cache)) {
         RegionOptions fraction_only;
         fraction_only.outputs = false;  // the fraction is all a verdict or a record needs
@@ -142,7 +142,7 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
           c.mismatches.push_back(mm);
         }
       }
-      if (l >= rr.fragments.size()) continue;
+      if (!parts.fragments || l >= rr.fragments.size()) continue;
       for (const Polygon3f& frag : rr.fragments[l]) {
         Vec3f x;
         if (!interior_point(frag, x)) continue;

@@ -65,9 +65,17 @@ Comparison compare_relations(const Scene& scene, const SolveResult& method, cons
 // mismatch for every reported fragment whose interior point (the centroid of its largest
 // fan triangle, rounded to float; fragments are convex) the relation oracle calls blocked
 // with margin >= tau. Only the fraction/fragment fields of the result are filled.
+// `parts` runs one of the two checks alone (fuzz_plucker: the fraction check, the
+// expensive one, on a few receivers the input chooses, the fragment check on all): the
+// two calls' mismatches together are those of one call with both parts, the fractions'
+// first per receiver and light.
 inline constexpr double kFractionTolerance = 1e-4;
+struct RegionParts {
+  bool fractions = true;  // visible fractions against the region oracle
+  bool fragments = true;  // one interior point per fragment against the relation oracle
+};
 Comparison compare_regions(const Scene& scene, const SolveResult& method, const std::vector<size_t>& receivers,
-                           double tau);
+                           double tau, RegionParts parts = {});
 
 // Adds the counts, histogram and mismatches of `other` to `into`.
 void merge(Comparison& into, const Comparison& other);

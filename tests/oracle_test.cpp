@@ -22,6 +22,7 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include "fuzz/decoder.h"
 #include "lib/scene/families.h"
@@ -845,6 +846,47 @@ TEST(Comparator, RegionComparisonFlagsWrongFractionsAndBlockedFragments) {
   EXPECT_EQ(c.fragment_mismatches, 1u);
   m.receivers[0].visible_fraction = {0.7f};
   EXPECT_EQ(compare_regions(s, m, {0}, 1e-5).fraction_mismatches, 1u);
+}
+
+TEST(Comparator, RegionPartsSplitTheRegionComparisonIntoItsTwoChecks) {
+  // compare_regions with RegionParts (comparator.h): the fraction check alone and the
+  // fragment check alone find exactly the mismatches of the full comparison between them
+  // (fuzz_plucker runs the first on one receiver and the second on all).
+  Scene s;
+  add_quad(s, {0.25f, 0.25f, 1}, {0.5f, 0.25f, 1}, {0.5f, 0.5f, 1}, {0.25f, 0.5f, 1});
+  s.lights.push_back(square_light_down(0, 1, 0, 1, 2));
+  s.lights.push_back(square_light_down(-1, 0, 0, 1, 2));
+  s.receivers.push_back({{0.5f, 0.5f, 0}, {0, 0, 1}});
+  s.receivers.push_back({{0.375f, 0.375f, 0.5f}, {0, 0, 1}});
+  SolveResult m = make_empty_result(s);
+  // Receiver 0: light 0 fraction right (0.75), a fragment inside the shadow; light 1
+  // fraction wrong. Receiver 1 (right under the quad): light 0 fraction wrong.
+  m.receivers[0].visible_fraction = {0.75f, 0.5f};
+  m.receivers[0].fragments = {{{{0.1f, 0.1f, 2}, {0.4f, 0.1f, 2}, {0.4f, 0.4f, 2}}}, {}};
+  m.receivers[1].visible_fraction = {0.9f, 1.0f};
+  const std::vector<size_t> both = {0, 1};
+  Comparison full = compare_regions(s, m, both, 1e-5);
+  Comparison fr = compare_regions(s, m, both, 1e-5, RegionParts{true, false});
+  Comparison fg = compare_regions(s, m, both, 1e-5, RegionParts{false, true});
+  EXPECT_EQ(full.fraction_mismatches, 2u);
+  EXPECT_EQ(full.fragment_mismatches, 1u);
+  EXPECT_EQ(fr.fraction_mismatches, full.fraction_mismatches);
+  EXPECT_EQ(fr.fragment_mismatches, 0u);
+  EXPECT_EQ(fg.fraction_mismatches, 0u);
+  EXPECT_EQ(fg.fragment_mismatches, full.fragment_mismatches);
+  merge(fr, fg);
+  ASSERT_EQ(fr.mismatches.size(), full.mismatches.size());
+  auto key = [](const Mismatch& x) { return std::tuple(x.receiver, x.light, int(x.direction), x.margin); };
+  std::vector<std::tuple<size_t, size_t, int, double>> a, b;
+  for (const auto& x : fr.mismatches) a.push_back(key(x));
+  for (const auto& x : full.mismatches) b.push_back(key(x));
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  EXPECT_EQ(a, b);
+  // One receiver only: its fraction mismatches, none of the other's.
+  Comparison one = compare_regions(s, m, {1}, 1e-5, RegionParts{true, false});
+  ASSERT_EQ(one.fraction_mismatches, 1u);
+  EXPECT_EQ(one.mismatches[0].receiver, 1u);
 }
 
 TEST(OracleJson, RoundTripsClassesAndMargins) {
