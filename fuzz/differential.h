@@ -32,11 +32,13 @@ int run_differential(const char* target, const uint8_t* data, size_t size);
 // are checked against the region oracle, from the option selector's unused bits
 // (decoder.h selector_rest): one receiver, rest % receivers. Every relation's bit and
 // every fragment's interior point are still checked for all receivers. Why one: the
-// exact region check (Epeck, CGAL's Boolean operations) was about 90% of a run's target
-// work with every receiver and light checked (3.3 pairs per run on average; README
-// "Speed (exec/s) and campaigns"); with one receiver chosen by the input, each run
-// costs a fraction of that and the fuzzer still reaches every receiver: mutating the
-// selector's high bytes changes the receiver and nothing else of the decoded case.
+// exact region check (Epeck, CGAL's Boolean operations) of every receiver and light was
+// 61% of fuzz_plucker's samples, 95% of run_differential's (perf, 2026-12-02; the seeds
+// decode to 3.68 pairs per run, one receiver has 1.12 on average); with one receiver
+// chosen by the input a run takes about half the CPU time (README "Speed (exec/s) and
+// campaigns", also for the trade-off), and the fuzzer still reaches every receiver:
+// mutating the selector's high bytes changes the receiver and nothing else of the
+// decoded case.
 // `visgate minimize` and `visgate check` check every receiver, so a finding found
 // here reproduces there.
 std::vector<size_t> fraction_receivers(uint32_t selector_rest, size_t receivers);
