@@ -1,9 +1,10 @@
 // The differential check shared by fuzz_iss, fuzz_ssv, fuzz_plucker and fuzz_embree
 // (DESIGN section 5): decode a small scene (fuzz/decoder.h), solve it with the method
 // under the options the input selects, classify every relation with the exact relation
-// oracle, and, for fragment methods, compare every receiver's visible fraction with the
-// region oracle and one interior point of every fragment with the relation oracle
-// (oracle/comparator.h compare_regions). A mismatch (a non-degenerate relation with
+// oracle, and, for fragment methods, compare one interior point of every fragment with
+// the relation oracle and the visible fractions of the receiver the input chooses
+// (fraction_receivers below) with the region oracle (oracle/comparator.h
+// compare_regions). A mismatch (a non-degenerate relation with
 // margin >= tau the method gets wrong, a visible fraction off by more than 1e-4, or a
 // fragment holding a point blocked with margin >= tau) is printed with the method,
 // its options, the relation, the exact class, the margin and the scene in hex-float
