@@ -470,7 +470,9 @@ class Traversal {
     MainAxis ax{parent.g.main_axis(), parent.g.dir()};
     // The geometry is built in place: a default-constructed one assigned afterwards cost
     // two fills and a copy of its plane and corner arrays (1.2 kB) per shaft.
-    Shaft sub{r, l, made ? *made : geometry(r, l, ax), {}, {}, 0};
+    // Two whole initialisers: each branch's prvalue initialises `sub` itself, so the
+    // geometry() branch still builds in place (no temporary and copy).
+    Shaft sub = made ? Shaft{r, l, *made, {}, {}, 0} : Shaft{r, l, geometry(r, l, ax), {}, {}, 0};
     init_shaft(sub);
     for (const AABBd& gb : parent.ghosts)
       if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
