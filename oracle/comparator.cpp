@@ -114,6 +114,25 @@ bool fraction_certainly_within(const Scene& scene, size_t i, size_t l, double mf
 }
 }  // namespace
 
+void fill_disagreement_margins(const Scene& scene, const SolveResult& method, RelationOracleResult& exact) {
+  VG_CHECK(method.receivers.size() == scene.receivers.size() && exact.classes.size() == scene.receivers.size());
+  const size_t n = scene.samples_per_receiver();
+  for (size_t i = 0; i < scene.receivers.size(); ++i) {
+    const std::string& cls = exact.classes[i];
+    if (cls.empty()) continue;
+    VG_CHECK(cls.size() == n && exact.margins[i].size() == n);
+    const ReceiverResult& rr = method.receivers[i];
+    VG_CHECK(rr.visible_bits.size() * 64 >= n);
+    for (size_t l = 0, b = 0; l < scene.lights.size(); ++l)
+      for (int j = 0; j < scene.lights[l].samples; ++j, ++b) {
+        const RelationClass e = RelationClass(cls[b]);
+        if (e == RelationClass::Degenerate || rr.visible(b) == (e == RelationClass::Visible)) continue;
+        exact.margins[i][b] =
+            classify_segment(scene, scene.receivers[i].p, sample_position(scene.lights[l], j, i)).margin;
+      }
+  }
+}
+
 Comparison compare_regions(const Scene& scene, const SolveResult& method, const std::vector<size_t>& receivers,
                            double tau, RegionParts parts) {
   Comparison c;

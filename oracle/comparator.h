@@ -58,6 +58,11 @@ struct Comparison {
 // The method result must have one row per receiver with enough bits (VG_CHECK).
 Comparison compare_relations(const Scene& scene, const SolveResult& method, const RelationOracleResult& exact,
                              double tau);
+// For run_relation_oracle_classes: sets the margin of every relation compare_relations
+// reads (non-degenerate, answered differently by `method`) from classify_segment, the
+// same margin run_relation_oracle gives; the others stay NaN. compare_relations then
+// finds exactly what it finds with run_relation_oracle's full result.
+void fill_disagreement_margins(const Scene& scene, const SolveResult& method, RelationOracleResult& exact);
 
 // Fragment methods (DESIGN section 5): for each listed receiver and each light, a
 // fraction mismatch when |method visible_fraction - exact fraction| > kFractionTolerance

@@ -1004,6 +1004,56 @@ TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
   EXPECT_GT(certified, (pairs - edge_on) / 2);
 }
 
+TEST(RelationOracle, ClassesOnlyRunAndFilledMarginsCompareAsTheFullRun) {
+  // run_relation_oracle_classes (relation_oracle.h) gives run_relation_oracle's classes;
+  // with fill_disagreement_margins (comparator.h), compare_relations finds the same
+  // counts, histogram and mismatch records for a method result that disagrees with the
+  // exact classes at pseudo-random relations (the fuzz targets' path), and the filled
+  // margins are the full run's, bit for bit. Scenes: the region-test families and the
+  // fuzz seeds (degenerate and far-away inputs among them).
+  std::vector<Scene> scenes = bound_scenes();
+  std::mt19937 rng(7);
+  size_t relations = 0, disagreements = 0;
+  for (size_t k = 0; k < scenes.size(); k += 3) {
+    const Scene& sc = scenes[k];
+    RelationOracleResult full = run_relation_oracle(sc, 1), cl = run_relation_oracle_classes(sc, 1);
+    ASSERT_EQ(cl.classes, full.classes) << "scene " << k;
+    SolveResult m = make_empty_result(sc);
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t b = 0; b < full.classes[i].size(); ++b) {
+        bool v = full.classes[i][b] == 'v';
+        if (full.classes[i][b] == 'd' || rng() % 3 == 0) v = rng() % 2 == 0;
+        m.receivers[i].set_visible(b, v);
+      }
+    fill_disagreement_margins(sc, m, cl);
+    Comparison a = compare_relations(sc, m, full, 1e-5), c = compare_relations(sc, m, cl, 1e-5);
+    EXPECT_EQ(a.relations, c.relations);
+    EXPECT_EQ(a.degenerate, c.degenerate);
+    EXPECT_EQ(a.agree, c.agree);
+    EXPECT_EQ(a.disagree, c.disagree);
+    EXPECT_EQ(a.false_visible, c.false_visible);
+    EXPECT_EQ(a.false_blocked, c.false_blocked);
+    EXPECT_EQ(a.disagreement_margins.buckets, c.disagreement_margins.buckets);
+    EXPECT_EQ(a.disagreement_margins.below, c.disagreement_margins.below);
+    ASSERT_EQ(a.mismatches.size(), c.mismatches.size());
+    for (size_t q = 0; q < a.mismatches.size(); ++q) {
+      EXPECT_EQ(a.mismatches[q].receiver, c.mismatches[q].receiver);
+      EXPECT_EQ(a.mismatches[q].sample, c.mismatches[q].sample);
+      EXPECT_EQ(a.mismatches[q].margin, c.mismatches[q].margin);
+    }
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t b = 0; b < full.classes[i].size(); ++b) {
+        const char e = full.classes[i][b];
+        if (e == 'd' || m.receivers[i].visible(b) == (e == 'v')) continue;
+        EXPECT_EQ(cl.margins[i][b], full.margins[i][b]) << "scene " << k << " receiver " << i << " relation " << b;
+        ++disagreements;
+      }
+    relations += a.relations;
+  }
+  EXPECT_GT(disagreements, 1000u);
+  EXPECT_GT(relations, 5000u);
+}
+
 TEST(RegionOracle, RegionCacheChangesNoAnswer) {
   // RegionCache (region_oracle.h) only saves recomputation: bounds and regions with it
   // equal the ones without, bit for bit, whether a region follows its pair's bound (the
