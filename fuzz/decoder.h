@@ -61,13 +61,15 @@ struct DecodeLimits {
 
 // The limits a differential target decodes with; every reader of that target's inputs
 // (the target, its replay build, `visgate minimize`) must use them, or a crash file
-// decodes to another scene. fuzz_plucker: at most 24 triangles. Its run is the exact
-// region check of every receiver-light pair (Epeck, CGAL's Boolean operations) and
+// decodes to another scene. fuzz_plucker: at most 24 triangles. Its run was the exact
+// region check of every receiver-light pair (Epeck, CGAL's Boolean operations; now of
+// one receiver's pairs, differential.h fraction_receivers) and
 // plucker-bsp's exact paths, both growing faster than linearly with the triangles; with
 // 48 it made about a tenth of the other targets' runs per CPU-second (README "Speed
 // (exec/s) and campaigns"). The cap changes what a count byte decodes to (the value is
 // taken modulo the range), so seeds decode to other scenes, but the open finding
-// corpus/fuzz/open/fuzz_plucker/6339247d... (21 triangles) decodes to the same scene
+// corpus/fuzz/open/fuzz_plucker/9386076d... (21 triangles; stored first as 6339247d...,
+// see its note) decodes to the same scene
 // under 24 (not under 16 to 23, checked) and still fails. Fewer receivers or lights
 // would lose it: with coherence on, dropping its receivers 3 and 4 hides the mismatch
 // at receiver 2. Every other target: DecodeLimits{}.
@@ -109,6 +111,16 @@ std::map<std::string, std::string> decode_options(uint32_t selector, const std::
     }
   }
   return out;
+}
+
+// The selector bits decode_options leaves unused: the quotient left after every option's
+// value is taken, in the same order. The targets draw their own choices from it
+// (differential.cpp: which receiver gets fuzz_plucker's exact fraction check), so the
+// scene and the options an input decodes to do not depend on those choices.
+template <class Spec>
+uint32_t selector_rest(uint32_t selector, const std::vector<Spec>& specs) {
+  for (const auto& s : specs) selector /= s.values.empty() ? 8u : uint32_t(s.values.size());
+  return selector;
 }
 
 // The method a fuzz target exercises: "fuzz_iss" -> "iss", "fuzz_ssv" -> "ssv",

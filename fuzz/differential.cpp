@@ -59,6 +59,11 @@ char class_char(oracle::RelationClass c) { return char(c); }
 
 }  // namespace
 
+std::vector<size_t> fraction_receivers(uint32_t selector_rest, size_t receivers) {
+  if (receivers == 0) return {};
+  return {size_t(selector_rest % receivers)};
+}
+
 int run_differential(const char* target, const uint8_t* data, size_t size) {
   Target& t = target_state(target);
   if (!t.solver) return 0;
@@ -80,7 +85,7 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   // Exact answers first: an exception from the oracle is an oracle bug, reported as such.
   oracle::RelationOracleResult exact;
   try {
-    exact = oracle::run_relation_oracle(scene, 1);
+    exact = oracle::run_relation_oracle_classes(scene, 1);  // margins below, where read
   } catch (const std::exception& e) {
     report_and_abort(target, "relation oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
   }
@@ -108,6 +113,11 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   }
 
   std::string findings;
+  try {
+    oracle::fill_disagreement_margins(scene, result, exact);
+  } catch (const std::exception& e) {
+    report_and_abort(target, "relation oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
+  }
   oracle::Comparison cmp = oracle::compare_relations(scene, result, exact, kTau);
   // fuzz_embree: Embree's known robust-mode false hit (corpus/embree-robust/sliver/
   // 4c8dae81..., open, third-party) is recorded once and not reported again: a
@@ -143,13 +153,18 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   // Fragment methods: the visible fractions against the region oracle and one interior
   // point per fragment against the relation oracle, by the comparator's own rules
   // (oracle/comparator.h compare_regions: receivers exactly on a light's plane, where
-  // the region oracle reports edge_on and computes no region, are skipped).
+  // the region oracle reports edge_on and computes no region, are skipped). The
+  // fragment check runs on every receiver, the fraction check on the one receiver
+  // (every light) the input chooses (fraction_receivers, differential.h).
   if (t.solver->reports_fragments()) {
     std::vector<size_t> all(scene.receivers.size());
     for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    const std::vector<size_t> chosen =
+        fraction_receivers(selector_rest(decoded->option_selector, t.solver->options()), scene.receivers.size());
     oracle::Comparison reg;
     try {
-      reg = oracle::compare_regions(scene, result, all, kTau);
+      reg = oracle::compare_regions(scene, result, chosen, kTau, {true, false});
+      oracle::merge(reg, oracle::compare_regions(scene, result, all, kTau, {false, true}));
     } catch (const std::exception& e) {
       report_and_abort(target, "region oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
     }

@@ -1,9 +1,10 @@
 // The differential check shared by fuzz_iss, fuzz_ssv, fuzz_plucker and fuzz_embree
 // (DESIGN section 5): decode a small scene (fuzz/decoder.h), solve it with the method
 // under the options the input selects, classify every relation with the exact relation
-// oracle, and, for fragment methods, compare every receiver's visible fraction with the
-// region oracle and one interior point of every fragment with the relation oracle
-// (oracle/comparator.h compare_regions). A mismatch (a non-degenerate relation with
+// oracle, and, for fragment methods, compare one interior point of every fragment with
+// the relation oracle and the visible fractions of the receiver the input chooses
+// (fraction_receivers below) with the region oracle (oracle/comparator.h
+// compare_regions). A mismatch (a non-degenerate relation with
 // margin >= tau the method gets wrong, a visible fraction off by more than 1e-4, or a
 // fragment holding a point blocked with margin >= tau) is printed with the method,
 // its options, the relation, the exact class, the margin and the scene in hex-float
@@ -13,6 +14,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace visgate::fuzz {
 
@@ -26,5 +28,20 @@ constexpr double kFractionTolerance = 1e-4;
 // registered in this build (make_solver gives nullptr: the method has not landed yet);
 // the first such call prints one line saying so to stderr.
 int run_differential(const char* target, const uint8_t* data, size_t size);
+
+// Fragment methods (fuzz_plucker): the receivers whose visible fractions (every light)
+// are checked against the region oracle, from the option selector's unused bits
+// (decoder.h selector_rest): one receiver, rest % receivers. Every relation's bit and
+// every fragment's interior point are still checked for all receivers. Why one: the
+// exact region check (Epeck, CGAL's Boolean operations) of every receiver and light was
+// 61% of fuzz_plucker's samples, 95% of run_differential's (perf, 2026-12-02; the seeds
+// decode to 3.68 pairs per run, one receiver has 1.12 on average); with one receiver
+// chosen by the input a run takes about half the CPU time (README "Speed (exec/s) and
+// campaigns", also for the trade-off), and the fuzzer still reaches every receiver:
+// mutating the selector's high bytes changes the receiver and nothing else of the
+// decoded case.
+// `visgate minimize` and `visgate check` check every receiver, so a finding found
+// here reproduces there.
+std::vector<size_t> fraction_receivers(uint32_t selector_rest, size_t receivers);
 
 }  // namespace visgate::fuzz

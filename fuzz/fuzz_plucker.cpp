@@ -1,7 +1,13 @@
 // fuzz_plucker: differential target for `plucker-bsp` (DESIGN sections 4 and 5). Each input decodes
 // (fuzz/decoder.h) to a small scene plus method options; the lazy Plücker BSP (paper 002)
-// is run on it and every relation is compared with the exact relation oracle,
-// and every receiver's visible fraction with the exact region oracle.
+// is run on it and every relation is compared with the exact relation oracle, one
+// interior point of every fragment too, and the visible fractions of one receiver (every
+// light), chosen by the input, with the exact region oracle.
+// Cap: one receiver's fractions per run (fuzz/differential.h fraction_receivers). The
+// exact region check of every receiver was about 60% of a run's CPU time (perf, clang-14
+// -O1 ASan+UBSan, 2026-12-02); with one, a run costs about half (README "Speed (exec/s)
+// and campaigns"), and the option selector's unused high bits pick the receiver, so the
+// fuzzer reaches every receiver of every scene by mutating them.
 // A mismatch (margin >= tau) or an exception prints method, options, relation, exact
 // class, margin and the hex-float scene, then aborts (fuzz/differential.h).
 // Until `plucker-bsp` is registered in lib/registry.cpp every input returns at once.

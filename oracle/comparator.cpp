@@ -114,8 +114,27 @@ bool fraction_certainly_within(const Scene& scene, size_t i, size_t l, double mf
 }
 }  // namespace
 
+void fill_disagreement_margins(const Scene& scene, const SolveResult& method, RelationOracleResult& exact) {
+  VG_CHECK(method.receivers.size() == scene.receivers.size() && exact.classes.size() == scene.receivers.size());
+  const size_t n = scene.samples_per_receiver();
+  for (size_t i = 0; i < scene.receivers.size(); ++i) {
+    const std::string& cls = exact.classes[i];
+    if (cls.empty()) continue;
+    VG_CHECK(cls.size() == n && exact.margins[i].size() == n);
+    const ReceiverResult& rr = method.receivers[i];
+    VG_CHECK(rr.visible_bits.size() * 64 >= n);
+    for (size_t l = 0, b = 0; l < scene.lights.size(); ++l)
+      for (int j = 0; j < scene.lights[l].samples; ++j, ++b) {
+        const RelationClass e = RelationClass(cls[b]);
+        if (e == RelationClass::Degenerate || rr.visible(b) == (e == RelationClass::Visible)) continue;
+        exact.margins[i][b] =
+            classify_segment(scene, scene.receivers[i].p, sample_position(scene.lights[l], j, i)).margin;
+      }
+  }
+}
+
 Comparison compare_regions(const Scene& scene, const SolveResult& method, const std::vector<size_t>& receivers,
-                           double tau) {
+                           double tau, RegionParts parts) {
   Comparison c;
   VG_CHECK(method.receivers.size() == scene.receivers.size());
   std::unique_ptr<BlockedSegmentTest> blocked;  // built at the first fragment
@@ -124,7 +143,7 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
     VG_CHECK(i < scene.receivers.size());
     const ReceiverResult& rr = method.receivers[i];
     for (size_t l = 0; l < scene.lights.size(); ++l) {
-      if (l < rr.visible_fraction.size() &&
+      if (parts.fractions && l < rr.visible_fraction.size() &&
           !fraction_certainly_within(scene, i, l, double(rr.visible_fraction[l]), cache)) {
         RegionOptions fraction_only;
         fraction_only.outputs = false;  // the fraction is all a verdict or a record needs
@@ -142,7 +161,7 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
           c.mismatches.push_back(mm);
         }
       }
-      if (l >= rr.fragments.size()) continue;
+      if (!parts.fragments || l >= rr.fragments.size()) continue;
       for (const Polygon3f& frag : rr.fragments[l]) {
         Vec3f x;
         if (!interior_point(frag, x)) continue;

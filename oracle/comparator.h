@@ -58,6 +58,11 @@ struct Comparison {
 // The method result must have one row per receiver with enough bits (VG_CHECK).
 Comparison compare_relations(const Scene& scene, const SolveResult& method, const RelationOracleResult& exact,
                              double tau);
+// For run_relation_oracle_classes: sets the margin of every relation compare_relations
+// reads (non-degenerate, answered differently by `method`) from classify_segment, the
+// same margin run_relation_oracle gives; the others stay NaN. compare_relations then
+// finds exactly what it finds with run_relation_oracle's full result.
+void fill_disagreement_margins(const Scene& scene, const SolveResult& method, RelationOracleResult& exact);
 
 // Fragment methods (DESIGN section 5): for each listed receiver and each light, a
 // fraction mismatch when |method visible_fraction - exact fraction| > kFractionTolerance
@@ -65,9 +70,17 @@ Comparison compare_relations(const Scene& scene, const SolveResult& method, cons
 // mismatch for every reported fragment whose interior point (the centroid of its largest
 // fan triangle, rounded to float; fragments are convex) the relation oracle calls blocked
 // with margin >= tau. Only the fraction/fragment fields of the result are filled.
+// `parts` runs one of the two checks alone (fuzz_plucker: the fraction check, the
+// expensive one, on a few receivers the input chooses, the fragment check on all): the
+// two calls' mismatches together are those of one call with both parts, the fractions'
+// first per receiver and light.
 inline constexpr double kFractionTolerance = 1e-4;
+struct RegionParts {
+  bool fractions = true;  // visible fractions against the region oracle
+  bool fragments = true;  // one interior point per fragment against the relation oracle
+};
 Comparison compare_regions(const Scene& scene, const SolveResult& method, const std::vector<size_t>& receivers,
-                           double tau);
+                           double tau, RegionParts parts = {});
 
 // Adds the counts, histogram and mismatches of `other` to `into`.
 void merge(Comparison& into, const Comparison& other);

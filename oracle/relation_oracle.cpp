@@ -239,6 +239,7 @@ struct Tri {
 
 // Per-relation accumulator.
 struct Accum {
+  bool classes_only = false;  // run_relation_oracle_classes: no margins, stop at a crossing
   bool blocked = false, touched = false;
   double best_block = 0.0;                                      // max over blockers
   double min_miss = std::numeric_limits<double>::infinity();    // min over nearby misses
@@ -252,16 +253,21 @@ void test_triangle(const Segment& s, const Tri& t, double cap, Accum& acc) {
   Hit h = classify_exact(s.P, s.Q, t.A, t.B, t.C, &flat);
   if (h == Hit::Cross) {
     acc.blocked = true;
-    acc.best_block = std::max(acc.best_block, blocked_distance(s.p, s.q, t.a, t.b, t.c));
+    if (!acc.classes_only) acc.best_block = std::max(acc.best_block, blocked_distance(s.p, s.q, t.a, t.b, t.c));
   } else if (h == Hit::Touch) {
     acc.touched = true;
-  } else if (!acc.blocked && !acc.touched) {
+  } else if (!acc.classes_only && !acc.blocked && !acc.touched) {
     acc.min_miss = std::min(acc.min_miss, miss_distance(flat, s.p, s.q, t.a, t.b, t.c));
   }
 }
 
 RelationAnswer finish(const Accum& acc, double diag, double cap) {
   RelationAnswer r;
+  if (acc.classes_only) {
+    r.cls = acc.blocked ? RelationClass::Blocked : acc.touched ? RelationClass::Degenerate : RelationClass::Visible;
+    r.margin = std::numeric_limits<double>::quiet_NaN();
+    return r;
+  }
   if (acc.blocked) {
     r.cls = RelationClass::Blocked;
     r.margin = acc.best_block / diag;
@@ -336,7 +342,7 @@ class Bvh {
     uint32_t stack[128];
     int sp = 0;
     stack[sp++] = 0;
-    while (sp > 0) {
+    while (sp > 0 && !(acc.classes_only && acc.blocked)) {  // a crossing decides the class
       const Node& nd = nodes_[stack[--sp]];
       if (!segment_meets_box(s, nd.lo, nd.hi, e)) continue;
       if (nd.count > 0) {
@@ -422,8 +428,8 @@ class Bvh {
   std::vector<Tri> tris_;
 };
 
-void run_receiver(const Scene& scene, const Bvh& bvh, size_t i, double diag, double cap, std::string& cls,
-                  std::vector<double>& margins) {
+void run_receiver(const Scene& scene, const Bvh& bvh, size_t i, double diag, double cap, bool classes_only,
+                  std::string& cls, std::vector<double>& margins) {
   size_t n = scene.samples_per_receiver();
   cls.assign(n, 'v');
   margins.assign(n, 0.0);
@@ -435,6 +441,7 @@ void run_receiver(const Scene& scene, const Bvh& bvh, size_t i, double diag, dou
       if (r == l) continue;  // empty open segment: visible, margin 0
       Segment s = make_segment(r, l);
       Accum acc;
+      acc.classes_only = classes_only;
       bvh.query(s, cap, acc);
       RelationAnswer a = finish(acc, diag, cap);
       cls[b] = char(a.cls);
@@ -498,7 +505,10 @@ bool BlockedSegmentTest::blocked(const Vec3f& from, const Vec3f& to, double tau)
   return false;
 }
 
-RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<size_t>& receivers, int threads) {
+namespace {
+
+RelationOracleResult run_oracle(const Scene& scene, const std::vector<size_t>& receivers, int threads,
+                                bool classes_only) {
   auto t0 = std::chrono::steady_clock::now();
   RelationOracleResult res;
   res.classes.resize(scene.receivers.size());
@@ -512,11 +522,23 @@ RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<s
     for (size_t k = rg.begin(); k < rg.end(); ++k) {
       size_t i = receivers[k];
       VG_CHECK(i < scene.receivers.size());
-      run_receiver(scene, bvh, i, diag, cap, res.classes[i], res.margins[i]);
+      run_receiver(scene, bvh, i, diag, cap, classes_only, res.classes[i], res.margins[i]);
     }
   });
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
+}
+
+}  // namespace
+
+RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<size_t>& receivers, int threads) {
+  return run_oracle(scene, receivers, threads, false);
+}
+
+RelationOracleResult run_relation_oracle_classes(const Scene& scene, int threads) {
+  std::vector<size_t> all(scene.receivers.size());
+  std::iota(all.begin(), all.end(), size_t(0));
+  return run_oracle(scene, all, threads, true);
 }
 
 RelationOracleResult run_relation_oracle(const Scene& scene, int threads) {

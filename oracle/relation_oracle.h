@@ -113,4 +113,12 @@ RelationOracleResult run_relation_oracle(const Scene& scene, int threads = 0);
 // Only the listed receivers (rows of the other receivers stay empty).
 RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<size_t>& receivers, int threads = 0);
 
+// Every relation's class only, the same classes as run_relation_oracle (the same BVH,
+// boxes and exact tests; a relation's class is Blocked as soon as one triangle crosses
+// it, so its traversal stops there, and no distances are computed); every margin is
+// NaN. For callers that need the margins of a few relations only (the fuzz targets: of
+// the relations a method answers differently, from classify_segment, which gives the
+// same margin).
+RelationOracleResult run_relation_oracle_classes(const Scene& scene, int threads = 0);
+
 }  // namespace visgate::oracle

@@ -22,6 +22,7 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include "fuzz/decoder.h"
 #include "lib/scene/families.h"
@@ -847,6 +848,47 @@ TEST(Comparator, RegionComparisonFlagsWrongFractionsAndBlockedFragments) {
   EXPECT_EQ(compare_regions(s, m, {0}, 1e-5).fraction_mismatches, 1u);
 }
 
+TEST(Comparator, RegionPartsSplitTheRegionComparisonIntoItsTwoChecks) {
+  // compare_regions with RegionParts (comparator.h): the fraction check alone and the
+  // fragment check alone find exactly the mismatches of the full comparison between them
+  // (fuzz_plucker runs the first on one receiver and the second on all).
+  Scene s;
+  add_quad(s, {0.25f, 0.25f, 1}, {0.5f, 0.25f, 1}, {0.5f, 0.5f, 1}, {0.25f, 0.5f, 1});
+  s.lights.push_back(square_light_down(0, 1, 0, 1, 2));
+  s.lights.push_back(square_light_down(-1, 0, 0, 1, 2));
+  s.receivers.push_back({{0.5f, 0.5f, 0}, {0, 0, 1}});
+  s.receivers.push_back({{0.375f, 0.375f, 0.5f}, {0, 0, 1}});
+  SolveResult m = make_empty_result(s);
+  // Receiver 0: light 0 fraction right (0.75), a fragment inside the shadow; light 1
+  // fraction wrong. Receiver 1 (right under the quad): light 0 fraction wrong.
+  m.receivers[0].visible_fraction = {0.75f, 0.5f};
+  m.receivers[0].fragments = {{{{0.1f, 0.1f, 2}, {0.4f, 0.1f, 2}, {0.4f, 0.4f, 2}}}, {}};
+  m.receivers[1].visible_fraction = {0.9f, 1.0f};
+  const std::vector<size_t> both = {0, 1};
+  Comparison full = compare_regions(s, m, both, 1e-5);
+  Comparison fr = compare_regions(s, m, both, 1e-5, RegionParts{true, false});
+  Comparison fg = compare_regions(s, m, both, 1e-5, RegionParts{false, true});
+  EXPECT_EQ(full.fraction_mismatches, 2u);
+  EXPECT_EQ(full.fragment_mismatches, 1u);
+  EXPECT_EQ(fr.fraction_mismatches, full.fraction_mismatches);
+  EXPECT_EQ(fr.fragment_mismatches, 0u);
+  EXPECT_EQ(fg.fraction_mismatches, 0u);
+  EXPECT_EQ(fg.fragment_mismatches, full.fragment_mismatches);
+  merge(fr, fg);
+  ASSERT_EQ(fr.mismatches.size(), full.mismatches.size());
+  auto key = [](const Mismatch& x) { return std::tuple(x.receiver, x.light, int(x.direction), x.margin); };
+  std::vector<std::tuple<size_t, size_t, int, double>> a, b;
+  for (const auto& x : fr.mismatches) a.push_back(key(x));
+  for (const auto& x : full.mismatches) b.push_back(key(x));
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  EXPECT_EQ(a, b);
+  // One receiver only: its fraction mismatches, none of the other's.
+  Comparison one = compare_regions(s, m, {1}, 1e-5, RegionParts{true, false});
+  ASSERT_EQ(one.fraction_mismatches, 1u);
+  EXPECT_EQ(one.mismatches[0].receiver, 1u);
+}
+
 TEST(OracleJson, RoundTripsClassesAndMargins) {
   Scene s = grid_scene(21, 30, 3, 5);
   RelationOracleResult r = run_relation_oracle(s);
@@ -960,6 +1002,56 @@ TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
               certified, pairs, edge_on, narrow, widest);
   for (const auto& [w, n] : why) std::printf("  not certified: %s: %zu\n", w.c_str(), n);
   EXPECT_GT(certified, (pairs - edge_on) / 2);
+}
+
+TEST(RelationOracle, ClassesOnlyRunAndFilledMarginsCompareAsTheFullRun) {
+  // run_relation_oracle_classes (relation_oracle.h) gives run_relation_oracle's classes;
+  // with fill_disagreement_margins (comparator.h), compare_relations finds the same
+  // counts, histogram and mismatch records for a method result that disagrees with the
+  // exact classes at pseudo-random relations (the fuzz targets' path), and the filled
+  // margins are the full run's, bit for bit. Scenes: the region-test families and the
+  // fuzz seeds (degenerate and far-away inputs among them).
+  std::vector<Scene> scenes = bound_scenes();
+  std::mt19937 rng(7);
+  size_t relations = 0, disagreements = 0;
+  for (size_t k = 0; k < scenes.size(); k += 3) {
+    const Scene& sc = scenes[k];
+    RelationOracleResult full = run_relation_oracle(sc, 1), cl = run_relation_oracle_classes(sc, 1);
+    ASSERT_EQ(cl.classes, full.classes) << "scene " << k;
+    SolveResult m = make_empty_result(sc);
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t b = 0; b < full.classes[i].size(); ++b) {
+        bool v = full.classes[i][b] == 'v';
+        if (full.classes[i][b] == 'd' || rng() % 3 == 0) v = rng() % 2 == 0;
+        m.receivers[i].set_visible(b, v);
+      }
+    fill_disagreement_margins(sc, m, cl);
+    Comparison a = compare_relations(sc, m, full, 1e-5), c = compare_relations(sc, m, cl, 1e-5);
+    EXPECT_EQ(a.relations, c.relations);
+    EXPECT_EQ(a.degenerate, c.degenerate);
+    EXPECT_EQ(a.agree, c.agree);
+    EXPECT_EQ(a.disagree, c.disagree);
+    EXPECT_EQ(a.false_visible, c.false_visible);
+    EXPECT_EQ(a.false_blocked, c.false_blocked);
+    EXPECT_EQ(a.disagreement_margins.buckets, c.disagreement_margins.buckets);
+    EXPECT_EQ(a.disagreement_margins.below, c.disagreement_margins.below);
+    ASSERT_EQ(a.mismatches.size(), c.mismatches.size());
+    for (size_t q = 0; q < a.mismatches.size(); ++q) {
+      EXPECT_EQ(a.mismatches[q].receiver, c.mismatches[q].receiver);
+      EXPECT_EQ(a.mismatches[q].sample, c.mismatches[q].sample);
+      EXPECT_EQ(a.mismatches[q].margin, c.mismatches[q].margin);
+    }
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t b = 0; b < full.classes[i].size(); ++b) {
+        const char e = full.classes[i][b];
+        if (e == 'd' || m.receivers[i].visible(b) == (e == 'v')) continue;
+        EXPECT_EQ(cl.margins[i][b], full.margins[i][b]) << "scene " << k << " receiver " << i << " relation " << b;
+        ++disagreements;
+      }
+    relations += a.relations;
+  }
+  EXPECT_GT(disagreements, 1000u);
+  EXPECT_GT(relations, 5000u);
 }
 
 TEST(RegionOracle, RegionCacheChangesNoAnswer) {

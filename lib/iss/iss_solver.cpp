@@ -10,6 +10,7 @@
 #include <x86intrin.h>
 #endif
 #include <memory>
+#include <optional>
 
 #include "lib/geom/check.h"
 #include "lib/geom/float_mode.h"
@@ -462,11 +463,16 @@ class Traversal {
 
   // CONSTRUCT-SUB-SHAFT (Figure 4.19). The parent's surfaces are copied for the first
   // child and moved into the second (section 4.13: no needless copies).
-  Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent) {
+  // `made`: this sub-shaft's geometry when choose_split has built it already (the same
+  // nodes, main axis and scale, so the same bits).
+  Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent,
+                            const ShaftGeometry* made = nullptr) {
     MainAxis ax{parent.g.main_axis(), parent.g.dir()};
     // The geometry is built in place: a default-constructed one assigned afterwards cost
     // two fills and a copy of its plane and corner arrays (1.2 kB) per shaft.
-    Shaft sub{r, l, geometry(r, l, ax), {}, {}, 0};
+    // Two whole initialisers: each branch's prvalue initialises `sub` itself, so the
+    // geometry() branch still builds in place (no temporary and copy).
+    Shaft sub = made ? Shaft{r, l, *made, {}, {}, 0} : Shaft{r, l, geometry(r, l, ax), {}, {}, 0};
     init_shaft(sub);
     for (const AABBd& gb : parent.ghosts)
       if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
@@ -598,8 +604,12 @@ class Traversal {
   }
 
   // CHOOSE-SPLIT (section 4.9): the strategy whose two sub-shafts bring the combined
-  // vertex centre closer to their boundaries on average.
-  SplitMode choose_split(const Shaft& sh) {
+  // vertex centre closer to their boundaries on average. The four candidate geometries
+  // are built in `cand` (receiver split left, right, light split left, right; empty when
+  // not built), so that the two of the chosen split are not built again for the
+  // sub-shafts: they were a third of all shaft constructions.
+  using SplitGeometries = std::array<std::optional<ShaftGeometry>, 4>;
+  SplitMode choose_split(const Shaft& sh, SplitGeometries& cand) {
     TreeNode& R = rn(sh.r);
     TreeNode& L = ln(sh.l);
     Vec3d sum(0, 0, 0);
@@ -619,8 +629,15 @@ class Traversal {
     if (!R.split_done()) return SplitMode::Light;
     if (!L.split_done()) return SplitMode::Receiver;
     MainAxis ax{sh.g.main_axis(), sh.g.dir()};
-    double dr = 0.5 * (geometry(R.left, sh.l, ax).boundary_distance(c) + geometry(R.right, sh.l, ax).boundary_distance(c));
-    double dl = 0.5 * (geometry(sh.r, L.left, ax).boundary_distance(c) + geometry(sh.r, L.right, ax).boundary_distance(c));
+    {
+      ScopedTimer t(times_[kShaftGeometry]);
+      cand[0].emplace(rn(R.left).box, L.box, ax, scale_);
+      cand[1].emplace(rn(R.right).box, L.box, ax, scale_);
+      cand[2].emplace(R.box, ln(L.left).box, ax, scale_);
+      cand[3].emplace(R.box, ln(L.right).box, ax, scale_);
+    }
+    double dr = 0.5 * (cand[0]->boundary_distance(c) + cand[1]->boundary_distance(c));
+    double dl = 0.5 * (cand[2]->boundary_distance(c) + cand[3]->boundary_distance(c));
     return dr <= dl ? SplitMode::Receiver : SplitMode::Light;
   }
 
@@ -761,9 +778,10 @@ class Traversal {
     }
     const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_;
     SplitMode mode;
+    SplitGeometries cand;
     if (R.is_leaf) mode = SplitMode::Light;
     else if (L.is_leaf) mode = SplitMode::Receiver;
-    else mode = choose_split(sh);
+    else mode = choose_split(sh, cand);
     if (mode == SplitMode::Receiver) {
       { ScopedTimer t(times_[kTree]); rtree_->split(sh.r); }
       if (!rn(sh.r).split_done()) {  // could not be split after all (identical points)
@@ -786,7 +804,8 @@ class Traversal {
       if (mode == SplitMode::Receiver) split = r = side == 0 ? rn(sh.r).left : rn(sh.r).right;
       else split = l = side == 0 ? ln(sh.l).left : ln(sh.l).right;
       const TreeNode& sn = mode == SplitMode::Receiver ? rn(split) : ln(split);
-      Shaft sub = construct_sub_shaft(r, l, sn, sh, side == 1);
+      const std::optional<ShaftGeometry>& made = cand[size_t((mode == SplitMode::Receiver ? 0 : 2) + side)];
+      Shaft sub = construct_sub_shaft(r, l, sn, sh, side == 1, made ? &*made : nullptr);
       shaft_traverse(sub);
       release(sub);
     }
