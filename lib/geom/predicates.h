@@ -7,8 +7,7 @@
 // oracle instantiates the same formula with CGAL's exact number type.
 #pragma once
 
-#include <cmath>
-
+#include "lib/geom/expansion.h"
 #include "lib/geom/vec.h"
 
 namespace visgate {
@@ -31,38 +30,26 @@ inline float orient3d_f32(const Vec3f& a, const Vec3f& b, const Vec3f& c, const 
 // 2^260, roundoff terms above 2^-360). For light validation (lib/scene prepare_light),
 // which must agree with the region oracle's exact frame polygon.
 inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx, float cy) {
-  auto two_sum = [](double a, double b, double& x, double& y) {
-    x = a + b;
-    const double bv = x - a, av = x - bv;
-    y = (a - av) + (b - bv);
-  };
-  double e[32];
-  int n = 0;
-  auto grow = [&](double q) {  // e += q, exactly (e nonoverlapping, increasing magnitude)
-    int m = 0;
-    for (int i = 0; i < n; ++i) {
-      double x, y;
-      two_sum(q, e[i], x, y);
-      q = x;
-      if (y != 0.0) e[m++] = y;
-    }
-    if (q != 0.0) e[m++] = q;
-    n = m;
-  };
+  using expansion::grow;
+  using expansion::two_product;
+  using expansion::two_sum;
   double d[4][2];  // bx - ax, cy - ay, by - ay, cx - ax as exact hi + lo
   two_sum(double(bx), -double(ax), d[0][0], d[0][1]);
   two_sum(double(cy), -double(ay), d[1][0], d[1][1]);
   two_sum(double(by), -double(ay), d[2][0], d[2][1]);
   two_sum(double(cx), -double(ax), d[3][0], d[3][1]);
+  double e[17];  // sixteen terms: at most sixteen components
+  int n = 0;
   for (int t = 0; t < 2; ++t) {
     const double sg = t == 0 ? 1.0 : -1.0;
     const double* u = d[2 * t];
     const double* v = d[2 * t + 1];
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2; ++j) {
-        const double x = u[i] * v[j], y = std::fma(u[i], v[j], -x);
-        grow(sg * x);
-        grow(sg * y);
+        double x, y;
+        two_product(u[i], v[j], x, y);
+        grow(e, n, sg * x);
+        grow(e, n, sg * y);
       }
   }
   if (n == 0) return 0;

@@ -4,26 +4,17 @@
 #include <cmath>
 #include <vector>
 
+#include "lib/geom/expansion.h"
+
 namespace visgate::plucker {
 
 namespace {
 
 using Expansion = std::vector<double>;  // nonoverlapping, increasing magnitude, no zeros
 
-// Two-Sum: a + b = x + y exactly, x = fl(a + b) (Knuth; valid in round-to-nearest).
-inline void two_sum(double a, double b, double& x, double& y) {
-  x = a + b;
-  double bv = x - a;
-  double av = x - bv;
-  y = (a - av) + (b - bv);
-}
-
-// Two-Product: a * b = x + y exactly; the fused multiply-add rounds a * b - x once, and
-// that value is representable.
-inline void two_product(double a, double b, double& x, double& y) {
-  x = a * b;
-  y = std::fma(a, b, -x);
-}
+using expansion::grow;
+using expansion::two_product;
+using expansion::two_sum;
 
 // Grow-Expansion: e += b, keeping e nonoverlapping; zero components are dropped.
 void grow(Expansion& e, double b) {
@@ -39,21 +30,9 @@ void grow(Expansion& e, double b) {
   if (q != 0.0) e.push_back(q);
 }
 
-// Grow-Expansion on a fixed array e[0..n) with room for n + 1 components (the result
-// has at most one more component than e): no allocation, for orient3d_exact, which the
-// fuzz_plucker profile showed spending as much in the allocator as in the arithmetic.
-inline void grow(double* e, int& n, double b) {
-  double q = b;
-  int out = 0;
-  for (int i = 0; i < n; ++i) {
-    double x, y;
-    two_sum(q, e[i], x, y);
-    q = x;
-    if (y != 0.0) e[out++] = y;
-  }
-  n = out;
-  if (q != 0.0) e[n++] = q;
-}
+// (The fixed-array Grow-Expansion, lib/geom/expansion.h, serves orient3d_exact: no
+// allocation; the fuzz_plucker profile showed the vector form spending as much in the
+// allocator as in the arithmetic.)
 
 // An expansion of at most four components: a coordinate difference.
 struct Diff {
