@@ -25,6 +25,16 @@ namespace {
 // against them (instead of trusting floor(log10(m))) puts every margin in the bucket its
 // decimal value belongs to, up to the rounding of the literals themselves.
 constexpr double kDecade[13] = {1e-12, 1e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
+
+// Receiver i's exact classes (nullptr when the oracle left the receiver out), after
+// checking that the oracle's margins and the method's bits cover all n relations.
+const std::string* receiver_classes(const SolveResult& method, const RelationOracleResult& exact, size_t i, size_t n) {
+  const std::string& cls = exact.classes[i];
+  if (cls.empty()) return nullptr;
+  VG_CHECK(cls.size() == n && exact.margins[i].size() == n);
+  VG_CHECK(method.receivers[i].visible_bits.size() * 64 >= n);
+  return &cls;
+}
 }  // namespace
 
 void DecadeHistogram::add(double margin) {
@@ -48,11 +58,10 @@ Comparison compare_relations(const Scene& scene, const SolveResult& method, cons
   for (size_t l = 0, b = 0; l < scene.lights.size(); ++l)
     for (int j = 0; j < scene.lights[l].samples; ++j, ++b) where[b] = {l, long(j)};
   for (size_t i = 0; i < scene.receivers.size(); ++i) {
-    const std::string& cls = exact.classes[i];
-    if (cls.empty()) continue;
-    VG_CHECK(cls.size() == n && exact.margins[i].size() == n);
+    const std::string* classes = receiver_classes(method, exact, i, n);
+    if (!classes) continue;
+    const std::string& cls = *classes;
     const ReceiverResult& rr = method.receivers[i];
-    VG_CHECK(rr.visible_bits.size() * 64 >= n);
     for (size_t b = 0; b < n; ++b) {
       ++c.relations;
       RelationClass e = RelationClass(cls[b]);
@@ -118,11 +127,10 @@ void fill_disagreement_margins(const Scene& scene, const SolveResult& method, Re
   VG_CHECK(method.receivers.size() == scene.receivers.size() && exact.classes.size() == scene.receivers.size());
   const size_t n = scene.samples_per_receiver();
   for (size_t i = 0; i < scene.receivers.size(); ++i) {
-    const std::string& cls = exact.classes[i];
-    if (cls.empty()) continue;
-    VG_CHECK(cls.size() == n && exact.margins[i].size() == n);
+    const std::string* classes = receiver_classes(method, exact, i, n);
+    if (!classes) continue;
+    const std::string& cls = *classes;
     const ReceiverResult& rr = method.receivers[i];
-    VG_CHECK(rr.visible_bits.size() * 64 >= n);
     for (size_t l = 0, b = 0; l < scene.lights.size(); ++l)
       for (int j = 0; j < scene.lights[l].samples; ++j, ++b) {
         const RelationClass e = RelationClass(cls[b]);
