@@ -529,6 +529,12 @@ RelationOracleResult run_oracle(const Scene& scene, const std::vector<size_t>& r
   return res;
 }
 
+std::vector<size_t> all_receivers(const Scene& scene) {
+  std::vector<size_t> all(scene.receivers.size());
+  std::iota(all.begin(), all.end(), size_t(0));
+  return all;
+}
+
 }  // namespace
 
 RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<size_t>& receivers, int threads) {
@@ -536,15 +542,11 @@ RelationOracleResult run_relation_oracle(const Scene& scene, const std::vector<s
 }
 
 RelationOracleResult run_relation_oracle_classes(const Scene& scene, int threads) {
-  std::vector<size_t> all(scene.receivers.size());
-  std::iota(all.begin(), all.end(), size_t(0));
-  return run_oracle(scene, all, threads, true);
+  return run_oracle(scene, all_receivers(scene), threads, true);
 }
 
 RelationOracleResult run_relation_oracle(const Scene& scene, int threads) {
-  std::vector<size_t> all(scene.receivers.size());
-  std::iota(all.begin(), all.end(), size_t(0));
-  return run_relation_oracle(scene, all, threads);
+  return run_oracle(scene, all_receivers(scene), threads, false);
 }
 
 }  // namespace visgate::oracle
