@@ -2,11 +2,11 @@
 // the relation hash of DESIGN section 3.
 #include "lib/scene/scene.h"
 
-#include "lib/geom/predicates.h"
-
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include "lib/geom/predicates.h"
 #include "lib/scene/rng.h"
 
 namespace visgate {

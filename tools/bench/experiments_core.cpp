@@ -120,16 +120,10 @@ struct Config {
   double light_scale;  // x light side (area scale squared)
 };
 
-// The issue-5 target configuration (README, ISS results): rooms at 500k+ triangles
-// with 256x256 receivers and 64 samples per light, the same with twice the receivers
-// and with twice the samples per light, and columns at its paper size; single-threaded
-// only, ISS and embree on the very same scene one after the other. Ratios: embree / ISS
-// time, and each doubled row's ISS (embree) time over the base row's. --quick shrinks
-// every scene (rooms 30k triangles, 32x32 receivers, 16 samples; columns 16x16).
-// The doubling targets measured in interleaved rounds. The rows above time each
-// scene in its own stretch of the run (minutes apart, with embree between them), so on
-// a shared machine a slow phase that falls on one row moves its ratio to the base row
-// by 20-40% (README, ISS results). Here ISS runs on the base scene and on each doubled
+// The doubling targets measured in interleaved rounds. The target rows of
+// run_iss_target (below) time each scene in its own stretch of the run (minutes apart,
+// with embree between them), so on a shared machine a slow phase that falls on one row
+// moves its ratio to the base row by 20-40% (README, ISS results). Here ISS runs on the base scene and on each doubled
 // scene in turn, round after round (base, 2x receivers, 2x samples, base, ...), and each
 // round's ratio compares runs made seconds apart. Reported: the ratio of the minima,
 // the median of the per-round ratios and their range, for wall and CPU time.
@@ -174,6 +168,12 @@ Table doubling_rounds(BenchContext& ctx, const std::vector<std::pair<std::string
   return t;
 }
 
+// The issue-5 target configuration (README, ISS results): rooms at 500k+ triangles
+// with 256x256 receivers and 64 samples per light, the same with twice the receivers
+// and with twice the samples per light, and columns at its paper size; single-threaded
+// only, ISS and embree on the very same scene one after the other. Ratios: embree / ISS
+// time, and each doubled row's ISS (embree) time over the base row's. --quick shrinks
+// every scene (rooms 30k triangles, 32x32 receivers, 16 samples; columns 16x16).
 Status run_iss_target(BenchContext& ctx) {
   const auto& o = ctx.opt;
   Table t{"target", "issue 5 targets: ISS against embree single-threaded on rooms 500k (256x256, 64 samples), "
