@@ -42,8 +42,10 @@ run_target() {
   # shellcheck disable=SC2207
   local opts=($("$ROOT/fuzz/options-flags.sh" "$ROOT/fuzz/$t.options"))
   local rc=0
-  # A fixed seed (FUZZ_SMOKE_SEED, default 1): the smoke mutates the same way in every
-  # CI run, so a finding reproduces with the same command; campaigns use random seeds.
+  # A fixed seed (FUZZ_SMOKE_SEED, default 1): the runs start down the same mutation path,
+  # but they part after a few thousand inputs (coverage depends on Embree's thread timing
+  # and ISA), so a finding is reproduced from its input, printed below; campaigns use
+  # random seeds.
   timeout -k 10 $(( SECS + 120 )) "$bin" "${opts[@]}" -seed="${FUZZ_SMOKE_SEED:-1}" -max_total_time="$SECS" -print_final_stats=1 \
     -artifact_prefix="$dir/" "$dir/new" "$ROOT/corpus/fuzz/$t" > "$dir/log" 2>&1 || rc=$?
   local execs
@@ -53,6 +55,17 @@ run_target() {
   else
     echo "fuzz-smoke: $t FAILED (exit $rc); log: $dir/log" >&2
     grep -E 'ERROR|MISMATCH|mismatch:|SUMMARY|Test unit written' "$dir/log" | head -20 >&2 || true
+    # The input itself, base64: CI machines are thrown away, and libFuzzer's path through
+    # the mutations is not reproducible elsewhere (a fixed -seed diverges after a few
+    # thousand runs even on one machine: Embree's BVH build and our filter's coverage
+    # differ by thread timing and ISA). Recreate it with `base64 -d > crash`.
+    local f
+    for f in "$dir"/crash-* "$dir"/leak-* "$dir"/timeout-* "$dir"/oom-*; do
+      [ -f "$f" ] || continue
+      echo "fuzz-smoke: $t input $(basename "$f") (base64, $(wc -c < "$f") bytes):" >&2
+      base64 -w0 "$f" >&2
+      echo >&2
+    done
   fi
   return "$rc"
 }
