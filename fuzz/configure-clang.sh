@@ -4,9 +4,10 @@
 # library with -fsanitize=fuzzer-no-link,address,undefined (coverage for libFuzzer),
 # -O2 with line tables, no tests (OSS-Fuzz uses -O1; here -O2 replayed fuzz_iss's 1,615
 # seeds in 2.9 CPU-seconds against 3.3, fuzz_plucker's within the noise; 2026-12-02).
-# UBSan's vptr check is left out of the libraries: CGAL's arrangement iterators (region oracle) downcast to a type the object
-# does not have (CGAL/Arrangement_2/Arrangement_2_iterators.h:458), a third-party
-# finding that would stop every fuzz_plucker run; the fuzz targets' own code keeps it.
+# UBSan's vptr check is left out of the libraries: CGAL's arrangement iterators (region
+# oracle) downcast to a type the object does not have
+# (CGAL/Arrangement_2/Arrangement_2_iterators.h:458), a third-party finding that would
+# stop every fuzz_plucker run; the fuzz targets' own code keeps it.
 # UBSan's object-size check is left out everywhere: next to ASan it adds nothing (both
 # flag an access past the allocated object, ASan also the ones the compiler cannot size),
 # and clang-14 inlines no function that carries it, at -O1 or -O2 (lib/iss/shaft.cpp: 52
