@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <string>
 
 #include "lib/geom/float_mode.h"
 #include "lib/geom/predicates.h"
@@ -21,9 +23,15 @@ namespace {
 // The process-wide Embree device (see EmbreeScene): created once, thread-safe by the
 // C++ static initialisation guarantee; never released (reachable through the static, so
 // leak checkers do not count it), which avoids tearing Embree down after TBB at exit.
+// VISGATE_EMBREE_CONFIG, when set, is appended to the device configuration (e.g.
+// "max_isa=avx" or "isa=sse4.2"): Embree picks its BVH and intersection kernels by the
+// CPU at run time, so a finding of another machine (AVX-512) may need another ISA's
+// kernels to show, and this is the way to run a target on them.
 RTCDevice shared_device() {
   static RTCDevice device = [] {
-    RTCDevice d = rtcNewDevice("verbose=0");
+    std::string config = "verbose=0";
+    if (const char* extra = std::getenv("VISGATE_EMBREE_CONFIG"); extra && *extra) config += std::string(",") + extra;
+    RTCDevice d = rtcNewDevice(config.c_str());
     VG_CHECK(d != nullptr);
     return d;
   }();
