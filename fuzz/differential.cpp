@@ -112,6 +112,17 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
                            " bit words and " + std::to_string(rr.visible_fraction.size()) + " fractions\n");
   }
 
+  // Embree answered queries blocked without a hit passing the verification filter
+  // (EmbreeScene::unverified_hits): rechecked in double, so no answer is wrong, but a
+  // kernel skipped the filter; said once per process, with the count.
+  if (const double u = result.stats.get("embree_unverified_hits"); u > 0) {
+    static double unverified_seen = 0;
+    if (unverified_seen == 0)
+      std::fprintf(stderr, "%s: NOTE Embree reported %g blocked queries without a verified hit (rechecked in double; "
+                           "an Embree kernel skipped the occlusion filter)\n", target, u);
+    unverified_seen += u;
+  }
+
   std::string findings;
   try {
     oracle::fill_disagreement_margins(scene, result, exact);

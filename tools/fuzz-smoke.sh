@@ -50,6 +50,7 @@ run_target() {
     -artifact_prefix="$dir/" "$dir/new" "$ROOT/corpus/fuzz/$t" > "$dir/log" 2>&1 || rc=$?
   local execs
   execs=$(grep -E '^stat::number_of_executed_units' "$dir/log" | awk '{print $2}' || true)
+  grep -m1 'NOTE Embree reported' "$dir/log" >&2 || true
   if [ "$rc" -eq 0 ]; then
     echo "fuzz-smoke: $t ok (${execs:-?} runs in ${SECS} s)" >&2
   else

@@ -948,6 +948,8 @@ SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
   result.seconds = std::chrono::duration<double>(t1 - t0).count();
   result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
   result.stats.set("time_embree_build", embree_build);
+  result.stats.set("embree_rejected_hits", double(es.rejected_hits()));
+  result.stats.set("embree_unverified_hits", double(es.unverified_hits()));
   result.stats.set("nonmanifold_edges_paired", double(paired));
   result.stats.set("leaf_receivers", p.leaf_receivers);
   result.stats.set("leaf_samples", p.leaf_samples);

@@ -184,6 +184,10 @@ struct VerifyContext {
   const TriangleSoup* soup = nullptr;
   unsigned csr = IeeeFloatMode::current_csr();  // the querying thread's MXCSR (the filter runs on it)
   size_t rejected = 0;
+  // Bit k: the filter let a hit of ray id k stand (fan ids are below 16, a single query's
+  // id is 0). A query that comes back blocked without its bit was not verified (see
+  // unverified_hit below).
+  uint32_t accepted = 0;
   // Segment queries: crossing_terms of the triangle `terms_prim` seen last from `from`
   // (~0u: none yet), shared by the lanes and packets of the query.
   unsigned terms_prim = ~0u;
@@ -203,19 +207,25 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const auto& t = vc->soup->triangles[prim];
     const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
-    const Vec3f& to = vc->fan_to ? vc->fan_to[RTCRayN_id(args->ray, args->N, i)] : vc->to;
+    const unsigned id = vc->fan_to ? RTCRayN_id(args->ray, args->N, i) : 0u;
+    const Vec3f& to = vc->fan_to ? vc->fan_to[id] : vc->to;
     if (!vc->ranged) {
       if (prim != vc->terms_prim) {
         vc->terms = crossing_terms(p, a, b, c);
         vc->terms_prim = prim;
       }
-      if (certainly_crosses(vc->terms, to_double(to) - p)) continue;
+      if (certainly_crosses(vc->terms, to_double(to) - p)) {
+        vc->accepted |= 1u << (id & 31u);
+        continue;
+      }
     }
     const bool confirmed = vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
                                       : segment_hits_triangle(a, b, c, vc->from, to);
     if (!confirmed) {
       args->valid[i] = 0;
       ++vc->rejected;
+    } else {
+      vc->accepted |= 1u << (id & 31u);
     }
   }
 }
@@ -311,7 +321,12 @@ bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnea
   rtcOccluded1(static_cast<RTCScene>(scene_), &vc.base, &ray);
   if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
   if (rejected) *rejected = vc.rejected;
-  return ray.tfar == -std::numeric_limits<float>::infinity();
+  const bool hit = ray.tfar == -std::numeric_limits<float>::infinity();
+  if (hit && verify_ && !(vc.accepted & 1u)) {  // blocked, but no hit passed the filter
+    unverified_hits_.fetch_add(1, std::memory_order_relaxed);
+    return ranged ? fallback_occluded(*soup_, from, to, tnear, tfar) : fallback_occluded(*soup_, from, to);
+  }
+  return hit;
 }
 
 namespace {
@@ -368,6 +383,16 @@ struct alignas(64) FanPacket {
 
 }  // namespace
 
+void EmbreeScene::recheck_unverified(const Vec3f& from, const Vec3f* to, int n, unsigned base, uint32_t accepted,
+                                     bool* out) const {
+  if (!verify_) return;
+  for (int k = 0; k < n; ++k)
+    if (out[k] && !((accepted >> ((base + unsigned(k)) & 31u)) & 1u) && within_embree_bound(to[k])) {
+      unverified_hits_.fetch_add(1, std::memory_order_relaxed);
+      out[k] = fallback_occluded(*soup_, from, to[k]);
+    }
+}
+
 void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* out) const {
   if (n <= 0) return;
   if (n > 16) {
@@ -391,6 +416,7 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
     pk.set(from, to, n, 0);
     rtcOccluded16(pk.valid, static_cast<RTCScene>(scene_), &vc.base, &pk.ray);
     for (int k = 0; k < n; ++k) out[k] = pk.valid[k] ? pk.ray.tfar[k] == kHit : occluded(from, to[k]);
+    recheck_unverified(from, to, n, 0, vc.accepted, out);
   } else {
     thread_local FanPacket<8, RTCRay8> pk;
     for (int b = 0; b < n; b += 8) {
@@ -398,6 +424,7 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
       pk.set(from, to + b, m, unsigned(b));
       rtcOccluded8(pk.valid, static_cast<RTCScene>(scene_), &vc.base, &pk.ray);
       for (int k = 0; k < m; ++k) out[b + k] = pk.valid[k] ? pk.ray.tfar[k] == kHit : occluded(from, to[b + k]);
+      recheck_unverified(from, to + b, m, unsigned(b), vc.accepted, out + b);
     }
   }
   if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
