@@ -2,8 +2,9 @@
 # Configures a clang-14 libFuzzer build of visgate (DESIGN section 9) in BUILD_DIR: the
 # fuzz targets with -fsanitize=fuzzer,address,undefined (fuzz/CMakeLists.txt), every
 # library with -fsanitize=fuzzer-no-link,address,undefined (coverage for libFuzzer),
-# -O2 with line tables, no tests (OSS-Fuzz uses -O1; here -O2 replayed fuzz_iss's 1,615
-# seeds in 2.9 CPU-seconds against 3.3, fuzz_plucker's within the noise; 2026-12-02).
+# -O2 with line tables, no tests (OSS-Fuzz uses -O1; README "Speed (exec/s)": -O2 with
+# the string_view stats replayed fuzz_iss's seeds in 2.7-3.1 CPU-seconds against
+# 3.3-3.5, fuzz_plucker's within the noise).
 # UBSan's vptr check is left out of the libraries: CGAL's arrangement iterators (region
 # oracle) downcast to a type the object does not have
 # (CGAL/Arrangement_2/Arrangement_2_iterators.h:458), a third-party finding that would
