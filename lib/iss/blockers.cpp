@@ -545,6 +545,7 @@ void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
                 ne.nb[1] = int32_t(pi);
                 ne.mesh_edge = kClipEdge;
                 ne.inside = 0;
+                ne.collapsed = 1;
                 loop[i] = Edge{uint32_t(s.raw.size()), 0};
                 s.raw.push_back(ne);
                 loop.erase(loop.begin() + long(j));
@@ -855,6 +856,7 @@ bool blocks_shaft(const Surface& s, const ShaftGeometry& g) {
   // products of such differences underflow, and a sliver 0.5 beside the shaft counted as
   // blocking). Its relations go to the rays.
   if (shaft_too_thin(g)) return false;
+  if (stands_beyond_clip_planes(s, g)) return false;
   // Line 1, CAN-BLOCK-SHAFT.
   if (!can_block_shaft(s.box, g)) return false;
   Vec3d q1, q2;
@@ -895,6 +897,16 @@ bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g) {
   const int a = g.main_axis();
   if (a < 0 || box.empty()) return false;
   return misses_slab(box, a, g.clip_lo(), g.clip_hi(), main_axis_gap(g) > 0.0);
+}
+
+bool has_collapsed_edges(const Surface& s) {
+  for (const RawEdge& re : s.raw)
+    if (re.collapsed) return true;
+  return false;
+}
+
+bool stands_beyond_clip_planes(const Surface& s, const ShaftGeometry& g) {
+  return beyond_clip_planes(s.box, g) && has_collapsed_edges(s);
 }
 
 bool blocks_ray(const BlockerContext& ctx, const Surface& s, int ax, const Vec3d& r, const Vec3d& l) {

@@ -55,6 +55,7 @@ struct RawEdge {
   uint8_t inside = 1;                     // at least partially inside the shaft
   uint8_t fresh = 0;  // left the shaft since the last SIMPLIFY-PATCHES (section 4.13:
                       // only patches with such an edge are simplified again)
+  uint8_t collapsed = 0;  // made by SIMPLIFY-PATCHES from two collapsed edges (4.7.5)
 };
 
 struct Edge {
@@ -177,8 +178,24 @@ double main_axis_gap(const ShaftGeometry& g);
 bool shaft_too_thin(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
 // misses_slab between the clip planes, touching counting as missing when the boxes have
-// a gap on the main axis.
+// a gap on the main axis. Sound for a surface whose box holds its triangles, i.e. one
+// without collapsed edges (has_collapsed_edges below).
 bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g);
+// True when a raw edge of `s` was made by collapsing edges (section 4.7.5). Such a
+// surface's boundary is no longer the boundary of its triangles: the collapsed ears lie
+// outside the extended shaft where they were cut, so every winding number about a
+// segment of that shaft or a sub-shaft is unchanged, but the boundary's box need not
+// hold the triangles. After a receiver split along the main axis the whole boundary can
+// lie beyond the new clip plane while the triangles it stands for still cross the
+// sub-shaft (fuzz_iss 8aab0cde..., corpus/iss/pouch/368db5c7...: a pouch's simplified
+// patch 0.06 above a receiver's level, its triangle 0.27 below it and on the segment).
+bool has_collapsed_edges(const Surface& s);
+// A surface with collapsed edges whose box is beyond or touching a clip plane of `g`
+// (beyond_clip_planes): it may stand for blockers inside the shaft, so it is neither
+// dropped nor removed, and it never blocks the shaft (its clamped boundary lies on the
+// clip plane, where the winding's sign at the node face is not reliable); its relations
+// go down to the rays.
+bool stands_beyond_clip_planes(const Surface& s, const ShaftGeometry& g);
 // CAN-BLOCK-SHAFT (line 1 of Figure 4.18): false when a surface with this box cannot
 // block the shaft: its box clamped to the clip planes misses one of three box-to-box
 // segments.

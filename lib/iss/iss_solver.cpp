@@ -239,6 +239,7 @@ class Traversal {
     st.set("surfaces_combined", n_combined_);
     st.set("surfaces_unchanged", n_unchanged_);
     st.set("surfaces_dropped_outside", n_dropped_);
+    st.set("surfaces_kept_beyond_clip_planes", n_kept_beyond_);
     st.set("embree_fallback_rays", n_fallback_);
     st.set("initial_shafts_blocked_by_probe", n_probe_blocked_);
     st.set("leaf_rays_with_surfaces", n_leaf_surfaces_);
@@ -395,7 +396,13 @@ class Traversal {
     const int ax = sh->g.main_axis();
     const double lo = std::min(rp[ax], lp[ax]), hi = std::max(rp[ax], lp[ax]);
     for (const Surface& s : sh->surfaces) {
-      if (misses_slab(s.box, ax, lo, hi, lo < hi)) continue;
+      if (misses_slab(s.box, ax, lo, hi, lo < hi)) {
+        // The box of a surface with collapsed edges need not hold its triangles
+        // (has_collapsed_edges, blockers.h): the ray decides.
+        if (!has_collapsed_edges(s)) continue;
+        ++n_fallback_;
+        return embree_->occluded(rpf, lpf);
+      }
       if (s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
         ++n_fallback_;
         return embree_->occluded(rpf, lpf);
@@ -502,9 +509,16 @@ class Traversal {
       // flatten it onto the plane, where the receiver is: fuzz_iss 621ee63f..., a
       // triangle reaching z = 0.5 below a leaf whose receiver is at z = 0.5, 2^-149 beside
       // its plane, was clamped into a sliver through the receiver and blocked the shaft.
+      // Not a surface with collapsed edges (has_collapsed_edges, blockers.h): its boundary
+      // may lie beyond while the triangles it stands for cross the sub-shaft; it is kept,
+      // never blocks and is never removed (stands_beyond_clip_planes), so its relations go
+      // to the rays.
       if (beyond_clip_planes(ps.box, sub.g)) {
-        ++n_dropped_;
-        continue;
+        if (!has_collapsed_edges(ps)) {
+          ++n_dropped_;
+          continue;
+        }
+        ++n_kept_beyond_;
       }
       Surface s;
       {
@@ -729,7 +743,7 @@ class Traversal {
         record_blocked(sh.r, sh.l);
         return;
       }
-      if (all_edges_outside(s)) {
+      if (all_edges_outside(s) && !stands_beyond_clip_planes(s, sh.g)) {
         sh.ghosts.push_back(s.box);
         ++n_removed_;
         ws_.recycle(std::move(s));
@@ -894,6 +908,7 @@ class Traversal {
   uint64_t tick0_ = ticks();
   double n_blocked_shaft_ = 0, n_empty_ = 0, n_rays_ = 0, n_rays_blocked_ = 0, n_shafts_ = 0, n_blocking_tests_ = 0;
   double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0, n_unchanged_ = 0, n_dropped_ = 0;
+  double n_kept_beyond_ = 0;
   double n_leaf_surfaces_ = 0, n_leaf_ghosts_ = 0, n_leaf_node_tris_ = 0, n_probe_blocked_ = 0;
   double n_auto_shafts_ = 0, n_auto_relations_ = 0;
   std::array<AutoRayBucket, 64> auto_buckets_{};
