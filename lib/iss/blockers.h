@@ -200,7 +200,15 @@ bool stands_beyond_clip_planes(const Surface& s, const ShaftGeometry& g);
 // block the shaft: its box clamped to the clip planes misses one of three box-to-box
 // segments.
 bool can_block_shaft(const AABBd& box, const ShaftGeometry& g);
-// BLOCKS-SHAFT, Figure 4.18.
+// BLOCKS-SHAFT, Figure 4.18, with a third answer. Clear: proven not to block (the box
+// test, a hole, or a zero winding number), so a surface with every edge outside may be
+// removed (section 4.7.8). Unknown: not tested, or the clamped boundary lands on a node
+// face (see blocks_shaft in blockers.cpp), or the shaft is too thin (shaft_too_thin),
+// or the surface stands beyond a clip plane (stands_beyond_clip_planes): it neither
+// blocks nor may be removed, so the shaft is not called empty either.
+enum class BlockTest { Blocked, Clear, Unknown };
+BlockTest blocking_test(const Surface& s, const ShaftGeometry& g);
+// blocking_test(s, g) == BlockTest::Blocked.
 bool blocks_shaft(const Surface& s, const ShaftGeometry& g);
 // Section 4.10: BLOCKS-RAY, per patch (a consistent patch is crossed by every ray in the
 // same direction, so its winding number is nonzero iff the ray crosses it; an

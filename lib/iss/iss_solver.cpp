@@ -733,17 +733,20 @@ class Traversal {
     // Lines 1-4: blocked? drop redundant surfaces (section 4.7.8).
     for (size_t k = 0; k < sh.surfaces.size();) {
       Surface& s = sh.surfaces[k];
-      bool blocked;
+      BlockTest test;
       {
         ScopedTimer t(times_[kBlocking]);
         ++n_blocking_tests_;
-        blocked = blocks_shaft(s, sh.g);
+        test = blocking_test(s, sh.g);
       }
-      if (blocked) {
+      if (test == BlockTest::Blocked) {
         record_blocked(sh.r, sh.l);
         return;
       }
-      if (all_edges_outside(s) && !stands_beyond_clip_planes(s, sh.g)) {
+      // Removal needs the winding test's proof (Clear), not a refusal to test (Unknown):
+      // a surface kept only because its test was refused, say in a shaft too thin to
+      // test, may block a later, thicker sub-shaft.
+      if (test == BlockTest::Clear && all_edges_outside(s)) {
         sh.ghosts.push_back(s.box);
         ++n_removed_;
         ws_.recycle(std::move(s));
