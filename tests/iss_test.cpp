@@ -378,6 +378,15 @@ TEST(IssShaft, SegmentTriangleTestExcludesEndpoints) {
   Vec3d sa(0, 0, 0), sb(0x1p-149, 0, 0), sc(0, 0, 1);
   EXPECT_FALSE(iss::segment_hits_triangle_d(Vec3d(-1, -1, 1), Vec3d(1, 1, 2), sa, sb, sc));
   EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(-1, -1, 0), Vec3d(1, 1, 1), sa, sb, sc));
+  // A crossing point on the extension of a sliver's long edges (fuzz_iss 79223f0b...):
+  // the sliver (2.5e-32, 0.5, 1), (-0, 0.5, 1), (-0.5, 1, 1) in z = 1; the segment
+  // (-0.5, 1.5, 0) -> (-1, 1, 2) crosses z = 1 at (-0.75, 1.25), on the line
+  // x + y = 0.5 of the edges b-c and c-a, a quarter unit beyond c: a miss, though two
+  // edge products are exactly 0 there and the third has the sign of the others'
+  // rounding. The same segment shifted to cross at (-0.25, 0.75), on the sliver: a hit.
+  Vec3d la(double(2.46519033e-32f), 0.5, 1), lb(-0.0, 0.5, 1), lc(-0.5, 1, 1);
+  EXPECT_FALSE(iss::segment_hits_triangle_d(Vec3d(-0.5, 1.5, 0), Vec3d(-1, 1, 2), la, lb, lc));
+  EXPECT_TRUE(iss::segment_hits_triangle_d(Vec3d(0, 1, 0), Vec3d(-0.5, 0.5, 2), la, lb, lc));
 }
 
 // ---- radial pairing of non-manifold edges (radial_pairing.h) --------------------------------
