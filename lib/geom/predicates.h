@@ -7,6 +7,8 @@
 // oracle instantiates the same formula with CGAL's exact number type.
 #pragma once
 
+#include <algorithm>
+
 #include "lib/geom/expansion.h"
 #include "lib/geom/vec.h"
 
@@ -54,6 +56,34 @@ inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx,
   }
   if (n == 0) return 0;
   return e[n - 1] > 0.0 ? 1 : -1;
+}
+
+// Closed point-in-triangle test of a point x in the triangle's plane (n its normal).
+// The point must lie in the triangle's box (grown by 2^-40 of the largest magnitude,
+// far above the rounding of x): without this a sliver fails the sign test below, for a
+// triangle of area 4e-25 the edge products of a point on the extension of its long
+// edges all round to zero or agree, and a point 0.7 beyond the sliver passed as inside
+// (fuzz_embree campaign, corpus/embree-robust/sliver/6cbacd9b: a robust-mode false hit
+// that this test then confirmed; fuzz_iss 79223f0b, corpus/iss/sliver/c979ba88: the same
+// for ISS's custom caster). Then, in the projection that drops n's dominant axis, the
+// three edge cross products agree in sign (zeros allowed). Used by the ray verification
+// (lib/raycast) and ISS's segment_hits_triangle_d.
+inline bool point_in_triangle_closed(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n,
+                                     const Vec3d& x) {
+  const Vec3d lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
+  const Vec3d mag = vmax(vabs(lo), vmax(vabs(hi), vabs(x)));
+  const double slack = 0x1p-40 * std::max(mag.x, std::max(mag.y, mag.z));
+  for (int k = 0; k < 3; ++k)
+    if (x[k] < lo[k] - slack || x[k] > hi[k] + slack) return false;
+  const Vec3d an = vabs(n);
+  const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
+    const double w = (e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]);
+    return (w > 0.0) - (w < 0.0);
+  };
+  const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
+  return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
 }
 
 // Textbook Möller-Trumbore ("Fast, Minimum Storage Ray/Triangle Intersection", 1997) in

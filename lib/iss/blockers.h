@@ -187,7 +187,7 @@ bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g);
 // segment of that shaft or a sub-shaft is unchanged, but the boundary's box need not
 // hold the triangles. After a receiver split along the main axis the whole boundary can
 // lie beyond the new clip plane while the triangles it stands for still cross the
-// sub-shaft (fuzz_iss 8aab0cde..., corpus/iss/pouch/368db5c7...: a pouch's simplified
+// sub-shaft (fuzz_iss 8aab0cde..., corpus/iss/pouch/d11d1859...: a pouch's simplified
 // patch 0.06 above a receiver's level, its triangle 0.27 below it and on the segment).
 bool has_collapsed_edges(const Surface& s);
 // A surface with collapsed edges whose box is beyond or touching a clip plane of `g`
@@ -203,7 +203,7 @@ bool can_block_shaft(const AABBd& box, const ShaftGeometry& g);
 // BLOCKS-SHAFT, Figure 4.18, with a third answer. Clear: proven not to block (the box
 // test, a hole, or a zero winding number), so a surface with every edge outside may be
 // removed (section 4.7.8). Unknown: not tested, or the clamped boundary lands on a node
-// face (see blocks_shaft in blockers.cpp), or the shaft is too thin (shaft_too_thin),
+// face (see blocking_test in blockers.cpp), or the shaft is too thin (shaft_too_thin),
 // or the surface stands beyond a clip plane (stands_beyond_clip_planes): it neither
 // blocks nor may be removed, so the shaft is not called empty either.
 enum class BlockTest { Blocked, Clear, Unknown };

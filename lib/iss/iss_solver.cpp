@@ -396,14 +396,11 @@ class Traversal {
     const int ax = sh->g.main_axis();
     const double lo = std::min(rp[ax], lp[ax]), hi = std::max(rp[ax], lp[ax]);
     for (const Surface& s : sh->surfaces) {
-      if (misses_slab(s.box, ax, lo, hi, lo < hi)) {
-        // The box of a surface with collapsed edges need not hold its triangles
-        // (has_collapsed_edges, blockers.h): the ray decides.
-        if (!has_collapsed_edges(s)) continue;
-        ++n_fallback_;
-        return embree_->occluded(rpf, lpf);
-      }
-      if (s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
+      // Except a surface with collapsed edges, whose box need not hold its triangles
+      // (has_collapsed_edges, blockers.h): the ray decides for it.
+      const bool misses = misses_slab(s.box, ax, lo, hi, lo < hi);
+      if (misses && !has_collapsed_edges(s)) continue;
+      if (misses || s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
         ++n_fallback_;
         return embree_->occluded(rpf, lpf);
       }

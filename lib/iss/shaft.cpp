@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lib/geom/predicates.h"
+
 namespace visgate::iss {
 
 namespace {
@@ -303,25 +305,11 @@ bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, con
   // its distance to p they round to zero (a 1e-45-wide sliver 1.4 units away, fuzz_iss)
   // and the test took every such triangle as touched.
   Vec3d x = std::abs(s1) <= std::abs(s2) ? p + (q - p) * (s1 / (s1 - s2)) : q + (p - q) * (s2 / (s2 - s1));
-  // The crossing point must lie in the triangle's box (grown by 2^-40 of the largest
-  // magnitude, far above x's rounding): for a sliver the edge products of a point on
-  // the extension of its long edges round to zero and pass the sign test (fuzz_iss
-  // 79223f0b..., corpus/iss/sliver/c979ba88...: a 2.5e-32-wide sliver, a point 0.25
-  // beyond its end on the line of its long edges, taken as hit by the custom caster),
-  // as raycast::segment_hits_triangle found for Embree's candidates.
-  const Vec3d lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
-  const Vec3d mag = vmax(vabs(lo), vmax(vabs(hi), vabs(x)));
-  const double slack = 0x1p-40 * std::max(mag.x, std::max(mag.y, mag.z));
-  for (int k = 0; k < 3; ++k)
-    if (x[k] < lo[k] - slack || x[k] > hi[k] + slack) return false;
-  Vec3d an = vabs(n);
-  int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-  int u = (drop + 1) % 3, v = (drop + 2) % 3;
-  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
-    return (e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]);
-  };
-  double w0 = edge(a, b), w1 = edge(b, c), w2 = edge(c, a);
-  return (w0 >= 0 && w1 >= 0 && w2 >= 0) || (w0 <= 0 && w1 <= 0 && w2 <= 0);
+  // The closed test first requires x in the triangle's box (point_in_triangle_closed,
+  // lib/geom/predicates.h): on a 2.5e-32-wide sliver a point on the line of its long
+  // edges, 0.25 beyond it, passed the sign test alone (fuzz_iss 79223f0b...,
+  // corpus/iss/sliver/c979ba88..., a false block by the custom caster).
+  return point_in_triangle_closed(a, b, c, n, x);
 }
 
 bool segment_may_hit_box(const Vec3d& p, const Vec3d& q, const AABBd& box, double grow) {

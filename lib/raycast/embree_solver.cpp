@@ -41,30 +41,6 @@ RTCDevice shared_device() {
 // Sign of a double as -1, 0, +1.
 int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
 
-// Closed point-in-triangle test of a point x in the triangle's plane (n its normal).
-// The point must lie in the triangle's box (grown by 2^-40 of the largest magnitude,
-// far above the rounding of x): without this a sliver fails the sign test below, for a
-// triangle of area 4e-25 the edge products of a point on the extension of its long
-// edges all round to zero or agree, and a point 0.7 beyond the sliver passed as inside
-// (fuzz_embree campaign, corpus/embree-robust/sliver/6cbacd9b: a robust-mode false hit
-// that this test then confirmed). Then, in the projection that drops n's dominant axis,
-// the three edge cross products agree in sign (zeros allowed).
-bool point_in_triangle_closed(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n, const Vec3d& x) {
-  const Vec3d lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
-  const Vec3d mag = vmax(vabs(lo), vmax(vabs(hi), vabs(x)));
-  const double slack = 0x1p-40 * std::max(mag.x, std::max(mag.y, mag.z));
-  for (int k = 0; k < 3; ++k)
-    if (x[k] < lo[k] - slack || x[k] > hi[k] + slack) return false;
-  const Vec3d an = vabs(n);
-  const int drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
-  auto edge = [&](const Vec3d& e0, const Vec3d& e1) {
-    return sign_of((e1[u] - e0[u]) * (x[v] - e0[v]) - (e1[v] - e0[v]) * (x[u] - e0[u]));
-  };
-  const int e0 = edge(a, b), e1 = edge(b, c), e2 = edge(c, a);
-  return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
-}
-
 // The ranged test of fallback_occluded(soup, from, to, t0, t1) for one triangle.
 bool line_range_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, const Vec3f& from, const Vec3f& to,
                               double t0, double t1) {
@@ -185,8 +161,8 @@ struct VerifyContext {
   unsigned csr = IeeeFloatMode::current_csr();  // the querying thread's MXCSR (the filter runs on it)
   size_t rejected = 0;
   // Bit k: the filter let a hit of ray id k stand (fan ids are below 16, a single query's
-  // id is 0). A query that comes back blocked without its bit was not verified (see
-  // unverified_hit below).
+  // id is 0). A query that comes back blocked without its bit was not verified
+  // (EmbreeScene::unverified_hits).
   uint32_t accepted = 0;
   // Segment queries: crossing_terms of the triangle `terms_prim` seen last from `from`
   // (~0u: none yet), shared by the lanes and packets of the query.
@@ -209,23 +185,19 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
     const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
     const unsigned id = vc->fan_to ? RTCRayN_id(args->ray, args->N, i) : 0u;
     const Vec3f& to = vc->fan_to ? vc->fan_to[id] : vc->to;
-    if (!vc->ranged) {
-      if (prim != vc->terms_prim) {
-        vc->terms = crossing_terms(p, a, b, c);
-        vc->terms_prim = prim;
-      }
-      if (certainly_crosses(vc->terms, to_double(to) - p)) {
-        vc->accepted |= 1u << (id & 31u);
-        continue;
-      }
+    if (!vc->ranged && prim != vc->terms_prim) {
+      vc->terms = crossing_terms(p, a, b, c);
+      vc->terms_prim = prim;
     }
-    const bool confirmed = vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
-                                      : segment_hits_triangle(a, b, c, vc->from, to);
-    if (!confirmed) {
+    const bool confirmed =
+        (!vc->ranged && certainly_crosses(vc->terms, to_double(to) - p)) ||
+        (vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
+                    : segment_hits_triangle(a, b, c, vc->from, to));
+    if (confirmed) {
+      vc->accepted |= 1u << (id & 31u);
+    } else {
       args->valid[i] = 0;
       ++vc->rejected;
-    } else {
-      vc->accepted |= 1u << (id & 31u);
     }
   }
 }

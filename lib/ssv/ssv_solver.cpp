@@ -201,12 +201,13 @@ Vec3f reference_point(const RefContext& c, int j) {
   const Vec3d fs = c.frame.to_frame_d(s), fq = c.frame.to_frame_d(q);
   const double du = fq.x - fs.x, dv = fq.y - fs.y;
   if (!(du * du + dv * dv <= 4.0 * step * step)) return s;
-  // And only inside L' (closed) when the sample is: the projected pieces are clipped to
-  // L', so outside it a shadow boundary may lie between the sample and q unseen by the
-  // clearance (fuzz_ssv 84a48072..., corpus/ssv/other/a5f02684...: samples on the
-  // corners of a light 5e-4 wide, a triangle's edge projected 1e-5 beside the light,
-  // outside it; a q moved off the corner crossed it, and its blocked ray answered the
-  // whole visible class). Both in a convex L', the segment between them is in it too.
+  // And only inside L' (closed), where every sample lies (light_frame.h): the projected
+  // pieces are clipped to L', so outside it a shadow boundary may lie between the sample
+  // and q unseen by the clearance (fuzz_ssv 84a48072..., corpus/ssv/other/a5f02684...:
+  // samples on the corners of a light 5e-4 wide, a triangle's edge projected 1e-5
+  // beside the light, outside it; a q moved off the corner crossed it, and its blocked
+  // ray answered the whole visible class). Both in a convex L', the segment between
+  // them is in it too.
   auto in_poly = [&](const Vec3d& f) {
     const std::vector<Vec2f>& P = c.frame.poly;
     for (size_t k = 0; k < P.size(); ++k) {
@@ -217,7 +218,7 @@ Vec3f reference_point(const RefContext& c, int j) {
     }
     return true;
   };
-  if (in_poly(fs) && !in_poly(fq)) return s;
+  if (!in_poly(fq)) return s;
   return q;
 }
 
