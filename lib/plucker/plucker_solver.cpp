@@ -184,6 +184,48 @@ bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec
   return false;
 }
 
+// Merges a clip point of a polygon clipped at the light plane with a neighbour that
+// rounding cannot tell apart from it. A vertex within rounding of the light plane but
+// beyond it (h = -1.7e-21, fuzz_plucker 09bd12dc...: a grid vertex on the float plane
+// z = 2 of a light whose lifted plane passes just above it) was clipped into two points
+// 1e-21 apart on a triangle of size 1: their edge's direction was rounding noise, and
+// the plane through a receiver and that edge cut the shadow wedge at the vertex in half
+// (fraction 0.75 for 0.62). The same holds for a vertex just on the near side next to
+// a clip point. Two consecutive vertices at most eps apart, one of them a clip point,
+// become the clip point (on the light plane, so it moves the shadow by about eps times
+// the receiver's magnification |v - r| / h(r), below 2^20 for a receiver the float path
+// shades); eps = 2^-36 of the two points' coordinates (local frame) leaves every edge at
+// least 2^17 times its rounding. The merged vertex touches the light plane (bsp.h: its
+// vvset lines are undecided, so it is inserted as mixed). Fewer than 3 left: dropped.
+void merge_plane_points(std::vector<Vec3d>& poly, std::vector<uint8_t>& on_plane) {
+  if (poly.size() < 3) return;
+  // eps from the two points' own magnitudes, not the polygon's: a clip point is
+  // interpolated from its edge's near end (fragment.h), so its rounding is relative to
+  // its own coordinates; a polygon reaching 2^108 away (fuzz_plucker seed 'pouch-12850')
+  // made a polygon-wide eps of 1e21 that merged every vertex of the part near the light.
+  auto close = [](const Vec3d& a, const Vec3d& b) {
+    const double eps = 0x1p-36 * std::max(max_component(vabs(a)), max_component(vabs(b)));
+    return max_component(vabs(a - b)) <= eps;
+  };
+  size_t w = 0;
+  for (size_t k = 0; k < poly.size(); ++k) {
+    if (w > 0 && (on_plane[k] || on_plane[w - 1]) && close(poly[k], poly[w - 1])) {
+      if (!on_plane[w - 1]) poly[w - 1] = poly[k], on_plane[w - 1] = 1;
+      continue;
+    }
+    poly[w] = poly[k];
+    on_plane[w] = on_plane[k];
+    ++w;
+  }
+  // The last against the first (the polygon is closed).
+  if (w > 1 && (on_plane[0] || on_plane[w - 1]) && close(poly[w - 1], poly[0])) {
+    if (!on_plane[0]) poly[0] = poly[w - 1], on_plane[0] = 1;
+    --w;
+  }
+  poly.resize(w < 3 ? 0 : w);
+  on_plane.resize(poly.size());
+}
+
 // A triangle part handled per receiver (plucker_solver.h "near" polygons).
 // Side of x against the plane of the triangle t (world coordinates, the inputs as
 // given: the local frame's rounding moves points by u |x - o|, which is enough to put a
@@ -529,6 +571,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<NearPoly> near;
   std::vector<Vec3d> near_verts;
   std::vector<Vec3d> poly0, lower, upper;
+  std::vector<uint8_t> on_plane0;
   std::vector<double> vals;
   const Vec3d nd = lf.nd, gd = g, refd = ref;
   const double gcut = gmax + delta;
@@ -567,7 +610,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // Behind every receiver's g-plane.
     if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
     // Clip to the light side h >= 0.
-    clip_by_values(tri, h, 3, true, poly0);
+    clip_by_values(tri, h, 3, true, poly0, &on_plane0);
+    merge_plane_points(poly0, on_plane0);
     if (poly0.empty()) continue;
     // Split at gmax + delta: beyond it, between every receiver and the light (tree);
     // the rest per receiver.
