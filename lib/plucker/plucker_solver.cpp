@@ -280,6 +280,7 @@ struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
+  uint64_t far_triangles = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -288,6 +289,7 @@ struct Totals {
     trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
     exact_triangles += o.exact_triangles;
+    far_triangles += o.far_triangles;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -590,12 +592,32 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     np.tmax = std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2]))));
     return np;
   };
+  // Triangles reaching far beyond the group's working scale (the light's extent and
+  // the receivers' distance from it): every double quantity of their clipping carries
+  // an absolute rounding of about 2^-53 of their coordinates (and the translation to the
+  // local frame one of u_d |x| when exponents differ by more than 29). Up to 2^20 times
+  // the working scale that stays below 2^-33 of it, the level the far-receiver bound
+  // below accepts; beyond, the light-plane crossing of an edge 4e18 long was 480 off
+  // (fuzz_plucker 1cb7edfb...: a wall reaching 8.2e22 away, entirely beyond the tilted
+  // light inside the slab, clipped into a sliver that hid 40% of a unit light, fraction
+  // 0.60 for 1). Such triangles are subtracted exactly per receiver
+  // (subtract_triangle_exact on the float inputs), never clipped in double.
+  const double work_scale =
+      std::max(double(lf.extent), max_component(vmax(vabs(dlo - lf.centroid), vabs(dhi - lf.centroid))));
+  std::vector<uint32_t> far_tris;
   std::vector<uint32_t> cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
   for (uint32_t t : cand) {
     Vec3d tri[3] = {to_local_d(scene.mesh.corner(t, 0), lf.origin), to_local_d(scene.mesh.corner(t, 1), lf.origin),
                     to_local_d(scene.mesh.corner(t, 2), lf.origin)};
     if (shaft.culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
+    // Far reaching (above): exact, per receiver, before the double rejections below
+    // (their values carry the same rounding).
+    if (!(std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2])))) <=
+          0x1p20 * work_scale)) {
+      far_tris.push_back(t);
+      continue;
+    }
     // Heights over the light plane and g-values in double on the float vertices (the
     // clipping below interpolates in double, fragment.h clip_by_values).
     double h[3], gv[3];
@@ -768,6 +790,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         all.extend(boxes.back());
       }
       exact_done.clear();
+      // Far-reaching triangles (occluder selection above), exactly.
+      for (uint32_t t : far_tris) {
+        if (frags.size() == 0) break;
+        if (!subtract_exact(t, rec)) continue;
+        ++tot.far_triangles;
+        all = Box2{};
+        for (const Box2& b : boxes) all.extend(b);
+      }
       const Vec3d& rd = r;
       const double rmax = max_component(vabs(r));
       // The box of this receiver's pyramid (r and the light), grown by 2^-20 of its
@@ -1151,6 +1181,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("fallback_receivers", double(totals.fallback));
   st.set("segment_relations", double(totals.segment_relations));
   st.set("exact_triangles", double(totals.exact_triangles));
+  st.set("far_triangles", double(totals.far_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
