@@ -155,6 +155,13 @@ TEST(SceneJson, RejectsOutOfRangeIndicesAndBadLights) {
   ASSERT_FALSE(nonplanar.ok());
   EXPECT_NE(nonplanar.error().message.find("plane"), std::string::npos) << nonplanar.error().message;
   EXPECT_FALSE(light("[[0,0,2],[1,0,2],[2,0,2]]").ok());  // zero area
+  // fuzz_plucker 35cf7d01: every vertex on the line y = 0, z = 2; the double Newell sum
+  // 2a + 2b - 2b - 2a left -2a = -3.5e-42 against an extent of 1.9e-21, above the
+  // relative area tolerance, and the region oracle's exact normal was zero.
+  auto on_a_line = light(R"([["-0x1.ep-142",0,2],[0,0,2],["0x1.e4acdp-68",0,2],[0,0,2]])");
+  ASSERT_FALSE(on_a_line.ok());
+  EXPECT_NE(on_a_line.error().message.find("lights[0].polygon: zero area"), std::string::npos)
+      << on_a_line.error().message;
   EXPECT_FALSE(light("[[0,0,2],[1,0,2]]").ok());          // too few vertices
   // A pentagram: every turn has the same sign but it winds twice.
   std::string star = "[";

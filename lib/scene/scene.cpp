@@ -133,6 +133,24 @@ Status prepare_light(Light& light, const std::string& where) {
     }
   }
 
+  // Zero area exactly: the Newell normal above is rounded, and vertices that lie exactly
+  // on one line can leave it nonzero (fuzz_plucker 35cf7d01: (-1.9e-42, 0, 2), (0, 0, 2),
+  // (1.9e-21, 0, 2), (0, 0, 2): 2a + 2b - 2b - 2a came out -2a in double, a "twice area"
+  // of 3.5e-42 against an extent of 1.9e-21, and the region oracle's exact normal was 0).
+  // Consecutive vertices are distinct (checked above), so the polygon lies on one line
+  // iff every corner is exactly straight in all three axis projections.
+  {
+    bool on_a_line = true;
+    for (int k = 0; k < 3 && on_a_line; ++k) {
+      const int i1 = (k + 1) % 3, i2 = (k + 2) % 3;
+      for (size_t i = 0; i < n && on_a_line; ++i) {
+        const Vec3f &a = P[(i + n - 1) % n], &b = P[i], &d = P[(i + 1) % n];
+        on_a_line = orient2d_exact_sign(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]) == 0;
+      }
+    }
+    if (on_a_line) return Error{where + ".polygon: zero area (every vertex on one line)"};
+  }
+
   light.normal = Vec3f(unit);
   light.area = 0.5 * twice_area;
 
