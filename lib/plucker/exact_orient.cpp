@@ -93,7 +93,10 @@ ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint&
   return r;
 }
 
-ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
+namespace {
+
+// orient3d_filtered's double evaluation and its forward error bound.
+double orient3d_estimate(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d, double& bound) {
   constexpr double kU = 0x1p-53;
   Vec3d a = to_double(af);
   Vec3d u = to_double(bf) - a, v = to_double(cf) - a;
@@ -106,9 +109,24 @@ ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf,
                 std::abs(w.z) * (std::abs(u.x * v.y) + std::abs(u.y * v.x));
   // The differences u, v, w are exact or rounded once (relative u each); the rounding
   // of dd (u |dd|_inf per coordinate) enters through the first-order term.
-  double bound = 2.0 * (7.0 + 56.0 * kU) * kU * perm +
-                 2.0 * (std::abs(uv.x) + std::abs(uv.y) + std::abs(uv.z)) * kU * max_component(vabs(dd));
+  bound = 2.0 * (7.0 + 56.0 * kU) * kU * perm +
+          2.0 * (std::abs(uv.x) + std::abs(uv.y) + std::abs(uv.z)) * kU * max_component(vabs(dd));
+  return val;
+}
+
+}  // namespace
+
+ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
+  double bound = 0.0;
+  const double val = orient3d_estimate(af, bf, cf, d, bound);
   if (std::abs(val) > bound) return ExactOrient{val > 0.0 ? 1 : -1, val};
+  return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
+}
+
+ExactOrient orient3d_accurate(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
+  double bound = 0.0;
+  const double val = orient3d_estimate(af, bf, cf, d, bound);
+  if (std::abs(val) * 0x1p-30 > bound) return ExactOrient{val > 0.0 ? 1 : -1, val};
   return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
 }
 

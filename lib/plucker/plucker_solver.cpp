@@ -422,7 +422,8 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   auto value = [&](int k, const Vec3d& x) {
     // det[x - rw, t_e - rw, t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x) (cyclic columns).
     SumPoint xs(origin, x);
-    ExactOrient o = k == 0 ? orient3d_filtered(tw[0], tw[1], tw[2], xs) : orient3d_filtered(rw, tw[k - 1], tw[k % 3], xs);
+    // Accurate values, not only signs: the clip below interpolates with them.
+    ExactOrient o = k == 0 ? orient3d_accurate(tw[0], tw[1], tw[2], xs) : orient3d_accurate(rw, tw[k - 1], tw[k % 3], xs);
     if (o.sign == 0) return 0.0;
     double v = std::abs(o.value);
     if (!(v > 0.0)) v = std::numeric_limits<double>::min();
