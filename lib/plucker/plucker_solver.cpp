@@ -280,7 +280,7 @@ struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
-  uint64_t far_triangles = 0;
+  uint64_t far_triangles = 0, band_triangles = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -290,6 +290,7 @@ struct Totals {
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
     exact_triangles += o.exact_triangles;
     far_triangles += o.far_triangles;
+    band_triangles += o.band_triangles;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -605,7 +606,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   // (subtract_triangle_exact on the float inputs), never clipped in double.
   const double work_scale =
       std::max(double(lf.extent), max_component(vmax(vabs(dlo - lf.centroid), vabs(dhi - lf.centroid))));
-  std::vector<uint32_t> far_tris;
+  // Triangles subtracted exactly per receiver: the far-reaching ones (above) and those
+  // within rounding of the light plane (below).
+  std::vector<uint32_t> exact_tris;
   std::vector<uint32_t> cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
   for (uint32_t t : cand) {
@@ -616,7 +619,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // (their values carry the same rounding).
     if (!(std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2])))) <=
           0x1p20 * work_scale)) {
-      far_tris.push_back(t);
+      exact_tris.push_back(t);
+      ++tot.far_triangles;
       continue;
     }
     // Heights over the light plane and g-values in double on the float vertices (the
@@ -628,8 +632,28 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       gv[k] = dot(gd, x - refd);
     }
     // Beyond, or lying in, the light plane: it never meets an open segment (occluders
-    // touching the light plane with a vertex or an edge are kept).
-    if (std::max(h[0], std::max(h[1], h[2])) <= double(lf.plane_tol)) continue;
+    // touching the light plane with a vertex or an edge are kept). Within the plane's
+    // rounding bound h cannot tell: a vertex 5.7e-7 before a light at z = 2 (plane_tol
+    // 7e-7, the float normal's bound over a light 2 wide) made a triangle hiding 1/8 of
+    // the light count as lying in its plane (fuzz_plucker a77807ad, fraction 1 for
+    // 0.875). There the exact side of each such vertex against the light's plane (the
+    // region oracle's Newell plane, exact_orient.h newell_side_exact) decides: a triangle
+    // with a vertex strictly before it is subtracted exactly per receiver, which needs
+    // no clipping at the light plane (subtract_triangle_exact hides a light point only
+    // beyond the triangle's plane as seen from r).
+    if (const double hmax = std::max(h[0], std::max(h[1], h[2])); hmax <= double(lf.plane_tol)) {
+      if (hmax < -double(lf.plane_tol)) continue;
+      bool before = false;
+      for (int k = 0; k < 3 && !before; ++k)
+        before = h[k] >= -double(lf.plane_tol) &&
+                 double(sigma) * newell_side_exact(light.polygon.data(), int(light.polygon.size()),
+                                                   scene.mesh.corner(t, k)) > 0.0;
+      if (before) {
+        exact_tris.push_back(t);
+        ++tot.band_triangles;
+      }
+      continue;
+    }
     // Behind every receiver's g-plane.
     if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
     // Clip to the light side h >= 0.
@@ -791,11 +815,11 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         all.extend(boxes.back());
       }
       exact_done.clear();
-      // Far-reaching triangles (occluder selection above), exactly.
-      for (uint32_t t : far_tris) {
+      // Far-reaching triangles and those within rounding of the light plane (occluder
+      // selection above), exactly.
+      for (uint32_t t : exact_tris) {
         if (frags.size() == 0) break;
         if (!subtract_exact(t, rec)) continue;
-        ++tot.far_triangles;
         all = Box2{};
         for (const Box2& b : boxes) all.extend(b);
       }
@@ -1183,6 +1207,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("segment_relations", double(totals.segment_relations));
   st.set("exact_triangles", double(totals.exact_triangles));
   st.set("far_triangles", double(totals.far_triangles));
+  st.set("band_triangles", double(totals.band_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
