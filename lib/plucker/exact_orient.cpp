@@ -130,6 +130,103 @@ ExactOrient orient3d_accurate(const Vec3f& af, const Vec3f& bf, const Vec3f& cf,
   return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
 }
 
+namespace {
+
+// e * x for a double x, exactly: each component's Two-Product grown in.
+void add_scaled(Expansion& out, const Expansion& e, double x, double sign = 1.0) {
+  if (x == 0.0) return;
+  for (double y : e) {
+    double hi, lo;
+    two_product(y, x, hi, lo);
+    if (lo != 0.0) grow(out, sign * lo);
+    grow(out, sign * hi);
+  }
+}
+
+// out += sign * e * f, exactly.
+void add_product(Expansion& out, const Expansion& e, const Expansion& f, double sign = 1.0) {
+  for (double x : f) add_scaled(out, e, x, sign);
+}
+
+// The rounded value: components summed from the smallest (within a few ulps).
+double estimate(const Expansion& e) {
+  double v = 0.0;
+  for (double x : e) v += x;
+  return v;
+}
+
+Expansion float_difference(float a, float b) {
+  Expansion e;
+  double x, y;
+  two_sum(double(a), -double(b), x, y);
+  if (y != 0.0) e.push_back(y);
+  if (x != 0.0) e.push_back(x);
+  return e;
+}
+
+}  // namespace
+
+LiftedLight::LiftedLight(const Vec3f* poly, int m, int u, int v) : m_(m), u_(u), v_(v), w_(3 - u - v) {
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    for (int i = 0; i < m; ++i) {
+      const Vec3f& a = poly[i];
+      const Vec3f& b = poly[(i + 1) % m];
+      grow(n_[k], double(a[k1]) * double(b[k2]));  // products of two floats: exact
+      grow(n_[k], -double(a[k2]) * double(b[k1]));
+      grow(s_[k], double(a[k]));
+    }
+  }
+}
+
+LiftedLight::Plane LiftedLight::plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const {
+  Plane pl;
+  const Expansion& nw = n_[w_];
+  pl.nw_sign = nw.empty() || nw.back() > 0.0 ? 1 : -1;
+  // c = (q1 - p) x (q2 - p), exactly.
+  Expansion d1[3], d2[3], c[3];
+  for (int k = 0; k < 3; ++k) {
+    d1[k] = float_difference(q1[k], p[k]);
+    d2[k] = float_difference(q2[k], p[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    add_product(c[k], d1[k1], d2[k2]);
+    add_product(c[k], d1[k2], d2[k1], -1.0);
+  }
+  const double m = double(m_);
+  // B = m (N_w c_u - N_u c_w), C = m (N_w c_v - N_v c_w).
+  Expansion t;
+  add_product(t, nw, c[u_]);
+  add_product(t, n_[u_], c[w_], -1.0);
+  add_scaled(pl.b, t, m);
+  t.clear();
+  add_product(t, nw, c[v_]);
+  add_product(t, n_[v_], c[w_], -1.0);
+  add_scaled(pl.c, t, m);
+  // A = c_w (N . S) - m N_w (c . p).
+  Expansion ns, cp, x;
+  for (int k = 0; k < 3; ++k) add_product(ns, n_[k], s_[k]);
+  add_product(pl.a, c[w_], ns);
+  for (int k = 0; k < 3; ++k) add_scaled(cp, c[k], double(p[k]));
+  add_product(x, nw, cp);
+  add_scaled(pl.a, x, m, -1.0);
+  return pl;
+}
+
+ExactOrient LiftedLight::value(const Plane& pl, float hu, double lu, float hv, double lv) {
+  Expansion g = pl.a;
+  add_scaled(g, pl.b, double(hu));
+  add_scaled(g, pl.b, lu);
+  add_scaled(g, pl.c, double(hv));
+  add_scaled(g, pl.c, lv);
+  ExactOrient r;
+  if (g.empty()) return r;
+  r.sign = (g.back() > 0.0 ? 1 : -1) * pl.nw_sign;
+  r.value = double(pl.nw_sign) * estimate(g);
+  return r;
+}
+
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
   return orient3d_exact(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign;
 }

@@ -18,6 +18,8 @@
 // callers use it only where a float bound leaves a decision open.
 #pragma once
 
+#include <vector>
+
 #include "lib/geom/vec.h"
 
 namespace visgate::plucker {
@@ -55,6 +57,55 @@ ExactOrient orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, co
 // by most of itself (fuzz_plucker 6b11d2a3: a receiver 5.8e22 away at a grazing angle,
 // split points moved far enough to leave 0.1% of a light visible that a pouch hides).
 ExactOrient orient3d_accurate(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& d);
+
+// The light's exact plane, parametrised by two coordinate axes: the region oracle's light
+// (oracle/region_oracle.h "Exact frame") is the polygon of its float vertices' (u, v)
+// coordinates lifted along the third axis w onto the plane of the Newell normal
+// N = sum P_i x P_(i+1) through the exact centroid S / m (S = sum P_i). A point of it is
+// X(u, v) = (u, v, w(u, v)) with m N_w w = N . S - m N_u u - m N_v v.
+//
+// For a plane through a float point p with normal c = (q1 - p) x (q2 - p) (q1, q2
+// float), orient3d(p, q1, q2, X) = c . (X - p) is affine in (u, v); times m N_w it is
+//   g(u, v) = B u + C v + A,  B = m (N_w c_u - N_u c_w),  C = m (N_w c_v - N_v c_w),
+//   A = c_w (N . S) - m N_w (c . p),
+// with A, B, C exact expansions of float products (degree 4 and 5). LiftedPlane::value
+// evaluates sign(N_w) g exactly (the sign of orient3d(p, q1, q2, X) for the exact lifted
+// point X of (u, v)) and rounds it within a few ulps.
+//
+// Why: a fragment vertex kept as a 3D double point lies up to its rounding (1e-17 of its
+// coordinates) off the light's plane; seen from a receiver within that distance of the
+// plane (an edge-on light), that offset decides which side of a plane through the
+// receiver and a triangle edge the vertex is on (fuzz_plucker 9386076d, 3d8b5bf8,
+// 71a1d636: receivers 1e-22 .. 1e-35 from tilted lights' planes, fractions off by
+// 0.003 to 0.07). On (u, v) and the exact lift the answer is the region oracle's.
+//
+// Range: with float inputs every term stays within double's range (below 2^660; the
+// float products and their roundoffs above 2^-960). The double parts lu, lv of a
+// fragment vertex are local coordinates; a product B lu whose roundoff falls below
+// 2^-1074 loses it (lu below about 2^-250 of B's scale), an error far below any area.
+class LiftedLight {
+ public:
+  LiftedLight() = default;
+  // poly: the light's m float vertices; u, v: the parameter axes (w = 3 - u - v must
+  // have N_w != 0, true for the axis of the largest normal component).
+  LiftedLight(const Vec3f* poly, int m, int u, int v);
+  int u() const { return u_; }
+  int v() const { return v_; }
+  bool valid() const { return m_ > 0; }
+
+  struct Plane {
+    std::vector<double> a, b, c;  // expansions of A, B, C above
+    int nw_sign = 1;
+  };
+  // The affine function of the plane through p with normal (q1 - p) x (q2 - p).
+  Plane plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const;
+  // sign(N_w) g at u = hu + lu, v = hv + lv: exact sign, value within a few ulps.
+  static ExactOrient value(const Plane& pl, float hu, double lu, float hv, double lv);
+
+ private:
+  std::vector<double> n_[3], s_[3];  // Newell normal and vertex sum, exact
+  int m_ = 0, u_ = 0, v_ = 1, w_ = 2;
+};
 
 // Its sign for plain float points.
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d);

@@ -55,6 +55,9 @@ struct LightFrame {
   int p1 = 1, p2 = 2, emit_sign = 1;
   std::vector<Vec3d> samples;     // local jitter points, parallel to light.jitter_points
   std::vector<uint8_t> on_light;  // per jitter point: on the light polygon (fragment test)
+  // The region oracle's exact light plane over the frame's (u, v) axes, for the exact
+  // path's plane values at fragment vertices (exact_orient.h LiftedLight).
+  LiftedLight lift;
 };
 
 Vec3f to_local(const Vec3f& x, const Vec3f& origin) { return x - origin; }
@@ -87,6 +90,7 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
     f.plane_tol = std::max(f.plane_tol, h);
   }
   f.frame = PlaneFrame::from_normal(f.n);
+  f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
   f.extent = max_component(f.box.extent());
   {
     // The vertex pair spanning the largest float area with vertex 0, then exactness.
@@ -410,7 +414,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
 // receivers within float rounding of the triangle's plane, where float cannot tell which
 // way the planes through rw and the edges lean.
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
-                             const PlaneFrame& frame, const FragmentList& in, FragmentList& out,
+                             const PlaneFrame& frame, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
                              std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur) {
   out.clear();
   out_boxes.clear();
@@ -419,12 +423,17 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   // part of fuzz_plucker's ASan allocator time.
   thread_local std::vector<double> w;
   thread_local std::vector<Vec3d> inside, outside;
-  // w > 0 inside plane k's half-space of the blocked set.
+  // w > 0 inside plane k's half-space of the blocked set. The planes: the triangle's
+  // (orient3d(t0, t1, t2, x)) and those through rw and each edge (det[x - rw, t_e - rw,
+  // t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x), cyclic columns), evaluated at the exact
+  // lifted light point of x's (u, v) (LiftedLight: a vertex kept in 3D lies its rounding
+  // off the light's plane, which decides the side for a receiver that close to the
+  // plane), with accurate values: the clip below interpolates with them.
+  const LiftedLight::Plane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
+                                        lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
+  const int lu = lift.u(), lv = lift.v();
   auto value = [&](int k, const Vec3d& x) {
-    // det[x - rw, t_e - rw, t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x) (cyclic columns).
-    SumPoint xs(origin, x);
-    // Accurate values, not only signs: the clip below interpolates with them.
-    ExactOrient o = k == 0 ? orient3d_accurate(tw[0], tw[1], tw[2], xs) : orient3d_accurate(rw, tw[k - 1], tw[k % 3], xs);
+    ExactOrient o = LiftedLight::value(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
     if (o.sign == 0) return 0.0;
     double v = std::abs(o.value);
     if (!(v > 0.0)) v = std::numeric_limits<double>::min();
@@ -737,7 +746,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     const int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec.p);
     if (side_exact == 0) return false;
     ++tot.exact_triangles;
-    subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, frags, tmp, tmp_boxes, cur);
+    subtract_triangle_exact(rec.p, wtri, side_exact, lf.origin, lf.frame, lf.lift, frags, tmp, tmp_boxes, cur);
     std::swap(frags, tmp);
     std::swap(boxes, tmp_boxes);
     return true;
