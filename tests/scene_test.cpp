@@ -162,6 +162,17 @@ TEST(SceneJson, RejectsOutOfRangeIndicesAndBadLights) {
   ASSERT_FALSE(on_a_line.ok());
   EXPECT_NE(on_a_line.error().message.find("lights[0].polygon: zero area"), std::string::npos)
       << on_a_line.error().message;
+  // fuzz_plucker 4602bcaf: the same kind of light folded back on itself at vertex 0
+  // (0, 0) -> (0, -a) -> (0, 0): not on one line, but zero area exactly, and the double
+  // Newell sum and turning sum still made a light of it.
+  auto folded = light(R"([["0","-0x1.ep-142",2],[0,0,2],["-0x1p-147","0x1.e4acdp-68",2],[0,0,2]])");
+  ASSERT_FALSE(folded.ok());
+  EXPECT_NE(folded.error().message.find("lights[0].polygon: zero area"), std::string::npos) << folded.error().message;
+  // A fold in a light of positive area: a square with a spike out and back (rejected by
+  // the turning checks: a fold adds pi to the turning sum of a polygon of positive area).
+  auto spike = light("[[-1,-1,2],[1,-1,2],[1,0,2],[2,0,2],[1,0,2],[1,1,2],[-1,1,2]]");
+  ASSERT_FALSE(spike.ok());
+  EXPECT_NE(spike.error().message.find("lights[0].polygon["), std::string::npos) << spike.error().message;
   EXPECT_FALSE(light("[[0,0,2],[1,0,2]]").ok());          // too few vertices
   // A pentagram: every turn has the same sign but it winds twice.
   std::string star = "[";

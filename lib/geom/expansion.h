@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 namespace visgate::expansion {
 
@@ -36,6 +37,27 @@ inline void grow(double* e, int& n, double b) {
   }
   n = out;
   if (q != 0.0) e[n++] = q;
+}
+
+// The same on a vector (any length), and the expansion's value rounded within a few
+// ulps (components summed from the smallest).
+inline void grow_vector(std::vector<double>& e, double b) {
+  double q = b;
+  size_t out = 0;
+  for (size_t i = 0; i < e.size(); ++i) {
+    double x, y;
+    two_sum(q, e[i], x, y);
+    q = x;
+    if (y != 0.0) e[out++] = y;
+  }
+  e.resize(out);
+  if (q != 0.0) e.push_back(q);
+}
+
+inline double estimate(const std::vector<double>& e) {
+  double v = 0.0;
+  for (double x : e) v += x;
+  return v;
 }
 
 }  // namespace visgate::expansion

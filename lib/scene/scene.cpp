@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "lib/geom/expansion.h"
 #include "lib/geom/predicates.h"
 #include "lib/scene/rng.h"
 
@@ -111,6 +112,25 @@ Status prepare_light(Light& light, const std::string& where) {
   }
   if (std::abs(turning - 2 * std::numbers::pi) > 1e-3)
     return Error{where + ".polygon: not a simple convex polygon (winds " + std::to_string(turning / (2 * std::numbers::pi)) + " times)"};
+  // The Newell normal exactly (products of two floats are exact in double, summed by
+  // expansion arithmetic), rounded per component: the double sum above can be far off.
+  // Four vertices on the line y = 0, z = 2, (-1.9e-42, 0, 2) (0, 0, 2) (1.9e-21, 0, 2)
+  // (0, 0, 2), summed 2a + 2b - 2b - 2a to -2a: a "twice area" of 3.5e-42 against an
+  // extent of 1.9e-21 (fuzz_plucker 35cf7d01), and a light folded back on itself had the
+  // same (4602bcaf); the region oracle's exact normal was zero and its frame failed. A
+  // zero exact normal is zero area; the exact checks below take their axes from it.
+  Vec3d ne(0, 0, 0);
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    std::vector<double> e;
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3f &a = P[i], &b = P[(i + 1) % n];
+      expansion::grow_vector(e, double(a[k1]) * double(b[k2]));
+      expansion::grow_vector(e, -double(a[k2]) * double(b[k1]));
+    }
+    ne[k] = expansion::estimate(e);
+  }
+  if (ne.x == 0.0 && ne.y == 0.0 && ne.z == 0.0) return Error{where + ".polygon: zero area (exactly)"};
   // Convexity exactly, in the frame the region oracle uses (oracle/region_oracle.h "Exact
   // frame": the float vertices with the axis of the largest Newell component dropped).
   // The tolerance above admits a turn of -1e-9 |e0| |e1|; on a sliver light 4 wide and
@@ -121,34 +141,17 @@ Status prepare_light(Light& light, const std::string& where) {
   // rounding did to the normal; a corner may be exactly straight (the oracle drops it),
   // never turned against the normal.
   {
-    const double big = std::max({std::abs(nn.x), std::abs(nn.y), std::abs(nn.z)});
+    const double big = std::max({std::abs(ne.x), std::abs(ne.y), std::abs(ne.z)});
     for (int k = 0; k < 3; ++k) {
-      if (std::abs(nn[k]) < 0.5 * big) continue;
-      const int i1 = (k + 1) % 3, i2 = (k + 2) % 3, want = nn[k] > 0 ? 1 : -1;
+      if (std::abs(ne[k]) < 0.5 * big) continue;
+      const int i1 = (k + 1) % 3, i2 = (k + 2) % 3, want = ne[k] > 0 ? 1 : -1;
       for (size_t i = 0; i < n; ++i) {
         const Vec3f &a = P[(i + n - 1) % n], &b = P[i], &d = P[(i + 1) % n];
-        if (orient2d_exact_sign(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]) == -want)
+        const int o = orient2d_exact_sign(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]);
+        if (o == -want)
           return Error{fmt_index(where, "polygon", i) + ": polygon is not convex (reflex vertex in exact arithmetic)"};
       }
     }
-  }
-
-  // Zero area exactly: the Newell normal above is rounded, and vertices that lie exactly
-  // on one line can leave it nonzero (fuzz_plucker 35cf7d01: (-1.9e-42, 0, 2), (0, 0, 2),
-  // (1.9e-21, 0, 2), (0, 0, 2): 2a + 2b - 2b - 2a came out -2a in double, a "twice area"
-  // of 3.5e-42 against an extent of 1.9e-21, and the region oracle's exact normal was 0).
-  // Consecutive vertices are distinct (checked above), so the polygon lies on one line
-  // iff every corner is exactly straight in all three axis projections.
-  {
-    bool on_a_line = true;
-    for (int k = 0; k < 3 && on_a_line; ++k) {
-      const int i1 = (k + 1) % 3, i2 = (k + 2) % 3;
-      for (size_t i = 0; i < n && on_a_line; ++i) {
-        const Vec3f &a = P[(i + n - 1) % n], &b = P[i], &d = P[(i + 1) % n];
-        on_a_line = orient2d_exact_sign(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]) == 0;
-      }
-    }
-    if (on_a_line) return Error{where + ".polygon: zero area (every vertex on one line)"};
   }
 
   light.normal = Vec3f(unit);
