@@ -168,6 +168,13 @@ TEST(SceneJson, RejectsOutOfRangeIndicesAndBadLights) {
   auto folded = light(R"([["0","-0x1.ep-142",2],[0,0,2],["-0x1p-147","0x1.e4acdp-68",2],[0,0,2]])");
   ASSERT_FALSE(folded.ok());
   EXPECT_NE(folded.error().message.find("lights[0].polygon: zero area"), std::string::npos) << folded.error().message;
+  // fuzz_plucker d36d5128: one vertex 4.5e-44 off that line; the exact normal is along z
+  // and 2.9e-64 long, the double one was along -y. A sliver of aspect 1e-23: zero area
+  // for the relative tolerance, judged on the exact normal.
+  auto sliver_light = light(R"([["-0x1.ep-142",0,2],[0,"-0x1p-144",2],["0x1.e4acdp-68",0,2],[0,0,2]])");
+  ASSERT_FALSE(sliver_light.ok());
+  EXPECT_NE(sliver_light.error().message.find("lights[0].polygon: zero area"), std::string::npos)
+      << sliver_light.error().message;
   // A fold in a light of positive area: a square with a spike out and back (rejected by
   // the turning checks: a fold adds pi to the turning sum of a polygon of positive area).
   auto spike = light("[[-1,-1,2],[1,-1,2],[1,0,2],[2,0,2],[1,0,2],[1,1,2],[-1,1,2]]");

@@ -75,21 +75,36 @@ Status prepare_light(Light& light, const std::string& where) {
   if (light.samples > (1 << 20)) return Error{where + ".samples: " + std::to_string(light.samples) + " exceeds the limit 1048576"};
   if (light.jitter < 1 || light.jitter > 64) return Error{where + ".jitter: must be in 1..64"};
 
-  // Newell normal and centroid in double.
-  Vec3d nn(0, 0, 0), c(0, 0, 0);
-  for (size_t i = 0; i < n; ++i) {
-    Vec3d a = to_double(P[i]), b = to_double(P[(i + 1) % n]);
-    nn += cross(a, b);
-    c += a;
+  // The Newell normal exactly (products of two floats are exact in double, summed by
+  // expansion arithmetic), rounded per component, and the centroid in double. Summed in
+  // double the normal can be far off: four vertices on the line y = 0, z = 2,
+  // (-3.4e-43, 0, 2) (0, 0, 2) (6.4e-21, 0, 2) (0, 0, 2), summed 2a + 2b - 2b - 2a to
+  // -2a, a normal along -y and a "twice area" of 6.7e-43 (fuzz_plucker 35cf7d01); the
+  // same light folded back on itself (4602bcaf) or with a vertex 4.5e-44 off the line
+  // (d36d5128: exact normal along z, 2.9e-64 long) got the same wrong normal, and the
+  // region oracle's exact frame failed or plucker-bsp lifted the light along an axis
+  // whose exact normal component was 0. Zero is zero area; the area, the normal and the
+  // exact checks below use the exact normal.
+  Vec3d ne(0, 0, 0), c(0, 0, 0);
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    std::vector<double> e;
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3f &a = P[i], &b = P[(i + 1) % n];
+      expansion::grow_vector(e, double(a[k1]) * double(b[k2]));
+      expansion::grow_vector(e, -double(a[k2]) * double(b[k1]));
+    }
+    ne[k] = expansion::estimate(e);
   }
+  for (size_t i = 0; i < n; ++i) c += to_double(P[i]);
   c = c / double(n);
-  double twice_area = length(nn);
+  double twice_area = length(ne);
   AABB box;
   for (const auto& p : P) box.extend(p);
   double extent = box.diagonal();
   if (!(twice_area > 0.0) || twice_area <= 1e-12 * extent * extent)
     return Error{where + ".polygon: zero area"};
-  Vec3d unit = nn / twice_area;
+  Vec3d unit = ne / twice_area;
   // Planarity.
   for (size_t i = 0; i < n; ++i) {
     double dist = std::abs(dot(unit, to_double(P[i]) - c));
@@ -112,25 +127,6 @@ Status prepare_light(Light& light, const std::string& where) {
   }
   if (std::abs(turning - 2 * std::numbers::pi) > 1e-3)
     return Error{where + ".polygon: not a simple convex polygon (winds " + std::to_string(turning / (2 * std::numbers::pi)) + " times)"};
-  // The Newell normal exactly (products of two floats are exact in double, summed by
-  // expansion arithmetic), rounded per component: the double sum above can be far off.
-  // Four vertices on the line y = 0, z = 2, (-1.9e-42, 0, 2) (0, 0, 2) (1.9e-21, 0, 2)
-  // (0, 0, 2), summed 2a + 2b - 2b - 2a to -2a: a "twice area" of 3.5e-42 against an
-  // extent of 1.9e-21 (fuzz_plucker 35cf7d01), and a light folded back on itself had the
-  // same (4602bcaf); the region oracle's exact normal was zero and its frame failed. A
-  // zero exact normal is zero area; the exact checks below take their axes from it.
-  Vec3d ne(0, 0, 0);
-  for (int k = 0; k < 3; ++k) {
-    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    std::vector<double> e;
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3f &a = P[i], &b = P[(i + 1) % n];
-      expansion::grow_vector(e, double(a[k1]) * double(b[k2]));
-      expansion::grow_vector(e, -double(a[k2]) * double(b[k1]));
-    }
-    ne[k] = expansion::estimate(e);
-  }
-  if (ne.x == 0.0 && ne.y == 0.0 && ne.z == 0.0) return Error{where + ".polygon: zero area (exactly)"};
   // Convexity exactly, in the frame the region oracle uses (oracle/region_oracle.h "Exact
   // frame": the float vertices with the axis of the largest Newell component dropped).
   // The tolerance above admits a turn of -1e-9 |e0| |e1|; on a sliver light 4 wide and
