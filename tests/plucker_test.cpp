@@ -1595,9 +1595,10 @@ double lifted_gmp(const std::vector<Vec3f>& poly, int u, int v, const Vec3f& p, 
 TEST(PluckerGeometry, LiftedLightPlaneValuesAgreeWithRationalArithmetic) {
   // LiftedLight::value against GMP rationals: tilted quads (planar, and with one vertex a
   // few ulps off), planes through points near the light's plane and through its edges,
-  // at (u, v) points of the light given as float + double sums.
+  // at (u, v) points of the light given as float + double sums: the same sign and the
+  // value within 2^-29, by the double filter or the exact expansions (both are used).
   Rng rng(77);
-  int near_zero = 0, compared = 0;
+  int near_zero = 0, compared = 0, exact_used = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const double scale = std::ldexp(1.0, int(rng.below(41)) - 20);
     const double sx = rng.uniform(-2, 2), sy = rng.uniform(-2, 2);
@@ -1612,7 +1613,7 @@ TEST(PluckerGeometry, LiftedLightPlaneValuesAgreeWithRationalArithmetic) {
     const Vec3f r = on_plane(rng.uniform(-3, 3), rng.uniform(-3, 3));
     const Vec3f a = trial % 3 ? on_plane(rng.uniform(-1, 1), rng.uniform(-1, 1)) : Vec3f(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0, 2)) * scale);
     const Vec3f b = on_plane(rng.uniform(-1, 1), rng.uniform(-1, 1));
-    const LiftedLight::Plane pl = lift.plane(r, a, b);
+    LiftedLight::Plane pl = lift.plane(r, a, b);
     for (int k = 0; k < 8; ++k) {
       const Vec3f o = poly[0];
       const double lu = rng.uniform(-2, 2) * scale, lv = rng.uniform(-2, 2) * scale;
@@ -1621,15 +1622,18 @@ TEST(PluckerGeometry, LiftedLightPlaneValuesAgreeWithRationalArithmetic) {
       // The rational's (u, v) is the double sum, the evaluator's the exact one: compare
       // at points whose sum is exact in double.
       if (double(o[u]) + lu - double(o[u]) != lu || double(o[v]) + lv - double(o[v]) != lv) continue;
-      const ExactOrient got = LiftedLight::value(pl, o[u], lu, o[v], lv);
+      const ExactOrient got = lift.value(pl, o[u], lu, o[v], lv);
       EXPECT_EQ(got.sign, want) << trial << " " << k;
-      EXPECT_LE(std::abs(got.value - exact), 1e-12 * std::abs(exact)) << trial << " " << k;
+      EXPECT_LE(std::abs(got.value - exact), 0x1p-29 * std::abs(exact)) << trial << " " << k;
       near_zero += std::abs(exact) < 1e-6 * scale * scale * scale * scale * scale;
+      exact_used += pl.exact_ready;
       ++compared;
     }
   }
   EXPECT_GT(compared, 2000);
   EXPECT_GT(near_zero, 0);
+  EXPECT_GT(exact_used, 0);
+  EXPECT_LT(exact_used, compared);
 }
 
 TEST(PluckerSolver, ReceiverWithinRoundingOfATiltedLightsPlaneUsesTheExactLift) {

@@ -176,13 +176,62 @@ LiftedLight::LiftedLight(const Vec3f* poly, int m, int u, int v) : m_(m), u_(u),
       grow(n_[k], -double(a[k2]) * double(b[k1]));
       grow(s_[k], double(a[k]));
     }
+    nd_[k] = estimate(n_[k]);
   }
+  Expansion ns;
+  for (int k = 0; k < 3; ++k) add_product(ns, n_[k], s_[k]);
+  ns_ = estimate(ns);
+  nw_sign_ = n_[w_].empty() || n_[w_].back() > 0.0 ? 1 : -1;
 }
 
 LiftedLight::Plane LiftedLight::plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const {
+  // In double with forward error bounds (kU = 2^-53; each bound generous by a factor
+  // of about 2). d = q - p: exact or rounded once (|e| <= u |d|). c = d1 x d2: each
+  // product's rounding plus the d's, |e_c| <= 4 u (|d1_k1 d2_k2| + |d1_k2 d2_k1|). The
+  // rounded N_k and N . S are within 2 u of the exact values (expansions rounded).
+  constexpr double kU = 0x1p-53;
   Plane pl;
-  const Expansion& nw = n_[w_];
-  pl.nw_sign = nw.empty() || nw.back() > 0.0 ? 1 : -1;
+  pl.p = p;
+  pl.q1 = q1;
+  pl.q2 = q2;
+  double d1[3], d2[3], c[3], ecm[3];
+  for (int k = 0; k < 3; ++k) {
+    d1[k] = double(q1[k]) - double(p[k]);
+    d2[k] = double(q2[k]) - double(p[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+    const double x = d1[k1] * d2[k2], y = d1[k2] * d2[k1];
+    c[k] = x - y;
+    ecm[k] = 4.0 * kU * (std::abs(x) + std::abs(y));
+  }
+  const double m = double(m_);
+  const double nw = nd_[w_], enw = 2.0 * kU * std::abs(nw);
+  auto coefficient = [&](int axis, double& val, double& err) {
+    // m (N_w c_axis - N_axis c_w)
+    const double na = nd_[axis], ena = 2.0 * kU * std::abs(na);
+    const double x = nw * c[axis], y = na * c[w_];
+    val = m * (x - y);
+    err = m * (std::abs(nw) * ecm[axis] + enw * std::abs(c[axis]) + std::abs(na) * ecm[w_] + ena * std::abs(c[w_]) +
+               4.0 * kU * (std::abs(x) + std::abs(y)));
+  };
+  coefficient(u_, pl.b, pl.eb);
+  coefficient(v_, pl.c, pl.ec);
+  // A = c_w (N . S) - m N_w (c . p).
+  double cp = 0.0, ecp = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    cp += c[k] * double(p[k]);
+    ecp += (ecm[k] + 4.0 * kU * std::abs(c[k])) * std::abs(double(p[k]));
+  }
+  const double x = c[w_] * ns_, y = m * nw * cp;
+  pl.a = x - y;
+  pl.ea = ecm[w_] * std::abs(ns_) + std::abs(c[w_]) * 2.0 * kU * std::abs(ns_) + m * std::abs(nw) * ecp +
+          m * enw * std::abs(cp) + 4.0 * kU * (std::abs(x) + std::abs(y));
+  return pl;
+}
+
+void LiftedLight::make_exact(Plane& pl) const {
+  const Vec3f &p = pl.p, &q1 = pl.q1, &q2 = pl.q2;
   // c = (q1 - p) x (q2 - p), exactly.
   Expansion d1[3], d2[3], c[3];
   for (int k = 0; k < 3; ++k) {
@@ -195,35 +244,46 @@ LiftedLight::Plane LiftedLight::plane(const Vec3f& p, const Vec3f& q1, const Vec
     add_product(c[k], d1[k2], d2[k1], -1.0);
   }
   const double m = double(m_);
+  const Expansion& nw = n_[w_];
   // B = m (N_w c_u - N_u c_w), C = m (N_w c_v - N_v c_w).
   Expansion t;
   add_product(t, nw, c[u_]);
   add_product(t, n_[u_], c[w_], -1.0);
-  add_scaled(pl.b, t, m);
+  add_scaled(pl.xb, t, m);
   t.clear();
   add_product(t, nw, c[v_]);
   add_product(t, n_[v_], c[w_], -1.0);
-  add_scaled(pl.c, t, m);
+  add_scaled(pl.xc, t, m);
   // A = c_w (N . S) - m N_w (c . p).
   Expansion ns, cp, x;
   for (int k = 0; k < 3; ++k) add_product(ns, n_[k], s_[k]);
-  add_product(pl.a, c[w_], ns);
+  add_product(pl.xa, c[w_], ns);
   for (int k = 0; k < 3; ++k) add_scaled(cp, c[k], double(p[k]));
   add_product(x, nw, cp);
-  add_scaled(pl.a, x, m, -1.0);
-  return pl;
+  add_scaled(pl.xa, x, m, -1.0);
+  pl.exact_ready = true;
 }
 
-ExactOrient LiftedLight::value(const Plane& pl, float hu, double lu, float hv, double lv) {
-  Expansion g = pl.a;
-  add_scaled(g, pl.b, double(hu));
-  add_scaled(g, pl.b, lu);
-  add_scaled(g, pl.c, double(hv));
-  add_scaled(g, pl.c, lv);
+ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double lv) const {
+  // Double first: g = a + b hu + b lu + c hv + c lv, off by the coefficients' bounds
+  // times |u|, |v| plus the rounding of four products and four sums (8 u of the terms).
+  constexpr double kU = 0x1p-53;
+  const double t0 = pl.b * double(hu), t1 = pl.b * lu, t2 = pl.c * double(hv), t3 = pl.c * lv;
+  const double g = pl.a + t0 + t1 + t2 + t3;
+  const double err = pl.ea + pl.eb * (std::abs(double(hu)) + std::abs(lu)) + pl.ec * (std::abs(double(hv)) + std::abs(lv)) +
+                     8.0 * kU * (std::abs(pl.a) + std::abs(t0) + std::abs(t1) + std::abs(t2) + std::abs(t3));
+  if (std::abs(g) * 0x1p-30 > err) return ExactOrient{(g > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * g};
+  if (!pl.exact_ready) make_exact(pl);
+  thread_local Expansion e;
+  e = pl.xa;
+  add_scaled(e, pl.xb, double(hu));
+  add_scaled(e, pl.xb, lu);
+  add_scaled(e, pl.xc, double(hv));
+  add_scaled(e, pl.xc, lv);
   ExactOrient r;
-  if (g.empty()) return r;
-  r.sign = (g.back() > 0.0 ? 1 : -1) * pl.nw_sign;
-  r.value = double(pl.nw_sign) * estimate(g);
+  if (e.empty()) return r;
+  r.sign = (e.back() > 0.0 ? 1 : -1) * nw_sign_;
+  r.value = double(nw_sign_) * estimate(e);
   return r;
 }
 

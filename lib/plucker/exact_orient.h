@@ -93,18 +93,26 @@ class LiftedLight {
   int v() const { return v_; }
   bool valid() const { return m_ > 0; }
 
+  // One plane's affine function. The coefficients in double with forward error bounds
+  // answer most evaluations; the exact expansions are formed on the first evaluation
+  // those bounds leave open (an edge-on receiver: B and C cancel).
   struct Plane {
-    std::vector<double> a, b, c;  // expansions of A, B, C above
-    int nw_sign = 1;
+    double a = 0, b = 0, c = 0, ea = 0, eb = 0, ec = 0;  // A, B, C rounded, and bounds
+    Vec3f p{}, q1{}, q2{};
+    bool exact_ready = false;
+    std::vector<double> xa, xb, xc;  // exact A, B, C (once exact_ready)
   };
   // The affine function of the plane through p with normal (q1 - p) x (q2 - p).
   Plane plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const;
-  // sign(N_w) g at u = hu + lu, v = hv + lv: exact sign, value within a few ulps.
-  static ExactOrient value(const Plane& pl, float hu, double lu, float hv, double lv);
+  // sign(N_w) g at u = hu + lu, v = hv + lv: exact sign, value within 2^-30 (the double
+  // evaluation where its bound allows that, else the exact expansion rounded).
+  ExactOrient value(Plane& pl, float hu, double lu, float hv, double lv) const;
 
  private:
+  void make_exact(Plane& pl) const;
   std::vector<double> n_[3], s_[3];  // Newell normal and vertex sum, exact
-  int m_ = 0, u_ = 0, v_ = 1, w_ = 2;
+  double nd_[3] = {0, 0, 0}, ns_ = 0;  // N and N . S rounded (within a few ulps)
+  int m_ = 0, u_ = 0, v_ = 1, w_ = 2, nw_sign_ = 1;
 };
 
 // Its sign for plain float points.

@@ -429,11 +429,11 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   // lifted light point of x's (u, v) (LiftedLight: a vertex kept in 3D lies its rounding
   // off the light's plane, which decides the side for a receiver that close to the
   // plane), with accurate values: the clip below interpolates with them.
-  const LiftedLight::Plane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
+  LiftedLight::Plane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
                                         lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
   const int lu = lift.u(), lv = lift.v();
   auto value = [&](int k, const Vec3d& x) {
-    ExactOrient o = LiftedLight::value(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
+    ExactOrient o = lift.value(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
     if (o.sign == 0) return 0.0;
     double v = std::abs(o.value);
     if (!(v > 0.0)) v = std::numeric_limits<double>::min();
