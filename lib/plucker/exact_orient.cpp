@@ -12,23 +12,13 @@ namespace {
 
 using Expansion = std::vector<double>;  // nonoverlapping, increasing magnitude, no zeros
 
+using expansion::estimate;
 using expansion::grow;
 using expansion::two_product;
 using expansion::two_sum;
 
-// Grow-Expansion: e += b, keeping e nonoverlapping; zero components are dropped.
-void grow(Expansion& e, double b) {
-  double q = b;
-  size_t out = 0;
-  for (size_t i = 0; i < e.size(); ++i) {
-    double x, y;
-    two_sum(q, e[i], x, y);
-    q = x;
-    if (y != 0.0) e[out++] = y;
-  }
-  e.resize(out);
-  if (q != 0.0) e.push_back(q);
-}
+// Grow-Expansion on a vector (lib/geom/expansion.h grow_vector): e += b exactly.
+inline void grow(Expansion& e, double b) { expansion::grow_vector(e, b); }
 
 // (The fixed-array Grow-Expansion, lib/geom/expansion.h, serves orient3d_exact: no
 // allocation; the fuzz_plucker profile showed the vector form spending as much in the
@@ -148,12 +138,6 @@ void add_product(Expansion& out, const Expansion& e, const Expansion& f, double 
   for (double x : f) add_scaled(out, e, x, sign);
 }
 
-// The rounded value: components summed from the smallest (within a few ulps).
-double estimate(const Expansion& e) {
-  double v = 0.0;
-  for (double x : e) v += x;
-  return v;
-}
 
 Expansion float_difference(float a, float b) {
   Expansion e;
