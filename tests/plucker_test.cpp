@@ -1022,7 +1022,7 @@ TEST(PluckerGeometry, ExactOrientationAgreesWithRationalArithmetic) {
   // near-degenerate float quadruples: a point moved by a few ulps off the plane of three
   // others, at scales from 2^-100 to 2^100, and exactly coplanar grid points.
   Rng rng(31);
-  int nonzero = 0, zero = 0, filtered_off = 0;
+  int nonzero = 0, zero = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     double scale = std::ldexp(1.0, int(rng.below(201)) - 100);
     Vec3f p[4];
@@ -1035,20 +1035,12 @@ TEST(PluckerGeometry, ExactOrientationAgreesWithRationalArithmetic) {
     if (trial % 10 == 0) {  // exactly coplanar: small integers in the plane z = 3
       for (auto& v : p) v = Vec3f(float(rng.below(17)) - 8, float(rng.below(17)) - 8, 3);
     }
-    double exact = 0.0;
-    int want = orient3d_gmp_sign(p[0], p[1], p[2], p[3], &exact);
+    int want = orient3d_gmp_sign(p[0], p[1], p[2], p[3]);
     EXPECT_EQ(orient3d_exact_sign(p[0], p[1], p[2], p[3]), want) << trial;
-    // orient3d_accurate: the same sign and the value within 2^-29 of the rational one.
-    ExactOrient acc = orient3d_accurate(p[0], p[1], p[2], SumPoint(p[3]));
-    EXPECT_EQ(acc.sign, want) << trial;
-    EXPECT_LE(std::abs(acc.value - exact), 0x1p-29 * std::abs(exact)) << trial;
-    filtered_off += std::abs(orient3d_filtered(p[0], p[1], p[2], SumPoint(p[3])).value - exact) > 0x1p-29 * std::abs(exact);
     ++(want == 0 ? zero : nonzero);
   }
   EXPECT_GT(zero, 200);
   EXPECT_GT(nonzero, 1000);
-  // The filtered value decides the sign only: some of these cases are far less accurate.
-  EXPECT_GT(filtered_off, 0);
 }
 
 TEST(PluckerSolver, ReceiverFarBesideTheLightAndASliverReachingAway) {
@@ -1479,7 +1471,7 @@ TEST(PluckerSolver, GrazingFarReceiverSplitsWithAccurateValues) {
   // around the light hides all of it. The exact path split fragments where the orient3d
   // values change sign, interpolating with filtered values that decide the sign but
   // can be off by most of themselves: 0.1% of the light stayed visible (fraction
-  // 0.00117 for 0). It interpolates with orient3d_accurate now.
+  // 0.00117 for 0). It interpolates with values accurate to 2^-30 now (LiftedLight).
   const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"pouch-0",
 "meshes":[{"vertices":[["0x1.6p-2","0x1p-5","0x1.8p+0"],["0x1.3p-1","-0x0p+0","0x1.14p+1"],["0x1.4p-3","-0x1p-2","0x1.78p+0"],["0x1.2p-2","-0x1p-1","0x1.1p+1"],["-0x1.4p-3","-0x1p-2","0x1.78p+0"],["-0x1.eb6f74p-26","-0x1p-1","0x1.1p+1"],["-0x1.6p-2","0x1p-5","0x1.8p+0"],["-0x1.3p-1","-0x0p+0","0x1.14p+1"],["-0x1.4p-3","0x1.4p-2","0x1.8p+0"],["0x1p-31","0x1p-1","0x1.1cp+1"],["0x1.4p-3","0x1.4p-2","0x1.8p+0"],["0x1.2p-2","0x1p-1","0x1.1cp+1"],["0x0p+0","-0x1p-5","0x1.4cp+1"]],
 "triangles":[[0,1,2],[2,1,3],[2,3,4],[4,3,5],[4,5,6],[6,5,7],[6,7,8],[8,7,9],[8,9,10],[10,9,11],[10,11,0],[0,11,1],[1,12,3],[3,12,5],[5,12,7],[7,12,9],[9,12,11],[11,12,1]]}],

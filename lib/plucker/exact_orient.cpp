@@ -113,13 +113,6 @@ ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf,
   return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
 }
 
-ExactOrient orient3d_accurate(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
-  double bound = 0.0;
-  const double val = orient3d_estimate(af, bf, cf, d, bound);
-  if (std::abs(val) * 0x1p-30 > bound) return ExactOrient{val > 0.0 ? 1 : -1, val};
-  return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
-}
-
 namespace {
 
 // e * x for a double x, exactly: each component's Two-Product grown in.

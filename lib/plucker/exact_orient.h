@@ -50,14 +50,6 @@ ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint&
 // double evaluation (within its bound of the exact one).
 ExactOrient orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& d);
 
-// The same with the value accurate to 2^-30 relative: the double evaluation only where
-// its bound is below 2^-30 of it, else the exact expansion (rounded within a few ulps).
-// For callers that interpolate with the value (the exact near-plane path splits
-// fragments where it changes sign): a filtered value decides the sign but may be off
-// by most of itself (fuzz_plucker 6b11d2a3: a receiver 5.8e22 away at a grazing angle,
-// split points moved far enough to leave 0.1% of a light visible that a pouch hides).
-ExactOrient orient3d_accurate(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& d);
-
 // The light's exact plane, parametrised by two coordinate axes: the region oracle's light
 // (oracle/region_oracle.h "Exact frame") is the polygon of its float vertices' (u, v)
 // coordinates lifted along the third axis w onto the plane of the Newell normal

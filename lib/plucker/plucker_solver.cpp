@@ -408,11 +408,14 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
 // stabbing side of every edge line (lines.h: side(rw -> x, t_e -> t_e+1) has the sign
 // -sigma for lines crossing from side sigma). Then the crossing point lies strictly
 // inside the triangle and strictly between rw and x, so no slab clipping is needed.
-// Every sign is exact (orient3d_exact on world coordinates, x as origin + local summed
-// exactly); new vertices are interpolated in double from the rounded exact values and
-// rounded to float, so only points within rounding of a plane can be misjudged. Used for
-// receivers within float rounding of the triangle's plane, where float cannot tell which
-// way the planes through rw and the edges lean.
+// Every sign is exact, taken at the region oracle's own light point of x: the exact
+// lift onto the light's plane of x's (u, v) coordinates (origin + local, summed
+// exactly; exact_orient.h LiftedLight); new vertices are interpolated in double from
+// values accurate to 2^-30, so only points within rounding of a plane can be
+// misjudged. Used where float cannot tell which way the planes through rw and the
+// edges lean: receivers within rounding of a triangle's plane, extreme and undecided
+// receivers, and triangles reaching far away or lying within rounding of the light's
+// plane (shade_group).
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
                              const PlaneFrame& frame, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
                              std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur) {
@@ -430,7 +433,7 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   // off the light's plane, which decides the side for a receiver that close to the
   // plane), with accurate values: the clip below interpolates with them.
   LiftedLight::Plane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
-                                        lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
+                                  lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
   const int lu = lift.u(), lv = lift.v();
   auto value = [&](int k, const Vec3d& x) {
     ExactOrient o = lift.value(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
