@@ -775,8 +775,16 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // extent that counts is the light's width (area over its longest side) when that
     // is smaller: a sliver light 5.4e8 long and 6e-4 wide seen from 1.07e8 below
     // (fuzz_plucker e49b6000...) was answered fully visible, exactly hidden.
+    // For a long light the grazing bound is tighter by its aspect (extent over width):
+    // a shadow line running along the long axis meets the light's long edge at an angle
+    // of about width / extent, so a lateral error moves where it ends by extent / width
+    // times that (fuzz_plucker 685e5d6f...: a light 288k long and 0.66 wide seen from
+    // 6.25e5 away and 0.8 below its plane, 2^19.6 times its height; a sliver occluder
+    // lying along the light left a shadow line whose end on the long edge was 2400 off,
+    // fraction 0.1845 for 0.1825).
     const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
-    const bool extreme = !(far <= 0x1p20 * hr) || !(far <= 0x1p20 * light_width);
+    const double aspect = std::max(1.0, double(lf.extent) / light_width);
+    const bool extreme = !(far * aspect <= 0x1p20 * hr) || !(far <= 0x1p20 * light_width);
     auto shade_exact = [&]() {
       ++tot.exact_receivers;
       frags.clear();
