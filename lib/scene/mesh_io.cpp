@@ -260,6 +260,17 @@ std::string prescan_off(std::istream& in, std::string& canonical) {
   return {};
 }
 
+// Whether a decimal integer (optional '-', then digits) fits a 32-bit int, as
+// `std::istream >> int` requires.
+bool fits_int(const std::string& field) {
+  const bool negative = field[0] == '-';
+  size_t k = negative ? 1 : 0;
+  while (k + 1 < field.size() && field[k] == '0') ++k;  // leading zeros do not count
+  if (field.size() - k > 10) return false;
+  const uint64_t v = std::stoull(field.substr(k));
+  return v <= (negative ? 2147483648ull : 2147483647ull);
+}
+
 std::string prescan_obj(std::istream& in) {
   std::string line;
   size_t lineno = 0, vertices = 0, faces = 0;
@@ -283,6 +294,9 @@ std::string prescan_obj(std::istream& in) {
       // reads every token of the line (a `#` does not end it) and skips those whose
       // vertex part is not a number. So a face needs a valid reference before any `#`
       // (`f   #4 /1(f0` asserted; `f #4 1 2 3` reads a triangle but is refused here too).
+      // The reader takes each number as an int and skips one that does not fit, so a
+      // reference out of int range counts as bad too (fuzz_mesh_files ee5ddf7f:
+      // `f  42949672951 #4 /1` left the face without a vertex before `/1` and asserted).
       ++faces;
       size_t refs = 0;
       for (std::string t; ss >> t; ++refs) {
@@ -293,7 +307,7 @@ std::string prescan_obj(std::istream& in) {
           if (k < t.size() && t[k] != '/') continue;
           const std::string field = t.substr(start, k - start);
           const bool integer = !field.empty() && field.find_first_not_of("0123456789", field[0] == '-' ? 1 : 0) ==
-                                                     std::string::npos && field != "-";
+                                                     std::string::npos && field != "-" && fits_int(field);
           // The vertex part is required; texture (part 1) and normal (part 2) may be empty.
           ok = part <= 2 && (integer || (part > 0 && field.empty()));
           ++part;
