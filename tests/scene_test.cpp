@@ -526,6 +526,40 @@ TEST(MeshFiles, ObjFaceReferencesAreCheckedBeforeOpenMesh) {
   }
 }
 
+// OpenMesh's OBJ reader removes every repeated vertex of a face (`f 1 2 2` vanished,
+// `f 1 2 1 3` became the triangle 1 2 3) and reads on past a `#` (`f 1 2 3 # 4` became a
+// quad); a line starting with a form feed hid a vertex and shifted later indices. The
+// faces are now read as the file states them, like the same faces in an OFF file.
+TEST(MeshFiles, ObjFacesAreReadAsTheFileStatesThem) {
+  fs::path d = temp_dir();
+  const std::string verts = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
+  std::ofstream(d / "f.obj") << verts << "f 1 2 2\nf 1 2 1 3\nf 1 2 3 # 4\nf -4 -3 -1 #\nf 4/1 3//2 2/3/4\n";
+  auto soup = read_polygon_file((d / "f.obj").string());
+  ASSERT_TRUE(soup.ok()) << soup.error().message;
+  const std::vector<std::vector<uint32_t>> want = {{0, 1, 1}, {0, 1, 0, 2}, {0, 1, 2}, {0, 1, 3}, {3, 2, 1}};
+  EXPECT_EQ(soup->faces, want);
+  std::ofstream(d / "f.off") << "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 1\n4 0 1 0 2\n";
+  auto off = read_polygon_file((d / "f.off").string());
+  ASSERT_TRUE(off.ok()) << off.error().message;
+  EXPECT_EQ(off->faces, (std::vector<std::vector<uint32_t>>{want[0], want[1]}));
+  // Forward references are legal OBJ (every vertex is known before faces are resolved).
+  std::ofstream(d / "fwd.obj") << "f 1 2 3\n" << verts;
+  auto fwd = read_polygon_file((d / "fwd.obj").string());
+  ASSERT_TRUE(fwd.ok()) << fwd.error().message;
+  EXPECT_EQ(fwd->faces, (std::vector<std::vector<uint32_t>>{{0, 1, 2}}));
+
+  struct Case { const char* text; const char* message; };
+  for (const Case& c : {Case{"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 9 9\n", "line 4: face 0: vertex index '9' out of range (3 vertices)"},
+                        Case{"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", "line 4: face 0: vertex index '-4' out of range"},
+                        Case{"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4: face 0: vertex index '0' out of range"},
+                        Case{"\fv 5 5 5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "line 1: starts with a form feed"}}) {
+    std::ofstream(d / "bad.obj") << c.text;
+    auto r = read_polygon_file((d / "bad.obj").string());
+    ASSERT_FALSE(r.ok()) << c.text;
+    EXPECT_NE(r.error().message.find(std::string("bad.obj: ") + c.message), std::string::npos) << r.error().message;
+  }
+}
+
 TEST(MeshFiles, SceneReferencesMeshFilesRelativeToTheJson) {
   fs::path d = temp_dir();
   std::ofstream(d / "tri.obj") << "v -1 -1 1\nv 1 -1 1\nv 0 1 1\nf 1 2 3\n";

@@ -34,6 +34,10 @@ class SoupImporter : public OIO::BaseImporter {
  public:
   PolygonSoup soup;
   std::string error;  // first problem seen
+  // OBJ: the faces come from prescan_obj; OpenMesh's are counted (its reader asks for
+  // n_faces and attaches texture coordinates to them) but not kept.
+  bool faces_elsewhere = false;
+  size_t faces_seen = 0;
 
   VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
     soup.vertices.emplace_back(double(p[0]), double(p[1]), double(p[2]));
@@ -50,6 +54,7 @@ class SoupImporter : public OIO::BaseImporter {
   }
   HalfedgeHandle add_edge(VertexHandle, VertexHandle) override { return HalfedgeHandle(); }
   FaceHandle add_face(const VHandles& idx) override {
+    if (faces_elsewhere) return FaceHandle(int(faces_seen++));
     std::vector<uint32_t> f;
     f.reserve(idx.size());
     for (const auto& vh : idx) {
@@ -101,7 +106,7 @@ class SoupImporter : public OIO::BaseImporter {
   void set_status(FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
   void add_texture_information(int, std::string) override {}
   size_t n_vertices() const override { return soup.vertices.size(); }
-  size_t n_faces() const override { return soup.faces.size(); }
+  size_t n_faces() const override { return faces_elsewhere ? faces_seen : soup.faces.size(); }
   size_t n_edges() const override { return 0; }
 };
 
@@ -271,11 +276,31 @@ bool fits_int(const std::string& field) {
   return v <= (negative ? 2147483648ull : 2147483647ull);
 }
 
-std::string prescan_obj(std::istream& in) {
+// The faces of an OBJ file as the file states them (prescan_obj). OpenMesh's OBJ reader
+// changes faces without a word: it removes every repeated vertex of a face (`f 1 2 1 3`
+// becomes the triangle 1 2 3, `f 1 2 2` disappears, and an index out of range inside a
+// face that disappears is never seen) and it reads on past a `#` (`f 1 2 3 # 4` became
+// the quad 1 2 3 4). So OpenMesh reads the vertices and the attributes, and the faces
+// come from here, one list of 0-based vertex indices per `f` line, repeats kept for the
+// repair's report (`repeated_vertex_faces`, as for OFF and PLY).
+struct ObjFaces {
+  size_t vertices = 0;  // `v` lines, counted as OpenMesh counts them
+  std::vector<std::vector<uint32_t>> faces;
+};
+
+std::string prescan_obj(std::istream& in, ObjFaces& out) {
   std::string line;
   size_t lineno = 0, vertices = 0, faces = 0;
+  struct Ref { size_t line, face; int64_t index; std::string token; };
+  std::vector<Ref> positive;  // forward references are legal: checked once every `v` is counted
   while (std::getline(in, line)) {
     ++lineno;
+    // OpenMesh trims " \t\r\n" and then skips a line that starts with any other
+    // whitespace (form feed, vertical tab) as if it were a comment: a `v` line so hidden
+    // would shift every later vertex index, so such a line is refused.
+    const size_t first = line.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && std::isspace(static_cast<unsigned char>(line[first])))
+      return "line " + std::to_string(lineno) + ": starts with a form feed or vertical tab";
     std::istringstream ss(line);
     std::string kw;
     if (!(ss >> kw)) continue;
@@ -297,12 +322,13 @@ std::string prescan_obj(std::istream& in) {
       // The reader takes each number as an int and skips one that does not fit, so a
       // reference out of int range counts as bad too (fuzz_mesh_files ee5ddf7f:
       // `f  42949672951 #4 /1` left the face without a vertex before `/1` and asserted).
-      ++faces;
-      size_t refs = 0;
-      for (std::string t; ss >> t; ++refs) {
+      const size_t face = faces++;
+      std::vector<uint32_t> idx;
+      for (std::string t; ss >> t;) {
         if (t[0] == '#') break;
         size_t part = 0, start = 0;
         bool ok = true;
+        std::string vertex_part;
         for (size_t k = 0; k <= t.size() && ok; ++k) {
           if (k < t.size() && t[k] != '/') continue;
           const std::string field = t.substr(start, k - start);
@@ -310,16 +336,31 @@ std::string prescan_obj(std::istream& in) {
                                                      std::string::npos && field != "-" && fits_int(field);
           // The vertex part is required; texture (part 1) and normal (part 2) may be empty.
           ok = part <= 2 && (integer || (part > 0 && field.empty()));
+          if (part == 0) vertex_part = field;
           ++part;
           start = k + 1;
         }
         if (!ok)
-          return "line " + std::to_string(lineno) + ": face " + std::to_string(faces - 1) + ": bad vertex reference '" +
+          return "line " + std::to_string(lineno) + ": face " + std::to_string(face) + ": bad vertex reference '" +
                  t.substr(0, 32) + "'";
+        // OBJ numbers vertices from 1; -k is the k-th vertex line before this one.
+        const int64_t v = std::stoll(vertex_part);
+        const int64_t resolved = v < 0 ? int64_t(vertices) + v : v - 1;
+        if (v == 0 || resolved < 0)
+          return "line " + std::to_string(lineno) + ": face " + std::to_string(face) + ": vertex index '" +
+                 vertex_part + "' out of range (" + std::to_string(vertices) + " vertices before it)";
+        if (v > 0) positive.push_back({lineno, face, resolved, vertex_part});
+        idx.push_back(uint32_t(resolved));
       }
-      if (refs == 0) return "line " + std::to_string(lineno) + ": face " + std::to_string(faces - 1) + ": no vertex references";
+      if (idx.empty()) return "line " + std::to_string(lineno) + ": face " + std::to_string(face) + ": no vertex references";
+      out.faces.push_back(std::move(idx));
     }
   }
+  for (const Ref& r : positive)
+    if (size_t(r.index) >= vertices)
+      return "line " + std::to_string(r.line) + ": face " + std::to_string(r.face) + ": vertex index '" + r.token +
+             "' out of range (" + std::to_string(vertices) + " vertices)";
+  out.vertices = vertices;
   return {};
 }
 
@@ -579,11 +620,11 @@ std::string prescan_ply(const std::string& data) {
 }
 
 // `canonical` receives the text to hand to OpenMesh instead of the file (OFF only).
-std::string prescan_mesh_file(const std::string& path, const std::string& ext, std::string& canonical) {
+std::string prescan_mesh_file(const std::string& path, const std::string& ext, std::string& canonical, ObjFaces& obj) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "cannot open file";
   if (ext == ".off") return prescan_off(in, canonical);
-  if (ext == ".obj") return prescan_obj(in);
+  if (ext == ".obj") return prescan_obj(in, obj);
   if (ext == ".ply") {
     std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     return prescan_ply(data);
@@ -626,9 +667,11 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
     return Error{path + ": unsupported mesh format '" + ext + "' (OBJ, OFF, PLY, STL)"};
 
   std::string canonical;
-  if (auto pre = prescan_mesh_file(path, ext, canonical); !pre.empty()) return Error{path + ": " + pre};
+  ObjFaces obj;
+  if (auto pre = prescan_mesh_file(path, ext, canonical, obj); !pre.empty()) return Error{path + ": " + pre};
 
   SoupImporter imp;
+  imp.faces_elsewhere = ext == ".obj";
   bool ok = false;
   {
     std::lock_guard<std::mutex> lock(io_mutex());
@@ -662,6 +705,12 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
   }
   if (!imp.error.empty()) return Error{path + ": " + imp.error};
   if (!ok) return Error{path + ": malformed or unreadable mesh file"};
+  if (imp.faces_elsewhere) {
+    if (imp.soup.vertices.size() != obj.vertices)
+      return Error{path + ": OpenMesh read " + std::to_string(imp.soup.vertices.size()) + " vertices, the file has " +
+                   std::to_string(obj.vertices) + " vertex lines"};
+    imp.soup.faces = std::move(obj.faces);
+  }
   for (size_t i = 0; i < imp.soup.vertices.size(); ++i) {
     const Vec3d& v = imp.soup.vertices[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
