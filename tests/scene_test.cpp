@@ -560,6 +560,55 @@ TEST(MeshFiles, ObjFacesAreReadAsTheFileStatesThem) {
   }
 }
 
+// OpenMesh's STL readers drop every facet whose corners are not three distinct
+// positions, so a file's degenerate facets never reached the repair's report; its ASCII
+// reader takes the three lines after any line containing "outer" as vertices, whatever
+// they say (`outer loop` then `endloop` left the coordinates uninitialised). Facets are
+// now rebuilt from the file, degenerate ones kept, and such files are refused.
+TEST(MeshFiles, StlFacetsAreReadAsTheFileStatesThem) {
+  fs::path d = temp_dir();
+  auto facet = [](const char* a, const char* b, const char* c) {
+    return std::string("facet normal 0 0 1\nouter loop\nvertex ") + a + "\nvertex " + b + "\nvertex " + c +
+           "\nendloop\nendfacet\n";
+  };
+  std::ofstream(d / "a.stl") << "solid t\n" << facet("0 0 0", "1 0 0", "1 0 0") << facet("0 0 0", "1 0 0", "0 1 0")
+                             << "endsolid t\n";
+  auto a = read_polygon_file((d / "a.stl").string());
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  EXPECT_EQ(a->vertices.size(), 3u);
+  EXPECT_EQ(a->faces, (std::vector<std::vector<uint32_t>>{{0, 1, 1}, {0, 1, 2}}));
+
+  // The same two facets in binary STL.
+  {
+    std::string bin(80, ' ');
+    const uint32_t n = 2;
+    bin.append(reinterpret_cast<const char*>(&n), 4);
+    const float tri[2][12] = {{0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0}, {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0}};
+    for (const auto& t : tri) {
+      bin.append(reinterpret_cast<const char*>(t), 48);
+      bin.append(2, '\0');
+    }
+    std::ofstream(d / "b.stl", std::ios::binary) << bin;
+  }
+  auto b = read_polygon_file((d / "b.stl").string());
+  ASSERT_TRUE(b.ok()) << b.error().message;
+  EXPECT_EQ(b->faces, a->faces);
+
+  struct Case { std::string text; const char* message; };
+  for (const Case& c : {Case{"solid outer_wall\n" + facet("0 0 0", "1 0 0", "0 1 0") + "endsolid\n",
+                             "line 2: facet 0: expected 'vertex x y z'"},
+                        Case{"solid t\nfacet normal 0 0 1\nouter loop\nendloop\nendfacet\nendsolid\n",
+                             "line 4: facet 0: expected 'vertex x y z'"},
+                        Case{"solid t\nvertex 0 0 0\n" + facet("0 0 0", "1 0 0", "0 1 0") + "endsolid\n",
+                             "line 2: vertex 0 outside an 'outer loop'"},
+                        Case{"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "facet 0: file ends inside"}}) {
+    std::ofstream(d / "bad.stl") << c.text;
+    auto r = read_polygon_file((d / "bad.stl").string());
+    ASSERT_FALSE(r.ok()) << c.text;
+    EXPECT_NE(r.error().message.find(std::string("bad.stl: ") + c.message), std::string::npos) << r.error().message;
+  }
+}
+
 TEST(MeshFiles, SceneReferencesMeshFilesRelativeToTheJson) {
   fs::path d = temp_dir();
   std::ofstream(d / "tri.obj") << "v -1 -1 1\nv 1 -1 1\nv 0 1 1\nf 1 2 3\n";

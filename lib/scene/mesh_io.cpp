@@ -8,6 +8,7 @@
 #include <OpenMesh/Core/System/omstream.hh>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cctype>
 #include <cmath>
@@ -16,6 +17,8 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <map>
 #include <mutex>
 #include <sstream>
 
@@ -364,21 +367,51 @@ std::string prescan_obj(std::istream& in, ObjFaces& out) {
   return {};
 }
 
-std::string prescan_ascii_stl(std::istream& in) {
+// The facets of an STL file, three float positions each, in file order. OpenMesh's STL
+// readers merge equal positions into one vertex and then drop every facet whose three
+// vertices are not distinct, without a word, so a file's degenerate facets never
+// reached the repair's report. OpenMesh still reads the vertices; the faces are rebuilt
+// from these facets (read_polygon_file), degenerate ones included.
+using StlFacets = std::vector<std::array<Vec3f, 3>>;
+
+// ASCII STL as OpenMesh 9 reads it: after any line containing "outer" (or "OUTER") it
+// takes the next three lines as vertices, skipping their first word and reading three
+// floats, whatever they say; a failed read leaves the previous (first time:
+// uninitialised) coordinates. So those three lines must be `vertex x y z`, and a line
+// such as `solid outer_wall` that only looks like a loop is refused rather than read
+// as one.
+std::string prescan_ascii_stl(std::istream& in, StlFacets& facets) {
   std::string line;
   size_t lineno = 0, vertices = 0;
   while (std::getline(in, line)) {
     ++lineno;
-    std::istringstream ss(line);
-    std::string kw;
-    if (!(ss >> kw) || kw != "vertex") continue;
-    for (int k = 0; k < 3; ++k) {
-      std::string t;
-      if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
-      double x;
-      if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
+    if (line.find("outer") == std::string::npos && line.find("OUTER") == std::string::npos) {
+      std::istringstream ss(line);
+      std::string kw;
+      if (ss >> kw && kw == "vertex")
+        return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + " outside an 'outer loop'";
+      continue;
     }
-    ++vertices;
+    std::array<Vec3f, 3> facet;
+    for (int c = 0; c < 3; ++c) {
+      if (!std::getline(in, line))
+        return "facet " + std::to_string(facets.size()) + ": file ends inside its 'outer loop'";
+      ++lineno;
+      std::istringstream ss(line);
+      std::string kw;
+      if (!(ss >> kw) || kw != "vertex")
+        return "line " + std::to_string(lineno) + ": facet " + std::to_string(facets.size()) +
+               ": expected 'vertex x y z' (the line after 'outer loop' and the two after it are vertices)";
+      for (int k = 0; k < 3; ++k) {
+        std::string t;
+        if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
+        double x;
+        if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
+        facet[size_t(c)][k] = std::strtof(t.c_str(), nullptr);  // as the stream's float read rounds it
+      }
+      ++vertices;
+    }
+    facets.push_back(facet);
   }
   return {};
 }
@@ -620,7 +653,8 @@ std::string prescan_ply(const std::string& data) {
 }
 
 // `canonical` receives the text to hand to OpenMesh instead of the file (OFF only).
-std::string prescan_mesh_file(const std::string& path, const std::string& ext, std::string& canonical, ObjFaces& obj) {
+std::string prescan_mesh_file(const std::string& path, const std::string& ext, std::string& canonical, ObjFaces& obj,
+                              StlFacets& stl) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "cannot open file";
   if (ext == ".off") return prescan_off(in, canonical);
@@ -641,12 +675,27 @@ std::string prescan_mesh_file(const std::string& path, const std::string& ext, s
     std::memcpy(&n, head + 80, 4);
     binary = size == 84 + 50ull * n;
   }
-  if (binary) return {};
+  if (binary) {
+    // Binary STL: 84 header bytes, then per facet a normal, three vertices (12 floats,
+    // little-endian as OpenMesh reads them on this host) and 2 attribute bytes.
+    uint32_t n;
+    std::memcpy(&n, head + 80, 4);
+    stl.reserve(n);
+    char rec[50];
+    for (uint32_t f = 0; f < n; ++f) {
+      if (!in.read(rec, 50)) return "facet " + std::to_string(f) + ": file ends early";
+      std::array<Vec3f, 3> facet;
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) std::memcpy(&facet[size_t(c)][k], rec + 12 + 12 * c + 4 * k, 4);
+      stl.push_back(facet);
+    }
+    return {};
+  }
   if (std::string(head, head + std::min<size_t>(5, size_t(in.gcount()))) != "solid")
     return "neither ASCII STL ('solid' header) nor binary STL (size " + std::to_string(size) + " does not match the triangle count)";
   in.clear();
   in.seekg(0);
-  return prescan_ascii_stl(in);
+  return prescan_ascii_stl(in, stl);
 }
 
 std::mutex& io_mutex() {
@@ -668,10 +717,11 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
 
   std::string canonical;
   ObjFaces obj;
-  if (auto pre = prescan_mesh_file(path, ext, canonical, obj); !pre.empty()) return Error{path + ": " + pre};
+  StlFacets stl;
+  if (auto pre = prescan_mesh_file(path, ext, canonical, obj, stl); !pre.empty()) return Error{path + ": " + pre};
 
   SoupImporter imp;
-  imp.faces_elsewhere = ext == ".obj";
+  imp.faces_elsewhere = ext == ".obj" || ext == ".stl";
   bool ok = false;
   {
     std::lock_guard<std::mutex> lock(io_mutex());
@@ -705,16 +755,44 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
   }
   if (!imp.error.empty()) return Error{path + ": " + imp.error};
   if (!ok) return Error{path + ": malformed or unreadable mesh file"};
-  if (imp.faces_elsewhere) {
-    if (imp.soup.vertices.size() != obj.vertices)
-      return Error{path + ": OpenMesh read " + std::to_string(imp.soup.vertices.size()) + " vertices, the file has " +
-                   std::to_string(obj.vertices) + " vertex lines"};
-    imp.soup.faces = std::move(obj.faces);
-  }
   for (size_t i = 0; i < imp.soup.vertices.size(); ++i) {
     const Vec3d& v = imp.soup.vertices[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
       return Error{path + ": vertex " + std::to_string(i) + ": coordinate is NaN or infinite"};
+  }
+  if (ext == ".stl") {
+    // OpenMesh's own merge (STLReader.cc CmpVec with eps FLT_MIN: coordinates within
+    // FLT_MIN are equal), first position wins, so every facet corner finds the vertex
+    // OpenMesh made for it.
+    struct Cmp {
+      bool operator()(const Vec3f& a, const Vec3f& b) const {
+        const float eps = std::numeric_limits<float>::min();
+        if (std::fabs(a.x - b.x) <= eps) {
+          if (std::fabs(a.y - b.y) <= eps) return a.z < b.z - eps;
+          return a.y < b.y - eps;
+        }
+        return a.x < b.x - eps;
+      }
+    };
+    std::map<Vec3f, uint32_t, Cmp> index;
+    for (size_t i = 0; i < imp.soup.vertices.size(); ++i) index.emplace(Vec3f(imp.soup.vertices[i]), uint32_t(i));
+    imp.soup.faces.clear();
+    imp.soup.faces.reserve(stl.size());
+    for (size_t f = 0; f < stl.size(); ++f) {
+      std::vector<uint32_t> face;
+      for (const Vec3f& p : stl[f]) {
+        auto it = index.find(p);
+        if (it == index.end()) return Error{path + ": facet " + std::to_string(f) + ": a corner OpenMesh did not read"};
+        face.push_back(it->second);
+      }
+      imp.soup.faces.push_back(std::move(face));
+    }
+  }
+  if (ext == ".obj") {
+    if (imp.soup.vertices.size() != obj.vertices)
+      return Error{path + ": OpenMesh read " + std::to_string(imp.soup.vertices.size()) + " vertices, the file has " +
+                   std::to_string(obj.vertices) + " vertex lines"};
+    imp.soup.faces = std::move(obj.faces);
   }
   return std::move(imp.soup);
 }
