@@ -295,7 +295,7 @@ std::string prescan_obj(std::istream& in, ObjFaces& out) {
   std::string line;
   size_t lineno = 0, vertices = 0, faces = 0;
   struct Ref { size_t line, face; int64_t index; std::string token; };
-  std::vector<Ref> positive;  // forward references are legal: checked once every `v` is counted
+  std::vector<Ref> forward;  // references past the vertices read so far (legal OBJ): checked at the end
   while (std::getline(in, line)) {
     ++lineno;
     // OpenMesh trims " \t\r\n" and then skips a line that starts with any other
@@ -352,14 +352,14 @@ std::string prescan_obj(std::istream& in, ObjFaces& out) {
         if (v == 0 || resolved < 0)
           return "line " + std::to_string(lineno) + ": face " + std::to_string(face) + ": vertex index '" +
                  vertex_part + "' out of range (" + std::to_string(vertices) + " vertices before it)";
-        if (v > 0) positive.push_back({lineno, face, resolved, vertex_part});
+        if (size_t(resolved) >= vertices) forward.push_back({lineno, face, resolved, vertex_part});
         idx.push_back(uint32_t(resolved));
       }
       if (idx.empty()) return "line " + std::to_string(lineno) + ": face " + std::to_string(face) + ": no vertex references";
       out.faces.push_back(std::move(idx));
     }
   }
-  for (const Ref& r : positive)
+  for (const Ref& r : forward)
     if (size_t(r.index) >= vertices)
       return "line " + std::to_string(r.line) + ": face " + std::to_string(r.face) + ": vertex index '" + r.token +
              "' out of range (" + std::to_string(vertices) + " vertices)";
