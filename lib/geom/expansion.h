@@ -54,6 +54,22 @@ inline void grow_vector(std::vector<double>& e, double b) {
   if (q != 0.0) e.push_back(q);
 }
 
+// Component k of a polygon's Newell normal, sum_i (a[k1] b[k2] - a[k2] b[k1]) over its
+// edges (a, b), as an exact expansion: for float coordinates each product is exact in
+// double and the sum is grown exactly. P: any point type with operator[] over floats.
+template <class P>
+std::vector<double> newell_component(const P* poly, size_t m, int k) {
+  const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+  std::vector<double> e;
+  for (size_t i = 0; i < m; ++i) {
+    const P& a = poly[i];
+    const P& b = poly[(i + 1) % m];
+    grow_vector(e, double(a[k1]) * double(b[k2]));
+    grow_vector(e, -double(a[k2]) * double(b[k1]));
+  }
+  return e;
+}
+
 inline double estimate(const std::vector<double>& e) {
   double v = 0.0;
   for (double x : e) v += x;

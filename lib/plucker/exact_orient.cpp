@@ -145,19 +145,13 @@ Expansion float_difference(float a, float b) {
 
 LiftedLight::LiftedLight(const Vec3f* poly, int m, int u, int v) : m_(m), u_(u), v_(v), w_(3 - u - v) {
   for (int k = 0; k < 3; ++k) {
-    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    for (int i = 0; i < m; ++i) {
-      const Vec3f& a = poly[i];
-      const Vec3f& b = poly[(i + 1) % m];
-      grow(n_[k], double(a[k1]) * double(b[k2]));  // products of two floats: exact
-      grow(n_[k], -double(a[k2]) * double(b[k1]));
-      grow(s_[k], double(a[k]));
-    }
+    n_[k] = expansion::newell_component(poly, size_t(m), k);
     nd_[k] = estimate(n_[k]);
+    Expansion s;  // S_k = sum_i P_i[k]
+    for (int i = 0; i < m; ++i) grow(s, double(poly[i][k]));
+    add_product(ns_exact_, n_[k], s);
   }
-  Expansion ns;
-  for (int k = 0; k < 3; ++k) add_product(ns, n_[k], s_[k]);
-  ns_ = estimate(ns);
+  ns_ = estimate(ns_exact_);
   nw_sign_ = n_[w_].empty() || n_[w_].back() > 0.0 ? 1 : -1;
 }
 
@@ -232,9 +226,8 @@ void LiftedLight::make_exact(Plane& pl) const {
   add_product(t, n_[v_], c[w_], -1.0);
   add_scaled(pl.xc, t, m);
   // A = c_w (N . S) - m N_w (c . p).
-  Expansion ns, cp, x;
-  for (int k = 0; k < 3; ++k) add_product(ns, n_[k], s_[k]);
-  add_product(pl.xa, c[w_], ns);
+  Expansion cp, x;
+  add_product(pl.xa, c[w_], ns_exact_);
   for (int k = 0; k < 3; ++k) add_scaled(cp, c[k], double(p[k]));
   add_product(x, nw, cp);
   add_scaled(pl.xa, x, m, -1.0);
@@ -276,14 +269,8 @@ int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x) {
   // (|N_k| < 2^260, |d_k| < 2^160; nonzero terms above 2^-600).
   Expansion n[3], d[3];
   for (int k = 0; k < 3; ++k) {
-    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    for (int i = 0; i < m; ++i) {
-      const Vec3f& a = poly[i];
-      const Vec3f& b = poly[(i + 1) % m];
-      grow(n[k], double(a[k1]) * double(b[k2]));
-      grow(n[k], -double(a[k2]) * double(b[k1]));
-      grow(d[k], -double(a[k]));
-    }
+    n[k] = expansion::newell_component(poly, size_t(m), k);
+    for (int i = 0; i < m; ++i) grow(d[k], -double(poly[i][k]));
     grow(d[k], double(m) * double(x[k]));
   }
   Expansion sum;

@@ -102,7 +102,8 @@ class LiftedLight {
 
  private:
   void make_exact(Plane& pl) const;
-  std::vector<double> n_[3], s_[3];  // Newell normal and vertex sum, exact
+  std::vector<double> n_[3];       // Newell normal N, exact
+  std::vector<double> ns_exact_;   // N . S (S the vertex sum), exact: every plane's A uses it
   double nd_[3] = {0, 0, 0}, ns_ = 0;  // N and N . S rounded (within a few ulps)
   int m_ = 0, u_ = 0, v_ = 1, w_ = 2, nw_sign_ = 1;
 };

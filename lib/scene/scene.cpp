@@ -86,16 +86,7 @@ Status prepare_light(Light& light, const std::string& where) {
   // whose exact normal component was 0. Zero is zero area; the area, the normal and the
   // exact checks below use the exact normal.
   Vec3d ne(0, 0, 0), c(0, 0, 0);
-  for (int k = 0; k < 3; ++k) {
-    const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-    std::vector<double> e;
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3f &a = P[i], &b = P[(i + 1) % n];
-      expansion::grow_vector(e, double(a[k1]) * double(b[k2]));
-      expansion::grow_vector(e, -double(a[k2]) * double(b[k1]));
-    }
-    ne[k] = expansion::estimate(e);
-  }
+  for (int k = 0; k < 3; ++k) ne[k] = expansion::estimate(expansion::newell_component(P.data(), n, k));
   for (size_t i = 0; i < n; ++i) c += to_double(P[i]);
   c = c / double(n);
   double twice_area = length(ne);
