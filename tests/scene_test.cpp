@@ -48,6 +48,16 @@ fs::path temp_dir() {
   return d;
 }
 
+// Writes `text` to d/name and checks that reading it fails with a message holding
+// "name: message" (the file, then the line and element).
+void expect_read_error(const fs::path& d, const std::string& name, const std::string& text, const std::string& message) {
+  SCOPED_TRACE(name + ": " + text);
+  std::ofstream(d / name, std::ios::binary) << text;
+  auto r = read_polygon_file((d / name).string());
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find(name + ": " + message), std::string::npos) << r.error().message;
+}
+
 }  // namespace
 
 TEST(FloatText, DecimalAndHexRoundTripBitExact) {
@@ -344,12 +354,7 @@ TEST(MeshFiles, NumbersOpenMeshCannotReadAreRejected) {
       {"big.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 4e38 0\nvertex 0 1 0\nendloop\n"
                   "endfacet\nendsolid t\n", "line 5: vertex 1: '4e38' overflows float32"},
   };
-  for (const Case& c : cases) {
-    std::ofstream(d / c.name) << c.text;
-    auto r = read_polygon_file((d / c.name).string());
-    ASSERT_FALSE(r.ok()) << c.name;
-    EXPECT_NE(r.error().message.find(std::string(c.name) + ": " + c.message), std::string::npos) << r.error().message;
-  }
+  for (const Case& c : cases) expect_read_error(d, c.name, c.text, c.message);
   // fuzz_mesh_files oom 867bfe69: tokens after a face's indices are not read by OpenMesh
   // as part of that face (no face colours in the header), so they must not become the
   // next face: "0 2147483648 2 0" is an empty face, then the next line's face.
@@ -500,22 +505,12 @@ TEST(MeshFiles, ObjFaceReferencesAreCheckedBeforeOpenMesh) {
   // fuzz_mesh_files crash ee5ddf7f: `f  42949672951 #4 /1`. OpenMesh reads each number as
   // an int and skips one that overflows, which left the face without a vertex before `/1`.
   for (const char* bad : {"f /1 2 3", "f 1 2 3/1/1/1", "f 1 x 3", "f 1 - 3", "f  42949672951 #4 /1 =?4",
-                          "f 1 2 2147483648", "f 1 2 -2147483649", "f 1 2/99999999999 3", "f 1 2 0000000000000000000004294967296"}) {
-    std::ofstream(d / "bad.obj") << verts << bad << "\n";
-    auto soup = read_polygon_file((d / "bad.obj").string());
-    ASSERT_FALSE(soup.ok()) << bad;
-    EXPECT_NE(soup.error().message.find("bad.obj: line 6: face 0: bad vertex reference"), std::string::npos)
-        << soup.error().message;
-  }
+                          "f 1 2 2147483648", "f 1 2 -2147483649", "f 1 2/99999999999 3", "f 1 2 0000000000000000000004294967296"})
+    expect_read_error(d, "bad.obj", verts + bad + "\n", "line 6: face 0: bad vertex reference");
   // fuzz_mesh_files crash 19564d18: `f   #4 /1(f0`. OpenMesh reads past a `#` and skips
   // tokens without a numeric vertex part, so this face had no vertex and it asserted.
-  for (const char* empty : {"f", "f   #4 /1(f0", "f # 1 2 3"}) {
-    std::ofstream(d / "bad.obj") << verts << empty << "\n";
-    auto soup = read_polygon_file((d / "bad.obj").string());
-    ASSERT_FALSE(soup.ok()) << empty;
-    EXPECT_NE(soup.error().message.find("bad.obj: line 6: face 0: no vertex references"), std::string::npos)
-        << soup.error().message;
-  }
+  for (const char* empty : {"f", "f   #4 /1(f0", "f # 1 2 3"})
+    expect_read_error(d, "bad.obj", verts + empty + "\n", "line 6: face 0: no vertex references");
   for (const char* good : {"f 1 2 3", "f 1/1 2/1 3/1", "f 1//1 2//1 3//1", "f 1/1/1 2/1/1 3/1/1", "f -3 -2 -1 # c",
                            "f 0000000000000000001 2 3", "f 1 2 3 # 42949672951 /1"}) {
     std::ofstream(d / "good.obj") << verts << good << "\n";
@@ -552,12 +547,8 @@ TEST(MeshFiles, ObjFacesAreReadAsTheFileStatesThem) {
   for (const Case& c : {Case{"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 9 9\n", "line 4: face 0: vertex index '9' out of range (3 vertices)"},
                         Case{"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", "line 4: face 0: vertex index '-4' out of range"},
                         Case{"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4: face 0: vertex index '0' out of range"},
-                        Case{"\fv 5 5 5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "line 1: starts with a form feed"}}) {
-    std::ofstream(d / "bad.obj") << c.text;
-    auto r = read_polygon_file((d / "bad.obj").string());
-    ASSERT_FALSE(r.ok()) << c.text;
-    EXPECT_NE(r.error().message.find(std::string("bad.obj: ") + c.message), std::string::npos) << r.error().message;
-  }
+                        Case{"\fv 5 5 5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "line 1: starts with a form feed"}})
+    expect_read_error(d, "bad.obj", c.text, c.message);
 }
 
 // OpenMesh's STL readers drop every facet whose corners are not three distinct
@@ -601,12 +592,8 @@ TEST(MeshFiles, StlFacetsAreReadAsTheFileStatesThem) {
                              "line 4: facet 0: expected 'vertex x y z'"},
                         Case{"solid t\nvertex 0 0 0\n" + facet("0 0 0", "1 0 0", "0 1 0") + "endsolid\n",
                              "line 2: vertex 0 outside an 'outer loop'"},
-                        Case{"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "facet 0: file ends inside"}}) {
-    std::ofstream(d / "bad.stl") << c.text;
-    auto r = read_polygon_file((d / "bad.stl").string());
-    ASSERT_FALSE(r.ok()) << c.text;
-    EXPECT_NE(r.error().message.find(std::string("bad.stl: ") + c.message), std::string::npos) << r.error().message;
-  }
+                        Case{"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "facet 0: file ends inside"}})
+    expect_read_error(d, "bad.stl", c.text, c.message);
 }
 
 TEST(MeshFiles, SceneReferencesMeshFilesRelativeToTheJson) {

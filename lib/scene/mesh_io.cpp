@@ -279,6 +279,20 @@ bool fits_int(const std::string& field) {
   return v <= (negative ? 2147483648ull : 2147483647ull);
 }
 
+// The next three tokens of a vertex line (OBJ `v`, ASCII STL `vertex`) as coordinates
+// OpenMesh's float reads accept, rounded as they round them; else a message naming the
+// line and the vertex.
+std::string three_coordinates(std::istringstream& ss, size_t lineno, size_t vertex, Vec3f& out) {
+  for (int k = 0; k < 3; ++k) {
+    std::string t;
+    if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertex) + ": needs 3 coordinates";
+    double x;
+    if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertex));
+    out[k] = std::strtof(t.c_str(), nullptr);
+  }
+  return {};
+}
+
 // The faces of an OBJ file as the file states them (prescan_obj). OpenMesh's OBJ reader
 // changes faces without a word: it removes every repeated vertex of a face (`f 1 2 1 3`
 // becomes the triangle 1 2 3, `f 1 2 2` disappears, and an index out of range inside a
@@ -308,12 +322,8 @@ std::string prescan_obj(std::istream& in, ObjFaces& out) {
     std::string kw;
     if (!(ss >> kw)) continue;
     if (kw == "v") {
-      for (int k = 0; k < 3; ++k) {
-        std::string t;
-        if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
-        double x;
-        if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
-      }
+      Vec3f p;
+      if (auto err = three_coordinates(ss, lineno, vertices, p); !err.empty()) return err;
       ++vertices;
     } else if (kw == "f") {
       // Face references `v`, `v/vt`, `v//vn` or `v/vt/vn`, each an integer: OpenMesh 9's
@@ -402,13 +412,7 @@ std::string prescan_ascii_stl(std::istream& in, StlFacets& facets) {
       if (!(ss >> kw) || kw != "vertex")
         return "line " + std::to_string(lineno) + ": facet " + std::to_string(facets.size()) +
                ": expected 'vertex x y z' (the line after 'outer loop' and the two after it are vertices)";
-      for (int k = 0; k < 3; ++k) {
-        std::string t;
-        if (!(ss >> t)) return "line " + std::to_string(lineno) + ": vertex " + std::to_string(vertices) + ": needs 3 coordinates";
-        double x;
-        if (!float_number(t, x)) return number_error(t, lineno, "vertex " + std::to_string(vertices));
-        facet[size_t(c)][k] = std::strtof(t.c_str(), nullptr);  // as the stream's float read rounds it
-      }
+      if (auto err = three_coordinates(ss, lineno, vertices, facet[size_t(c)]); !err.empty()) return err;
       ++vertices;
     }
     facets.push_back(facet);
