@@ -153,12 +153,12 @@ LightFrame make_frame(const Light& light) {
 // unless `squash_new` is false: the certified bound needs their intervals (and exact
 // signs where the intervals do not decide), not their exact values.
 // `tags` (optional, parallel to poly, updated): kept vertices keep their tag (an index
-// into `tag_points`, the triangle's float vertices), new ones get -1. A new point on an
+// into `tag_points`, the triangle's float vertices), new ones get `new_tag` (negative). A new point on an
 // edge between two tagged vertices is formed from the lexicographically smaller one, so
 // two triangles sharing that edge form the same lazy expression for it (the same
 // interval, hence the same double point in the certified bound).
 std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool squash_new = true,
-                     std::vector<int>* tags = nullptr, const Vec3f* tag_points = nullptr) {
+                     std::vector<int>* tags = nullptr, const Vec3f* tag_points = nullptr, int new_tag = -1) {
   std::vector<V3> out;
   std::vector<int> out_tags;
   size_t n = poly.size();
@@ -189,7 +189,7 @@ std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool
       if (squash_new)
         for (int a = 0; a < 3; ++a) x[a] = squash(x[a]);
       out.push_back(x);
-      if (tags) out_tags.push_back(-1);
+      if (tags) out_tags.push_back(new_tag);
     }
   }
   if (tags) *tags = std::move(out_tags);
@@ -826,6 +826,20 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     const double ext = std::max(hi[0] - lo[0], hi[1] - lo[1]);
     for (int a = 0; a < 2; ++a) near_lo[a] = lo[a] - ext, near_hi[a] = hi[a] + ext;
   }
+  // Snapping (below): 2^-30 of the largest coordinate, far above the interval
+  // midpoints' rounding (a few ulps of it), and at most 2^-30 of L's width (area over
+  // perimeter), so that the moves, which enter the bound as delta times a perimeter,
+  // stay far below the fraction tolerance on a sliver light far from the origin too (any
+  // tolerance keeps the bound valid; this one keeps it narrow).
+  std::vector<P2d> anchors = polys[0].v;
+  double snap_tol = 0, area2 = 0;
+  for (size_t k = 0; k < ln; ++k) {
+    const P2d &v = polys[0].v[k], &w = polys[0].v[(k + 1) % ln];
+    snap_tol = std::max({snap_tol, std::abs(v.x()), std::abs(v.y())});
+    area2 += (v.x() - polys[0].v[0].x()) * (w.y() - polys[0].v[0].y()) -
+             (v.y() - polys[0].v[0].y()) * (w.x() - polys[0].v[0].x());
+  }
+  snap_tol = 0x1p-30 * std::min(snap_tol, std::abs(area2) / std::max(light_per, 1e-300));
   const TriangleSoup& mesh = scene.mesh;
   const FastPass& fp = pre.fp;
   const IK::Point_3 rp = ipt(scene.receivers[receiver].p);
@@ -930,22 +944,41 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
         if (narrow(a0)) return a0;
         return I(CGAL::to_interval(v.exact()));
       };
+      // g = 0 exactly at a float point (the double test first, exact where it cannot tell).
+      auto on_light_plane = [&](const Vec3f& x) {
+        double e = 0, v = fp.g(to_double(x), e);
+        return std::abs(v) <= e && CGAL::is_zero(pre.g_of(exact3(x)));
+      };
       // Without the pyramid clip first; a far shadow is projected again from the part of
       // the triangle inside the pyramid.
       bool finite = true;
       for (bool to_pyramid : {reaches_receiver, true}) {
         std::vector<V3> poly = tri;
-        std::vector<int> tags = {0, 1, 2};  // which triangle vertex, -1 for a clip point
+        // Which triangle vertex; -1 for a point of a pyramid clip, -2 for one of the clip
+        // to g >= 0 (a point on the light plane).
+        std::vector<int> tags = {0, 1, 2};
         if (to_pyramid)
           for (const auto& [m, e] : pre.sides()) poly = clip(poly, m, e, false, &tags, cf);
         // Every vertex certainly at g > 0 (the double test above): the clip to g >= 0 would
         // return the polygon unchanged (g is affine, so positive on its convex hull).
-        if (maybe_beyond) poly = clip(poly, pre.gn, pre.ge, false, &tags, cf);
+        if (maybe_beyond) poly = clip(poly, pre.gn, pre.ge, false, &tags, cf, -2);
         vs.clear();
         delta = 0;
         for (size_t k = 0; k < poly.size() && finite && poly.size() >= 3; ++k) {
           const V3& x = poly[k];
           I ui, wi;
+          // A point on the light plane (g = 0) projects onto itself: its own frame
+          // coordinates, not the projection formula, whose rounding moved a blocker vertex
+          // sitting on a light vertex or edge off it by an ulp. Such a shadow edge along
+          // an edge of L was then nearly, not exactly, collinear with it, and the cut
+          // parameters of the boundary integral (ill-conditioned there) made the bound
+          // useless: 137 of 2,078 fuzz_plucker pairs went to the Boolean operations,
+          // which were then 18% of its samples (2026-12-03).
+          if (tags[k] == -2 || (tags[k] >= 0 && on_light_plane(cf[tags[k]]))) {
+            finite = tags[k] == -2 ? add_vertex(tight(x[f.i1]), tight(x[f.i2]))
+                                   : add_vertex(I(double(cf[tags[k]][f.i1])), I(double(cf[tags[k]][f.i2])));
+            continue;
+          }
           // A kept triangle vertex has 0 <= g < g_r unless it is the receiver itself, whose
           // projection has no finite enclosure either way.
           if (tags[k] >= 0 && project_vertex(cf[tags[k]], ui, wi)) {
@@ -964,9 +997,58 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       }
       if (vs.size() < 3) continue;
     }
+    // Snapping. Exact coincidences of the geometry (a shadow corner on a corner of L, two
+    // shadows sharing a projected point reached by different formulas, a blocker edge
+    // projecting onto an edge of L) come out of the interval midpoints an ulp apart;
+    // edges through them were then nearly, not exactly, collinear with L's or each
+    // other's, and the boundary integral's cut parameters on nearly collinear edges are
+    // ill-conditioned: 137 of 2,078 fuzz_plucker pairs got a bound wider than the
+    // fraction tolerance and went to the Boolean operations, 18% of its samples
+    // (2026-12-03; 33 after the snapping below). Two moves, each within about snap_tol:
+    // - each coordinate within snap_tol of the same coordinate of a vertex of L or of an
+    //   earlier shadow takes that value (a whole vertex snaps onto a vertex; a corner an
+    //   ulp off an axis-parallel edge of L goes onto its line);
+    // - a vertex within snap_tol of the line of an edge of L, but not on it, is pushed
+    //   outwards to about snap_tol beyond it: a shadow edge along an edge of L, between
+    //   points inside that edge, is then strictly outside, decided by exact side tests.
+    // The moved S' is within delta + (the largest move, its 1-norm) of S, so delta grows
+    // by that; the exact side tests then decide the coincident parts without cuts.
+    {
+      const std::vector<P2d> before = vs;
+      for (P2d& v : vs) {
+        double c[2] = {v.x(), v.y()};
+        for (int k = 0; k < 2; ++k)
+          for (const P2d& a : anchors) {
+            const double ak = k == 0 ? a.x() : a.y();
+            if (std::abs(c[k] - ak) <= snap_tol) {
+              c[k] = ak;
+              break;
+            }
+          }
+        v = P2d(c[0], c[1]);
+      }
+      const CPoly& L = polys[0];
+      for (P2d& v : vs)
+        for (size_t k = 0; k < L.v.size(); ++k) {
+          const P2d &c = L.v[k], &d = L.v[(k + 1) % L.v.size()];
+          if (orient2(c, d, v) == CGAL::ZERO) continue;
+          const double ex = d.x() - c.x(), ey = d.y() - c.y(), len = std::hypot(ex, ey);
+          if (!(len > 0)) continue;
+          const double dist = (ex * (v.y() - c.y()) - ey * (v.x() - c.x())) / len;  // > 0 inside
+          if (!(std::abs(dist) <= snap_tol)) continue;
+          const double step = dist + snap_tol;  // against the inward unit normal (-ey, ex) / len
+          const P2d w(v.x() + step * ey / len, v.y() - step * ex / len);
+          if (orient2(c, d, w) == CGAL::NEGATIVE) v = w;
+        }
+      double moved = 0;
+      for (size_t k = 0; k < vs.size(); ++k)
+        moved = std::max(moved, std::abs(vs[k].x() - before[k].x()) + std::abs(vs[k].y() - before[k].y()));
+      delta += moved * (1.0 + 0x1p-50);
+    }
     // S' = the convex hull of the double vertices (exact predicates): within delta of S.
     CPoly s;
     CGAL::convex_hull_2(vs.begin(), vs.end(), std::back_inserter(s.v));
+    anchors.insert(anchors.end(), s.v.begin(), s.v.end());
     Upward up;
     double per = 0;
     for (size_t k = 0; k < s.v.size() && s.v.size() >= 2; ++k) {

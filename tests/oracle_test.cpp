@@ -1004,6 +1004,40 @@ TEST(RegionOracle, CertifiedFractionBoundEnclosesTheExactFraction) {
   EXPECT_GT(certified, (pairs - edge_on) / 2);
 }
 
+TEST(RegionOracle, CoincidentShadowCornersAndEdgesKeepTheBoundNarrow) {
+  // Snapping in visible_fraction_bound (region_oracle.cpp): fuzz_plucker inputs whose
+  // shadows have corners on L's corners (5ed47670), an edge along an edge of L between
+  // points inside it (e6b21dbc), and a sliver light 1 wide at 3e5 from the origin
+  // (04341f28, where a tolerance taken from the coordinates alone would have widened the
+  // bound). Without the snapping each bound was certified but wider than the fraction
+  // tolerance, so the comparator ran CGAL's Boolean operations for it. Now each is
+  // certified, at most 1e-4 wide, and encloses the exact fraction.
+  const char* src = std::getenv("VISGATE_SOURCE_DIR");
+  if (!src) src = VISGATE_TEST_SOURCE_DIR;
+  size_t pairs = 0;
+  for (const char* name : {"5ed47670c86901c439da76d3792524f96d506daa", "e6b21dbc2ebd27bc5b92b210c2e593cc5b8b0112",
+                           "04341f281d99973c6888082cf396f840e582617e"}) {
+    std::ifstream in(std::filesystem::path(src) / "corpus/fuzz/fuzz_plucker" / name, std::ios::binary);
+    ASSERT_TRUE(in) << name;
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    auto c = visgate::fuzz::decode_case(bytes.data(), bytes.size(), visgate::fuzz::target_limits("fuzz_plucker"));
+    ASSERT_TRUE(c) << name;
+    const Scene& sc = c->scene;
+    for (size_t i = 0; i < sc.receivers.size(); ++i)
+      for (size_t l = 0; l < sc.lights.size(); ++l) {
+        FractionBound b = visible_fraction_bound(sc, i, l);
+        if (b.edge_on) continue;
+        RegionAnswer a = visible_region(sc, i, l);
+        ++pairs;
+        ASSERT_TRUE(b.certified) << name << " receiver " << i << " light " << l << ": " << b.why;
+        EXPECT_LE(b.hi - b.lo, 1e-4) << name << " receiver " << i << " light " << l;
+        EXPECT_LE(b.lo, a.visible_fraction) << name << " receiver " << i << " light " << l;
+        EXPECT_GE(b.hi, a.visible_fraction) << name << " receiver " << i << " light " << l;
+      }
+  }
+  EXPECT_GE(pairs, 3u);
+}
+
 TEST(RelationOracle, ClassesOnlyRunAndFilledMarginsCompareAsTheFullRun) {
   // run_relation_oracle_classes (relation_oracle.h) gives run_relation_oracle's classes;
   // with fill_disagreement_margins (comparator.h), compare_relations finds the same
