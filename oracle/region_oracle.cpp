@@ -79,15 +79,17 @@ struct LightFrame {
   FT height(const V3& x) const { return dot(n, x) - d0; }
 };
 
-// Removes repeated consecutive vertices and vertices collinear with their neighbours.
-void simplify(std::vector<Pt2>& pts) {
+// Removes repeated consecutive vertices and vertices collinear with their neighbours
+// (exact predicates for either kernel).
+template <class P>
+void simplify(std::vector<P>& pts) {
   bool changed = true;
   while (changed && pts.size() >= 3) {
     changed = false;
     for (size_t i = 0; i < pts.size() && pts.size() >= 3; ++i) {
-      const Pt2& a = pts[(i + pts.size() - 1) % pts.size()];
-      const Pt2& b = pts[i];
-      const Pt2& c = pts[(i + 1) % pts.size()];
+      const P& a = pts[(i + pts.size() - 1) % pts.size()];
+      const P& b = pts[i];
+      const P& c = pts[(i + 1) % pts.size()];
       if (a == b || CGAL::collinear(a, b, c)) {
         pts.erase(pts.begin() + long(i));
         changed = true;
@@ -117,22 +119,26 @@ LightFrame make_frame(const Light& light) {
   VG_CHECK(sgn(n[f.k]) != 0);
   for (int a = 0; a < 3; ++a) f.n[a] = FT(n[a]);
   f.d0 = FT(d0);
+  // The frame polygon's coordinates are floats: simplified and hulled on doubles with
+  // exact predicates (the same decisions as on the lazy points, without building their
+  // exact values to read the coordinates back).
+  std::vector<IK::Point_2> dpts;
+  for (const Vec3f& p : v) dpts.emplace_back(double(p[f.i1]), double(p[f.i2]));
+  simplify(dpts);
+  VG_CHECK(dpts.size() >= 3);
   std::vector<Pt2> pts;
-  for (const Vec3f& p : v) pts.emplace_back(FT(double(p[f.i1])), FT(double(p[f.i2])));
-  simplify(pts);
-  VG_CHECK(pts.size() >= 3);
+  for (const IK::Point_2& p : dpts) pts.emplace_back(FT(p.x()), FT(p.y()));
   f.polygon = Poly(pts.begin(), pts.end());
   VG_CHECK(f.polygon.is_simple());
   if (f.polygon.orientation() == CGAL::CLOCKWISE) {
     f.polygon.reverse_orientation();
     f.reversed = true;
   }
-  std::vector<Pt2> hull;
-  CGAL::convex_hull_2(pts.begin(), pts.end(), std::back_inserter(hull));
-  for (const Pt2& p : hull) {
-    // The frame coordinates are the float ones (constants): their exact values are at hand.
+  std::vector<IK::Point_2> hull;
+  CGAL::convex_hull_2(dpts.begin(), dpts.end(), std::back_inserter(hull));
+  for (const IK::Point_2& p : hull) {
     std::array<Q, 3> x;
-    const double u = to_double_exact(p.x()), w = to_double_exact(p.y());
+    const double u = p.x(), w = p.y();
     x[f.i1] = Q(u);
     x[f.i2] = Q(w);
     x[f.k] = (d0 - n[f.i1] * x[f.i1] - n[f.i2] * x[f.i2]) / n[f.k];
