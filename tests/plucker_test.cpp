@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lib/geom/expansion.h"
 #include "lib/geom/predicates.h"
 #include "oracle/region_oracle.h"
 #include "oracle/relation_oracle.h"
@@ -1584,70 +1583,6 @@ double lifted_gmp(const std::vector<Vec3f>& poly, int u, int v, const Vec3f& p, 
 }
 
 }  // namespace
-
-TEST(PluckerGeometry, LinearExpansionScaleAndSumAreExact) {
-  // expansion::scale_vector and sum_vector (Shewchuk's Scale-Expansion and
-  // Fast-Expansion-Sum, lib/geom/expansion.h; LiftedLight's exact path) against GMP
-  // rationals, on expansions grown from doubles of widely spread exponents with
-  // cancellations, and on their own outputs fed back in: exact values, components
-  // increasing in magnitude, no zeros, and the largest component carrying the sign.
-  Rng rng(91);
-  auto value = [](const std::vector<double>& e, mpq_t out) {
-    mpq_t t;
-    mpq_init(t);
-    mpq_set_ui(out, 0, 1);
-    for (double x : e) {
-      mpq_set_d(t, x);
-      mpq_add(out, out, t);
-    }
-    mpq_clear(t);
-  };
-  auto well_formed = [](const std::vector<double>& e) {
-    for (size_t k = 0; k < e.size(); ++k) {
-      if (e[k] == 0.0) return false;
-      if (k > 0 && !(std::abs(e[k]) > std::abs(e[k - 1]))) return false;
-    }
-    return true;
-  };
-  auto random_expansion = [&]() {
-    std::vector<double> e;
-    const int n = int(rng.below(12));
-    for (int k = 0; k < n; ++k) {
-      double x = std::ldexp(rng.uniform(-1, 1), int(rng.below(120)) - 60);
-      if (!e.empty() && rng.below(3) == 0) x = -e.back() * (1.0 + std::ldexp(rng.uniform(-1, 1), -40));
-      expansion::grow_vector(e, x);
-    }
-    return e;
-  };
-  mpq_t a, b, c, want;
-  mpq_inits(a, b, c, want, nullptr);
-  std::vector<double> prev = random_expansion();
-  int nonzero = 0;
-  for (int trial = 0; trial < 3000; ++trial) {
-    std::vector<double> e = trial % 4 == 3 ? prev : random_expansion(), f = random_expansion(), h, g;
-    const double x = std::ldexp(rng.uniform(-1, 1), int(rng.below(60)) - 30);
-    expansion::sum_vector(e, f, h);
-    value(e, a);
-    value(f, b);
-    value(h, c);
-    mpq_add(want, a, b);
-    ASSERT_TRUE(mpq_equal(c, want)) << trial;
-    ASSERT_TRUE(well_formed(h)) << trial;
-    if (!h.empty()) {
-      EXPECT_EQ(h.back() > 0, mpq_sgn(c) > 0) << trial;
-    }
-    expansion::scale_vector(h, x, g);
-    value(g, c);
-    mpq_set_d(b, x);
-    mpq_mul(want, want, b);
-    ASSERT_TRUE(mpq_equal(c, want)) << trial;
-    ASSERT_TRUE(well_formed(g)) << trial;
-    nonzero += !g.empty();
-    prev = g;
-  }
-  EXPECT_GT(nonzero, 2000);
-  mpq_clears(a, b, c, want, nullptr);
-}
 
 TEST(PluckerGeometry, LiftedLightPlaneValuesAgreeWithRationalArithmetic) {
   // LiftedLight::value against GMP rationals: tilted quads (planar, and with one vertex a

@@ -70,56 +70,6 @@ std::vector<double> newell_component(const P* poly, size_t m, int k) {
   return e;
 }
 
-// Fast-Two-Sum: a + b = x + y exactly when |a| >= |b| (or a == 0) (Dekker).
-inline void fast_two_sum(double a, double b, double& x, double& y) {
-  x = a + b;
-  y = b - (x - a);
-}
-
-// Scale-Expansion with zero elimination (Shewchuk, Theorem 19): h = b * e exactly, in
-// O(|e|); e strongly nonoverlapping and increasing gives h the same (round-to-even).
-inline void scale_vector(const std::vector<double>& e, double b, std::vector<double>& h) {
-  h.clear();
-  if (e.empty() || b == 0.0) return;
-  double q, hh;
-  two_product(e[0], b, q, hh);
-  if (hh != 0.0) h.push_back(hh);
-  for (size_t i = 1; i < e.size(); ++i) {
-    double p1, p0, sum;
-    two_product(e[i], b, p1, p0);
-    two_sum(q, p0, sum, hh);
-    if (hh != 0.0) h.push_back(hh);
-    fast_two_sum(p1, sum, q, hh);
-    if (hh != 0.0) h.push_back(hh);
-  }
-  if (q != 0.0) h.push_back(q);
-}
-
-// Fast-Expansion-Sum with zero elimination (Shewchuk, Theorem 13): h = e + f exactly,
-// in O(|e| + |f|); both strongly nonoverlapping and increasing (what grow_vector,
-// scale_vector and this function produce in round-to-nearest-even), h the same.
-inline void sum_vector(const std::vector<double>& e, const std::vector<double>& f, std::vector<double>& h) {
-  h.clear();
-  if (e.empty() || f.empty()) {
-    h = e.empty() ? f : e;
-    return;
-  }
-  size_t i = 0, j = 0;
-  // Components are taken in increasing magnitude from either expansion.
-  auto take = [&]() {
-    if (j >= f.size() || (i < e.size() && ((f[j] > e[i]) == (f[j] > -e[i])))) return e[i++];
-    return f[j++];
-  };
-  // (Shewchuk's first step is a Fast-Two-Sum; Two-Sum gives the same pair.)
-  double q = take(), hh, qn;
-  while (i < e.size() || j < f.size()) {
-    two_sum(q, take(), qn, hh);
-    q = qn;
-    if (hh != 0.0) h.push_back(hh);
-  }
-  if (q != 0.0) h.push_back(q);
-}
-
 inline double estimate(const std::vector<double>& e) {
   double v = 0.0;
   for (double x : e) v += x;

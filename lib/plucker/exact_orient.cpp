@@ -115,16 +115,15 @@ ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf,
 
 namespace {
 
-// out += sign * e * x for a double x, exactly.
+// e * x for a double x, exactly: each component's Two-Product grown in.
 void add_scaled(Expansion& out, const Expansion& e, double x, double sign = 1.0) {
-  if (x == 0.0 || e.empty()) return;
-  // Scale-Expansion then Fast-Expansion-Sum, linear in the lengths: growing `out` by each
-  // of the 2|e| product terms in turn was quadratic, and the exact path of LiftedLight::
-  // value (Grow-Expansion's loop) was 7% of fuzz_plucker's samples (perf, 2026-12-03).
-  thread_local Expansion scaled, sum;
-  expansion::scale_vector(e, sign * x, scaled);  // sign is +-1: sign * x is exact
-  expansion::sum_vector(out, scaled, sum);
-  out.swap(sum);
+  if (x == 0.0) return;
+  for (double y : e) {
+    double hi, lo;
+    two_product(y, x, hi, lo);
+    if (lo != 0.0) grow(out, sign * lo);
+    grow(out, sign * hi);
+  }
 }
 
 // out += sign * e * f, exactly.
