@@ -34,8 +34,9 @@ Target& target_state(const char* target) {
   Target t;
   t.method = target_method(target);
   t.solver = make_solver(t.method);
-  if (t.solver) t.specs = t.solver->options();
-  if (!t.solver)
+  if (t.solver)
+    t.specs = t.solver->options();
+  else
     std::fprintf(stderr, "%s: method '%s' is not registered in this build; every input returns at once\n", target,
                  t.method.c_str());
   return targets.emplace(target, std::move(t)).first->second;

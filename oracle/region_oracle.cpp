@@ -66,7 +66,7 @@ struct LightFrame {
   Poly polygon;            // light polygon in the frame, counter-clockwise
   bool reversed = false;   // the frame's CCW runs against the light's own order
   std::vector<V3> lifted;  // vertices of the convex hull of `polygon`, lifted to the plane
-  std::vector<std::array<Q, 3>> lifted_q;  // the same as rationals (the pyramid planes)
+                           // (constants: their exact() is the rational they were made from)
   double scale = 1.0;      // 3D area = frame area * scale (|n| / |n_k|)
 
   V3 lift(const Pt2& p) const {
@@ -137,17 +137,12 @@ LightFrame make_frame(const Light& light) {
   std::vector<IK::Point_2> hull;
   CGAL::convex_hull_2(dpts.begin(), dpts.end(), std::back_inserter(hull));
   for (const IK::Point_2& p : hull) {
-    std::array<Q, 3> x;
     const double u = p.x(), w = p.y();
-    x[f.i1] = Q(u);
-    x[f.i2] = Q(w);
-    x[f.k] = (d0 - n[f.i1] * x[f.i1] - n[f.i2] * x[f.i2]) / n[f.k];
     V3 lifted;
     lifted[f.i1] = FT(u);
     lifted[f.i2] = FT(w);
-    lifted[f.k] = FT(x[f.k]);
+    lifted[f.k] = FT(Q((d0 - n[f.i1] * Q(u) - n[f.i2] * Q(w)) / n[f.k]));
     f.lifted.push_back(lifted);
-    f.lifted_q.push_back(std::move(x));
   }
   Vec3d nd = approx(f.n);
   f.scale = length(nd) / std::abs(nd[f.k]);
@@ -355,7 +350,6 @@ struct Prepared {
   V3 r;
   FT h_r, g_r;
   CGAL::Sign side = CGAL::ZERO;
-  const Receiver* rec = nullptr;
   V3 gn;                                 // the light plane as the half-space g >= 0
   FT ge;
   FastPass fp;
@@ -369,14 +363,14 @@ struct Prepared {
   // shadows of the certified bound are clipped to them.
   const std::vector<std::pair<V3, FT>>& sides() const {
     if (!sides_made) {
-      const Q rq[3] = {Q(double(rec->p.x)), Q(double(rec->p.y)), Q(double(rec->p.z))};
-      auto minus_r = [&](const std::array<Q, 3>& x) {
-        return std::array<Q, 3>{x[0] - rq[0], x[1] - rq[1], x[2] - rq[2]};
+      const Q rq[3] = {r[0].exact(), r[1].exact(), r[2].exact()};
+      auto minus_r = [&](const V3& x) {
+        return std::array<Q, 3>{x[0].exact() - rq[0], x[1].exact() - rq[1], x[2].exact() - rq[2]};
       };
-      const size_t hn = f.lifted_q.size();
+      const size_t hn = f.lifted.size();
       for (size_t j = 0; j < hn; ++j) {
-        const std::array<Q, 3> a = minus_r(f.lifted_q[j]), b = minus_r(f.lifted_q[(j + 1) % hn]),
-                               c = minus_r(f.lifted_q[(j + 2) % hn]);
+        const std::array<Q, 3> a = minus_r(f.lifted[j]), b = minus_r(f.lifted[(j + 1) % hn]),
+                               c = minus_r(f.lifted[(j + 2) % hn]);
         Q m[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
         if (sgn(m[0] * c[0] + m[1] * c[1] + m[2] * c[2]) < 0)
           for (Q& x : m) x = -x;
@@ -409,7 +403,6 @@ bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_
   // g = side * height: positive on the receiver's side; g_r = |h_r|.
   p.g_r = CGAL::abs(p.h_r);
 
-  p.rec = &rec;
   p.gn = p.side == CGAL::POSITIVE ? f.n : -f.n;
   p.ge = p.side == CGAL::POSITIVE ? f.d0 : -f.d0;
 
@@ -812,6 +805,8 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
   // delta-neighbourhood of a convex set). Any other triangle (clipped by a slab plane or
   // the pyramid) makes the bound give up.
   double light_per = 0;  // perimeter of L, rounded up
+  const P2d o = polys[0].v[0];
+  I light2(0);  // area of L
   {
     Upward up;
     for (size_t k = 0; k < ln; ++k) {
@@ -819,10 +814,11 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       I dx = I(p0.x()) - p1.x(), dy = I(p0.y()) - p1.y();
       light_per += CGAL::sqrt(dx * dx + dy * dy).sup();
     }
+    for (size_t k = 1; k + 1 < ln; ++k) light2 += det2(o, polys[0].v[k], polys[0].v[k + 1]) * I(0.5);
   }
   // L's frame box grown by its own extent on every side: a shadow vertex beyond it is
   // "far" (below).
-  double near_lo[2], near_hi[2];
+  double near_lo[2], near_hi[2], largest = 0;
   {
     double lo[2] = {polys[0].v[0].x(), polys[0].v[0].y()}, hi[2] = {lo[0], lo[1]};
     for (const P2d& v : polys[0].v) {
@@ -830,7 +826,10 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       lo[1] = std::min(lo[1], v.y()), hi[1] = std::max(hi[1], v.y());
     }
     const double ext = std::max(hi[0] - lo[0], hi[1] - lo[1]);
-    for (int a = 0; a < 2; ++a) near_lo[a] = lo[a] - ext, near_hi[a] = hi[a] + ext;
+    for (int a = 0; a < 2; ++a) {
+      near_lo[a] = lo[a] - ext, near_hi[a] = hi[a] + ext;
+      largest = std::max({largest, std::abs(lo[a]), std::abs(hi[a])});
+    }
   }
   // Snapping (below): 2^-30 of the largest coordinate, far above the interval
   // midpoints' rounding (a few ulps of it), and at most 2^-30 of L's width (area over
@@ -838,14 +837,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
   // stay far below the fraction tolerance on a sliver light far from the origin too (any
   // tolerance keeps the bound valid; this one keeps it narrow).
   std::vector<P2d> anchors = polys[0].v;
-  double snap_tol = 0, area2 = 0;
-  for (size_t k = 0; k < ln; ++k) {
-    const P2d &v = polys[0].v[k], &w = polys[0].v[(k + 1) % ln];
-    snap_tol = std::max({snap_tol, std::abs(v.x()), std::abs(v.y())});
-    area2 += (v.x() - polys[0].v[0].x()) * (w.y() - polys[0].v[0].y()) -
-             (v.y() - polys[0].v[0].y()) * (w.x() - polys[0].v[0].x());
-  }
-  snap_tol = 0x1p-30 * std::min(snap_tol, std::abs(area2) / std::max(light_per, 1e-300));
+  const double snap_tol = 0x1p-30 * std::min(largest, 2.0 * light2.sup() / std::max(light_per, 1e-300));
   const TriangleSoup& mesh = scene.mesh;
   const FastPass& fp = pre.fp;
   const IK::Point_3 rp = ipt(scene.receivers[receiver].p);
@@ -1076,13 +1068,10 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     polys.push_back(std::move(s));
   }
   out.shadows = polys.size() - 1;
-  const P2d o = polys[0].v[0];
   I area = region_area(polys, o);
   double lo, hi;
   {
     Upward up;
-    I light2(0);
-    for (size_t k = 1; k + 1 < ln; ++k) light2 += det2(o, polys[0].v[k], polys[0].v[k + 1]) * I(0.5);
     area = area + I(-perturb.sup(), perturb.sup());
     I frac = area / light2;
     lo = std::max(frac.inf(), 0.0);
