@@ -673,17 +673,12 @@ std::string prescan_mesh_file(const std::string& path, const std::string& ext, s
   if (ec) return "cannot stat file";
   char head[84] = {};
   in.read(head, 84);
-  bool binary = false;
-  if (in.gcount() == 84) {
-    uint32_t n;
-    std::memcpy(&n, head + 80, 4);
-    binary = size == 84 + 50ull * n;
-  }
+  uint32_t n = 0;  // binary STL's facet count
+  std::memcpy(&n, head + 80, 4);
+  const bool binary = in.gcount() == 84 && size == 84 + 50ull * n;
   if (binary) {
     // Binary STL: 84 header bytes, then per facet a normal, three vertices (12 floats,
     // little-endian as OpenMesh reads them on this host) and 2 attribute bytes.
-    uint32_t n;
-    std::memcpy(&n, head + 80, 4);
     stl.reserve(n);
     char rec[50];
     for (uint32_t f = 0; f < n; ++f) {
