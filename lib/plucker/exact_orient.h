@@ -93,11 +93,16 @@ class LiftedLight {
     Vec3f p{}, q1{}, q2{};
     bool exact_ready = false;
     std::vector<double> xa, xb, xc;  // exact A, B, C (once exact_ready)
+    // Their two largest components and a bound on the sum of the others (value()'s
+    // second stage), set with them.
+    double top[3][2] = {{0, 0}, {0, 0}, {0, 0}}, rest[3] = {0, 0, 0};
   };
   // The affine function of the plane through p with normal (q1 - p) x (q2 - p).
   Plane plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const;
   // sign(N_w) g at u = hu + lu, v = hv + lv: exact sign, value within 2^-30 (the double
-  // evaluation where its bound allows that, else the exact expansion rounded).
+  // evaluation where its bound allows that, then a compensated sum of the exact
+  // coefficients' two leading components with its error bound, else the exact
+  // expansion rounded).
   ExactOrient value(Plane& pl, float hu, double lu, float hv, double lv) const;
 
  private:
