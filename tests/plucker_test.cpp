@@ -1661,6 +1661,37 @@ TEST(PluckerSolver, ReceiverWithinRoundingOfATiltedLightsPlaneUsesTheExactLift) 
   }
 }
 
+TEST(PluckerSolver, SliverLostInTheLocalFrameIsSubtractedExactly) {
+  // fuzz_plucker eb250d24 (ASan run, 2026-12-03): a collapsed torus whose triangle
+  // (-0, 0, 2), (-0, -1.5 2^-148, -2), (2^-147, 0, 2) is a sliver along the z axis, and
+  // receivers at the origin 2^-149 from its plane: seen from there it hides the wedge
+  // 0 <= x <= 4|y|/3, y < 0 of the light at z = 2, 5/32 of it (fraction 0.84375). In the
+  // local frame of the light's first vertex (-2, -2, 2) the sliver's x = 2^-147 rounded
+  // away, the triangle became a segment and was dropped: fraction 1. A triangle whose
+  // translation is rounded and that is that thin is now subtracted exactly
+  // (plucker_solver.cpp, "rounded_triangles").
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"torus-28747",
+"meshes":[{"vertices":[["0x0p+0","0x0p+0","-0x0p+0"],["-0x0p+0","0x0p+0","0x1p+1"],["-0x0p+0","0x0p+0","0x1p+1"],["0x0p+0","0x0p+0","0x1p+1"],["-0x0p+0","0x0p+0","0x1p+1"],["0x0p+0","0x0p+0","0x0p+0"],["0x1p-147","-0x0p+0","0x1p+1"],["-0x0p+0","-0x0p+0","0x1p+1"],["-0x0p+0","-0x1.8p-148","-0x1p+1"]],
+"triangles":[[0,1,2],[0,2,3],[3,2,4],[3,4,5],[5,4,1],[5,1,0],[1,6,7],[1,7,2],[2,7,8],[2,8,4],[4,8,6],[4,6,1],[6,0,3],[6,3,7],[7,3,5],[7,5,8],[8,5,0],[8,0,6]]}],
+"lights":[{"polygon":[["-0x1p+1","-0x1p+1","0x1p+1"],["-0x1p+1","0x1.fffffep+0","0x1p+1"],["0x1p+1","0x1p+1","0x1p+1"],["0x1p+1","-0x1p+1","0x1p+1"]],"samples":6,"pattern":"stratified","jitter":4,"seed":28747}],
+"receivers":[{"p":["-0x0p+0","-0x0p+0","0x0p+0"],"n":["0x1p-77","0x0p+0","-0x1p-74"]},
+{"p":["0x0p+0","-0x0p+0","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x1.e4acdp-68","0x0p+0","0x0p+0"],"n":["0x1p+1","0x0p+0","0x1p+0"]},
+{"p":["0x0p+0","0x0p+0","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(*s, {{"coherence", coherence}, {"tile", "7"}});
+    EXPECT_GT(r.stats.get("rounded_triangles"), 0.0);
+    for (size_t i = 0; i < s->receivers.size(); ++i) {
+      const auto exact = oracle::visible_region(*s, i, 0);
+      if (exact.edge_on) continue;
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact.visible_fraction, 1e-4) << i << " " << coherence;
+    }
+  }
+  EXPECT_NEAR(oracle::visible_region(*s, 1, 0).visible_fraction, 27.0 / 32.0, 1e-8);  // the hand-worked wedge
+}
+
 TEST(PluckerSolver, GrazingReceiverOfALongLightTakesTheExactPath) {
   // fuzz_plucker 685e5d6f (a sanitizer-free 30 s run): a sliver light 288k long and 0.66
   // wide, receiver 0 6.25e5 away and 0.8 below its plane (2^19.6 times its height, just
