@@ -259,7 +259,7 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
   if (!pl.exact_ready) make_exact(pl);
   {
     // Second stage: A' + B' u + C' v with A', B', C' the two leading components of the
-    // exact coefficients, as 18 exact terms (Two-Product by fused multiply-add; a
+    // exact coefficients, as 20 exact terms (Two-Product by fused multiply-add; a
     // product below 2^-969 may lose its low part to underflow, at most 2^-1074 each),
     // summed by Sum2 (Ogita, Rump and Oishi, "Accurate sum and dot product", 2005:
     // |res - sum| <= u |sum| + gamma_(n-1)^2 sum |p_i|, gamma_k = k u / (1 - k u)),
