@@ -1692,6 +1692,36 @@ TEST(PluckerSolver, SliverLostInTheLocalFrameIsSubtractedExactly) {
   EXPECT_NEAR(oracle::visible_region(*s, 1, 0).visible_fraction, 27.0 / 32.0, 1e-8);  // the hand-worked wedge
 }
 
+TEST(PluckerSolver, ExtremeReceiverDoesNotSetTheGroupsWorkingScale) {
+  // fuzz_plucker 96d10f7c (a sanitizer-free 30 s run, 2026-12-03): a fan whose wall
+  // reaches 2^104 away crosses the slab 0.78 below a unit light; receiver 0, at 2^99,
+  // is shaded exactly (more than 2^20 light widths away) but it set the group's working
+  // scale, so the wall was not "far" for receivers 1-3 and was clipped in double, where
+  // merge_plane_points (tolerance 2^-36 of the points' magnitudes, 2^68 there) merged
+  // the clip points at the light plane with the vertices below them and dropped it:
+  // fractions 0.885, 0.817, 0.555 for 0.767, 0.789, 0.527. The scale now counts only the
+  // receivers the float path shades, and the wall is subtracted exactly.
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"double-surface-13285",
+"meshes":[{"vertices":[["0x0p+0","0x1p+0","0x1.c8ead8p+75"],["0x1.54f1ecp-2","-0x1.cf0d12p-2","0x1.1da482p+0"],["0x1.cacae4p+103","0x1.54f1ecp-2","0x1.37ef58p+0"],["-0x1.e1e1ep+98","0x1.cf0d12p-2","0x1.37ef58p+0"],["-0x1.cf0cfp-2","-0x1.54f1ecp-2","0x1.1da482p+0"],["0x1.54f1ecp-2","-0x1.cf0d12p-2","0x1.f0eb58p-1"],["-0x1.54f1ecp-2","0x1.54f1ecp-2","0x1.bc55acp-1"],["-0x1.54f1ecp-2","0x1.cf0d12p-2","0x1.d0ea92p+124"],["-0x1.cf0d12p-2","-0x1.54f1ecp-2","0x1.f0eb58p-1"]],
+"triangles":[[0,1,2],[0,2,3],[0,3,4],[0,4,5],[0,5,6],[0,6,7],[0,7,8],[0,8,1]]}],
+"lights":[{"polygon":[["-0x1.333334p-1","-0x1.333288p-1","0x1p+1"],["-0x1.333334p-1","0x1.333334p-1","0x1p+1"],["0x1.333334p-1","0x1.333334p-1","0x1p+1"],["0x1.333334p-1","-0x1.333334p-1","0x1p+1"]],"samples":11,"pattern":"stratified","jitter":4,"seed":13285}],
+"receivers":[{"p":["-0x1.e1e1ep+98","-0x1p-1","0x1p-149"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x1p-1","-0x1p-1","0x0p+0"],"n":["0x0p+0","0x0p+0","-0x1p-144"]},
+{"p":["-0x1p-1","0x1p-1","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x1p-1","0x1p-1","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(*s, {{"coherence", coherence}, {"tile", "7"}});
+    EXPECT_GT(r.stats.get("far_triangles"), 0.0);
+    for (size_t i = 0; i < s->receivers.size(); ++i) {
+      const auto exact = oracle::visible_region(*s, i, 0);
+      if (exact.edge_on) continue;
+      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact.visible_fraction, 1e-4) << i << " " << coherence;
+    }
+  }
+}
+
 TEST(PluckerSolver, GrazingReceiverOfALongLightTakesTheExactPath) {
   // fuzz_plucker 685e5d6f (a sanitizer-free 30 s run): a sliver light 288k long and 0.66
   // wide, receiver 0 6.25e5 away and 0.8 below its plane (2^19.6 times its height, just

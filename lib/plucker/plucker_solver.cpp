@@ -630,8 +630,19 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   // light inside the slab, clipped into a sliver that hid 40% of a unit light, fraction
   // 0.60 for 1). Such triangles are subtracted exactly per receiver
   // (subtract_triangle_exact on the float inputs), never clipped in double.
-  const double work_scale =
-      std::max(double(lf.extent), max_component(vmax(vabs(dlo - lf.centroid), vabs(dhi - lf.centroid))));
+  // The receivers that set the scale are those the float path shades: one more than
+  // 2^20 light widths from the light is extreme and shaded exactly (below). Letting it
+  // count kept a wall reaching 2^104 away on the float path for the group's other
+  // receivers, where merge_plane_points, whose tolerance is relative to the points'
+  // magnitudes (2^68 there), merged its clip points at the light plane with the
+  // vertices 0.78 below them and dropped the wall (fuzz_plucker 96d10f7c...: receiver
+  // 0 at 2^99, fractions 0.885, 0.817, 0.555 for 0.767, 0.789, 0.527).
+  const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
+  double work_scale = double(lf.extent);
+  for (const Vec3d& rl : rloc) {
+    const double d = max_component(vabs(rl - lf.centroid));
+    if (std::max(d, double(lf.extent)) <= 0x1p20 * light_width) work_scale = std::max(work_scale, d);
+  }
   // Triangles subtracted exactly per receiver: the far-reaching ones (above) and those
   // within rounding of the light plane (below).
   std::vector<uint32_t> exact_tris;
@@ -776,9 +787,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
-  // The light's width for the far-receiver bound below: its longest side, or its area over
-  // that side when that is smaller.
-  const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
+  // light_width (above), for the far-receiver bound below: the light's longest side, or
+  // its area over that side when that is smaller.
   // Subtracts triangle t exactly from frags (boxes follow); false, subtracting nothing,
   // when rec lies in its plane.
   auto subtract_exact = [&](uint32_t t, const Receiver& rec) {
