@@ -149,6 +149,19 @@ LightFrame make_frame(const Light& light) {
   return f;
 }
 
+// The ends (from, to) a clip forms the crossing on edge (i, j) from: i first, unless both
+// ends are tagged triangle vertices (an index into `tag_points`, >= 0) and j's float point
+// is lexicographically smaller. Two triangles sharing an edge then form its crossing from
+// the same vertex, whichever way they walk it (clip below and the certified bound's
+// interval clip use this one rule, so their points agree).
+std::pair<size_t, size_t> crossing_ends(size_t i, size_t j, int tag_i, int tag_j, const Vec3f* tag_points) {
+  if (tag_points && tag_i >= 0 && tag_j >= 0) {
+    const Vec3f &pi = tag_points[tag_i], &pj = tag_points[tag_j];
+    if (std::tie(pj.x, pj.y, pj.z) < std::tie(pi.x, pi.y, pi.z)) return {j, i};
+  }
+  return {i, j};
+}
+
 // Sutherland-Hodgman step, exact: keeps the part of the convex polygon with
 // dot(m, x) - e >= 0. New points are squashed (their lazy DAGs collapsed to exact values)
 // unless `squash_new` is false: the certified bound needs their intervals (and exact
@@ -180,11 +193,7 @@ std::vector<V3> clip(const std::vector<V3>& poly, const V3& m, const FT& e, bool
       if (tags) out_tags.push_back((*tags)[i]);
     }
     if ((sg[i] == CGAL::POSITIVE && sg[j] == CGAL::NEGATIVE) || (sg[i] == CGAL::NEGATIVE && sg[j] == CGAL::POSITIVE)) {
-      size_t from = i, to = j;
-      if (tags && tag_points && (*tags)[i] >= 0 && (*tags)[j] >= 0) {
-        const Vec3f &pi = tag_points[(*tags)[i]], &pj = tag_points[(*tags)[j]];
-        if (std::tie(pj.x, pj.y, pj.z) < std::tie(pi.x, pi.y, pi.z)) std::swap(from, to);
-      }
+      const auto [from, to] = tags ? crossing_ends(i, j, (*tags)[i], (*tags)[j], tag_points) : std::pair{i, j};
       FT t = val[from] / (val[from] - val[to]);
       V3 x = poly[from] + (poly[to] - poly[from]) * t;
       if (squash_new)
@@ -971,9 +980,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     if (!projected) {
       using IP = std::array<I, 3>;
       std::vector<std::pair<I, I>> uw;  // projected vertices, added outside the Upward scope
-      auto try_intervals = [&]() -> int {  // 1: vs filled; 0: take the lazy path
-        vs.clear();
-        delta = 0;
+      auto try_intervals = [&]() -> bool {  // true: vs and delta filled; false: take the lazy path
         auto g_iv = [&](const IP& x) { return sg * (nI[0] * x[0] + nI[1] * x[1] + nI[2] * x[2] - d0I); };
         auto point = [](const Vec3f& x) { return IP{I(double(x.x)), I(double(x.y)), I(double(x.z))}; };
         // Keeps the part with value >= 0 (values certainly nonzero), as clip() does.
@@ -989,11 +996,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
               out_tags.push_back(tags[i]);
             }
             if (pi != pj) {
-              size_t from = i, to = j;
-              if (tags[i] >= 0 && tags[j] >= 0) {
-                const Vec3f &a = cf[tags[i]], &b = cf[tags[j]];
-                if (std::tie(b.x, b.y, b.z) < std::tie(a.x, a.y, a.z)) std::swap(from, to);
-              }
+              const auto [from, to] = crossing_ends(i, j, tags[i], tags[j], cf);
               const I tt = val[from] / (val[from] - val[to]);
               IP x;
               for (int a = 0; a < 3; ++a) x[a] = poly[from][a] + (poly[to][a] - poly[from][a]) * tt;
@@ -1011,19 +1014,19 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
           for (int k = 0; k < 3; ++k) {
             const I d = g_iv(point(cf[k])) - grI;
             if (d.inf() >= 0.0) reaches = true;
-            else if (!(d.sup() < 0.0)) return 0;
+            else if (!(d.sup() < 0.0)) return false;
           }
         for (bool to_pyramid : {reaches, true}) {
           std::vector<IP> poly = {point(cf[0]), point(cf[1]), point(cf[2])};
           std::vector<int> tags = {0, 1, 2};
           std::vector<I> val;
           if (to_pyramid) {
-            if (!interval_sides()) return 0;
+            if (!interval_sides()) return false;
             for (const IP& m : sides_iv) {
               val.clear();
               for (const IP& x : poly) {
                 const I v = m[0] * (x[0] - rI[0]) + m[1] * (x[1] - rI[1]) + m[2] * (x[2] - rI[2]);
-                if (!certain(v)) return 0;
+                if (!certain(v)) return false;
                 val.push_back(v);
               }
               clip_iv(poly, tags, val, -1);
@@ -1033,7 +1036,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
             val.clear();
             for (const IP& x : poly) {
               const I v = g_iv(x);
-              if (!certain(v)) return 0;
+              if (!certain(v)) return false;
               val.push_back(v);
             }
             clip_iv(poly, tags, val, -2);
@@ -1046,14 +1049,14 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
               ui = x[f.i1];
               wi = x[f.i2];
             } else if (tags[k] >= 0) {
-              if (!certain(g_iv(x))) return 0;  // maybe on the light plane: the lazy path tells
-              if (!project_vertex(cf[tags[k]], ui, wi)) return 0;
+              if (!certain(g_iv(x))) return false;  // maybe on the light plane: the lazy path tells
+              if (!project_vertex(cf[tags[k]], ui, wi)) return false;
             } else {
               const I sc = grI / (grI - g_iv(x));
               ui = rI[f.i1] + (x[f.i1] - rI[f.i1]) * sc;
               wi = rI[f.i2] + (x[f.i2] - rI[f.i2]) * sc;
             }
-            if (!narrow(ui) || !narrow(wi)) return 0;
+            if (!narrow(ui) || !narrow(wi)) return false;
             uw.emplace_back(ui, wi);
           }
           {
@@ -1061,18 +1064,16 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
             vs.clear();
             delta = 0;
             for (const auto& [ui, wi] : uw)
-              if (!add_vertex(ui, wi)) return 0;
+              if (!add_vertex(ui, wi)) return false;
           }
           if (to_pyramid || !far(vs)) break;
         }
-        return 1;
+        return true;
       };
-      if (try_intervals() == 1) {
+      // On false the lazy path starts from an empty vs and delta of its own.
+      if (try_intervals()) {
         if (vs.size() < 3) continue;
         projected = true;
-      } else {
-        vs.clear();
-        delta = 0;
       }
     }
     if (!projected) {  // the exact path's clipping with lazy exact numbers: exact signs, interval points
