@@ -605,7 +605,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<double> vals;
   const Vec3d nd = lf.nd, gd = g, refd = ref;
   const double gcut = gmax + delta;
-  auto make_near = [&](uint32_t t, const Vec3d tri[3], const std::vector<Vec3d>& part) {
+  // tmax: the largest |local coordinate| of the triangle (the selection loop's).
+  auto make_near = [&](uint32_t t, const Vec3d tri[3], double tmax, const std::vector<Vec3d>& part) {
     NearPoly np;
     np.triangle = t;
     np.begin = uint32_t(near_verts.size());
@@ -617,7 +618,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
     np.e1 = std::abs(e1.x) + std::abs(e1.y) + std::abs(e1.z);
     np.e2 = std::abs(e2.x) + std::abs(e2.y) + std::abs(e2.z);
-    np.tmax = std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2]))));
+    np.tmax = tmax;
     return np;
   };
   // Triangles reaching far beyond the group's working scale (the light's extent and
@@ -654,8 +655,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     if (shaft.culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
     // Far reaching (above): exact, per receiver, before the double rejections below
     // (their values carry the same rounding).
-    if (!(std::max(max_component(vabs(tri[0])), std::max(max_component(vabs(tri[1])), max_component(vabs(tri[2])))) <=
-          0x1p20 * work_scale)) {
+    const double tmax = std::max({max_component(vabs(tri[0])), max_component(vabs(tri[1])), max_component(vabs(tri[2]))});
+    if (!(tmax <= 0x1p20 * work_scale)) {
       exact_tris.push_back(t);
       ++tot.far_triangles;
       continue;
@@ -676,7 +677,6 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           translates_exactly(scene.mesh.corner(t, 2), lf.origin))) {
       const Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0], e3 = tri[2] - tri[1];
       const double longest = std::max({length(e1), length(e2), length(e3)});
-      const double tmax = std::max({max_component(vabs(tri[0])), max_component(vabs(tri[1])), max_component(vabs(tri[2]))});
       if (!(length(cross(e1, e2)) > 0x1p-32 * tmax * longest)) {
         exact_tris.push_back(t);
         ++tot.rounded_triangles;
@@ -746,14 +746,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Measured on columns (1024 receivers, 64 samples): two-sided occluders in the
         // tree are mixed against most hyperplanes and multiply the developments by ~25;
         // per receiver they cost one subtraction. So they go to the near list.
-        near.push_back(make_near(t, tri, lower));
+        near.push_back(make_near(t, tri, tmax, lower));
         near_verts.insert(near_verts.end(), lower.begin(), lower.end());
       } else {
         occluders.push_back(o);
       }
     }
     if (!upper.empty()) {
-      near.push_back(make_near(t, tri, upper));
+      near.push_back(make_near(t, tri, tmax, upper));
       near_verts.insert(near_verts.end(), upper.begin(), upper.end());
     }
   }
