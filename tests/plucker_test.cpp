@@ -1628,6 +1628,19 @@ TEST(PluckerGeometry, LiftedLightPlaneValuesAgreeWithRationalArithmetic) {
   EXPECT_LT(exact_used, compared);
 }
 
+namespace {
+// Every receiver's fraction of light 0 within the fraction tolerance (1e-4) of the region
+// oracle's; receivers on the light's plane (edge_on: no region) are skipped. `what` names
+// the run in failure messages.
+void expect_fractions_match_region_oracle(const Scene& s, const SolveResult& r, const std::string& what) {
+  for (size_t i = 0; i < s.receivers.size(); ++i) {
+    const auto exact = oracle::visible_region(s, i, 0);
+    if (exact.edge_on) continue;
+    EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact.visible_fraction, 1e-4) << what << " receiver " << i;
+  }
+}
+}  // namespace
+
 TEST(PluckerSolver, ReceiverWithinRoundingOfATiltedLightsPlaneUsesTheExactLift) {
   // Receivers within 1e-20 .. 1e-35 of a tilted light's plane (fuzz_plucker 71a1d636 and
   // 3d8b5bf8, sanitizer-free 30 s runs; 9386076d, open since 2026-12-02): the exact path
@@ -1651,12 +1664,7 @@ TEST(PluckerSolver, ReceiverWithinRoundingOfATiltedLightsPlaneUsesTheExactLift) 
     for (const char* choice : {"random", "relevant"})
       for (const char* coherence : {"on", "off"}) {
         SolveResult r = run(*s, {{"choice", choice}, {"coherence", coherence}, {"tile", "7"}});
-        for (size_t i = 0; i < s->receivers.size(); ++i) {
-          const auto exact = oracle::visible_region(*s, i, 0);
-          if (exact.edge_on) continue;
-          EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact.visible_fraction, 1e-4)
-              << s->name << " " << i << " " << choice << " " << coherence;
-        }
+        expect_fractions_match_region_oracle(*s, r, s->name + " " + choice + " " + coherence);
       }
   }
 }
@@ -1683,11 +1691,7 @@ TEST(PluckerSolver, SliverLostInTheLocalFrameIsSubtractedExactly) {
   for (const char* coherence : {"on", "off"}) {
     SolveResult r = run(*s, {{"coherence", coherence}, {"tile", "7"}});
     EXPECT_GT(r.stats.get("rounded_triangles"), 0.0);
-    for (size_t i = 0; i < s->receivers.size(); ++i) {
-      const auto exact = oracle::visible_region(*s, i, 0);
-      if (exact.edge_on) continue;
-      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact.visible_fraction, 1e-4) << i << " " << coherence;
-    }
+    expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
   }
   EXPECT_NEAR(oracle::visible_region(*s, 1, 0).visible_fraction, 27.0 / 32.0, 1e-8);  // the hand-worked wedge
 }
@@ -1714,11 +1718,7 @@ TEST(PluckerSolver, ExtremeReceiverDoesNotSetTheGroupsWorkingScale) {
   for (const char* coherence : {"on", "off"}) {
     SolveResult r = run(*s, {{"coherence", coherence}, {"tile", "7"}});
     EXPECT_GT(r.stats.get("far_triangles"), 0.0);
-    for (size_t i = 0; i < s->receivers.size(); ++i) {
-      const auto exact = oracle::visible_region(*s, i, 0);
-      if (exact.edge_on) continue;
-      EXPECT_NEAR(r.receivers[i].visible_fraction[0], exact.visible_fraction, 1e-4) << i << " " << coherence;
-    }
+    expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
   }
 }
 
