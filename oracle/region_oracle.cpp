@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <numbers>
 #include <tuple>
@@ -63,11 +64,31 @@ struct LightFrame {
   V3 n;                    // exact Newell normal (emitting side)
   FT d0;                   // plane: n . x = d0
   int k = 2, i1 = 0, i2 = 1;  // dropped axis and the two kept ones
-  Poly polygon;            // light polygon in the frame, counter-clockwise
+  std::vector<IK::Point_2> dpolygon;  // light polygon in the frame, counter-clockwise
+                                      // (float coordinates: exact doubles)
   bool reversed = false;   // the frame's CCW runs against the light's own order
   std::vector<V3> lifted;  // vertices of the convex hull of `polygon`, lifted to the plane
                            // (constants: their exact() is the rational they were made from)
   double scale = 1.0;      // 3D area = frame area * scale (|n| / |n_k|)
+
+  // dpolygon as an exact polygon and its doubled area, made at first use: only
+  // visible_region's Boolean operations and its fraction need them (the certified bound,
+  // which answers most pairs, reads dpolygon; building the lazy polygon and its area was
+  // a fifth of the frame's allocations under ASan).
+  const Poly& polygon() const {
+    if (!polygon_made_) {
+      std::vector<Pt2> pts;
+      for (const IK::Point_2& p : dpolygon) pts.emplace_back(FT(p.x()), FT(p.y()));
+      polygon_ = Poly(pts.begin(), pts.end());
+      area2_ = polygon_.area();
+      polygon_made_ = true;
+    }
+    return polygon_;
+  }
+  const FT& area2() const {
+    polygon();
+    return area2_;
+  }
 
   V3 lift(const Pt2& p) const {
     V3 x;
@@ -77,6 +98,11 @@ struct LightFrame {
     return x;
   }
   FT height(const V3& x) const { return dot(n, x) - d0; }
+
+ private:
+  mutable Poly polygon_;
+  mutable FT area2_;
+  mutable bool polygon_made_ = false;
 };
 
 // Removes repeated consecutive vertices and vertices collinear with their neighbours
@@ -99,6 +125,31 @@ void simplify(std::vector<P>& pts) {
   }
 }
 
+// The exact value of an expansion (finite doubles) as a rational: the components'
+// integer mantissas aligned to the smallest exponent and summed as one integer, then
+// scaled by a power of two (one canonicalisation instead of a rational sum per component).
+Q rational(const expansion::Small& e) {
+  if (e.empty()) return Q(0);
+  int lo = INT_MAX;
+  for (double c : e) {
+    int ex = 0;
+    std::frexp(c, &ex);
+    lo = std::min(lo, ex - 53);
+  }
+  mpz_class z(0);
+  for (double c : e) {
+    int ex = 0;
+    const double m = std::ldexp(std::frexp(c, &ex), 53);  // an integer below 2^53
+    mpz_class t(m);
+    mpz_mul_2exp(t.get_mpz_t(), t.get_mpz_t(), mp_bitcnt_t(ex - 53 - lo));
+    z += t;
+  }
+  Q q(z);
+  if (lo < 0) mpq_div_2exp(q.get_mpq_t(), q.get_mpq_t(), mp_bitcnt_t(-lo));
+  else mpq_mul_2exp(q.get_mpq_t(), q.get_mpq_t(), mp_bitcnt_t(lo));
+  return q;
+}
+
 LightFrame make_frame(const Light& light) {
   LightFrame f;
   const auto& v = light.polygon;
@@ -107,8 +158,10 @@ LightFrame make_frame(const Light& light) {
   // the centroid: d0 = n . (sum v_j) / m.
   Q n[3], sum[3];
   for (int a = 0; a < 3; ++a) {
-    for (double c : expansion::newell_component(v.data(), m, a)) n[a] += Q(c);
-    for (const Vec3f& p : v) sum[a] += Q(double(p[a]));
+    n[a] = rational(expansion::newell_component<expansion::Small>(v.data(), m, a));
+    expansion::Small s;
+    for (const Vec3f& p : v) expansion::grow_vector(s, double(p[a]));
+    sum[a] = rational(s);
   }
   const Q d0 = (n[0] * sum[0] + n[1] * sum[1] + n[2] * sum[2]) / Q(double(m));
   f.k = 0;
@@ -126,12 +179,11 @@ LightFrame make_frame(const Light& light) {
   for (const Vec3f& p : v) dpts.emplace_back(double(p[f.i1]), double(p[f.i2]));
   simplify(dpts);
   VG_CHECK(dpts.size() >= 3);
-  std::vector<Pt2> pts;
-  for (const IK::Point_2& p : dpts) pts.emplace_back(FT(p.x()), FT(p.y()));
-  f.polygon = Poly(pts.begin(), pts.end());
-  VG_CHECK(f.polygon.is_simple());
-  if (f.polygon.orientation() == CGAL::CLOCKWISE) {
-    f.polygon.reverse_orientation();
+  // Exact predicates on the doubles: the same answers as on the exact polygon.
+  VG_CHECK(CGAL::is_simple_2(dpts.begin(), dpts.end(), IK()));
+  f.dpolygon = dpts;
+  if (CGAL::orientation_2(dpts.begin(), dpts.end(), IK()) == CGAL::CLOCKWISE) {
+    std::reverse(f.dpolygon.begin() + 1, f.dpolygon.end());  // as Polygon_2::reverse_orientation
     f.reversed = true;
   }
   std::vector<IK::Point_2> hull;
@@ -354,8 +406,10 @@ double polygon_form_factor(std::vector<Vec3d> poly, const Vec3d& r, const Vec3d&
 // Everything visible_region and visible_fraction_bound share: the exact frame, the
 // receiver's side, the pyramid planes, the double cull and the fast-path classification.
 struct Prepared {
-  LightFrame f;
-  FT light_area2;
+  // The light's frame: the cache's (RegionCache) or own_frame, never copied (a frame
+  // holds lazy exact numbers and vectors; copying it per pair was an allocation each).
+  const LightFrame* frame = nullptr;
+  std::unique_ptr<LightFrame> own_frame;
   V3 r;
   FT h_r, g_r;
   CGAL::Sign side = CGAL::ZERO;
@@ -365,7 +419,8 @@ struct Prepared {
   std::vector<uint32_t> unknown;  // culled triangles the fast paths left undecided
   bool covered = false;           // a Cover triangle: fraction 0
 
-  FT g_of(const V3& x) const { return side == CGAL::POSITIVE ? f.height(x) : -f.height(x); }
+  const LightFrame& f() const { return *frame; }
+  FT g_of(const V3& x) const { return side == CGAL::POSITIVE ? f().height(x) : -f().height(x); }
 
   // The pyramid's side planes through r and consecutive hull vertices, inwards (m . x >= e
   // inside), made at first use: only triangles reaching the receiver's level and far
@@ -376,10 +431,11 @@ struct Prepared {
       auto minus_r = [&](const V3& x) {
         return std::array<Q, 3>{x[0].exact() - rq[0], x[1].exact() - rq[1], x[2].exact() - rq[2]};
       };
-      const size_t hn = f.lifted.size();
+      const std::vector<V3>& lifted = f().lifted;
+      const size_t hn = lifted.size();
       for (size_t j = 0; j < hn; ++j) {
-        const std::array<Q, 3> a = minus_r(f.lifted[j]), b = minus_r(f.lifted[(j + 1) % hn]),
-                               c = minus_r(f.lifted[(j + 2) % hn]);
+        const std::array<Q, 3> a = minus_r(lifted[j]), b = minus_r(lifted[(j + 1) % hn]),
+                               c = minus_r(lifted[(j + 2) % hn]);
         Q m[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
         if (sgn(m[0] * c[0] + m[1] * c[1] + m[2] * c[2]) < 0)
           for (Q& x : m) x = -x;
@@ -401,9 +457,12 @@ bool prepare(const Scene& scene, size_t receiver, size_t light_index, bool fast_
              const LightFrame* frame = nullptr) {
   const Light& light = scene.lights[light_index];
   const Receiver& rec = scene.receivers[receiver];
-  p.f = frame ? *frame : make_frame(light);
-  LightFrame& f = p.f;
-  p.light_area2 = f.polygon.area();
+  if (frame == nullptr) {
+    p.own_frame = std::make_unique<LightFrame>(make_frame(light));
+    frame = p.own_frame.get();
+  }
+  p.frame = frame;
+  const LightFrame& f = *frame;
   p.r = exact3(rec.p);
   const V3& r = p.r;
   p.h_r = f.height(r);
@@ -495,8 +554,8 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
                                 : prepare(scene, receiver, light_index, opt.fast_paths, local,
                                           cache ? &cache->impl().frame(light_index) : nullptr);
   const Prepared& pre = cached ? cache->impl().last : local;
-  const LightFrame& f = pre.f;
-  const FT& light_area2 = pre.light_area2;
+  const LightFrame& f = pre.f();
+  const FT& light_area2 = f.area2();
   ans.light_area = to_double_exact(light_area2) * f.scale;
   if (!off_plane) {
     ans.edge_on = true;
@@ -556,7 +615,7 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
     Poly sp(pts.begin(), pts.end());
     if (sp.orientation() == CGAL::CLOCKWISE) sp.reverse_orientation();
     // Cheap exact prefilter: skip projections that miss the light's frame box.
-    if (CGAL::do_overlap(sp.bbox(), f.polygon.bbox()) == false) continue;
+    if (CGAL::do_overlap(sp.bbox(), f.polygon().bbox()) == false) continue;
     shadows.push_back(std::move(sp));
   }
   ans.blockers_projected = shadows.size();
@@ -564,9 +623,9 @@ RegionAnswer visible_region(const Scene& scene, size_t receiver, size_t light_in
   // Visible region = light minus the union of the shadows.
   std::vector<PolyH> parts;
   if (shadows.empty()) {
-    parts.emplace_back(f.polygon);  // nothing to subtract: no arrangement needed
+    parts.emplace_back(f.polygon());  // nothing to subtract: no arrangement needed
   } else {
-    PolySet vis(f.polygon);
+    PolySet vis(f.polygon());
     PolySet blocked;
     blocked.join(shadows.begin(), shadows.end());
     vis.difference(blocked);
@@ -791,12 +850,11 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     out.lo = out.hi = pre.covered ? 0.0 : 1.0;
     return out;
   }
-  const LightFrame& f = pre.f;
+  const LightFrame& f = pre.f();
   // The light in the frame: float coordinates, exact doubles; the certified area needs a
   // convex light (DESIGN: lights are convex; anything else goes to the exact path).
   std::vector<CPoly> polys(1);
-  for (auto v = f.polygon.vertices_begin(); v != f.polygon.vertices_end(); ++v)
-    polys[0].v.emplace_back(to_double_exact(v->x()), to_double_exact(v->y()));
+  polys[0].v = f.dpolygon;
   const size_t ln = polys[0].v.size();
   for (size_t k = 0; k < ln; ++k)
     if (orient2(polys[0].v[k], polys[0].v[(k + 1) % ln], polys[0].v[(k + 2) % ln]) != CGAL::POSITIVE) {
@@ -851,8 +909,8 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
   const FastPass& fp = pre.fp;
   const IK::Point_3 rp = ipt(scene.receivers[receiver].p);
   const Vec3f& rf = scene.receivers[receiver].p;
-  I nI[3] = {pre.f.n[0].approx(), pre.f.n[1].approx(), pre.f.n[2].approx()};
-  I d0I = pre.f.d0.approx();
+  I nI[3] = {pre.f().n[0].approx(), pre.f().n[1].approx(), pre.f().n[2].approx()};
+  I d0I = pre.f().d0.approx();
   I sg(fp.sgn);
   I rI[3] = {I(double(rf.x)), I(double(rf.y)), I(double(rf.z))};
   I grI;
@@ -870,14 +928,14 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
   auto interval_sides = [&]() -> bool {
     if (sides_iv_state == 0) {
       Upward up;
-      const size_t hn = pre.f.lifted.size();
+      const size_t hn = pre.f().lifted.size();
       auto minus_r = [&](const V3& x) {
         return std::array<I, 3>{x[0].approx() - rI[0], x[1].approx() - rI[1], x[2].approx() - rI[2]};
       };
       sides_iv_state = 1;
       for (size_t j = 0; j < hn && sides_iv_state == 1; ++j) {
-        const std::array<I, 3> a = minus_r(pre.f.lifted[j]), b = minus_r(pre.f.lifted[(j + 1) % hn]),
-                               c = minus_r(pre.f.lifted[(j + 2) % hn]);
+        const std::array<I, 3> a = minus_r(pre.f().lifted[j]), b = minus_r(pre.f().lifted[(j + 1) % hn]),
+                               c = minus_r(pre.f().lifted[(j + 2) % hn]);
         std::array<I, 3> m = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
         const I turn = m[0] * c[0] + m[1] * c[1] + m[2] * c[2];
         if (turn.sup() < 0.0)

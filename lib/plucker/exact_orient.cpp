@@ -10,7 +10,7 @@ namespace visgate::plucker {
 
 namespace {
 
-using Expansion = std::vector<double>;  // nonoverlapping, increasing magnitude, no zeros
+using Expansion = expansion::Small;  // nonoverlapping, increasing magnitude, no zeros
 
 using expansion::estimate;
 using expansion::grow;
@@ -145,7 +145,7 @@ Expansion float_difference(float a, float b) {
 
 LiftedLight::LiftedLight(const Vec3f* poly, int m, int u, int v) : m_(m), u_(u), v_(v), w_(3 - u - v) {
   for (int k = 0; k < 3; ++k) {
-    n_[k] = expansion::newell_component(poly, size_t(m), k);
+    n_[k] = expansion::newell_component<Expansion>(poly, size_t(m), k);
     nd_[k] = estimate(n_[k]);
     Expansion s;  // S_k = sum_i P_i[k]
     for (int i = 0; i < m; ++i) grow(s, double(poly[i][k]));
@@ -234,9 +234,9 @@ void LiftedLight::make_exact(Plane& pl) const {
   // value()'s second stage: each coefficient as its two largest components plus the
   // others, whose sum is bounded by the sum of their magnitudes (rounded up by the
   // factor: at most 2^10 components, each addition rounding by 2^-53).
-  const std::vector<double>* xs[3] = {&pl.xa, &pl.xb, &pl.xc};
+  const Expansion* xs[3] = {&pl.xa, &pl.xb, &pl.xc};
   for (int k = 0; k < 3; ++k) {
-    const std::vector<double>& e = *xs[k];
+    const Expansion& e = *xs[k];
     const size_t n = e.size();
     pl.top[k][0] = n > 0 ? e[n - 1] : 0.0;
     pl.top[k][1] = n > 1 ? e[n - 2] : 0.0;
@@ -320,7 +320,7 @@ int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x) {
   // (|N_k| < 2^260, |d_k| < 2^160; nonzero terms above 2^-600).
   Expansion n[3], d[3];
   for (int k = 0; k < 3; ++k) {
-    n[k] = expansion::newell_component(poly, size_t(m), k);
+    n[k] = expansion::newell_component<Expansion>(poly, size_t(m), k);
     for (int i = 0; i < m; ++i) grow(d[k], -double(poly[i][k]));
     grow(d[k], double(m) * double(x[k]));
   }

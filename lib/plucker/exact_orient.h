@@ -20,6 +20,7 @@
 
 #include <vector>
 
+#include "lib/geom/expansion.h"
 #include "lib/geom/vec.h"
 
 namespace visgate::plucker {
@@ -92,7 +93,7 @@ class LiftedLight {
     double a = 0, b = 0, c = 0, ea = 0, eb = 0, ec = 0;  // A, B, C rounded, and bounds
     Vec3f p{}, q1{}, q2{};
     bool exact_ready = false;
-    std::vector<double> xa, xb, xc;  // exact A, B, C (once exact_ready)
+    expansion::Small xa, xb, xc;  // exact A, B, C (once exact_ready)
     // Their two largest components and a bound on the sum of the others (value()'s
     // second stage), set with them.
     double top[3][2] = {{0, 0}, {0, 0}, {0, 0}}, rest[3] = {0, 0, 0};
@@ -107,8 +108,8 @@ class LiftedLight {
 
  private:
   void make_exact(Plane& pl) const;
-  std::vector<double> n_[3];       // Newell normal N, exact
-  std::vector<double> ns_exact_;   // N . S (S the vertex sum), exact: every plane's A uses it
+  expansion::Small n_[3];       // Newell normal N, exact
+  expansion::Small ns_exact_;   // N . S (S the vertex sum), exact: every plane's A uses it
   double nd_[3] = {0, 0, 0}, ns_ = 0;  // N and N . S rounded (within a few ulps)
   int m_ = 0, u_ = 0, v_ = 1, w_ = 2, nw_sign_ = 1;
 };
