@@ -13,6 +13,7 @@
 #include <CGAL/Interval_nt.h>
 #include <CGAL/Polygon_with_holes_2.h>
 #include <CGAL/convex_hull_2.h>
+#include <boost/container/small_vector.hpp>
 
 #include <algorithm>
 #include <array>
@@ -684,6 +685,40 @@ struct CPoly {
 };
 
 CGAL::Sign orient2(const P2d& a, const P2d& b, const P2d& c) { return CGAL::orientation(a, b, c); }
+
+// Containers of one triangle's clip and projection (a triangle clipped by the pyramid's
+// sides and the light plane: a dozen vertices at most in practice), kept inline: as
+// std::vector they were a quarter of the certified bound's allocations under ASan.
+template <class T>
+using Small = boost::container::small_vector<T, 12>;
+
+// The convex hull of a few double points, counter-clockwise from the smallest point in
+// (x, y) order, extreme points only (exact orientations): Andrew's monotone chain, the
+// same vertices in the same order as CGAL::convex_hull_2 (Akl-Toussaint starts there
+// too), without its allocations. One point (all equal) or two (all collinear) for
+// degenerate input.
+void convex_hull_small(Small<P2d> pts, std::vector<P2d>& out) {
+  std::sort(pts.begin(), pts.end(), [](const P2d& a, const P2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  out.clear();
+  if (pts.size() <= 2) {
+    out.assign(pts.begin(), pts.end());
+    return;
+  }
+  Small<P2d> h;
+  for (int pass = 0; pass < 2; ++pass) {  // lower chain left to right, then upper right to left
+    const size_t base = h.size();
+    for (size_t k = 0; k < pts.size(); ++k) {
+      const P2d& p = pass == 0 ? pts[k] : pts[pts.size() - 1 - k];
+      while (h.size() >= base + 2 && orient2(h[h.size() - 2], h.back(), p) != CGAL::LEFT_TURN) h.pop_back();
+      h.push_back(p);
+    }
+    h.pop_back();  // the last point starts the other chain
+  }
+  out.assign(h.begin(), h.end());
+}
 // det[b - a, c - a] enclosed (a, b, c exact doubles).
 I det2(const P2d& a, const P2d& b, const P2d& c) {
   return (I(b.x()) - a.x()) * (I(c.y()) - a.y()) - (I(b.y()) - a.y()) * (I(c.x()) - a.x());
@@ -971,7 +1006,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
       if (all_beyond || all_behind) continue;
     }
     // Shadow vertices as intervals (midpoint, and the sum of the two widths as delta).
-    std::vector<P2d> vs;
+    Small<P2d> vs;
     double delta = 0;
     auto add_vertex = [&](const I& u, const I& w) {
       double um = 0.5 * (u.inf() + u.sup()), wm = 0.5 * (w.inf() + w.sup());
@@ -986,7 +1021,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     // the pyramid: L minus the union is the same set. Far vertices made the bound useless:
     // their errors enter delta (Steiner's term grows with delta^2) and the cut parameters
     // of their long edges cancel catastrophically.
-    auto far = [&](const std::vector<P2d>& pts) {
+    auto far = [&](const Small<P2d>& pts) {
       for (const P2d& v : pts)
         if (!(v.x() >= near_lo[0] && v.x() <= near_hi[0] && v.y() >= near_lo[1] && v.y() <= near_hi[1])) return true;
       return false;
@@ -1037,14 +1072,14 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     // about 15% of fuzz_plucker's samples (perf, 2026-12-03).
     if (!projected) {
       using IP = std::array<I, 3>;
-      std::vector<std::pair<I, I>> uw;  // projected vertices, added outside the Upward scope
+      Small<std::pair<I, I>> uw;  // projected vertices, added outside the Upward scope
       auto try_intervals = [&]() -> bool {  // true: vs and delta filled; false: take the lazy path
         auto g_iv = [&](const IP& x) { return sg * (nI[0] * x[0] + nI[1] * x[1] + nI[2] * x[2] - d0I); };
         auto point = [](const Vec3f& x) { return IP{I(double(x.x)), I(double(x.y)), I(double(x.z))}; };
         // Keeps the part with value >= 0 (values certainly nonzero), as clip() does.
-        auto clip_iv = [&](std::vector<IP>& poly, std::vector<int>& tags, const std::vector<I>& val, int new_tag) {
-          std::vector<IP> kept;
-          std::vector<int> out_tags;
+        auto clip_iv = [&](Small<IP>& poly, Small<int>& tags, const Small<I>& val, int new_tag) {
+          Small<IP> kept;
+          Small<int> out_tags;
           const size_t n = poly.size();
           for (size_t i = 0; i < n; ++i) {
             const size_t j = (i + 1) % n;
@@ -1075,9 +1110,9 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
             else if (!(d.sup() < 0.0)) return false;
           }
         for (bool to_pyramid : {reaches, true}) {
-          std::vector<IP> poly = {point(cf[0]), point(cf[1]), point(cf[2])};
-          std::vector<int> tags = {0, 1, 2};
-          std::vector<I> val;
+          Small<IP> poly = {point(cf[0]), point(cf[1]), point(cf[2])};
+          Small<int> tags = {0, 1, 2};
+          Small<I> val;
           if (to_pyramid) {
             if (!interval_sides()) return false;
             for (const IP& m : sides_iv) {
@@ -1217,7 +1252,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     // The moved S' is within delta + (the largest move, its 1-norm) of S, so delta grows
     // by that; the exact side tests then decide the coincident parts without cuts.
     {
-      const std::vector<P2d> before = vs;
+      const Small<P2d> before = vs;
       for (P2d& v : vs) {
         double c[2] = {v.x(), v.y()};
         for (int k = 0; k < 2; ++k)
@@ -1250,7 +1285,7 @@ FractionBound visible_fraction_bound(const Scene& scene, size_t receiver, size_t
     }
     // S' = the convex hull of the double vertices (exact predicates): within delta of S.
     CPoly s;
-    CGAL::convex_hull_2(vs.begin(), vs.end(), std::back_inserter(s.v));
+    convex_hull_small(vs, s.v);
     anchors.insert(anchors.end(), s.v.begin(), s.v.end());
     Upward up;
     double per = 0;
