@@ -247,14 +247,29 @@ void LiftedLight::make_exact(Plane& pl) const {
   pl.exact_ready = true;
 }
 
-ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double lv) const {
-  // Double first: g = a + b hu + b lu + c hv + c lv, off by the coefficients' bounds
-  // times |u|, |v| plus the rounding of four products and four sums (8 u of the terms).
+double LiftedLight::double_value(const Plane& pl, float hu, double lu, float hv, double lv, double& err) {
+  // g = a + b hu + b lu + c hv + c lv in double, off by the coefficients' bounds times
+  // |u|, |v| plus the rounding of four products and four sums (8 u of the terms).
   constexpr double kU = 0x1p-53;
   const double t0 = pl.b * double(hu), t1 = pl.b * lu, t2 = pl.c * double(hv), t3 = pl.c * lv;
   const double g = pl.a + t0 + t1 + t2 + t3;
-  const double err = pl.ea + pl.eb * (std::abs(double(hu)) + std::abs(lu)) + pl.ec * (std::abs(double(hv)) + std::abs(lv)) +
-                     8.0 * kU * (std::abs(pl.a) + std::abs(t0) + std::abs(t1) + std::abs(t2) + std::abs(t3));
+  err = pl.ea + pl.eb * (std::abs(double(hu)) + std::abs(lu)) + pl.ec * (std::abs(double(hv)) + std::abs(lv)) +
+        8.0 * kU * (std::abs(pl.a) + std::abs(t0) + std::abs(t1) + std::abs(t2) + std::abs(t3));
+  return g;
+}
+
+ExactOrient LiftedLight::sign(Plane& pl, float hu, double lu, float hv, double lv) const {
+  double err = 0.0;
+  const double g = double_value(pl, hu, lu, hv, lv, err);
+  if (std::abs(g) > err) return ExactOrient{(g > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * g};
+  return value(pl, hu, lu, hv, lv);
+}
+
+ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double lv) const {
+  // Double first (double_value), accepted when its bound is below 2^-30 of it.
+  constexpr double kU = 0x1p-53;
+  double err = 0.0;
+  const double g = double_value(pl, hu, lu, hv, lv, err);
   if (std::abs(g) * 0x1p-30 > err) return ExactOrient{(g > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * g};
   if (!pl.exact_ready) make_exact(pl);
   {

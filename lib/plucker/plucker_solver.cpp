@@ -449,8 +449,10 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   LiftedLight::Plane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
                                   lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
   const int lu = lift.u(), lv = lift.v();
-  auto value = [&](int k, const Vec3d& x) {
-    ExactOrient o = lift.value(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
+  // accurate: within 2^-30 (clip interpolation); else only the sign is exact.
+  auto value = [&](int k, const Vec3d& x, bool accurate) {
+    ExactOrient o = accurate ? lift.value(planes[k], origin[lu], x[lu], origin[lv], x[lv])
+                             : lift.sign(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
     if (o.sign == 0) return 0.0;
     double v = std::abs(o.value);
     if (!(v > 0.0)) v = std::numeric_limits<double>::min();
@@ -463,7 +465,7 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
       w.resize(cur.size());
       bool pos = false, neg = false;
       for (size_t j = 0; j < cur.size(); ++j) {
-        w[j] = value(k, cur[j]);
+        w[j] = value(k, cur[j], false);
         pos |= w[j] > 0.0;
         neg |= w[j] < 0.0;
       }
@@ -472,6 +474,8 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
         break;
       }
       if (!neg) continue;
+      // A split interpolates with the values: those within 2^-30 (signs unchanged).
+      for (size_t j = 0; j < cur.size(); ++j) w[j] = value(k, cur[j], true);
       // Split: the outside part is kept, the inside part goes on to the next plane.
       clip_by_values(cur.data(), w.data(), int(cur.size()), false, outside);
       clip_by_values(cur.data(), w.data(), int(cur.size()), true, inside);
