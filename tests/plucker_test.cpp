@@ -1722,6 +1722,27 @@ TEST(PluckerSolver, ExtremeReceiverDoesNotSetTheGroupsWorkingScale) {
   }
 }
 
+TEST(PluckerSolver, NonPlanarLightIsLiftedAlongTheOraclesAxis) {
+  // fuzz_plucker e50d5948 (ASan run, 2026-12-03): a light whose float vertices lie 0.5
+  // off their Newell plane, a ribbon 4 x 4 x 420,000 whose exact Newell normal has
+  // |N_y| - |N_x| = 2^-71 at 1.7e6. The region oracle lifts the vertices along y (the
+  // exact largest component); the float normal's x and y are equal and plucker-bsp
+  // lifted along x, a light polygon 0.06% different: fraction 0.99924 for 0.998671
+  // (checked by hand in exact rationals: one triangle 0.7 from the plane hides 0.13%).
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"far-origin-14936-random-soup",
+"meshes":[{"vertices":[["-0x1.2102a8p+17","-0x1.169c9ap+18","0x1.07e464p+17"],["-0x1.2102b6p+17","-0x1.169c9p+18","-0x1p-64"],["-0x1.2102b2p+17","0x1p-78","0x1.07e466p+17"]],
+"triangles":[[0,1,2]]}],
+"lights":[{"polygon":[["-0x1.2104p+17","-0x1.169dp+18","0x1.07e5p+17"],["-0x1.2104p+17","-0x1.169cp+18","0x0p+0"],["-0x1.2102p+17","-0x1.169cp+18","-0x1.169dp+18"],["-0x1.2102p+17","-0x1.169dp+18","0x1p-74"]],"samples":16,"pattern":"stratified","jitter":4,"seed":14936}],
+"receivers":[{"p":["-0x1.2103p+17","0x1.07e46ap+17","-0x1.07e4p+17"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(*s, {{"coherence", coherence}, {"tile", "7"}});
+    expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
+  }
+  EXPECT_NEAR(oracle::visible_region(*s, 0, 0).visible_fraction, 0.9986710878426059, 1e-12);  // the hand computation
+}
+
 TEST(PluckerSolver, GrazingReceiverOfALongLightTakesTheExactPath) {
   // fuzz_plucker 685e5d6f (a sanitizer-free 30 s run): a sliver light 288k long and 0.66
   // wide, receiver 0 6.25e5 away and 0.8 below its plane (2^19.6 times its height, just

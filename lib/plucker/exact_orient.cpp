@@ -352,4 +352,20 @@ int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x) {
   return sum.back() > 0.0 ? 1 : -1;
 }
 
+int newell_dominant_axis(const Vec3f* poly, int m) {
+  Expansion mag[3];  // |N_k|: the expansion, negated when its leading component is negative
+  for (int k = 0; k < 3; ++k) {
+    mag[k] = expansion::newell_component<Expansion>(poly, size_t(m), k);
+    if (!mag[k].empty() && mag[k].back() < 0.0)
+      for (double& c : mag[k]) c = -c;
+  }
+  int best = 0;
+  for (int j = 1; j < 3; ++j) {
+    Expansion diff = mag[j];  // |N_j| - |N_best|, exactly
+    for (double c : mag[best]) grow(diff, -c);
+    if (!diff.empty() && diff.back() > 0.0) best = j;
+  }
+  return best;
+}
+
 }  // namespace visgate::plucker

@@ -134,4 +134,13 @@ int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Ve
 // crash-61c69374...).
 int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x);
 
+// The axis the region oracle drops for a light's frame (oracle/region_oracle.h "Exact
+// frame"): k with the largest |N_k| of the exact Newell normal of the m float vertices,
+// the lowest such k on a tie (k = 0, then j = 1, 2 replaces it when |N_j| > |N_k|). For
+// a light that is not exactly planar the lifted polygon depends on it; the rounded
+// normal cannot tell components that differ by less than its rounding (fuzz_plucker
+// e50d5948: |N_y| - |N_x| = 2^-71 at 1.7e6, the float normal's equal components picked
+// x, the oracle y, and the two liftings differ by 0.06% of the light).
+int newell_dominant_axis(const Vec3f* poly, int m);
+
 }  // namespace visgate::plucker

@@ -122,6 +122,18 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
       f.planar = orient3d_exact_sign(v[0], v[size_t(f.p1)], v[size_t(f.p2)], v[k]) == 0;
   }
   if (!f.planar) {
+    // The lifted polygon (below) depends on the dropped axis: the region oracle's,
+    // decided on the exact Newell normal (exact_orient.h newell_dominant_axis), not the
+    // float normal's largest component.
+    const int w = newell_dominant_axis(light.polygon.data(), int(light.polygon.size()));
+    if (w != 3 - f.frame.u - f.frame.v) {
+      f.frame.u = (w + 1) % 3;
+      f.frame.v = (w + 2) % 3;
+      f.frame.flip = f.n[w] < 0.0f;
+      f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
+    }
+  }
+  if (!f.planar) {
     // A light whose float vertices are not coplanar (DESIGN allows 1e-5 of its extent)
     // is, for the region oracle, the polygon of its vertices' (u, v) coordinates lifted
     // along the dropped axis onto the plane of its Newell normal through its centroid
