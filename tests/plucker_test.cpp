@@ -1722,6 +1722,30 @@ TEST(PluckerSolver, ExtremeReceiverDoesNotSetTheGroupsWorkingScale) {
   }
 }
 
+TEST(PluckerSolver, NearPolygonClippedNextToTheReceiverGoesExact) {
+  // fuzz_plucker 88259d77 (a sanitizer-free 30 s run, 2026-12-03), reduced to the one
+  // triangle that shows it: a receiver 1.8e-12 above the triangle's vertex at the
+  // origin, under a light about 3 away (so the local frame's coordinates are about 3,
+  // ulp 4e-16). The triangle's clip at r's level put a vertex 1e-13 from r, rounded by
+  // 1e-16: the plane through r and that edge turned by 7e-4 and a sliver of shadow,
+  // 1.3e-4 of the light, stayed visible (fraction 0.862647 for 0.862518, checked by hand
+  // in rationals; the scene as found, a foliage trunk around the receiver, gave 0.028220
+  // for 0.028092). A near polygon with a vertex that close to r goes to the exact path.
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"foliage-50432",
+"meshes":[{"vertices":[["0x0p+0","0x0p+0","0x0p+0"],["0x1.8p-5","0x1p-5","0x1.dp-1"],["0x1p-4","0x0p+0","0x1.dp-1"]],
+"triangles":[[0,1,2]]}],
+"lights":[{"polygon":[["-0x1.68p-1","-0x1.98p-1","0x1.80013cp+1"],["-0x1.68p-1","0x1.34p+0","0x1.8p+1"],["0x1.4cp+0","0x1.34p+0","0x1.8p+1"],["0x1.4cp+0","-0x1.98p-1","0x1.8p+1"]],"samples":1,"pattern":"stratified","jitter":4,"seed":50432}],
+"receivers":[{"p":["0x1.64p-143","0x0p+0","0x1p-39"],"n":["-0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"}) {
+    SolveResult r = run(*s, {{"coherence", coherence}, {"tile", "5"}});
+    EXPECT_EQ(r.stats.get("close_triangles"), 1.0);
+    expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
+  }
+  EXPECT_NEAR(oracle::visible_region(*s, 0, 0).visible_fraction, 0.862518343928549, 1e-12);  // the hand computation
+}
+
 TEST(PluckerSolver, NonPlanarLightIsLiftedAlongTheOraclesAxis) {
   // fuzz_plucker e50d5948 (ASan run, 2026-12-03): a light whose float vertices lie 0.5
   // off their Newell plane, a ribbon 4 x 4 x 420,000 whose exact Newell normal has
