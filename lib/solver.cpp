@@ -2,11 +2,23 @@
 // the TBB thread limit.
 #include "lib/solver.h"
 
+#include <mutex>
+#include <set>
+
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
 
 namespace visgate {
+
+std::string_view stats_key(std::string_view name) {
+  static std::mutex mutex;
+  static std::set<std::string, std::less<>> names;  // nodes never move: the views stay valid
+  std::lock_guard<std::mutex> lock(mutex);
+  auto it = names.find(name);
+  if (it == names.end()) it = names.emplace(name).first;
+  return *it;
+}
 
 long SolveOptions::get_int(const std::string& k, long fallback) const {
   auto it = opts.find(k);
@@ -132,7 +144,7 @@ std::string write_result_json(const Scene& scene, const std::string& method, con
   }
   doc["receivers"] = std::move(recs);
   json st = json::object();
-  for (const auto& [k, v] : result.stats.values) st[k] = v;
+  for (const auto& [k, v] : result.stats.values) st[std::string(k)] = v;
   doc["stats"] = st;
   doc["seconds"] = result.seconds;
   return doc.dump() + "\n";

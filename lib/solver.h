@@ -8,6 +8,7 @@
 // preparation (which it reports in stats as "prepare_seconds" when it has any).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -22,24 +23,33 @@ namespace visgate {
 
 using Polygon3f = std::vector<Vec3f>;
 
-// Named figures of one solve. Keys are looked up without building a std::string
-// (transparent comparator): a method sets 20 to 40 of them per solve, most longer than
-// the short-string buffer, and in the fuzz targets (thousands of solves a second, every
-// allocation and string compare instrumented) the temporaries were 3.5% of fuzz_iss's
-// time (perf, 2026-12-02).
+// Named figures of one solve, sorted by name. Names are interned: one process-wide copy
+// of each, made the first time any Stats uses it (stats_key), so setting a figure
+// allocates nothing once its name is known. A method sets 20 to 60 of them per solve,
+// most longer than the short-string buffer: as a std::map of std::string they were 17%
+// of fuzz_iss's allocations and 2.6% of fuzz_plucker's (ASan's allocator is a quarter
+// to a third of those targets' samples; 2026-12-03), and before the transparent lookup
+// the temporaries 3.5% of fuzz_iss's time (2026-12-02).
+std::string_view stats_key(std::string_view name);
+
 struct Stats {
-  std::map<std::string, double, std::less<>> values;
+  using Entry = std::pair<std::string_view, double>;
+  std::vector<Entry> values;  // sorted by name; names from stats_key (they outlive every Stats)
   void set(std::string_view k, double v) { slot(k) = v; }
   void add(std::string_view k, double v) { slot(k) += v; }
+  const Entry* find(std::string_view k) const {
+    auto it = std::lower_bound(values.begin(), values.end(), k, [](const Entry& e, std::string_view x) { return e.first < x; });
+    return it != values.end() && it->first == k ? &*it : nullptr;
+  }
   double get(std::string_view k, double fallback = 0.0) const {
-    auto it = values.find(k);
-    return it == values.end() ? fallback : it->second;
+    const Entry* e = find(k);
+    return e ? e->second : fallback;
   }
 
  private:
   double& slot(std::string_view k) {
-    auto it = values.lower_bound(k);
-    if (it == values.end() || it->first != k) it = values.emplace_hint(it, std::string(k), 0.0);
+    auto it = std::lower_bound(values.begin(), values.end(), k, [](const Entry& e, std::string_view x) { return e.first < x; });
+    if (it == values.end() || it->first != k) it = values.insert(it, Entry{stats_key(k), 0.0});
     return it->second;
   }
 };

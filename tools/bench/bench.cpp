@@ -119,8 +119,7 @@ Json scene_summary(const Scene& s) {
 
 double stat_or_nan(const Stats& s, const std::vector<std::string>& keys) {
   for (const auto& k : keys) {
-    auto it = s.values.find(k);
-    if (it != s.values.end()) return it->second;
+    if (const Stats::Entry* e = s.find(k)) return e->second;
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
@@ -163,7 +162,7 @@ double blocked_share(const Scene& scene, const SolveResult& r) {
 void add_stat_rows(Table& t, const std::vector<Json>& prefix, const Stats& stats) {
   for (const auto& [k, v] : stats.values) {
     std::vector<Json> row = prefix;
-    row.push_back(k);
+    row.push_back(std::string(k));
     row.push_back(v);
     t.add_row(std::move(row));
   }
