@@ -38,7 +38,7 @@ struct Stats {
   void set(std::string_view k, double v) { slot(k) = v; }
   void add(std::string_view k, double v) { slot(k) += v; }
   const Entry* find(std::string_view k) const {
-    auto it = std::lower_bound(values.begin(), values.end(), k, [](const Entry& e, std::string_view x) { return e.first < x; });
+    auto it = position(values, k);
     return it != values.end() && it->first == k ? &*it : nullptr;
   }
   double get(std::string_view k, double fallback = 0.0) const {
@@ -47,8 +47,13 @@ struct Stats {
   }
 
  private:
+  // The first entry whose name is not below k.
+  template <class V>
+  static auto position(V& v, std::string_view k) -> decltype(v.begin()) {
+    return std::lower_bound(v.begin(), v.end(), k, [](const Entry& e, std::string_view x) { return e.first < x; });
+  }
   double& slot(std::string_view k) {
-    auto it = std::lower_bound(values.begin(), values.end(), k, [](const Entry& e, std::string_view x) { return e.first < x; });
+    auto it = position(values, k);
     if (it == values.end() || it->first != k) it = values.insert(it, Entry{stats_key(k), 0.0});
     return it->second;
   }

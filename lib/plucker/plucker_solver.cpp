@@ -103,7 +103,6 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
     f.plane_tol = std::max(f.plane_tol, h);
   }
   f.frame = PlaneFrame::from_normal(f.n);
-  f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
   f.extent = max_component(f.box.extent());
   {
     // The vertex pair spanning the largest float area with vertex 0, then exactness.
@@ -125,15 +124,12 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
     // The lifted polygon (below) depends on the dropped axis: the region oracle's,
     // decided on the exact Newell normal (exact_orient.h newell_dominant_axis), not the
     // float normal's largest component.
-    const int w = newell_dominant_axis(light.polygon.data(), int(light.polygon.size()));
-    if (w != 3 - f.frame.u - f.frame.v) {
-      f.frame.u = (w + 1) % 3;
-      f.frame.v = (w + 2) % 3;
-      f.frame.flip = f.n[w] < 0.0f;
-      f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
+    const int axis = newell_dominant_axis(light.polygon.data(), int(light.polygon.size()));
+    if (axis != 3 - f.frame.u - f.frame.v) {
+      f.frame.u = (axis + 1) % 3;
+      f.frame.v = (axis + 2) % 3;
+      f.frame.flip = f.n[axis] < 0.0f;
     }
-  }
-  if (!f.planar) {
     // A light whose float vertices are not coplanar (DESIGN allows 1e-5 of its extent)
     // is, for the region oracle, the polygon of its vertices' (u, v) coordinates lifted
     // along the dropped axis onto the plane of its Newell normal through its centroid
@@ -178,6 +174,7 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
     }
   }
   if (f.planar || f.nd == Vec3d(0, 0, 0)) f.nd = to_double(f.n);
+  f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
   f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame, f.nd, f.h0};
   Vec3d c(0, 0, 0);
   for (const Vec3d& v : f.poly) c += v;
@@ -655,6 +652,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   // magnitudes (2^68 there), merged its clip points at the light plane with the
   // vertices 0.78 below them and dropped the wall (fuzz_plucker 96d10f7c...: receiver
   // 0 at 2^99, fractions 0.885, 0.817, 0.555 for 0.767, 0.789, 0.527).
+  // The light's width: its longest side, or its area over that side when that is smaller.
   const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
   double work_scale = double(lf.extent);
   for (const Vec3d& rl : rloc) {
@@ -804,8 +802,6 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
-  // light_width (above), for the far-receiver bound below: the light's longest side, or
-  // its area over that side when that is smaller.
   // Subtracts triangle t exactly from frags (boxes follow); false, subtracting nothing,
   // when rec lies in its plane.
   auto subtract_exact = [&](uint32_t t, const Receiver& rec) {
@@ -899,6 +895,16 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         all.extend(boxes.back());
       }
       exact_done.clear();
+      // A near polygon's whole triangle, exactly, once for this receiver; true when it
+      // was subtracted (false: already done, or r lies in its plane).
+      auto exact_once = [&](uint32_t t) {
+        if (std::find(exact_done.begin(), exact_done.end(), t) != exact_done.end()) return false;
+        exact_done.push_back(t);
+        if (!subtract_exact(t, rec)) return false;
+        all = Box2{};
+        for (const Box2& b : boxes) all.extend(b);
+        return true;
+      };
       // Far-reaching triangles and those within rounding of the light plane (occluder
       // selection above), exactly.
       for (uint32_t t : exact_tris) {
@@ -963,11 +969,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // touches or contains it): skipped.
         int side_r = near_side(np, r, rmax);
         if (side_r == 0) {
-          if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
-          exact_done.push_back(np.triangle);
-          if (!subtract_exact(np.triangle, rec)) continue;
-          all = Box2{};
-          for (const Box2& b : boxes) all.extend(b);
+          exact_once(np.triangle);
           continue;
         }
         if (maxv <= 0.0) continue;  // float path: at or behind r's g-plane
@@ -1003,12 +1005,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           too_close = !(d > 0x1p-24 * scale);
         }
         if (too_close) {
-          if (std::find(exact_done.begin(), exact_done.end(), np.triangle) != exact_done.end()) continue;
-          exact_done.push_back(np.triangle);
-          if (!subtract_exact(np.triangle, rec)) continue;
-          ++tot.close_triangles;
-          all = Box2{};
-          for (const Box2& b : boxes) all.extend(b);
+          if (exact_once(np.triangle)) ++tot.close_triangles;
           continue;
         }
         // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
