@@ -11,13 +11,39 @@
 
 namespace visgate {
 
-std::string_view stats_key(std::string_view name) {
+namespace {
+
+std::string_view intern_stats_name(std::string_view name) {
   static std::mutex mutex;
   static std::set<std::string, std::less<>> names;  // nodes never move: the views stay valid
   std::lock_guard<std::mutex> lock(mutex);
   auto it = names.find(name);
   if (it == names.end()) it = names.emplace(name).first;
   return *it;
+}
+
+}  // namespace
+
+// Names are mostly string literals, whose addresses do not change: a small per-thread
+// table keyed by the name's address answers them with one comparison of the contents
+// (needed: a name built in a temporary string may reuse an address with other text).
+std::string_view stats_key(std::string_view name) {
+  struct Slot {
+    const char* data = nullptr;
+    size_t size = 0;
+    std::string_view interned;
+  };
+  thread_local Slot table[128];
+  Slot& s = table[(reinterpret_cast<uintptr_t>(name.data()) >> 3 ^ name.size()) & 127];
+  if (s.data == name.data() && s.size == name.size() && s.interned == name) return s.interned;
+  s = Slot{name.data(), name.size(), intern_stats_name(name)};
+  return s.interned;
+}
+
+std::vector<Stats::Entry> Stats::sorted() const {
+  std::vector<Entry> v = values_;
+  std::sort(v.begin(), v.end(), [](const Entry& a, const Entry& b) { return a.first < b.first; });
+  return v;
 }
 
 long SolveOptions::get_int(const std::string& k, long fallback) const {
@@ -144,7 +170,7 @@ std::string write_result_json(const Scene& scene, const std::string& method, con
   }
   doc["receivers"] = std::move(recs);
   json st = json::object();
-  for (const auto& [k, v] : result.stats.values) st[std::string(k)] = v;
+  for (const auto& [k, v] : result.stats.sorted()) st[std::string(k)] = v;
   doc["stats"] = st;
   doc["seconds"] = result.seconds;
   return doc.dump() + "\n";

@@ -23,40 +23,44 @@ namespace visgate {
 
 using Polygon3f = std::vector<Vec3f>;
 
-// Named figures of one solve, sorted by name. Names are interned: one process-wide copy
-// of each, made the first time any Stats uses it (stats_key), so setting a figure
-// allocates nothing once its name is known. A method sets 20 to 60 of them per solve,
-// most longer than the short-string buffer: as a std::map of std::string they were 17%
-// of fuzz_iss's allocations and 2.6% of fuzz_plucker's (ASan's allocator is a quarter
-// to a third of those targets' samples; 2026-12-03), and before the transparent lookup
-// the temporaries 3.5% of fuzz_iss's time (2026-12-02).
+// Named figures of one solve. Names are interned: one process-wide copy of each, made
+// the first time any Stats uses it (stats_key), so setting a figure allocates nothing
+// once its name is known. A method sets 20 to 60 of them per solve, most longer than the
+// short-string buffer: as a std::map of std::string they were 17% of fuzz_iss's
+// allocations and 2.6% of fuzz_plucker's (ASan's allocator is a quarter to a third of
+// those targets' samples; 2026-12-03). Entries stay in the order they were first set and
+// are found by the interned name's address, so set() and add() compare no strings: kept
+// sorted by name, the lower_bound's string compares and the interning's std::set lookup
+// (each compare a memcmp through ASan's interceptor and libFuzzer's comparison hook) were
+// 4.6% of fuzz_iss's samples and 2.8% of fuzz_plucker's (perf, 2026-12-03). sorted()
+// gives them by name for output.
 std::string_view stats_key(std::string_view name);
 
 struct Stats {
   using Entry = std::pair<std::string_view, double>;
-  std::vector<Entry> values;  // sorted by name; names from stats_key (they outlive every Stats)
   void set(std::string_view k, double v) { slot(k) = v; }
   void add(std::string_view k, double v) { slot(k) += v; }
   const Entry* find(std::string_view k) const {
-    auto it = position(values, k);
-    return it != values.end() && it->first == k ? &*it : nullptr;
+    for (const Entry& e : values_)
+      if (e.first == k) return &e;
+    return nullptr;
   }
   double get(std::string_view k, double fallback = 0.0) const {
     const Entry* e = find(k);
     return e ? e->second : fallback;
   }
+  size_t size() const { return values_.size(); }
+  // The entries sorted by name.
+  std::vector<Entry> sorted() const;
 
  private:
-  // The first entry whose name is not below k.
-  template <class V>
-  static auto position(V& v, std::string_view k) -> decltype(v.begin()) {
-    return std::lower_bound(v.begin(), v.end(), k, [](const Entry& e, std::string_view x) { return e.first < x; });
-  }
   double& slot(std::string_view k) {
-    auto it = position(values, k);
-    if (it == values.end() || it->first != k) it = values.insert(it, Entry{stats_key(k), 0.0});
-    return it->second;
+    const std::string_view key = stats_key(k);
+    for (auto it = values_.rbegin(); it != values_.rend(); ++it)
+      if (it->first.data() == key.data()) return it->second;
+    return values_.emplace_back(key, 0.0).second;
   }
+  std::vector<Entry> values_;  // in order of first use; names from stats_key (they outlive every Stats)
 };
 
 struct SolveOptions {

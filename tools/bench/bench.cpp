@@ -160,7 +160,7 @@ double blocked_share(const Scene& scene, const SolveResult& r) {
 }
 
 void add_stat_rows(Table& t, const std::vector<Json>& prefix, const Stats& stats) {
-  for (const auto& [k, v] : stats.values) {
+  for (const auto& [k, v] : stats.sorted()) {
     std::vector<Json> row = prefix;
     row.push_back(std::string(k));
     row.push_back(v);
