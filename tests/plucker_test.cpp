@@ -1746,6 +1746,32 @@ TEST(PluckerSolver, NearPolygonClippedNextToTheReceiverGoesExact) {
   EXPECT_NEAR(oracle::visible_region(*s, 0, 0).visible_fraction, 0.862518343928549, 1e-12);  // the hand computation
 }
 
+TEST(PluckerSolver, NearPolygonVertexWithinRoundingOfTheReceiversLevelCountsAsOnIt) {
+  // fuzz_plucker fbf561ee (a sanitizer-free 60 s run, 2026-12-03), reduced to the one
+  // triangle that shows it. The light lies in z = 2y + 1 (its first vertex 2^-143 off),
+  // the receiver at the origin; the plane through r with normal (0, -2, 1) has every
+  // light vertex at +1 and every triangle vertex at or below 0 (v3 -1, v12 -0.5, v5
+  // -2^-63 + 1.9e-42), so no open segment from r to the light meets the triangle: the
+  // exact fraction is 1 (by hand). v5, 0.5 from r, came out 1.3e-43 above r's level in
+  // double; its clip points were 1e-42 from it and the plane through r and that edge of
+  // ulps halved the light (fraction 0.5; the scene as found, a pouch, 0.4097 for
+  // 0.9097). Vertices within the rounding of r's level now count as on it.
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"pouch-13285",
+"meshes":[{"vertices":[["0x1p-1","0x1p-1","-0x0p+0"],["0x0p+0","0x0p+0","-0x1.000002p-1"],["-0x1p-1","0x1p-64","0x1.eap-142"]],
+"triangles":[[0,1,2]]}],
+"lights":[{"polygon":[["-0x1p-1","-0x1p-1","0x1p-143"],["-0x1p-1","0x1p-1","0x1p+1"],["0x1p-1","0x1p-1","0x1p+1"],["0x1p-1","-0x1p-1","0x0p+0"]],"samples":8,"pattern":"stratified","jitter":4,"seed":13285}],
+"receivers":[{"p":["0x0p+0","0x0p+0","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"})
+    for (const char* tile : {"1", "7"}) {
+      SolveResult r = run(*s, {{"coherence", coherence}, {"tile", tile}});
+      EXPECT_EQ(r.receivers[0].visible_fraction[0], 1.0f) << coherence << " " << tile;
+      expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
+    }
+  EXPECT_EQ(oracle::visible_region(*s, 0, 0).visible_fraction, 1.0);  // the hand computation
+}
+
 TEST(PluckerSolver, NonPlanarLightIsLiftedAlongTheOraclesAxis) {
   // fuzz_plucker e50d5948 (ASan run, 2026-12-03): a light whose float vertices lie 0.5
   // off their Newell plane, a ribbon 4 x 4 x 420,000 whose exact Newell normal has

@@ -306,7 +306,7 @@ struct Totals {
   double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
-  uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0;
+  uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -319,6 +319,7 @@ struct Totals {
     band_triangles += o.band_triangles;
     rounded_triangles += o.rounded_triangles;
     close_triangles += o.close_triangles;
+    level_triangles += o.level_triangles;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -972,7 +973,33 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           exact_once(np.triangle);
           continue;
         }
-        if (maxv <= 0.0) continue;  // float path: at or behind r's g-plane
+        // Vertices within the rounding of r's level count as on it. Just above it, a
+        // vertex next to one below made a clip point within rounding of itself: the
+        // plane through r and that edge of ulps took any direction about the line from
+        // r (fuzz_plucker fbf561ee...: a pouch vertex 2^-63 behind r's level, computed
+        // 1.3e-43 before it, 0.5 from r; its clip points 1e-42 away, and the plane
+        // through them halved the light: fraction 0.5 for 1). On the level such a
+        // vertex starts or ends only edges along the level (skipped below) or edges to
+        // well-separated points. A vertex further above the level but still close to it
+        // (within 2^-24 of the coordinates) has clip points whose rounding turns their
+        // planes about a point far beyond the light by an angle the light can see: such
+        // a triangle is subtracted exactly (`level_triangles`; none on the built-in
+        // families, whose vertices are at a receiver's level exactly or far from it).
+        {
+          const double on_tol = 4.0 * kUd * gn1 * (pmax + rmax), near_tol = 0x1p-24 * gn1 * (pmax + rmax);
+          bool near_level = false;
+          maxv = 0.0;
+          for (double& v : vals) {
+            if (std::abs(v) <= on_tol) v = 0.0;
+            near_level |= v > 0.0 && v <= near_tol;
+            maxv = std::max(maxv, v);
+          }
+          if (maxv <= 0.0) continue;  // float path: at or behind r's g-plane
+          if (near_level) {
+            if (exact_once(np.triangle)) ++tot.level_triangles;
+            continue;
+          }
+        }
         clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
         if (q.empty()) continue;
         // Oriented so that r is on the negative side (bsp.h Occluder).
@@ -1314,6 +1341,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("band_triangles", double(totals.band_triangles));
   st.set("rounded_triangles", double(totals.rounded_triangles));
   st.set("close_triangles", double(totals.close_triangles));
+  st.set("level_triangles", double(totals.level_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
