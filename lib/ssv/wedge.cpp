@@ -58,14 +58,21 @@ Plane to_float(const PlaneD& pl) {
   return f;
 }
 
-// Orients a candidate plane so that L' lies on its closed negative side within tol;
-// false when L' straddles it (not a separating plane) or lies in it within tol. The
-// latter happens for an edge touching or lying in the light plane (grid-snapped scenes):
-// every candidate through it and a light vertex or edge is the light plane itself, and
-// either orientation of it would be arbitrary (the wrong one excludes every receiver).
-// The light plane is added once, oriented, by build_wedges; dropping a candidate only
-// enlarges the wedge.
-bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double tol) {
+// Orients a candidate plane so that L' lies on its closed negative side; false when L'
+// straddles it (not a separating plane) or lies in it within tol. The latter happens for
+// an edge touching or lying in the light plane (grid-snapped scenes): every candidate
+// through it and a light vertex or edge is the light plane itself, and either orientation
+// of it would be arbitrary (the wrong one excludes every receiver). The light plane is
+// added once, oriented, by build_wedges; dropping a candidate only enlarges the wedge.
+// "Negative side" allows L' only `rtol` (rounding) beyond the plane, not tol: a point x
+// reached through the edge point p from the light point l is x = p + t (p - l), where
+// f(x) = (1 + t) f(p) - t f(l), and t = |x - p| / |p - l| is unbounded for an edge that
+// passes next to L'. fuzz_ssv 5f3d9427 (corpus/ssv/sliver/b582982b...): an edge from a
+// corner of L to a vertex 4096 away at the receivers' level; the plane through it and
+// another vertex of L' had a corner of L' 2.4e-7 beyond it (tol was 4e-6), t was about
+// 8000, and the wedge excluded a receiver by 2.0 whose segments meet the edge: its
+// projection was dropped and a blocked sample counted visible.
+bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double tol, double rtol) {
   double lo = 0.0, hi = 0.0;
   for (const auto& l : light) {
     double f = pl.eval(l);
@@ -73,8 +80,8 @@ bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double to
     hi = std::max(hi, f);
   }
   if (hi <= tol && lo >= -tol) return false;
-  if (hi <= tol) return true;
-  if (lo >= -tol) {
+  if (hi <= rtol) return true;
+  if (lo >= -rtol) {
     pl.n = -pl.n;
     return true;
   }
@@ -233,6 +240,9 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
   const size_t nl = L.size();
   counts.edges += edges.size();
   std::vector<PlaneD> cand;
+  // The rounding of a double plane test (unit normal, coordinates up to M, tol = 1e-9 M
+  // in the solver): about 1e-15 M; rtol = 1e-13 M keeps a hundredfold margin.
+  const double rtol = 1e-4 * tol;
   for (size_t ei = 0; ei < edges.size(); ++ei) {
     const Edge& e = edges[ei];
     // Some incident triangle must reach above the light plane (be active, integrate.h),
@@ -281,7 +291,7 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     for (size_t i = 0; i < nl; ++i) {  // through the edge and a light vertex
       PlaneD pl;
       if (!make_plane(cross(AB, L[i] - A), A, length(AB) * length(L[i] - A), pl)) continue;
-      if (orient_against_light(pl, L, tol)) cand.push_back(pl);
+      if (orient_against_light(pl, L, tol, rtol)) cand.push_back(pl);
     }
     for (int end = 0; end < 2; ++end) {  // through an edge endpoint and a light edge
       const Vec3d& P = end == 0 ? A : B;
@@ -291,8 +301,8 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
         const Vec3d& l1 = L[(i + 1) % nl];
         PlaneD pl;
         if (!make_plane(cross(l1 - l0, P - l0), l0, length(l1 - l0) * length(P - l0), pl)) continue;
-        if (!orient_against_light(pl, L, tol)) continue;
-        if (pl.eval(Q) < -tol) continue;  // the edge must lie on the inner side
+        if (!orient_against_light(pl, L, tol, rtol)) continue;
+        if (pl.eval(Q) < -rtol) continue;  // the edge must lie on the inner side (rtol: as above)
         cand.push_back(pl);
       }
     }

@@ -15,7 +15,9 @@
 // exact region {x : some segment from x to L' meets the edge} is contained in it: each
 // separating plane has the edge on its closed inner side and L' on its closed outer side,
 // so x = p + t (p - l) (p on the edge, l in L', t >= 0) evaluates to
-// (1 + t) f(p) - t f(l) >= 0. A candidate plane that contains L' (within the tolerance
+// (1 + t) f(p) - t f(l) >= 0; "closed" up to the rounding of the double plane test only
+// (1e-13 M, not `tol`: t is unbounded for an edge next to L', wedge.cpp
+// orient_against_light). A candidate plane that contains L' (within the tolerance
 // `tol`; only the light plane can, for an edge touching or lying in it) separates
 // nothing and is dropped: the light plane enters once, as h >= 0. The silhouette region of a double edge (section 3.3: exactly
 // one triangle front-facing) is tested the same way: a box is excluded only when it lies
