@@ -448,6 +448,93 @@ TEST(SsvWedge, WedgeContainsEveryPointFromWhichTheEdgeOverlapsTheLight) {
   EXPECT_GT(tested, 500u);
 }
 
+TEST(SsvWedge, WedgeOfAnEdgeTouchingTheLightContainsEveryPointThatSeesItOverTheLight) {
+  // fuzz_ssv 5f3d9427 (corpus/ssv/sliver/087e6f52...): an edge from a corner of the
+  // light to a vertex 4096 away at the receivers' level. A wedge plane that L' crossed
+  // by 2.4e-7 (within the old 1e-9 M tolerance) excluded a receiver by 2.0: the points
+  // x = p + t (p - l) reached through an edge point p next to L' have t in the
+  // thousands. Edges from every corner and edge midpoint of the light to far vertices at
+  // the receivers' level, points with t up to 1e4 inside the scene's bounds; then, with
+  // the minimised case turned four ways added, the relations of a receiver grid against
+  // the oracle (with the old tolerance SSV answers some blocked samples visible).
+  Scene s;
+  s.name = "edges-touching-the-light";
+  Light l = make_square_light_down(Vec3d(0, 0, 2), 0.5, 25, 1);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  for (int b = 0; b < 5; ++b)
+    for (int a = 0; a < 5; ++a) l.explicit_samples.push_back(Vec3f(float(-0.5 + 0.25 * a), float(-0.5 + 0.25 * b), 2.0f));
+  s.lights.push_back(l);
+  std::mt19937_64 g(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const float touch[8][2] = {{0.5f, 0.5f}, {-0.5f, 0.5f}, {-0.5f, -0.5f}, {0.5f, -0.5f},
+                             {0.5f, 0.0f}, {0.0f, 0.5f}, {-0.5f, 0.0f}, {0.0f, -0.5f}};
+  for (const auto& c : touch)
+    for (double far : {4.0, 64.0, 4096.0}) {
+      const double ang = 6.283185307179586 * u(g), da = 0.05 + 0.3 * u(g);
+      const uint32_t base = uint32_t(s.mesh.vertices.size());
+      s.mesh.vertices.push_back(Vec3f(c[0], c[1], 2.0f));
+      s.mesh.vertices.push_back(Vec3f(float(far * std::cos(ang)), float(far * std::sin(ang)), 0.0f));
+      s.mesh.vertices.push_back(Vec3f(float(far * std::cos(ang + da)), float(far * std::sin(ang + da)), 0.0f));
+      s.mesh.triangles.push_back({base, base + 1, base + 2});
+    }
+  // The minimised case's triangles, (0.5, 0, 0), (0.5, 0.5, 2), (0, 4096, 0) and a
+  // blocker, turned by quarter turns about the light's centre.
+  for (int q = 0; q < 4; ++q) {
+    auto turn = [&](float x, float y, float z) {
+      for (int k = 0; k < q; ++k) std::swap(x, y), x = -x;
+      return Vec3f(x, y, z);
+    };
+    const uint32_t base = uint32_t(s.mesh.vertices.size());
+    for (const Vec3f& v : {Vec3f(0.5f, 0, 0), Vec3f(0.5f, 0.5f, 2), Vec3f(0, 4096, 0), Vec3f(0, 1, 0), Vec3f(-1, 0, 0),
+                           Vec3f(1, -0.25f, 2)})
+      s.mesh.vertices.push_back(turn(v.x, v.y, v.z));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+    s.mesh.triangles.push_back({base + 3, base + 4, base + 5});
+  }
+  for (int y = -6; y <= 6; ++y)
+    for (int x = -6; x <= 6; ++x) s.receivers.push_back({Vec3f(0.25f * float(x), 0.25f * float(y), 0.0f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+
+  mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
+  LightFrame frame = make_light_frame(s.lights[0]);
+  std::vector<Vec3d> fp(pm.vertex_pos.size());
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame_d(pm.vertex_pos[v]);
+  std::vector<Edge> edges = mesh_edges(pm);
+  const AABB box = s.bounds();
+  const double M = std::max(max_component(vabs(to_double(box.lo))), max_component(vabs(to_double(box.hi))));
+  WedgeBuildCounts counts;
+  std::vector<Wedge> wedges = build_wedges(pm, edges, fp, frame, 1e-9 * M, counts);  // the solver's tolerances
+  const float eps = float(4e-6 * M);
+  size_t tested = 0;
+  for (const Wedge& w : wedges) {
+    const Edge& e = edges[w.edge];
+    const Vec3d a = to_double(pm.vertex_pos[e.a]), b = to_double(pm.vertex_pos[e.b]);
+    for (int k = 0; k < 200; ++k) {
+      // Edge points next to either end (the light's end is where t grows).
+      const double sp = std::pow(10.0, -6.0 * u(g));
+      const Vec3d p = (k & 1) ? a + (b - a) * sp : b + (a - b) * sp;
+      if (frame.height(p) <= 0.0) continue;
+      const size_t n = frame.poly_world.size(), f = 1 + size_t(g() % (n - 2));
+      double x = u(g), y = u(g);
+      if (x + y > 1) x = 1 - x, y = 1 - y;
+      const Vec3d lp = frame.poly_world[0] + (frame.poly_world[f] - frame.poly_world[0]) * x +
+                       (frame.poly_world[f + 1] - frame.poly_world[0]) * y;
+      const Vec3d q = p + (p - lp) * std::pow(10.0, 4.0 * u(g));
+      if (!(max_component(vabs(q)) <= M)) continue;
+      EXPECT_TRUE(point_in_wedge(w, Vec3f(q), eps)) << "edge " << w.edge << " point " << q.x << " " << q.y << " " << q.z;
+      ++tested;
+    }
+  }
+  EXPECT_GT(tested, 2000u);
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+  for (bool regions : {true, false}) {
+    SolveResult r = run_ssv(s, regions);
+    // Most relations are below tau against a scene 8192 wide (margins are relative).
+    EXPECT_GT(expect_matches_oracle(s, ex, r, regions ? "regions on" : "regions off"), 100u);
+  }
+}
+
 TEST(SsvWedge, BspQueryReportsEveryWedgeContainingThePoint) {
   // Lazy BSP against a linear scan: every wedge that contains the point (and, with
   // silhouette regions, whose edge is a silhouette from it) must be reported.
