@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fuzz/decoder.h"
+#include "fuzz/gmp_pool.h"
 #include "lib/raycast/embree_solver.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
@@ -68,6 +69,8 @@ std::vector<size_t> fraction_receivers(uint32_t selector_rest, size_t receivers)
 }
 
 int run_differential(const char* target, const uint8_t* data, size_t size) {
+  static const bool gmp_pooled = install_gmp_pool();  // fuzz/gmp_pool.h
+  (void)gmp_pooled;
   Target& t = target_state(target);
   if (!t.solver) return 0;
   static ThreadLimit one_thread(1);  // tiny scenes: threads cost more than they save
