@@ -71,8 +71,9 @@ bool SolveOptions::get_bool(const std::string& k, bool fallback) const {
   return fallback;
 }
 
-Status Solver::check_options(const SolveOptions& opt) const {
-  auto specs = options();
+Status Solver::check_options(const SolveOptions& opt) const { return check_options(opt, options()); }
+
+Status Solver::check_options(const SolveOptions& opt, const std::vector<OptionSpec>& specs) const {
   for (const auto& [k, v] : opt.opts) {
     const OptionSpec* spec = nullptr;
     for (const auto& s : specs)
