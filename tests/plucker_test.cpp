@@ -1755,7 +1755,8 @@ TEST(PluckerSolver, NearPolygonVertexWithinRoundingOfTheReceiversLevelCountsAsOn
   // exact fraction is 1 (by hand). v5, 0.5 from r, came out 1.3e-43 above r's level in
   // double; its clip points were 1e-42 from it and the plane through r and that edge of
   // ulps halved the light (fraction 0.5; the scene as found, a pouch, 0.4097 for
-  // 0.9097). Vertices within the rounding of r's level now count as on it.
+  // 0.9097). Vertices within the rounding of r's level now count as on it (and a
+  // triangle above the level only by rounding goes to the exact path).
   const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"pouch-13285",
 "meshes":[{"vertices":[["0x1p-1","0x1p-1","-0x0p+0"],["0x0p+0","0x0p+0","-0x1.000002p-1"],["-0x1p-1","0x1p-64","0x1.eap-142"]],
 "triangles":[[0,1,2]]}],
@@ -1770,6 +1771,33 @@ TEST(PluckerSolver, NearPolygonVertexWithinRoundingOfTheReceiversLevelCountsAsOn
       expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
     }
   EXPECT_EQ(oracle::visible_region(*s, 0, 0).visible_fraction, 1.0);  // the hand computation
+}
+
+TEST(PluckerSolver, TriangleAboveTheReceiversLevelOnlyByRoundingGoesExact) {
+  // fuzz_plucker 50cf10d2 (a sanitizer-free 60 s run, 2026-12-03, after the fix of the
+  // test above), reduced to its one triangle: (0, 0, 2^-49), (0, 1, 0), (-1, 0, 0) over
+  // receivers at the origin (and 2^-147 from it), light [-1, 1]^2 at z = 2. The triangle
+  // rises 2^-49 above r's level at its corner right over r, so a segment from r to a
+  // light point (lx, ly) crosses its plane at height about 2^-49 at (lx, ly) 2^-50,
+  // inside it exactly when lx < 0 < ly: a quarter of the light is hidden (by hand;
+  // fraction 0.75). 2^-49 is exactly the rounding bound of the level values there, so
+  // the vertex counted as on the level and the triangle was dropped (fraction 1).
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"pouch-52531",
+"meshes":[{"vertices":[["-0x0p+0","0x0p+0","0x1p-49"],["0x0p+0","0x1p+0","-0x0p+0"],["-0x1p+0","-0x0p+0","-0x0p+0"]],
+"triangles":[[0,1,2]]}],
+"lights":[{"polygon":[["-0x1p+0","-0x1p+0","0x1p+1"],["-0x1p+0","0x1p+0","0x1p+1"],["0x1p+0","0x1p+0","0x1p+1"],["0x1p+0","-0x1p+0","0x1p+1"]],"samples":16,"pattern":"stratified","jitter":4,"seed":52531}],
+"receivers":[{"p":["-0x0p+0","-0x0p+0","0x0p+0"],"n":["0x0p+0","0x0p+0","-0x1p+0"]},
+{"p":["0x0p+0","0x1p-147","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"})
+    for (const char* choice : {"random", "relevant"}) {
+      SolveResult r = run(*s, {{"coherence", coherence}, {"choice", choice}, {"tile", "4"}});
+      for (size_t i = 0; i < 2; ++i) EXPECT_EQ(r.receivers[i].visible_fraction[0], 0.75f) << coherence << " " << choice;
+      EXPECT_GE(r.stats.get("level_triangles"), 1.0);
+      expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
+    }
+  EXPECT_EQ(oracle::visible_region(*s, 0, 0).visible_fraction, 0.75);  // the hand computation
 }
 
 TEST(PluckerSolver, NonPlanarLightIsLiftedAlongTheOraclesAxis) {

@@ -982,11 +982,16 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // vertex starts or ends only edges along the level (skipped below) or edges to
         // well-separated points. A vertex further above the level but still close to it
         // (within 2^-24 of the coordinates) has clip points whose rounding turns their
-        // planes about a point far beyond the light by an angle the light can see: such
-        // a triangle is subtracted exactly (`level_triangles`; none on the built-in
-        // families, whose vertices are at a receiver's level exactly or far from it).
+        // planes about a point far beyond the light by an angle the light can see; and
+        // a triangle whose only part above the level is within its rounding may still
+        // hide much of the light from a receiver right under it (fuzz_plucker 50cf10d2:
+        // a vertex 2^-49 above a receiver, exactly the rounding bound there, hides a
+        // quarter of the light). Both go to the exact path (`level_triangles`; none on
+        // the built-in families, whose vertices are at a receiver's level exactly or far
+        // from it).
         {
           const double on_tol = 4.0 * kUd * gn1 * (pmax + rmax), near_tol = 0x1p-24 * gn1 * (pmax + rmax);
+          const bool above = maxv > 0.0;
           bool near_level = false;
           maxv = 0.0;
           for (double& v : vals) {
@@ -994,7 +999,10 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
             near_level |= v > 0.0 && v <= near_tol;
             maxv = std::max(maxv, v);
           }
-          if (maxv <= 0.0) continue;  // float path: at or behind r's g-plane
+          if (maxv <= 0.0) {  // at or behind r's g-plane, or above it only by rounding
+            if (above && exact_once(np.triangle)) ++tot.level_triangles;
+            continue;
+          }
           if (near_level) {
             if (exact_once(np.triangle)) ++tot.level_triangles;
             continue;
