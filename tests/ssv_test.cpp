@@ -162,6 +162,17 @@ size_t expect_matches_direct(const Scene& s, const SolveResult& r, const std::st
 // Compares a result against the exact relation oracle: no disagreement where the class
 // is not degenerate and the margin is at least tau = 1e-5 (DESIGN section 5). Returns the
 // number of relations compared.
+// The light [-0.5, 0.5]^2 at z = 2 (emitting down) with explicit samples on its 5 x 5
+// grid of step 0.25, boundary included (grid-snapped scenes put samples on light edges).
+Light grid_sampled_light() {
+  Light l = make_square_light_down(Vec3d(0, 0, 2), 0.5, 25, 1);
+  l.jitter = 1;
+  l.pattern = SamplePattern::Explicit;
+  for (int b = 0; b < 5; ++b)
+    for (int a = 0; a < 5; ++a) l.explicit_samples.push_back(Vec3f(float(-0.5 + 0.25 * a), float(-0.5 + 0.25 * b), 2.0f));
+  return l;
+}
+
 size_t expect_matches_oracle(const Scene& s, const oracle::RelationOracleResult& ex, const SolveResult& r,
                              const std::string& what) {
   size_t compared = 0, mismatches = 0;
@@ -459,12 +470,7 @@ TEST(SsvWedge, WedgeOfAnEdgeTouchingTheLightContainsEveryPointThatSeesItOverTheL
   // the oracle (with the old tolerance SSV answers some blocked samples visible).
   Scene s;
   s.name = "edges-touching-the-light";
-  Light l = make_square_light_down(Vec3d(0, 0, 2), 0.5, 25, 1);
-  l.jitter = 1;
-  l.pattern = SamplePattern::Explicit;
-  for (int b = 0; b < 5; ++b)
-    for (int a = 0; a < 5; ++a) l.explicit_samples.push_back(Vec3f(float(-0.5 + 0.25 * a), float(-0.5 + 0.25 * b), 2.0f));
-  s.lights.push_back(l);
+  s.lights.push_back(grid_sampled_light());
   std::mt19937_64 g(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const float touch[8][2] = {{0.5f, 0.5f}, {-0.5f, 0.5f}, {-0.5f, -0.5f}, {0.5f, -0.5f},
@@ -721,12 +727,7 @@ TEST(SsvDegenerate, EdgeInTheLightPlaneKeepsItsWedge) {
   // a grid over the light including its boundary, against the oracle.
   Scene s;
   s.name = "edge-in-light-plane";
-  Light l = make_square_light_down(Vec3d(0, 0, 2), 0.5, 25, 1);
-  l.jitter = 1;
-  l.pattern = SamplePattern::Explicit;
-  for (int b = 0; b < 5; ++b)
-    for (int a = 0; a < 5; ++a) l.explicit_samples.push_back(Vec3f(float(-0.5 + 0.25 * a), float(-0.5 + 0.25 * b), 2.0f));
-  s.lights.push_back(l);
+  s.lights.push_back(grid_sampled_light());
   s.mesh.vertices = {Vec3f(0, 0, 0), Vec3f(0.5f, 0, 2), Vec3f(0, 1, 2)};
   s.mesh.triangles = {{0, 1, 2}};
   for (int y = -6; y <= 6; ++y)
