@@ -83,10 +83,9 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
   opt.opts = decode_options(decoded->option_selector, t.specs);
   opt.seed = 1;
   opt.threads = 1;
-  if (!t.solver->check_options(opt, t.specs))
+  if (Status st = t.solver->check_options(opt, t.specs); !st)
     report_and_abort(target, t.method, opt, scene,
-                     "decode_options produced options the method rejects: " +
-                         t.solver->check_options(opt, t.specs).error().message + "\n");
+                     "decode_options produced options the method rejects: " + st.error().message + "\n");
 
   // Exact answers first: an exception from the oracle is an oracle bug, reported as such.
   oracle::RelationOracleResult exact;

@@ -46,7 +46,7 @@ bool in_pool(const void* p) {
   return c >= g_begin && c < g_end;
 }
 
-size_t class_of(size_t size) { return (size + kGrain - 1) / kGrain - 1; }  // size >= 1
+size_t class_of(size_t size) { return size == 0 ? 0 : (size - 1) / kGrain; }  // block (class + 1) * kGrain
 
 // ASan: a block in a free list is poisoned, an allocated one unpoisoned up to the size
 // asked for, so instrumented code touching freed limbs (or limbs past the request) is
@@ -94,7 +94,7 @@ void pool_free(void* p, size_t size) {
     std::free(p);
     return;
   }
-  const size_t cls = class_of(size == 0 ? 1 : size);
+  const size_t cls = class_of(size);
   FreeBlock* b = static_cast<FreeBlock*>(p);
 #ifdef VISGATE_GMP_POOL_ASAN
   ASAN_UNPOISON_MEMORY_REGION(b, sizeof(FreeBlock));
@@ -105,10 +105,11 @@ void pool_free(void* p, size_t size) {
 }
 
 void* pool_realloc(void* p, size_t old_size, size_t new_size) {
+  if (new_size == 0) new_size = 1;
   if (!p) return pool_alloc(new_size);
-  if (!in_pool(p)) return std::realloc(p, new_size == 0 ? 1 : new_size);
-  if (new_size <= kLargest && class_of(new_size == 0 ? 1 : new_size) == class_of(old_size == 0 ? 1 : old_size)) {
-    unpoison(p, new_size == 0 ? 1 : new_size);
+  if (!in_pool(p)) return std::realloc(p, new_size);
+  if (new_size <= kLargest && class_of(new_size) == class_of(old_size)) {
+    unpoison(p, new_size);
     return p;
   }
   void* q = pool_alloc(new_size);

@@ -2,6 +2,7 @@
 // the TBB thread limit.
 #include "lib/solver.h"
 
+#include <algorithm>
 #include <mutex>
 #include <set>
 

@@ -8,7 +8,6 @@
 // preparation (which it reports in stats as "prepare_seconds" when it has any).
 #pragma once
 
-#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -49,7 +48,6 @@ struct Stats {
     const Entry* e = find(k);
     return e ? e->second : fallback;
   }
-  size_t size() const { return values_.size(); }
   // The entries sorted by name.
   std::vector<Entry> sorted() const;
 

@@ -2,8 +2,8 @@
 #include "lib/mesh/prepare.h"
 
 #include <algorithm>
-#include <string>
 #include <numeric>
+#include <string>
 #include <unordered_map>
 
 namespace visgate::mesh {

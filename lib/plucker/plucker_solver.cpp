@@ -999,11 +999,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
             near_level |= v > 0.0 && v <= near_tol;
             maxv = std::max(maxv, v);
           }
-          if (maxv <= 0.0) {  // at or behind r's g-plane, or above it only by rounding
-            if (above && exact_once(np.triangle)) ++tot.level_triangles;
-            continue;
-          }
-          if (near_level) {
+          if (maxv <= 0.0 && !above) continue;  // float path: at or behind r's g-plane
+          if (maxv <= 0.0 || near_level) {  // above it only by rounding, or close to it
             if (exact_once(np.triangle)) ++tot.level_triangles;
             continue;
           }
