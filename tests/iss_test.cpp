@@ -457,7 +457,7 @@ TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
     s.raw.push_back(re);
     s.edges.push_back({uint32_t(k), 0});
   }
-  s.patches.push_back({0, 3, iss::Facing::TowardsReceiver, -1});
+  s.patches.push_back({0, 3, iss::Facing::TowardsReceiver, 0, -1});
   EXPECT_EQ(iss::validate(s, nullptr), "");
   iss::Surface broken = s;
   broken.raw[1].v[1] = Vec3d(5, 5, 5);  // the loop no longer closes
@@ -549,7 +549,7 @@ TEST(IssBlockers, ClampingKeepsSplitPointsOnTheirClipPlanes) {
       s.raw.push_back(re);
       s.edges.push_back({uint32_t(k), 0});
     }
-    s.patches.push_back({0, 3, iss::Facing::TowardsLight, -1});
+    s.patches.push_back({0, 3, iss::Facing::TowardsLight, 0, -1});
     AABB r(Vec3f(1, 1.5f, zr), Vec3f(1, 1.5f, zr)), l(Vec3f(-0.25f, -0.25f, e), Vec3f(-0.25f, -0.25f, e));
     iss::ShaftGeometry g(r, l, iss::MainAxis{2, 1}, 2.0);
     EXPECT_EQ(iss::classify_edges(s, g), 3u) << "every edge is 0.03 or more from the shaft";
@@ -578,6 +578,57 @@ TEST(IssBlockers, ClampingKeepsSplitPointsOnTheirClipPlanes) {
       EXPECT_TRUE(res.receivers[0].visible(1)) << rc << " z_r = " << zr;
     }
   }
+}
+
+TEST(IssBlockers, ALoopThatCollapsesAwayLeavesItsPatchMarked) {
+  // fuzz_iss 2f7607fd (corpus/iss/pouch/c4bb726e...), reduced by hand: one patch with
+  // two boundary loops, a rim around the receivers at z in [-0.125, 0] and a triangle
+  // far beside the shaft at z = 2 (the pouch's top rim, which the shafts pass through).
+  // SIMPLIFY-PATCHES collapses the far loop away entirely (its ears lie outside the
+  // extended shaft), so no collapsed edge is left, and the box of what remains lies on
+  // the receivers' level while the patch's triangles rise through the shaft. The patch
+  // must stay marked: then a sub-shaft whose clip plane is that level keeps the surface
+  // and sends its relations to the rays instead of dropping it as beyond the plane.
+  iss::Surface s;
+  auto loop = [&](std::initializer_list<Vec3d> pts) {
+    std::vector<Vec3d> v(pts);
+    for (size_t k = 0; k < v.size(); ++k) {
+      iss::RawEdge re;
+      re.v[0] = v[k];
+      re.v[1] = v[(k + 1) % v.size()];
+      re.nb[1] = 0;
+      s.edges.push_back({uint32_t(s.raw.size()), 0});
+      s.raw.push_back(re);
+    }
+  };
+  loop({Vec3d(0.5, 0, 0), Vec3d(0, 0.5, 0), Vec3d(-0.5, 0, 0), Vec3d(0, -0.5, 0), Vec3d(0, -0.625, -0.125)});
+  loop({Vec3d(10, 0, 2), Vec3d(11, 0, 2), Vec3d(10, 1, 2)});
+  s.patches.push_back({0, uint32_t(s.edges.size()), iss::Facing::TowardsLight, 0, -1});
+  ASSERT_EQ(iss::validate(s, nullptr), "");
+  AABB r(Vec3f(-0.2f, -0.25f, -2), Vec3f(0.2f, 0.2f, 0)), l(Vec3f(-2, -2, 2), Vec3f(2, 2, 2));
+  iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 11.0);
+  ASSERT_EQ(g.main_axis(), 2);
+  iss::classify_edges(s, g);
+  for (uint32_t k = 5; k < 8; ++k) ASSERT_FALSE(s.raw[k].inside) << "the far loop is outside the shaft";
+  for (iss::RawEdge& re : s.raw) re.fresh = 1;
+  EXPECT_FALSE(iss::has_collapsed_patches(s));
+  iss::Workspace ws;
+  iss::simplify_patches(s, g, ws);
+  ASSERT_EQ(iss::validate(s, nullptr), "");
+  ASSERT_EQ(s.patches.size(), 1u);
+  EXPECT_EQ(s.edges.size(), 5u) << "the far loop collapsed away";
+  EXPECT_TRUE(iss::has_collapsed_patches(s));
+  // A sub-shaft of the receivers on z = 0 only: the remaining boundary touches its clip
+  // plane, so the surface stands beyond it and neither blocks nor is dropped.
+  AABB r1(Vec3f(-0.2f, -0.25f, 0), Vec3f(0.2f, 0.2f, 0));
+  iss::ShaftGeometry g1(r1, l, iss::MainAxis{g.main_axis(), g.dir()}, 11.0);
+  iss::compute_bounds(s, g1);
+  EXPECT_TRUE(iss::beyond_clip_planes(s.box, g1));
+  EXPECT_TRUE(iss::stands_beyond_clip_planes(s, g1));
+  EXPECT_EQ(iss::blocking_test(s, g1), iss::BlockTest::Unknown);
+  // Merging keeps the mark (MERGE-PATCHES ors it into the merged patch).
+  iss::merge_patches(s, ws);
+  EXPECT_TRUE(iss::has_collapsed_patches(s));
 }
 
 // ---- hand-worked scenes -------------------------------------------------------------------

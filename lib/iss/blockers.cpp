@@ -390,6 +390,7 @@ void merge_patches(Surface& s, Workspace& ws) {
       q.facing = p.facing;
       q.tri = p.tri;
     }
+    q.collapsed |= p.collapsed;
     for (uint32_t k = p.first; k < p.first + p.count; ++k) {
       const Edge& e = s.edges[k];
       if (keep(e, gi)) ws.edge_tmp[fill[size_t(gi)]++] = e;
@@ -550,6 +551,7 @@ void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
               s.raw[e1.raw].nb[e1.flipped ? 0 : 1] = kNoPatch;
               s.raw[e2.raw].nb[e2.flipped ? 0 : 1] = kNoPatch;
               changed = true;
+              p.collapsed = 1;
               if (u == w || loop.size() == 2) {
                 if (j > i) {
                   loop.erase(loop.begin() + long(j));
@@ -572,7 +574,6 @@ void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
                 ne.nb[1] = int32_t(pi);
                 ne.mesh_edge = kClipEdge;
                 ne.inside = 0;
-                ne.collapsed = 1;
                 loop[i] = Edge{uint32_t(s.raw.size()), 0};
                 s.raw.push_back(ne);
                 loop.erase(loop.begin() + long(j));
@@ -942,14 +943,14 @@ bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g) {
   return misses_slab(box, a, g.clip_lo(), g.clip_hi(), main_axis_gap(g) > 0.0);
 }
 
-bool has_collapsed_edges(const Surface& s) {
-  for (const RawEdge& re : s.raw)
-    if (re.collapsed) return true;
+bool has_collapsed_patches(const Surface& s) {
+  for (const Patch& p : s.patches)
+    if (p.collapsed) return true;
   return false;
 }
 
 bool stands_beyond_clip_planes(const Surface& s, const ShaftGeometry& g) {
-  return beyond_clip_planes(s.box, g) && has_collapsed_edges(s);
+  return beyond_clip_planes(s.box, g) && has_collapsed_patches(s);
 }
 
 bool blocks_ray(const BlockerContext& ctx, const Surface& s, int ax, const Vec3d& r, const Vec3d& l) {

@@ -55,7 +55,6 @@ struct RawEdge {
   uint8_t inside = 1;                     // at least partially inside the shaft
   uint8_t fresh = 0;  // left the shaft since the last SIMPLIFY-PATCHES (section 4.13:
                       // only patches with such an edge are simplified again)
-  uint8_t collapsed = 0;  // made by SIMPLIFY-PATCHES from two collapsed edges (4.7.5)
 };
 
 struct Edge {
@@ -66,6 +65,10 @@ struct Edge {
 struct Patch {
   uint32_t first = 0, count = 0;  // range in Surface::edges
   Facing facing = Facing::Inconsistent;
+  // SIMPLIFY-PATCHES (4.7.5) cut triangles off this patch, or off a patch merged into
+  // it: its boundary's box need not hold the triangles it stands for (has_collapsed_patches).
+  // Next to `facing`, so a patch stays 16 bytes.
+  uint8_t collapsed = 0;
   int32_t tri = -1;  // mesh triangle if facing == Inconsistent
 };
 
@@ -179,9 +182,9 @@ bool shaft_too_thin(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
 // misses_slab between the clip planes, touching counting as missing when the boxes have
 // a gap on the main axis. Sound for a surface whose box holds its triangles, i.e. one
-// without collapsed edges (has_collapsed_edges below).
+// without collapsed patches (has_collapsed_patches below).
 bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g);
-// True when a raw edge of `s` was made by collapsing edges (section 4.7.5). Such a
+// True when a patch of `s` was simplified by collapsing edges (section 4.7.5). Such a
 // surface's boundary is no longer the boundary of its triangles: the collapsed ears lie
 // outside the extended shaft where they were cut, so every winding number about a
 // segment of that shaft or a sub-shaft is unchanged, but the boundary's box need not
@@ -189,8 +192,13 @@ bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g);
 // lie beyond the new clip plane while the triangles it stands for still cross the
 // sub-shaft (fuzz_iss 8aab0cde..., corpus/iss/pouch/d11d1859...: a pouch's simplified
 // patch 0.06 above a receiver's level, its triangle 0.27 below it and on the segment).
-bool has_collapsed_edges(const Surface& s);
-// A surface with collapsed edges whose box is beyond or touching a clip plane of `g`
+// The mark is the patch's, not a collapsed edge's: a loop of outside edges can collapse
+// away entirely and leave no such edge behind (fuzz_iss 2f7607fd...,
+// corpus/iss/pouch/c4bb726e...: the top rim of a pouch vanished, the patch kept only its
+// bottom rim, flat on the receivers' level, and was dropped as beyond the clip plane
+// although its triangles block the receivers).
+bool has_collapsed_patches(const Surface& s);
+// A surface with collapsed patches whose box is beyond or touching a clip plane of `g`
 // (beyond_clip_planes): it may stand for blockers inside the shaft, so it is neither
 // dropped nor removed, and it never blocks the shaft (its clamped boundary lies on the
 // clip plane, where the winding's sign at the node face is not reliable); its relations

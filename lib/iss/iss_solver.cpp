@@ -396,10 +396,10 @@ class Traversal {
     const int ax = sh->g.main_axis();
     const double lo = std::min(rp[ax], lp[ax]), hi = std::max(rp[ax], lp[ax]);
     for (const Surface& s : sh->surfaces) {
-      // Except a surface with collapsed edges, whose box need not hold its triangles
-      // (has_collapsed_edges, blockers.h): the ray decides for it.
+      // Except a surface with collapsed patches, whose box need not hold its triangles
+      // (has_collapsed_patches, blockers.h): the ray decides for it.
       const bool misses = misses_slab(s.box, ax, lo, hi, lo < hi);
-      if (misses && !has_collapsed_edges(s)) continue;
+      if (misses && !has_collapsed_patches(s)) continue;
       if (misses || s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
         ++n_fallback_;
         return embree_->occluded(rpf, lpf);
@@ -506,12 +506,12 @@ class Traversal {
       // flatten it onto the plane, where the receiver is: fuzz_iss 621ee63f..., a
       // triangle reaching z = 0.5 below a leaf whose receiver is at z = 0.5, 2^-149 beside
       // its plane, was clamped into a sliver through the receiver and blocked the shaft.
-      // Not a surface with collapsed edges (has_collapsed_edges, blockers.h): its boundary
+      // Not a surface with collapsed patches (has_collapsed_patches, blockers.h): its boundary
       // may lie beyond while the triangles it stands for cross the sub-shaft; it is kept,
       // never blocks and is never removed (stands_beyond_clip_planes), so its relations go
       // to the rays.
       if (beyond_clip_planes(ps.box, sub.g)) {
-        if (!has_collapsed_edges(ps)) {
+        if (!has_collapsed_patches(ps)) {
           ++n_dropped_;
           continue;
         }
