@@ -1800,6 +1800,37 @@ TEST(PluckerSolver, TriangleAboveTheReceiversLevelOnlyByRoundingGoesExact) {
   EXPECT_EQ(oracle::visible_region(*s, 0, 0).visible_fraction, 0.75);  // the hand computation
 }
 
+TEST(PluckerSolver, SliverSeenEdgeOnIsNotMergedAwayAtTheLightPlane) {
+  // fuzz_plucker 2d069e89 (a sanitizer-free 60 s run, 2026-12-04), reduced to its one
+  // triangle: a sliver in the plane y = 0 with vertices (0, 0, 2), (2^-37, 0, 2) on the
+  // light's plane z = 2 and (0, 0, -2); light [-2, 2]^2 at z = 2; receiver r = (0, e, 0),
+  // e = 1.6e-34. By hand: a segment from r to a light point (lx, ly) with ly < 0 crosses
+  // y = 0 at t = e / (e - ly), at (t lx, 0, 2t); the sliver there spans x in [0, about
+  // 2^-38], so the segment is blocked exactly when lx > 0 (for all but |ly| below about
+  // e 2^39 = 1e-22): a quarter of the light is hidden, fraction 0.75. A receiver at the
+  // origin lies on the sliver's edge line and in its plane: nothing hides (fraction 1).
+  // The two light-plane vertices, 2^-37 apart, were within the merge tolerance of clip
+  // points (2^-36 of the coordinates), so they were merged and the sliver dropped
+  // (fraction 1 for 0.75); such triangles now go to the exact path.
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"torus-28747",
+"meshes":[{"vertices":[["-0x0p+0","0x0p+0","0x1p+1"],["0x1p-37","-0x0p+0","0x1p+1"],["-0x0p+0","0x0p+0","-0x1p+1"]],
+"triangles":[[0,1,2]]}],
+"lights":[{"polygon":[["-0x1p+1","-0x1p+1","0x1p+1"],["-0x1p+1","0x1p+1","0x1p+1"],["0x1p+1","0x1p+1","0x1p+1"],["0x1p+1","-0x1p+1","0x1p+1"]],"samples":6,"pattern":"stratified","jitter":4,"seed":28747}],
+"receivers":[{"p":["0x0p+0","0x1.a045cap-114","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]},
+{"p":["0x0p+0","0x0p+0","0x0p+0"],"n":["0x0p+0","0x0p+0","0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (const char* coherence : {"on", "off"})
+    for (const char* choice : {"random", "relevant"}) {
+      SolveResult r = run(*s, {{"coherence", coherence}, {"choice", choice}, {"tile", "7"}});
+      EXPECT_NEAR(r.receivers[0].visible_fraction[0], 0.75, 1e-6) << coherence << " " << choice;
+      EXPECT_EQ(r.receivers[1].visible_fraction[0], 1.0f) << coherence << " " << choice;
+      EXPECT_GE(r.stats.get("plane_point_triangles"), 1.0);
+      expect_fractions_match_region_oracle(*s, r, std::string("coherence ") + coherence);
+    }
+  EXPECT_NEAR(oracle::visible_region(*s, 0, 0).visible_fraction, 0.75, 1e-9);  // the hand computation
+}
+
 TEST(PluckerSolver, NonPlanarLightIsLiftedAlongTheOraclesAxis) {
   // fuzz_plucker e50d5948 (ASan run, 2026-12-03): a light whose float vertices lie 0.5
   // off their Newell plane, a ribbon 4 x 4 x 420,000 whose exact Newell normal has

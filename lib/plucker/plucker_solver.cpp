@@ -210,46 +210,36 @@ bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec
   return false;
 }
 
-// Merges a clip point of a polygon clipped at the light plane with a neighbour that
-// rounding cannot tell apart from it. A vertex within rounding of the light plane but
-// beyond it (h = -1.7e-21, fuzz_plucker 09bd12dc...: a grid vertex on the float plane
-// z = 2 of a light whose lifted plane passes just above it) was clipped into two points
-// 1e-21 apart on a triangle of size 1: their edge's direction was rounding noise, and
-// the plane through a receiver and that edge cut the shadow wedge at the vertex in half
-// (fraction 0.75 for 0.62). The same holds for a vertex just on the near side next to
-// a clip point. Two consecutive vertices at most eps apart, one of them a clip point,
-// become the clip point (on the light plane, so it moves the shadow by about eps times
-// the receiver's magnification |v - r| / h(r), below 2^20 for a receiver the float path
-// shades); eps = 2^-36 of the two points' coordinates (local frame) leaves every edge at
-// least 2^17 times its rounding. The merged vertex touches the light plane (bsp.h: its
-// vvset lines are undecided, so it is inserted as mixed). Fewer than 3 left: dropped.
-void merge_plane_points(std::vector<Vec3d>& poly, std::vector<uint8_t>& on_plane) {
-  if (poly.size() < 3) return;
-  // eps from the two points' own magnitudes, not the polygon's: a clip point is
-  // interpolated from its edge's near end (fragment.h), so its rounding is relative to
-  // its own coordinates; a polygon reaching 2^108 away (fuzz_plucker seed 'pouch-12850')
-  // made a polygon-wide eps of 1e21 that merged every vertex of the part near the light.
+// True when a polygon clipped at the light plane has a clip point and a neighbour that
+// rounding cannot tell apart: two consecutive vertices at most eps apart, one of them
+// on the plane, eps = 2^-36 of the two points' own coordinates (local frame; a clip
+// point is interpolated from its edge's near end, fragment.h, so its rounding is
+// relative to its own magnitude: a polygon-wide eps reaching 2^108, fuzz_plucker seed
+// 'pouch-12850', would have caught every vertex near the light). Such an edge's
+// direction is rounding noise: a vertex within rounding of the light plane but beyond
+// it (h = -1.7e-21, fuzz_plucker 09bd12dc...: a grid vertex on the float plane z = 2 of
+// a light whose lifted plane passes just above it) was clipped into two points 1e-21
+// apart on a triangle of size 1, and the plane through a receiver and their edge cut the
+// shadow wedge at the vertex in half (fraction 0.75 for 0.62). Merging the two points
+// instead (the rule until stop 26) moves the shadow by eps at the light plane, which is
+// harmless unless a receiver sees the triangle nearly edge-on: then the shadow's wedge
+// angle is the triangle's width at the plane over the receiver's distance from its
+// plane, and a sliver 2^-37 wide at the light plane, 1.6e-34 beside a receiver, lost
+// its only distinct vertex and was dropped although it hides a quarter of the light
+// (fuzz_plucker 2d069e89..., fraction 1 for 0.75). Such triangles are subtracted exactly
+// per receiver (subtract_triangle_exact, which needs no clipping at the light plane),
+// as those within rounding of the plane (`plane_point_triangles`).
+bool close_plane_points(const std::vector<Vec3d>& poly, const std::vector<uint8_t>& on_plane) {
   auto close = [](const Vec3d& a, const Vec3d& b) {
     const double eps = 0x1p-36 * std::max(max_component(vabs(a)), max_component(vabs(b)));
     return max_component(vabs(a - b)) <= eps;
   };
-  size_t w = 0;
-  for (size_t k = 0; k < poly.size(); ++k) {
-    if (w > 0 && (on_plane[k] || on_plane[w - 1]) && close(poly[k], poly[w - 1])) {
-      if (!on_plane[w - 1]) poly[w - 1] = poly[k], on_plane[w - 1] = 1;
-      continue;
-    }
-    poly[w] = poly[k];
-    on_plane[w] = on_plane[k];
-    ++w;
+  const size_t n = poly.size();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t k1 = (k + 1) % n;
+    if (k1 != k && (on_plane[k] || on_plane[k1]) && close(poly[k], poly[k1])) return true;
   }
-  // The last against the first (the polygon is closed).
-  if (w > 1 && (on_plane[0] || on_plane[w - 1]) && close(poly[w - 1], poly[0])) {
-    if (!on_plane[0]) poly[0] = poly[w - 1], on_plane[0] = 1;
-    --w;
-  }
-  poly.resize(w < 3 ? 0 : w);
-  on_plane.resize(poly.size());
+  return false;
 }
 
 // A triangle part handled per receiver (plucker_solver.h "near" polygons).
@@ -307,6 +297,7 @@ struct Totals {
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
+  uint64_t plane_point_triangles = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -320,6 +311,7 @@ struct Totals {
     rounded_triangles += o.rounded_triangles;
     close_triangles += o.close_triangles;
     level_triangles += o.level_triangles;
+    plane_point_triangles += o.plane_point_triangles;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -649,9 +641,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   // The receivers that set the scale are those the float path shades: one more than
   // 2^20 light widths from the light is extreme and shaded exactly (below). Letting it
   // count kept a wall reaching 2^104 away on the float path for the group's other
-  // receivers, where merge_plane_points, whose tolerance is relative to the points'
-  // magnitudes (2^68 there), merged its clip points at the light plane with the
-  // vertices 0.78 below them and dropped the wall (fuzz_plucker 96d10f7c...: receiver
+  // receivers, where the merging of close plane points (now close_plane_points, whose
+  // tolerance is relative to the points' magnitudes, 2^68 there) merged its clip points
+  // at the light plane with the vertices 0.78 below them and dropped the wall (fuzz_plucker 96d10f7c...: receiver
   // 0 at 2^99, fractions 0.885, 0.817, 0.555 for 0.767, 0.789, 0.527).
   // The light's width: its longest side, or its area over that side when that is smaller.
   const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
@@ -734,8 +726,12 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     if (std::max(gv[0], std::max(gv[1], gv[2])) <= gmin - delta) continue;
     // Clip to the light side h >= 0.
     clip_by_values(tri, h, 3, true, poly0, &on_plane0);
-    merge_plane_points(poly0, on_plane0);
-    if (poly0.empty()) continue;
+    if (poly0.size() < 3) continue;
+    if (close_plane_points(poly0, on_plane0)) {
+      exact_tris.push_back(t);
+      ++tot.plane_point_triangles;
+      continue;
+    }
     // Split at gmax + delta: beyond it, between every receiver and the light (tree);
     // the rest per receiver.
     vals.resize(poly0.size());
@@ -1347,6 +1343,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("rounded_triangles", double(totals.rounded_triangles));
   st.set("close_triangles", double(totals.close_triangles));
   st.set("level_triangles", double(totals.level_triangles));
+  st.set("plane_point_triangles", double(totals.plane_point_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
