@@ -229,6 +229,7 @@ bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec
 // (fuzz_plucker 2d069e89..., fraction 1 for 0.75). Such triangles are subtracted exactly
 // per receiver (subtract_triangle_exact, which needs no clipping at the light plane),
 // as those within rounding of the plane (`plane_point_triangles`).
+// `poly` has at least 3 vertices.
 bool close_plane_points(const std::vector<Vec3d>& poly, const std::vector<uint8_t>& on_plane) {
   auto close = [](const Vec3d& a, const Vec3d& b) {
     const double eps = 0x1p-36 * std::max(max_component(vabs(a)), max_component(vabs(b)));
@@ -237,7 +238,7 @@ bool close_plane_points(const std::vector<Vec3d>& poly, const std::vector<uint8_
   const size_t n = poly.size();
   for (size_t k = 0; k < n; ++k) {
     const size_t k1 = (k + 1) % n;
-    if (k1 != k && (on_plane[k] || on_plane[k1]) && close(poly[k], poly[k1])) return true;
+    if ((on_plane[k] || on_plane[k1]) && close(poly[k], poly[k1])) return true;
   }
   return false;
 }
@@ -643,8 +644,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   // count kept a wall reaching 2^104 away on the float path for the group's other
   // receivers, where the merging of close plane points (now close_plane_points, whose
   // tolerance is relative to the points' magnitudes, 2^68 there) merged its clip points
-  // at the light plane with the vertices 0.78 below them and dropped the wall (fuzz_plucker 96d10f7c...: receiver
-  // 0 at 2^99, fractions 0.885, 0.817, 0.555 for 0.767, 0.789, 0.527).
+  // at the light plane with the vertices 0.78 below them and dropped the wall
+  // (fuzz_plucker 96d10f7c...: receiver 0 at 2^99, fractions 0.885, 0.817, 0.555 for
+  // 0.767, 0.789, 0.527).
   // The light's width: its longest side, or its area over that side when that is smaller.
   const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
   double work_scale = double(lf.extent);
