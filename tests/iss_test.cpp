@@ -456,10 +456,17 @@ TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
     re.nb[1] = 0;
     s.raw.push_back(re);
     s.edges.push_back({uint32_t(k), 0});
+    s.hull.extend(v[k]);
   }
-  s.patches.push_back({0, 3, iss::Facing::TowardsReceiver, 0, -1});
+  s.patches.push_back({0, 3, iss::Facing::TowardsReceiver, -1});
   EXPECT_EQ(iss::validate(s, nullptr), "");
   iss::Surface broken = s;
+  broken.hull = iss::AABBd{};  // patches stand for triangles somewhere
+  EXPECT_NE(iss::validate(broken, nullptr), "");
+  broken = s;
+  broken.hull.hi.z = 0.5;  // the hull holds every edge
+  EXPECT_NE(iss::validate(broken, nullptr), "");
+  broken = s;
   broken.raw[1].v[1] = Vec3d(5, 5, 5);  // the loop no longer closes
   EXPECT_NE(iss::validate(broken, nullptr), "");
   broken = s;
@@ -548,8 +555,9 @@ TEST(IssBlockers, ClampingKeepsSplitPointsOnTheirClipPlanes) {
       re.nb[1] = 0;
       s.raw.push_back(re);
       s.edges.push_back({uint32_t(k), 0});
+      s.hull.extend(v[k]);
     }
-    s.patches.push_back({0, 3, iss::Facing::TowardsLight, 0, -1});
+    s.patches.push_back({0, 3, iss::Facing::TowardsLight, -1});
     AABB r(Vec3f(1, 1.5f, zr), Vec3f(1, 1.5f, zr)), l(Vec3f(-0.25f, -0.25f, e), Vec3f(-0.25f, -0.25f, e));
     iss::ShaftGeometry g(r, l, iss::MainAxis{2, 1}, 2.0);
     EXPECT_EQ(iss::classify_edges(s, g), 3u) << "every edge is 0.03 or more from the shaft";
@@ -580,15 +588,15 @@ TEST(IssBlockers, ClampingKeepsSplitPointsOnTheirClipPlanes) {
   }
 }
 
-TEST(IssBlockers, ALoopThatCollapsesAwayLeavesItsPatchMarked) {
-  // fuzz_iss 2f7607fd (corpus/iss/pouch/c4bb726e...), reduced by hand: one patch with
+TEST(IssBlockers, ALoopThatCollapsesAwayStaysInTheHull) {
+  // fuzz_iss 2f7607fd (corpus/iss/pouch/8f524c6c...), reduced by hand: one patch with
   // two boundary loops, a rim around the receivers at z in [-0.125, 0] and a triangle
   // far beside the shaft at z = 2 (the pouch's top rim, which the shafts pass through).
   // SIMPLIFY-PATCHES collapses the far loop away entirely (its ears lie outside the
-  // extended shaft), so no collapsed edge is left, and the box of what remains lies on
-  // the receivers' level while the patch's triangles rise through the shaft. The patch
-  // must stay marked: then a sub-shaft whose clip plane is that level keeps the surface
-  // and sends its relations to the rays instead of dropping it as beyond the plane.
+  // extended shaft), and the box of what remains lies on the receivers' level while the
+  // patch's triangles rise through the shaft. The hull keeps the far loop: then a
+  // sub-shaft whose clip plane is that level keeps the surface and sends its relations
+  // to the rays instead of dropping it as beyond the plane.
   iss::Surface s;
   auto loop = [&](std::initializer_list<Vec3d> pts) {
     std::vector<Vec3d> v(pts);
@@ -599,11 +607,12 @@ TEST(IssBlockers, ALoopThatCollapsesAwayLeavesItsPatchMarked) {
       re.nb[1] = 0;
       s.edges.push_back({uint32_t(s.raw.size()), 0});
       s.raw.push_back(re);
+      s.hull.extend(re.v[0]);  // as construct_triangle_surface sets it
     }
   };
   loop({Vec3d(0.5, 0, 0), Vec3d(0, 0.5, 0), Vec3d(-0.5, 0, 0), Vec3d(0, -0.5, 0), Vec3d(0, -0.625, -0.125)});
   loop({Vec3d(10, 0, 2), Vec3d(11, 0, 2), Vec3d(10, 1, 2)});
-  s.patches.push_back({0, uint32_t(s.edges.size()), iss::Facing::TowardsLight, 0, -1});
+  s.patches.push_back({0, uint32_t(s.edges.size()), iss::Facing::TowardsLight, -1});
   ASSERT_EQ(iss::validate(s, nullptr), "");
   AABB r(Vec3f(-0.2f, -0.25f, -2), Vec3f(0.2f, 0.2f, 0)), l(Vec3f(-2, -2, 2), Vec3f(2, 2, 2));
   iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 11.0);
@@ -611,24 +620,69 @@ TEST(IssBlockers, ALoopThatCollapsesAwayLeavesItsPatchMarked) {
   iss::classify_edges(s, g);
   for (uint32_t k = 5; k < 8; ++k) ASSERT_FALSE(s.raw[k].inside) << "the far loop is outside the shaft";
   for (iss::RawEdge& re : s.raw) re.fresh = 1;
-  EXPECT_FALSE(iss::has_collapsed_patches(s));
   iss::Workspace ws;
   iss::simplify_patches(s, g, ws);
   ASSERT_EQ(iss::validate(s, nullptr), "");
   ASSERT_EQ(s.patches.size(), 1u);
   EXPECT_EQ(s.edges.size(), 5u) << "the far loop collapsed away";
-  EXPECT_TRUE(iss::has_collapsed_patches(s));
+  EXPECT_EQ(s.hull.hi.z, 2.0) << "the hull still reaches the far loop";
   // A sub-shaft of the receivers on z = 0 only: the remaining boundary touches its clip
-  // plane, so the surface stands beyond it and neither blocks nor is dropped.
+  // plane, the hull does not, so the surface stands beyond it and neither blocks nor is
+  // dropped.
   AABB r1(Vec3f(-0.2f, -0.25f, 0), Vec3f(0.2f, 0.2f, 0));
   iss::ShaftGeometry g1(r1, l, iss::MainAxis{g.main_axis(), g.dir()}, 11.0);
   iss::compute_bounds(s, g1);
   EXPECT_TRUE(iss::beyond_clip_planes(s.box, g1));
+  EXPECT_FALSE(iss::beyond_clip_planes(s.hull, g1));
   EXPECT_TRUE(iss::stands_beyond_clip_planes(s, g1));
   EXPECT_EQ(iss::blocking_test(s, g1), iss::BlockTest::Unknown);
-  // Merging keeps the mark (MERGE-PATCHES ors it into the merged patch).
+  // Merging keeps the hull.
   iss::merge_patches(s, ws);
-  EXPECT_TRUE(iss::has_collapsed_patches(s));
+  EXPECT_EQ(s.hull.hi.z, 2.0);
+}
+
+// The open tetrahedron of fuzz_iss aa81c695 (corpus/iss/other/b8a6e1e8...): apex
+// (0, 0, 0.5) over the base (0, 0, 0), (0, 2, 0), (-1, 1, 0), which is left open, its
+// three faces wound so that they merge into one patch facing the light.
+void add_open_tetrahedron(Scene& s) {
+  s.mesh.vertices = {Vec3f(0, 0, 0.5f), Vec3f(0, 0, 0), Vec3f(0, 2, 0), Vec3f(-1, 1, 0)};
+  s.mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {1, 0, 3}};
+}
+
+TEST(IssBlockers, AMergedPatchKeepsItsTrianglesInTheHull) {
+  // MERGE-PATCHES forgets the edges inside a merged patch: the three faces of the open
+  // tetrahedron, consistent towards the light, merge into one patch whose boundary is the
+  // base triangle, flat on z = 0, while the faces rise to z = 0.5. The boundary's box is
+  // flat; the hull keeps the apex, so a shaft from a receiver on the base plane does
+  // not drop the surface as beyond its clip plane.
+  Scene sc;
+  add_open_tetrahedron(sc);
+  sc.lights.push_back(square_light(0, 0, 2, 2, 4));
+  sc.receivers.push_back({Vec3f(-0.5f, 1, 0), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(sc).ok());
+  mesh::PreparedMesh pm = mesh::prepare_mesh(sc.mesh);
+  iss::BlockerContext ctx{&pm, 4.0};
+  AABB r(Vec3f(-0.5f, 0.8f, -1.5f), Vec3f(-0.3f, 1, 0)), l(Vec3f(-2, -2, 2), Vec3f(2, 2, 2));
+  iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 4.0);
+  ASSERT_EQ(g.main_axis(), 2);
+  iss::TreeNode rn, ln;  // no inside triangles
+  iss::Workspace ws;
+  iss::Surface s = iss::construct_triangle_surface(ctx, {0, 1, 2}, g, rn, ln, ws);
+  ASSERT_EQ(s.patches.size(), 3u);
+  iss::classify_edges(s, g);
+  iss::update_patch_facings(ctx, s, g);
+  iss::merge_patches(s, ws);
+  ASSERT_EQ(iss::validate(s, &pm), "");
+  ASSERT_EQ(s.patches.size(), 1u) << "the faces merge";
+  iss::compute_bounds(s, g);
+  EXPECT_EQ(s.box.hi.z, 0.0) << "the boundary is the base";
+  EXPECT_EQ(s.hull.hi.z, 0.5) << "the hull keeps the apex";
+  // The sub-shaft of the receiver on the base: its clip plane is z = 0.
+  AABB r1(Vec3f(-0.5f, 1, 0), Vec3f(-0.5f, 1, 0));
+  iss::ShaftGeometry g1(r1, l, iss::MainAxis{g.main_axis(), g.dir()}, 4.0);
+  EXPECT_TRUE(iss::beyond_clip_planes(s.box, g1));
+  EXPECT_FALSE(iss::beyond_clip_planes(s.hull, g1)) << "not to be dropped";
+  EXPECT_NE(iss::blocking_test(s, g1), iss::BlockTest::Clear) << "not to be removed";
 }
 
 // ---- hand-worked scenes -------------------------------------------------------------------
@@ -778,6 +832,32 @@ TEST(Iss, PouchAroundReceiversOpenTowardsTheLight) {
       Compare c = compare_to_reference(s, r);
       EXPECT_EQ(c.mismatches, 0u) << describe(o);
     }
+  }
+}
+
+TEST(Iss, ReceiverOnTheOpeningOfAMergedPouchIsBlocked) {
+  // fuzz_iss aa81c695 (corpus/iss/other/b8a6e1e8...), hand-worked: a receiver inside the
+  // open base of the tetrahedron, on the base's plane. Every segment from it to the
+  // light at z = 2 rises into the tetrahedron and leaves through a face: all blocked. A
+  // second receiver below makes the parent node merge the faces into one patch whose
+  // boundary is the base; the one-receiver sub-shaft used to drop that surface as beyond
+  // its clip plane (the base's box is flat on it) and call the empty shaft visible.
+  Scene s;
+  add_open_tetrahedron(s);
+  Light li = square_light(0, 0, 2, 2, 13);
+  li.seed = 25857;
+  s.lights.push_back(li);
+  s.receivers.push_back({Vec3f(-0.5f, 1, 0), Vec3f(0.0133137237f, 0.0765991881f, 0.996973097f)});
+  s.receivers.push_back({Vec3f(-0.303171992f, 0.799211144f, -1.5f), Vec3f(0, 0, 1)});
+  ASSERT_TRUE(finish_scene(s).ok());
+  auto opts = kOptionSets;
+  opts.push_back({{"leaf_receivers", "1"}, {"leaf_samples", "1"}, {"auto_rays", "off"}});
+  opts.push_back({{"leaf_receivers", "1"}, {"leaf_samples", "1"}, {"auto_rays", "off"}, {"ray_caster", "custom"}});
+  for (const auto& o : opts) {
+    SolveResult r = run_iss(s, o);
+    for (int j = 0; j < 13; ++j) EXPECT_FALSE(r.receivers[0].visible(size_t(j))) << describe(o) << " sample " << j;
+    Compare c = compare_to_reference(s, r);
+    EXPECT_EQ(c.mismatches, 0u) << describe(o);
   }
 }
 

@@ -207,6 +207,7 @@ void Workspace::recycle(Surface&& s) {
   s.patches.clear();
   s.loose.clear();
   s.box = AABBd{};
+  s.hull = AABBd{};
   s.vsum = Vec3d(0, 0, 0);
   s.vcount = 0;
   s.refined = true;
@@ -291,6 +292,10 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
     s.patches.push_back(p);
   }
   compact_raw(s, ws);
+  for (const RawEdge& re : s.raw) {  // the clipped triangles, before any merge
+    s.hull.extend(re.v[0]);
+    s.hull.extend(re.v[1]);
+  }
   return s;
 }
 
@@ -390,7 +395,6 @@ void merge_patches(Surface& s, Workspace& ws) {
       q.facing = p.facing;
       q.tri = p.tri;
     }
-    q.collapsed |= p.collapsed;
     for (uint32_t k = p.first; k < p.first + p.count; ++k) {
       const Edge& e = s.edges[k];
       if (keep(e, gi)) ws.edge_tmp[fill[size_t(gi)]++] = e;
@@ -551,7 +555,6 @@ void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws) {
               s.raw[e1.raw].nb[e1.flipped ? 0 : 1] = kNoPatch;
               s.raw[e2.raw].nb[e2.flipped ? 0 : 1] = kNoPatch;
               changed = true;
-              p.collapsed = 1;
               if (u == w || loop.size() == 2) {
                 if (j > i) {
                   loop.erase(loop.begin() + long(j));
@@ -639,7 +642,10 @@ void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws) {
     if (e.flipped && ws.remap[e.raw] >= 0) e.raw = uint32_t(ws.remap[e.raw]);
   // Distribute patches, edges and raw edges to the components.
   size_t base = out.size();
-  for (int32_t c = 0; c < nc; ++c) out.push_back(ws.take_surface());
+  for (int32_t c = 0; c < nc; ++c) {
+    out.push_back(ws.take_surface());
+    out.back().hull = s.hull;  // a superset of each component's triangles
+  }
   std::vector<int32_t>& local_patch = ws.local_patch;
   std::vector<int32_t>& local_raw = ws.local_raw;
   local_patch.assign(np, -1);
@@ -741,6 +747,7 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
         p.first += eb;
         c.patches.push_back(p);
       }
+      c.hull.extend(s.hull);
       ws.recycle(std::move(s));
     }
     ws.reset_labels(ctx.mesh->edge_count());
@@ -943,14 +950,8 @@ bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g) {
   return misses_slab(box, a, g.clip_lo(), g.clip_hi(), main_axis_gap(g) > 0.0);
 }
 
-bool has_collapsed_patches(const Surface& s) {
-  for (const Patch& p : s.patches)
-    if (p.collapsed) return true;
-  return false;
-}
-
 bool stands_beyond_clip_planes(const Surface& s, const ShaftGeometry& g) {
-  return beyond_clip_planes(s.box, g) && has_collapsed_patches(s);
+  return beyond_clip_planes(s.box, g) && !beyond_clip_planes(s.hull, g);
 }
 
 bool blocks_ray(const BlockerContext& ctx, const Surface& s, int ax, const Vec3d& r, const Vec3d& l) {
@@ -1020,13 +1021,17 @@ std::string validate(const Surface& s, const mesh::PreparedMesh* m) {
     if (label < 0 || (m && (size_t(label) >= m->edge_count() || !m->is_double_edge[size_t(label)])))
       return fail("loose edge label is not a double edge");
   }
-  if (!s.box.empty()) {
+  auto holds = [&](const AABBd& b, const char* what) -> std::string {
+    if (b.empty()) return {};
     for (const RawEdge& re : s.raw)
       for (const Vec3d& v : re.v)
-        if (v.x < s.box.lo.x || v.y < s.box.lo.y || v.z < s.box.lo.z || v.x > s.box.hi.x || v.y > s.box.hi.y ||
-            v.z > s.box.hi.z)
-          return fail("vertex outside the surface box");
-  }
+        if (v.x < b.lo.x || v.y < b.lo.y || v.z < b.lo.z || v.x > b.hi.x || v.y > b.hi.y || v.z > b.hi.z)
+          return fail(std::string("vertex outside the surface ") + what);
+    return {};
+  };
+  if (!s.patches.empty() && s.hull.empty()) return fail("patches without a hull");
+  if (std::string e = holds(s.box, "box"); !e.empty()) return e;
+  if (std::string e = holds(s.hull, "hull"); !e.empty()) return e;
   return {};
 }
 

@@ -65,10 +65,6 @@ struct Edge {
 struct Patch {
   uint32_t first = 0, count = 0;  // range in Surface::edges
   Facing facing = Facing::Inconsistent;
-  // SIMPLIFY-PATCHES (4.7.5) cut triangles off this patch, or off a patch merged into
-  // it: its boundary's box need not hold the triangles it stands for (has_collapsed_patches).
-  // Next to `facing`, so a patch stays 16 bytes.
-  uint8_t collapsed = 0;
   int32_t tri = -1;  // mesh triangle if facing == Inconsistent
 };
 
@@ -77,7 +73,18 @@ struct Surface {
   std::vector<Edge> edges;
   std::vector<Patch> patches;
   std::vector<int32_t> loose;  // loose edge labels (section 4.4.2)
-  AABBd box;
+  AABBd box;   // of the raw edges (compute_bounds)
+  // Box of the clipped triangles the surface stands for, a superset: set from the
+  // triangles' edges when they are built into patches, carried through copies and
+  // splits, joined by combining, never shrunk. The boundary's `box` need not hold them:
+  // MERGE-PATCHES (4.7.3) forgets the edges inside a merged patch and SIMPLIFY-PATCHES
+  // (4.7.5) collapses outside edges away, so a pouch's merged patch keeps only its rim
+  // (fuzz_iss aa81c695..., corpus/iss/other/b8a6e1e8...: the rim flat on a receiver's
+  // level, the pouch rising above it) and a collapsed one may keep nothing near its
+  // triangles (fuzz_iss 2f7607fd..., corpus/iss/pouch/8f524c6c...). Whatever claims to
+  // know where the triangles are (beyond_clip_planes drops, the ray caster's slab
+  // test) asks the hull, never the boundary.
+  AABBd hull;
   Vec3d vsum{0, 0, 0};  // vertex centre data (section 4.7.9): sum and count of the
   double vcount = 0;    // endpoints of edges inside the shaft
   bool refined = true;  // false when postponed in the last construction
@@ -181,28 +188,14 @@ double main_axis_gap(const ShaftGeometry& g);
 bool shaft_too_thin(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
 // misses_slab between the clip planes, touching counting as missing when the boxes have
-// a gap on the main axis. Sound for a surface whose box holds its triangles, i.e. one
-// without collapsed patches (has_collapsed_patches below).
+// a gap on the main axis. Sound for a box that holds the triangles: a surface's hull,
+// not its boundary's box.
 bool beyond_clip_planes(const AABBd& box, const ShaftGeometry& g);
-// True when a patch of `s` was simplified by collapsing edges (section 4.7.5). Such a
-// surface's boundary is no longer the boundary of its triangles: the collapsed ears lie
-// outside the extended shaft where they were cut, so every winding number about a
-// segment of that shaft or a sub-shaft is unchanged, but the boundary's box need not
-// hold the triangles. After a receiver split along the main axis the whole boundary can
-// lie beyond the new clip plane while the triangles it stands for still cross the
-// sub-shaft (fuzz_iss 8aab0cde..., corpus/iss/pouch/d11d1859...: a pouch's simplified
-// patch 0.06 above a receiver's level, its triangle 0.27 below it and on the segment).
-// The mark is the patch's, not a collapsed edge's: a loop of outside edges can collapse
-// away entirely and leave no such edge behind (fuzz_iss 2f7607fd...,
-// corpus/iss/pouch/c4bb726e...: the top rim of a pouch vanished, the patch kept only its
-// bottom rim, flat on the receivers' level, and was dropped as beyond the clip plane
-// although its triangles block the receivers).
-bool has_collapsed_patches(const Surface& s);
-// A surface with collapsed patches whose box is beyond or touching a clip plane of `g`
-// (beyond_clip_planes): it may stand for blockers inside the shaft, so it is neither
-// dropped nor removed, and it never blocks the shaft (its clamped boundary lies on the
-// clip plane, where the winding's sign at the node face is not reliable); its relations
-// go down to the rays.
+// A surface whose boundary's box is beyond or touching a clip plane of `g`
+// (beyond_clip_planes) while its hull is not: it may stand for blockers inside the
+// shaft, so it is neither dropped nor removed, and it never blocks the shaft (its
+// clamped boundary lies on the clip plane, where the winding's sign at the node face is
+// not reliable); its relations go down to the rays.
 bool stands_beyond_clip_planes(const Surface& s, const ShaftGeometry& g);
 // CAN-BLOCK-SHAFT (line 1 of Figure 4.18): false when a surface with this box cannot
 // block the shaft: its box clamped to the clip planes misses one of three box-to-box

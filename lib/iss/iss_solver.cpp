@@ -396,11 +396,10 @@ class Traversal {
     const int ax = sh->g.main_axis();
     const double lo = std::min(rp[ax], lp[ax]), hi = std::max(rp[ax], lp[ax]);
     for (const Surface& s : sh->surfaces) {
-      // Except a surface with collapsed patches, whose box need not hold its triangles
-      // (has_collapsed_patches, blockers.h): the ray decides for it.
-      const bool misses = misses_slab(s.box, ax, lo, hi, lo < hi);
-      if (misses && !has_collapsed_patches(s)) continue;
-      if (misses || s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
+      // Where the triangles are is the hull's to say; a boundary missing the slab while
+      // the hull does not (a merged or collapsed patch, Surface::hull) leaves the ray.
+      if (misses_slab(s.hull, ax, lo, hi, lo < hi)) continue;
+      if (misses_slab(s.box, ax, lo, hi, lo < hi) || s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
         ++n_fallback_;
         return embree_->occluded(rpf, lpf);
       }
@@ -506,17 +505,15 @@ class Traversal {
       // flatten it onto the plane, where the receiver is: fuzz_iss 621ee63f..., a
       // triangle reaching z = 0.5 below a leaf whose receiver is at z = 0.5, 2^-149 beside
       // its plane, was clamped into a sliver through the receiver and blocked the shaft.
-      // Not a surface with collapsed patches (has_collapsed_patches, blockers.h): its boundary
-      // may lie beyond while the triangles it stands for cross the sub-shaft; it is kept,
-      // never blocks and is never removed (stands_beyond_clip_planes), so its relations go
-      // to the rays.
-      if (beyond_clip_planes(ps.box, sub.g)) {
-        if (!has_collapsed_patches(ps)) {
-          ++n_dropped_;
-          continue;
-        }
-        ++n_kept_beyond_;
+      // The test is the hull's (Surface::hull): a merged or collapsed patch's boundary
+      // may lie beyond while the triangles it stands for cross the sub-shaft; such a
+      // surface is kept, never blocks and is never removed (stands_beyond_clip_planes),
+      // so its relations go to the rays.
+      if (beyond_clip_planes(ps.hull, sub.g)) {
+        ++n_dropped_;
+        continue;
       }
+      if (beyond_clip_planes(ps.box, sub.g)) ++n_kept_beyond_;
       Surface s;
       {
         ScopedTimer t(times_[kCopy]);
@@ -744,7 +741,7 @@ class Traversal {
       // a surface kept only because its test was refused, say in a shaft too thin to
       // test, may block a later, thicker sub-shaft.
       if (test == BlockTest::Clear && all_edges_outside(s)) {
-        sh.ghosts.push_back(s.box);
+        sh.ghosts.push_back(s.hull);
         ++n_removed_;
         ws_.recycle(std::move(s));
         if (k + 1 != sh.surfaces.size()) sh.surfaces[k] = std::move(sh.surfaces.back());
