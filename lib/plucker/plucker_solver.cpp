@@ -880,10 +880,25 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       size_t m = lf.poly.size();
       pyramid.resize(m);
       pyramid_err.resize(m);
+      // A plane only culls when the whole light is on its positive side (then it
+      // supports the pyramid, whatever edge it came from). An edge far shorter than the
+      // rounding of its lifted ends has no direction: fuzz_plucker 2f79b58a..., a
+      // non-planar light with two vertices 2^-64 apart, lifted onto its Newell plane to
+      // 1e-16; the plane through r and that edge turned about r and the light vertex,
+      // cut through the light, and culled a polygon hiding 2% of it. Such a plane is
+      // dropped (a zero normal culls nothing).
       for (size_t j = 0; j < m; ++j) {
         Vec3d err;
         Vec3d nrm = edge_plane_normal_err(r, lf.poly[j], lf.poly[(j + 1) % m], err);
         if (dot(nrm, lf.centroid - lf.poly[j]) < 0.0) nrm = -nrm;
+        for (size_t k = 0; k < m; ++k) {
+          const Vec3d d = lf.poly[k] - lf.poly[j];
+          if (dot(nrm, d) < -16.0 * dot_err(d, nrm, err)) {
+            nrm = Vec3d(0, 0, 0);
+            err = Vec3d(0, 0, 0);
+            break;
+          }
+        }
         pyramid[j] = nrm;
         pyramid_err[j] = err;
       }
