@@ -1113,7 +1113,17 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         double ar = length(cross(b - a, c - a));
         if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
       }
-      if (best > 0.0 && point_in_fragment(lf.frame, frags.data(f), frags.count(f), inside - od)) {
+      // The comparator's segment runs from r to that rounded point, which rounding also
+      // moved off the light's plane (by up to half the spacing): its test is the point
+      // where the segment meets the plane, the central projection from r, not the point
+      // with an axis dropped. fuzz_plucker c4e40475...: a light 4 across at 4.7e5 tilted
+      // by 1/64 (spacing 1/32), a sliver fragment 1/64 wide whose rounded point lay 1/64
+      // below the plane and, seen from a receiver 1.84 below it and 3 aside, behind a
+      // shadow edge (blocked at margin 8e-5) while its dropped-axis point was inside.
+      Vec3d pl = inside - od;
+      const double h_r = dot(lf.nd, r) - lf.h0, h_p = dot(lf.nd, pl) - lf.h0;
+      if (h_r != h_p) pl = r + (pl - r) * (h_r / (h_r - h_p));
+      if (best > 0.0 && point_in_fragment(lf.frame, frags.data(f), frags.count(f), pl)) {
         out.push_back(std::move(wf));
       } else {
         ++tot.unreported_slivers;
