@@ -1093,6 +1093,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     out.reserve(frags.size());
     double area = 0.0, irr = 0.0;
     const Vec3d od = to_double(lf.origin);
+    const double h_r = dot(lf.nd, r) - lf.h0;  // r's height over the light's plane (below)
     for (size_t f = 0; f < frags.size(); ++f) {
       area += polygon_area(frags.data(f), frags.count(f));
       irr += lambert_irradiance(r, rec.n, frags.data(f), frags.count(f));
@@ -1121,7 +1122,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       // below the plane and, seen from a receiver 1.84 below it and 3 aside, behind a
       // shadow edge (blocked at margin 8e-5) while its dropped-axis point was inside.
       Vec3d pl = inside - od;
-      const double h_r = dot(lf.nd, r) - lf.h0, h_p = dot(lf.nd, pl) - lf.h0;
+      const double h_p = dot(lf.nd, pl) - lf.h0;
       if (h_r != h_p) pl = r + (pl - r) * (h_r / (h_r - h_p));
       if (best > 0.0 && point_in_fragment(lf.frame, frags.data(f), frags.count(f), pl)) {
         out.push_back(std::move(wf));
