@@ -14,6 +14,9 @@
 # and clang-14 inlines no function that carries it, at -O1 or -O2 (lib/iss/shaft.cpp: 52
 # out-of-line calls of dot, cross and Vec3 operators with it, 9 without), so every
 # small inline helper of the code under test became a call (fuzz_iss: README "Speed").
+# Single-threaded: CGAL without thread safety (VISGATE_CGAL_NO_THREADS, the root
+# CMakeLists.txt): the targets run one input at a time on one thread, and CGAL's
+# call_once per exact evaluation cost a system call each.
 # Used by tools/fuzz-smoke.sh and tools/fuzz-campaign.sh; then build with
 #   cmake --build BUILD_DIR -j2 --target visgate_fuzzers
 #
@@ -42,7 +45,8 @@ cmake -S "$ROOT" -B "$BUILD" \
   -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
   -DCMAKE_C_FLAGS="$FLAGS" -DCMAKE_CXX_FLAGS="$FLAGS" \
   -DCMAKE_C_FLAGS_RELEASE="-O2 -DNDEBUG" -DCMAKE_CXX_FLAGS_RELEASE="-O2 -DNDEBUG" \
-  "${ENGINE[@]}" -DVISGATE_BUILD_FUZZERS=ON -DVISGATE_SANITIZE=OFF -DVISGATE_BUILD_TESTS=OFF > "$BUILD/configure.log" 2>&1 || {
+  "${ENGINE[@]}" -DVISGATE_BUILD_FUZZERS=ON -DVISGATE_SANITIZE=OFF -DVISGATE_BUILD_TESTS=OFF \
+  -DVISGATE_CGAL_NO_THREADS=ON > "$BUILD/configure.log" 2>&1 || {
   cat "$BUILD/configure.log" >&2
   exit 1
 }

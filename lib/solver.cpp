@@ -184,6 +184,15 @@ std::string write_result_json(const Scene& scene, const std::string& method, con
   return doc.dump() + "\n";
 }
 
+#ifdef CGAL_HAS_NO_THREADS
+// A build with CGAL's thread safety off (CMake option VISGATE_CGAL_NO_THREADS, the fuzz
+// builds) runs everything on one thread: TBB takes the smallest active limit, so every
+// ThreadLimit below and every parallel loop without one stays serial.
+namespace {
+const tbb::global_control single_threaded_build(tbb::global_control::max_allowed_parallelism, 1);
+}  // namespace
+#endif
+
 ThreadLimit::ThreadLimit(int threads) : impl_(nullptr) {
   if (threads > 0) impl_ = new tbb::global_control(tbb::global_control::max_allowed_parallelism, size_t(threads));
 }
