@@ -9,8 +9,29 @@ namespace visgate::plucker {
 
 LazyBsp::LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers,
                  int nr)
-    : light_(light, light + m), occ_(std::move(occluders)), recv_(receivers, receivers + nr), rng_(seed) {
+    : rng_(seed) {
+  rebuild(light, m, occluders, seed, receivers, nr);
+}
+
+void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluders, uint64_t seed,
+                      const Vec3d* receivers, int nr) {
+  light_.assign(light, light + m);
+  occ_.swap(occluders);
+  occluders.clear();
+  recv_.assign(receivers, receivers + nr);
+  rng_ = Rng(seed);
+  counters_ = BspCounters{};
+  choice_ = Choice::Relevant;
+  plane_ = LightPlane{};
+  have_plane_ = false;
+  // The per-query caches: stamps from an earlier tree must not match (begin_query sizes
+  // them again from zero).
+  shadow_r_ = Vec3d{};
+  stamp_ = 0;
+  shadow_stamp_.clear();
+  plane_stamp_.clear();
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
+  light_centroid_ = Vec3d{};
   for (const Vec3d& v : light_) light_centroid_ += v;
   if (m > 0) light_centroid_ = light_centroid_ / double(m);
   reset();

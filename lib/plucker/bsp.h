@@ -119,6 +119,14 @@ class LazyBsp {
   LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers = nullptr,
           int nr = 0);
 
+  // The same tree initialisation on an existing object, which keeps the capacity of its
+  // lists (nodes, occluder lists, query scratch): the solver keeps one tree per thread
+  // and rebuilds it for every group (plucker_solver.cpp shade_group). `occluders` is
+  // taken by swapping: it comes back empty, holding the previous tree's storage.
+  // Everything else is as after the constructor (choice Relevant, no light plane).
+  void rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluders, uint64_t seed,
+               const Vec3d* receivers = nullptr, int nr = 0);
+
   // How an undefined leaf is developed (Algorithm 1 line 31).
   //  - Random: the paper's choice, a random occluder of the leaf (seeded).
   //  - Relevant (default): first the leaf's occluders are classified against the query

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 
 #include "lib/geom/check.h"
@@ -530,8 +531,41 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
 // band g . p <= gmax + delta is clipped per receiver (near polygons). g is the receiver
 // grid's normal when the light lies beyond the group's grid plane (flat tiles: a band
 // of rounding width), else the light's normal (the band spans the group's depth).
+// shade_group's working lists, one set per thread, kept from group to group: a group
+// starts them empty but with the capacity earlier groups gave them. Allocated per group,
+// their growth was about a fifth of plucker-bsp's samples in fuzz_plucker (ASan's
+// allocator, perf 2026-12-04), where every scene is a few small groups. shade_group runs
+// no parallel work of its own, so a thread never enters it twice at once.
+struct GroupScratch {
+  std::vector<Vec3d> rloc, near_verts, poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q;
+  std::vector<NearPoly> near;
+  std::vector<Occluder> occluders;
+  std::vector<uint8_t> on_plane0, on_level, skip;
+  std::vector<double> vals;
+  std::vector<uint32_t> exact_tris, cand, exact_done, cell_start, cell_items, cell_fill;
+  FragmentList frags, tmp;
+  std::vector<Box2> boxes, tmp_boxes;
+
+  void clear() {
+    for (auto* v : {&rloc, &near_verts, &poly0, &lower, &upper, &region, &pyramid, &pyramid_err, &cur, &pos, &neg, &q})
+      v->clear();
+    near.clear();
+    occluders.clear();
+    for (auto* v : {&on_plane0, &on_level, &skip}) v->clear();
+    vals.clear();
+    for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill}) v->clear();
+    frags.clear();
+    tmp.clear();
+    boxes.clear();
+    tmp_boxes.clear();
+  }
+};
+
 void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std::vector<uint32_t>& group, float sigma,
                  uint64_t tree_seed, Totals& tot) {
+  thread_local GroupScratch scratch;
+  GroupScratch& sc = scratch;
+  sc.clear();
   const Scene& scene = *ctx.scene;
   const Light& light = scene.lights[li];
 
@@ -539,7 +573,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   Clock::time_point t0 = Clock::now();
   // Everything below is in the light's local frame (plucker_solver.h): the group's
   // receivers are translated here, the triangles as they are selected.
-  std::vector<Vec3d> rloc(group.size());
+  std::vector<Vec3d>& rloc = sc.rloc;
+  rloc.resize(group.size());
   AABB rbox;  // float box for the shaft (its margin covers the rounding)
   Vec3d dlo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
             std::numeric_limits<double>::infinity());
@@ -605,12 +640,12 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   for (int c = 0; c < 8; ++c)
     corners[c] = Vec3d((c & 1) ? dhi.x : dlo.x, (c & 2) ? dhi.y : dlo.y, (c & 4) ? dhi.z : dlo.z);
   Shaft shaft(rbox, lf.box);
-  std::vector<Occluder> occluders;
-  std::vector<NearPoly> near;
-  std::vector<Vec3d> near_verts;
-  std::vector<Vec3d> poly0, lower, upper;
-  std::vector<uint8_t> on_plane0;
-  std::vector<double> vals;
+  std::vector<Occluder>& occluders = sc.occluders;
+  std::vector<NearPoly>& near = sc.near;
+  std::vector<Vec3d>& near_verts = sc.near_verts;
+  std::vector<Vec3d>&poly0 = sc.poly0, &lower = sc.lower, &upper = sc.upper;
+  std::vector<uint8_t>& on_plane0 = sc.on_plane0;
+  std::vector<double>& vals = sc.vals;
   const Vec3d nd = lf.nd, gd = g, refd = ref;
   const double gcut = gmax + delta;
   // tmax: the largest |local coordinate| of the triangle (the selection loop's).
@@ -656,8 +691,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   }
   // Triangles subtracted exactly per receiver: the far-reaching ones (above) and those
   // within rounding of the light plane (below).
-  std::vector<uint32_t> exact_tris;
-  std::vector<uint32_t> cand;
+  std::vector<uint32_t>& exact_tris = sc.exact_tris;
+  std::vector<uint32_t>& cand = sc.cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
   for (uint32_t t : cand) {
     Vec3d tri[3] = {to_local_d(scene.mesh.corner(t, 0), lf.origin), to_local_d(scene.mesh.corner(t, 1), lf.origin),
@@ -778,10 +813,13 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   tot.occluders += occluders.size();
   tot.near += near.size();
   // The receiver region for the second vvset (bsp.h): the distinct corners of the box.
-  std::vector<Vec3d> region;
+  std::vector<Vec3d>& region = sc.region;
   for (const Vec3d& c : corners)
     if (std::find(region.begin(), region.end(), c) == region.end()) region.push_back(c);
-  LazyBsp bsp(lf.poly.data(), int(lf.poly.size()), std::move(occluders), tree_seed, region.data(), int(region.size()));
+  thread_local std::unique_ptr<LazyBsp> tree;  // one per thread, rebuilt per group (GroupScratch)
+  if (!tree) tree = std::make_unique<LazyBsp>(nullptr, 0, std::vector<Occluder>{}, 0);
+  LazyBsp& bsp = *tree;
+  bsp.rebuild(lf.poly.data(), int(lf.poly.size()), occluders, tree_seed, region.data(), int(region.size()));
   bsp.set_choice(ctx.choice);
   bsp.set_light_plane(lf.plane);
   ++tot.trees;
@@ -790,14 +828,15 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   ctx.memory->change(reported);
 
   // --- Queries (Figure 8 "Q"): every receiver of the group, in grid order ---
-  FragmentList frags, tmp;
-  std::vector<Box2> boxes, tmp_boxes;
-  std::vector<Vec3d> pyramid, pyramid_err;
-  std::vector<Vec3d> cur, pos, neg;
-  std::vector<Vec3d> q;
-  std::vector<uint8_t> on_level, skip;
-  std::vector<uint32_t> exact_done;  // triangles subtracted exactly for this receiver
-  std::vector<uint32_t> cell_start, cell_items, cell_fill;  // the samples' fragment grid
+  FragmentList &frags = sc.frags, &tmp = sc.tmp;
+  std::vector<Box2>&boxes = sc.boxes, &tmp_boxes = sc.tmp_boxes;
+  std::vector<Vec3d>&pyramid = sc.pyramid, &pyramid_err = sc.pyramid_err;
+  std::vector<Vec3d>&cur = sc.cur, &pos = sc.pos, &neg = sc.neg;
+  std::vector<Vec3d>& q = sc.q;
+  std::vector<uint8_t>&on_level = sc.on_level, &skip = sc.skip;
+  std::vector<uint32_t>& exact_done = sc.exact_done;  // triangles subtracted exactly for this receiver
+  std::vector<uint32_t>&cell_start = sc.cell_start, &cell_items = sc.cell_items,
+                        &cell_fill = sc.cell_fill;  // the samples' fragment grid
   BspCounters near_counters;
   size_t off = scene.light_offset(li);
   size_t nlights = scene.lights.size();
