@@ -862,6 +862,60 @@ TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
   EXPECT_GT(lazy, 0u);
 }
 
+TEST(PluckerBsp, ARebuiltTreeAnswersAsAFreshOne) {
+  // LazyBsp::rebuild (the solver's per-thread tree, reused group after group) keeps
+  // storage, nothing else: after queries on a larger tree with another light, a random
+  // choice, a light plane and another seed, the rebuilt tree returns the same fragments,
+  // vertex for vertex, and the same counters as a tree constructed from scratch.
+  Rng rng(21);
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  Vec3d big_light[3] = {Vec3d(-3, -3, 2.5), Vec3d(3, -3, 2.5), Vec3d(0, 3, 2.5)};
+  auto soup = [&](int count) {
+    std::vector<Occluder> occ;
+    for (int k = 0; k < count; ++k) {
+      Occluder o;
+      o.n = 3;
+      Vec3d c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5));
+      for (int i = 0; i < 3; ++i) o.v[i] = c + Vec3d(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 0);
+      if (orient3d(o.v[0], o.v[1], o.v[2], Vec3d(0, 0, -10)) > 0) std::swap(o.v[0], o.v[1]);
+      occ.push_back(o);
+    }
+    return occ;
+  };
+  std::vector<Occluder> first = soup(40);
+  LazyBsp reused(big_light, 3, first, 5);
+  reused.set_choice(LazyBsp::Choice::Random);
+  FragmentList out;
+  for (int q = 0; q < 12; ++q) reused.query(Vec3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0), out);
+  ASSERT_GT(reused.node_count(), 1u);
+  for (int round = 0; round < 3; ++round) {
+    const std::vector<Occluder> occ = soup(12);
+    std::vector<Occluder> handed = occ;
+    reused.rebuild(light, 4, handed, 9 + uint64_t(round));
+    EXPECT_TRUE(handed.empty());  // swapped in; the previous storage comes back cleared
+    LazyBsp fresh(light, 4, occ, 9 + uint64_t(round));
+    EXPECT_EQ(reused.node_count(), 1u);
+    EXPECT_EQ(reused.occluder_count(), occ.size());
+    FragmentList a, b;
+    for (int q = 0; q < 10; ++q) {
+      const Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
+      reused.query(r, a);
+      fresh.query(r, b);
+      ASSERT_EQ(a.size(), b.size());
+      EXPECT_EQ(a.verts.size(), b.verts.size());
+      for (size_t k = 0; k < a.verts.size() && k < b.verts.size(); ++k) {
+        EXPECT_EQ(a.verts[k].x, b.verts[k].x);
+        EXPECT_EQ(a.verts[k].y, b.verts[k].y);
+        EXPECT_EQ(a.verts[k].z, b.verts[k].z);
+      }
+    }
+    EXPECT_EQ(reused.node_count(), fresh.node_count());
+    EXPECT_EQ(reused.counters().developments, fresh.counters().developments);
+    EXPECT_EQ(reused.counters().splits, fresh.counters().splits);
+    EXPECT_EQ(reused.counters().nodes_created, fresh.counters().nodes_created);
+  }
+}
+
 TEST(PluckerBsp, HidesAllWhenOneOccluderCoversTheLight) {
   Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Occluder big, small;

@@ -1,6 +1,7 @@
 // `plucker-bsp`: paper 002 Algorithm 2 around the lazy BSP; see plucker_solver.h.
 #include "lib/plucker/plucker_solver.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -531,11 +532,15 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
 // band g . p <= gmax + delta is clipped per receiver (near polygons). g is the receiver
 // grid's normal when the light lies beyond the group's grid plane (flat tiles: a band
 // of rounding width), else the light's normal (the band spans the group's depth).
-// shade_group's working lists, one set per thread, kept from group to group: a group
-// starts them empty but with the capacity earlier groups gave them. Allocated per group,
-// their growth was about a fifth of plucker-bsp's samples in fuzz_plucker (ASan's
-// allocator, perf 2026-12-04), where every scene is a few small groups. shade_group runs
-// no parallel work of its own, so a thread never enters it twice at once.
+// shade_group's working lists and its tree, one set per thread of a solve, kept from
+// group to group: a group starts them empty (the tree rebuilt, LazyBsp::rebuild) but
+// with the capacity earlier groups of the solve gave them, and the solve frees them when
+// it returns (a thread-local set outlived the solve: after a light 100x larger, a
+// 2-light solve in the same process reported the 41 MB the larger one had left behind).
+// Allocated per group, their growth was about a fifth of plucker-bsp's samples in
+// fuzz_plucker (ASan's allocator, perf 2026-12-04), where every scene is a few small
+// groups. shade_group runs no parallel work of its own, so a thread never enters it
+// twice at once.
 struct GroupScratch {
   std::vector<Vec3d> rloc, near_verts, poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q;
   std::vector<NearPoly> near;
@@ -560,11 +565,14 @@ struct GroupScratch {
     tmp_boxes.clear();
   }
 };
+struct ThreadWork {
+  GroupScratch scratch;
+  std::unique_ptr<LazyBsp> tree;  // made at the thread's first group
+};
 
 void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std::vector<uint32_t>& group, float sigma,
-                 uint64_t tree_seed, Totals& tot) {
-  thread_local GroupScratch scratch;
-  GroupScratch& sc = scratch;
+                 uint64_t tree_seed, ThreadWork& work, Totals& tot) {
+  GroupScratch& sc = work.scratch;
   sc.clear();
   const Scene& scene = *ctx.scene;
   const Light& light = scene.lights[li];
@@ -816,9 +824,8 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<Vec3d>& region = sc.region;
   for (const Vec3d& c : corners)
     if (std::find(region.begin(), region.end(), c) == region.end()) region.push_back(c);
-  thread_local std::unique_ptr<LazyBsp> tree;  // one per thread, rebuilt per group (GroupScratch)
-  if (!tree) tree = std::make_unique<LazyBsp>(nullptr, 0, std::vector<Occluder>{}, 0);
-  LazyBsp& bsp = *tree;
+  if (!work.tree) work.tree = std::make_unique<LazyBsp>(nullptr, 0, std::vector<Occluder>{}, 0);
+  LazyBsp& bsp = *work.tree;  // the thread's tree, rebuilt per group (GroupScratch)
   bsp.rebuild(lf.poly.data(), int(lf.poly.size()), occluders, tree_seed, region.data(), int(region.size()));
   bsp.set_choice(ctx.choice);
   bsp.set_light_plane(lf.plane);
@@ -1340,6 +1347,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   const Vec3d focus = scene.receivers.empty() ? Vec3d(0, 0, 0) : (to_double(rbox_all.lo) + to_double(rbox_all.hi)) * 0.5;
   Totals totals;
   std::mutex merge_mutex;
+  tbb::enumerable_thread_specific<ThreadWork> thread_work;  // freed when the solve returns
 
   // Multiple lights in turn (Algorithm 2 line 2); groups of one light in parallel.
   for (size_t li = 0; li < scene.lights.size(); ++li) {
@@ -1376,7 +1384,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
         if (side[s].empty()) continue;
         // One tree per group, light and side; its random stream depends only on them.
         uint64_t seed = splitmix64(opt.seed ^ splitmix64((uint64_t(g) << 1 | uint64_t(s)) ^ splitmix64(li + 0x9E37)));
-        shade_group(ctx, li, lf, side[s], s == 0 ? 1.0f : -1.0f, seed, tot);
+        shade_group(ctx, li, lf, side[s], s == 0 ? 1.0f : -1.0f, seed, thread_work.local(), tot);
       }
       std::lock_guard<std::mutex> lock(merge_mutex);
       totals.merge(tot);
