@@ -520,18 +520,6 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
   ++tot.fallback;
 }
 
-// Algorithm 2 for one group of receivers (all strictly on the side `sigma` of the light
-// plane) and one light.
-//
-// Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
-// light point x and receiver r. A point p on the line r -> x lies strictly between r
-// and x iff g . p > g . r and h(p) > 0 (h: distance from the light plane, positive on
-// the receivers' side): along the line g grows from r to x and h falls to 0 at x. With
-// gmax the largest g . r of the group, a triangle part with g . p >= gmax + delta and
-// h >= 0 is between every receiver of the group and the light (tree occluders); the
-// band g . p <= gmax + delta is clipped per receiver (near polygons). g is the receiver
-// grid's normal when the light lies beyond the group's grid plane (flat tiles: a band
-// of rounding width), else the light's normal (the band spans the group's depth).
 // shade_group's working lists and its tree, one set per thread of a solve, kept from
 // group to group: a group starts them empty (the tree rebuilt, LazyBsp::rebuild) but
 // with the capacity earlier groups of the solve gave them, and the solve frees them when
@@ -570,6 +558,18 @@ struct ThreadWork {
   std::unique_ptr<LazyBsp> tree;  // made at the thread's first group
 };
 
+// Algorithm 2 for one group of receivers (all strictly on the side `sigma` of the light
+// plane) and one light.
+//
+// Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
+// light point x and receiver r. A point p on the line r -> x lies strictly between r
+// and x iff g . p > g . r and h(p) > 0 (h: distance from the light plane, positive on
+// the receivers' side): along the line g grows from r to x and h falls to 0 at x. With
+// gmax the largest g . r of the group, a triangle part with g . p >= gmax + delta and
+// h >= 0 is between every receiver of the group and the light (tree occluders); the
+// band g . p <= gmax + delta is clipped per receiver (near polygons). g is the receiver
+// grid's normal when the light lies beyond the group's grid plane (flat tiles: a band
+// of rounding width), else the light's normal (the band spans the group's depth).
 void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std::vector<uint32_t>& group, float sigma,
                  uint64_t tree_seed, ThreadWork& work, Totals& tot) {
   GroupScratch& sc = work.scratch;
