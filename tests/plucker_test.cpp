@@ -824,6 +824,33 @@ double region_area(const FragmentList& out) {
   for (size_t k = 0; k < out.size(); ++k) a += polygon_area(out.data(k), out.count(k));
   return a;
 }
+// `count` small triangles at heights 0.5 to 1.5 over x, y in [-1.3, 1.3], oriented so
+// that receivers below (z = -10 and the query plane z = 0) are on their negative side
+// (bsp.h Occluder).
+std::vector<Occluder> random_occluders(Rng& rng, int count) {
+  std::vector<Occluder> occ;
+  for (int k = 0; k < count; ++k) {
+    Occluder o;
+    o.n = 3;
+    Vec3d c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5));
+    for (int i = 0; i < 3; ++i) o.v[i] = c + Vec3d(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 0);
+    if (orient3d(o.v[0], o.v[1], o.v[2], Vec3d(0, 0, -10)) > 0)
+      std::swap(o.v[0], o.v[1]);  // receivers below on the negative side (bsp.h)
+    occ.push_back(o);
+  }
+  return occ;
+}
+// The plane z = height in the tests' frame, as the solver gives it to a tree
+// (fragment.h LightPlane: nd . x = h0, positive towards the receivers below).
+LightPlane plane_at(double height, float extent) {
+  LightPlane lp;
+  lp.n = Vec3f(0, 0, -1);
+  lp.extent = extent;
+  lp.frame = PlaneFrame::from_normal(lp.n);
+  lp.nd = Vec3d(0, 0, -1);
+  lp.h0 = -height;
+  return lp;
+}
 }  // namespace
 
 TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
@@ -834,16 +861,7 @@ TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
   Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   uint64_t lazy = 0;
   for (int scene = 0; scene < 20; ++scene) {
-    std::vector<Occluder> occ;
-    for (int k = 0; k < 12; ++k) {
-      Occluder o;
-      o.n = 3;
-      Vec3d c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5));
-      for (int i = 0; i < 3; ++i) o.v[i] = c + Vec3d(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 0);
-      if (orient3d(o.v[0], o.v[1], o.v[2], Vec3d(0, 0, -10)) > 0)
-        std::swap(o.v[0], o.v[1]);  // receivers below on the negative side (bsp.h)
-      occ.push_back(o);
-    }
+    std::vector<Occluder> occ = random_occluders(rng, 12);
     LazyBsp relevant(light, 4, occ, 9), random(light, 4, occ, 9);
     random.set_choice(LazyBsp::Choice::Random);
     FragmentList a, b;
@@ -866,34 +884,30 @@ TEST(PluckerBsp, ARebuiltTreeAnswersAsAFreshOne) {
   // LazyBsp::rebuild (the solver's per-thread tree, reused group after group) keeps
   // storage, nothing else: after queries on a larger tree with another light, a random
   // choice, a light plane and another seed, the rebuilt tree returns the same fragments,
-  // vertex for vertex, and the same counters as a tree constructed from scratch.
+  // vertex for vertex, and the same counters as a tree constructed from scratch. Round 0
+  // sets no light plane on either tree (rebuild drops the old one); rounds 1 and 2 set
+  // one on both, with as many occluders as the round before, so shadow-box caches left
+  // from the previous tree would be read if rebuild kept them.
   Rng rng(21);
   Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Vec3d big_light[3] = {Vec3d(-3, -3, 2.5), Vec3d(3, -3, 2.5), Vec3d(0, 3, 2.5)};
-  auto soup = [&](int count) {
-    std::vector<Occluder> occ;
-    for (int k = 0; k < count; ++k) {
-      Occluder o;
-      o.n = 3;
-      Vec3d c(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1.5));
-      for (int i = 0; i < 3; ++i) o.v[i] = c + Vec3d(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 0);
-      if (orient3d(o.v[0], o.v[1], o.v[2], Vec3d(0, 0, -10)) > 0) std::swap(o.v[0], o.v[1]);
-      occ.push_back(o);
-    }
-    return occ;
-  };
-  std::vector<Occluder> first = soup(40);
+  std::vector<Occluder> first = random_occluders(rng, 40);
   LazyBsp reused(big_light, 3, first, 5);
   reused.set_choice(LazyBsp::Choice::Random);
+  reused.set_light_plane(plane_at(2.5, 6.0f));
   FragmentList out;
   for (int q = 0; q < 12; ++q) reused.query(Vec3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0), out);
   ASSERT_GT(reused.node_count(), 1u);
   for (int round = 0; round < 3; ++round) {
-    const std::vector<Occluder> occ = soup(12);
+    const std::vector<Occluder> occ = random_occluders(rng, 12);
     std::vector<Occluder> handed = occ;
     reused.rebuild(light, 4, handed, 9 + uint64_t(round));
     EXPECT_TRUE(handed.empty());  // swapped in; the previous storage comes back cleared
     LazyBsp fresh(light, 4, occ, 9 + uint64_t(round));
+    if (round > 0) {
+      reused.set_light_plane(plane_at(2.0, 2.0f));
+      fresh.set_light_plane(plane_at(2.0, 2.0f));
+    }
     EXPECT_EQ(reused.node_count(), 1u);
     EXPECT_EQ(reused.occluder_count(), occ.size());
     FragmentList a, b;
