@@ -85,6 +85,12 @@ struct FragmentList {
     polys.emplace_back(uint32_t(verts.size()), uint32_t(n));
     verts.insert(verts.end(), p, p + n);
   }
+  // Drops the fragments from the n-th on (n <= size()).
+  void truncate(size_t n) {
+    if (n >= polys.size()) return;
+    verts.resize(polys[n].first);
+    polys.resize(n);
+  }
 };
 
 struct BspCounters {

@@ -400,6 +400,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       continue;
     }
     cur.assign(in.data(f), in.data(f) + in.count(f));
+    const size_t first_piece = out.size();
     bool alive = true;
     for (int m = 0; m < nq && alive; ++m) {
       if (skip[m]) continue;
@@ -407,7 +408,16 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       switch (s) {
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
-        case SplitResult::Negative: keep(cur.data(), cur.size()); alive = false; break;
+        case SplitResult::Negative:
+          // What is left misses q: nothing of the fragment is hidden, and the pieces
+          // split off it so far are taken back for the whole fragment (as in
+          // subtract_triangle_exact: a shadow beside a fragment still cuts it).
+          out.truncate(first_piece);
+          out_boxes.resize(first_piece);
+          out.add(in.data(f), size_t(in.count(f)));
+          out_boxes.push_back(boxes[f]);
+          alive = false;
+          break;
         case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
         case SplitResult::Both:
           ++c.splits;
@@ -466,6 +476,9 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   };
   for (size_t f = 0; f < in.size(); ++f) {
     cur.assign(in.data(f), in.data(f) + in.count(f));
+    // The pieces split off this fragment start here; when nothing of it turns out hidden
+    // they are taken back and the fragment kept whole (below).
+    const size_t first_piece = out.size();
     bool blocked = true;
     for (int k = 0; k < 4; ++k) {
       w.resize(cur.size());
@@ -492,9 +505,17 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
       cur.swap(inside);
       if (cur.empty()) break;
     }
-    if (!blocked) {
-      out.add(cur.data(), cur.size());
-      out_boxes.push_back(Box2::of(frame, cur.data(), int(cur.size())));
+    if (!blocked || cur.empty()) {
+      // Nothing of the fragment is hidden: the pieces split off it (outside one plane or
+      // another) make up the whole fragment, which is kept instead, unsplit. Splitting it
+      // anyway multiplied the fragments for nothing: a triangle whose shadow misses a
+      // fragment still cuts it along the planes through its edges, and a fragment list
+      // grew 1.8x per triangle to 145,369 fragments after 18 triangles, none hidden
+      // (fuzz_plucker 82d969b1..., corpus/fuzz/slow: a light 2e-3 wide and 4e36 long).
+      out.truncate(first_piece);
+      out_boxes.resize(first_piece);
+      out.add(in.data(f), size_t(in.count(f)));
+      out_boxes.push_back(Box2::of(frame, in.data(f), in.count(f)));
     }
     // Otherwise what is left is inside all four half-spaces: hidden, dropped.
   }
