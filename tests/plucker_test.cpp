@@ -228,6 +228,42 @@ TEST(PluckerBsp, SingleOccluderHasFourLeaves) {
   EXPECT_EQ(bsp.node_count(), 1u);
 }
 
+TEST(PluckerBsp, SplitsWhosePiecesAllStayVisibleAreUndone) {
+  // Occluder A at z = 1 (normal +z) casts its shape scaled by 2 about the query point
+  // onto the light at z = 2. From r0 = the origin: the triangle (-0.6, 0.1), (0.2, -0.7),
+  // (0.2, 0.9) inside the light (area 0.64), which develops bsp(A). From r1 = (-1.8, 0, 0)
+  // the same triangle moved by 1.8: (1.2, 0.1), (2, -0.7), (2, 0.9), right of the light,
+  // but the planes through r1 and A's edges from (1.2, 0.1) (lines x + y = 1.3 and
+  // y = x - 1.1 on the light) cut the light, and the walk splits it along them. Every
+  // piece comes out visible, so the query returns the light itself, one fragment. The
+  // same after a reset: no edge of A has the whole light on its outer side, so the
+  // undefined root develops A for r1 too.
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  Occluder a;
+  a.n = 3;
+  a.v[0] = Vec3d(-0.3, 0.05, 1);
+  a.v[1] = Vec3d(0.1, -0.35, 1);
+  a.v[2] = Vec3d(0.1, 0.45, 1);
+  for (int coherent = 0; coherent < 2; ++coherent) {
+    LazyBsp bsp(light, 4, {a}, 1);
+    FragmentList out;
+    bsp.query(Vec3d(0, 0, 0), out);
+    double area = 0;
+    for (size_t k = 0; k < out.size(); ++k) area += polygon_area(out.data(k), out.count(k));
+    EXPECT_NEAR(area, 4.0 - 0.64, 1e-12);
+    EXPECT_EQ(bsp.node_count(), 7u);
+    EXPECT_EQ(bsp.counters().merged, 0u);  // every split of r0's walk cut the shadow off
+    if (!coherent) bsp.reset();
+    const uint64_t splits = bsp.counters().splits;
+    bsp.query(Vec3d(-1.8, 0, 0), out);
+    ASSERT_EQ(out.size(), 1u) << coherent;
+    ASSERT_EQ(out.count(0), 4) << coherent;
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(out.data(0)[k], light[k]) << coherent << " " << k;
+    EXPECT_GE(bsp.counters().splits - splits, 1u) << coherent;
+    EXPECT_EQ(bsp.counters().merged, bsp.counters().splits - splits) << coherent;
+  }
+}
+
 // ---- Hand-computed fractions ----
 
 TEST(PluckerSolver, SquareOccluderHalfCoveringTheLight) {

@@ -62,7 +62,7 @@ void LazyBsp::reset() {
 size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
          (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
-         stack_.capacity() * sizeof(Work) + shadow_stamp_.capacity() * sizeof(uint32_t) +
+         stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + shadow_stamp_.capacity() * sizeof(uint32_t) +
          shadow_box_.capacity() * sizeof(Box2) + plane_stamp_.capacity() * sizeof(uint32_t) +
          plane_cache_.capacity() * sizeof(NodePlane);
 }
@@ -268,15 +268,40 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   out.clear();
   work_.clear();
   stack_.clear();
+  splits_.clear();
   for (size_t f = in.size(); f-- > 0;) {
-    stack_.push_back(Work{0, uint32_t(work_.size()), uint32_t(in.count(f))});
+    stack_.push_back(Work{0, uint32_t(work_.size()), uint32_t(in.count(f)), kNoSplit});
     work_.insert(work_.end(), in.data(f), in.data(f) + in.count(f));
   }
+  // A piece of split `split` is finished, visible or not. A split all of whose pieces
+  // came out visible is undone: its pieces' output (everything after its out_mark, as
+  // the walk is depth-first) is replaced by the fragment it split, which then counts as
+  // a visible piece of its own split. The visible set is the same (the pieces tile the
+  // fragment, up to the rounding of the split points, which the whole fragment does
+  // not have); on columns most node lines cut fragments that stay visible on both sides
+  // (97% of the fragments came from undefined leaves none of whose occluders meets
+  // them), and every fragment costs its receiver a point-in-fragment test per sample
+  // and a Lambert term.
+  auto finish = [&](uint32_t split, bool visible) {
+    while (split != kNoSplit) {
+      Split& sp = splits_[split];
+      sp.visible &= visible;
+      if (--sp.pending > 0) return;
+      if (sp.visible) {
+        out.truncate(sp.out_mark);
+        out.add(work_.data() + sp.begin, sp.count);
+        ++counters_.merged;
+      }
+      visible = sp.visible;
+      split = sp.parent;
+    }
+  };
   while (!stack_.empty()) {
     Work w = stack_.back();
     stack_.pop_back();
     cur_.assign(work_.begin() + w.begin, work_.begin() + w.begin + w.count);
     int32_t node = w.node;
+    uint32_t split = w.split;
     for (;;) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.kind == kInner) {
@@ -291,29 +316,43 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
           node = nd.right;
         } else if (s == SplitResult::ZeroArea) {
           ++counters_.zero_area;
+          finish(split, false);
           break;
         } else {
           // Line 25, with the right piece on the explicit stack.
           ++counters_.splits;
-          int32_t right = nd.right;
-          if (!neg_.empty()) {
-            stack_.push_back(Work{right, uint32_t(work_.size()), uint32_t(neg_.size())});
-            work_.insert(work_.end(), neg_.begin(), neg_.end());
-          } else {
-            ++counters_.zero_area;
-          }
-          if (pos_.empty()) {
-            ++counters_.zero_area;
+          if (neg_.empty() && pos_.empty()) {
+            counters_.zero_area += 2;
+            finish(split, false);
             break;
           }
+          const uint32_t id = uint32_t(splits_.size());
+          Split sp{split, uint32_t(work_.size()), uint32_t(cur_.size()), uint32_t(out.size()), 0, true};
+          work_.insert(work_.end(), cur_.begin(), cur_.end());
+          if (neg_.empty() || pos_.empty()) {  // a piece of zero area dropped: no undoing
+            ++counters_.zero_area;
+            sp.visible = false;
+          }
+          sp.pending = uint8_t(!neg_.empty()) + uint8_t(!pos_.empty());
+          splits_.push_back(sp);
+          if (!neg_.empty()) {
+            stack_.push_back(Work{nd.right, uint32_t(work_.size()), uint32_t(neg_.size()), id});
+            work_.insert(work_.end(), neg_.begin(), neg_.end());
+          }
+          if (pos_.empty()) break;
           cur_.swap(pos_);
           node = nd.left;
+          split = id;
         }
         continue;
       }
-      if (nd.kind == kInvisible) break;  // line 29: invisible class, discarded
-      if (nd.occ_count == 0) {           // line 29: visible class, returned
+      if (nd.kind == kInvisible) {  // line 29: invisible class, discarded
+        finish(split, false);
+        break;
+      }
+      if (nd.occ_count == 0) {  // line 29: visible class, returned
         out.add(cur_.data(), cur_.size());
+        finish(split, true);
         break;
       }
       // Lines 31-35, then continue from the root of bsp(ro).
@@ -339,6 +378,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       if (cover < 0 && candidates_.empty()) {
         ++counters_.lazy_visible;
         out.add(cur_.data(), cur_.size());
+        finish(split, true);
         break;
       }
       if (cover < 0) cover = candidates_[size_t(rng_.below(candidates_.size()))];

@@ -102,6 +102,7 @@ struct BspCounters {
   uint64_t zero_area = 0;        // degenerate: zero-area fragments dropped
   uint64_t occlusion_tests = 0;  // Choice::Relevant: occluders classified at undefined leaves
   uint64_t lazy_visible = 0;     // Choice::Relevant: fragments returned visible from an undefined leaf
+  uint64_t merged = 0;           // splits undone in a query: every piece came out visible
 };
 
 class LazyBsp {
@@ -192,9 +193,21 @@ class LazyBsp {
     uint8_t edge = 0;          // inner: its line is edge `edge` of occluder `occ`
     uint32_t occ = 0;          //   (a -> b = occ.v[edge] -> occ.v[edge + 1])
   };
+  static constexpr uint32_t kNoSplit = ~uint32_t(0);
   struct Work {
     int32_t node;
     uint32_t begin, count;  // fragment vertices in work_
+    uint32_t split;         // the split it is a piece of (splits_), or kNoSplit
+  };
+  // A split of one query (line 25) whose pieces are still being walked. When every piece
+  // has come out visible, the pieces' output is replaced by the fragment that was split
+  // (query): the split was the tree's, not the shadow's.
+  struct Split {
+    uint32_t parent;        // the split the fragment itself is a piece of, or kNoSplit
+    uint32_t begin, count;  // the fragment's vertices in work_
+    uint32_t out_mark;      // out.size() when it was split: its pieces' output follows
+    uint8_t pending;        // pieces not yet finished
+    bool visible;           // every finished piece came out visible, none dropped
   };
 
   // Algorithm 1 lines 31-35: replace the undefined leaf by bsp(ro) for ro = `forced`, or
@@ -237,6 +250,7 @@ class LazyBsp {
   // Scratch reused across queries.
   std::vector<Vec3d> work_, cur_, pos_, neg_;
   std::vector<Work> stack_;
+  std::vector<Split> splits_;
   std::vector<uint32_t> list_scratch_;
   std::vector<uint32_t> leaf_lists_[2 * kMaxOccluderVertices];
   std::vector<int32_t> new_leaves_;
