@@ -160,7 +160,9 @@ class LazyBsp {
   }
 
   // Algorithm 1 BSP_query(root, L, r): appends the visible fragments of the light seen
-  // from r to `out` (cleared first).
+  // from r to `out` (cleared first). Beyond the paper, a split (line 25) all of whose
+  // pieces come out visible is undone: `out` receives the fragment that was split
+  // (counters().merged), so fragments are cut only where something is hidden.
   void query(const Vec3d& r, FragmentList& out);
   // The same query for parts of the light only: `in` holds disjoint convex pieces of the
   // light polygon (each walked from the root as L in Algorithm 1); `out` receives the
