@@ -349,6 +349,19 @@ struct Context {
   MemoryMeter* memory;
 };
 
+// Keeps fragment f of `in` whole in `out` (box `box` in `out_boxes`), after taking back
+// the pieces `out` received from index `first` on: a subtraction that split the fragment
+// and then found nothing of it hidden returns the fragment instead of its pieces (a
+// shadow beside a fragment still cuts it along the planes through its edges). With
+// first == out.size() it only keeps the fragment.
+void keep_whole(const FragmentList& in, size_t f, const Box2& box, size_t first, FragmentList& out,
+                std::vector<Box2>& out_boxes) {
+  out.truncate(first);
+  out_boxes.resize(first);
+  out.add(in.data(f), size_t(in.count(f)));
+  out_boxes.push_back(box);
+}
+
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
 // `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
@@ -381,8 +394,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   };
   for (size_t f = 0; f < in.size(); ++f) {
     if (!qbox.overlaps(boxes[f])) {
-      out.add(in.data(f), size_t(in.count(f)));
-      out_boxes.push_back(boxes[f]);
+      keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
       continue;
     }
     // A fragment entirely on the negative side of one edge plane misses q: kept whole,
@@ -395,8 +407,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       misses = s == SplitResult::Negative || s == SplitResult::OnLine;
     }
     if (misses) {
-      out.add(in.data(f), size_t(in.count(f)));
-      out_boxes.push_back(boxes[f]);
+      keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
       continue;
     }
     cur.assign(in.data(f), in.data(f) + in.count(f));
@@ -408,14 +419,8 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       switch (s) {
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
-        case SplitResult::Negative:
-          // What is left misses q: nothing of the fragment is hidden, and the pieces
-          // split off it so far are taken back for the whole fragment (as in
-          // subtract_triangle_exact: a shadow beside a fragment still cuts it).
-          out.truncate(first_piece);
-          out_boxes.resize(first_piece);
-          out.add(in.data(f), size_t(in.count(f)));
-          out_boxes.push_back(boxes[f]);
+        case SplitResult::Negative:  // what is left misses q: nothing of the fragment is hidden
+          keep_whole(in, f, boxes[f], first_piece, out, out_boxes);
           alive = false;
           break;
         case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
@@ -512,10 +517,7 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
       // fragment still cuts it along the planes through its edges, and a fragment list
       // grew 1.8x per triangle to 145,369 fragments after 18 triangles, none hidden
       // (fuzz_plucker 82d969b1..., corpus/fuzz/slow: a light 2e-3 wide and 4e36 long).
-      out.truncate(first_piece);
-      out_boxes.resize(first_piece);
-      out.add(in.data(f), size_t(in.count(f)));
-      out_boxes.push_back(Box2::of(frame, in.data(f), in.count(f)));
+      keep_whole(in, f, Box2::of(frame, in.data(f), in.count(f)), first_piece, out, out_boxes);
     }
     // Otherwise what is left is inside all four half-spaces: hidden, dropped.
   }
