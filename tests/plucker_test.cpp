@@ -66,6 +66,13 @@ double fragments_area(const std::vector<Polygon3f>& frags) {
   return a;
 }
 
+// Total area of a tree's output fragments (polygon_area of each).
+double region_area(const FragmentList& out) {
+  double a = 0;
+  for (size_t k = 0; k < out.size(); ++k) a += polygon_area(out.data(k), out.count(k));
+  return a;
+}
+
 // Double precision relation classifier: +1 blocked, 0 visible, -1 within 1e-5
 // (normalised) of a sign change of one of the predicates (skipped by the comparisons).
 int classify_double(const TriangleSoup& soup, const Vec3f& rf, const Vec3f& lf) {
@@ -217,10 +224,8 @@ TEST(PluckerBsp, SingleOccluderHasFourLeaves) {
   FragmentList out;
   bsp.query(Vec3d(0, 0, 0), out);
   EXPECT_EQ(bsp.node_count(), 7u);
-  double area = 0;
-  for (size_t k = 0; k < out.size(); ++k) area += polygon_area(out.data(k), out.count(k));
   // The shadow is the occluder scaled by 2 from the origin: area 0.125 * 4 = 0.5.
-  EXPECT_NEAR(area, 4.0 - 0.5, 1e-6);
+  EXPECT_NEAR(region_area(out), 4.0 - 0.5, 1e-6);
   // A second query reuses the developed tree.
   bsp.query(Vec3d(0.1f, 0, 0), out);
   EXPECT_EQ(bsp.node_count(), 7u);
@@ -248,9 +253,7 @@ TEST(PluckerBsp, SplitsWhosePiecesAllStayVisibleAreUndone) {
     LazyBsp bsp(light, 4, {a}, 1);
     FragmentList out;
     bsp.query(Vec3d(0, 0, 0), out);
-    double area = 0;
-    for (size_t k = 0; k < out.size(); ++k) area += polygon_area(out.data(k), out.count(k));
-    EXPECT_NEAR(area, 4.0 - 0.64, 1e-12);
+    EXPECT_NEAR(region_area(out), 4.0 - 0.64, 1e-12);
     EXPECT_EQ(bsp.node_count(), 7u);
     EXPECT_EQ(bsp.counters().merged, 0u);  // every split of r0's walk cut the shadow off
     if (!coherent) bsp.reset();
@@ -855,11 +858,6 @@ TEST(PluckerFragment, PointInFragmentToleratesANoiseEdge) {
 }
 
 namespace {
-double region_area(const FragmentList& out) {
-  double a = 0;
-  for (size_t k = 0; k < out.size(); ++k) a += polygon_area(out.data(k), out.count(k));
-  return a;
-}
 // `count` small triangles at heights 0.5 to 1.5 over x, y in [-1.3, 1.3], oriented so
 // that receivers below (z = -10 and the query plane z = 0) are on their negative side
 // (bsp.h Occluder).
