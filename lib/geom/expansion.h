@@ -63,6 +63,67 @@ inline void grow_vector(V& e, double b) {
   if (q != 0.0) e.push_back(q);
 }
 
+// Scale-Expansion with zero elimination (Shewchuk's scale_expansion_zeroelim, Two-Product
+// by fused multiply-add): h = e * b exactly, in one pass over e[0..n); returns h's length
+// (at most 2n; 0 for zero). e nonoverlapping (and strongly nonoverlapping, as every
+// expansion these routines and grow make in round-to-nearest-even), increasing
+// magnitude, no zeros; h the same. h must not overlap e.
+inline int scale_expansion(const double* e, int n, double b, double* h) {
+  if (n == 0 || b == 0.0) return 0;
+  int out = 0;
+  double q, hh;
+  two_product(e[0], b, q, hh);
+  if (hh != 0.0) h[out++] = hh;
+  for (int i = 1; i < n; ++i) {
+    double p1, p0, sum;
+    two_product(e[i], b, p1, p0);
+    two_sum(q, p0, sum, hh);
+    if (hh != 0.0) h[out++] = hh;
+    q = p1 + sum;  // Fast-Two-Sum: |p1| >= |sum|
+    hh = sum - (q - p1);
+    if (hh != 0.0) h[out++] = hh;
+  }
+  if (q != 0.0) h[out++] = q;
+  return out;
+}
+
+// Fast-Expansion-Sum with zero elimination (Shewchuk's fast_expansion_sum_zeroelim):
+// h = e + f exactly, merging the components in order of magnitude in one pass; returns
+// h's length (at most ne + nf). Inputs as for scale_expansion; h must not overlap them.
+inline int sum_expansions(const double* e, int ne, const double* f, int nf, double* h) {
+  if (ne + nf == 0) return 0;
+  int i = 0, j = 0, out = 0;
+  double q, qn, hh;
+  // The smaller in magnitude of e[i] and f[j] goes first (Shewchuk's comparison).
+  auto e_first = [](double ei, double fj) { return (fj > ei) == (fj > -ei); };
+  if (j == nf || (i < ne && e_first(e[i], f[j]))) q = e[i++];
+  else q = f[j++];
+  if (i < ne && j < nf) {  // Fast-Two-Sum for the second: |next| >= |q|
+    const double next = e_first(e[i], f[j]) ? e[i++] : f[j++];
+    qn = next + q;
+    hh = q - (qn - next);
+    q = qn;
+    if (hh != 0.0) h[out++] = hh;
+    while (i < ne && j < nf) {
+      two_sum(q, e_first(e[i], f[j]) ? e[i++] : f[j++], qn, hh);
+      q = qn;
+      if (hh != 0.0) h[out++] = hh;
+    }
+  }
+  for (; i < ne; ++i) {
+    two_sum(q, e[i], qn, hh);
+    q = qn;
+    if (hh != 0.0) h[out++] = hh;
+  }
+  for (; j < nf; ++j) {
+    two_sum(q, f[j], qn, hh);
+    q = qn;
+    if (hh != 0.0) h[out++] = hh;
+  }
+  if (q != 0.0) h[out++] = q;
+  return out;
+}
+
 // Component k of a polygon's Newell normal, sum_i (a[k1] b[k2] - a[k2] b[k1]) over its
 // edges (a, b), as an exact expansion: for float coordinates each product is exact in
 // double and the sum is grown exactly. P: any point type with operator[] over floats;

@@ -1,6 +1,7 @@
 // Exact orientation of float points by expansion arithmetic; see exact_orient.h.
 #include "lib/plucker/exact_orient.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -115,15 +116,21 @@ ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf,
 
 namespace {
 
-// e * x for a double x, exactly: each component's Two-Product grown in.
+// out += sign * e * x for a double x, exactly: Scale-Expansion, then one merging
+// Fast-Expansion-Sum (lib/geom/expansion.h), linear in the lengths (growing each
+// component's Two-Product into out was quadratic), in a per-thread scratch buffer so
+// that intermediate lengths beyond Small's inline 16 allocate nothing. sign is +-1, so
+// sign * x is exact.
 void add_scaled(Expansion& out, const Expansion& e, double x, double sign = 1.0) {
-  if (x == 0.0) return;
-  for (double y : e) {
-    double hi, lo;
-    two_product(y, x, hi, lo);
-    if (lo != 0.0) grow(out, sign * lo);
-    grow(out, sign * hi);
-  }
+  if (x == 0.0 || e.empty()) return;
+  thread_local std::vector<double> scratch;
+  const size_t ns = 2 * e.size(), nh = out.size() + ns;
+  if (scratch.size() < ns + nh) scratch.resize(ns + nh);
+  double* s = scratch.data();
+  double* h = s + ns;
+  const int n_s = expansion::scale_expansion(e.data(), int(e.size()), sign * x, s);
+  const int n_h = expansion::sum_expansions(out.data(), int(out.size()), s, n_s, h);
+  out.assign(h, h + n_h);
 }
 
 // out += sign * e * f, exactly.
@@ -258,6 +265,53 @@ double LiftedLight::double_value(const Plane& pl, float hu, double lu, float hv,
   return g;
 }
 
+namespace {
+
+// LiftedLight::value's third stage, out of line: its stack arrays cost ASan's redzone
+// poisoning on every entry, which the first two stages (most evaluations) should not pay.
+[[gnu::noinline]] ExactOrient third_stage(const LiftedLight::Plane& pl, float hu, double lu, float hv, double lv,
+                                          int nw_sign) {
+  // A + B hu + B lu + C hv + C lv as one exact expansion, by Scale-Expansion
+  // and Fast-Expansion-Sum on arrays on the stack (lib/geom/expansion.h). The
+  // coefficients have a few components (at most 8 over 150 slow fuzz_plucker inputs,
+  // mostly 2-3), so the sum has at most |A| + 4 (|B| + |C|) components; this stage runs
+  // where the vertex lies exactly on the plane (a value of zero, which the second stage
+  // cannot certify), 48,161 times on those inputs. As Small vectors grown component by
+  // component the sum outgrew their inline storage: an allocation per evaluation, and
+  // the stage was 7% of fuzz_plucker's samples under ASan (perf, 2026-12-04).
+  constexpr size_t kStack = 96;
+  const size_t terms = pl.xa.size() + 4 * (pl.xb.size() + pl.xc.size());
+  std::vector<double> heap;
+  double stack[3 * kStack];
+  double* buf = stack;
+  size_t cap = kStack;
+  if (terms > kStack) {
+    heap.resize(3 * terms);
+    buf = heap.data();
+    cap = terms;
+  }
+  double *acc = buf, *next = buf + cap, *scaled = buf + 2 * cap;
+  int n = int(pl.xa.size());
+  std::copy(pl.xa.begin(), pl.xa.end(), acc);
+  const std::pair<const Expansion*, double> parts[4] = {
+      {&pl.xb, double(hu)}, {&pl.xb, lu}, {&pl.xc, double(hv)}, {&pl.xc, lv}};
+  for (const auto& [coef, mult] : parts) {
+    const int ns = expansion::scale_expansion(coef->data(), int(coef->size()), mult, scaled);
+    if (ns == 0) continue;
+    n = expansion::sum_expansions(acc, n, scaled, ns, next);
+    std::swap(acc, next);
+  }
+  ExactOrient r;
+  if (n == 0) return r;
+  r.sign = (acc[n - 1] > 0.0 ? 1 : -1) * nw_sign;
+  double v = 0.0;  // summed from the smallest: within a few ulps
+  for (int i = 0; i < n; ++i) v += acc[i];
+  r.value = double(nw_sign) * v;
+  return r;
+}
+
+}  // namespace
+
 ExactOrient LiftedLight::sign(Plane& pl, float hu, double lu, float hv, double lv) const {
   double err = 0.0;
   const double g = double_value(pl, hu, lu, hv, lv, err);
@@ -310,17 +364,7 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
     if (std::isfinite(res) && std::isfinite(bound) && std::abs(res) * (0x1p-30 - 0x1p-52) > bound)
       return ExactOrient{(res > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * res};
   }
-  thread_local Expansion e;
-  e = pl.xa;
-  add_scaled(e, pl.xb, double(hu));
-  add_scaled(e, pl.xb, lu);
-  add_scaled(e, pl.xc, double(hv));
-  add_scaled(e, pl.xc, lv);
-  ExactOrient r;
-  if (e.empty()) return r;
-  r.sign = (e.back() > 0.0 ? 1 : -1) * nw_sign_;
-  r.value = double(nw_sign_) * estimate(e);
-  return r;
+  return third_stage(pl, hu, lu, hv, lv, nw_sign_);
 }
 
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
