@@ -142,9 +142,10 @@ expansion::Small random_expansion(Rng& rng, int n) {
 }  // namespace
 
 TEST(Expansion, LinearScaleAndSumAreExactAgainstGrowExpansion) {
-  // scale_expansion and sum_expansions (Shewchuk's Scale-Expansion and Fast-Expansion-Sum) against
-  // the independent Grow-Expansion: (e + f) - h and e b - h, grown term by term (each
-  // product as its exact Two-Product pair), must be exactly zero, and h well formed.
+  // scale_expansion and sum_expansions (Shewchuk's Scale-Expansion and
+  // Fast-Expansion-Sum) against the independent Grow-Expansion: (e + f) - h and e b - h,
+  // grown term by term (each product as its exact Two-Product pair), must be exactly
+  // zero, and h well formed.
   Rng rng(2026);
   int nonzero = 0, zero = 0;
   for (int trial = 0; trial < 2000; ++trial) {

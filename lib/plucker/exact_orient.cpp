@@ -276,9 +276,10 @@ namespace {
   // coefficients have a few components (at most 8 over 150 slow fuzz_plucker inputs,
   // mostly 2-3), so the sum has at most |A| + 4 (|B| + |C|) components; this stage runs
   // where the vertex lies exactly on the plane (a value of zero, which the second stage
-  // cannot certify), 48,161 times on those inputs. As Small vectors grown component by
-  // component the sum outgrew their inline storage: an allocation per evaluation, and
-  // the stage was 7% of fuzz_plucker's samples under ASan (perf, 2026-12-04).
+  // cannot certify), 48,161 times on those inputs. Grown into a Small vector one
+  // Two-Product component at a time (quadratic, with the vector's bookkeeping per
+  // component) the stage was 7.9% of those inputs' samples under ASan, 4.6% now (perf,
+  // 2026-12-04, docs/fuzzing-log.md stop 30).
   constexpr size_t kStack = 96;
   const size_t terms = pl.xa.size() + 4 * (pl.xb.size() + pl.xc.size());
   std::vector<double> heap;
