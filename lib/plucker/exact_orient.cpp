@@ -278,8 +278,8 @@ namespace {
   // where the vertex lies exactly on the plane (a value of zero, which the second stage
   // cannot certify), 48,161 times on those inputs. Grown into a Small vector one
   // Two-Product component at a time (quadratic, with the vector's bookkeeping per
-  // component) the stage was 7.9% of those inputs' samples under ASan, 4.6% now (perf,
-  // 2026-12-04, docs/fuzzing-log.md stop 30).
+  // component) it made LiftedLight::value 7.9% of those inputs' samples under ASan, 4.6%
+  // now (perf, 2026-12-04, docs/fuzzing-log.md stop 30).
   constexpr size_t kStack = 96;
   const size_t terms = pl.xa.size() + 4 * (pl.xb.size() + pl.xc.size());
   std::vector<double> heap;
