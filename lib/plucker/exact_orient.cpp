@@ -1,7 +1,6 @@
 // Exact orientation of float points by expansion arithmetic; see exact_orient.h.
 #include "lib/plucker/exact_orient.h"
 
-#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -265,54 +264,6 @@ double LiftedLight::double_value(const Plane& pl, float hu, double lu, float hv,
   return g;
 }
 
-namespace {
-
-// LiftedLight::value's third stage, out of line: its stack arrays cost ASan's redzone
-// poisoning on every entry, which the first two stages (most evaluations) should not pay.
-[[gnu::noinline]] ExactOrient third_stage(const LiftedLight::Plane& pl, float hu, double lu, float hv, double lv,
-                                          int nw_sign) {
-  // A + B hu + B lu + C hv + C lv as one exact expansion, by Scale-Expansion
-  // and Fast-Expansion-Sum on arrays on the stack (lib/geom/expansion.h). The
-  // coefficients have a few components (at most 8 over 150 slow fuzz_plucker inputs,
-  // mostly 2-3), so the sum has at most |A| + 4 (|B| + |C|) components; this stage runs
-  // where the vertex lies exactly on the plane (a value of zero, which the second stage
-  // cannot certify), 48,161 times on those inputs. Grown into a Small vector one
-  // Two-Product component at a time (quadratic, with the vector's bookkeeping per
-  // component) it made LiftedLight::value 7.9% of those inputs' samples under ASan, 4.6%
-  // now (perf, 2026-12-04, docs/fuzzing-log.md stop 30).
-  constexpr size_t kStack = 96;
-  const size_t terms = pl.xa.size() + 4 * (pl.xb.size() + pl.xc.size());
-  std::vector<double> heap;
-  double stack[3 * kStack];
-  double* buf = stack;
-  size_t cap = kStack;
-  if (terms > kStack) {
-    heap.resize(3 * terms);
-    buf = heap.data();
-    cap = terms;
-  }
-  double *acc = buf, *next = buf + cap, *scaled = buf + 2 * cap;
-  int n = int(pl.xa.size());
-  std::copy(pl.xa.begin(), pl.xa.end(), acc);
-  const std::pair<const Expansion*, double> parts[4] = {
-      {&pl.xb, double(hu)}, {&pl.xb, lu}, {&pl.xc, double(hv)}, {&pl.xc, lv}};
-  for (const auto& [coef, mult] : parts) {
-    const int ns = expansion::scale_expansion(coef->data(), int(coef->size()), mult, scaled);
-    if (ns == 0) continue;
-    n = expansion::sum_expansions(acc, n, scaled, ns, next);
-    std::swap(acc, next);
-  }
-  ExactOrient r;
-  if (n == 0) return r;
-  r.sign = (acc[n - 1] > 0.0 ? 1 : -1) * nw_sign;
-  double v = 0.0;  // summed from the smallest: within a few ulps
-  for (int i = 0; i < n; ++i) v += acc[i];
-  r.value = double(nw_sign) * v;
-  return r;
-}
-
-}  // namespace
-
 ExactOrient LiftedLight::sign(Plane& pl, float hu, double lu, float hv, double lv) const {
   double err = 0.0;
   const double g = double_value(pl, hu, lu, hv, lv, err);
@@ -365,7 +316,20 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
     if (std::isfinite(res) && std::isfinite(bound) && std::abs(res) * (0x1p-30 - 0x1p-52) > bound)
       return ExactOrient{(res > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * res};
   }
-  return third_stage(pl, hu, lu, hv, lv, nw_sign_);
+  // Third stage: the exact expansion, where the vertex lies exactly on the plane (a zero
+  // the second stage cannot certify; 48,161 times over the 150 slowest fuzz_plucker
+  // seeds, on coefficients of 1-8 components). add_scaled is linear since stop 30.
+  thread_local Expansion e;
+  e = pl.xa;
+  add_scaled(e, pl.xb, double(hu));
+  add_scaled(e, pl.xb, lu);
+  add_scaled(e, pl.xc, double(hv));
+  add_scaled(e, pl.xc, lv);
+  ExactOrient r;
+  if (e.empty()) return r;
+  r.sign = (e.back() > 0.0 ? 1 : -1) * nw_sign_;
+  r.value = double(nw_sign_) * estimate(e);
+  return r;
 }
 
 int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
