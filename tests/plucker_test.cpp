@@ -1019,6 +1019,114 @@ TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
   }
 }
 
+namespace {
+// The four corners of t's quadrilateral as a set equal the union of t's and its
+// partner's corners, and the quadrilateral, checked in double independently of the
+// exact predicates: planar (every corner within 1e-12 of the plane of the first three),
+// strictly convex (all four turns of one sign about that plane's normal) and of the
+// area of the two triangles together (they tile it, no overlap).
+void expect_convex_quad(const TriangleSoup& m, const TriangleTree& tree, uint32_t t) {
+  const int32_t p = tree.partner(t);
+  ASSERT_GE(p, 0);
+  EXPECT_EQ(tree.partner(uint32_t(p)), int32_t(t));
+  Vec3f q[4], q2[4];
+  tree.quad(m, t, q);
+  tree.quad(m, uint32_t(p), q2);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(q[k], q2[k]);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_TRUE(std::find(q, q + 4, m.corner(t, k)) != q + 4);
+    EXPECT_TRUE(std::find(q, q + 4, m.corner(uint32_t(p), k)) != q + 4);
+  }
+  Vec3d d[4];
+  for (int k = 0; k < 4; ++k) d[k] = to_double(q[k]);
+  const Vec3d n = cross(d[1] - d[0], d[2] - d[0]);
+  EXPECT_NEAR(dot(n, d[3] - d[0]) / length(n), 0.0, 1e-12);
+  for (int k = 0; k < 4; ++k)
+    EXPECT_GT(dot(cross(d[(k + 1) % 4] - d[k], d[(k + 2) % 4] - d[(k + 1) % 4]), n), 0.0) << k;
+  auto tri_area = [&](uint32_t u) {
+    return 0.5 * length(cross(to_double(m.corner(u, 1)) - to_double(m.corner(u, 0)),
+                              to_double(m.corner(u, 2)) - to_double(m.corner(u, 0))));
+  };
+  const double quad_area = 0.5 * length(cross(d[2] - d[0], d[3] - d[1]));
+  EXPECT_NEAR(quad_area, tri_area(t) + tri_area(uint32_t(p)), 1e-12 * quad_area);
+}
+}  // namespace
+
+TEST(PluckerSelection, CoplanarConvexPairsBecomeQuadrilaterals) {
+  // triangle_tree.h partner: a cylinder of 16 segments pairs its 32 side triangles into
+  // its 16 side rectangles and each cap's fan of 14 triangles into 7 convex quadrilaterals.
+  TriangleSoup cyl;
+  shapes::add_cylinder(cyl, Vec3d(0.3, -0.2, 0.0), 0.7, 2.5, 16);
+  ASSERT_EQ(cyl.size(), 60u);
+  TriangleTree tree(cyl);
+  size_t paired = 0;
+  for (uint32_t t = 0; t < cyl.size(); ++t)
+    if (tree.partner(t) >= 0) {
+      ++paired;
+      expect_convex_quad(cyl, tree, t);
+    }
+  EXPECT_EQ(paired, 60u);
+  for (uint32_t t = 0; t < 32; ++t) EXPECT_EQ(tree.partner(t), int32_t(t ^ 1u)) << t;  // the rectangles
+
+  // Not paired: a fold (the fourth corner 2^-20 off the plane), darts (a reflex corner),
+  // a straight corner (exactly on the line of its neighbours: not strictly convex), a
+  // fourth corner on the shared edge, an edge shared by three triangles. Paired: corners
+  // stored twice, at -0 and +0 (one position).
+  auto pair_of = [](Vec3f a, Vec3f b, Vec3f c, Vec3f d) {
+    TriangleSoup m;
+    m.vertices = {a, b, c, d};
+    m.triangles = {{0, 1, 2}, {1, 0, 3}};
+    return TriangleTree(m).partner(0);
+  };
+  const Vec3f a(0, 0, 0), b(1, 1, 0), c(0, 1, 0), d(1, 0, 0);
+  EXPECT_EQ(pair_of(a, b, c, d), 1);
+  EXPECT_EQ(pair_of(a, b, c, Vec3f(1, 0, 0x1p-20f)), -1);
+  EXPECT_EQ(pair_of(a, b, c, Vec3f(0.3f, 0.2f, 0)), 1);    // convex
+  EXPECT_EQ(pair_of(a, b, c, Vec3f(-0.5f, -1, 0)), -1);    // reflex at a
+  EXPECT_EQ(pair_of(a, b, c, Vec3f(2, 1.5f, 0)), -1);      // reflex at b
+  EXPECT_EQ(pair_of(a, b, c, Vec3f(0.5f, 0.5f, 0)), -1);   // d on the shared edge: not across it
+  EXPECT_EQ(pair_of(a, b, c, Vec3f(2, 1, 0)), -1);         // c, b, d collinear: a straight corner at b
+  {
+    TriangleSoup m;
+    m.vertices = {a, b, c, d, Vec3f(0.5f, 0.5f, 1)};
+    m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+    TriangleTree tree3(m);
+    EXPECT_EQ(tree3.partner(0), -1);
+    EXPECT_EQ(tree3.partner(1), -1);
+  }
+  {
+    TriangleSoup m;  // two triangles with their own copies of the shared corners, one at -0
+    m.vertices = {Vec3f(-0.0f, 0, 0), b, c, Vec3f(0, 0, 0), Vec3f(1, 1, -0.0f), d};
+    m.triangles = {{0, 1, 2}, {4, 3, 5}};
+    TriangleTree tree2(m);
+    EXPECT_EQ(tree2.partner(0), 1);
+    expect_convex_quad(m, tree2, 0);
+  }
+}
+
+TEST(PluckerOracle, QuadrilateralOccludersMatchTheRegionOracle) {
+  // A square occluder made of two triangles, tilted, between a receiver grid and the light,
+  // its shared diagonal's shadow crossing the light for most receivers: one quadrilateral
+  // occluder in the tree (stats quad_occluders), fractions as the region oracle's, bits as
+  // the relation oracle's.
+  std::vector<Vec3f> rs;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) rs.push_back(Vec3f(-0.7f + 0.2f * float(x), -0.7f + 0.2f * float(y), 0.0f));
+  Scene s = light_scene(rs, 16);
+  shapes::add_quad(s.mesh, Vec3d(-0.35, -0.3, 0.9), Vec3d(0.3, -0.35, 1.0), Vec3d(0.35, 0.3, 1.1),
+                   Vec3d(-0.3, 0.35, 1.0));
+  SolveResult r = run(s);
+  EXPECT_GT(r.stats.get("quad_occluders"), 0.0);
+  OracleCheck c = check_against_oracles(s, {r});
+  EXPECT_GT(c.compared, 0u);
+  EXPECT_EQ(c.bit_mismatches, 0u);
+  EXPECT_EQ(c.fraction_mismatches, 0u);
+  double lo = 1.0, hi = 0.0;
+  for (const auto& rr : r.receivers) lo = std::min(lo, double(rr.visible_fraction[0])), hi = std::max(hi, double(rr.visible_fraction[0]));
+  EXPECT_LT(lo, 0.6);  // the occluder hides a good part of the light from some receivers
+  EXPECT_GT(hi, 0.75);
+}
+
 TEST(PluckerSolver, ReceiverFarFromTheLight) {
   // fuzz_plucker 597a1279...: a receiver 7e22 from a light of size 1. Lines from it are
   // parallel to rounding, and the side of a light point against the plane through the

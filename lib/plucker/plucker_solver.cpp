@@ -300,7 +300,7 @@ struct Totals {
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
-  uint64_t plane_point_triangles = 0;
+  uint64_t plane_point_triangles = 0, quad_occluders = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -315,6 +315,7 @@ struct Totals {
     close_triangles += o.close_triangles;
     level_triangles += o.level_triangles;
     plane_point_triangles += o.plane_point_triangles;
+    quad_occluders += o.quad_occluders;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -556,7 +557,7 @@ struct GroupScratch {
   std::vector<Vec3d> rloc, near_verts, poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q;
   std::vector<NearPoly> near;
   std::vector<Occluder> occluders;
-  std::vector<uint8_t> on_plane0, on_level, skip;
+  std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
   std::vector<uint32_t> exact_tris, cand, exact_done, cell_start, cell_items, cell_fill;
   FragmentList frags, tmp;
@@ -567,7 +568,7 @@ struct GroupScratch {
       v->clear();
     near.clear();
     occluders.clear();
-    for (auto* v : {&on_plane0, &on_level, &skip}) v->clear();
+    for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
     vals.clear();
     for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill}) v->clear();
     frags.clear();
@@ -720,15 +721,90 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     const double d = max_component(vabs(rl - lf.centroid));
     if (std::max(d, double(lf.extent)) <= 0x1p20 * light_width) work_scale = std::max(work_scale, d);
   }
+  // A coplanar convex pair t, u (triangle_tree.h partner; tt: t in local coordinates)
+  // shaded as one quadrilateral occluder: only when each triangle would take the plain
+  // float path of the loop below without a clip at the light plane (kept by the shaft,
+  // translated exactly, not far reaching, every vertex before the light plane beyond its
+  // rounding, not behind every receiver) and the receivers lie strictly on one side of
+  // the plane. Then the quadrilateral's part beyond gcut is the union of the two
+  // triangles' parts (one occluder, bsp.h), and their parts below gcut are their near
+  // polygons as the loop would make them. Else false, having added nothing.
+  auto shade_quad = [&](uint32_t t, uint32_t u, const Vec3d tt[3]) {
+    const uint32_t ids[2] = {t, u};
+    Vec3d loc[2][3];
+    double tmx[2];
+    for (int j = 0; j < 2; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& w = scene.mesh.corner(ids[j], k);
+        if (!translates_exactly(w, lf.origin)) return false;
+        loc[j][k] = j == 0 ? tt[k] : to_local_d(w, lf.origin);
+      }
+      if (j == 1 && shaft.culls(Vec3f(loc[1][0]), Vec3f(loc[1][1]), Vec3f(loc[1][2]))) return false;
+      tmx[j] = std::max({max_component(vabs(loc[j][0])), max_component(vabs(loc[j][1])), max_component(vabs(loc[j][2]))});
+      if (!(tmx[j] <= 0x1p20 * work_scale)) return false;
+      double gmx = -std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k) {
+        if (!(double(sigma) * (dot(nd, loc[j][k]) - lf.h0) > double(lf.plane_tol))) return false;
+        gmx = std::max(gmx, dot(gd, loc[j][k] - refd));
+      }
+      if (gmx <= gmin - delta) return false;
+    }
+    Vec3f wq[4];
+    ctx.tree->quad(scene.mesh, t, wq);
+    int npos = 0, nneg = 0;
+    for (const Vec3f& c : wcorners) {
+      int sd = plane_side(wq, c, false);  // the plane of a, d, b: the quadrilateral's, in its orientation
+      npos += sd > 0;
+      nneg += sd < 0;
+    }
+    if (npos != 8 && nneg != 8) return false;
+    Vec3d q[4];
+    double qv[4];
+    for (int k = 0; k < 4; ++k) {
+      q[k] = to_local_d(wq[k], lf.origin);
+      qv[k] = dot(gd, q[k] - refd) - gcut;
+    }
+    clip_by_values(q, qv, 4, true, lower);
+    if (!lower.empty()) {
+      VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
+      Occluder o;
+      o.n = int(lower.size());
+      for (int k = 0; k < o.n; ++k) o.v[k] = lower[size_t(npos == 8 ? o.n - 1 - k : k)];
+      occluders.push_back(o);
+      ++tot.quad_occluders;
+    }
+    for (int j = 0; j < 2; ++j) {
+      double tv[3];
+      for (int k = 0; k < 3; ++k) tv[k] = dot(gd, loc[j][k] - refd) - gcut;
+      clip_by_values(loc[j], tv, 3, false, upper);
+      if (!upper.empty()) {
+        near.push_back(make_near(ids[j], loc[j], tmx[j], upper));
+        near_verts.insert(near_verts.end(), upper.begin(), upper.end());
+      }
+    }
+    return true;
+  };
   // Triangles subtracted exactly per receiver: the far-reaching ones (above) and those
   // within rounding of the light plane (below).
   std::vector<uint32_t>& exact_tris = sc.exact_tris;
   std::vector<uint32_t>& cand = sc.cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
-  for (uint32_t t : cand) {
+  std::vector<uint8_t>& merged = sc.merged;  // per candidate: shaded as part of a quad
+  merged.assign(cand.size(), 0);
+  for (size_t ci = 0; ci < cand.size(); ++ci) {
+    const uint32_t t = cand[ci];
+    if (merged[ci]) continue;
     Vec3d tri[3] = {to_local_d(scene.mesh.corner(t, 0), lf.origin), to_local_d(scene.mesh.corner(t, 1), lf.origin),
                     to_local_d(scene.mesh.corner(t, 2), lf.origin)};
     if (shaft.culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
+    // A coplanar convex pair, both candidates: one quadrilateral occluder (shade_quad).
+    if (const int32_t pt = ctx.tree->partner(t); pt > int32_t(t)) {
+      const auto it = std::lower_bound(cand.begin() + ptrdiff_t(ci) + 1, cand.end(), uint32_t(pt));
+      if (it != cand.end() && *it == uint32_t(pt) && shade_quad(t, uint32_t(pt), tri)) {
+        merged[size_t(it - cand.begin())] = 1;
+        continue;
+      }
+    }
     // Far reaching (above): exact, per receiver, before the double rejections below
     // (their values carry the same rounding).
     const double tmax = std::max({max_component(vabs(tri[0])), max_component(vabs(tri[1])), max_component(vabs(tri[2]))});
@@ -1444,6 +1520,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("close_triangles", double(totals.close_triangles));
   st.set("level_triangles", double(totals.level_triangles));
   st.set("plane_point_triangles", double(totals.plane_point_triangles));
+  st.set("quad_occluders", double(totals.quad_occluders));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));

@@ -31,9 +31,26 @@ class TriangleTree {
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const;
 
   size_t node_count() const { return nodes_.size(); }
-  size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + index_.capacity() * sizeof(uint32_t); }
+  size_t memory_bytes() const {
+    return nodes_.capacity() * sizeof(Node) + index_.capacity() * sizeof(uint32_t) + quads_.capacity() * sizeof(Quad);
+  }
+
+  // Coplanar pairs for occluder merging (plucker_solver.cpp shade_group). Two triangles
+  // that share an edge (the same two vertex positions, exactly), lie exactly in one plane
+  // (orient3d exact) and form a strictly convex quadrilateral (exact 2D orientations in
+  // the plane's dominant projection, which preserves them for coplanar points) block
+  // exactly the segments their union, that quadrilateral, blocks: one convex occluder of
+  // 4 edges for two of 3, without the shared diagonal, whose node planes cut fragments
+  // that come out visible on both sides (the surfaces of columns, rooms and most meshes
+  // are made of such pairs). Matched greedily in triangle order, each triangle in at most
+  // one pair. Empty meshes and meshes without pairs store nothing.
+  int32_t partner(uint32_t t) const { return quads_.empty() ? -1 : quads_[t].partner; }
+  // For t with a partner: the quadrilateral's corners, in the orientation of one of the
+  // two (the same for both).
+  void quad(const TriangleSoup& mesh, uint32_t t, Vec3f out[4]) const;
 
  private:
+  void find_quads(const TriangleSoup& mesh);
   struct Node {
     AABB box;
     uint32_t first = 0;  // leaf: first index in index_; inner: right child (left is this + 1)
@@ -41,6 +58,13 @@ class TriangleTree {
   };
   std::vector<Node> nodes_;
   std::vector<uint32_t> index_;
+  struct Quad {
+    int32_t partner = -1;
+    uint8_t edge = 0;  // the shared edge is t's corners edge, edge + 1
+    uint8_t apex = 0;  // the partner's corner off that edge
+    bool base = false; // edge and apex are as seen from this triangle (else from the partner)
+  };
+  std::vector<Quad> quads_;  // empty when no pair exists
 };
 
 }  // namespace visgate::plucker
