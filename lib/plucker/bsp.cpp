@@ -306,6 +306,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.kind == kInner) {
         // Lines 17-27: position of the fragment against makePlane(xyz, hyperplane).
+        ++counters_.visits;
         SplitResult s = split_fragment(edge_plane(nd.occ, nd.edge), cur_.data(), int(cur_.size()), pos_, neg_);
         if (s == SplitResult::Positive) {
           node = nd.left;

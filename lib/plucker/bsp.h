@@ -103,6 +103,7 @@ struct BspCounters {
   uint64_t occlusion_tests = 0;  // Choice::Relevant: occluders classified at undefined leaves
   uint64_t lazy_visible = 0;     // Choice::Relevant: fragments returned visible from an undefined leaf
   uint64_t merged = 0;           // splits undone in a query: every piece came out visible
+  uint64_t visits = 0;           // inner nodes a query fragment was classified against (lines 17-27)
 };
 
 class LazyBsp {

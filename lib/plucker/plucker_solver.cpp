@@ -323,7 +323,7 @@ struct Totals {
     bsp.nodes_created += o.bsp.nodes_created; bsp.developments += o.bsp.developments;
     bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
     bsp.occlusion_tests += o.bsp.occlusion_tests; bsp.lazy_visible += o.bsp.lazy_visible;
-    bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area; bsp.merged += o.bsp.merged;
+    bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area; bsp.merged += o.bsp.merged; bsp.visits += o.bsp.visits;
   }
 };
 
@@ -1372,6 +1372,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   tot.bsp.occlusion_tests += c.occlusion_tests;
   tot.bsp.lazy_visible += c.lazy_visible;
   tot.bsp.merged += c.merged;
+  tot.bsp.visits += c.visits;
   tot.bsp.splits += c.splits + near_counters.splits;
   tot.bsp.on_line += c.on_line + near_counters.on_line;
   tot.bsp.zero_area += c.zero_area + near_counters.zero_area;
@@ -1509,6 +1510,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("lazy_visible", double(totals.bsp.lazy_visible));
   st.set("merged_splits", double(totals.bsp.merged));
   st.set("splits", double(totals.bsp.splits));
+  st.set("node_visits", double(totals.bsp.visits));
   st.set("degenerate_on_line", double(totals.bsp.on_line));
   st.set("degenerate_zero_area", double(totals.bsp.zero_area));
   st.set("fallback_receivers", double(totals.fallback));
