@@ -1105,26 +1105,39 @@ TEST(PluckerSelection, CoplanarConvexPairsBecomeQuadrilaterals) {
 }
 
 TEST(PluckerOracle, QuadrilateralOccludersMatchTheRegionOracle) {
-  // A square occluder made of two triangles, tilted, between a receiver grid and the light,
-  // its shared diagonal's shadow crossing the light for most receivers: one quadrilateral
-  // occluder in the tree (stats quad_occluders), fractions as the region oracle's, bits as
-  // the relation oracle's.
+  // Coplanar convex pairs shaded as quadrilaterals (plucker_solver.cpp shade_quad), each
+  // against the region oracle (fractions) and the relation oracle (bits):
+  //  - a tilted square between a receiver grid and the light, its shared diagonal's
+  //    shadow crossing the light for most receivers: one occluder in the tree;
+  //  - a wall standing in the grid, from below the receivers' level to above it, whose
+  //    plane separates the receivers (and holds one of them): its part above the band is
+  //    a two-sided near polygon, its part in the band another, both of the pair, and the
+  //    receiver in its plane takes the exact path for both triangles.
   std::vector<Vec3f> rs;
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 8; ++x) rs.push_back(Vec3f(-0.7f + 0.2f * float(x), -0.7f + 0.2f * float(y), 0.0f));
-  Scene s = light_scene(rs, 16);
-  shapes::add_quad(s.mesh, Vec3d(-0.35, -0.3, 0.9), Vec3d(0.3, -0.35, 1.0), Vec3d(0.35, 0.3, 1.1),
-                   Vec3d(-0.3, 0.35, 1.0));
-  SolveResult r = run(s);
-  EXPECT_GT(r.stats.get("quad_occluders"), 0.0);
-  OracleCheck c = check_against_oracles(s, {r});
-  EXPECT_GT(c.compared, 0u);
-  EXPECT_EQ(c.bit_mismatches, 0u);
-  EXPECT_EQ(c.fraction_mismatches, 0u);
-  double lo = 1.0, hi = 0.0;
-  for (const auto& rr : r.receivers) lo = std::min(lo, double(rr.visible_fraction[0])), hi = std::max(hi, double(rr.visible_fraction[0]));
-  EXPECT_LT(lo, 0.6);  // the occluder hides a good part of the light from some receivers
-  EXPECT_GT(hi, 0.75);
+  rs.push_back(Vec3f(0.05f, 0.1f, 0.0f));
+  for (int which = 0; which < 2; ++which) {
+    Scene s = light_scene(rs, 16);
+    if (which == 0) {
+      shapes::add_quad(s.mesh, Vec3d(-0.35, -0.3, 0.9), Vec3d(0.3, -0.35, 1.0), Vec3d(0.35, 0.3, 1.1),
+                       Vec3d(-0.3, 0.35, 1.0));
+    } else {
+      shapes::add_quad(s.mesh, Vec3d(0.05, -0.4, -0.2), Vec3d(0.05, 0.4, -0.2), Vec3d(0.05, 0.4, 1.2),
+                       Vec3d(0.05, -0.4, 1.2));
+    }
+    SolveResult r = run(s);
+    EXPECT_GT(r.stats.get("quads"), 0.0) << which;
+    OracleCheck c = check_against_oracles(s, {r});
+    EXPECT_GT(c.compared, 0u);
+    EXPECT_EQ(c.bit_mismatches, 0u) << which;
+    EXPECT_EQ(c.fraction_mismatches, 0u) << which;
+    double lo = 1.0, hi = 0.0;
+    for (const auto& rr : r.receivers)
+      lo = std::min(lo, double(rr.visible_fraction[0])), hi = std::max(hi, double(rr.visible_fraction[0]));
+    EXPECT_LT(lo, 0.6) << which;  // the quadrilateral hides a good part of the light from some receivers
+    EXPECT_GT(hi, 0.75) << which;
+  }
 }
 
 TEST(PluckerSolver, ReceiverFarFromTheLight) {

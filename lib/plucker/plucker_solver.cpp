@@ -268,6 +268,7 @@ int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
   return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
 }
 
+constexpr uint32_t kNoTriangle = ~uint32_t(0);
 struct NearPoly {
   uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
   uint32_t begin, count;
@@ -277,6 +278,9 @@ struct NearPoly {
   Vec3d lo, hi;
   Vec3d t[3], n, err;
   double e1 = 0, e2 = 0, tmax = 0;
+  // A part of a coplanar convex pair (shade_group shade_quad): the partner triangle,
+  // which the exact paths subtract too. Else kNoTriangle.
+  uint32_t triangle2 = kNoTriangle;
 };
 
 // Side of the (local, double) point r against a near polygon's triangle plane: +1, -1, or
@@ -300,7 +304,7 @@ struct Totals {
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
-  uint64_t plane_point_triangles = 0, quad_occluders = 0;
+  uint64_t plane_point_triangles = 0, quads = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -315,7 +319,7 @@ struct Totals {
     close_triangles += o.close_triangles;
     level_triangles += o.level_triangles;
     plane_point_triangles += o.plane_point_triangles;
-    quad_occluders += o.quad_occluders;
+    quads += o.quads;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -722,13 +726,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     if (std::max(d, double(lf.extent)) <= 0x1p20 * light_width) work_scale = std::max(work_scale, d);
   }
   // A coplanar convex pair t, u (triangle_tree.h partner; tt: t in local coordinates)
-  // shaded as one quadrilateral occluder: only when each triangle would take the plain
-  // float path of the loop below without a clip at the light plane (kept by the shaft,
-  // translated exactly, not far reaching, every vertex before the light plane beyond its
-  // rounding, not behind every receiver) and the receivers lie strictly on one side of
-  // the plane. Then the quadrilateral's part beyond gcut is the union of the two
-  // triangles' parts (one occluder, bsp.h), and their parts below gcut are their near
-  // polygons as the loop would make them. Else false, having added nothing.
+  // shaded as one quadrilateral: only when each triangle would take the plain float path
+  // of the loop below without a clip at the light plane (kept by the shaft, translated
+  // exactly, not far reaching, every vertex before the light plane beyond its rounding,
+  // not behind every receiver). Then the quadrilateral's parts beyond and below gcut are
+  // the unions of the two triangles' parts: beyond gcut one occluder (bsp.h) when the
+  // receivers lie strictly on one side of the plane, else one near polygon, and below
+  // gcut one near polygon; a near polygon of the pair names both triangles for the
+  // exact paths (NearPoly::triangle2). Else false, having added nothing.
   auto shade_quad = [&](uint32_t t, uint32_t u, const Vec3d tt[3]) {
     const uint32_t ids[2] = {t, u};
     Vec3d loc[2][3];
@@ -757,31 +762,34 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       npos += sd > 0;
       nneg += sd < 0;
     }
-    if (npos != 8 && nneg != 8) return false;
     Vec3d q[4];
     double qv[4];
     for (int k = 0; k < 4; ++k) {
       q[k] = to_local_d(wq[k], lf.origin);
       qv[k] = dot(gd, q[k] - refd) - gcut;
     }
+    const double tmax = std::max(tmx[0], tmx[1]);
+    auto add_near = [&](const std::vector<Vec3d>& part) {
+      NearPoly np = make_near(t, loc[0], tmax, part);
+      np.triangle2 = u;
+      near.push_back(np);
+      near_verts.insert(near_verts.end(), part.begin(), part.end());
+    };
     clip_by_values(q, qv, 4, true, lower);
     if (!lower.empty()) {
-      VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
-      Occluder o;
-      o.n = int(lower.size());
-      for (int k = 0; k < o.n; ++k) o.v[k] = lower[size_t(npos == 8 ? o.n - 1 - k : k)];
-      occluders.push_back(o);
-      ++tot.quad_occluders;
-    }
-    for (int j = 0; j < 2; ++j) {
-      double tv[3];
-      for (int k = 0; k < 3; ++k) tv[k] = dot(gd, loc[j][k] - refd) - gcut;
-      clip_by_values(loc[j], tv, 3, false, upper);
-      if (!upper.empty()) {
-        near.push_back(make_near(ids[j], loc[j], tmx[j], upper));
-        near_verts.insert(near_verts.end(), upper.begin(), upper.end());
+      if (npos == 8 || nneg == 8) {
+        VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
+        Occluder o;
+        o.n = int(lower.size());
+        for (int k = 0; k < o.n; ++k) o.v[k] = lower[size_t(npos == 8 ? o.n - 1 - k : k)];
+        occluders.push_back(o);
+      } else {
+        add_near(lower);
       }
     }
+    clip_by_values(q, qv, 4, false, upper);
+    if (!upper.empty()) add_near(upper);
+    ++tot.quads;
     return true;
   };
   // Triangles subtracted exactly per receiver: the far-reaching ones (above) and those
@@ -1064,6 +1072,11 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         for (const Box2& b : boxes) all.extend(b);
         return true;
       };
+      // A near polygon's triangles (both of a pair), exactly.
+      auto exact_near = [&](const NearPoly& np) {
+        const bool done = exact_once(np.triangle);
+        return (np.triangle2 != kNoTriangle && exact_once(np.triangle2)) || done;
+      };
       // Far-reaching triangles and those within rounding of the light plane (occluder
       // selection above), exactly.
       for (uint32_t t : exact_tris) {
@@ -1128,7 +1141,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // touches or contains it): skipped.
         int side_r = near_side(np, r, rmax);
         if (side_r == 0) {
-          exact_once(np.triangle);
+          exact_near(np);
           continue;
         }
         // Vertices within the rounding of r's level count as on it. Just above it, a
@@ -1159,7 +1172,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           }
           if (maxv <= 0.0 && !above) continue;  // float path: at or behind r's g-plane
           if (maxv <= 0.0 || near_level) {  // above it only by rounding, or close to it
-            if (exact_once(np.triangle)) ++tot.level_triangles;
+            if (exact_near(np)) ++tot.level_triangles;
             continue;
           }
         }
@@ -1195,7 +1208,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           too_close = !(d > 0x1p-24 * scale);
         }
         if (too_close) {
-          if (exact_once(np.triangle)) ++tot.close_triangles;
+          if (exact_near(np)) ++tot.close_triangles;
           continue;
         }
         // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
@@ -1522,7 +1535,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("close_triangles", double(totals.close_triangles));
   st.set("level_triangles", double(totals.level_triangles));
   st.set("plane_point_triangles", double(totals.plane_point_triangles));
-  st.set("quad_occluders", double(totals.quad_occluders));
+  st.set("quads", double(totals.quads));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
