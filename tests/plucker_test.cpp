@@ -1020,92 +1020,129 @@ TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
 }
 
 namespace {
-// The four corners of t's quadrilateral as a set equal the union of t's and its
-// partner's corners, and the quadrilateral, checked in double independently of the
-// exact predicates: planar (every corner within 1e-12 of the plane of the first three),
-// strictly convex (all four turns of one sign about that plane's normal) and of the
-// area of the two triangles together (they tile it, no overlap).
-void expect_convex_quad(const TriangleSoup& m, const TriangleTree& tree, uint32_t t) {
-  const int32_t p = tree.partner(t);
-  ASSERT_GE(p, 0);
-  EXPECT_EQ(tree.partner(uint32_t(p)), int32_t(t));
-  Vec3f q[4], q2[4];
-  tree.quad(m, t, q);
-  tree.quad(m, uint32_t(p), q2);
-  for (int k = 0; k < 4; ++k) EXPECT_EQ(q[k], q2[k]);
-  for (int k = 0; k < 3; ++k) {
-    EXPECT_TRUE(std::find(q, q + 4, m.corner(t, k)) != q + 4);
-    EXPECT_TRUE(std::find(q, q + 4, m.corner(uint32_t(p), k)) != q + 4);
+// Patch pid (triangle_tree.h), checked in double independently of the exact predicates:
+// its triangles name it, its corners are exactly the corners of its triangles, and the
+// polygon is planar (every corner within 1e-12 of the plane of the first three),
+// strictly convex (every turn of one sign about that plane's normal) and of the area of
+// its triangles together (they tile it, no overlap).
+void expect_convex_patch(const TriangleSoup& m, const TriangleTree& tree, int32_t pid) {
+  const auto tris = tree.patch_triangles(pid);
+  const auto poly = tree.patch_polygon(pid);
+  ASSERT_GE(tris.size(), 2u);
+  ASSERT_LE(poly.size(), size_t(TriangleTree::kMaxPatchVertices));
+  EXPECT_TRUE(std::is_sorted(tris.begin(), tris.end()));
+  double tri_area = 0.0;
+  for (uint32_t t : tris) {
+    EXPECT_EQ(tree.patch(t), pid);
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::find(poly.begin(), poly.end(), m.corner(t, k)) != poly.end());
+    tri_area += 0.5 * length(cross(to_double(m.corner(t, 1)) - to_double(m.corner(t, 0)),
+                                   to_double(m.corner(t, 2)) - to_double(m.corner(t, 0))));
   }
-  Vec3d d[4];
-  for (int k = 0; k < 4; ++k) d[k] = to_double(q[k]);
-  const Vec3d n = cross(d[1] - d[0], d[2] - d[0]);
-  EXPECT_NEAR(dot(n, d[3] - d[0]) / length(n), 0.0, 1e-12);
-  for (int k = 0; k < 4; ++k)
-    EXPECT_GT(dot(cross(d[(k + 1) % 4] - d[k], d[(k + 2) % 4] - d[(k + 1) % 4]), n), 0.0) << k;
-  auto tri_area = [&](uint32_t u) {
-    return 0.5 * length(cross(to_double(m.corner(u, 1)) - to_double(m.corner(u, 0)),
-                              to_double(m.corner(u, 2)) - to_double(m.corner(u, 0))));
-  };
-  const double quad_area = 0.5 * length(cross(d[2] - d[0], d[3] - d[1]));
-  EXPECT_NEAR(quad_area, tri_area(t) + tri_area(uint32_t(p)), 1e-12 * quad_area);
+  for (const Vec3f& c : poly) {
+    bool found = false;
+    for (uint32_t t : tris)
+      for (int k = 0; k < 3; ++k) found |= m.corner(t, k) == c;
+    EXPECT_TRUE(found);
+  }
+  const size_t n = poly.size();
+  std::vector<Vec3d> d(n);
+  for (size_t k = 0; k < n; ++k) d[k] = to_double(poly[k]);
+  const Vec3d nrm = cross(d[1] - d[0], d[2] - d[0]);
+  Vec3d area2(0, 0, 0);
+  for (size_t k = 0; k < n; ++k) {
+    EXPECT_NEAR(dot(nrm, d[k] - d[0]) / length(nrm), 0.0, 1e-12);
+    EXPECT_GT(dot(cross(d[(k + 1) % n] - d[k], d[(k + 2) % n] - d[(k + 1) % n]), nrm), 0.0) << k;
+    area2 += cross(d[k], d[(k + 1) % n]);
+  }
+  EXPECT_NEAR(0.5 * length(area2), tri_area, 1e-12 * tri_area);
 }
 }  // namespace
 
-TEST(PluckerSelection, CoplanarConvexPairsBecomeQuadrilaterals) {
-  // triangle_tree.h partner: a cylinder of 16 segments pairs its 32 side triangles into
-  // its 16 side rectangles and each cap's fan of 14 triangles into 7 convex quadrilaterals.
+TEST(PluckerSelection, CoplanarConvexPatches) {
+  // triangle_tree.h patches: a cylinder of 16 segments makes each of its 16 side
+  // rectangles (two triangles) a patch, and each cap's fan of 14 triangles a few convex
+  // patches of at most kMaxPatchVertices corners (a 16-gon needs at least three).
   TriangleSoup cyl;
   shapes::add_cylinder(cyl, Vec3d(0.3, -0.2, 0.0), 0.7, 2.5, 16);
   ASSERT_EQ(cyl.size(), 60u);
   TriangleTree tree(cyl);
-  size_t paired = 0;
-  for (uint32_t t = 0; t < cyl.size(); ++t)
-    if (tree.partner(t) >= 0) {
-      ++paired;
-      expect_convex_quad(cyl, tree, t);
+  std::vector<int32_t> seen;
+  for (uint32_t t = 0; t < cyl.size(); ++t) {
+    const int32_t p = tree.patch(t);
+    ASSERT_GE(p, 0) << t;
+    if (std::find(seen.begin(), seen.end(), p) == seen.end()) {
+      seen.push_back(p);
+      expect_convex_patch(cyl, tree, p);
     }
-  EXPECT_EQ(paired, 60u);
-  for (uint32_t t = 0; t < 32; ++t) EXPECT_EQ(tree.partner(t), int32_t(t ^ 1u)) << t;  // the rectangles
+  }
+  for (uint32_t t = 0; t < 32; t += 2) EXPECT_EQ(tree.patch(t), tree.patch(t + 1)) << t;  // the rectangles
+  EXPECT_EQ(tree.patch_triangles(tree.patch(0)).size(), 2u);
+  EXPECT_GE(seen.size(), 16u + 2u * 3u);
+  EXPECT_LE(seen.size(), 16u + 2u * 4u);
 
-  // Not paired: a fold (the fourth corner 2^-20 off the plane), darts (a reflex corner),
-  // a straight corner (exactly on the line of its neighbours: not strictly convex), a
-  // fourth corner on the shared edge, an edge shared by three triangles. Paired: corners
-  // stored twice, at -0 and +0 (one position).
-  auto pair_of = [](Vec3f a, Vec3f b, Vec3f c, Vec3f d) {
+  // Pairs: a fold (the fourth corner 2^-20 off the plane), darts (a reflex corner), a
+  // straight corner (exactly on the line of its neighbours: not strictly convex), a
+  // fourth corner on the shared edge, an edge of three triangles are not patches;
+  // corners stored twice, at -0 and +0 (one position), are.
+  auto patched = [](Vec3f a, Vec3f b, Vec3f c, Vec3f d) {
     TriangleSoup m;
     m.vertices = {a, b, c, d};
     m.triangles = {{0, 1, 2}, {1, 0, 3}};
-    return TriangleTree(m).partner(0);
+    TriangleTree tr(m);
+    if (tr.patch(0) >= 0) expect_convex_patch(m, tr, tr.patch(0));
+    return tr.patch(0) >= 0 && tr.patch(0) == tr.patch(1);
   };
   const Vec3f a(0, 0, 0), b(1, 1, 0), c(0, 1, 0), d(1, 0, 0);
-  EXPECT_EQ(pair_of(a, b, c, d), 1);
-  EXPECT_EQ(pair_of(a, b, c, Vec3f(1, 0, 0x1p-20f)), -1);
-  EXPECT_EQ(pair_of(a, b, c, Vec3f(0.3f, 0.2f, 0)), 1);    // convex
-  EXPECT_EQ(pair_of(a, b, c, Vec3f(-0.5f, -1, 0)), -1);    // reflex at a
-  EXPECT_EQ(pair_of(a, b, c, Vec3f(2, 1.5f, 0)), -1);      // reflex at b
-  EXPECT_EQ(pair_of(a, b, c, Vec3f(0.5f, 0.5f, 0)), -1);   // d on the shared edge: not across it
-  EXPECT_EQ(pair_of(a, b, c, Vec3f(2, 1, 0)), -1);         // c, b, d collinear: a straight corner at b
+  EXPECT_TRUE(patched(a, b, c, d));
+  EXPECT_FALSE(patched(a, b, c, Vec3f(1, 0, 0x1p-20f)));
+  EXPECT_TRUE(patched(a, b, c, Vec3f(0.3f, 0.2f, 0)));    // convex
+  EXPECT_FALSE(patched(a, b, c, Vec3f(-0.5f, -1, 0)));    // reflex at a
+  EXPECT_FALSE(patched(a, b, c, Vec3f(2, 1.5f, 0)));      // reflex at b
+  EXPECT_FALSE(patched(a, b, c, Vec3f(0.5f, 0.5f, 0)));   // d on the shared edge: not across it
+  EXPECT_FALSE(patched(a, b, c, Vec3f(2, 1, 0)));         // c, b, d collinear: a straight corner at b
   {
     TriangleSoup m;
     m.vertices = {a, b, c, d, Vec3f(0.5f, 0.5f, 1)};
     m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
     TriangleTree tree3(m);
-    EXPECT_EQ(tree3.partner(0), -1);
-    EXPECT_EQ(tree3.partner(1), -1);
+    for (uint32_t t = 0; t < 3; ++t) EXPECT_EQ(tree3.patch(t), -1);
   }
   {
     TriangleSoup m;  // two triangles with their own copies of the shared corners, one at -0
     m.vertices = {Vec3f(-0.0f, 0, 0), b, c, Vec3f(0, 0, 0), Vec3f(1, 1, -0.0f), d};
     m.triangles = {{0, 1, 2}, {4, 3, 5}};
     TriangleTree tree2(m);
-    EXPECT_EQ(tree2.partner(0), 1);
-    expect_convex_quad(m, tree2, 0);
+    ASSERT_GE(tree2.patch(0), 0);
+    EXPECT_EQ(tree2.patch(0), tree2.patch(1));
+  }
+  {
+    // A grid of 3 x 3 unit squares in one plane (18 triangles): its strictly convex
+    // patches are the squares (any larger union has a straight corner on a grid line;
+    // merging across the longest edge, the diagonal, first finds them), each checked as
+    // above.
+    TriangleSoup m;
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 3; ++x)
+        shapes::add_quad(m, Vec3d(x, y, 0.5), Vec3d(x + 1, y, 0.5), Vec3d(x + 1, y + 1, 0.5), Vec3d(x, y + 1, 0.5));
+    TriangleTree tg(m);
+    std::vector<int32_t> ids;
+    size_t alone = 0;
+    for (uint32_t t = 0; t < m.size(); ++t) {
+      const int32_t p = tg.patch(t);
+      if (p < 0) {
+        ++alone;
+      } else if (std::find(ids.begin(), ids.end(), p) == ids.end()) {
+        ids.push_back(p);
+        expect_convex_patch(m, tg, p);
+      }
+    }
+    EXPECT_EQ(ids.size(), 9u);
+    EXPECT_EQ(alone, 0u);
   }
 }
 
 TEST(PluckerOracle, QuadrilateralOccludersMatchTheRegionOracle) {
-  // Coplanar convex pairs shaded as quadrilaterals (plucker_solver.cpp shade_quad), each
+  // Coplanar convex pairs shaded as quadrilaterals (plucker_solver.cpp shade_patch), each
   // against the region oracle (fractions) and the relation oracle (bits):
   //  - a tilted square between a receiver grid and the light, its shared diagonal's
   //    shadow crossing the light for most receivers: one occluder in the tree;
@@ -1127,7 +1164,7 @@ TEST(PluckerOracle, QuadrilateralOccludersMatchTheRegionOracle) {
                        Vec3d(0.05, -0.4, 1.2));
     }
     SolveResult r = run(s);
-    EXPECT_GT(r.stats.get("quads"), 0.0) << which;
+    EXPECT_GT(r.stats.get("patches"), 0.0) << which;
     OracleCheck c = check_against_oracles(s, {r});
     EXPECT_GT(c.compared, 0u);
     EXPECT_EQ(c.bit_mismatches, 0u) << which;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 
 #include "lib/geom/expansion.h"
 #include "lib/geom/vec.h"
@@ -32,6 +33,16 @@ inline float orient3d_f32(const Vec3f& a, const Vec3f& b, const Vec3f& c, const 
 // 2^260, roundoff terms above 2^-360). For light validation (lib/scene prepare_light),
 // which must agree with the region oracle's exact frame polygon.
 inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx, float cy) {
+  // Shewchuk's filter (orient2d's ccwerrboundA = (3 + 16 u) u, u = 2^-53, for double
+  // inputs, which the floats are): the double evaluation's sign when its magnitude
+  // exceeds the bound, else the exact sum below.
+  {
+    const double l = (double(bx) - double(ax)) * (double(cy) - double(ay));
+    const double r = (double(by) - double(ay)) * (double(cx) - double(ax));
+    const double det = l - r, bound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53 * (std::abs(l) + std::abs(r));
+    if (det > bound) return 1;
+    if (-det > bound) return -1;
+  }
   using expansion::grow;
   using expansion::two_product;
   using expansion::two_sum;

@@ -52,9 +52,11 @@
 
 namespace visgate::plucker {
 
-// A triangle clipped to the slab between the receivers and the light has at most
-// 3 + 2 vertices; one more for safety of float clipping.
-constexpr int kMaxOccluderVertices = 6;
+// An occluder is a triangle or a coplanar convex patch of up to 8 corners
+// (triangle_tree.h kMaxPatchVertices) clipped to the slab between the receivers and the
+// light: a triangle gains at most 2 corners (two clips), a patch 1 (plucker_solver.cpp
+// clips patches at one plane only); one more for safety.
+constexpr int kMaxOccluderVertices = 10;
 
 // A convex occluder polygon. One-sided (the paper's case): oriented so that every
 // receiver of the group lies strictly on the negative side of (v1 - v0) x (v2 - v0), so

@@ -268,7 +268,6 @@ int plane_side(const Vec3f t[3], const Vec3f& x, bool exact) {
   return exact ? orient3d_exact_sign(t[0], t[1], t[2], x) : 0;
 }
 
-constexpr uint32_t kNoTriangle = ~uint32_t(0);
 struct NearPoly {
   uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
   uint32_t begin, count;
@@ -278,9 +277,9 @@ struct NearPoly {
   Vec3d lo, hi;
   Vec3d t[3], n, err;
   double e1 = 0, e2 = 0, tmax = 0;
-  // A part of a coplanar convex pair (shade_group shade_quad): the partner triangle,
-  // which the exact paths subtract too. Else kNoTriangle.
-  uint32_t triangle2 = kNoTriangle;
+  // A part of a coplanar convex patch (shade_group shade_patch; `triangle` is its first):
+  // the patch, all of whose triangles the exact paths subtract. Else -1.
+  int32_t patch = -1;
 };
 
 // Side of the (local, double) point r against a near polygon's triangle plane: +1, -1, or
@@ -304,7 +303,7 @@ struct Totals {
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
-  uint64_t plane_point_triangles = 0, quads = 0;
+  uint64_t plane_point_triangles = 0, patches = 0, patch_triangles = 0;
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
@@ -319,7 +318,8 @@ struct Totals {
     close_triangles += o.close_triangles;
     level_triangles += o.level_triangles;
     plane_point_triangles += o.plane_point_triangles;
-    quads += o.quads;
+    patches += o.patches;
+    patch_triangles += o.patch_triangles;
     exact_receivers += o.exact_receivers;
     undecided_receivers += o.undecided_receivers;
     unreported_slivers += o.unreported_slivers;
@@ -558,23 +558,23 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
 // groups. shade_group runs no parallel work of its own, so a thread never enters it
 // twice at once.
 struct GroupScratch {
-  std::vector<Vec3d> rloc, near_verts, poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q;
+  std::vector<Vec3d> rloc, near_verts, poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;
   std::vector<NearPoly> near;
   std::vector<Occluder> occluders;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
-  std::vector<uint32_t> exact_tris, cand, exact_done, cell_start, cell_items, cell_fill;
+  std::vector<uint32_t> exact_tris, cand, exact_done, cell_start, cell_items, cell_fill, patch_at;
   FragmentList frags, tmp;
   std::vector<Box2> boxes, tmp_boxes;
 
   void clear() {
-    for (auto* v : {&rloc, &near_verts, &poly0, &lower, &upper, &region, &pyramid, &pyramid_err, &cur, &pos, &neg, &q})
+    for (auto* v : {&rloc, &near_verts, &poly0, &lower, &upper, &region, &pyramid, &pyramid_err, &cur, &pos, &neg, &q, &patch})
       v->clear();
     near.clear();
     occluders.clear();
     for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
     vals.clear();
-    for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill}) v->clear();
+    for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
     frags.clear();
     tmp.clear();
     boxes.clear();
@@ -725,57 +725,59 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     const double d = max_component(vabs(rl - lf.centroid));
     if (std::max(d, double(lf.extent)) <= 0x1p20 * light_width) work_scale = std::max(work_scale, d);
   }
-  // A coplanar convex pair t, u (triangle_tree.h partner; tt: t in local coordinates)
-  // shaded as one quadrilateral: only when each triangle would take the plain float path
-  // of the loop below without a clip at the light plane (kept by the shaft, translated
-  // exactly, not far reaching, every vertex before the light plane beyond its rounding,
-  // not behind every receiver). Then the quadrilateral's parts beyond and below gcut are
-  // the unions of the two triangles' parts: beyond gcut one occluder (bsp.h) when the
-  // receivers lie strictly on one side of the plane, else one near polygon, and below
-  // gcut one near polygon; a near polygon of the pair names both triangles for the
-  // exact paths (NearPoly::triangle2). Else false, having added nothing.
-  auto shade_quad = [&](uint32_t t, uint32_t u, const Vec3d tt[3]) {
-    const uint32_t ids[2] = {t, u};
-    Vec3d loc[2][3];
-    double tmx[2];
-    for (int j = 0; j < 2; ++j) {
+  // A coplanar convex patch (triangle_tree.h; its triangles tris, the first of them t with
+  // local coordinates tt) shaded as one polygon: only when each triangle would take the
+  // plain float path of the loop below without a clip at the light plane (kept by the
+  // shaft, translated exactly, not far reaching, every vertex before the light plane
+  // beyond its rounding, not behind every receiver). Then the polygon's parts beyond and
+  // below gcut are the unions of the triangles' parts: beyond gcut one occluder (bsp.h)
+  // when the receivers lie strictly on one side of the plane, else one near polygon, and
+  // below gcut one near polygon; a near polygon of a patch names it for the exact paths,
+  // which subtract all its triangles (NearPoly::patch). Else false, having added nothing.
+  static_assert(TriangleTree::kMaxPatchVertices + 1 <= kMaxOccluderVertices, "a patch clipped once is an occluder");
+  auto shade_patch = [&](int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]) {
+    double tmax = 0.0;
+    Vec3d tri0[3];
+    for (size_t j = 0; j < tris.size(); ++j) {
+      Vec3d loc[3];
       for (int k = 0; k < 3; ++k) {
-        const Vec3f& w = scene.mesh.corner(ids[j], k);
+        const Vec3f& w = scene.mesh.corner(tris[j], k);
         if (!translates_exactly(w, lf.origin)) return false;
-        loc[j][k] = j == 0 ? tt[k] : to_local_d(w, lf.origin);
+        loc[k] = j == 0 ? tt[k] : to_local_d(w, lf.origin);
       }
-      if (j == 1 && shaft.culls(Vec3f(loc[1][0]), Vec3f(loc[1][1]), Vec3f(loc[1][2]))) return false;
-      tmx[j] = std::max({max_component(vabs(loc[j][0])), max_component(vabs(loc[j][1])), max_component(vabs(loc[j][2]))});
-      if (!(tmx[j] <= 0x1p20 * work_scale)) return false;
+      if (j == 0) std::copy(loc, loc + 3, tri0);
+      if (j > 0 && shaft.culls(Vec3f(loc[0]), Vec3f(loc[1]), Vec3f(loc[2]))) return false;
+      const double tm = std::max({max_component(vabs(loc[0])), max_component(vabs(loc[1])), max_component(vabs(loc[2]))});
+      if (!(tm <= 0x1p20 * work_scale)) return false;
+      tmax = std::max(tmax, tm);
       double gmx = -std::numeric_limits<double>::infinity();
       for (int k = 0; k < 3; ++k) {
-        if (!(double(sigma) * (dot(nd, loc[j][k]) - lf.h0) > double(lf.plane_tol))) return false;
-        gmx = std::max(gmx, dot(gd, loc[j][k] - refd));
+        if (!(double(sigma) * (dot(nd, loc[k]) - lf.h0) > double(lf.plane_tol))) return false;
+        gmx = std::max(gmx, dot(gd, loc[k] - refd));
       }
       if (gmx <= gmin - delta) return false;
     }
-    Vec3f wq[4];
-    ctx.tree->quad(scene.mesh, t, wq);
+    const std::span<const Vec3f> wq = ctx.tree->patch_polygon(pid);
     int npos = 0, nneg = 0;
     for (const Vec3f& c : wcorners) {
-      int sd = plane_side(wq, c, false);  // the plane of a, d, b: the quadrilateral's, in its orientation
+      int sd = plane_side(wq.data(), c, false);  // three corners of the polygon: its plane, in its orientation
       npos += sd > 0;
       nneg += sd < 0;
     }
-    Vec3d q[4];
-    double qv[4];
-    for (int k = 0; k < 4; ++k) {
+    std::vector<Vec3d>& q = sc.patch;
+    q.resize(wq.size());
+    vals.resize(wq.size());
+    for (size_t k = 0; k < wq.size(); ++k) {
       q[k] = to_local_d(wq[k], lf.origin);
-      qv[k] = dot(gd, q[k] - refd) - gcut;
+      vals[k] = dot(gd, q[k] - refd) - gcut;
     }
-    const double tmax = std::max(tmx[0], tmx[1]);
     auto add_near = [&](const std::vector<Vec3d>& part) {
-      NearPoly np = make_near(t, loc[0], tmax, part);
-      np.triangle2 = u;
+      NearPoly np = make_near(tris[0], tri0, tmax, part);
+      np.patch = pid;
       near.push_back(np);
       near_verts.insert(near_verts.end(), part.begin(), part.end());
     };
-    clip_by_values(q, qv, 4, true, lower);
+    clip_by_values(q.data(), vals.data(), int(q.size()), true, lower);
     if (!lower.empty()) {
       if (npos == 8 || nneg == 8) {
         VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
@@ -787,9 +789,10 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         add_near(lower);
       }
     }
-    clip_by_values(q, qv, 4, false, upper);
+    clip_by_values(q.data(), vals.data(), int(q.size()), false, upper);
     if (!upper.empty()) add_near(upper);
-    ++tot.quads;
+    ++tot.patches;
+    tot.patch_triangles += tris.size();
     return true;
   };
   // Triangles subtracted exactly per receiver: the far-reaching ones (above) and those
@@ -805,11 +808,19 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     Vec3d tri[3] = {to_local_d(scene.mesh.corner(t, 0), lf.origin), to_local_d(scene.mesh.corner(t, 1), lf.origin),
                     to_local_d(scene.mesh.corner(t, 2), lf.origin)};
     if (shaft.culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
-    // A coplanar convex pair, both candidates: one quadrilateral occluder (shade_quad).
-    if (const int32_t pt = ctx.tree->partner(t); pt > int32_t(t)) {
-      const auto it = std::lower_bound(cand.begin() + ptrdiff_t(ci) + 1, cand.end(), uint32_t(pt));
-      if (it != cand.end() && *it == uint32_t(pt) && shade_quad(t, uint32_t(pt), tri)) {
-        merged[size_t(it - cand.begin())] = 1;
+    // A coplanar convex patch from its first triangle, all of its triangles candidates:
+    // one polygon (shade_patch).
+    if (const int32_t pid = ctx.tree->patch(t); pid >= 0 && ctx.tree->patch_triangles(pid)[0] == t) {
+      const std::span<const uint32_t> tris = ctx.tree->patch_triangles(pid);
+      std::vector<uint32_t>& at = sc.patch_at;  // positions of tris[1..] in cand
+      at.clear();
+      for (size_t j = 1; j < tris.size(); ++j) {
+        const auto it = std::lower_bound(cand.begin() + ptrdiff_t(ci) + 1, cand.end(), tris[j]);
+        if (it == cand.end() || *it != tris[j]) break;
+        at.push_back(uint32_t(it - cand.begin()));
+      }
+      if (at.size() + 1 == tris.size() && shade_patch(pid, tris, tri)) {
+        for (uint32_t k : at) merged[k] = 1;
         continue;
       }
     }
@@ -1072,10 +1083,12 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         for (const Box2& b : boxes) all.extend(b);
         return true;
       };
-      // A near polygon's triangles (both of a pair), exactly.
+      // A near polygon's triangles (all of a patch), exactly.
       auto exact_near = [&](const NearPoly& np) {
-        const bool done = exact_once(np.triangle);
-        return (np.triangle2 != kNoTriangle && exact_once(np.triangle2)) || done;
+        if (np.patch < 0) return exact_once(np.triangle);
+        bool done = false;
+        for (uint32_t pt : ctx.tree->patch_triangles(np.patch)) done = exact_once(pt) || done;
+        return done;
       };
       // Far-reaching triangles and those within rounding of the light plane (occluder
       // selection above), exactly.
@@ -1535,7 +1548,8 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("close_triangles", double(totals.close_triangles));
   st.set("level_triangles", double(totals.level_triangles));
   st.set("plane_point_triangles", double(totals.plane_point_triangles));
-  st.set("quads", double(totals.quads));
+  st.set("patches", double(totals.patches));
+  st.set("patch_triangles", double(totals.patch_triangles));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));

@@ -69,10 +69,10 @@ TriangleTree::TriangleTree(const TriangleSoup& mesh) {
     stack.push_back({right, it.first + half, it.count - half});
     stack.push_back({left, it.first, half});
   }
-  find_quads(mesh);
+  find_patches(mesh);
 }
 
-void TriangleTree::find_quads(const TriangleSoup& mesh) {
+void TriangleTree::find_patches(const TriangleSoup& mesh) {
   const size_t n = mesh.size();
   // Vertex positions to ids: equal positions (compared as values, so -0 == +0) share one.
   struct KeyHash {
@@ -84,87 +84,127 @@ void TriangleTree::find_quads(const TriangleSoup& mesh) {
   };
   std::unordered_map<std::array<float, 3>, uint32_t, KeyHash> ids;
   std::vector<std::array<uint32_t, 3>> tv(n);
+  std::vector<Vec3f> id_pos;
   for (size_t t = 0; t < n; ++t)
     for (int k = 0; k < 3; ++k) {
       const Vec3f& v = mesh.corner(t, k);
-      tv[t][size_t(k)] = ids.emplace(std::array<float, 3>{v.x + 0.0f, v.y + 0.0f, v.z + 0.0f}, uint32_t(ids.size()))
-                             .first->second;
+      auto [it, fresh] = ids.emplace(std::array<float, 3>{v.x + 0.0f, v.y + 0.0f, v.z + 0.0f}, uint32_t(ids.size()));
+      if (fresh) id_pos.push_back(v);
+      tv[t][size_t(k)] = it->second;
     }
-  // Edges (lower id, higher id, triangle, corner of the edge's start), sorted: a run of
-  // exactly two entries is an edge shared by two triangles (manifold).
+  // Edges (lower id, higher id, triangle), sorted: a run of exactly two entries is an
+  // edge shared by two triangles (manifold); only those glue triangles into patches.
   struct Edge {
     uint32_t lo, hi, t;
-    uint8_t k;
     bool operator<(const Edge& o) const { return lo != o.lo ? lo < o.lo : hi != o.hi ? hi < o.hi : t < o.t; }
   };
+  auto degenerate = [&](size_t t) { return tv[t][0] == tv[t][1] || tv[t][1] == tv[t][2] || tv[t][0] == tv[t][2]; };
   std::vector<Edge> edges;
   edges.reserve(3 * n);
   for (size_t t = 0; t < n; ++t) {
-    const auto& c = tv[t];
-    if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+    if (degenerate(t)) continue;
     for (int k = 0; k < 3; ++k) {
-      uint32_t a = c[size_t(k)], b = c[size_t((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), uint32_t(t), uint8_t(k)});
+      uint32_t a = tv[t][size_t(k)], b = tv[t][size_t((k + 1) % 3)];
+      edges.push_back({std::min(a, b), std::max(a, b), uint32_t(t)});
     }
   }
   std::sort(edges.begin(), edges.end());
-  // For each triangle and corner k: the other triangle on edge (k, k + 1) and its corner.
   constexpr uint32_t kNone = ~uint32_t(0);
+  // For each triangle and corner k: the other triangle on its edge (k, k + 1) when exactly
+  // two triangles have that edge, else kNone.
   std::vector<std::array<uint32_t, 3>> other(n, {kNone, kNone, kNone});
+  auto corner_of = [&](uint32_t t, uint32_t a, uint32_t b) {  // k with edge (k, k + 1) = {a, b}
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t x = tv[t][size_t(k)], y = tv[t][size_t((k + 1) % 3)];
+      if ((x == a && y == b) || (x == b && y == a)) return k;
+    }
+    return -1;
+  };
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
     while (j < edges.size() && edges[j].lo == edges[i].lo && edges[j].hi == edges[i].hi) ++j;
-    if (j - i == 2) {
-      other[edges[i].t][edges[i].k] = edges[i + 1].t;
-      other[edges[i + 1].t][edges[i + 1].k] = edges[i].t;
+    if (j - i == 2 && edges[i].t != edges[i + 1].t) {
+      const Edge &e0 = edges[i], &e1 = edges[i + 1];
+      other[e0.t][size_t(corner_of(e0.t, e0.lo, e0.hi))] = e1.t;
+      other[e1.t][size_t(corner_of(e1.t, e1.lo, e1.hi))] = e0.t;
     }
     i = j;
   }
-  std::vector<Quad> quads(n);
-  bool any = false;
-  for (uint32_t t = 0; t < n; ++t) {
-    if (quads[t].partner >= 0) continue;
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t p = other[t][size_t(e)];
-      if (p == kNone || p == t || quads[p].partner >= 0) continue;
-      // t = (a, b, c) with the shared edge a -> b, d the partner's third corner.
-      const uint32_t ia = tv[t][size_t(e)], ib = tv[t][size_t((e + 1) % 3)];
-      int apex = -1;
-      for (int k = 0; k < 3; ++k)
-        if (tv[p][size_t(k)] != ia && tv[p][size_t(k)] != ib) apex = k;
-      if (apex < 0) continue;
-      const Vec3f &a = mesh.corner(t, e), &b = mesh.corner(t, (e + 1) % 3), &c = mesh.corner(t, (e + 2) % 3);
-      const Vec3f& d = mesh.corner(p, apex);
-      if (orient3d_exact_sign(a, b, c, d) != 0) continue;
-      // The dominant axis of t's normal is dropped; t's projected orientation is then
-      // nonzero unless t is degenerate.
-      const Vec3d nn = cross(to_double(b) - to_double(a), to_double(c) - to_double(a));
-      const int w = std::abs(nn.x) >= std::abs(nn.y) ? (std::abs(nn.x) >= std::abs(nn.z) ? 0 : 2)
-                                                     : (std::abs(nn.y) >= std::abs(nn.z) ? 1 : 2);
-      const int u = (w + 1) % 3, v = (w + 2) % 3;
-      auto o2 = [&](const Vec3f& x, const Vec3f& y, const Vec3f& z) {
-        return orient2d_exact_sign(x[u], x[v], y[u], y[v], z[u], z[v]);
-      };
-      const int s = o2(a, b, c);
-      // Strictly convex a, d, b, c: d strictly across a -> b, convex at b and at a.
-      if (s == 0 || o2(a, b, d) != -s || o2(d, b, c) != s || o2(c, a, d) != s) continue;
-      quads[t] = {int32_t(p), uint8_t(e), uint8_t(apex), true};
-      quads[p] = {int32_t(t), uint8_t(e), uint8_t(apex), false};
-      any = true;
-      break;
-    }
-  }
-  if (any) quads_ = std::move(quads);
-}
 
-void TriangleTree::quad(const TriangleSoup& mesh, uint32_t t, Vec3f out[4]) const {
-  const Quad& q = quads_[t];
-  const uint32_t base = q.base ? t : uint32_t(q.partner), other = q.base ? uint32_t(q.partner) : t;
-  const int e = q.edge;
-  out[0] = mesh.corner(base, e);
-  out[1] = mesh.corner(other, q.apex);
-  out[2] = mesh.corner(base, (e + 1) % 3);
-  out[3] = mesh.corner(base, (e + 2) % 3);
+  std::vector<int32_t> patch_of(n, -1);
+  // The growing polygon: vertex ids, and per edge i (poly[i] -> poly[i + 1]) the patch
+  // triangle that has it; its triangles.
+  std::vector<uint32_t> poly, owner, members, order;
+  for (uint32_t t = 0; t < n; ++t) {
+    if (patch_of[t] >= 0 || degenerate(t)) continue;
+    const auto& c = tv[t];
+    const Vec3f &a = id_pos[c[0]], &b = id_pos[c[1]], &cc = id_pos[c[2]];
+    // The dominant axis of t's normal is dropped; t's projected orientation s is then
+    // nonzero unless t is degenerate, and every turn of the polygon must have that sign.
+    const Vec3d nn = cross(to_double(b) - to_double(a), to_double(cc) - to_double(a));
+    const int w = std::abs(nn.x) >= std::abs(nn.y) ? (std::abs(nn.x) >= std::abs(nn.z) ? 0 : 2)
+                                                   : (std::abs(nn.y) >= std::abs(nn.z) ? 1 : 2);
+    const int u = (w + 1) % 3, v = (w + 2) % 3;
+    auto turn = [&](uint32_t x, uint32_t y, uint32_t z) {
+      const Vec3f &p = id_pos[x], &q = id_pos[y], &r = id_pos[z];
+      return orient2d_exact_sign(p[u], p[v], q[u], q[v], r[u], r[v]);
+    };
+    const int s = turn(c[0], c[1], c[2]);
+    if (s == 0) continue;
+    poly.assign(c.begin(), c.end());
+    owner.assign(3, t);
+    members.assign(1, t);
+    // Grown across one edge at a time, the longest first (merging across a long edge
+    // removes the most inner edge: the diagonal of a rectangle, the chords of a fan),
+    // until no edge grows it.
+    bool grown = true;
+    while (grown && int(poly.size()) < kMaxPatchVertices) {
+      grown = false;
+      order.resize(poly.size());
+      for (size_t i = 0; i < poly.size(); ++i) order[i] = uint32_t(i);
+      auto len2 = [&](uint32_t i) {
+        const Vec3d e = to_double(id_pos[poly[(i + 1) % poly.size()]]) - to_double(id_pos[poly[i]]);
+        return dot(e, e);
+      };
+      std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return len2(x) > len2(y); });
+      for (size_t oi = 0; oi < order.size() && !grown; ++oi) {
+        const size_t i = order[oi];
+        const uint32_t pa = poly[i], pb = poly[(i + 1) % poly.size()];
+        const int k = corner_of(owner[i], pa, pb);
+        const uint32_t q = k < 0 ? kNone : other[owner[i]][size_t(k)];
+        if (q == kNone || patch_of[q] >= 0 || std::find(members.begin(), members.end(), q) != members.end()) continue;
+        uint32_t d = kNone;
+        for (uint32_t x : tv[q])
+          if (x != pa && x != pb) d = x;
+        if (d == kNone || std::find(poly.begin(), poly.end(), d) != poly.end()) continue;
+        // d strictly across pa -> pb, and the turns at pa and at pb strictly convex: the
+        // new polygon is the old one (convex, on the other side of pa -> pb) and q.
+        // The 2D turns first (cheaper); they mean something once d is in the plane.
+        const uint32_t prev = poly[(i + poly.size() - 1) % poly.size()], next = poly[(i + 2) % poly.size()];
+        if (turn(pa, d, pb) != s || turn(prev, pa, d) != s || turn(d, pb, next) != s) continue;
+        if (orient3d_exact_sign(a, b, cc, id_pos[d]) != 0) continue;
+        poly.insert(poly.begin() + ptrdiff_t(i) + 1, d);
+        owner[i] = q;
+        owner.insert(owner.begin() + ptrdiff_t(i) + 1, q);
+        members.push_back(q);
+        grown = true;
+      }
+    }
+    if (members.size() < 2) continue;
+    std::sort(members.begin(), members.end());
+    Patch pt;
+    pt.tri_begin = uint32_t(patch_tris_.size());
+    pt.tri_count = uint32_t(members.size());
+    pt.poly_begin = uint32_t(patch_poly_.size());
+    pt.poly_count = uint32_t(poly.size());
+    for (uint32_t m : members) {
+      patch_tris_.push_back(m);
+      patch_of[m] = int32_t(patches_.size());
+    }
+    for (uint32_t id : poly) patch_poly_.push_back(id_pos[id]);
+    patches_.push_back(pt);
+  }
+  if (!patches_.empty()) patch_of_ = std::move(patch_of);
 }
 
 void TriangleTree::candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const {

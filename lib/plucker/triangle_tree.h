@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "lib/geom/aabb.h"
@@ -32,25 +33,38 @@ class TriangleTree {
 
   size_t node_count() const { return nodes_.size(); }
   size_t memory_bytes() const {
-    return nodes_.capacity() * sizeof(Node) + index_.capacity() * sizeof(uint32_t) + quads_.capacity() * sizeof(Quad);
+    return nodes_.capacity() * sizeof(Node) + index_.capacity() * sizeof(uint32_t) +
+           patch_of_.capacity() * sizeof(int32_t) + patches_.capacity() * sizeof(Patch) +
+           patch_tris_.capacity() * sizeof(uint32_t) + patch_poly_.capacity() * sizeof(Vec3f);
   }
 
-  // Coplanar pairs for occluder merging (plucker_solver.cpp shade_group). Two triangles
-  // that share an edge (the same two vertex positions, exactly), lie exactly in one plane
-  // (orient3d exact) and form a strictly convex quadrilateral (exact 2D orientations in
-  // the plane's dominant projection, which preserves them for coplanar points) block
-  // exactly the segments their union, that quadrilateral, blocks: one convex occluder of
-  // 4 edges for two of 3, without the shared diagonal, whose node planes cut fragments
-  // that come out visible on both sides (the surfaces of columns, rooms and most meshes
-  // are made of such pairs). Matched greedily in triangle order, each triangle in at most
-  // one pair. Empty meshes and meshes without pairs store nothing.
-  int32_t partner(uint32_t t) const { return quads_.empty() ? -1 : quads_[t].partner; }
-  // For t with a partner: the quadrilateral's corners, in the orientation of one of the
-  // two (the same for both).
-  void quad(const TriangleSoup& mesh, uint32_t t, Vec3f out[4]) const;
+  // Coplanar convex patches for occluder merging (plucker_solver.cpp shade_group).
+  // Triangles glued edge to edge (the same two vertex positions, exactly, on an edge of
+  // exactly two triangles), lying exactly in one plane (orient3d exact) and forming a
+  // strictly convex polygon (exact 2D orientations in the plane's dominant projection,
+  // which preserves them for coplanar points) block exactly the segments their union,
+  // that polygon, blocks: one convex occluder of k edges instead of several triangles,
+  // without the inner edges, whose node planes cut fragments that come out visible on
+  // both sides (the surfaces of columns, rooms and most meshes are made of such
+  // patches: rectangles of two triangles, fans of caps). Grown greedily from the lowest
+  // unassigned triangle, a triangle across one of the polygon's edges at a time, while
+  // the polygon stays strictly convex and has at most kMaxPatchVertices corners; each
+  // triangle in at most one patch. Meshes without any patch of two or more store nothing.
+  static constexpr int kMaxPatchVertices = 8;
+  // The patch of t (-1: none, t stands alone).
+  int32_t patch(uint32_t t) const { return patch_of_.empty() ? -1 : patch_of_[t]; }
+  // Its triangles (increasing) and its polygon (in the orientation of its first triangle).
+  std::span<const uint32_t> patch_triangles(int32_t p) const {
+    const Patch& q = patches_[size_t(p)];
+    return {patch_tris_.data() + q.tri_begin, q.tri_count};
+  }
+  std::span<const Vec3f> patch_polygon(int32_t p) const {
+    const Patch& q = patches_[size_t(p)];
+    return {patch_poly_.data() + q.poly_begin, q.poly_count};
+  }
 
  private:
-  void find_quads(const TriangleSoup& mesh);
+  void find_patches(const TriangleSoup& mesh);
   struct Node {
     AABB box;
     uint32_t first = 0;  // leaf: first index in index_; inner: right child (left is this + 1)
@@ -58,13 +72,13 @@ class TriangleTree {
   };
   std::vector<Node> nodes_;
   std::vector<uint32_t> index_;
-  struct Quad {
-    int32_t partner = -1;
-    uint8_t edge = 0;  // the shared edge is t's corners edge, edge + 1
-    uint8_t apex = 0;  // the partner's corner off that edge
-    bool base = false; // edge and apex are as seen from this triangle (else from the partner)
+  struct Patch {
+    uint32_t tri_begin = 0, tri_count = 0, poly_begin = 0, poly_count = 0;
   };
-  std::vector<Quad> quads_;  // empty when no pair exists
+  std::vector<int32_t> patch_of_;  // empty when no patch exists
+  std::vector<Patch> patches_;
+  std::vector<uint32_t> patch_tris_;
+  std::vector<Vec3f> patch_poly_;
 };
 
 }  // namespace visgate::plucker
