@@ -18,7 +18,10 @@
 //    clipped to that receiver's slab and subtracted from the fragments with the same
 //    plane-through-the-query-point splits (bsp(o) walked once, nothing stored);
 //  - insertOccluder bounds the occluded lines with two vvsets: occluder-light (Theorem 1)
-//    and receiver region-occluder (bsp.h), the first decided one wins.
+//    and receiver region-occluder (bsp.h), the first decided one wins;
+//  - coplanar convex patches of triangles (triangle_tree.h, exact predicates) are one
+//    occluder or near polygon when all their triangles take the plain float path: the
+//    same blocked set without node planes along inner edges (shade_group shade_patch).
 // Per receiver and light: the visible fragments (convex polygons on the light plane,
 // counter-clockwise about the light normal), the visible fraction (sum of fragment areas
 // over the light area), per-sample bits by point-in-fragment of sample_position(light, j,
