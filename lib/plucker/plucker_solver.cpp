@@ -800,7 +800,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   std::vector<uint32_t>& exact_tris = sc.exact_tris;
   std::vector<uint32_t>& cand = sc.cand;
   ctx.tree->candidates(shaft, lf.origin, cand);
-  std::vector<uint8_t>& merged = sc.merged;  // per candidate: shaded as part of a quad
+  std::vector<uint8_t>& merged = sc.merged;  // per candidate: shaded as part of a patch
   merged.assign(cand.size(), 0);
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
