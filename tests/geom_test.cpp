@@ -96,6 +96,20 @@ TEST(Predicates, Orient2dExactSignAgainstInt128OnNearCollinearFloats) {
     zero += expect == 0;
   }
   EXPECT_GT(zero, 1000);  // the exactly collinear triples came out zero
+  // General triples of the same range, and triples moved 1-64 ulps off a line, for the
+  // floating-point filter in front of the exact sum (predicates.h): int128's sign.
+  for (int it = 0; it < 20000; ++it) {
+    float ax = pick(), ay = pick(), bx = pick(), by = pick(), cx = pick(), cy = pick();
+    if (it % 2 == 1) {
+      double t = rng.uniform(-2, 3);
+      cx = float(double(ax) + t * (double(bx) - double(ax)));
+      cy = float(double(ay) + t * (double(by) - double(ay)));
+      for (int k = int(1 + rng.below(64)); k > 0; --k) cy = std::nextafter(cy, 0x1p41f);
+      if (!(cx >= 8 && cy >= 8 && cx < 0x1p40f && cy < 0x1p40f)) continue;
+    }
+    i128 det = (fix(bx) - fix(ax)) * (fix(cy) - fix(ay)) - (fix(by) - fix(ay)) * (fix(cx) - fix(ax));
+    ASSERT_EQ(orient2d_exact_sign(ax, ay, bx, by, cx, cy), det > 0 ? 1 : det < 0 ? -1 : 0) << it;
+  }
   // Hand cases: a counter-clockwise, a clockwise and a collinear triple.
   EXPECT_EQ(orient2d_exact_sign(0, 0, 1, 0, 0, 1), 1);
   EXPECT_EQ(orient2d_exact_sign(0, 0, 0, 1, 1, 0), -1);
