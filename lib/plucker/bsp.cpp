@@ -30,6 +30,7 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   stamp_ = 0;
   shadow_stamp_.clear();
   plane_stamp_.clear();
+  miss_edge_.clear();
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
   light_centroid_ = Vec3d{};
   for (const Vec3d& v : light_) light_centroid_ += v;
@@ -207,12 +208,22 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
   // the same, on-line) on its non-negative side.
   bool all_pos = true, all_neg = true, some_nonpos = false, some_nonneg = false;
   (void)r;  // the edge planes are those of the current query point (begin_query)
-  for (int m = 0; m < o.n; ++m) {
+  // Starting at the edge that last separated a fragment from this occluder: neighbouring
+  // fragments and query points are mostly separated by the same edge, and a one-sided
+  // occluder is missed at the first edge that separates (the answer does not depend on
+  // the order).
+  if (miss_edge_.size() != occ_.size()) miss_edge_.assign(occ_.size(), 0);
+  const int first = miss_edge_[id] < o.n ? miss_edge_[id] : 0;
+  for (int mi = 0; mi < o.n; ++mi) {
+    const int m = first + mi < o.n ? first + mi : first + mi - o.n;
     SplitResult s = classify_fragment(edge_plane(id, m), f, n);
     if (s == SplitResult::OnLine) ++counters_.on_line;  // undecided: the solver re-shades r exactly
     bool nonpos = s == SplitResult::Negative || s == SplitResult::OnLine;
     bool nonneg = s == SplitResult::Positive || s == SplitResult::OnLine;
-    if (nonpos && !o.two_sided) return Occlusion::Miss;
+    if (nonpos && !o.two_sided) {
+      miss_edge_[id] = uint8_t(m);
+      return Occlusion::Miss;
+    }
     some_nonpos |= nonpos;
     some_nonneg |= nonneg;
     all_pos &= s == SplitResult::Positive;

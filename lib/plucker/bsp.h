@@ -267,6 +267,7 @@ class LazyBsp {
   uint32_t stamp_ = 0;
   std::vector<uint32_t> shadow_stamp_;  // per occluder: stamp_ when shadow_box_ is valid
   std::vector<Box2> shadow_box_;
+  std::vector<uint8_t> miss_edge_;      // per occluder: the edge occlusion() last found separating
   std::vector<uint32_t> plane_stamp_;   // per occluder edge: stamp_ when plane_cache_ is valid
   std::vector<NodePlane> plane_cache_;
   Vec3d light_centroid_{};

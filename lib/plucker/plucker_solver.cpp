@@ -397,19 +397,23 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     out.add(p, n);
     out_boxes.push_back(Box2::of(frame, p, int(n)));
   };
+  int hint = 0;
   for (size_t f = 0; f < in.size(); ++f) {
     if (!qbox.overlaps(boxes[f])) {
       keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
       continue;
     }
     // A fragment entirely on the negative side of one edge plane misses q: kept whole,
-    // without the splits the walk below would make before reaching that edge.
+    // without the splits the walk below would make before reaching that edge. Tried
+    // from the edge that separated the previous fragment (neighbours mostly share it).
     bool misses = false;
-    for (int m = 0; m < nq && !misses; ++m) {
+    for (int mi = 0; mi < nq && !misses; ++mi) {
+      const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
       if (skip[m]) continue;
       SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
       if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
       misses = s == SplitResult::Negative || s == SplitResult::OnLine;
+      if (misses) hint = m;
     }
     if (misses) {
       keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
