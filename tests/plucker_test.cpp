@@ -1032,8 +1032,14 @@ void expect_convex_patch(const TriangleSoup& m, const TriangleTree& tree, int32_
   ASSERT_LE(poly.size(), size_t(TriangleTree::kMaxPatchVertices));
   EXPECT_TRUE(std::is_sorted(tris.begin(), tris.end()));
   double tri_area = 0.0;
+  const Vec3d pn = cross(to_double(poly[1]) - to_double(poly[0]), to_double(poly[2]) - to_double(poly[0]));
   for (uint32_t t : tris) {
     EXPECT_EQ(tree.patch(t), pid);
+    // Each triangle has the polygon's orientation (shade_patch's near polygons take the
+    // plane of the first one).
+    const Vec3d tn = cross(to_double(m.corner(t, 1)) - to_double(m.corner(t, 0)),
+                           to_double(m.corner(t, 2)) - to_double(m.corner(t, 0)));
+    EXPECT_GT(dot(tn, pn), 0.0) << t;
     for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::find(poly.begin(), poly.end(), m.corner(t, k)) != poly.end());
     tri_area += 0.5 * length(cross(to_double(m.corner(t, 1)) - to_double(m.corner(t, 0)),
                                    to_double(m.corner(t, 2)) - to_double(m.corner(t, 0))));
@@ -1082,8 +1088,8 @@ TEST(PluckerSelection, CoplanarConvexPatches) {
 
   // Pairs: a fold (the fourth corner 2^-20 off the plane), darts (a reflex corner), a
   // straight corner (exactly on the line of its neighbours: not strictly convex), a
-  // fourth corner on the shared edge, an edge of three triangles are not patches;
-  // corners stored twice, at -0 and +0 (one position), are.
+  // fourth corner on the shared edge, opposite windings, an edge of three triangles are
+  // not patches; corners stored twice, at -0 and +0 (one position), are.
   auto patched = [](Vec3f a, Vec3f b, Vec3f c, Vec3f d) {
     TriangleSoup m;
     m.vertices = {a, b, c, d};
@@ -1100,6 +1106,12 @@ TEST(PluckerSelection, CoplanarConvexPatches) {
   EXPECT_FALSE(patched(a, b, c, Vec3f(2, 1.5f, 0)));      // reflex at b
   EXPECT_FALSE(patched(a, b, c, Vec3f(0.5f, 0.5f, 0)));   // d on the shared edge: not across it
   EXPECT_FALSE(patched(a, b, c, Vec3f(2, 1, 0)));         // c, b, d collinear: a straight corner at b
+  {
+    TriangleSoup m;  // the convex pair again, the second triangle wound the other way
+    m.vertices = {a, b, c, d};
+    m.triangles = {{0, 1, 2}, {0, 1, 3}};
+    EXPECT_EQ(TriangleTree(m).patch(0), -1);
+  }
   {
     TriangleSoup m;
     m.vertices = {a, b, c, d, Vec3f(0.5f, 0.5f, 1)};

@@ -2,12 +2,11 @@
 #include "lib/plucker/triangle_tree.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <unordered_map>
 
 #include "lib/geom/check.h"
 #include "lib/geom/predicates.h"
+#include "lib/mesh/prepare.h"
 #include "lib/plucker/exact_orient.h"
 
 namespace visgate::plucker {
@@ -73,72 +72,32 @@ TriangleTree::TriangleTree(const TriangleSoup& mesh) {
 }
 
 void TriangleTree::find_patches(const TriangleSoup& mesh) {
-  const size_t n = mesh.size();
-  // Vertex positions to ids: equal positions (compared as values, so -0 == +0) share one.
-  struct KeyHash {
-    size_t operator()(const std::array<float, 3>& k) const {
-      size_t h = 0;
-      for (float f : k) h = h * 0x9E3779B97F4A7C15ull + std::hash<float>()(f);
-      return h;
-    }
-  };
-  std::unordered_map<std::array<float, 3>, uint32_t, KeyHash> ids;
-  std::vector<std::array<uint32_t, 3>> tv(n);
-  std::vector<Vec3f> id_pos;
-  for (size_t t = 0; t < n; ++t)
+  // Welded vertices and neighbours across edges of exactly two triangles that traverse
+  // them in opposite directions (lib/mesh/prepare.h, paper 000 section 4.2): so every
+  // triangle of a patch has the winding of the one it was grown from, and the polygon
+  // has the orientation of each of them. Degenerate triangles are not in `pm`.
+  const mesh::PreparedMesh pm = mesh::prepare_mesh(mesh);
+  const size_t n = pm.triangles.size();
+  const auto& pos = pm.vertex_pos;
+  // The edge (k, k + 1) of prepared triangle t with ends {a, b}.
+  auto corner_of = [&](uint32_t t, uint32_t a, uint32_t b) {
+    const auto& v = pm.triangles[t].v;
     for (int k = 0; k < 3; ++k) {
-      const Vec3f& v = mesh.corner(t, k);
-      auto [it, fresh] = ids.emplace(std::array<float, 3>{v.x + 0.0f, v.y + 0.0f, v.z + 0.0f}, uint32_t(ids.size()));
-      if (fresh) id_pos.push_back(v);
-      tv[t][size_t(k)] = it->second;
-    }
-  // Edges (lower id, higher id, triangle), sorted: a run of exactly two entries is an
-  // edge shared by two triangles (manifold); only those glue triangles into patches.
-  struct Edge {
-    uint32_t lo, hi, t;
-    bool operator<(const Edge& o) const { return lo != o.lo ? lo < o.lo : hi != o.hi ? hi < o.hi : t < o.t; }
-  };
-  auto degenerate = [&](size_t t) { return tv[t][0] == tv[t][1] || tv[t][1] == tv[t][2] || tv[t][0] == tv[t][2]; };
-  std::vector<Edge> edges;
-  edges.reserve(3 * n);
-  for (size_t t = 0; t < n; ++t) {
-    if (degenerate(t)) continue;
-    for (int k = 0; k < 3; ++k) {
-      uint32_t a = tv[t][size_t(k)], b = tv[t][size_t((k + 1) % 3)];
-      edges.push_back({std::min(a, b), std::max(a, b), uint32_t(t)});
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  constexpr uint32_t kNone = ~uint32_t(0);
-  // For each triangle and corner k: the other triangle on its edge (k, k + 1) when exactly
-  // two triangles have that edge, else kNone.
-  std::vector<std::array<uint32_t, 3>> other(n, {kNone, kNone, kNone});
-  auto corner_of = [&](uint32_t t, uint32_t a, uint32_t b) {  // k with edge (k, k + 1) = {a, b}
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t x = tv[t][size_t(k)], y = tv[t][size_t((k + 1) % 3)];
+      const uint32_t x = v[size_t(k)], y = v[size_t((k + 1) % 3)];
       if ((x == a && y == b) || (x == b && y == a)) return k;
     }
     return -1;
   };
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].lo == edges[i].lo && edges[j].hi == edges[i].hi) ++j;
-    if (j - i == 2 && edges[i].t != edges[i + 1].t) {
-      const Edge &e0 = edges[i], &e1 = edges[i + 1];
-      other[e0.t][size_t(corner_of(e0.t, e0.lo, e0.hi))] = e1.t;
-      other[e1.t][size_t(corner_of(e1.t, e1.lo, e1.hi))] = e0.t;
-    }
-    i = j;
-  }
 
-  std::vector<int32_t> patch_of(n, -1);
-  // The growing polygon: vertex ids, and per edge i (poly[i] -> poly[i + 1]) the patch
-  // triangle that has it; its triangles.
+  std::vector<int32_t> patch_of(mesh.size(), -1);  // by input triangle
+  std::vector<uint8_t> taken(n, 0);               // by prepared triangle
+  // The growing polygon: vertex ids, and per edge i (poly[i] -> poly[i + 1]) the prepared
+  // triangle that has it; its prepared triangles.
   std::vector<uint32_t> poly, owner, members, order;
   for (uint32_t t = 0; t < n; ++t) {
-    if (patch_of[t] >= 0 || degenerate(t)) continue;
-    const auto& c = tv[t];
-    const Vec3f &a = id_pos[c[0]], &b = id_pos[c[1]], &cc = id_pos[c[2]];
+    if (taken[t]) continue;
+    const auto& c = pm.triangles[t].v;
+    const Vec3f &a = pos[c[0]], &b = pos[c[1]], &cc = pos[c[2]];
     // The dominant axis of t's normal is dropped; t's projected orientation s is then
     // nonzero unless t is degenerate, and every turn of the polygon must have that sign.
     const Vec3d nn = cross(to_double(b) - to_double(a), to_double(cc) - to_double(a));
@@ -146,7 +105,7 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
                                                    : (std::abs(nn.y) >= std::abs(nn.z) ? 1 : 2);
     const int u = (w + 1) % 3, v = (w + 2) % 3;
     auto turn = [&](uint32_t x, uint32_t y, uint32_t z) {
-      const Vec3f &p = id_pos[x], &q = id_pos[y], &r = id_pos[z];
+      const Vec3f &p = pos[x], &q = pos[y], &r = pos[z];
       return orient2d_exact_sign(p[u], p[v], q[u], q[v], r[u], r[v]);
     };
     const int s = turn(c[0], c[1], c[2]);
@@ -163,7 +122,7 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
       order.resize(poly.size());
       for (size_t i = 0; i < poly.size(); ++i) order[i] = uint32_t(i);
       auto len2 = [&](uint32_t i) {
-        const Vec3d e = to_double(id_pos[poly[(i + 1) % poly.size()]]) - to_double(id_pos[poly[i]]);
+        const Vec3d e = to_double(pos[poly[(i + 1) % poly.size()]]) - to_double(pos[poly[i]]);
         return dot(e, e);
       };
       std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return len2(x) > len2(y); });
@@ -171,18 +130,20 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
         const size_t i = order[oi];
         const uint32_t pa = poly[i], pb = poly[(i + 1) % poly.size()];
         const int k = corner_of(owner[i], pa, pb);
-        const uint32_t q = k < 0 ? kNone : other[owner[i]][size_t(k)];
-        if (q == kNone || patch_of[q] >= 0 || std::find(members.begin(), members.end(), q) != members.end()) continue;
-        uint32_t d = kNone;
-        for (uint32_t x : tv[q])
+        const int32_t nb = k < 0 ? -1 : pm.triangles[owner[i]].neighbors[size_t(k)];
+        if (nb < 0 || taken[size_t(nb)] || std::find(members.begin(), members.end(), uint32_t(nb)) != members.end())
+          continue;
+        const uint32_t q = uint32_t(nb);
+        uint32_t d = pa;
+        for (uint32_t x : pm.triangles[q].v)
           if (x != pa && x != pb) d = x;
-        if (d == kNone || std::find(poly.begin(), poly.end(), d) != poly.end()) continue;
+        if (d == pa || std::find(poly.begin(), poly.end(), d) != poly.end()) continue;
         // d strictly across pa -> pb, and the turns at pa and at pb strictly convex: the
         // new polygon is the old one (convex, on the other side of pa -> pb) and q.
         // The 2D turns first (cheaper); they mean something once d is in the plane.
         const uint32_t prev = poly[(i + poly.size() - 1) % poly.size()], next = poly[(i + 2) % poly.size()];
         if (turn(pa, d, pb) != s || turn(prev, pa, d) != s || turn(d, pb, next) != s) continue;
-        if (orient3d_exact_sign(a, b, cc, id_pos[d]) != 0) continue;
+        if (orient3d_exact_sign(a, b, cc, pos[d]) != 0) continue;
         poly.insert(poly.begin() + ptrdiff_t(i) + 1, d);
         owner[i] = q;
         owner.insert(owner.begin() + ptrdiff_t(i) + 1, q);
@@ -191,6 +152,10 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
       }
     }
     if (members.size() < 2) continue;
+    for (uint32_t& m : members) {
+      taken[m] = 1;
+      m = pm.triangles[m].source;
+    }
     std::sort(members.begin(), members.end());
     Patch pt;
     pt.tri_begin = uint32_t(patch_tris_.size());
@@ -201,7 +166,7 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
       patch_tris_.push_back(m);
       patch_of[m] = int32_t(patches_.size());
     }
-    for (uint32_t id : poly) patch_poly_.push_back(id_pos[id]);
+    for (uint32_t id : poly) patch_poly_.push_back(pos[id]);
     patches_.push_back(pt);
   }
   if (!patches_.empty()) patch_of_ = std::move(patch_of);

@@ -40,7 +40,8 @@ class TriangleTree {
 
   // Coplanar convex patches for occluder merging (plucker_solver.cpp shade_group).
   // Triangles glued edge to edge (the same two vertex positions, exactly, on an edge of
-  // exactly two triangles), lying exactly in one plane (orient3d exact) and forming a
+  // exactly two triangles that traverse it in opposite directions: the neighbours of
+  // lib/mesh/prepare.h), lying exactly in one plane (orient3d exact) and forming a
   // strictly convex polygon (exact 2D orientations in the plane's dominant projection,
   // which preserves them for coplanar points) block exactly the segments their union,
   // that polygon, blocks: one convex occluder of k edges instead of several triangles,
@@ -53,7 +54,8 @@ class TriangleTree {
   static constexpr int kMaxPatchVertices = 8;
   // The patch of t (-1: none, t stands alone).
   int32_t patch(uint32_t t) const { return patch_of_.empty() ? -1 : patch_of_[t]; }
-  // Its triangles (increasing) and its polygon (in the orientation of its first triangle).
+  // Its triangles (increasing) and its polygon (in the orientation of every one of them:
+  // they are glued across consistently traversed edges only).
   std::span<const uint32_t> patch_triangles(int32_t p) const {
     const Patch& q = patches_[size_t(p)];
     return {patch_tris_.data() + q.tri_begin, q.tri_count};
