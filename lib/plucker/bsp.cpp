@@ -64,7 +64,7 @@ size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
          (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
          stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + shadow_stamp_.capacity() * sizeof(uint32_t) +
-         shadow_box_.capacity() * sizeof(Box2) + plane_stamp_.capacity() * sizeof(uint32_t) +
+         shadow_box_.capacity() * sizeof(Box2) + miss_edge_.capacity() + plane_stamp_.capacity() * sizeof(uint32_t) +
          plane_cache_.capacity() * sizeof(NodePlane);
 }
 
@@ -173,6 +173,7 @@ void LazyBsp::begin_query(const Vec3d& r) {
     shadow_stamp_.assign(occ_.size(), 0u);
     shadow_box_.resize(occ_.size());
   }
+  if (miss_edge_.size() != occ_.size()) miss_edge_.assign(occ_.size(), 0);
   if (plane_stamp_.size() != occ_.size() * size_t(kMaxOccluderVertices)) {
     plane_stamp_.assign(occ_.size() * size_t(kMaxOccluderVertices), 0u);
     plane_cache_.resize(occ_.size() * size_t(kMaxOccluderVertices));
@@ -212,7 +213,6 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
   // fragments and query points are mostly separated by the same edge, and a one-sided
   // occluder is missed at the first edge that separates (the answer does not depend on
   // the order).
-  if (miss_edge_.size() != occ_.size()) miss_edge_.assign(occ_.size(), 0);
   const int first = miss_edge_[id] < o.n ? miss_edge_[id] : 0;
   for (int mi = 0; mi < o.n; ++mi) {
     const int m = first + mi < o.n ? first + mi : first + mi - o.n;

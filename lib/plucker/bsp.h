@@ -228,7 +228,8 @@ class LazyBsp {
   Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n);
   // occlusion() preceded by the shadow-box test against the fragment's box `fbox`.
   Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox);
-  // The per-query caches (shadow boxes, edge planes): valid for query point shadow_r_.
+  // The per-query caches (shadow boxes, edge planes) and the per-occluder edge hints of
+  // occlusion(), sized here; the caches are valid for query point shadow_r_.
   void begin_query(const Vec3d& r);
   // The plane through the query point and edge `edge` of occluder `id` (fragment.h
   // node_plane, based near the light's centroid), computed once per query: every node
