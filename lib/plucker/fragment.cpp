@@ -83,8 +83,8 @@ SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
                    pl.vertex_scale * max_component(vabs(poly[k]));
     pos |= s > bound;
     neg |= s < -bound;
+    if (pos && neg) return SplitResult::Both;  // the remaining vertices cannot change it
   }
-  if (pos && neg) return SplitResult::Both;
   if (pos) return SplitResult::Positive;
   if (neg) return SplitResult::Negative;
   return SplitResult::ZeroArea;
