@@ -303,8 +303,7 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, i
   double sum = 0.0;
   for (size_t k = 0; k < q.size(); ++k) {
     Vec3d a = q[k], b = q[(k + 1) % q.size()];
-    double la = length(a), lb = length(b);
-    if (la == 0.0 || lb == 0.0) continue;
+    if (dot(a, a) == 0.0 || dot(b, b) == 0.0) continue;  // length() == 0 exactly then, without the roots
     Vec3d c = cross(a, b);
     double lc = length(c);
     if (lc == 0.0) continue;

@@ -63,12 +63,12 @@ void EdgeFan::set(const Vec3d& a_, const Vec3d& b, const Vec3f* p, int m) {
 Orientation EdgeFan::orientation(const Vec3d* x, int n, bool toward) const {
   bool pos = false, neg = false;
   const size_t m = w.size();
+  const double sign = toward ? 1.0 : -1.0;  // exact: negation
   for (int i = 0; i < n; ++i) {
     Vec3d d = x[i] - a;
     double nd = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
     for (size_t k = 0; k < m; ++k) {
-      double s = dot(d, w[k]);
-      if (!toward) s = -s;
+      double s = sign * dot(d, w[k]);
       double bound = scale[k] * nd;
       if (s > bound) pos = true;
       else if (s < -bound) neg = true;
