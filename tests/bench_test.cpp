@@ -146,6 +146,53 @@ TEST(BenchRoundRatios, HandComputedPairedRounds) {
   EXPECT_TRUE(std::isnan(round_ratios({1, 2}, {1}).of_minima));
 }
 
+// A solver that reports scripted times and logs which scene and options it was given.
+class Scripted : public Solver {
+ public:
+  Scripted(std::string name, std::vector<double> times, std::vector<std::string>* log)
+      : name_(std::move(name)), times_(std::move(times)), log_(log) {}
+  std::string name() const override { return name_; }
+  SolveResult solve(const Scene& scene, const SolveOptions& opt) override {
+    log_->push_back(name_ + ":" + scene.name + ":" + opt.get("k", "-") + ":" + std::to_string(opt.threads));
+    SolveResult r;
+    r.seconds = times_.at(calls_++);
+    return r;
+  }
+
+ private:
+  std::string name_;
+  std::vector<double> times_;
+  std::vector<std::string>* log_;
+  size_t calls_ = 0;
+};
+
+TEST(BenchPaired, AlternatesTheTwoSolversOnTheirOwnScenesSingleThreaded) {
+  std::vector<std::string> log;
+  // Round 2 is a slow phase for both (x2): the ratio of the minima and the median of the
+  // per-round ratios stay at 3, where back-to-back minima of b in that phase would not.
+  Scripted a("a", {0.30, 0.60, 0.33}, &log), b("b", {0.10, 0.20, 0.11}, &log);
+  Scene sa, sb;
+  sa.name = "big";
+  sb.name = "small";
+  SolveOptions oa, ob;
+  oa.threads = ob.threads = 4;  // overridden: every paired run is single-threaded
+  ob.opts["k"] = "v";
+  MeasureConfig cfg;
+  cfg.repeat = 5;  // ignored: one run per solver and round
+  PairedTimes t = measure_paired(a, sa, oa, b, sb, ob, 3, cfg);
+  const std::vector<std::string> want = {"a:big:-:1", "b:small:v:1", "a:big:-:1",
+                                         "b:small:v:1", "a:big:-:1", "b:small:v:1"};
+  EXPECT_EQ(log, want);
+  EXPECT_EQ(t.a_seconds, (std::vector<double>{0.30, 0.60, 0.33}));
+  EXPECT_EQ(t.b_seconds, (std::vector<double>{0.10, 0.20, 0.11}));
+  ASSERT_EQ(t.a_cpu.size(), 3u);
+  for (double c : t.a_cpu) EXPECT_GE(c, 0.0);
+  RoundRatios r = round_ratios(t.b_seconds, t.a_seconds);
+  EXPECT_NEAR(r.of_minima, 3.0, 1e-12);
+  EXPECT_NEAR(r.median, 3.0, 1e-12);
+  EXPECT_TRUE(measure_paired(a, sa, oa, b, sb, ob, 0, cfg).a_seconds.empty());
+}
+
 TEST(BenchSweepGuard, PredictsLinearlyFromTheLastPoint) {
   SweepGuard g(10.0);
   std::string why;

@@ -341,25 +341,16 @@ Status run_plucker(BenchContext& ctx) {
       ctx.progress.step(fam + ": embree N=" + std::to_string(eq_n) + " and plucker-bsp, " + std::to_string(rounds) +
                         " paired rounds");
       auto pe = make_solver("embree"), pp = make_solver(P);
-      MeasureConfig one = ctx.measure_config();
-      one.repeat = 1;
-      one.single = true;
-      one.all = false;
       SolveOptions se_opt, sp_opt;
       se_opt.seed = sp_opt.seed = o.seed;
       sp_opt.opts = {{"coherence", "on"}};
-      std::vector<double> te, tp, ce, cp;
-      for (int k = 0; k < rounds && pe && pp; ++k) {
-        Measured me = measure_solve(*pe, *eq_scene, se_opt, one);
-        Measured mp = measure_solve(*pp, *base, sp_opt, one);
-        te.push_back(me.seconds_1t), tp.push_back(mp.seconds_1t);
-        ce.push_back(me.cpu_1t), cp.push_back(mp.cpu_1t);
-      }
-      const RoundRatios rw = round_ratios(tp, te), rc = round_ratios(cp, ce);
+      const PairedTimes pt = measure_paired(*pe, *eq_scene, se_opt, *pp, *base, sp_opt, rounds, ctx.measure_config());
+      // Embree's time over plucker-bsp's: the speedup, per round and of the minima.
+      const RoundRatios rw = round_ratios(pt.b_seconds, pt.a_seconds), rc = round_ratios(pt.b_cpu, pt.a_cpu);
       eq.add_row({fam, pen, eq_n, eqm->seconds_1t, eqm->seconds_all, eq_rms, on->seconds_1t, on->seconds_all, p_rms,
                   ratio(eqm->seconds_1t, on->seconds_1t), ratio(eqm->seconds_all, on->seconds_all), eqm->cpu_1t,
-                  on->cpu_1t, ratio(eqm->cpu_1t, on->cpu_1t), int(te.size()), rw.of_minima, rw.median, rw.lo, rw.hi,
-                  rc.of_minima, rc.median});
+                  on->cpu_1t, ratio(eqm->cpu_1t, on->cpu_1t), int(pt.a_seconds.size()), rw.of_minima, rw.median, rw.lo,
+                  rw.hi, rc.of_minima, rc.median});
       eq_samples[fam] = eq_n;
     } else if (have_e) {
       ctx.note(fam + ": no embree sample count up to " + std::to_string(ns.back()) + " (within the budget) reached a " +

@@ -123,6 +123,24 @@ std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Sc
   return out;
 }
 
+PairedTimes measure_paired(Solver& a, const Scene& sa, const SolveOptions& oa, Solver& b, const Scene& sb,
+                           const SolveOptions& ob, int rounds, const MeasureConfig& cfg) {
+  MeasureConfig one = cfg;
+  one.repeat = 1;
+  one.single = true;
+  one.all = false;
+  PairedTimes t;
+  for (int r = 0; r < rounds; ++r) {
+    Measured ma = measure_solve(a, sa, oa, one);
+    Measured mb = measure_solve(b, sb, ob, one);
+    t.a_seconds.push_back(ma.seconds_1t);
+    t.b_seconds.push_back(mb.seconds_1t);
+    t.a_cpu.push_back(ma.cpu_1t);
+    t.b_cpu.push_back(mb.cpu_1t);
+  }
+  return t;
+}
+
 RoundRatios round_ratios(const std::vector<double>& base, const std::vector<double>& x) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   if (base.empty() || base.size() != x.size()) return {nan, nan, nan, nan};

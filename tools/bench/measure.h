@@ -67,6 +67,17 @@ Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& b
 std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Scene& scene, const SolveOptions& base,
                                                   const MeasureConfig& cfg);
 
+// Paired rounds of two solvers on their own scenes (a on sa, b on sb: e.g. embree at
+// the sample count of equal quality and an exact method), single-threaded, a then b in
+// each of `rounds` rounds, one run each: per-round seconds (SolveResult::seconds, else
+// wall) and process CPU seconds, in round order. A slow phase of a shared machine then
+// falls on both methods' runs of a round instead of on all runs of one.
+struct PairedTimes {
+  std::vector<double> a_seconds, b_seconds, a_cpu, b_cpu;
+};
+PairedTimes measure_paired(Solver& a, const Scene& sa, const SolveOptions& oa, Solver& b, const Scene& sb,
+                           const SolveOptions& ob, int rounds, const MeasureConfig& cfg);
+
 // Ratios of paired runs: x[r] and base[r] measured in the same round r (seconds
 // apart), as the interleaved doubling rounds of the iss-target experiment make them.
 // of_minima = min(x) / min(base); median, lo and hi over the per-round ratios x[r] /
