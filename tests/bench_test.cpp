@@ -191,6 +191,14 @@ TEST(BenchPaired, AlternatesTheTwoSolversOnTheirOwnScenesSingleThreaded) {
   EXPECT_NEAR(r.of_minima, 3.0, 1e-12);
   EXPECT_NEAR(r.median, 3.0, 1e-12);
   EXPECT_TRUE(measure_paired(a, sa, oa, b, sb, ob, 0, cfg).a_seconds.empty());
+  // A run beyond the budget ends the rounds after its own.
+  log.clear();
+  Scripted c("c", {1.0, 9.0, 1.0}, &log), d("d", {0.5, 0.5, 0.5}, &log);
+  cfg.budget = 5.0;
+  PairedTimes cut = measure_paired(c, sa, oa, d, sb, ob, 3, cfg);
+  EXPECT_EQ(cut.a_seconds, (std::vector<double>{1.0, 9.0}));
+  EXPECT_EQ(cut.b_seconds, (std::vector<double>{0.5, 0.5}));
+  EXPECT_EQ(log.size(), 4u);
 }
 
 TEST(BenchSweepGuard, PredictsLinearlyFromTheLastPoint) {

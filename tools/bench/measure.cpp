@@ -137,6 +137,7 @@ PairedTimes measure_paired(Solver& a, const Scene& sa, const SolveOptions& oa, S
     t.b_seconds.push_back(mb.seconds_1t);
     t.a_cpu.push_back(ma.cpu_1t);
     t.b_cpu.push_back(mb.cpu_1t);
+    if (ma.seconds_1t > cfg.budget || mb.seconds_1t > cfg.budget) break;  // long runs are not repeated
   }
   return t;
 }

@@ -71,7 +71,8 @@ std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Sc
 // the sample count of equal quality and an exact method), single-threaded, a then b in
 // each of `rounds` rounds, one run each: per-round seconds (SolveResult::seconds, else
 // wall) and process CPU seconds, in round order. A slow phase of a shared machine then
-// falls on both methods' runs of a round instead of on all runs of one.
+// falls on both methods' runs of a round instead of on all runs of one. The rounds stop
+// after one in which either run exceeded cfg.budget.
 struct PairedTimes {
   std::vector<double> a_seconds, b_seconds, a_cpu, b_cpu;
 };
