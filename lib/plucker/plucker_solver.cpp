@@ -569,7 +569,8 @@ void shade_fallback(const Context& ctx, size_t li, const LightFrame& lf, size_t 
 // twice at once.
 struct GroupScratch {
   std::vector<Vec3d> rloc, near_verts, poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;
-  std::vector<NearPoly> near;
+  std::vector<NearPoly> near, near_sorted;
+  std::vector<std::pair<double, uint32_t>> near_key;
   std::vector<Occluder> occluders;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
@@ -581,6 +582,8 @@ struct GroupScratch {
     for (auto* v : {&rloc, &near_verts, &poly0, &lower, &upper, &region, &pyramid, &pyramid_err, &cur, &pos, &neg, &q, &patch})
       v->clear();
     near.clear();
+    near_sorted.clear();
+    near_key.clear();
     occluders.clear();
     for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
     vals.clear();
@@ -676,7 +679,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     }
   }
   const double delta = 16.0 * double(kUnitRoundoff) * (std::abs(g.x) + std::abs(g.y) + std::abs(g.z)) * 3.0 * coord_max;
-  // World corners of the receivers' box, for the one-sided test (plane_side).
+  // World corners of the receivers' box, for the one-sided test (box_side).
   AABB wbox;
   for (uint32_t i : group) wbox.extend(scene.receivers[i].p);
   Vec3f wcorners[8];
@@ -931,6 +934,31 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       near.push_back(make_near(t, tri, tmax, upper));
       near_verts.insert(near_verts.end(), upper.begin(), upper.end());
     }
+  }
+  // The near polygons in decreasing size over distance from the receivers' box centre
+  // (box diagonal squared over the squared distance of the box centres): per receiver
+  // they are subtracted in this order, and the big, close ones first leave fewer and
+  // larger fragments to cut for the others. Measured (callgrind, columns 4096 x 16):
+  // splits 234,842 -> 224,130, instructions -3%; nearest first -2.6%, largest first and
+  // largest solid angle first worse than the selection order; rooms -0.4%. The visible
+  // set does not depend on the order (each subtraction removes exactly its shadow).
+  {
+    Vec3d cen(0, 0, 0);
+    for (const Vec3d& c : corners) cen += c;
+    cen = cen * 0.125;
+    std::vector<std::pair<double, uint32_t>>& key = sc.near_key;
+    key.resize(near.size());
+    for (size_t k = 0; k < near.size(); ++k) {
+      const Vec3d d = near[k].hi - near[k].lo, m = (near[k].hi + near[k].lo) * 0.5 - cen;
+      double q = dot(d, d) / std::max(dot(m, m), std::numeric_limits<double>::min());
+      if (!(q >= 0.0)) q = 0.0;  // inf / inf: any place, but a strict weak order
+      key[k] = {-q, uint32_t(k)};
+    }
+    std::sort(key.begin(), key.end());
+    std::vector<NearPoly>& sorted = sc.near_sorted;
+    sorted.resize(near.size());
+    for (size_t k = 0; k < near.size(); ++k) sorted[k] = near[key[k].second];
+    near.swap(sorted);
   }
   tot.select_s += seconds_since(t0);
 
