@@ -179,6 +179,11 @@ TEST(BenchPaired, AlternatesTheTwoSolversOnTheirOwnScenesSingleThreaded) {
   ob.opts["k"] = "v";
   MeasureConfig cfg;
   cfg.repeat = 5;  // ignored: one run per solver and round
+  const MeasureConfig one = single_run(cfg);
+  EXPECT_EQ(one.repeat, 1);
+  EXPECT_TRUE(one.single);
+  EXPECT_FALSE(one.all);
+  EXPECT_EQ(one.budget, cfg.budget);
   PairedTimes t = measure_paired(a, sa, oa, b, sb, ob, 3, cfg);
   const std::vector<std::string> want = {"a:big:-:1", "b:small:v:1", "a:big:-:1",
                                          "b:small:v:1", "a:big:-:1", "b:small:v:1"};

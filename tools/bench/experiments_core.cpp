@@ -136,10 +136,7 @@ Table doubling_rounds(BenchContext& ctx, const std::vector<std::pair<std::string
   auto iss = ctx.solver("iss");
   SolveOptions so;
   so.seed = ctx.opt.seed;
-  MeasureConfig one = cfg;
-  one.repeat = 1;
-  one.single = true;
-  one.all = false;
+  const MeasureConfig one = single_run(cfg);
   const int rounds = std::max(cfg.repeat, 5);
   const size_t n = scenes.size();
   std::vector<std::vector<double>> wall(n), cpu(n);

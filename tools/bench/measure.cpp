@@ -92,12 +92,16 @@ Measured measure_solve(Solver& solver, const Scene& scene, const SolveOptions& b
   return m;
 }
 
+MeasureConfig single_run(MeasureConfig cfg) {
+  cfg.repeat = 1;
+  cfg.single = true;
+  cfg.all = false;
+  return cfg;
+}
+
 std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Scene& scene, const SolveOptions& base,
                                                   const MeasureConfig& cfg) {
-  MeasureConfig one = cfg;
-  one.repeat = 1;
-  one.single = true;
-  one.all = false;
+  const MeasureConfig one = single_run(cfg);
   std::pair<Measured, Measured> out;
   auto merge = [](Measured& into, Measured&& run) {
     if (into.runs_1t == 0) {
@@ -125,10 +129,7 @@ std::pair<Measured, Measured> measure_alternating(Solver& a, Solver& b, const Sc
 
 PairedTimes measure_paired(Solver& a, const Scene& sa, const SolveOptions& oa, Solver& b, const Scene& sb,
                            const SolveOptions& ob, int rounds, const MeasureConfig& cfg) {
-  MeasureConfig one = cfg;
-  one.repeat = 1;
-  one.single = true;
-  one.all = false;
+  const MeasureConfig one = single_run(cfg);
   PairedTimes t;
   for (int r = 0; r < rounds; ++r) {
     Measured ma = measure_solve(a, sa, oa, one);

@@ -54,6 +54,10 @@ struct Measured {
   double seconds() const { return runs_1t ? seconds_1t : seconds_all; }
 };
 
+// `cfg` for one single-threaded run per call (the rounds of the interleaved measurements
+// below and of the iss doubling experiment).
+MeasureConfig single_run(MeasureConfig cfg);
+
 // Runs `solver` on `scene` (1 thread, then all threads) as configured. Time is the
 // method's own SolveResult::seconds (DESIGN section 4: the solve including its
 // acceleration structures, excluding loading and mesh preparation); a method that
