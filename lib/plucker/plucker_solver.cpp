@@ -943,9 +943,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   // largest solid angle first worse than the selection order; rooms -0.4%. The visible
   // set does not depend on the order (each subtraction removes exactly its shadow).
   {
-    Vec3d cen(0, 0, 0);
-    for (const Vec3d& c : corners) cen += c;
-    cen = cen * 0.125;
+    const Vec3d cen = (dlo + dhi) * 0.5;
     std::vector<std::pair<double, uint32_t>>& key = sc.near_key;
     key.resize(near.size());
     for (size_t k = 0; k < near.size(); ++k) {
