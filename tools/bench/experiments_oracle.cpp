@@ -340,7 +340,7 @@ Status run_plucker(BenchContext& ctx) {
       const int rounds = std::max(3, 2 * o.repeat + 1);
       ctx.progress.step(fam + ": embree N=" + std::to_string(eq_n) + " and plucker-bsp, " + std::to_string(rounds) +
                         " paired rounds");
-      auto pe = make_solver("embree"), pp = make_solver(P);
+      auto pe = ctx.solver("embree"), pp = ctx.solver(P);  // both ran above: registered
       SolveOptions se_opt, sp_opt;
       se_opt.seed = sp_opt.seed = o.seed;
       sp_opt.opts = {{"coherence", "on"}};
