@@ -1,6 +1,7 @@
 // The lazy Plücker-space BSP, paper 002 Algorithm 1; see bsp.h.
 #include "lib/plucker/bsp.h"
 
+#include <algorithm>
 #include <array>
 
 #include "lib/geom/check.h"
@@ -393,10 +394,32 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
         finish(split, true);
         break;
       }
-      if (cover < 0) cover = candidates_[size_t(rng_.below(candidates_.size()))];
+      if (cover < 0) cover = have_plane_ ? largest_overlap(fbox) : candidates_[size_t(rng_.below(candidates_.size()))];
       develop(node, cover);
     }
   }
+}
+
+uint32_t LazyBsp::largest_overlap(const Box2& fbox) const {
+  // Overlap of the boxes as the area the occluder's shadow can take from the fragment:
+  // the one that can hide the most makes the largest invisible class first, where the
+  // fragment's pieces (and later queries' fragments) end without further splits.
+  // Measured (one thread, against a random candidate): columns 4096 x 16 0.1025 ->
+  // 0.0961 s (splits 224,130 -> 211,394), rooms 1024 x 27 lights 0.180 -> 0.175 s,
+  // columns light x36 3.01 -> 2.64 s, foliage 6.07 -> 5.53 s, torus 0.228 -> 0.161 s,
+  // random-soup 0.158 -> 0.139 s. The exact area the shadow hides (the fragment clipped
+  // by the occluder's edge planes) chose worse on columns (0.099 s), the largest shadow
+  // box and the largest overlap relative to the shadow too.
+  uint32_t best_id = candidates_.front();
+  double best = -1.0;
+  for (uint32_t id : candidates_) {
+    const Box2& b = shadow_box_[id];
+    const double du = std::min(b.uhi, fbox.uhi) - std::max(b.ulo, fbox.ulo);
+    const double dv = std::min(b.vhi, fbox.vhi) - std::max(b.vlo, fbox.vlo);
+    const double a = std::max(du, 0.0) * std::max(dv, 0.0);
+    if (a > best) best = a, best_id = id;
+  }
+  return best_id;
 }
 
 }  // namespace visgate::plucker

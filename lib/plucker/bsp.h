@@ -141,8 +141,10 @@ class LazyBsp {
   //  - Random: the paper's choice, a random occluder of the leaf (seeded).
   //  - Relevant (default): first the leaf's occluders are classified against the query
   //    fragment F seen from r (Occlusion below): one that hides all of F is merged (F then
-  //    walks straight into its invisible class); otherwise a random occluder among those
-  //    that hide part of F; if none hides any part of F, F is returned visible and the
+  //    walks straight into its invisible class); otherwise one among those that hide
+  //    part of F: with the light's plane known (set_light_plane) the one whose shadow
+  //    box overlaps F's box the most (largest_overlap), else a random one (seeded);
+  //    if none hides any part of F, F is returned visible and the
   //    leaf stays undefined for later queries. Still exact: conservative insertion puts
   //    every occluder that can block a line of the leaf's class into the leaf, so an F
   //    that none of them meets is visible. Lazier than the paper (section 4.3 "Tree
@@ -228,6 +230,10 @@ class LazyBsp {
   Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n);
   // occlusion() preceded by the shadow-box test against the fragment's box `fbox`.
   Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox);
+  // Among candidates_ (occluders hiding part of a fragment with box fbox, their shadow
+  // boxes valid for this query): the one whose shadow box overlaps fbox the most, the
+  // first of equal ones (Choice::Relevant with the light's plane known).
+  uint32_t largest_overlap(const Box2& fbox) const;
   // The per-query caches (shadow boxes, edge planes) and the per-occluder edge hints of
   // occlusion(), sized here; the caches are valid for query point shadow_r_.
   void begin_query(const Vec3d& r);
