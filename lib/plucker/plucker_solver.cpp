@@ -305,7 +305,7 @@ int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
 }
 
 struct Totals {
-  double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, irradiance = 0;
+  double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, tree_s = 0, irradiance = 0;
   uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
@@ -313,7 +313,7 @@ struct Totals {
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o) {
-    select_s += o.select_s; init_s += o.init_s; query_s += o.query_s; bsp_query_s += o.bsp_query_s;
+    select_s += o.select_s; init_s += o.init_s; query_s += o.query_s; bsp_query_s += o.bsp_query_s; tree_s += o.tree_s;
     irradiance += o.irradiance;
     trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
     fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
@@ -1057,7 +1057,10 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       // (callgrind, 1024 receivers): columns 1.90e9 instructions against 2.75e9 with the
       // BSP first; rooms needs the hides_all walk (lights on other storeys).
       frags.clear();
-      if (!bsp.hides_all(r)) frags.add(lf.poly.data(), lf.poly.size());
+      Clock::time_point th = Clock::now();
+      const bool hidden = bsp.hides_all(r);
+      tot.tree_s += seconds_since(th);
+      if (!hidden) frags.add(lf.poly.data(), lf.poly.size());
       // Side planes of the pyramid (r, light), oriented so the light's centroid is
       // positive: a near polygon entirely on the negative side of one misses every
       // segment from r to the light. Each plane through r and light edge (l_j, l_j+1)
@@ -1266,7 +1269,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         bsp.query(r, frags, tmp);
         std::swap(frags, tmp);
       }
-      tot.bsp_query_s += seconds_since(tb);
+      const double tbs = seconds_since(tb);
+      tot.bsp_query_s += tbs;
+      tot.tree_s += tbs;
       // An undecided plane was taken as "outside that edge" (bsp.cpp, subtract_polygon):
       // right when r is exactly on the edge's line (the line lies in the triangle's
       // plane, so r does too and the triangle is edge-on to it, hiding nothing), but a
@@ -1585,6 +1590,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("tree_init_seconds", totals.init_s);
   st.set("query_seconds", totals.query_s);
   st.set("bsp_query_seconds", totals.bsp_query_s);
+  st.set("tree_seconds", totals.tree_s);
   double sum = totals.select_s + totals.init_s + totals.query_s;
   if (sum > 0) {
     st.set("occluder_selection_percent", 100.0 * totals.select_s / sum);

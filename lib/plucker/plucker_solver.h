@@ -71,7 +71,11 @@
 // Options: coherence=on|off (off: each tree is reset between queries, the paper's
 // "modified version", section 5.1; the reset is excluded from the timings), tile=N
 // (group side, default 8). Stats (Figure 8): peak_memory_bytes, occluder_selection_
-// seconds / tree_init_seconds / query_seconds and their percentages, bsp_nodes.
+// seconds / tree_init_seconds / query_seconds and their percentages, bsp_nodes;
+// bsp_query_seconds (Algorithm 1 on the pieces the near polygons leave) and
+// tree_seconds (every LazyBsp call of the queries: the hides_all walk too), the part of
+// a coherent solve that the tree could share between queries (visgate bench plucker
+// `falloff_bound_1t`).
 #pragma once
 
 #include <vector>

@@ -252,7 +252,7 @@ Status run_plucker(BenchContext& ctx) {
   Table f8{"fig8", "paper 002 Figure 8 analogue: memory, time split and the coherence falloff factor FO (off / on)",
            {"family", "coherence", "seconds_1t", "seconds_all", "method_peak_kb", "process_peak_mb", "bsp_nodes",
             "developments", "selection_pct", "init_pct", "queries_pct", "falloff_factor_1t", "falloff_factor_all",
-            "cpu_1t", "falloff_factor_cpu_1t"}, {}};
+            "cpu_1t", "falloff_factor_cpu_1t", "tree_pct", "falloff_bound_1t"}, {}};
   Table st{"stats", "every figure plucker-bsp reports", {"family", "run", "stat", "value"}, {}};
   std::map<std::string, long> eq_samples;  // family -> equal-quality N
 
@@ -285,16 +285,27 @@ Status run_plucker(BenchContext& ctx) {
       } else {
         ctx.note("plucker-bsp has no option coherence: the falloff factor (Figure 8) is not measured");
       }
+      // The share of a solve spent in the tree (every BSP walk and development of the
+      // queries, stat tree_seconds, of the solver's timed total), and the falloff factor
+      // the coherent solve would reach if its tree work cost nothing: off / (on x (1 -
+      // on's tree share)). The rest (selection, near polygons, Lambert, bits) is the
+      // same work in both modes, so FO cannot exceed this bound.
+      auto tree_share = [](const Stats& ss) {
+        double total = ss.get("occluder_selection_seconds") + ss.get("tree_init_seconds") + ss.get("query_seconds");
+        return total > 0.0 ? ss.get("tree_seconds") / total : kNaN;
+      };
       for (const auto* m : {&on, &off}) {
         if (!*m) continue;
         const Stats& ss = (*m)->stats;
         bool is_on = m == &on;
+        double bound = kNaN;
+        if (!is_on && on) bound = ratio((*m)->seconds_1t, on->seconds_1t * (1.0 - tree_share(on->stats)));
         f8.add_row({fam, is_on ? "on" : "off", (*m)->seconds_1t, (*m)->seconds_all, ss.get("peak_memory_kb"),
                     (*m)->peak_mb, ss.get("bsp_nodes"), ss.get("developments"), ss.get("occluder_selection_percent"),
                     ss.get("tree_init_percent"), ss.get("query_percent"),
                     is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_1t, on->seconds_1t)),
                     is_on || !on ? Json(1.0) : Json(ratio((*m)->seconds_all, on->seconds_all)), (*m)->cpu_1t,
-                    is_on || !on ? Json(1.0) : Json(ratio((*m)->cpu_1t, on->cpu_1t))});
+                    is_on || !on ? Json(1.0) : Json(ratio((*m)->cpu_1t, on->cpu_1t)), 100.0 * tree_share(ss), bound});
       }
     }
 
