@@ -888,7 +888,8 @@ LightPlane plane_at(double height, float extent) {
 }  // namespace
 
 TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
-  // Both ways of developing a leaf (bsp.h Choice) answer every query with the same
+  // Both ways of developing a leaf (bsp.h Choice), the relevant one with and without the
+  // light's plane (largest_overlap or a random candidate), answer every query with the same
   // visible area, with and without coherence, on random occluder soups; the relevant
   // choice returns fragments from undefined leaves that no occluder of theirs meets.
   Rng rng(8);
@@ -896,22 +897,56 @@ TEST(PluckerBsp, RelevantAndRandomChoicesGiveTheSameRegion) {
   uint64_t lazy = 0;
   for (int scene = 0; scene < 20; ++scene) {
     std::vector<Occluder> occ = random_occluders(rng, 12);
-    LazyBsp relevant(light, 4, occ, 9), random(light, 4, occ, 9);
+    LazyBsp relevant(light, 4, occ, 9), random(light, 4, occ, 9), overlap(light, 4, occ, 9);
     random.set_choice(LazyBsp::Choice::Random);
-    FragmentList a, b;
+    overlap.set_light_plane(plane_at(2.0, 2.0f));  // relevant, merging by largest_overlap
+    FragmentList a, b, c;
     for (int q = 0; q < 10; ++q) {
       Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
       relevant.query(r, a);
       random.query(r, b);
+      overlap.query(r, c);
       EXPECT_NEAR(region_area(a), region_area(b), 1e-5);
+      EXPECT_NEAR(region_area(c), region_area(b), 1e-5);
       if (q % 3 == 0) {
         relevant.reset();
         random.reset();
+        overlap.reset();
       }
     }
     lazy += relevant.counters().lazy_visible;
   }
   EXPECT_GT(lazy, 0u);
+}
+
+TEST(PluckerBsp, RelevantChoiceMergesTheOccluderWhoseShadowOverlapsMostFirst) {
+  // Hand-worked: seen from r = 0 the big triangle at z = 1 casts the shadow (-0.8, -0.8),
+  // (0.8, -0.8), (0, 0.8) on the light square [-1, 1]^2 at z = 2 (area 1.28), the small one
+  // at z = 1.5 the same triangle scaled by 1/4 (edges parallel, strictly inside). Both
+  // hide part of the light, neither all of it. Listed small first, the relevant choice
+  // with the light's plane known merges the big one (bsp.h largest_overlap): every piece
+  // outside its shadow lies beyond one of its edge lines, so beyond the small one's
+  // parallel edge line too, a miss, and one development answers the query. The visible
+  // area is 4 - 1.28 either way.
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  auto tri = [](double s, double z) {
+    Occluder o;
+    o.n = 3;
+    o.v[0] = Vec3d(-s, -s, z), o.v[1] = Vec3d(s, -s, z), o.v[2] = Vec3d(0, s, z);  // normal +z: r below is negative
+    return o;
+  };
+  const std::vector<Occluder> occ = {tri(0.15, 1.5), tri(0.4, 1.0)};
+  LazyBsp tree(light, 4, occ, 3);
+  tree.set_light_plane(plane_at(2.0, 2.0f));
+  FragmentList out;
+  tree.query(Vec3d(0, 0, 0), out);
+  EXPECT_NEAR(region_area(out), 4.0 - 1.28, 1e-9);
+  EXPECT_EQ(tree.counters().developments, 1u);
+  // The same tree and query with the paper's random choice end with the same area.
+  LazyBsp random(light, 4, occ, 3);
+  random.set_choice(LazyBsp::Choice::Random);
+  random.query(Vec3d(0, 0, 0), out);
+  EXPECT_NEAR(region_area(out), 4.0 - 1.28, 1e-9);
 }
 
 TEST(PluckerBsp, ARebuiltTreeAnswersAsAFreshOne) {
