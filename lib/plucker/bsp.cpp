@@ -36,6 +36,7 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   light_centroid_ = Vec3d{};
   for (const Vec3d& v : light_) light_centroid_ += v;
   if (m > 0) light_centroid_ = light_centroid_ / double(m);
+  light_mag_ = vertex_magnitude(light_.data(), m);
   reset();
   counters_.nodes_created = 1;
 }
@@ -185,7 +186,7 @@ const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
   size_t slot = size_t(id) * size_t(kMaxOccluderVertices) + size_t(edge);
   if (plane_stamp_[slot] != stamp_) {
     const Occluder& o = occ_[id];
-    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_centroid_);
+    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_centroid_, light_mag_);
     plane_stamp_[slot] = stamp_;
   }
   return plane_cache_[slot];

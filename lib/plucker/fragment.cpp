@@ -34,9 +34,11 @@ constexpr double kUd = 0x1p-53;
 // fragment's first vertex, so every vertex of one fragment is judged against the same
 // plane: for a receiver far from the light (fuzz_plucker 597a1279...: 7e22 away) x - r
 // is -r to within rounding and (x - r) . N cancels catastrophically.
-// The bound of d . N is dot_scale |d|_1 (its evaluation) plus vertex_scale |x|_inf: a
-// fragment vertex x was rounded (when it was interpolated) by up to u |x_i| per
-// coordinate, so a vertex within that of the plane is on it. Without this term, vertices
+// The bound of d . N is dot_scale |d|_1 (its evaluation) plus vertex_term = 2 u_d |N|_1
+// vertex_mag: a fragment vertex x was rounded (when it was interpolated) by up to
+// u_d |x_i| per coordinate, and |x|_inf <= vertex_mag (fragment.h), so a vertex within
+// that of the plane is on it (one term per plane: the per-vertex |x|_inf cost 6 of the
+// loop's instructions per vertex, on columns 4% of a solve). Without this term, vertices
 // that lie on a plane only to float precision (shared boundaries of earlier splits) were
 // split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
 
@@ -61,14 +63,20 @@ Vec3d edge_crossing(const P& a, const P& b, double sa, double sb) {
 
 }  // namespace
 
-NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0) {
+double vertex_magnitude(const Vec3d* poly, int n) {
+  double m = 0.0;
+  for (int k = 0; k < n; ++k) m = std::max(m, max_component(vabs(poly[k])));
+  return m * (1.0 + 0x1p-50);
+}
+
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0, double vertex_mag) {
   NodePlane p;
   Vec3d err;
   p.n = edge_plane_normal_err(r, a, b, err);
   p.on_line = on_line(p.n, err);
   p.base = nearest_base(r, a, b, x0);
   p.dot_scale = 8.0 * kUd * max_component(vabs(p.n));
-  p.vertex_scale = 2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z));
+  p.vertex_term = 2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z)) * vertex_mag;
   return p;
 }
 
@@ -79,8 +87,7 @@ SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
   for (int k = 0; k < n; ++k) {
     Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
-    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) +
-                   pl.vertex_scale * max_component(vabs(poly[k]));
+    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) + pl.vertex_term;
     pos |= s > bound;
     neg |= s < -bound;
     if (pos && neg) return SplitResult::Both;  // the remaining vertices cannot change it
@@ -91,12 +98,12 @@ SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
 }
 
 SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n) {
-  return classify_fragment(node_plane(r, a, b, poly[0]), poly, n);
+  return classify_fragment(node_plane(r, a, b, poly[0], vertex_magnitude(poly, n)), poly, n);
 }
 
 SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
                            std::vector<Vec3d>& pos, std::vector<Vec3d>& neg) {
-  return split_fragment(node_plane(r, a, b, poly[0]), poly, n, pos, neg);
+  return split_fragment(node_plane(r, a, b, poly[0], vertex_magnitude(poly, n)), poly, n, pos, neg);
 }
 
 SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
@@ -116,8 +123,7 @@ SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::v
   for (int k = 0; k < n; ++k) {
     Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
-    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) +
-                   pl.vertex_scale * max_component(vabs(poly[k]));
+    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) + pl.vertex_term;
     if (s > bound) ++npos;
     else if (s < -bound) ++nneg;
     else s = 0.0;  // on the plane within the error bound: belongs to both pieces
