@@ -389,8 +389,10 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   out.clear();
   out_boxes.clear();
-  // The planes through r and q's edges, once for every fragment (fragment.h node_plane).
-  NodePlane planes[2 * kMaxOccluderVertices + 2];
+  // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
+  // each written before it is read. Per thread rather than per call: 22 planes
+  // default-constructed in every call were 0.7% of the instructions of a columns solve.
+  static thread_local NodePlane planes[2 * kMaxOccluderVertices + 2];
   VG_CHECK(nq <= int(std::size(planes)));
   bool have_planes = false;
   auto plane = [&](int m) -> const NodePlane& {
