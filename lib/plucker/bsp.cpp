@@ -33,10 +33,7 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   plane_stamp_.clear();
   miss_edge_.clear();
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
-  light_centroid_ = Vec3d{};
-  for (const Vec3d& v : light_) light_centroid_ += v;
-  if (m > 0) light_centroid_ = light_centroid_ / double(m);
-  light_mag_ = vertex_magnitude(light_.data(), m);
+  light_bounds_ = LightBounds::of(light_.data(), m);
   reset();
   counters_.nodes_created = 1;
 }
@@ -186,7 +183,7 @@ const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
   size_t slot = size_t(id) * size_t(kMaxOccluderVertices) + size_t(edge);
   if (plane_stamp_[slot] != stamp_) {
     const Occluder& o = occ_[id];
-    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_centroid_, light_mag_);
+    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_bounds_);
     plane_stamp_[slot] = stamp_;
   }
   return plane_cache_[slot];

@@ -277,8 +277,7 @@ class LazyBsp {
   std::vector<uint8_t> miss_edge_;      // per occluder: the edge occlusion() last found separating
   std::vector<uint32_t> plane_stamp_;   // per occluder edge: stamp_ when plane_cache_ is valid
   std::vector<NodePlane> plane_cache_;
-  Vec3d light_centroid_{};
-  double light_mag_ = 0.0;  // vertex_magnitude of the light: every query fragment is part of it
+  LightBounds light_bounds_;  // every query fragment is a piece of the light (node_plane)
 };
 
 }  // namespace visgate::plucker

@@ -29,16 +29,19 @@ constexpr double kUd = 0x1p-53;
 // d . N is bounded (1 rounding in d, 1 per product, 2 in the sum: < 4.01 u_d
 // sum |d_i N_i| <= 4.01 u_d |d|_1 |N|_inf; doubled), so every fragment is split
 // consistently by one plane, and "zero area" means inside that plane up to evaluation.
-// The plane is evaluated through the one of r, a, b nearest to the fragment (lines.h
-// nearest_base; (x - a) . N = (x - r) . N because N is orthogonal to a - r), chosen on the
-// fragment's first vertex, so every vertex of one fragment is judged against the same
-// plane: for a receiver far from the light (fuzz_plucker 597a1279...: 7e22 away) x - r
-// is -r to within rounding and (x - r) . N cancels catastrophically.
-// The bound of d . N is dot_scale |d|_1 (its evaluation) plus vertex_term = 2 u_d |N|_1
-// vertex_mag: a fragment vertex x was rounded (when it was interpolated) by up to
-// u_d |x_i| per coordinate, and |x|_inf <= vertex_mag (fragment.h), so a vertex within
-// that of the plane is on it (one term per plane: the per-vertex |x|_inf cost 6 of the
-// loop's instructions per vertex, on columns 4% of a solve). Without this term, vertices
+// The plane is evaluated through the one of r, a, b nearest to the light's centroid
+// (lines.h nearest_base; (x - a) . N = (x - r) . N because N is orthogonal to a - r), so
+// every vertex of every fragment is judged against the same plane: for a receiver far
+// from the light (fuzz_plucker 597a1279...: 7e22 away) x - r is -r to within rounding
+// and (x - r) . N cancels catastrophically.
+// The bound of d . N is 8 u_d |N|_inf |d|_1 (its evaluation) plus 2 u_d |N|_1 |x|_inf: a
+// fragment vertex x was rounded (when it was interpolated) by up to u_d |x_i| per
+// coordinate, so a vertex within that of the plane is on it. Both are taken at their
+// largest over the light polygon (fragment.h LightBounds: |d|_1 <= |centroid - base|_1 +
+// radius1, |x|_inf <= mag), one number per plane: the per-vertex norms were 6-8 of
+// the loop's instructions per vertex (columns 4096 x 16: 1.316G -> 1.25G instructions
+// for |x|_inf alone). The tolerance so grows to rounding of the light's size, far below
+// every fragment the comparator or the fraction can see. Without the vertex term, vertices
 // that lie on a plane only to float precision (shared boundaries of earlier splits) were
 // split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
 
@@ -63,20 +66,32 @@ Vec3d edge_crossing(const P& a, const P& b, double sa, double sb) {
 
 }  // namespace
 
-double vertex_magnitude(const Vec3d* poly, int n) {
-  double m = 0.0;
-  for (int k = 0; k < n; ++k) m = std::max(m, max_component(vabs(poly[k])));
-  return m * (1.0 + 0x1p-50);
+LightBounds LightBounds::of(const Vec3d* poly, int n) {
+  LightBounds lb;
+  if (n <= 0) return lb;
+  Vec3d c(0, 0, 0);
+  for (int k = 0; k < n; ++k) c += poly[k];
+  lb.centroid = c / double(n);
+  for (int k = 0; k < n; ++k) {
+    const Vec3d d = poly[k] - lb.centroid;
+    lb.radius1 = std::max(lb.radius1, std::abs(d.x) + std::abs(d.y) + std::abs(d.z));
+    lb.mag = std::max(lb.mag, max_component(vabs(poly[k])));
+  }
+  lb.radius1 *= 1.0 + 0x1p-50;
+  lb.mag *= 1.0 + 0x1p-50;
+  return lb;
 }
 
-NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0, double vertex_mag) {
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light) {
   NodePlane p;
   Vec3d err;
   p.n = edge_plane_normal_err(r, a, b, err);
   p.on_line = on_line(p.n, err);
-  p.base = nearest_base(r, a, b, x0);
-  p.dot_scale = 8.0 * kUd * max_component(vabs(p.n));
-  p.vertex_term = 2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z)) * vertex_mag;
+  p.base = nearest_base(r, a, b, light.centroid);
+  const Vec3d dc = light.centroid - p.base;
+  const double d1 = (std::abs(dc.x) + std::abs(dc.y) + std::abs(dc.z)) * (1.0 + 0x1p-50) + light.radius1;
+  p.bound = 8.0 * kUd * max_component(vabs(p.n)) * d1 +
+            2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z)) * light.mag;
   return p;
 }
 
@@ -87,9 +102,8 @@ SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
   for (int k = 0; k < n; ++k) {
     Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
-    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) + pl.vertex_term;
-    pos |= s > bound;
-    neg |= s < -bound;
+    pos |= s > pl.bound;
+    neg |= s < -pl.bound;
     if (pos && neg) return SplitResult::Both;  // the remaining vertices cannot change it
   }
   if (pos) return SplitResult::Positive;
@@ -98,12 +112,12 @@ SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int n) {
 }
 
 SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n) {
-  return classify_fragment(node_plane(r, a, b, poly[0], vertex_magnitude(poly, n)), poly, n);
+  return classify_fragment(node_plane(r, a, b, LightBounds::of(poly, n)), poly, n);
 }
 
 SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d* poly, int n,
                            std::vector<Vec3d>& pos, std::vector<Vec3d>& neg) {
-  return split_fragment(node_plane(r, a, b, poly[0], vertex_magnitude(poly, n)), poly, n, pos, neg);
+  return split_fragment(node_plane(r, a, b, LightBounds::of(poly, n)), poly, n, pos, neg);
 }
 
 SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
@@ -123,9 +137,8 @@ SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::v
   for (int k = 0; k < n; ++k) {
     Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
-    double bound = pl.dot_scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z)) + pl.vertex_term;
-    if (s > bound) ++npos;
-    else if (s < -bound) ++nneg;
+    if (s > pl.bound) ++npos;
+    else if (s < -pl.bound) ++nneg;
     else s = 0.0;  // on the plane within the error bound: belongs to both pieces
     val[k] = s;
   }

@@ -35,23 +35,26 @@ enum class SplitResult : uint8_t {
 // its bounds are derived in fragment.cpp: the normal N from the two shortest of a - r,
 // b - r, b - a with per-component error bounds (r on the line when every component is
 // within its bound), evaluated as (x - base) . N through the one of r, a, b nearest to
-// the point x0 (a point of the light). `vertex_mag` bounds |x|_inf of every fragment
-// vertex the plane will judge (the light polygon's largest coordinate magnitude: the
-// fragments are convex pieces of it, their vertices interpolated on its edges): the
-// rounding of an interpolated vertex, up to u |x_i| per coordinate, is then one term
-// per plane instead of one per vertex.
+// the light's centroid. Every vertex x the plane judges is a vertex of a fragment, a
+// convex piece of the light polygon with its vertices interpolated on its edges, so
+// |x - base|_1 <= |centroid - base|_1 + radius1 and |x|_inf <= mag (LightBounds): the
+// error bound of (x - base) . N is one number per plane (fragment.cpp).
+struct LightBounds {
+  Vec3d centroid;
+  double radius1 = 0.0;  // max |l_j - centroid|_1 over the polygon's vertices
+  double mag = 0.0;      // max |l_j|_inf
+  // Of the polygon (n vertices), both maxima rounded up by 2^-50 relative (an
+  // interpolated vertex exceeds its edge's ends by rounding only).
+  static LightBounds of(const Vec3d* poly, int n);
+};
+
 struct NodePlane {
   Vec3d n, base;
-  double dot_scale = 0.0;    // 8 u_d |N|_inf
-  double vertex_term = 0.0;  // 2 u_d |N|_1 vertex_mag
+  double bound = 0.0;  // |(x - base) . N| <= bound: x on the plane (fragment.cpp)
   bool on_line = false;
 };
 
-NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Vec3d& x0, double vertex_mag);
-// The largest |coordinate| of the polygon's vertices, rounded up by 2^-50 relative (an
-// interpolated vertex exceeds its edge's ends by rounding only): vertex_mag for the
-// fragments of this polygon.
-double vertex_magnitude(const Vec3d* poly, int n);
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light);
 
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or

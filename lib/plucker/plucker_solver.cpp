@@ -42,7 +42,7 @@ struct LightFrame {
   std::vector<Vec3d> poly;  // local (double: exact x - origin for float x, see to_local_d)
   Vec3f n{}, p0{};
   Vec3d centroid{};
-  double vertex_mag = 0.0;  // fragment.h vertex_magnitude of poly: bounds every fragment vertex
+  LightBounds bounds;       // of poly: every fragment is a piece of it (fragment.h node_plane)
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
   AABB box;                // local
   float extent = 0.0f;     // largest side of box
@@ -182,7 +182,7 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
   Vec3d c(0, 0, 0);
   for (const Vec3d& v : f.poly) c += v;
   f.centroid = c / double(f.poly.size());
-  f.vertex_mag = vertex_magnitude(f.poly.data(), int(f.poly.size()));
+  f.bounds = LightBounds::of(f.poly.data(), int(f.poly.size()));
   // Light points (DESIGN section 6 allows explicit samples anywhere): a point on the
   // light's plane (|h| within the rounding bound used for receivers) and inside the
   // light polygon (point_in_fragment's boundary bound) is decided by point-in-fragment;
@@ -384,7 +384,7 @@ void keep_whole(const FragmentList& in, size_t f, const Box2& box, size_t first,
 // light line from r is on their inner side (the edge q has at r's own level, see the
 // near-polygon loop in shade_group).
 void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
-                      const PlaneFrame& frame, const Vec3d& light_centroid, double light_mag, const FragmentList& in,
+                      const PlaneFrame& frame, const LightBounds& light, const FragmentList& in,
                       const std::vector<Box2>& boxes, FragmentList& out, std::vector<Box2>& out_boxes,
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   out.clear();
@@ -398,7 +398,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   auto plane = [&](int m) -> const NodePlane& {
     if (!have_planes) {
       for (int k = 0; k < nq; ++k)
-        if (!skip[k]) planes[k] = node_plane(r, q[k], q[(k + 1) % nq], light_centroid, light_mag);
+        if (!skip[k]) planes[k] = node_plane(r, q[k], q[(k + 1) % nq], light);
       have_planes = true;
     }
     return planes[m];
@@ -1260,7 +1260,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
         Box2 qbox = shadow_box(lf.plane, r, q.data(), q.size());
         if (!qbox.overlaps(all)) continue;
-        subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, lf.centroid, lf.vertex_mag, frags, boxes, tmp,
+        subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, lf.bounds, frags, boxes, tmp,
                          tmp_boxes, cur, pos, neg, near_counters);
         std::swap(frags, tmp);
         std::swap(boxes, tmp_boxes);
