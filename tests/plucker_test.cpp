@@ -182,6 +182,72 @@ TEST(PluckerGeometry, Theorem1OrientationBoundsEveryStabbingLine) {
   EXPECT_GT(mixed, 50);
 }
 
+TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
+  // A node plane's one error bound per plane (fragment.h LightBounds, the largest over
+  // the light polygon): on pieces of random lights (far from the local origin too), made
+  // by random splits so that their vertices are interpolated, every decided side of a
+  // vertex is the exact sign of det[x - r, a - r, b - r] (orient3d_exact), and a piece a
+  // plane split off is never judged to lie on the wrong side by that plane.
+  Rng rng(33);
+  int decided = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const double scale = std::pow(10.0, rng.uniform(-3, 3)), off = trial % 3 == 0 ? 0.0 : rng.uniform(-1e3, 1e3);
+    std::vector<Vec3d> light = {Vec3d(off, off, 2), Vec3d(off, off + scale, 2), Vec3d(off + scale, off + scale, 2),
+                                Vec3d(off + scale, off, 2)};
+    const LightBounds lb = LightBounds::of(light.data(), 4);
+    auto random_point = [&](double zlo, double zhi) {
+      return Vec3d(off + scale * rng.uniform(-0.5, 1.5), off + scale * rng.uniform(-0.5, 1.5), rng.uniform(zlo, zhi));
+    };
+    std::vector<std::vector<Vec3d>> pieces = {light};
+    std::vector<Vec3d> pos, neg;
+    for (int k = 0; k < 6; ++k) {  // split every piece by a random plane through a random query point
+      const NodePlane pl = node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb);
+      std::vector<std::vector<Vec3d>> next;
+      for (const auto& pc : pieces) {
+        SplitResult sr = split_fragment(pl, pc.data(), int(pc.size()), pos, neg);
+        if (sr != SplitResult::Both) {
+          next.push_back(pc);
+          continue;
+        }
+        // The pieces are on their sides of the plane that cut them, up to its bound.
+        if (!pos.empty()) {
+          EXPECT_NE(classify_fragment(pl, pos.data(), int(pos.size())), SplitResult::Negative);
+          next.push_back(pos);
+        }
+        if (!neg.empty()) {
+          EXPECT_NE(classify_fragment(pl, neg.data(), int(neg.size())), SplitResult::Positive);
+          next.push_back(neg);
+        }
+      }
+      pieces.swap(next);
+    }
+    const Vec3d r = random_point(-2, 0), a = random_point(0.5, 1.5), b = random_point(0.5, 1.5);
+    const NodePlane pl = node_plane(r, a, b, lb);
+    if (pl.on_line) continue;
+    // Split by this plane too: the crossing points lie on it up to their rounding, where
+    // only the bound keeps a decided sign exact.
+    std::vector<std::vector<Vec3d>> last;
+    for (const auto& pc : pieces) {
+      if (split_fragment(pl, pc.data(), int(pc.size()), pos, neg) != SplitResult::Both) {
+        last.push_back(pc);
+        continue;
+      }
+      if (!pos.empty()) last.push_back(pos);
+      if (!neg.empty()) last.push_back(neg);
+    }
+    for (const auto& pc : last)
+      for (const Vec3d& x : pc) {
+        const SplitResult sr = classify_fragment(pl, &x, 1);
+        const int exact = orient3d_exact(SumPoint(Vec3f(), r), SumPoint(Vec3f(), x), SumPoint(Vec3f(), a),
+                                         SumPoint(Vec3f(), b)).sign;
+        if (sr == SplitResult::ZeroArea) continue;  // within the bound: undecided
+        ++decided;
+        EXPECT_EQ(sr == SplitResult::Positive ? 1 : -1, exact);
+      }
+  }
+  EXPECT_GT(decided, 5000);
+}
+
 TEST(PluckerFragment, SplitHalvesAndDegenerateCases) {
   std::vector<Vec3d> sq = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   std::vector<Vec3d> pos, neg;
