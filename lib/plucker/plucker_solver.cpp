@@ -179,10 +179,8 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
   if (f.planar || f.nd == Vec3d(0, 0, 0)) f.nd = to_double(f.n);
   f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
   f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame, f.nd, f.h0};
-  Vec3d c(0, 0, 0);
-  for (const Vec3d& v : f.poly) c += v;
-  f.centroid = c / double(f.poly.size());
   f.bounds = LightBounds::of(f.poly.data(), int(f.poly.size()));
+  f.centroid = f.bounds.centroid;
   // Light points (DESIGN section 6 allows explicit samples anywhere): a point on the
   // light's plane (|h| within the rounding bound used for receivers) and inside the
   // light polygon (point_in_fragment's boundary bound) is decided by point-in-fragment;
