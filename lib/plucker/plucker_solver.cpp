@@ -381,12 +381,14 @@ void keep_whole(const FragmentList& in, size_t f, const Box2& box, size_t first,
 // Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows every
 // light line from r is on their inner side (the edge q has at r's own level, see the
 // near-polygon loop in shade_group).
-void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
+// Returns false, with `out` and `out_boxes` untouched, when q's shadow misses every
+// fragment (box or edge plane): the fragments stay as they are and nothing is copied.
+// Measured on columns 4096 x 16: about half of the 44,081 calls change nothing; not
+// copying the fragments for them saves 1% of the solve's instructions.
+bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
                       const PlaneFrame& frame, const LightBounds& light, const FragmentList& in,
                       const std::vector<Box2>& boxes, FragmentList& out, std::vector<Box2>& out_boxes,
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
-  out.clear();
-  out_boxes.clear();
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
   // each written before it is read. Per thread rather than per call: 22 planes
   // default-constructed in every call were 0.7% of the instructions of a columns solve.
@@ -406,24 +408,32 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     out_boxes.push_back(Box2::of(frame, p, int(n)));
   };
   int hint = 0;
-  for (size_t f = 0; f < in.size(); ++f) {
-    if (!qbox.overlaps(boxes[f])) {
-      keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
-      continue;
-    }
-    // A fragment entirely on the negative side of one edge plane misses q: kept whole,
-    // without the splits the walk below would make before reaching that edge. Tried
-    // from the edge that separated the previous fragment (neighbours mostly share it).
-    bool misses = false;
-    for (int mi = 0; mi < nq && !misses; ++mi) {
+  // A fragment entirely on the negative side of one edge plane misses q: kept whole,
+  // without the splits the walk below would make before reaching that edge. Tried
+  // from the edge that separated the previous fragment (neighbours mostly share it).
+  auto misses = [&](size_t f) {
+    if (!qbox.overlaps(boxes[f])) return true;
+    for (int mi = 0; mi < nq; ++mi) {
       const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
       if (skip[m]) continue;
       SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
       if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
-      misses = s == SplitResult::Negative || s == SplitResult::OnLine;
-      if (misses) hint = m;
+      if (s == SplitResult::Negative || s == SplitResult::OnLine) {
+        hint = m;
+        return true;
+      }
     }
-    if (misses) {
+    return false;
+  };
+  // The first fragment q's shadow may meet; none: nothing changes.
+  size_t first = 0;
+  while (first < in.size() && misses(first)) ++first;
+  if (first == in.size()) return false;
+  out.clear();
+  out_boxes.clear();
+  for (size_t f = 0; f < first; ++f) keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
+  for (size_t f = first; f < in.size(); ++f) {
+    if (f > first && misses(f)) {
       keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
       continue;
     }
@@ -451,6 +461,7 @@ void subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     }
     // A piece positive against every edge stabs q: blocked, dropped.
   }
+  return true;
 }
 
 // The exact near-plane path: removes from the fragments (local coordinates relative to
@@ -1258,8 +1269,9 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
         Box2 qbox = shadow_box(lf.plane, r, q.data(), q.size());
         if (!qbox.overlaps(all)) continue;
-        subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, lf.bounds, frags, boxes, tmp,
-                         tmp_boxes, cur, pos, neg, near_counters);
+        if (!subtract_polygon(r, q.data(), int(q.size()), skip.data(), qbox, lf.frame, lf.bounds, frags, boxes, tmp,
+                              tmp_boxes, cur, pos, neg, near_counters))
+          continue;
         std::swap(frags, tmp);
         std::swap(boxes, tmp_boxes);
         all = Box2{};
