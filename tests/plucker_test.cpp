@@ -458,6 +458,43 @@ TEST(PluckerSolver, IrradianceOfAnUnoccludedLight) {
   EXPECT_NEAR(irr[0], e, 1e-5 * e);
 }
 
+TEST(PluckerSolver, IrradianceClipsAtTheReceiversHorizonAndCountsOnlyTheVisibleFragments) {
+  // Receiver 0 tilted towards +x (normal (2, 0, 1) / sqrt 5): its tangent plane meets the
+  // light plane z = 2 at x = -0.7, so the light's strip x < -0.7 lies below its horizon
+  // (the clipped Lambert polygon). Receiver 1 the same, under an occluder at z = 1 whose
+  // edge x = 0.15 hides the light's half x < 0 from it (0.3 + (0.15 - 0.3) * 2 = 0).
+  // Receiver 2 faces down: the whole light is below its horizon (irradiance 0, visible
+  // fraction still 1). Reference: the midpoint rule of max(0, n . d) d_z / |d|^4.
+  Scene s = light_scene({Vec3f(0.3f, -0.2f, 0), Vec3f(0.3f, 5.0f, 0), Vec3f(0.3f, -0.2f, 0.5f)});
+  const Vec3f tilt(0.894427191f, 0.0f, 0.447213595f);
+  s.receivers[0].n = tilt;
+  s.receivers[1].n = tilt;
+  s.receivers[2].n = Vec3f(0, 0, -1);
+  shapes::add_quad(s.mesh, Vec3d(-3, 2, 1), Vec3d(0.15, 2, 1), Vec3d(0.15, 8, 1), Vec3d(-3, 8, 1));
+  std::vector<double> irr;
+  SolveResult r = run(s, {}, 1, &irr);
+  auto reference = [&](const Vec3d& rp, double xlo) {
+    const Vec3d nr = to_double(tilt);
+    double e = 0;
+    const int n = 800;
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) {
+        Vec3d x(-1 + (a + 0.5) * 2.0 / n, -1 + (b + 0.5) * 2.0 / n, 2);
+        if (x.x < xlo) continue;
+        Vec3d d = x - rp;
+        double d2 = dot(d, d);
+        e += std::max(0.0, dot(nr, d)) * d.z / (d2 * d2) * (4.0 / (n * n));
+      }
+    return e;
+  };
+  const double e0 = reference(Vec3d(0.3, -0.2, 0), -1.0), e1 = reference(Vec3d(0.3, 5.0, 0), 0.0);
+  EXPECT_NEAR(irr[0], e0, 1e-5 * e0);
+  EXPECT_NEAR(r.receivers[1].visible_fraction[0], 0.5, 1e-6);
+  EXPECT_NEAR(irr[1], e1, 1e-5 * e1);
+  EXPECT_NEAR(r.receivers[2].visible_fraction[0], 1.0, 1e-6);
+  EXPECT_EQ(irr[2], 0.0);
+}
+
 // ---- Random scenes ----
 
 TEST(PluckerSolver, BitsMatchDoublePrecisionRayCastingOnRandomSoup) {
