@@ -375,6 +375,51 @@ Status run_plucker(BenchContext& ctx) {
   }
   ctx.report.options["scenes"] = sizes;
 
+  // Figure 8 against scene size: the falloff factor on columns (or the first family) at
+  // 1, 4 and 16 times the family's triangle count, same receivers and light, one thread.
+  // The paper's FO of 16-48 come from scenes of 10^4-10^5 triangles; this measures
+  // whether the factor grows with the number of occluders per tree, with the work
+  // counters of both modes (the coherent tree saves developments and insertion tests;
+  // its walk is longer than a fresh tree's, which holds only the current query's
+  // classes). A run longer than 5 s is not repeated.
+  Table f8s{"fig8-scale", "the falloff factor FO (off / on, one thread) as the scene grows",
+            {"family", "triangles", "occluders", "seconds_on", "seconds_off", "falloff_factor_1t", "tree_pct_on",
+             "falloff_bound_1t", "developments_on", "developments_off", "insert_tests_on", "insert_tests_off",
+             "node_visits_on", "node_visits_off", "splits_on", "splits_off"}, {}};
+  if (have_p && has_option(P, "coherence")) {
+    const std::string sfam = std::find(fams.begin(), fams.end(), "columns") != fams.end() ? "columns" : fams.front();
+    auto solver = make_solver(P);
+    MeasureConfig mc = ctx.measure_config();
+    mc.all = false;
+    mc.budget = std::min(mc.budget, 5.0);
+    long base_tris = 0;
+    for (long factor : o.quick ? std::vector<long>{1, 4} : std::vector<long>{1, 4, 16}) {
+      FamilyParams q = plucker_params(o, sfam);
+      q.samples = 16;
+      if (factor > 1) q.triangles = base_tris * factor;
+      auto sc = ctx.scene(sfam, q);
+      if (!sc) return sc.error();
+      if (factor == 1) base_tris = long(sc->mesh.size());
+      std::optional<Measured> m[2];
+      for (int k = 0; k < 2; ++k) {
+        SolveOptions so;
+        so.seed = o.seed;
+        so.opts = {{"coherence", k == 0 ? "on" : "off"}};
+        ctx.progress.step(P + " " + sfam + " " + std::to_string(sc->mesh.size()) + " triangles coherence " +
+                          (k == 0 ? "on" : "off"));
+        m[k] = measure_solve(*solver, *sc, so, mc);
+      }
+      const Stats &a = m[0]->stats, &b = m[1]->stats;
+      const double total = a.get("occluder_selection_seconds") + a.get("tree_init_seconds") + a.get("query_seconds");
+      const double share = total > 0.0 ? a.get("tree_seconds") / total : kNaN;
+      f8s.add_row({sfam, long(sc->mesh.size()), a.get("occluders"), m[0]->seconds_1t, m[1]->seconds_1t,
+                   ratio(m[1]->seconds_1t, m[0]->seconds_1t), 100.0 * share,
+                   ratio(m[1]->seconds_1t, m[0]->seconds_1t * (1.0 - share)), a.get("developments"),
+                   b.get("developments"), a.get("insert_tests"), b.get("insert_tests"), a.get("node_visits"),
+                   b.get("node_visits"), a.get("splits"), b.get("splits")});
+    }
+  }
+
   // Figure 9: light area x1 to x100 (side x1 to x10), on columns (or the first family).
   const std::string f9fam = std::find(fams.begin(), fams.end(), "columns") != fams.end() ? "columns" : fams.front();
   std::vector<double> areas = o.quick ? std::vector<double>{1, 16} : std::vector<double>{1, 4, 16, 36, 64, 100};
@@ -451,6 +496,7 @@ Status run_plucker(BenchContext& ctx) {
   ctx.report.tables.push_back(std::move(eq));
   ctx.report.tables.push_back(std::move(f7));
   if (!f8.rows.empty()) ctx.report.tables.push_back(std::move(f8));
+  if (!f8s.rows.empty()) ctx.report.tables.push_back(std::move(f8s));
   ctx.report.tables.push_back(std::move(f9));
   ctx.report.tables.push_back(std::move(f10));
   if (!st.rows.empty()) ctx.report.tables.push_back(std::move(st));
