@@ -208,6 +208,13 @@ double penumbra_rms(const std::vector<double>& got, const std::vector<double>& e
   return n ? std::sqrt(sum / double(n)) : kNaN;
 }
 
+// The share of a plucker-bsp solve spent in the tree: stat tree_seconds (every BSP walk
+// and development of the queries) over the solver's timed total.
+double tree_share(const Stats& ss) {
+  double total = ss.get("occluder_selection_seconds") + ss.get("tree_init_seconds") + ss.get("query_seconds");
+  return total > 0.0 ? ss.get("tree_seconds") / total : kNaN;
+}
+
 // Scene sizes of the plucker experiment: columns at the family's own 64 x 64 receivers,
 // rooms (27 lights) at 32 x 32 so that the region oracle (every receiver and light) and
 // embree at 1024 samples per light stay within minutes; --quick: 16 x 16 and a smaller
@@ -290,10 +297,6 @@ Status run_plucker(BenchContext& ctx) {
       // the coherent solve would reach if its tree work cost nothing: off / (on x (1 -
       // on's tree share)). The rest (selection, near polygons, Lambert, bits) is the
       // same work in both modes, so FO cannot exceed this bound.
-      auto tree_share = [](const Stats& ss) {
-        double total = ss.get("occluder_selection_seconds") + ss.get("tree_init_seconds") + ss.get("query_seconds");
-        return total > 0.0 ? ss.get("tree_seconds") / total : kNaN;
-      };
       for (const auto* m : {&on, &off}) {
         if (!*m) continue;
         const Stats& ss = (*m)->stats;
@@ -400,7 +403,7 @@ Status run_plucker(BenchContext& ctx) {
       auto sc = ctx.scene(sfam, q);
       if (!sc) return sc.error();
       if (factor == 1) base_tris = long(sc->mesh.size());
-      std::optional<Measured> m[2];
+      Measured m[2];
       for (int k = 0; k < 2; ++k) {
         SolveOptions so;
         so.seed = o.seed;
@@ -409,12 +412,11 @@ Status run_plucker(BenchContext& ctx) {
                           (k == 0 ? "on" : "off"));
         m[k] = measure_solve(*solver, *sc, so, mc);
       }
-      const Stats &a = m[0]->stats, &b = m[1]->stats;
-      const double total = a.get("occluder_selection_seconds") + a.get("tree_init_seconds") + a.get("query_seconds");
-      const double share = total > 0.0 ? a.get("tree_seconds") / total : kNaN;
-      f8s.add_row({sfam, long(sc->mesh.size()), a.get("occluders"), m[0]->seconds_1t, m[1]->seconds_1t,
-                   ratio(m[1]->seconds_1t, m[0]->seconds_1t), 100.0 * share,
-                   ratio(m[1]->seconds_1t, m[0]->seconds_1t * (1.0 - share)), a.get("developments"),
+      const Stats &a = m[0].stats, &b = m[1].stats;
+      const double share = tree_share(a);
+      f8s.add_row({sfam, long(sc->mesh.size()), a.get("occluders"), m[0].seconds_1t, m[1].seconds_1t,
+                   ratio(m[1].seconds_1t, m[0].seconds_1t), 100.0 * share,
+                   ratio(m[1].seconds_1t, m[0].seconds_1t * (1.0 - share)), a.get("developments"),
                    b.get("developments"), a.get("insert_tests"), b.get("insert_tests"), a.get("node_visits"),
                    b.get("node_visits"), a.get("splits"), b.get("splits")});
     }
