@@ -41,8 +41,7 @@ struct LightFrame {
   Vec3f origin{};          // world position of the local origin (a light vertex)
   std::vector<Vec3d> poly;  // local (double: exact x - origin for float x, see to_local_d)
   Vec3f n{}, p0{};
-  Vec3d centroid{};
-  LightBounds bounds;       // of poly: every fragment is a piece of it (fragment.h node_plane)
+  LightBounds bounds;       // of poly, centroid included: every fragment is a piece of it (node_plane)
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
   AABB box;                // local
   float extent = 0.0f;     // largest side of box
@@ -180,7 +179,6 @@ LightFrame make_frame(const Light& light, const Vec3d& focus) {
   f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
   f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame, f.nd, f.h0};
   f.bounds = LightBounds::of(f.poly.data(), int(f.poly.size()));
-  f.centroid = f.bounds.centroid;
   // Light points (DESIGN section 6 allows explicit samples anywhere): a point on the
   // light's plane (|h| within the rounding bound used for receivers) and inside the
   // light polygon (point_in_fragment's boundary bound) is decided by point-in-fragment;
@@ -748,7 +746,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   const double light_width = std::min(double(lf.extent), double(scene.lights[li].area) / double(lf.extent));
   double work_scale = double(lf.extent);
   for (const Vec3d& rl : rloc) {
-    const double d = max_component(vabs(rl - lf.centroid));
+    const double d = max_component(vabs(rl - lf.bounds.centroid));
     if (std::max(d, double(lf.extent)) <= 0x1p20 * light_width) work_scale = std::max(work_scale, d);
   }
   // A coplanar convex patch (triangle_tree.h; its triangles tris, the first of them t with
@@ -1044,7 +1042,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
     // 6.25e5 away and 0.8 below its plane, 2^19.6 times its height; a sliver occluder
     // lying along the light left a shadow line whose end on the long edge was 2400 off,
     // fraction 0.1845 for 0.1825).
-    const double far = std::max(max_component(vabs(r - lf.centroid)), double(lf.extent));
+    const double far = std::max(max_component(vabs(r - lf.bounds.centroid)), double(lf.extent));
     const double aspect = std::max(1.0, double(lf.extent) / light_width);
     const bool extreme = !(far * aspect <= 0x1p20 * hr) || !(far <= 0x1p20 * light_width);
     auto shade_exact = [&]() {
@@ -1096,7 +1094,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       for (size_t j = 0; j < m; ++j) {
         Vec3d err;
         Vec3d nrm = edge_plane_normal_err(r, lf.poly[j], lf.poly[(j + 1) % m], err);
-        if (dot(nrm, lf.centroid - lf.poly[j]) < 0.0) nrm = -nrm;
+        if (dot(nrm, lf.bounds.centroid - lf.poly[j]) < 0.0) nrm = -nrm;
         for (size_t k = 0; k < m; ++k) {
           const Vec3d d = lf.poly[k] - lf.poly[j];
           if (dot(nrm, d) < -16.0 * dot_err(d, nrm, err)) {
@@ -1109,11 +1107,14 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         pyramid_err[j] = err;
       }
       boxes.clear();
+      for (size_t f = 0; f < frags.size(); ++f) boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
+      // The union of the fragments' boxes, again after every subtraction that changed them.
       Box2 all;
-      for (size_t f = 0; f < frags.size(); ++f) {
-        boxes.push_back(Box2::of(lf.frame, frags.data(f), frags.count(f)));
-        all.extend(boxes.back());
-      }
+      auto bound_all = [&]() {
+        all = Box2{};
+        for (const Box2& b : boxes) all.extend(b);
+      };
+      bound_all();
       exact_done.clear();
       // A near polygon's whole triangle, exactly, once for this receiver; true when it
       // was subtracted (false: already done, or r lies in its plane).
@@ -1121,8 +1122,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
         if (std::find(exact_done.begin(), exact_done.end(), t) != exact_done.end()) return false;
         exact_done.push_back(t);
         if (!subtract_exact(t, rec)) return false;
-        all = Box2{};
-        for (const Box2& b : boxes) all.extend(b);
+        bound_all();
         return true;
       };
       // A near polygon's triangles (all of a patch), exactly.
@@ -1137,8 +1137,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
       for (uint32_t t : exact_tris) {
         if (frags.size() == 0) break;
         if (!subtract_exact(t, rec)) continue;
-        all = Box2{};
-        for (const Box2& b : boxes) all.extend(b);
+        bound_all();
       }
       const Vec3d& rd = r;
       const double rmax = max_component(vabs(r));
@@ -1274,8 +1273,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
           continue;
         std::swap(frags, tmp);
         std::swap(boxes, tmp_boxes);
-        all = Box2{};
-        for (const Box2& b : boxes) all.extend(b);
+        bound_all();
       }
       // Algorithm 1 on the pieces the near polygons left visible.
       Clock::time_point tb = Clock::now();
