@@ -126,7 +126,7 @@ double stat_or_nan(const Stats& s, const std::vector<std::string>& keys) {
 
 std::optional<Measured> run_method(BenchContext& ctx, const std::string& method, const Scene& scene,
                                    const std::string& label, SweepGuard* guard, double size,
-                                   const std::map<std::string, std::string>& opts) {
+                                   const std::map<std::string, std::string>& opts, const MeasureConfig* config) {
   std::string why;
   if (guard && guard->skip(method, size, &why)) {
     ctx.note(method + " skipped at " + label + ": " + why);
@@ -146,7 +146,7 @@ std::optional<Measured> run_method(BenchContext& ctx, const std::string& method,
     return std::nullopt;
   }
   ctx.progress.step(method + " " + label);
-  Measured m = measure_solve(*solver, scene, so, ctx.measure_config());
+  Measured m = measure_solve(*solver, scene, so, config ? *config : ctx.measure_config());
   if (guard) guard->record(method, size, m.seconds());
   return m;
 }

@@ -391,7 +391,6 @@ Status run_plucker(BenchContext& ctx) {
              "node_visits_on", "node_visits_off", "splits_on", "splits_off"}, {}};
   if (have_p && has_option(P, "coherence")) {
     const std::string sfam = std::find(fams.begin(), fams.end(), "columns") != fams.end() ? "columns" : fams.front();
-    auto solver = make_solver(P);
     MeasureConfig mc = ctx.measure_config();
     mc.all = false;
     mc.budget = std::min(mc.budget, 5.0);
@@ -403,20 +402,18 @@ Status run_plucker(BenchContext& ctx) {
       auto sc = ctx.scene(sfam, q);
       if (!sc) return sc.error();
       if (factor == 1) base_tris = long(sc->mesh.size());
-      Measured m[2];
+      std::optional<Measured> m[2];
       for (int k = 0; k < 2; ++k) {
-        SolveOptions so;
-        so.seed = o.seed;
-        so.opts = {{"coherence", k == 0 ? "on" : "off"}};
-        ctx.progress.step(P + " " + sfam + " " + std::to_string(sc->mesh.size()) + " triangles coherence " +
-                          (k == 0 ? "on" : "off"));
-        m[k] = measure_solve(*solver, *sc, so, mc);
+        const std::string mode = k == 0 ? "on" : "off";
+        m[k] = run_method(ctx, P, *sc, sfam + " " + std::to_string(sc->mesh.size()) + " triangles coherence " + mode,
+                          nullptr, 0.0, {{"coherence", mode}}, &mc);
       }
-      const Stats &a = m[0].stats, &b = m[1].stats;
+      if (!m[0] || !m[1]) continue;
+      const Stats &a = m[0]->stats, &b = m[1]->stats;
       const double share = tree_share(a);
-      f8s.add_row({sfam, long(sc->mesh.size()), a.get("occluders"), m[0].seconds_1t, m[1].seconds_1t,
-                   ratio(m[1].seconds_1t, m[0].seconds_1t), 100.0 * share,
-                   ratio(m[1].seconds_1t, m[0].seconds_1t * (1.0 - share)), a.get("developments"),
+      f8s.add_row({sfam, long(sc->mesh.size()), a.get("occluders"), m[0]->seconds_1t, m[1]->seconds_1t,
+                   ratio(m[1]->seconds_1t, m[0]->seconds_1t), 100.0 * share,
+                   ratio(m[1]->seconds_1t, m[0]->seconds_1t * (1.0 - share)), a.get("developments"),
                    b.get("developments"), a.get("insert_tests"), b.get("insert_tests"), a.get("node_visits"),
                    b.get("node_visits"), a.get("splits"), b.get("splits")});
     }

@@ -13,10 +13,12 @@ namespace visgate::bench {
 // the given method options. With a guard, a point predicted to exceed the budget is
 // skipped (noted) and nullopt returned; the guard records every measured point. Shows
 // `label` as progress. nullopt (noted) also when the method is not registered or
-// rejects the options.
+// rejects the options. `config`: how to measure instead of ctx.measure_config() (e.g.
+// single-threaded runs only).
 std::optional<Measured> run_method(BenchContext& ctx, const std::string& method, const Scene& scene,
                                    const std::string& label, SweepGuard* guard = nullptr, double size = 0.0,
-                                   const std::map<std::string, std::string>& opts = {});
+                                   const std::map<std::string, std::string>& opts = {},
+                                   const MeasureConfig* config = nullptr);
 
 // Share of blocked relations in a bit result (0..1).
 double blocked_share(const Scene& scene, const SolveResult& r);
