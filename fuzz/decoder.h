@@ -29,7 +29,9 @@
 //      degeneracies in family scenes);
 //   3. a list of perturbations of single coordinates: raw IEEE bits (NaN, Inf, subnormals
 //      and huge values are reachable), flips of low mantissa bits, steps of a few ulps,
-//      copies of another coordinate (exact coincidences), and sign flips.
+//      copies of another coordinate (exact coincidences), and sign flips;
+//   4. an exact axis map (permutation with mirrors) and a power-of-two scale 2^k, k in
+//      [-120, 124] clamped to where the copy is exact (fuzz_embree: k = 0).
 // Non-finite coordinates are rejected with an Error naming the element, as the scene
 // reader does (DESIGN section 2); lights that are no longer planar convex polygons are
 // rejected by prepare_light. The decoded scene never has a receiver grid (receivers are
@@ -57,6 +59,8 @@ struct DecodeLimits {
   size_t max_lights = 2;
   size_t max_relations = 96;     // receivers * samples over all lights
   size_t max_perturbations = 12;
+  // The exponents k of the 2^k scale the decoder may apply.
+  int min_scale_exponent = -120, max_scale_exponent = 124;
 };
 
 // The limits a differential target decodes with; every reader of that target's inputs

@@ -3,11 +3,15 @@
 #include "lib/solver.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <mutex>
 #include <set>
 
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+
+#include "lib/scene/exact_transform.h"
 
 
 namespace visgate {
@@ -70,6 +74,27 @@ bool SolveOptions::get_bool(const std::string& k, bool fallback) const {
   if (v == "on" || v == "true" || v == "1") return true;
   if (v == "off" || v == "false" || v == "0") return false;
   return fallback;
+}
+
+SolveResult Solver::solve(const Scene& scene, const SolveOptions& opt) {
+  const int k = normalises_scale() ? unit_scale_exponent(scene) : 0;
+  if (k == 0) {
+    SolveResult r = solve_scene(scene, opt);
+    if (normalises_scale()) r.stats.set("scale_exponent", 0.0);
+    return r;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene unit = scaled_scene(scene, k);
+  const double copy_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  SolveResult r = solve_scene(unit, opt);
+  for (auto& rr : r.receivers)
+    for (auto& per_light : rr.fragments)
+      for (auto& poly : per_light)
+        for (auto& p : poly)
+          for (int a = 0; a < 3; ++a) p[a] = float(std::ldexp(double(p[a]), -k));
+  r.seconds += copy_seconds;
+  r.stats.set("scale_exponent", double(k));
+  return r;
 }
 
 Status Solver::check_options(const SolveOptions& opt) const { return check_options(opt, options()); }

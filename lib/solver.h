@@ -113,7 +113,18 @@ class Solver {
   virtual std::string name() const = 0;
   virtual std::vector<OptionSpec> options() const { return {}; }
   virtual bool reports_fragments() const { return false; }
-  virtual SolveResult solve(const Scene& scene, const SolveOptions& opt) = 0;
+  // Whether solve() hands solve_scene the scene's unit copy (lib/scene/exact_transform.h:
+  // scaled by the power of two that brings its typical relation length into [2, 4)). True for the
+  // production methods, so that they answer a scene and each of its exact 2^k copies
+  // with the same bits (DESIGN section 2, "Scale"); the baselines (embree,
+  // embree-robust, brute) answer the scene as given, as their users run them.
+  virtual bool normalises_scale() const { return true; }
+
+  // Answers every relation of `scene`. With normalises_scale(), the method solves the
+  // unit copy; bits and fractions are scale-free, fragments are scaled back (exactly,
+  // unless a vertex falls below float32's normal range), `seconds` includes the copy,
+  // and stats "scale_exponent" holds the k applied (0: none).
+  SolveResult solve(const Scene& scene, const SolveOptions& opt);
 
   // Rejects unknown options and values outside the spec; messages name the option.
   Status check_options(const SolveOptions& opt) const;
@@ -121,6 +132,10 @@ class Solver {
   // targets check every input's options; building the list was 3.6% of fuzz_iss's
   // allocations).
   Status check_options(const SolveOptions& opt, const std::vector<OptionSpec>& specs) const;
+
+ protected:
+  // The method itself, on the scene solve() chose (the unit copy or the input).
+  virtual SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) = 0;
 };
 
 // Registry: every method name of DESIGN section 4 that is built in.

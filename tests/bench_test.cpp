@@ -152,7 +152,10 @@ class Scripted : public Solver {
   Scripted(std::string name, std::vector<double> times, std::vector<std::string>* log)
       : name_(std::move(name)), times_(std::move(times)), log_(log) {}
   std::string name() const override { return name_; }
-  SolveResult solve(const Scene& scene, const SolveOptions& opt) override {
+  bool normalises_scale() const override { return false; }  // its scripted times are the whole solve
+
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override {
     log_->push_back(name_ + ":" + scene.name + ":" + opt.get("k", "-") + ":" + std::to_string(opt.threads));
     SolveResult r;
     r.seconds = times_.at(calls_++);

@@ -114,7 +114,7 @@ TEST(Metamorphic, TranslationNeverRoundsAwaySmallCoordinates) {
 
 TEST(Check, RowsAccountForEveryRelationAndReportsRoundTrip) {
   CheckConfig cfg;
-  cfg.methods = {MethodSpec{"brute", {}}, MethodSpec{"embree", {}}};
+  cfg.methods = {MethodSpec{"brute", SolveOptions{}, ""}, MethodSpec{"embree", SolveOptions{}, ""}};
   cfg.tau = 1e-5;
   cfg.threads = 1;
   CheckReport whole, part1, part2;
@@ -312,7 +312,10 @@ class SeeThrough : public Solver {
  public:
   std::string name() const override { return "see-through"; }
   bool reports_fragments() const override { return true; }
-  SolveResult solve(const Scene& scene, const SolveOptions&) override {
+  bool normalises_scale() const override { return false; }
+
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions&) override {
     SolveResult r = make_empty_result(scene);
     for (auto& rr : r.receivers) {
       for (size_t b = 0; b < scene.samples_per_receiver(); ++b) rr.set_visible(b, true);

@@ -934,7 +934,7 @@ std::vector<OptionSpec> IssSolver::options() const {
   };
 }
 
-SolveResult IssSolver::solve(const Scene& scene, const SolveOptions& opt) {
+SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   const IeeeFloatMode ieee;  // the caller may be a TBB worker with FTZ/DAZ on (lib/geom/float_mode.h)
   Params p;

@@ -26,6 +26,13 @@
 // relations within float rounding of a degenerate configuration (oracle margin ~1e-7
 // relative), i.e. below the gate's tau.
 //
+// Domain (DESIGN section 2, "Scale"): every scene of finite float32 coordinates.
+// Solver::solve hands this method the scene's unit copy (lib/scene/exact_transform.h:
+// scaled by the power of two that brings its typical relation length into [2, 4)), so
+// every tolerance below is relative to lengths near 2, and a scene and each of its exact
+// 2^k copies
+// get the same answers bit for bit.
+//
 // Threads: the traversal is single-threaded (the thesis measures one thread); the
 // Embree BVH build uses TBB within opt.threads.
 #pragma once
@@ -59,7 +66,8 @@ class IssSolver : public Solver {
  public:
   std::string name() const override { return "iss"; }
   std::vector<OptionSpec> options() const override;
-  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;
 };
 
 }  // namespace visgate::iss

@@ -1621,6 +1621,6 @@ std::vector<OptionSpec> PluckerSolver::options() const {
            {"relevant", "random"}}};
 }
 
-SolveResult PluckerSolver::solve(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }
+SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }
 
 }  // namespace visgate::plucker

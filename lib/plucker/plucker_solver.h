@@ -27,6 +27,13 @@
 // over the light area), per-sample bits by point-in-fragment of sample_position(light, j,
 // i), and the Lambert irradiance over the fragments (unit radiance).
 //
+// Domain (DESIGN section 2, "Scale"): every scene of finite float32 coordinates.
+// Solver::solve hands this method the scene's unit copy (lib/scene/exact_transform.h:
+// scaled by the power of two that brings its typical relation length into [2, 4)), so
+// every tolerance below is relative to lengths near 2, and a scene and each of its exact
+// 2^k copies
+// get the same answers bit for bit.
+//
 // Semantics (DESIGN section 3): a triangle blocks r -> l only where it meets the open
 // segment; parts behind the receiver (its plane parallel to the light) or beyond the
 // light plane are clipped away before they reach the BSP.
@@ -95,7 +102,8 @@ class PluckerSolver : public Solver {
   std::string name() const override { return "plucker-bsp"; }
   std::vector<OptionSpec> options() const override;
   bool reports_fragments() const override { return true; }
-  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;
 };
 
 }  // namespace visgate::plucker

@@ -18,7 +18,7 @@ bool brute_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to
   return false;
 }
 
-SolveResult BruteSolver::solve(const Scene& scene, const SolveOptions& opt) {
+SolveResult BruteSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   auto t0 = std::chrono::steady_clock::now();
   SolveResult result = make_empty_result(scene);

@@ -11,7 +11,11 @@ namespace visgate::raycast {
 class BruteSolver : public Solver {
  public:
   std::string name() const override { return "brute"; }
-  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+  // A baseline: answers the scene as given (Solver::normalises_scale).
+  bool normalises_scale() const override { return false; }
+
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;
 };
 
 // One relation by brute force (exposed for tests and the minimiser).

@@ -402,7 +402,7 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
   if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
 }
 
-SolveResult EmbreeSolver::solve(const Scene& scene, const SolveOptions& opt) {
+SolveResult EmbreeSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   auto t0 = std::chrono::steady_clock::now();
   EmbreeScene es(scene.mesh, robust_, /*verify_hits=*/false);  // the baseline as users run it

@@ -10,6 +10,9 @@
 // RTC_SCENE_FLAG_ROBUST (watertight traversal and intersection, no cracks between
 // triangles that share an edge).
 //
+// Scale: a baseline answers the scene as given (Solver::normalises_scale is false), as its
+// users run it; `visgate bench stability` charts its mismatch rate per exact 2^k copy.
+//
 // Embree's input domain. Embree treats a float as valid input only when its magnitude is
 // below FLT_LARGE = 1.844e18 (embree common/math/constants.h, "we consider floating point
 // numbers in that range as valid input numbers"): a ray with |org| or |dir| above it
@@ -161,7 +164,11 @@ class EmbreeSolver : public Solver {
  public:
   explicit EmbreeSolver(bool robust) : robust_(robust) {}
   std::string name() const override { return robust_ ? "embree-robust" : "embree"; }
-  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+  // A baseline: answers the scene as given (Solver::normalises_scale).
+  bool normalises_scale() const override { return false; }
+
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;
 
  private:
   bool robust_;

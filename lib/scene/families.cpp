@@ -2,6 +2,8 @@
 // an analogue of a thesis scene (COLUMNS, TREE, SODA).
 #include "lib/scene/families.h"
 
+#include "lib/scene/exact_transform.h"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -687,14 +689,27 @@ Result<Scene> generate_family(const std::string& name, const FamilyParams& p) {
   if (p.receivers > 50'000'000) return Error{"--receivers: " + std::to_string(p.receivers) + " exceeds the limit 50000000"};
   if (p.samples > (1 << 20)) return Error{"--samples: " + std::to_string(p.samples) + " exceeds the limit 1048576"};
   if (!(p.light_scale > 0) || !std::isfinite(p.light_scale)) return Error{"--light-scale: must be a positive number"};
-  if (name.rfind("file:", 0) == 0) return gen_file(name.substr(5), p);
-  auto it = generators().find(name);
-  if (it == generators().end()) {
-    std::string known;
-    for (const auto& n : family_names()) known += (known.empty() ? "" : ", ") + n;
-    return Error{"unknown family '" + name + "' (known: " + known + ")"};
+  if (p.scale_exponent < -400 || p.scale_exponent > 400)
+    return Error{"--scale-exponent: " + std::to_string(p.scale_exponent) + " is outside -400..400"};
+  Result<Scene> s = Error{""};
+  if (name.rfind("file:", 0) == 0) {
+    s = gen_file(name.substr(5), p);
+  } else {
+    auto it = generators().find(name);
+    if (it == generators().end()) {
+      std::string known;
+      for (const auto& n : family_names()) known += (known.empty() ? "" : ", ") + n;
+      return Error{"unknown family '" + name + "' (known: " + known + ")"};
+    }
+    s = it->second(p);
   }
-  return it->second(p);
+  if (!s || p.scale_exponent == 0) return s;
+  const ScaleRange range = exact_scale_range(*s);
+  const int k = std::clamp(p.scale_exponent, range.lo, range.hi);
+  if (k == 0 || !range.contains(k)) return s;
+  Scene scaled = scaled_scene(*s, k);
+  scaled.name += "@2^" + std::to_string(k);
+  return scaled;
 }
 
 }  // namespace visgate

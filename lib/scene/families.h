@@ -16,6 +16,10 @@ struct FamilyParams {
   long receivers = -1;   // receiver count (a square grid where the family uses one); -1: default
   long samples = -1;     // samples per light; -1: default
   double light_scale = 1.0;  // scales every light polygon about its centre
+  // The generated scene multiplied by 2^scale_exponent, clamped to the exponents for
+  // which that copy is exact (lib/scene/exact_transform.h); a copy's name ends in
+  // "@2^k" with the k applied.
+  int scale_exponent = 0;
 };
 
 std::vector<std::string> family_names();

@@ -289,7 +289,7 @@ bool grazing_receiver(const LightFrame& frame, const Vec3f& r) {
 
 }  // namespace
 
-SolveResult SsvSolver::solve(const Scene& scene, const SolveOptions& opt) {
+SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   const IeeeFloatMode float_mode;
   const bool use_region = opt.get_bool("silhouette_regions", true);

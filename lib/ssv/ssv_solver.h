@@ -25,6 +25,13 @@
 // the first 8 clear samples of the minimum class is conclusive (doubtful), or when the
 // check finds a class above the minimum unblocked (inconsistent); all counted in stats.
 //
+// Domain (DESIGN section 2, "Scale"): every scene of finite float32 coordinates.
+// Solver::solve hands this method the scene's unit copy (lib/scene/exact_transform.h:
+// scaled by the power of two that brings its typical relation length into [2, 4)), so
+// every tolerance below is relative to lengths near 2, and a scene and each of its exact
+// 2^k copies
+// get the same answers bit for bit.
+//
 // Precision. Projection and integration run in the light's frame (origin at the light's
 // vertex average): vertices and receivers are transformed, clipped to the pyramid over
 // L' and projected in double and rounded once to float in the light plane, so the
@@ -72,7 +79,8 @@ class SsvSolver : public Solver {
   std::vector<OptionSpec> options() const override {
     return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}}};
   }
-  SolveResult solve(const Scene& scene, const SolveOptions& opt) override;
+ protected:
+  SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;
 };
 
 }  // namespace visgate::ssv

@@ -8,7 +8,8 @@
 //                   coherence falloff factor (Figure 8, columns MV and FO), light area x1
 //                   to x100 and 2 to 36 lights with peak memory;
 //   stability       disagreements with the relation oracle per margin decade, every
-//                   method on every family (DESIGN section 5);
+//                   method on every family (DESIGN section 5), and the mismatch rate
+//                   per exact scale 2^k, k from -120 to 124 (DESIGN section 2);
 //   oracle          throughput of the relation and region oracles.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -21,6 +22,7 @@
 
 #include "oracle/comparator.h"
 #include "oracle/region_oracle.h"
+#include "lib/scene/exact_transform.h"
 #include "oracle/relation_oracle.h"
 #include "tools/bench/bench.h"
 #include "tools/bench/run_method.h"
@@ -508,6 +510,80 @@ Status run_plucker(BenchContext& ctx) {
 // Lower bound of histogram bucket k (oracle::DecadeHistogram): 10^(k-12).
 double decade_low(size_t k) { return std::pow(10.0, double(k) - 12.0); }
 
+// The scale axis: mismatch rate of every method, baselines as their users run them, on
+// exact 2^k copies of every family's scene (DESIGN section 2, "Scale"). The production
+// methods solve the unit copy and so do not depend on k; Embree (and the leaf rays of any
+// method that handed it an unnormalised scene) does.
+void run_stability_scale(BenchContext& ctx, const std::vector<std::string>& fams, const std::vector<std::string>& methods) {
+  const auto& o = ctx.opt;
+  static constexpr int kExponents[] = {-120, -96, -64, -48, -40, -37, -32, -16, 0, 16, 32, 43, 48, 64, 66, 96, 124};
+  const long receivers = o.quick ? 16 : 64, samples = 16, triangles = o.quick ? 60 : 100;
+  ctx.report.options["scale_receivers"] = receivers;
+  ctx.report.options["scale_samples"] = samples;
+  ctx.report.options["scale_triangles"] = triangles;
+  Table tab{"scale", "mismatches against the relation oracle on exact 2^k copies (k clamped per scene to where the "
+                     "copy is exact; k_applied its mean), one scene per family",
+            {"k", "method", "scenes", "k_applied_mean", "relations", "mismatches", "false_visible", "false_blocked",
+             "mismatch_rate"}, {}};
+  Chart c{"stability-scale", "Mismatch rate on exact 2^k copies of every family (tau " + fmt_g(o.tau) + ")",
+          "k (scene scaled by 2^k)", "mismatches per relation", false, false, {}};
+  std::map<std::string, Series> series;
+  for (int k : kExponents) {
+    std::map<std::string, oracle::Comparison> acc;
+    double applied = 0;
+    int scenes = 0;
+    for (const auto& fam : fams) {
+      if (fam == "rooms") continue;  // thousands of triangles at its smallest: the other families cover it
+      FamilyParams p;
+      p.seed = o.seed;
+      p.receivers = receivers;
+      p.samples = samples;
+      p.triangles = triangles;
+      p.scale_exponent = k;
+      auto s = generate_family(fam, p);
+      if (!s) {
+        ctx.note("scale 2^" + std::to_string(k) + " family " + fam + ": " + s.error().message + ": skipped");
+        continue;
+      }
+      FamilyParams p0 = p;
+      p0.scale_exponent = 0;
+      Result<Scene> unscaled = generate_family(fam, p0);
+      const int kk = unscaled ? unit_scale_exponent(*unscaled) - unit_scale_exponent(*s) : 0;
+      applied += kk;
+      ++scenes;
+      ctx.progress.step("scale 2^" + std::to_string(k) + " " + fam + ": relation oracle");
+      const auto exact = oracle::run_relation_oracle(*s, o.threads);
+      for (const auto& m : methods) {
+        ctx.progress.step("scale 2^" + std::to_string(k) + " " + fam + ": " + m);
+        SolveOptions so;
+        so.seed = o.seed;
+        so.threads = o.threads;
+        const SolveResult r = make_solver(m)->solve(*s, so);
+        const auto cmp = oracle::compare_relations(*s, r, exact, o.tau);
+        auto& a = acc[m];
+        a.relations += cmp.relations, a.false_visible += cmp.false_visible, a.false_blocked += cmp.false_blocked;
+        a.fraction_mismatches += cmp.fraction_mismatches, a.fragment_mismatches += cmp.fragment_mismatches;
+      }
+    }
+    for (const auto& m : methods) {
+      if (!acc.count(m)) continue;
+      const auto& a = acc[m];
+      const double rate = double(a.mismatch_count()) / double(std::max<size_t>(1, a.relations));
+      tab.add_row({k, m, scenes, scenes ? applied / scenes : 0.0, a.relations, a.mismatch_count(), a.false_visible,
+                   a.false_blocked, rate});
+      Series& se = series[m];
+      se.name = m;
+      se.x.push_back(double(k));
+      se.y.push_back(rate);
+      se.labels.push_back("");
+    }
+  }
+  for (const auto& m : methods)
+    if (series.count(m)) c.series.push_back(std::move(series[m]));
+  ctx.report.charts.push_back(std::move(c));
+  ctx.report.tables.push_back(std::move(tab));
+}
+
 Status run_stability(BenchContext& ctx) {
   const auto& o = ctx.opt;
   auto fams = ctx.families(o.families.empty() ? family_names() : o.families);
@@ -606,6 +682,7 @@ Status run_stability(BenchContext& ctx) {
   ctx.report.charts.push_back(std::move(all));
   ctx.report.tables.push_back(std::move(sum));
   ctx.report.tables.push_back(std::move(dec));
+  run_stability_scale(ctx, fams, methods);
   return {};
 }
 

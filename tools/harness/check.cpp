@@ -34,6 +34,8 @@ void Row::merge(const Row& o) {
   fraction += o.fraction;
   fragment += o.fragment;
   metamorphic += o.metamorphic;
+  shaft_decided += o.shaft_decided;
+  shaft_reported += o.shaft_reported;
   for (size_t d = 0; d < kDecades; ++d) {
     disagreements[d] += o.disagreements[d];
     relations_per_decade[d] += o.relations_per_decade[d];
@@ -55,43 +57,6 @@ size_t CheckReport::mismatch_count(const std::string& method) const {
 }
 
 namespace {
-
-template <class F>
-void for_each_point(Scene& s, F&& f) {
-  for (auto& v : s.mesh.vertices) f(v);
-  for (auto& l : s.lights) {
-    for (auto& v : l.polygon) f(v);
-    for (auto& v : l.jitter_points) f(v);
-    for (auto& v : l.explicit_samples) f(v);
-  }
-  for (auto& r : s.receivers) f(r.p);
-  if (s.grid) f(s.grid->origin);
-}
-
-void rebuild_boxes(Light& l) {
-  for (int j = 0; j < l.samples; ++j) {
-    AABB b;
-    for (int k = 0; k < l.jitter; ++k) b.extend(l.jitter_point(j, k));
-    l.jitter_boxes[size_t(j)] = b;
-  }
-}
-
-// True when c + t is exactly a float for every coordinate c on axis k.
-bool exact_on_axis(Scene& s, int k, double t) {
-  bool ok = true;
-  for_each_point(s, [&](Vec3f& v) {
-    if (!ok) return;
-    // v + t must be exact in double before float(x) == x means anything: a power of two
-    // far above |v| swallows v (2^98 + -4.6e5 rounds to 2^98, a float, so the old test
-    // "translated" the far-origin fuzz scene 944ae82f onto one plane and reported its
-    // 16 oracle classes as metamorphic violations). Knuth's TwoSum gives the exact
-    // rounding error of the sum; it is zero iff the sum is exact.
-    const double a = double(v[k]);
-    const double x = a + t, bv = x - a, err = (a - (x - bv)) + (t - bv);
-    ok = err == 0.0 && double(float(x)) == x;
-  });
-  return ok;
-}
 
 MismatchRecord base_record(const std::string& method, const SolveOptions& so, const Scene& scene,
                            const SceneOrigin& origin) {
@@ -133,42 +98,36 @@ std::pair<size_t, long> light_and_sample(const Scene& scene, size_t bit) {
 
 }  // namespace
 
-Scene scaled_scene(const Scene& src, int exponent) {
-  Scene s = src;
-  for_each_point(s, [&](Vec3f& v) { v = Vec3f(std::ldexp(v.x, exponent), std::ldexp(v.y, exponent), std::ldexp(v.z, exponent)); });
-  for (auto& l : s.lights) {
-    l.area = std::ldexp(l.area, 2 * exponent);
-    rebuild_boxes(l);
+std::string method_of_label(const std::string& label) { return label.substr(0, label.find('#')); }
+
+std::vector<int> metamorphic_scale_exponents(uint64_t key, const ScaleRange& range) {
+  static constexpr int kNegative[] = {-120, -96, -64, -48, -40, -32, -16};
+  static constexpr int kPositive[] = {16, 32, 48, 64, 96, 124};
+  const uint64_t h = splitmix64(key);
+  std::vector<int> out;
+  for (int k : {kNegative[h % 7], kPositive[(h >> 32) % 6]}) {
+    k = std::clamp(k, range.lo, range.hi);
+    if (k != 0 && range.contains(k)) out.push_back(k);
   }
-  if (s.grid) {
-    auto sc = [&](Vec3f& v) { v = Vec3f(std::ldexp(v.x, exponent), std::ldexp(v.y, exponent), std::ldexp(v.z, exponent)); };
-    sc(s.grid->u);
-    sc(s.grid->v);
-    s.grid->offset = std::ldexp(s.grid->offset, exponent);
-  }
-  s.name = src.name + "-scaled";
-  return s;
+  return out;
 }
 
-Scene translated_scene(const Scene& src, Vec3d* offset) {
-  Scene s = src;
-  AABB b = s.bounds();
-  Vec3d off(0, 0, 0);
-  for (int k = 0; k < 3; ++k) {
-    double extent = std::max({double(b.hi[k]) - double(b.lo[k]), std::abs(double(b.lo[k])), std::abs(double(b.hi[k])), 1e-30});
-    int top = int(std::floor(std::log2(extent)));
-    // Largest power-of-two offset (either sign) that keeps every coordinate exact,
-    // trying 40 binades below the extent.
-    for (int e = top; e > top - 40 && off[k] == 0.0; --e)
-      for (double sign : {1.0, -1.0})
-        if (off[k] == 0.0 && exact_on_axis(s, k, sign * std::ldexp(1.0, e))) off[k] = sign * std::ldexp(1.0, e);
-  }
-  for_each_point(s, [&](Vec3f& v) { v = Vec3f(to_double(v) + off); });
-  for (auto& l : s.lights) rebuild_boxes(l);
-  s.name = src.name + "-translated";
-  if (offset) *offset = off;
-  return s;
+namespace {
+
+uint64_t name_key(const std::string& name) {
+  uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a
+  for (unsigned char c : name) h = (h ^ c) * 0x100000001b3ull;
+  return h;
 }
+
+// A metamorphic copy of the scene and what a method may change on it.
+struct Variant {
+  Scene scene;
+  std::string what;     // "scale 2^k", "axes", "translate"
+  bool exact_copy;      // scale: every bit and fraction must be identical
+};
+
+}  // namespace
 
 void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfig& cfg, CheckReport& report) {
   const std::string family = origin.family;
@@ -192,38 +151,49 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
     add_histogram(rel_hist, h);
   }
 
-  std::optional<Scene> scaled, translated;
-  std::optional<oracle::RelationOracleResult> exact_t;
+  std::vector<Variant> variants;
   if (cfg.metamorphic) {
-    scaled = scaled_scene(scene, 5);
-    translated = translated_scene(scene, nullptr);
-    exact_t = oracle::run_relation_oracle(*translated, cfg.threads);
+    const ScaleRange range = exact_scale_range(scene);
+    std::vector<int> exps = cfg.scale_exponents;
+    if (exps.empty()) exps = metamorphic_scale_exponents(name_key(scene.name), range);
+    for (int k : exps)
+      if (k != 0 && range.contains(k))
+        variants.push_back({scaled_scene(scene, k), "scale 2^" + std::to_string(k), true});
+    variants.push_back({axis_mapped_scene(scene, axis_map(1 + unsigned(name_key(scene.name) % 47u))), "axes", false});
+    variants.push_back({translated_scene(scene, nullptr), "translate", false});
+    // The oracle itself: its classes are invariant under the exact maps.
     size_t changed = 0;
+    double seconds = exact.seconds;
     MismatchRecord rec = base_record("oracle", SolveOptions{}, scene, origin);
-    for (size_t i = 0; i < exact.classes.size(); ++i)
-      for (size_t b = 0; b < exact.classes[i].size(); ++b)
-        if (exact.classes[i][b] != exact_t->classes[i][b]) {
-          if (++changed <= kMaxRecords) {
-            auto [l, j] = light_and_sample(scene, b);
-            rec.receiver = i, rec.light = l, rec.sample = j;
-            rec.exact = exact.classes[i][b];
-            rec.method_visible = exact_t->classes[i][b] == 'v';
-            rec.margin = exact.margins[i][b];
-            rec.direction = "translate";
-            rec.kind = "metamorphic";
-            report.mismatches.push_back(rec);
+    for (const Variant& v : variants) {
+      if (v.exact_copy) continue;
+      oracle::RelationOracleResult ev = oracle::run_relation_oracle_classes(v.scene, cfg.threads);
+      seconds += ev.seconds;
+      for (size_t i = 0; i < exact.classes.size(); ++i)
+        for (size_t b = 0; b < exact.classes[i].size(); ++b)
+          if (exact.classes[i][b] != ev.classes[i][b]) {
+            if (++changed <= kMaxRecords) {
+              auto [l, j] = light_and_sample(scene, b);
+              rec.receiver = i, rec.light = l, rec.sample = j;
+              rec.exact = exact.classes[i][b];
+              rec.method_visible = ev.classes[i][b] == 'v';
+              rec.margin = exact.margins[i][b];
+              rec.direction = v.what;
+              rec.kind = "metamorphic";
+              report.mismatches.push_back(rec);
+            }
           }
-        }
+    }
     Row& orow = report.rows[{family, "oracle"}];
     orow.scenes += 1;
     orow.relations += scene.relation_count();
     orow.metamorphic += changed;
-    orow.seconds += exact.seconds;
+    orow.seconds += seconds;
   }
 
   for (const auto& m : cfg.methods) {
     auto solver = make_solver(m.name);
-    Row& row = report.rows[{family, m.name}];
+    Row& row = report.rows[{family, m.row()}];
     if (!solver) {
       report.errors.push_back(scene.name + ": unknown method " + m.name);
       continue;
@@ -232,7 +202,7 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
     try {
       res = solver->solve(scene, m.options);
     } catch (const std::exception& e) {
-      report.errors.push_back(scene.name + ": method " + m.name + " threw: " + e.what());
+      report.errors.push_back(scene.name + ": method " + m.row() + " threw: " + e.what());
       continue;
     }
     oracle::Comparison cmp = oracle::compare_relations(scene, res, exact, cfg.tau);
@@ -245,6 +215,10 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
     row.false_blocked += cmp.false_blocked;
     row.fraction += cmp.fraction_mismatches;
     row.fragment += cmp.fragment_mismatches;
+    if (const Stats::Entry* e = res.stats.find("relations_blocked_by_shaft")) {
+      row.shaft_decided += size_t(e->second + res.stats.get("relations_visible_by_empty_shaft"));
+      row.shaft_reported += scene.relation_count();
+    }
     add_histogram(row.disagreements, cmp.disagreement_margins);
     for (size_t d = 0; d < kDecades; ++d) row.relations_per_decade[d] += rel_hist[d];
     row.seconds += res.seconds;
@@ -287,38 +261,44 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
         report.mismatches.push_back(rec);
       }
     }
-    if (!cfg.metamorphic) continue;
 
-    // Metamorphic: scale (every bit unchanged) and exact translation (bits may change only
-    // below tau).
-    auto metamorphic = [&](const Scene& variant, const char* what, bool only_above_tau) {
+    // Metamorphic: an exact 2^k copy must change no bit and no fraction; under the other
+    // maps a bit may change only below tau.
+    for (const Variant& v : variants) {
       SolveResult vr;
       try {
-        vr = solver->solve(variant, m.options);
+        vr = solver->solve(v.scene, m.options);
       } catch (const std::exception& e) {
-        report.errors.push_back(variant.name + ": method " + m.name + " threw: " + e.what());
-        return;
+        report.errors.push_back(scene.name + " (" + v.what + "): method " + m.row() + " threw: " + e.what());
+        continue;
       }
       size_t changed = 0;
-      for_each_changed_bit(scene, res, vr, [&](size_t i, size_t bit) {
-        double margin = exact.margins[i][bit];
-        char cls = exact.classes[i][bit];
-        if (only_above_tau && (cls == 'd' || margin < cfg.tau)) return;
+      auto record = [&](size_t i, long bit, char cls, double margin, bool visible) {
         if (++changed > kMaxRecords) return;
         MismatchRecord rec = base_record(m.name, m.options, scene, origin);
-        auto [l, j] = light_and_sample(scene, bit);
-        rec.receiver = i, rec.light = l, rec.sample = j;
+        if (bit >= 0) {
+          auto [l, j] = light_and_sample(scene, size_t(bit));
+          rec.light = l, rec.sample = j;
+        }
+        rec.receiver = i;
         rec.exact = cls;
-        rec.method_visible = vr.receivers[i].visible(bit);
+        rec.method_visible = visible;
         rec.margin = margin;
-        rec.direction = what;
+        rec.direction = v.what;
         rec.kind = "metamorphic";
         report.mismatches.push_back(rec);
+      };
+      for_each_changed_bit(scene, res, vr, [&](size_t i, size_t bit) {
+        const double margin = exact.margins[i][bit];
+        const char cls = exact.classes[i][bit];
+        if (!v.exact_copy && (cls == 'd' || margin < cfg.tau)) return;
+        record(i, long(bit), cls, margin, vr.receivers[i].visible(bit));
       });
+      if (v.exact_copy)
+        for (size_t i = 0; i < res.receivers.size(); ++i)
+          if (res.receivers[i].visible_fraction != vr.receivers[i].visible_fraction) record(i, -1, 'v', 0.0, true);
       row.metamorphic += changed;
-    };
-    metamorphic(*scaled, "scale", false);
-    metamorphic(*translated, "translate", true);
+    }
   }
 }
 
@@ -360,7 +340,8 @@ ojson record_json(const MismatchRecord& m) {
   if (!m.scene_file.empty()) o["scene_file"] = m.scene_file;
   o["seed"] = m.seed;
   o["params"] = {{"triangles", m.params.triangles}, {"receivers", m.params.receivers},
-                 {"samples", m.params.samples}, {"light_scale", m.params.light_scale}};
+                 {"samples", m.params.samples}, {"light_scale", m.params.light_scale},
+                 {"scale_exponent", m.params.scale_exponent}};
   o["receiver"] = m.receiver;
   o["light"] = m.light;
   o["sample"] = m.sample;
@@ -402,6 +383,8 @@ std::string report_to_json(const CheckReport& r) {
     o["fraction"] = row.fraction;
     o["fragment"] = row.fragment;
     o["metamorphic"] = row.metamorphic;
+    o["shaft_decided"] = row.shaft_decided;
+    o["shaft_reported"] = row.shaft_reported;
     o["disagreements_per_decade"] = decades_json(row.disagreements);
     o["relations_per_decade"] = decades_json(row.relations_per_decade);
     o["seconds"] = row.seconds;
@@ -469,6 +452,8 @@ Result<CheckReport> report_from_json(const std::string& text, const std::string&
       row.fraction = o.at("fraction").get<size_t>();
       row.fragment = o.at("fragment").get<size_t>();
       row.metamorphic = o.at("metamorphic").get<size_t>();
+      row.shaft_decided = o.value("shaft_decided", size_t(0));
+      row.shaft_reported = o.value("shaft_reported", size_t(0));
       row.disagreements = decades(o.at("disagreements_per_decade"));
       row.relations_per_decade = decades(o.at("relations_per_decade"));
       row.seconds = o.at("seconds").get<double>();
@@ -505,6 +490,7 @@ Result<CheckReport> report_from_json(const std::string& text, const std::string&
       m.params.receivers = p.at("receivers").get<long>();
       m.params.samples = p.at("samples").get<long>();
       m.params.light_scale = p.at("light_scale").get<double>();
+      m.params.scale_exponent = p.value("scale_exponent", 0);
       m.receiver = o.at("receiver").get<size_t>();
       m.light = o.at("light").get<size_t>();
       m.sample = o.at("sample").get<long>();
@@ -548,9 +534,9 @@ std::string format_table(const CheckReport& r) {
   std::string out;
   char buf[512];
   // Decades shown: those below tau (the disagreements that do not fail).
-  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s %9s\n", "family", "method",
+  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s %9s %7s\n", "family", "method",
                 "scenes", "relations", "degen", "mismatch", "f-vis", "f-blk", "frac", "frag", "meta",
-                "disagreements below tau per decade", "seconds");
+                "disagreements below tau per decade", "seconds", "shafts");
   out += buf;
   std::string hdr;
   for (size_t d = 0; d < kDecades; ++d) {
@@ -570,10 +556,15 @@ std::string format_table(const CheckReport& r) {
       if (!dec.empty()) dec += ' ';
       dec += std::to_string(row.disagreements[d]);
     }
-    std::snprintf(buf, sizeof buf, "%-18s %-14s %6zu %10zu %8zu %9zu %6zu %6zu %6zu %6zu %6zu  %-40s %9.3f\n",
+    // Share of relations decided by shafts (iss), so that a regression of the blocking
+    // test cannot hide behind leaf rays.
+    char shafts[16] = "-";
+    if (row.shaft_reported > 0)
+      std::snprintf(shafts, sizeof shafts, "%.1f%%", 100.0 * double(row.shaft_decided) / double(row.shaft_reported));
+    std::snprintf(buf, sizeof buf, "%-18s %-14s %6zu %10zu %8zu %9zu %6zu %6zu %6zu %6zu %6zu  %-40s %9.3f %7s\n",
                   key.first.c_str(), key.second.c_str(), row.scenes, row.relations, row.degenerate, row.mismatches(),
                   row.false_visible, row.false_blocked, row.fraction, row.fragment, row.metamorphic,
-                  ("[" + dec + "]").c_str(), row.seconds);
+                  ("[" + dec + "]").c_str(), row.seconds, shafts);
     out += buf;
   }
   std::snprintf(buf, sizeof buf, "total: %zu scenes, %zu mismatches, %zu errors\n", r.scenes.size(), r.mismatch_count(),

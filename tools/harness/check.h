@@ -4,15 +4,20 @@
 // disagreement histogram per margin decade. Reports are JSON (format
 // "visgate-check-report") so that shards of one campaign can be merged.
 //
-// Metamorphic checks (issue 4):
-//   scale      every coordinate multiplied by 2^5: float arithmetic commutes with a
-//              power-of-two scale away from overflow and underflow, so every method's
-//              bits must be unchanged; any changed bit is a violation.
+// Metamorphic checks (lib/scene/exact_transform.h), per scene and method:
+//   scale      every coordinate multiplied by 2^k, two exponents per scene spread over
+//              [-120, 124] (one negative, one positive, picked by the scene's name and
+//              clamped to the range where the copy is exact): the production methods
+//              solve the same unit copy, so every bit and every visible fraction must be
+//              unchanged; any change is a violation (the baselines, which answer scenes
+//              as given, are counted too but never fail the gate).
+//   axes       an exact axis permutation with mirrors (one of the 47 non-identity maps,
+//              picked by the scene's name): the oracle's classes must be unchanged (a
+//              violation is reported for the method "oracle") and a method's bit may
+//              change only on relations whose margin is below tau.
 //   translate  an offset per axis chosen so that every coordinate (blockers, light
 //              polygons, light points, receivers) translates exactly in float32: the
-//              oracle's classes must be unchanged (a violation is reported for the
-//              method "oracle"), and a method's bit may change only on relations whose
-//              margin is below tau.
+//              same rules as axes.
 // Violations are mismatches of class "metamorphic".
 #pragma once
 
@@ -23,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "lib/scene/exact_transform.h"
 #include "lib/scene/families.h"
 #include "lib/solver.h"
 #include "oracle/comparator.h"
@@ -30,9 +36,15 @@
 namespace visgate::harness {
 
 struct MethodSpec {
-  std::string name;
+  std::string name;  // the registered method
   SolveOptions options;
+  // The row this spec's results go to: `name`, or NAME#TAG when one method runs with
+  // several option sets (the gate's iss#shafts).
+  std::string label;
+  const std::string& row() const { return label.empty() ? name : label; }
 };
+// The method of a row label: NAME for NAME#TAG.
+std::string method_of_label(const std::string& label);
 
 // Margin decades as in oracle::DecadeHistogram: index 0 is "below 1e-12" (and 0),
 // index k + 1 the bucket k = [10^(k-12), 10^(k-11)), index 13 margins >= 1.
@@ -54,7 +66,7 @@ struct MismatchRecord {
   bool method_visible = false;
   double margin = 0.0;
   std::string direction;  // false-visible, false-blocked, fraction, fragment-blocked, or for
-                          // metamorphic records: scale, translate
+                          // metamorphic records: scale 2^k, axes, translate
   std::string kind;       // "oracle" (against the exact answer) or "metamorphic"
   std::string stored;     // corpus path when --store kept a case for it
 };
@@ -63,6 +75,10 @@ struct MismatchRecord {
 struct Row {
   size_t scenes = 0, relations = 0, degenerate = 0, agree = 0, disagree = 0;
   size_t false_visible = 0, false_blocked = 0, fraction = 0, fragment = 0, metamorphic = 0;
+  // Relations a method decided by its own geometry rather than by rays, where it says
+  // (iss: stats relations_blocked_by_shaft + relations_visible_by_empty_shaft), and the
+  // relations of the scenes that reported it.
+  size_t shaft_decided = 0, shaft_reported = 0;
   DecadeCounts disagreements{};  // every disagreement (any margin) per margin decade
   DecadeCounts relations_per_decade{};  // non-degenerate relations per margin decade
   double seconds = 0.0;
@@ -96,6 +112,9 @@ struct CheckConfig {
   double tau = 1e-5;
   int threads = 0;
   bool metamorphic = true;
+  // Scale exponents of the metamorphic scale check; empty: two per scene from the
+  // spread over [-120, 124] (metamorphic_scale_exponents).
+  std::vector<int> scale_exponents;
   // Fragment methods (plucker-bsp): visible fractions against the region oracle and one
   // interior point per fragment against the relation oracle (oracle::compare_regions,
   // DESIGN section 5), on at most this many (receiver, light) pairs per scene: every
@@ -111,15 +130,13 @@ struct SceneOrigin {
   std::string file;
 };
 
+// The metamorphic scale exponents of a scene without CheckConfig::scale_exponents: one
+// of -120, -96, -64, -48, -40, -32, -16 and one of 16, 32, 48, 64, 96, 124, picked by
+// `key`, each clamped to `range` (dropped when that leaves 0).
+std::vector<int> metamorphic_scale_exponents(uint64_t key, const ScaleRange& range);
+
 // Checks one scene and adds its rows, summary and mismatch records to `report`.
 void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfig& cfg, CheckReport& report);
-
-// Metamorphic transforms (exposed for tests).
-Scene scaled_scene(const Scene& s, int exponent);
-// An exact translation: per axis the largest power-of-two offset (either sign, at most
-// the scene's extent, trying 40 binades down) that keeps every coordinate exact in
-// float32; 0 on an axis where none does. The offset is returned in `offset`.
-Scene translated_scene(const Scene& s, Vec3d* offset);
 
 // Shards: "k/N" with 1 <= k <= N; job i belongs to shard k iff i mod N == k - 1.
 Result<std::pair<int, int>> parse_shard(const std::string& text);

@@ -20,7 +20,10 @@
 namespace visgate::harness {
 
 // Methods whose mismatches fail the gate, and the baselines that never do.
-bool gate_method_must_pass(const std::string& method);
+bool gate_method_must_pass(const std::string& method);  // a row label: NAME or NAME#TAG
+// The gate's methods: every registered one with default options, and iss#shafts (iss
+// with leaves of one receiver and one sample, automatic rays off).
+std::vector<MethodSpec> gate_methods();
 
 struct GateConfig {
   bool quick = false;

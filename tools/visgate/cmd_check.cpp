@@ -33,6 +33,7 @@ struct CheckOpts {
   double tau = 1e-5;
   int threads = 0;
   bool no_metamorphic = false;
+  std::vector<int> scale_exponents;
   size_t region_pairs = 4096;
 };
 
@@ -57,18 +58,20 @@ int run_check(const CheckOpts& o) {
   cfg.tau = o.tau;
   cfg.threads = o.threads;
   cfg.metamorphic = !o.no_metamorphic;
+  cfg.scale_exponents = o.scale_exponents;
   cfg.region_pairs = o.region_pairs;
   auto names = solver_names();
   std::vector<std::string> methods = o.methods == "all" ? names : split(o.methods, ',');
   if (methods.empty()) return bad_input("--methods: empty list");
   for (const auto& m : methods) {
-    auto solver = make_solver(m);
+    // NAME#TAG runs NAME once more with the options given to NAME#TAG (its own row).
+    auto solver = make_solver(method_of_label(m));
     if (!solver) {
       std::string known;
       for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
       return bad_input("--methods " + m + ": unknown method (known: " + known + ")");
     }
-    MethodSpec spec{m, SolveOptions{}};
+    MethodSpec spec{method_of_label(m), SolveOptions{}, m.find('#') == std::string::npos ? "" : m};
     spec.options.threads = o.threads;
     for (const auto& kv : o.opts) {
       auto colon = kv.find(':'), eq = kv.find('=');
@@ -131,8 +134,8 @@ int run_check(const CheckOpts& o) {
       ++attempts[sig];
       CaseSpec spec;
       spec.method = rec.method;
-      for (const auto& m : cfg.methods)
-        if (m.name == rec.method) spec.options = m.options;
+      spec.options.opts = rec.options;
+      spec.options.threads = o.threads;
       spec.receiver = rec.receiver;
       spec.light = rec.light;
       spec.sample = rec.sample;
@@ -182,14 +185,21 @@ void add_check(CLI::App& app, Action& run) {
   sub->add_option("--receivers", o->params.receivers, "Receivers of generated scenes");
   sub->add_option("--samples", o->params.samples, "Samples per light of generated scenes");
   sub->add_option("--light-scale", o->params.light_scale, "Light scale of generated scenes");
-  sub->add_option("--methods", o->methods, "Methods, comma-separated, or 'all'")->required();
-  sub->add_option("--opt", o->opts, "Method option METHOD:key=value (repeatable)");
+  sub->add_option("--scale-exponent", o->params.scale_exponent,
+                  "Multiply the generated scene by 2^K (clamped to where the copy is exact)");
+  sub->add_option("--methods", o->methods,
+                  "Methods, comma-separated, or 'all'; NAME#TAG runs NAME again in a row of its own with the options "
+                  "given to NAME#TAG")->required();
+  sub->add_option("--opt", o->opts, "Method option METHOD:key=value (repeatable; METHOD may be NAME#TAG)");
   sub->add_option("--tau", o->tau, "Margin threshold: disagreements below it are not mismatches (default 1e-5)");
   sub->add_option("--report", o->report, "Write the report JSON here");
   sub->add_option("--store", o->store, "Minimise and store one corpus case per mismatch signature under DIR");
   sub->add_option("--shard", o->shard, "Run shard k of N (1 <= k <= N) of the campaign");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_flag("--no-metamorphic", o->no_metamorphic, "Skip the scale and translation checks");
+  sub->add_flag("--no-metamorphic", o->no_metamorphic, "Skip the scale, axis-map and translation checks");
+  sub->add_option("--scale-exponents", o->scale_exponents,
+                  "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "
+                  "over [-120, 124]")->delimiter(',');
   sub->add_option("--region-pairs", o->region_pairs,
                   "Fragment methods: receiver-light pairs per scene checked against the region oracle "
                   "(fractions, fragments); every k-th receiver when more (default 4096, 0: none)");

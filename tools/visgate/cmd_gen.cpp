@@ -42,6 +42,8 @@ void add_gen(CLI::App& app, Action& run) {
   sub->add_option("--receivers", o->params.receivers, "Receiver count");
   sub->add_option("--samples", o->params.samples, "Samples per light");
   sub->add_option("--light-scale", o->params.light_scale, "Scale every light polygon about its centre");
+  sub->add_option("--scale-exponent", o->params.scale_exponent,
+                  "Multiply the generated scene by 2^K (clamped to where the copy is exact)");
   sub->add_flag("--hex", o->hex, "Write coordinates as C99 hex-floats");
   sub->add_option("-o,--output", o->out, "Output scene JSON ('-' for stdout)")->required();
   sub->callback([o, &run] { run = [o] { return run_gen(*o); }; });
