@@ -534,7 +534,7 @@ std::string format_table(const CheckReport& r) {
   std::string out;
   char buf[512];
   // Decades shown: those below tau (the disagreements that do not fail).
-  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s %9s %7s\n", "family", "method",
+  std::snprintf(buf, sizeof buf, "%-18s %-18s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s %9s %7s\n", "family", "method",
                 "scenes", "relations", "degen", "mismatch", "f-vis", "f-blk", "frac", "frag", "meta",
                 "disagreements below tau per decade", "seconds", "shafts");
   out += buf;
@@ -545,7 +545,7 @@ std::string format_table(const CheckReport& r) {
     if (!hdr.empty()) hdr += ' ';
     hdr += decade_label(d);
   }
-  std::snprintf(buf, sizeof buf, "%-18s %-14s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s\n", "", "", "", "", "", "", "",
+  std::snprintf(buf, sizeof buf, "%-18s %-18s %6s %10s %8s %9s %6s %6s %6s %6s %6s  %-40s\n", "", "", "", "", "", "", "",
                 "", "", "", "", ("[" + hdr + "]").c_str());
   out += buf;
   for (const auto& [key, row] : r.rows) {
@@ -561,7 +561,7 @@ std::string format_table(const CheckReport& r) {
     char shafts[16] = "-";
     if (row.shaft_reported > 0)
       std::snprintf(shafts, sizeof shafts, "%.1f%%", 100.0 * double(row.shaft_decided) / double(row.shaft_reported));
-    std::snprintf(buf, sizeof buf, "%-18s %-14s %6zu %10zu %8zu %9zu %6zu %6zu %6zu %6zu %6zu  %-40s %9.3f %7s\n",
+    std::snprintf(buf, sizeof buf, "%-18s %-18s %6zu %10zu %8zu %9zu %6zu %6zu %6zu %6zu %6zu  %-40s %9.3f %7s\n",
                   key.first.c_str(), key.second.c_str(), row.scenes, row.relations, row.degenerate, row.mismatches(),
                   row.false_visible, row.false_blocked, row.fraction, row.fragment, row.metamorphic,
                   ("[" + dec + "]").c_str(), row.seconds, shafts);
