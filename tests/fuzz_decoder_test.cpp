@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "fuzz/decoder.h"
+#include "lib/scene/exact_transform.h"
 #include "lib/scene/rng.h"
 #include "lib/scene/scene_json.h"
 
@@ -117,6 +118,52 @@ TEST(FuzzDecoder, RawModeGivesTheHandWorkedExactScene) {
   // passes exactly through triangle vertex (0,0,10).
   EXPECT_EQ(s->mesh.vertices[0].x, s->receivers[0].p.x);
   EXPECT_EQ(s->mesh.vertices[0].y, sample_position(L, 0, 0).y);
+}
+
+// The exact transforms at the end of the decoding (decoder.h step 4), worked by hand:
+// axis map 13 = permutation (1, 2, 0) with signs (-, +, -), i.e. new x = -old y,
+// new y = old z, new z = -old x (an even permutation with two mirrors: handedness kept),
+// then the value 164 meaning k = 124 - 164 = -40.
+TEST(FuzzDecoder, AxisMapAndScaleComeLastAndAreExact) {
+  Encoder e = raw_scene({{1, 2, 10}, {4, 0, 10}, {0, 4, 12}}, 1, -1, 3, 5);
+  no_snap(e);
+  e.pick(0, 12, 0);     // no perturbation
+  e.pick(0, 47, 13);    // axis map 13
+  e.pick(0, 244, 164);  // k = -40
+  auto s = decode(e.bytes());
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  const float k = 0x1p-40f;
+  EXPECT_EQ(s->mesh.vertices[0], Vec3f(-2 * k, 10 * k, -1 * k));
+  EXPECT_EQ(s->mesh.vertices[1], Vec3f(0 * k, 10 * k, -4 * k));
+  EXPECT_EQ(s->mesh.vertices[2], Vec3f(-4 * k, 12 * k, 0 * k));
+  EXPECT_EQ(s->receivers[0].p, Vec3f(-5 * k, 0 * k, -3 * k));
+  EXPECT_EQ(sample_position(s->lights[0], 0, 0), Vec3f(1 * k, 32 * k, -1 * k));
+  // The light emitted along -z; it now emits along -y, towards the receiver.
+  EXPECT_EQ(s->lights[0].normal, Vec3f(0, -1, 0));
+}
+
+TEST(FuzzDecoder, ScaledAndMappedScenesReadBackFromTheirJsonBitForBit) {
+  // The crash report prints the scene as JSON: lights are sampled after the transforms,
+  // so reading it back must give the very scene the target solved.
+  Rng rng(20261205);
+  size_t far_scaled = 0;
+  for (int iter = 0; iter < 600; ++iter) {
+    std::vector<uint8_t> b(rng.below(200));
+    for (auto& x : b) x = uint8_t(rng.next());
+    auto s = decode(b);
+    if (!s) continue;
+    const std::string text = write_scene_json(*s, {true});
+    auto again = read_scene_json(text, "decoded", ".");
+    ASSERT_TRUE(again.ok()) << again.error().message;
+    EXPECT_EQ(write_scene_json(*again, {true}), text);
+    for (size_t l = 0; l < s->lights.size(); ++l) EXPECT_EQ(again->lights[l].jitter_points, s->lights[l].jitter_points);
+    const double e = scene_extent(*s);
+    far_scaled += e > 0 && (e < 0x1p-30 || e > 0x1p+30);
+  }
+  EXPECT_GT(far_scaled, 0u);
+  // fuzz_embree decodes at scale 1 only.
+  EXPECT_EQ(fuzz::method_limits("embree-robust").min_scale_exponent, 0);
+  EXPECT_EQ(fuzz::method_limits("embree-robust").max_scale_exponent, 0);
 }
 
 TEST(FuzzDecoder, NaNCoordinateIsRejectedNamingTheElement) {
