@@ -65,7 +65,7 @@ int run_gate_cmd(const GateOpts& o) {
 void add_gate(CLI::App& app, Action& run) {
   auto o = std::make_shared<GateOpts>();
   auto* sub = app.add_subcommand("gate", "The CI correctness gate: every family and method, metamorphic checks, corpus replay");
-  sub->add_flag("--quick", o->quick, "The quick gate (one seed per family, small scenes; under 3 minutes on 2 cores)");
+  sub->add_flag("--quick", o->quick, "The quick gate (twelve seeds per family, small scenes; under 3 minutes on 2 cores)");
   sub->add_option("-o,--output", o->out, "Output folder (default out/gate)");
   sub->add_option("--corpus", o->corpus, "Corpus root to replay (default the source tree's corpus/)");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
