@@ -26,12 +26,22 @@ inline void put_uint(std::string& out, uint64_t v) {
   out.append(buf, r.ptr);
 }
 
+// A coordinate: float data (digits == 0, every value exactly a float) in the shortest
+// decimal that reads back to the same float, so a file's "0.262933" stays "0.262933";
+// double data with `digits` significant digits.
+inline void put_coord(std::string& out, double v, int digits) {
+  if (digits > 0) return put_num(out, v, digits);
+  char buf[40];
+  auto r = std::to_chars(buf, buf + sizeof(buf), float(v));
+  out.append(buf, r.ptr);
+}
+
 void put_xyz(std::string& out, const Vec3d& p, int digits) {
-  put_num(out, p.x, digits);
+  put_coord(out, p.x, digits);
   out.push_back(' ');
-  put_num(out, p.y, digits);
+  put_coord(out, p.y, digits);
   out.push_back(' ');
-  put_num(out, p.z, digits);
+  put_coord(out, p.z, digits);
 }
 
 // Facet normal for STL (informative only; readers recompute it), in double.
@@ -63,7 +73,7 @@ Result<MeshFormat> format_from_path(const std::string& path, bool stl_ascii) {
 }
 
 Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::string& path) {
-  const int digits = m.double_precision ? 17 : 9;
+  const int digits = m.double_precision ? 17 : 0;  // 0: shortest float
   std::string out;
   const size_t nv = m.vertices.size(), nt = m.triangles.size();
   switch (f) {
@@ -137,7 +147,7 @@ Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::s
       out += "solid visgate\n";
       for (const auto& t : m.triangles) {
         out += "facet normal ";
-        put_xyz(out, facet_normal(m, t), 9);
+        put_xyz(out, facet_normal(m, t), 9);  // a double, informative only
         out += "\nouter loop\n";
         for (int k = 0; k < 3; ++k) {
           out += "vertex ";
