@@ -253,3 +253,344 @@ TEST(RepairTJunction, SplitDoesNotLeaveADuplicateFace) {
   EXPECT_EQ(u.after.defects.duplicate_faces + u.after.defects.opposite_duplicate_faces, 0u);
   expect_idempotent(t, {}, "closed t-junction duplicate");
 }
+
+// ------------------------------------------------------------------------------------
+// Issue 36 defects 2 and 3: hole filling is checked exactly, and orientation runs after.
+
+namespace {
+
+const HoleRecord* only_hole(const RepairResult& r) {
+  EXPECT_EQ(r.holes.size(), 1u);
+  return r.holes.empty() ? nullptr : &r.holes[0];
+}
+
+// Open tube of `n` segments, radius 1, from z = 0 to z = 1, with a bottom cap (a fan
+// around the centre) when `cap`; sides outward.
+PolygonSoup tube(uint32_t n, bool cap) {
+  PolygonSoup s;
+  for (uint32_t i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    s.vertices.push_back({std::cos(a), std::sin(a), 0});
+    s.vertices.push_back({std::cos(a), std::sin(a), 1});
+  }
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = (i + 1) % n;
+    s.faces.push_back({2 * i, 2 * j, 2 * j + 1});
+    s.faces.push_back({2 * i, 2 * j + 1, 2 * i + 1});
+  }
+  if (cap) {
+    s.vertices.push_back({0, 0, 0});
+    const uint32_t c = 2 * n;
+    for (uint32_t i = 0; i < n; ++i) s.faces.push_back({c, 2 * ((i + 1) % n), 2 * i});
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(RepairFill, SingleTriangleIsNotClosedByItsOwnCopy) {
+  PolygonSoup s;
+  s.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  s.faces = {{0, 1, 2}};
+  RepairOptions o;
+  o.fill_holes = 10;
+  RepairResult r = run(s, o);
+  const HoleRecord* h = only_hole(r);
+  ASSERT_TRUE(h);
+  EXPECT_FALSE(h->filled);
+  EXPECT_STREQ(h->reason, "opposite_duplicate_face");
+  EXPECT_EQ(r.output.triangles.size(), 1u);
+  EXPECT_EQ(r.after.defects.boundary_loops, 1u);
+  EXPECT_EQ(r.after.defects.opposite_duplicate_faces, 0u);
+  expect_idempotent(s, o, "single triangle");
+}
+
+// A flat 4 x 4 sheet: any fill of its 16-edge rim lies on the sheet.
+TEST(RepairFill, FlatSheetIsNotCoveredByASecondLayer) {
+  PolygonSoup s;
+  for (int y = 0; y <= 4; ++y)
+    for (int x = 0; x <= 4; ++x) s.vertices.push_back({double(x), double(y), 0});
+  for (uint32_t y = 0; y < 4; ++y)
+    for (uint32_t x = 0; x < 4; ++x) {
+      const uint32_t a = 5 * y + x;
+      s.faces.push_back({a, a + 1, a + 6});
+      s.faces.push_back({a, a + 6, a + 5});
+    }
+  RepairOptions o;
+  o.fill_holes = 100;
+  RepairResult r = run(s, o);
+  const HoleRecord* h = only_hole(r);
+  ASSERT_TRUE(h);
+  EXPECT_EQ(h->edges, 16u);
+  EXPECT_FALSE(h->filled);
+  EXPECT_EQ(r.output.triangles.size(), 32u);
+  EXPECT_EQ(r.after.defects.self_intersections, 0u);
+  expect_idempotent(s, o, "flat sheet");
+}
+
+// A cylinder with one 136-edge rim: the minimum-area fill is a valid cap; the closed
+// result faces outward, with the volume of the prism over the 136-gon.
+TEST(RepairFill, LongRimOfACylinderIsCappedCleanly) {
+  const uint32_t n = 136;
+  PolygonSoup s = tube(n, true);
+  RepairOptions o;
+  o.fill_holes = 200;
+  RepairResult r = run(s, o);
+  const HoleRecord* h = only_hole(r);
+  ASSERT_TRUE(h);
+  EXPECT_TRUE(h->filled) << (h->reason ? h->reason : "");
+  EXPECT_EQ(h->triangles, n - 2);
+  EXPECT_EQ(r.after.defects.total(), 0u);
+  EXPECT_NEAR(volume(r.output), 0.5 * n * std::sin(2 * M_PI / n), 1e-9);
+  expect_idempotent(s, o, "capped cylinder");
+}
+
+// A hole next to other geometry: a tetrahedron pokes out of the cube through the hole,
+// so a cap would cut it. The loop stays open and no intersection is created.
+TEST(RepairFill, FillThatWouldCutNearbyGeometryIsRefused) {
+  PolygonSoup s;
+  add_box(s, {0, 0, 0}, {4, 4, 4});
+  s.faces.erase(s.faces.end() - 2, s.faces.end());  // the +z side
+  const uint32_t b = uint32_t(s.vertices.size());
+  s.vertices.insert(s.vertices.end(), {{1, 1, 2}, {3, 1, 2}, {2, 3, 2}, {2, 2, 5}});
+  const uint32_t f[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  for (const auto& t : f) s.faces.push_back({b + t[0], b + t[1], b + t[2]});
+  RepairOptions o;
+  o.fill_holes = 4;
+  RepairResult r = run(s, o);
+  const HoleRecord* h = only_hole(r);
+  ASSERT_TRUE(h);
+  EXPECT_FALSE(h->filled);
+  EXPECT_STREQ(h->reason, "self_intersection");
+  EXPECT_EQ(r.after.defects.self_intersections, 0u);
+  EXPECT_EQ(r.after.defects.boundary_loops, 1u);
+  expect_idempotent(s, o, "hole next to a tetrahedron");
+}
+
+// Defect 3: an inside-out open box is closed by filling and must then face outward.
+TEST(RepairFill, ComponentsClosedByFillingAreOrientedAfterwards) {
+  PolygonSoup s;
+  add_box(s, {0, 0, 0}, {1, 1, 1}, /*inward=*/true);
+  s.faces.erase(s.faces.end() - 2, s.faces.end());
+  RepairOptions o;
+  o.fill_holes = 4;
+  RepairResult r = run(s, o);
+  EXPECT_EQ(r.after.defects.total(), 0u);
+  EXPECT_EQ(volume(r.output), 1.0);
+  // And a hollow one: the cavity's open box is filled, then turned inward.
+  PolygonSoup t;
+  add_box(t, {0, 0, 0}, {4, 4, 4});
+  add_box(t, {1, 1, 1}, {3, 3, 3});
+  t.faces.erase(t.faces.end() - 2, t.faces.end());
+  RepairResult u = run(t, o);
+  EXPECT_EQ(u.after.defects.total(), 0u);
+  EXPECT_EQ(volume(u.output), 56.0);
+  expect_idempotent(t, o, "hollow box filled");
+}
+
+// ------------------------------------------------------------------------------------
+// Input handling through the CLI (defects 5 to 9), run as a process.
+
+namespace {
+
+int run_cli(const std::string& args, std::string* err = nullptr) {
+  const fs::path e = temp_dir() / "stderr.txt";
+  const std::string cmd = std::string(VISGATE_BIN) + " " + args + " 2>" + e.string();
+  const int rc = std::system(cmd.c_str());
+  if (err) *err = read_all(e);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+const char* kTetObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+std::string utf16(const std::string& ascii, bool little_endian) {
+  std::string out = little_endian ? std::string("\xFF\xFE", 2) : std::string("\xFE\xFF", 2);
+  for (char c : ascii) {
+    if (little_endian) { out.push_back(c); out.push_back('\0'); }
+    else { out.push_back('\0'); out.push_back(c); }
+  }
+  return out;
+}
+
+}  // namespace
+
+// Defect 5: a file that yields no face is bad input (exit 2, nothing written), whatever
+// its format.
+TEST(RepairInputFiles, NoFacesIsExitTwoInEveryFormat) {
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"empty.obj", ""},
+      {"empty.off", ""},
+      {"empty.ply", ""},
+      {"empty.stl", ""},
+      {"points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"},
+      {"lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n"},
+      {"points.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                     "end_header\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"edges.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"},
+      {"empty_solid.stl", "solid x\nendsolid x\n"},
+  };
+  for (const auto& [name, text] : files) {
+    write_text(temp_dir() / name, text);
+    const fs::path out = temp_dir() / "nofaces_out.obj";
+    std::string err;
+    EXPECT_EQ(run_cli("repair " + (temp_dir() / name).string() + " -o " + out.string(), &err), 2) << name << ": " << err;
+    EXPECT_FALSE(fs::exists(out)) << name;
+    EXPECT_NE(err.find(name), std::string::npos) << name << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << name << ": " << err;
+  }
+}
+
+// Defect 5: byte-order marks. UTF-8 and ASCII-only UTF-16 (both byte orders) read as the
+// plain file; UTF-16 with a non-ASCII character is refused by name.
+TEST(RepairInputFiles, ByteOrderMarksAreDecodedOrRefusedByName) {
+  const fs::path plain = temp_dir() / "plain.obj";
+  write_text(plain, kTetObj);
+  auto want = read_polygon_file(plain.string());
+  ASSERT_TRUE(want.ok());
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"bom8.obj", "\xEF\xBB\xBF" + std::string(kTetObj)},
+      {"bom16le.obj", utf16(kTetObj, true)},
+      {"bom16be.obj", utf16(kTetObj, false)},
+      {"bom16.off", utf16("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n", true)},
+  };
+  for (const auto& [name, text] : files) {
+    write_text(temp_dir() / name, text);
+    auto got = read_polygon_file((temp_dir() / name).string());
+    ASSERT_TRUE(got.ok()) << name << ": " << got.error().message;
+    EXPECT_EQ(got->vertices, want->vertices) << name;
+    EXPECT_EQ(got->faces, want->faces) << name;
+    EXPECT_EQ(run_cli("repair --check " + (temp_dir() / name).string()), 0) << name;
+  }
+  write_text(temp_dir() / "bom16x.obj", utf16("# caf\xE9\n", true).replace(8, 2, std::string("\xE9\x00", 2)) + utf16(kTetObj, true).substr(2));
+  std::string err;
+  EXPECT_EQ(run_cli("repair --check " + (temp_dir() / "bom16x.obj").string(), &err), 2);
+  EXPECT_NE(err.find("UTF-16"), std::string::npos) << err;
+  EXPECT_NE(err.find("bom16x.obj"), std::string::npos) << err;
+}
+
+// Defect 6: `f 1 2 3 4` with its cycle listed 117 times is the quad, once. Six such
+// quads make a clean unit cube.
+TEST(RepairInputFiles, RepeatedVertexCycleIsCollapsed) {
+  std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+  const int quads[6][4] = {{1, 4, 3, 2}, {5, 6, 7, 8}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 4, 8, 7}, {4, 1, 5, 8}};
+  for (const auto& q : quads) {
+    obj += "f";
+    for (int k = 0; k < 117; ++k)
+      for (int v : q) obj += " " + std::to_string(v);
+    obj += "\n";
+  }
+  write_text(temp_dir() / "cycles.obj", obj);
+  auto soup = read_polygon_file((temp_dir() / "cycles.obj").string());
+  ASSERT_TRUE(soup.ok());
+  RepairResult r = run(*soup);
+  EXPECT_EQ(r.repeated_cycles_collapsed, 6u);
+  EXPECT_EQ(r.output.triangles.size(), 12u);
+  EXPECT_EQ(r.after.defects.total(), 0u);
+  EXPECT_EQ(volume(r.output), 1.0);
+  // Not a repetition: a period that does not divide, or a single cycle, is kept.
+  PolygonSoup p;
+  p.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  p.faces = {{0, 1, 2, 3, 0, 1, 2}};
+  EXPECT_EQ(run(p).repeated_cycles_collapsed, 0u);
+}
+
+// Defect 7: a PLY header line without a keyword (Blender 2.4x) is accepted with a
+// warning that names it; a misspelt keyword is still refused.
+TEST(RepairInputFiles, UnknownPlyHeaderLineIsAWarning) {
+  const std::string ply = "ply\nformat ascii 1.0\nCreated by Blender3D\nelement vertex 4\nproperty float x\n"
+                          "property float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\n"
+                          "end_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  write_text(temp_dir() / "blender.ply", ply);
+  auto soup = read_polygon_file((temp_dir() / "blender.ply").string());
+  ASSERT_TRUE(soup.ok()) << soup.error().message;
+  ASSERT_EQ(soup->warnings.size(), 1u);
+  EXPECT_NE(soup->warnings[0].find("line 3"), std::string::npos);
+  EXPECT_NE(soup->warnings[0].find("Created by Blender3D"), std::string::npos);
+  std::string err;
+  EXPECT_EQ(run_cli("repair --check " + (temp_dir() / "blender.ply").string(), &err), 0) << err;
+  EXPECT_NE(err.find("warning"), std::string::npos) << err;
+  EXPECT_NE(err.find("Created by Blender3D"), std::string::npos) << err;
+}
+
+// Files without an extension are read by their content.
+TEST(RepairInputFiles, ExtensionlessFilesAreRecognisedByContent) {
+  const fs::path plain = temp_dir() / "tet_plain.obj";
+  write_text(plain, kTetObj);
+  auto want = read_polygon_file(plain.string());
+  ASSERT_TRUE(want.ok());
+  // The same tetrahedron as OBJ, OFF, PLY, ASCII and binary STL, written by the writer.
+  IndexedMesh m;
+  m.vertices = want->vertices;
+  for (const auto& f : want->faces) m.triangles.push_back({f[0], f[1], f[2]});
+  const std::pair<MeshFormat, const char*> formats[] = {{MeshFormat::Obj, "obj"},
+                                                        {MeshFormat::Off, "off"},
+                                                        {MeshFormat::Ply, "ply"},
+                                                        {MeshFormat::StlAscii, "stla"},
+                                                        {MeshFormat::StlBinary, "stlb"}};
+  for (const auto& [f, name] : formats) {
+    auto bytes = encode_mesh(m, f, "x");
+    ASSERT_TRUE(bytes.ok());
+    const fs::path p = temp_dir() / (std::string("noext_") + name);
+    write_text(p, *bytes);
+    auto got = read_polygon_file(p.string());
+    ASSERT_TRUE(got.ok()) << name << ": " << got.error().message;
+    EXPECT_EQ(got->faces.size(), 4u) << name;
+    EXPECT_EQ(run_cli("repair --check " + p.string()), 0) << name;
+  }
+  write_text(temp_dir() / "noext_junk", "hello world\n");
+  std::string err;
+  EXPECT_EQ(run_cli("repair --check " + (temp_dir() / "noext_junk").string(), &err), 2);
+  EXPECT_NE(err.find("noext_junk"), std::string::npos) << err;
+}
+
+// Defect 8: float coordinates come back as the user wrote them (shortest round trip).
+TEST(RepairOutput, FloatCoordinatesKeepTheirShortestDecimals) {
+  const std::string in = "v 0.262933 0 0\nv 1 0.1 0\nv 0 1 3.4028235e38\nv 0 0 1e-7\n"
+                         "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  write_text(temp_dir() / "decimals.obj", in);
+  const fs::path out = temp_dir() / "decimals_out.obj";
+  run_cli("repair " + (temp_dir() / "decimals.obj").string() + " -o " + out.string());
+  const std::string text = read_all(out);
+  EXPECT_NE(text.find("v 0.262933 0 0\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("v 1 0.1 0\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("3.4028235e+38"), std::string::npos) << text;
+  // Every written value reads back to the same float.
+  auto a = read_polygon_file((temp_dir() / "decimals.obj").string());
+  auto b = read_polygon_file(out.string());
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(a->vertices, b->vertices);
+}
+
+// Defect 9: --in-place keeps the mode, replaces the target of a symbolic link (the link
+// stays a link) and warns that other hard links keep the old content.
+TEST(RepairInPlace, KeepsModeFollowsLinksAndWarnsAboutHardLinks) {
+  const std::string inside_out = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 3 4\n";
+  const fs::path f = temp_dir() / "mode.obj";
+  write_text(f, inside_out);
+  ASSERT_EQ(::chmod(f.c_str(), 0640), 0);
+  EXPECT_EQ(run_cli("repair --in-place " + f.string()), 0);
+  struct stat st {};
+  ASSERT_EQ(::stat(f.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0640u);
+  EXPECT_NE(read_all(f), inside_out);
+
+  const fs::path target = temp_dir() / "target.obj", link = temp_dir() / "link.obj";
+  write_text(target, inside_out);
+  fs::remove(link);
+  fs::create_symlink(target, link);
+  EXPECT_EQ(run_cli("repair --in-place " + link.string()), 0);
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_NE(read_all(target), inside_out);
+  EXPECT_EQ(run_cli("repair --check " + target.string()), 0);
+
+  const fs::path one = temp_dir() / "one.obj", two = temp_dir() / "two.obj";
+  write_text(one, inside_out);
+  fs::remove(two);
+  fs::create_hard_link(one, two);
+  std::string err;
+  EXPECT_EQ(run_cli("repair --in-place " + one.string(), &err), 0);
+  EXPECT_NE(err.find("hard link"), std::string::npos) << err;
+  EXPECT_NE(read_all(one), inside_out);
+  EXPECT_EQ(read_all(two), inside_out);  // replaced atomically: the other name keeps the old file
+}
