@@ -1555,6 +1555,30 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
     R.steps.push_back({"split_nonmanifold", {{"vertex_copies_added", copies}}, seconds_since(t0)});
   }
 
+  // Vertices that removed faces left unused go (in order), as the next run would drop
+  // them as unreferenced.
+  {
+    std::vector<uint32_t> id(w.pos.size(), kNone);
+    for (const Tri& t : w.tris)
+      for (uint32_t v : t) id[v] = 0;
+    uint32_t next = 0;
+    for (uint32_t v = 0; v < w.pos.size(); ++v)
+      if (id[v] != kNone) {
+        id[v] = next;
+        w.pos[next] = w.pos[v];
+        ++next;
+      }
+    if (next != w.pos.size()) {
+      std::vector<uint32_t> c(next);
+      for (uint32_t v = 0; v < cls.size(); ++v)
+        if (id[v] != kNone) c[id[v]] = id[cls[v]] != kNone ? id[cls[v]] : id[v];
+      cls = std::move(c);
+      w.pos.resize(next);
+      for (Tri& t : w.tris)
+        for (uint32_t& v : t) v = id[v];
+    }
+  }
+
   // Output triangles in input face order (stable; hole fillers last), so that the report
   // maps them to input faces by runs.
   {
