@@ -798,6 +798,7 @@ Result<DecodedMeshFile> decode_mesh_file(const std::string& path) {
     if (!in) return Error{path + ": cannot open file"};
     d.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
+  if (d.bytes.empty()) return Error{path + ": empty file (no faces)"};
   std::string ext = fs::path(path).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   const bool binary_stl = (ext == ".stl" || ext.empty()) && binary_stl_size(d.bytes);
