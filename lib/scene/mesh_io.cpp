@@ -191,6 +191,25 @@ std::string number_error(const std::string& tok, size_t line, const std::string&
 // number, leaving counts uninitialised. The canonical text is the magic alone on line 1,
 // "nv nf 0" on line 2, then every vertex and face line with comments and blank lines
 // removed: exactly what was validated here.
+// The words of `line` as `istream >> std::string` finds them (separated by the "C"
+// locale's white space), without a stream per line; `toks` keeps its capacity.
+void split_words(const std::string& line, std::vector<std::string>& toks) {
+  size_t n = 0;
+  const char* p = line.data();
+  const char* end = p + line.size();
+  auto space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r'; };
+  while (p < end) {
+    while (p < end && space(*p)) ++p;
+    if (p == end) break;
+    const char* b = p;
+    while (p < end && !space(*p)) ++p;
+    if (n < toks.size()) toks[n].assign(b, p);
+    else toks.emplace_back(b, p);
+    ++n;
+  }
+  toks.resize(n);
+}
+
 std::string prescan_off(std::istream& in, std::string& canonical) {
   std::string line;
   size_t lineno = 0;
@@ -200,9 +219,7 @@ std::string prescan_off(std::istream& in, std::string& canonical) {
       ++lineno;
       auto hash = line.find('#');
       if (hash != std::string::npos) line.resize(hash);
-      std::istringstream ss(line);
-      toks.clear();
-      for (std::string t; ss >> t;) toks.push_back(t);
+      split_words(line, toks);
       if (!toks.empty()) return true;
     }
     return false;
@@ -794,9 +811,13 @@ Result<DecodedMeshFile> decode_mesh_file(const std::string& path) {
   if (fs::is_directory(path, ec)) return Error{path + ": is a directory"};
   DecodedMeshFile d;
   {
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) return Error{path + ": cannot open file"};
-    d.bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    const std::streamoff size = in.tellg();
+    if (size < 0) return Error{path + ": cannot read file"};
+    d.bytes.resize(size_t(size));
+    in.seekg(0);
+    if (!in.read(d.bytes.data(), size)) return Error{path + ": read error"};
   }
   if (d.bytes.empty()) return Error{path + ": empty file (no faces)"};
   std::string ext = fs::path(path).extension().string();
@@ -837,9 +858,14 @@ Result<DecodedMeshFile> decode_mesh_file(const std::string& path) {
 }
 
 Result<PolygonSoup> read_polygon_file(const std::string& path) {
-  namespace fs = std::filesystem;
   auto d = decode_mesh_file(path);
   if (!d) return d.error();
+  return read_polygon_file(path, *d);
+}
+
+Result<PolygonSoup> read_polygon_file(const std::string& path, const DecodedMeshFile& decoded) {
+  namespace fs = std::filesystem;
+  const DecodedMeshFile* d = &decoded;
   if (!d->changed && !fs::path(path).extension().empty()) {
     auto soup = read_soup(path, path, d->format);
     if (soup) soup->format = d->format;
@@ -863,7 +889,7 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
   fs::remove(tmp, ec);
   if (soup) {
     soup->format = d->format;
-    soup->warnings = std::move(d->warnings);
+    soup->warnings = d->warnings;
   }
   return soup;
 }

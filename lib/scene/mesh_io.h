@@ -39,6 +39,8 @@ Result<DecodedMeshFile> decode_mesh_file(const std::string& path);
 // element: unreadable or malformed file, NaN/Inf coordinates ("vertex 12"), face indices
 // out of range ("face 7").
 Result<PolygonSoup> read_polygon_file(const std::string& path);
+// The same on a file decode_mesh_file has already read.
+Result<PolygonSoup> read_polygon_file(const std::string& path, const DecodedMeshFile& decoded);
 
 // Fan triangulation (v0, vk, vk+1) of every face, coordinates rounded to float32.
 // Faces with fewer than 3 vertices produce no triangle; `short_faces` counts them.

@@ -135,11 +135,13 @@ int run_repair(const RepairOpts& o) {
   }
 
   // Read, then audit what the reader does not keep (attributes, double coordinates).
-  auto bytes = read_text_file(o.in);
-  if (!bytes) return bad_input(bytes.error().message);
   auto decoded = decode_mesh_file(o.in);
   if (!decoded) return bad_input(decoded.error().message);
-  auto soup = read_polygon_file(o.in);
+  // The report hashes the file's own bytes, which differ from the decoded ones only
+  // when decoding changed them.
+  Result<std::string> bytes = decoded->changed ? read_text_file(o.in) : Result<std::string>(decoded->bytes);
+  if (!bytes) return bad_input(bytes.error().message);
+  auto soup = read_polygon_file(o.in, *decoded);
   if (!soup) return bad_input(soup.error().message);
   auto audit = mesh::audit_input(o.in, decoded->bytes, *soup);
   if (!audit) return bad_input(audit.error().message);
