@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -621,7 +622,8 @@ TEST(RepairOpenScad, RegressionMeshesAreRepairedHonestly) {
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
   std::sort(files.begin(), files.end());
-  size_t read = 0, holes_filled = 0, holes_open = 0;
+  size_t read = 0, holes_filled = 0;
+  std::map<std::string, size_t> open_reasons;
   for (const fs::path& f : files) {
     auto soup = read_polygon_file(f.string());
     if (!soup) {
@@ -655,9 +657,14 @@ TEST(RepairOpenScad, RegressionMeshesAreRepairedHonestly) {
     EXPECT_LE(p1.after.defects.duplicate_faces + p1.after.defects.opposite_duplicate_faces,
               p0.after.defects.duplicate_faces + p0.after.defects.opposite_duplicate_faces) << f;
     EXPECT_LE(p1.after.defects.nonmanifold_edges, p0.after.defects.nonmanifold_edges) << f;
-    for (const HoleRecord& h : p1.holes) holes_filled += h.filled, holes_open += !h.filled;
+    for (const HoleRecord& h : p1.holes) {
+      holes_filled += h.filled;
+      if (!h.filled) ++open_reasons[h.reason ? h.reason : "?"];
+    }
     expect_idempotent(punched, fill, f.filename().string() + " punched --fill-holes");
   }
-  std::printf("OpenSCAD meshes: %zu read; punched holes: %zu filled, %zu left open\n", read, holes_filled, holes_open);
+  std::printf("OpenSCAD meshes: %zu read; punched holes: %zu filled; left open:", read, holes_filled);
+  for (const auto& [why, n] : open_reasons) std::printf(" %s=%zu", why.c_str(), n);
+  std::printf("\n");
   EXPECT_GT(read, 10u) << "fewer regression meshes read than fetched";
 }
