@@ -137,7 +137,9 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
                    {"sha256", ctx.output_sha256},
                    {"vertices", r.output.vertices.size()},
                    {"triangles", r.output.triangles.size()},
-                   {"coordinate_digits", r.output.double_precision ? 17 : 9}};
+                   {"coordinate_digits", r.output.double_precision ? 17 : 9},
+                   {"coordinate_format", r.output.double_precision ? "double, 17 significant digits"
+                                                                   : "float, shortest round trip (at most 9 digits)"}};
   }
   if (ctx.options.fill_holes > 0 && !check)
     j["holes"] = capped(r.holes, [](const HoleRecord& h) {
