@@ -928,7 +928,7 @@ Result<PolygonSoup> read_soup(const std::string& path, const std::string& read_p
           h << canonical.substr(0, canonical.find('\n') + 1);
           if (!h) return Error{path + ": cannot write a temporary file in " + head.parent_path().string()};
         }
-        std::istringstream body(canonical);
+        std::istringstream body(std::move(canonical));  // no second copy of a large file
         ok = OIO::OFFReader().can_u_read(head.string()) && OIO::OFFReader().read(body, imp, opt);
         fs::remove(head, ec);
       } else {

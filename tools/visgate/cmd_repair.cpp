@@ -139,7 +139,8 @@ int run_repair(const RepairOpts& o) {
   if (!decoded) return bad_input(decoded.error().message);
   // The report hashes the file's own bytes, which differ from the decoded ones only
   // when decoding changed them.
-  Result<std::string> bytes = decoded->changed ? read_text_file(o.in) : Result<std::string>(decoded->bytes);
+  const bool report = !o.report.empty();  // only the JSON report holds the hashes
+  Result<std::string> bytes = decoded->changed && report ? read_text_file(o.in) : Result<std::string>(std::string());
   if (!bytes) return bad_input(bytes.error().message);
   auto soup = read_polygon_file(o.in, *decoded);
   if (!soup) return bad_input(soup.error().message);
@@ -155,7 +156,7 @@ int run_repair(const RepairOpts& o) {
 
   mesh::ReportContext ctx;
   ctx.input_path = o.in;
-  ctx.input_sha256 = mesh::sha256_hex(*bytes);
+  if (report) ctx.input_sha256 = mesh::sha256_hex(decoded->changed ? *bytes : decoded->bytes);
   ctx.options = ro;
   ctx.audit = *audit;
   std::string encoded;
@@ -164,7 +165,7 @@ int run_repair(const RepairOpts& o) {
     if (!enc) return bad_input(enc.error().message);
     encoded = std::move(*enc);
     ctx.output_path = out;
-    ctx.output_sha256 = mesh::sha256_hex(encoded);
+    if (report) ctx.output_sha256 = mesh::sha256_hex(encoded);
   }
   ctx.exit_code = mesh::remaining_defects(r, o.check).empty() ? kOk : kFound;
   ctx.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
