@@ -14,6 +14,8 @@
 #include <cstdlib>
 #include <string>
 
+#include <tbb/global_control.h>
+
 #include "lib/mesh/repair.h"
 #include "oracle/exact_predicates.h"
 
@@ -46,6 +48,8 @@ PolygonSoup as_soup(const IndexedMesh& m) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 2) return 0;
+  // One thread: the soups are tiny, and fuzz builds compile CGAL without thread safety.
+  static const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   static const oracle::CgalExactPredicates ex;
   RepairOptions o;
   o.weld_tolerance = data[0] & 1 ? 0.25 : 0.0;

@@ -668,3 +668,40 @@ TEST(RepairOpenScad, RegressionMeshesAreRepairedHonestly) {
   std::printf("\n");
   EXPECT_GT(read, 10u) << "fewer regression meshes read than fetched";
 }
+
+// ------------------------------------------------------------------------------------
+// Defect 10 (speed, measured by `visgate bench repair`): when no step changed the mesh,
+// the output's analysis is the input's, not a second self-intersection pass; when a step
+// did change it, the output is analysed anew.
+
+namespace {
+
+size_t step_value(const RepairResult& r, const std::string& step, const std::string& key) {
+  for (const auto& s : r.steps)
+    if (s.name == step)
+      for (const auto& [k, v] : s.changes)
+        if (k == key) return v;
+  ADD_FAILURE() << "no step " << step << " / " << key;
+  return 0;
+}
+
+}  // namespace
+
+TEST(RepairSpeed, UnchangedMeshReusesTheInputAnalysis) {
+  PolygonSoup s;
+  add_box(s, {0, 0, 0}, {4, 4, 4});
+  add_box(s, {1, 1, 1}, {3, 3, 3}, true);
+  RepairResult r = run(s);
+  EXPECT_EQ(step_value(r, "analyze_output", "reused_input_analysis"), 1u);
+  EXPECT_EQ(step_value(r, "analyze_output", "self_intersection_pairs_tested"), 0u);
+  EXPECT_EQ(r.after.defects.total(), 0u);
+  EXPECT_EQ(r.after.cavities, 1u);
+  // A changed mesh (the cavity listed outward) is analysed again.
+  PolygonSoup t;
+  add_box(t, {0, 0, 0}, {4, 4, 4});
+  add_box(t, {1, 1, 1}, {3, 3, 3});
+  RepairResult u = run(t);
+  EXPECT_EQ(step_value(u, "analyze_output", "reused_input_analysis"), 0u);
+  EXPECT_EQ(u.after.self_intersection_pairs_tested, u.before.self_intersection_pairs_tested);
+  EXPECT_EQ(u.after.defects.total(), 0u);
+}
