@@ -369,6 +369,25 @@ TEST(RepairFill, FillThatWouldCutNearbyGeometryIsRefused) {
   expect_idempotent(s, o, "hole next to a tetrahedron");
 }
 
+// Two holes that meet at a vertex form one boundary walk through it twice: they are
+// filled as two holes. (The cube loses triangle (0, 4, 6) of its -x side and (4, 5, 7)
+// of its +z side; the boundary walk runs 0 4 5 7 4 6.)
+TEST(RepairFill, HolesMeetingAtAVertexAreFilledApart) {
+  PolygonSoup s;
+  add_box(s, {0, 0, 0}, {1, 1, 1});
+  s.faces.erase(s.faces.begin() + 10);
+  s.faces.erase(s.faces.begin());
+  EXPECT_EQ(run(s).before.boundary_loops.size(), 1u);
+  RepairOptions o;
+  o.fill_holes = 8;
+  RepairResult r = run(s, o);
+  EXPECT_EQ(r.holes.size(), 2u);
+  for (const HoleRecord& h : r.holes) EXPECT_TRUE(h.filled) << (h.reason ? h.reason : "");
+  EXPECT_EQ(r.after.defects.total(), 0u);
+  EXPECT_EQ(volume(r.output), 1.0);
+  expect_idempotent(s, o, "holes meeting at a vertex");
+}
+
 // Defect 3: an inside-out open box is closed by filling and must then face outward.
 TEST(RepairFill, ComponentsClosedByFillingAreOrientedAfterwards) {
   PolygonSoup s;

@@ -1205,6 +1205,43 @@ const char* fill_defect(const std::vector<Vec3d>& pos, const std::vector<Tri>& f
   return nullptr;
 }
 
+// Closed loops that pass a vertex more than once (two holes meeting at a vertex) split
+// there into simple cycles, each a hole of its own; chains and simple loops stay as they
+// are. A cycle of two edges (an edge walked there and back) is dropped: it bounds nothing.
+std::vector<Loop> simple_loops(std::vector<Loop> loops) {
+  std::vector<Loop> out;
+  std::unordered_map<uint32_t, size_t> at;  // vertex -> index in the current path
+  for (Loop& L : loops) {
+    if (!L.closed) {
+      out.push_back(std::move(L));
+      continue;
+    }
+    const size_t n = L.groups.size();
+    std::vector<uint32_t> path{L.verts[0]}, edges;
+    at.clear();
+    at[L.verts[0]] = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t next = L.verts[(i + 1) % n];
+      edges.push_back(L.groups[i]);
+      auto it = at.find(next);
+      if (it == at.end()) {
+        at[next] = path.size();
+        path.push_back(next);
+        continue;
+      }
+      const size_t j = it->second;
+      Loop C;
+      C.verts.assign(path.begin() + long(j), path.end());
+      C.groups.assign(edges.begin() + long(j), edges.end());
+      if (C.groups.size() >= 3) out.push_back(std::move(C));
+      for (size_t k = j + 1; k < path.size(); ++k) at.erase(path[k]);
+      path.resize(j + 1);
+      edges.resize(j);
+    }
+  }
+  return out;
+}
+
 // Fills closed boundary loops of at most `max_len` edges that are simple and
 // consistently directed: the minimum-area triangulation of the loop traversed against
 // its faces' direction, or else its ear-clipping triangulation, whichever first passes
@@ -1214,7 +1251,7 @@ void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, std::vector<
                 size_t& longer) {
   const FilteredPredicates fp(ex);
   EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
-  std::vector<Loop> loops = boundary_loops(e);
+  std::vector<Loop> loops = simple_loops(boundary_loops(e));
   std::unordered_map<uint64_t, uint32_t> edge_count;
   std::unordered_map<uint64_t, uint8_t> faces;
   auto fkey = [](const Tri& t) {
