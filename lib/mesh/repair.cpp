@@ -1266,8 +1266,8 @@ void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, std::vector<
   }
   for (size_t g = 0; g < e.groups(); ++g) edge_count[e.recs[e.start[g]].key] = e.size(g);
   for (const Tri& t : w.tris) faces[fkey(t)] = 1;
-  // The mesh's triangles (fills accepted so far are appended to w.tris and checked
-  // through `fills`, outside the tree).
+  // A tree of the mesh's triangles; fills accepted later are appended to w.tris and
+  // tested directly, outside the tree.
   const size_t base = w.tris.size();
   std::vector<Box3d> boxes(base);
   for (size_t t = 0; t < base; ++t) {
@@ -1276,7 +1276,7 @@ void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, std::vector<
     boxes[t].extend(w.pos[w.tris[t][2]]);
   }
   BoxTree tree(boxes);
-  constexpr size_t kMaxTriangulated = 2000;  // O(n^3) program: about a second at this size
+  constexpr size_t kMaxTriangulated = 2000;  // the O(n^3) program takes seconds at this size
   for (const Loop& L : loops) {
     const size_t n = L.groups.size();
     if (!L.closed || n < 3) continue;
