@@ -61,14 +61,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (size_t i = 0; i < nv && at + 3 <= size; ++i, at += 3)
     s.vertices.push_back(Vec3d(int8_t(data[at]) / 4.0, int8_t(data[at + 1]) / 4.0, int8_t(data[at + 2]) / 4.0));
   if (s.vertices.size() < 3) return 0;
-  // Faces: a byte k gives 3 + k % 4 corners (k >= 252: the previous face's cycle
-  // repeated), then one byte per corner.
+  // Faces: a byte k gives 3 + k % 4 corners (k >= 252: the previous face listed 2 to 5
+  // times over, up to 64 corners), then one byte per corner.
   while (at < size && s.faces.size() < 200) {
     const uint8_t k = data[at++];
     if (k >= 252 && !s.faces.empty()) {
-      std::vector<uint32_t> f = s.faces.back();
-      const size_t n = f.size();
-      for (int r = 0; r < 1 + k % 4; ++r) f.insert(f.end(), f.begin(), f.begin() + long(n));
+      const std::vector<uint32_t>& prev = s.faces.back();
+      std::vector<uint32_t> f;
+      for (int r = 0; r < 2 + k % 4 && f.size() + prev.size() <= 64; ++r) f.insert(f.end(), prev.begin(), prev.end());
       s.faces.push_back(std::move(f));
       continue;
     }
