@@ -566,6 +566,11 @@ TEST(RepairInputFiles, ExtensionlessFilesAreRecognisedByContent) {
     EXPECT_EQ(got->faces.size(), 4u) << name;
     EXPECT_EQ(run_cli("repair --check " + p.string()), 0) << name;
   }
+  // --in-place keeps the format the content had (here OFF).
+  const fs::path off = temp_dir() / "noext_inplace";
+  write_text(off, "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  EXPECT_EQ(run_cli("repair --in-place " + off.string()), 0);
+  EXPECT_EQ(read_all(off).rfind("OFF\n", 0), 0u) << read_all(off);
   write_text(temp_dir() / "noext_junk", "hello world\n");
   std::string err;
   EXPECT_EQ(run_cli("repair --check " + (temp_dir() / "noext_junk").string(), &err), 2);

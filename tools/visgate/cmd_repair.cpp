@@ -115,8 +115,10 @@ int run_repair(const RepairOpts& o) {
   if (!o.report.empty() && (same_path(o.report, o.in) || (!out.empty() && same_path(o.report, out))))
     return bad_input("--report " + o.report + ": must differ from the input and output meshes");
   mesh::MeshFormat fmt = mesh::MeshFormat::Obj;
+  // --in-place on a file without an extension writes the format its content had.
+  const bool format_from_content = o.in_place && std::filesystem::path(out).extension().empty();
   if (!o.check) {
-    auto f = mesh::format_from_path(out, o.stl_ascii);
+    auto f = format_from_content ? Result<mesh::MeshFormat>(mesh::MeshFormat::Obj) : mesh::format_from_path(out, o.stl_ascii);
     if (!f) return bad_input(f.error().message);
     fmt = *f;
     std::error_code ec;
@@ -144,6 +146,11 @@ int run_repair(const RepairOpts& o) {
   if (!bytes) return bad_input(bytes.error().message);
   auto soup = read_polygon_file(o.in, *decoded);
   if (!soup) return bad_input(soup.error().message);
+  if (format_from_content) {
+    auto f = mesh::format_from_path("in" + soup->format, o.stl_ascii);
+    if (!f) return bad_input(f.error().message);
+    fmt = *f;
+  }
   auto audit = mesh::audit_input(o.in, decoded->bytes, *soup);
   if (!audit) return bad_input(audit.error().message);
   for (const std::string& w : soup->warnings) std::fprintf(stderr, "warning: %s: %s\n", o.in.c_str(), w.c_str());
