@@ -401,23 +401,28 @@ int ray_crosses(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c, 
   return d != area ? 1 : 0;  // the hit is at t = -det / n_x, ahead of p iff the signs differ
 }
 
-// Whether `inner` lies inside the closed shell `outer`: parity at the first vertex of
-// `inner` that is not on `outer`. False when every vertex is on `outer` (coincident
-// shells).
+// Whether `inner` lies inside the closed shell `outer`: parity at the lowest-index vertex
+// of `inner` that is not on `outer`. False when every vertex is on `outer` (coincident
+// shells). The vertex order, not the triangle order or orientation, picks the vertex, so
+// repair and the analysis of its output agree even on shells that cross.
 bool shell_inside(const std::vector<Vec3d>& pos, const std::vector<Tri>& tris, const std::vector<uint32_t>& inner,
                   const std::vector<uint32_t>& outer, const FilteredPredicates& fp) {
-  for (uint32_t t : inner)
-    for (uint32_t v : tris[t]) {
-      const Vec3d& p = pos[v];
-      int crossings = 0;
-      bool on = false;
-      for (uint32_t u : outer) {
-        const int r = ray_crosses(p, pos[tris[u][0]], pos[tris[u][1]], pos[tris[u][2]], fp);
-        if (r < 0) { on = true; break; }
-        crossings += r;
-      }
-      if (!on) return crossings % 2 == 1;
+  std::vector<uint32_t> verts;
+  verts.reserve(inner.size() * 3);
+  for (uint32_t t : inner) verts.insert(verts.end(), tris[t].begin(), tris[t].end());
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  for (uint32_t v : verts) {
+    const Vec3d& p = pos[v];
+    int crossings = 0;
+    bool on = false;
+    for (uint32_t u : outer) {
+      const int r = ray_crosses(p, pos[tris[u][0]], pos[tris[u][1]], pos[tris[u][2]], fp);
+      if (r < 0) { on = true; break; }
+      crossings += r;
     }
+    if (!on) return crossings % 2 == 1;
+  }
   return false;
 }
 
