@@ -76,13 +76,8 @@ IndexedMesh as_indexed(const PolygonSoup& s) {
   return m;
 }
 
-PolygonSoup as_soup(const IndexedMesh& m) {
-  PolygonSoup s;
-  s.vertices = m.vertices;
-  for (const auto& t : m.triangles) s.faces.push_back({t[0], t[1], t[2]});
-  s.double_precision = m.double_precision;
-  return s;
-}
+
+void expect_idempotent(const PolygonSoup& s, const RepairOptions& o, const std::string& what);
 
 }  // namespace
 
@@ -99,6 +94,7 @@ TEST(RepairNesting, InwardCavityIsKeptAndClean) {
   EXPECT_EQ(r.before.cavities, 1u);
   EXPECT_EQ(r.after.defects.total(), 0u);
   EXPECT_EQ(volume(r.output), 56.0);
+  expect_idempotent(s, {}, "inward cavity");
 }
 
 TEST(RepairNesting, OutwardCavityIsTurnedInward) {
@@ -117,6 +113,8 @@ TEST(RepairNesting, OutwardCavityIsTurnedInward) {
   EXPECT_EQ(u.before.defects.inward_components, 2u);
   EXPECT_EQ(u.after.defects.total(), 0u);
   EXPECT_EQ(volume(u.output), 56.0);
+  expect_idempotent(s, {}, "outward cavity");
+  expect_idempotent(t, {}, "both shells inside out");
 }
 
 // An island in the void: depth 2 faces outward again, 216 - 64 + 8 = 160; two side by
@@ -147,6 +145,8 @@ TEST(RepairNesting, IslandInACavityAndSiblingCavities) {
   RepairResult x = run(w);
   EXPECT_EQ(x.after.cavities, 0u);
   EXPECT_EQ(volume(x.output), 2.0);
+  expect_idempotent(s, {}, "island in a cavity");
+  expect_idempotent(t, {}, "sibling cavities");
 }
 
 // Touching shells: an octahedral void whose lowest vertex lies on the cube's floor (the
@@ -179,6 +179,14 @@ TEST(RepairNesting, TouchingShellsAndRaysThroughEdges) {
   EXPECT_EQ(u.after.cavities, 1u);
   EXPECT_EQ(u.after.defects.total(), 0u);
   EXPECT_EQ(volume(u.output), 64.0 - 2 * 3 * 3);
+  expect_idempotent(s, {}, "touching octahedral void");
+  expect_idempotent(t, {}, "void level with the outer edges");
+  // Shells that cross (a cube half inside another): whatever orientation the parity of
+  // one vertex gives, a second run must not change it.
+  PolygonSoup c;
+  add_box(c, {0, 0, 0}, {4, 4, 4});
+  add_box(c, {2, 1, 1}, {6, 3, 3}, true);
+  expect_idempotent(c, {}, "crossing shells");
 }
 
 // ------------------------------------------------------------------------------------
@@ -505,7 +513,10 @@ TEST(RepairInputFiles, RepeatedVertexCycleIsCollapsed) {
   for (const auto& q : quads) {
     obj += "f";
     for (int k = 0; k < 117; ++k)
-      for (int v : q) obj += " " + std::to_string(v);
+      for (int v : q) {
+        obj += ' ';
+        obj += char('0' + v);
+      }
     obj += "\n";
   }
   write_text(temp_dir() / "cycles.obj", obj);
@@ -516,6 +527,7 @@ TEST(RepairInputFiles, RepeatedVertexCycleIsCollapsed) {
   EXPECT_EQ(r.output.triangles.size(), 12u);
   EXPECT_EQ(r.after.defects.total(), 0u);
   EXPECT_EQ(volume(r.output), 1.0);
+  expect_idempotent(*soup, {}, "repeated cycles");
   // Not a repetition: a period that does not divide, or a single cycle, is kept.
   PolygonSoup p;
   p.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
