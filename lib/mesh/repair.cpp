@@ -1304,14 +1304,24 @@ void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, std::vector<
       holes.push_back(rec);
       continue;
     }
+    // The candidates are computed on the loop in a canonical order (from its lowest
+    // vertex, towards the lower neighbour), so that they do not depend on where the walk
+    // started or on the faces' orientation, then turned to run against the faces.
     std::vector<uint32_t> poly(L.verts);
-    if (along > 0) std::reverse(poly.begin(), poly.end());
+    std::rotate(poly.begin(), std::min_element(poly.begin(), poly.end()), poly.end());
+    if (poly[n - 1] < poly[1]) std::reverse(poly.begin() + 1, poly.end());
+    const size_t at0 = size_t(std::find(L.verts.begin(), L.verts.end(), poly[0]) - L.verts.begin());
+    const bool walk_order = L.verts[(at0 + 1) % n] == poly[1];
+    const bool flip = walk_order == (along > 0);  // the fill runs against the faces' direction
     auto is_edge = [&](uint32_t a, uint32_t b) {
       return edge_count.count(a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a)) > 0;
     };
     std::vector<std::vector<Tri>> candidates(2);
     if (!min_area_triangulation(w.pos, poly, is_edge, candidates[0])) candidates[0].clear();
     triangulate_polygon(w.pos, poly, candidates[1]);
+    if (flip)
+      for (auto& fill : candidates)
+        for (Tri& t : fill) std::swap(t[1], t[2]);
     const std::vector<Tri>* chosen = nullptr;
     for (const auto& fill : candidates) {
       if (fill.empty()) {
@@ -1574,10 +1584,26 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
   // Fill holes.
   if (opt.fill_holes > 0) {
     t0 = clock::now();
-    size_t added = 0, longer = 0;
-    fill_holes(w, opt.fill_holes, ex, R.holes, added, longer);
-    size_t filled = 0;
-    for (const HoleRecord& h : R.holes) filled += h.filled;
+    // Passes until one fills nothing: a fill can change the boundary walk and the
+    // geometry later loops are checked against, and repair of the output must find
+    // nothing more to fill (idempotence). The report keeps every fill and the last
+    // pass's open loops.
+    size_t added = 0, longer = 0, filled = 0;
+    for (int pass = 0; pass < 8; ++pass) {
+      std::vector<HoleRecord> holes;
+      longer = 0;
+      fill_holes(w, opt.fill_holes, ex, holes, added, longer);
+      size_t now = 0;
+      for (const HoleRecord& h : holes) now += h.filled;
+      filled += now;
+      std::vector<HoleRecord> kept;
+      for (const HoleRecord& h : R.holes)
+        if (h.filled) kept.push_back(h);
+      for (const HoleRecord& h : holes)
+        if (h.filled || now == 0) kept.push_back(h);
+      R.holes = std::move(kept);
+      if (now == 0) break;
+    }
     OrientStats os2 = filled ? orient(w, ex) : OrientStats{};
     R.steps.push_back({"fill_holes",
                        {{"loops_filled", filled},
