@@ -73,7 +73,12 @@ Result<MeshFormat> format_from_path(const std::string& path, bool stl_ascii) {
 }
 
 Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::string& path) {
-  const int digits = m.double_precision ? 17 : 0;  // 0: shortest float
+  // Float data only when every coordinate is exactly a float, whatever the flag says:
+  // the shortest-float form would round anything else.
+  bool doubles = m.double_precision;
+  for (size_t i = 0; i < m.vertices.size() && !doubles; ++i)
+    for (int a = 0; a < 3; ++a) doubles = doubles || double(float(m.vertices[i][a])) != m.vertices[i][a];
+  const int digits = doubles ? 17 : 0;  // 0: shortest float
   std::string out;
   const size_t nv = m.vertices.size(), nt = m.triangles.size();
   switch (f) {
@@ -120,7 +125,7 @@ Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::s
     }
     case MeshFormat::Ply: {
       out.reserve(nv * 40 + nt * 24 + 256);
-      const char* type = m.double_precision ? "double" : "float";
+      const char* type = doubles ? "double" : "float";
       out += "ply\nformat ascii 1.0\ncomment written by visgate repair\nelement vertex ";
       put_uint(out, nv);
       out += std::string("\nproperty ") + type + " x\nproperty " + type + " y\nproperty " + type + " z\n";
