@@ -24,7 +24,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SECS="${1:-30}"
 BUILD="${VISGATE_FUZZ_BUILD:-$ROOT/build-fuzz-clang}"
 JOBS="${JOBS:-2}"
-TARGETS=(fuzz_scene_json fuzz_mesh_files fuzz_prepare fuzz_iss fuzz_ssv fuzz_plucker fuzz_embree)
+TARGETS=(fuzz_scene_json fuzz_mesh_files fuzz_prepare fuzz_repair fuzz_iss fuzz_ssv fuzz_plucker fuzz_embree)
 
 "$ROOT/fuzz/configure-clang.sh" "$BUILD"
 start=$(date +%s)

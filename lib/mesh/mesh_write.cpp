@@ -26,12 +26,22 @@ inline void put_uint(std::string& out, uint64_t v) {
   out.append(buf, r.ptr);
 }
 
+// A coordinate: float data (digits == 0, every value exactly a float) in the shortest
+// decimal that reads back to the same float, so a file's "0.262933" stays "0.262933";
+// double data with `digits` significant digits.
+inline void put_coord(std::string& out, double v, int digits) {
+  if (digits > 0) return put_num(out, v, digits);
+  char buf[40];
+  auto r = std::to_chars(buf, buf + sizeof(buf), float(v));
+  out.append(buf, r.ptr);
+}
+
 void put_xyz(std::string& out, const Vec3d& p, int digits) {
-  put_num(out, p.x, digits);
+  put_coord(out, p.x, digits);
   out.push_back(' ');
-  put_num(out, p.y, digits);
+  put_coord(out, p.y, digits);
   out.push_back(' ');
-  put_num(out, p.z, digits);
+  put_coord(out, p.z, digits);
 }
 
 // Facet normal for STL (informative only; readers recompute it), in double.
@@ -63,7 +73,12 @@ Result<MeshFormat> format_from_path(const std::string& path, bool stl_ascii) {
 }
 
 Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::string& path) {
-  const int digits = m.double_precision ? 17 : 9;
+  // Float data only when every coordinate is exactly a float, whatever the flag says:
+  // the shortest-float form would round anything else.
+  bool doubles = m.double_precision;
+  for (size_t i = 0; i < m.vertices.size() && !doubles; ++i)
+    for (int a = 0; a < 3; ++a) doubles = doubles || double(float(m.vertices[i][a])) != m.vertices[i][a];
+  const int digits = doubles ? 17 : 0;  // 0: shortest float
   std::string out;
   const size_t nv = m.vertices.size(), nt = m.triangles.size();
   switch (f) {
@@ -110,7 +125,7 @@ Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::s
     }
     case MeshFormat::Ply: {
       out.reserve(nv * 40 + nt * 24 + 256);
-      const char* type = m.double_precision ? "double" : "float";
+      const char* type = doubles ? "double" : "float";
       out += "ply\nformat ascii 1.0\ncomment written by visgate repair\nelement vertex ";
       put_uint(out, nv);
       out += std::string("\nproperty ") + type + " x\nproperty " + type + " y\nproperty " + type + " z\n";
@@ -137,7 +152,7 @@ Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::s
       out += "solid visgate\n";
       for (const auto& t : m.triangles) {
         out += "facet normal ";
-        put_xyz(out, facet_normal(m, t), 9);
+        put_xyz(out, facet_normal(m, t), 9);  // a double, informative only
         out += "\nouter loop\n";
         for (int k = 0; k < 3; ++k) {
           out += "vertex ";

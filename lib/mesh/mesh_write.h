@@ -1,6 +1,7 @@
 // Triangle mesh writers for OBJ, OFF, PLY (ASCII) and STL (binary and ASCII), used by
 // `visgate repair` (DESIGN section 7). Coordinates round-trip bit for bit (DESIGN
-// section 2): float data is written with 9 significant digits, double data with 17, and
+// section 2): float data is written in the shortest decimal that reads back to the same
+// float (at most 9 significant digits, std::to_chars), double data with 17, and
 // binary STL (float32 by format) refuses coordinates that are not exactly floats.
 // Files are written through write_file_atomic: nothing is left behind on failure.
 #pragma once

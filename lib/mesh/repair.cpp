@@ -366,6 +366,92 @@ std::vector<std::array<uint32_t, 2>> self_intersections(const std::vector<Vec3d>
   return out;
 }
 
+// ---------------------------------------------------------------------------------------
+// Nesting of closed shells (as CGAL's orient_to_bound_a_volume): a shell inside an odd
+// number of other shells bounds a cavity and must face inward, the others outward.
+// Inside-ness is ray parity along +x from a vertex, made exact by a symbolic
+// perturbation of the ray's start in the (y, z) projection, p' = p + e (1, 0) + e^2 (0, 1)
+// for an infinitesimal e: the ray then misses every edge and vertex, so each crossing is
+// a strict point-in-triangle test in the projection plus the sign of the 3D orientation.
+
+// Sign of the (y, z) orientation of a, b and the perturbed q; never 0 when a and b
+// project to distinct points.
+int perturbed_side(const Vec3d& a, const Vec3d& b, const Vec3d& q, const FilteredPredicates& fp) {
+  const int s = fp.orient2d(a, b, q, 0);
+  if (s != 0) return s;
+  // d/de of (b - a) x (q' - a) in (y, z): -(b_z - a_z), then d/de^2: (b_y - a_y).
+  if (a.z != b.z) return a.z > b.z ? 1 : -1;
+  if (a.y != b.y) return b.y > a.y ? 1 : -1;
+  return 0;
+}
+
+// 1: the perturbed +x ray from p crosses triangle t beyond p; 0: it does not; -1: p lies
+// on the triangle (its plane, inside the perturbed projection), so parity says nothing.
+int ray_crosses(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c, const FilteredPredicates& fp) {
+  // Cheap exact rejection: p's (y, z) outside the triangle's projected box (closed).
+  if (p.y < std::min({a.y, b.y, c.y}) || p.y > std::max({a.y, b.y, c.y}) || p.z < std::min({a.z, b.z, c.z}) ||
+      p.z > std::max({a.z, b.z, c.z}) || p.x > std::max({a.x, b.x, c.x}))
+    return 0;
+  const int area = fp.orient2d(a, b, c, 0);
+  if (area == 0) return 0;  // zero projected area: the perturbed ray misses it
+  if (perturbed_side(a, b, p, fp) != area || perturbed_side(b, c, p, fp) != area || perturbed_side(c, a, p, fp) != area)
+    return 0;
+  const int d = fp.orientation(a, b, c, p);
+  if (d == 0) return -1;
+  return d != area ? 1 : 0;  // the hit is at t = -det / n_x, ahead of p iff the signs differ
+}
+
+// Whether `inner` lies inside the closed shell `outer`: parity at the lowest-index vertex
+// of `inner` that is not on `outer`. False when every vertex is on `outer` (coincident
+// shells). The vertex order, not the triangle order or orientation, picks the vertex, so
+// repair and the analysis of its output agree even on shells that cross.
+bool shell_inside(const std::vector<Vec3d>& pos, const std::vector<Tri>& tris, const std::vector<uint32_t>& inner,
+                  const std::vector<uint32_t>& outer, const FilteredPredicates& fp) {
+  std::vector<uint32_t> verts;
+  verts.reserve(inner.size() * 3);
+  for (uint32_t t : inner) verts.insert(verts.end(), tris[t].begin(), tris[t].end());
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  for (uint32_t v : verts) {
+    const Vec3d& p = pos[v];
+    int crossings = 0;
+    bool on = false;
+    for (uint32_t u : outer) {
+      const int r = ray_crosses(p, pos[tris[u][0]], pos[tris[u][1]], pos[tris[u][2]], fp);
+      if (r < 0) { on = true; break; }
+      crossings += r;
+    }
+    if (!on) return crossings % 2 == 1;
+  }
+  return false;
+}
+
+// depth[i]: how many of the other shells contain shell i (by a vertex of it; shells
+// of a valid solid do not cross). Only shells whose box lies in the other's box are
+// tested.
+std::vector<int> nesting_depths(const std::vector<Vec3d>& pos, const std::vector<Tri>& tris,
+                                const std::vector<std::vector<uint32_t>>& shells, const FilteredPredicates& fp) {
+  const size_t n = shells.size();
+  std::vector<Box3d> box(n);
+  for (size_t i = 0; i < n; ++i) {
+    box[i] = Box3d{pos[tris[shells[i][0]][0]], pos[tris[shells[i][0]][0]]};
+    for (uint32_t t : shells[i])
+      for (uint32_t v : tris[t]) box[i].extend(pos[v]);
+  }
+  auto within = [](const Box3d& a, const Box3d& b) {
+    return b.lo.x <= a.lo.x && b.lo.y <= a.lo.y && b.lo.z <= a.lo.z && a.hi.x <= b.hi.x && a.hi.y <= b.hi.y &&
+           a.hi.z <= b.hi.z;
+  };
+  std::vector<int> depth(n, 0);
+  if (n < 2) return depth;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      for (size_t j = 0; j < n; ++j)
+        if (j != i && within(box[i], box[j]) && shell_inside(pos, tris, shells[i], shells[j], fp)) ++depth[i];
+  });
+  return depth;
+}
+
 // Sorted vertex triple, the key of duplicate detection.
 inline std::array<uint32_t, 3> sorted3(const Tri& t) {
   std::array<uint32_t, 3> s = t;
@@ -579,9 +665,23 @@ Analysis analyze_mesh(const IndexedMesh& m, const ExactPredicates& ex, const std
       if (!ci.orientable) ++A.defects.nonorientable_components;
       if (ci.closed && ci.orientable && ci.consistent) {
         ci.volume_sign = ex.volume_sign(pos, tris, members[c]);
-        if (ci.volume_sign < 0) ++A.defects.inward_components;
         if (ci.volume_sign == 0) ++A.defects.zero_volume_components;
       }
+    }
+    // Nesting: a shell inside an odd number of others bounds a cavity and faces inward.
+    std::vector<std::vector<uint32_t>> shells;
+    std::vector<size_t> shell_comp;
+    for (size_t c = 0; c < nc; ++c)
+      if (A.components[c].volume_sign != 0) {
+        shells.push_back(std::move(members[c]));
+        shell_comp.push_back(c);
+      }
+    const std::vector<int> depth = nesting_depths(pos, tris, shells, fp);
+    for (size_t i = 0; i < shells.size(); ++i) {
+      ComponentInfo& ci = A.components[shell_comp[i]];
+      ci.depth = depth[i];
+      if (depth[i] % 2 == 1) ++A.cavities;
+      if (ci.volume_sign != (depth[i] % 2 == 1 ? -1 : 1)) ++A.defects.inward_components;
     }
   }
   lap("volumes");
@@ -946,11 +1046,12 @@ size_t split_t_junctions(Work& w, const ExactPredicates& ex, size_t& added) {
 }
 
 struct OrientStats {
-  size_t consistency_flips = 0, outward_components = 0, outward_flips = 0, nonorientable_skipped = 0;
+  size_t consistency_flips = 0, outward_components = 0, outward_flips = 0, nonorientable_skipped = 0, cavities = 0;
 };
 
 // Consistent orientation per patch (faces joined across two-face edges), flipping the
-// minority; closed patches then face outward by the exact volume sign.
+// minority; closed patches then bound the solid: outward by the exact volume sign, or
+// inward where nesting makes them a cavity.
 OrientStats orient(Work& w, const ExactPredicates& ex) {
   OrientStats st;
   const size_t nt = w.tris.size();
@@ -958,6 +1059,7 @@ OrientStats orient(Work& w, const ExactPredicates& ex) {
   Adjacency adj = build_adjacency(e, nt);
   std::vector<int8_t> parity(nt, -1);
   std::vector<uint32_t> patch;
+  std::vector<std::vector<uint32_t>> closed_patches;
   for (uint32_t s = 0; s < nt; ++s) {
     if (parity[s] >= 0) continue;
     parity[s] = 0;
@@ -989,58 +1091,269 @@ OrientStats orient(Work& w, const ExactPredicates& ex) {
         std::swap(w.tris[t][1], w.tris[t][2]);
         ++st.consistency_flips;
       }
-    if (closed && ex.volume_sign(w.pos, w.tris, patch) < 0) {
-      for (uint32_t t : patch) std::swap(w.tris[t][1], w.tris[t][2]);
-      ++st.outward_components;
-      st.outward_flips += patch.size();
-    }
+    if (closed) closed_patches.push_back(patch);
+  }
+  // Closed patches face outward, or inward where they bound a cavity (nesting parity).
+  std::vector<std::vector<uint32_t>> shells;
+  std::vector<int> sign;
+  for (auto& p : closed_patches) {
+    const int s = ex.volume_sign(w.pos, w.tris, p);
+    if (s == 0) continue;
+    shells.push_back(std::move(p));
+    sign.push_back(s);
+  }
+  const std::vector<int> depth = nesting_depths(w.pos, w.tris, shells, FilteredPredicates(ex));
+  for (size_t i = 0; i < shells.size(); ++i) {
+    if (depth[i] % 2 == 1) ++st.cavities;
+    if (sign[i] == (depth[i] % 2 == 1 ? -1 : 1)) continue;
+    for (uint32_t t : shells[i]) std::swap(w.tris[t][1], w.tris[t][2]);
+    ++st.outward_components;
+    st.outward_flips += shells[i].size();
   }
   return st;
 }
 
-// Fills boundary loops of at most `max_len` edges that are simple and consistently
-// directed, by ear clipping the loop traversed against its faces' direction; a loop
-// whose fill would contain an exactly degenerate triangle is left open.
-void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, size_t& filled, size_t& added, size_t& skipped) {
-  const FilteredPredicates fp(ex);
-  EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
-  for (const Loop& L : boundary_loops(e)) {
-    const size_t n = L.groups.size();
-    if (!L.closed || n > max_len || n < 3) {
-      if (L.closed && n <= max_len) ++skipped;
+// Minimum-area triangulation of the closed polygon `poly` (Liepa's dynamic program over
+// sub-polygons, O(n^3)): a float proposal, checked exactly by the caller. Triangles
+// whose sides would reuse an existing mesh edge as a chord (`is_edge`) are not allowed.
+// Returns false when no triangulation avoids them. Triangles follow the polygon's order.
+template <class IsEdge>
+bool min_area_triangulation(const std::vector<Vec3d>& pos, const std::vector<uint32_t>& poly, IsEdge&& is_edge,
+                            std::vector<Tri>& out) {
+  const size_t n = poly.size();
+  const double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> W(n * n, 0.0);
+  std::vector<uint32_t> K(n * n, kNone);
+  auto area = [&](size_t i, size_t k, size_t j) {
+    return 0.5 * length(cross(pos[poly[k]] - pos[poly[i]], pos[poly[j]] - pos[poly[i]]));
+  };
+  // A chord (i, j), j > i + 1 and not the closing pair (0, n-1), must not be a mesh edge.
+  auto chord_ok = [&](size_t i, size_t j) { return j == i + 1 || (i == 0 && j == n - 1) || !is_edge(poly[i], poly[j]); };
+  for (size_t len = 2; len < n; ++len)
+    for (size_t i = 0; i + len < n; ++i) {
+      const size_t j = i + len;
+      double best = kInf;
+      uint32_t arg = kNone;
+      if (chord_ok(i, j))
+        for (size_t k = i + 1; k < j; ++k) {
+          const double c = W[i * n + k] + W[k * n + j] + area(i, k, j);
+          if (c < best) { best = c; arg = uint32_t(k); }
+        }
+      W[i * n + j] = best;
+      K[i * n + j] = arg;
+    }
+  if (K[n - 1] == kNone) return false;
+  std::vector<std::pair<size_t, size_t>> stack{{0, n - 1}};
+  while (!stack.empty()) {
+    auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j < i + 2) continue;
+    const size_t k = K[i * n + j];
+    if (k == kNone) return false;
+    out.push_back({poly[i], poly[k], poly[j]});
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+  return true;
+}
+
+// Why a fill cannot be applied, or nullptr when every check passes: each triangle is
+// non-degenerate, no triangle repeats a face of the mesh or of the fill (in either
+// orientation), no chord is a mesh edge or used by more than two fill triangles, and no
+// triangle meets a mesh triangle or another fill triangle beyond their shared vertices
+// and edges (exact).
+const char* fill_defect(const std::vector<Vec3d>& pos, const std::vector<Tri>& fill, const std::vector<Tri>& tris,
+                        const BoxTree& tree, const std::vector<Box3d>& boxes,
+                        const std::unordered_map<uint64_t, uint32_t>& edge_count,
+                        const std::unordered_map<uint64_t, uint8_t>& faces, const FilteredPredicates& fp) {
+  auto ekey = [](uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a); };
+  auto fkey = [](const Tri& t) {
+    const auto k = sorted3(t);
+    return uint64_t(k[0]) * 0x9E3779B97F4A7C15ull ^ (uint64_t(k[1]) << 32 | k[2]);
+  };
+  for (const Tri& t : fill)
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || fp.collinear(pos[t[0]], pos[t[1]], pos[t[2]]))
+      return "degenerate_triangle";
+  // Faces: the hash only proposes; the sorted triples decide.
+  for (size_t i = 0; i < fill.size(); ++i) {
+    if (faces.count(fkey(fill[i])))
+      for (const Tri& m : tris)
+        if (sorted3(m) == sorted3(fill[i])) return same_orientation(m, fill[i]) ? "duplicate_face" : "opposite_duplicate_face";
+    for (size_t j = 0; j < i; ++j)
+      if (sorted3(fill[j]) == sorted3(fill[i]))
+        return same_orientation(fill[j], fill[i]) ? "duplicate_face" : "opposite_duplicate_face";
+  }
+  // Edges: a fill edge already in the mesh may gain one face (a loop edge); any other
+  // use would make it non-manifold.
+  std::unordered_map<uint64_t, uint32_t> added;
+  for (const Tri& t : fill)
+    for (int k = 0; k < 3; ++k) ++added[ekey(t[size_t(k)], t[size_t((k + 1) % 3)])];
+  for (const auto& [key, n] : added) {
+    auto it = edge_count.find(key);
+    const uint32_t have = it == edge_count.end() ? 0 : it->second;
+    if (have + n > 2) return "nonmanifold_edge";
+  }
+  // Intersections with the mesh and within the fill.
+  for (size_t i = 0; i < fill.size(); ++i) {
+    const Tri& t = fill[i];
+    Box3d b{pos[t[0]], pos[t[0]]};
+    b.extend(pos[t[1]]);
+    b.extend(pos[t[2]]);
+    bool hit = false;
+    tree.query(b, [&](uint32_t m) {
+      if (!hit && boxes_overlap(boxes[m], b) && pair_intersects(pos, t, tris[m], nullptr, fp)) hit = true;
+    });
+    if (hit) return "self_intersection";
+    for (size_t j = 0; j < i; ++j)
+      if (pair_intersects(pos, fill[j], t, nullptr, fp)) return "self_intersection";
+  }
+  return nullptr;
+}
+
+// Closed loops that pass a vertex more than once (two holes meeting at a vertex) split
+// there into simple cycles, each a hole of its own; chains and simple loops stay as they
+// are. A cycle of two edges (an edge walked there and back) is dropped: it bounds nothing.
+std::vector<Loop> simple_loops(std::vector<Loop> loops) {
+  std::vector<Loop> out;
+  std::unordered_map<uint32_t, size_t> at;  // vertex -> index in the current path
+  for (Loop& L : loops) {
+    if (!L.closed) {
+      out.push_back(std::move(L));
       continue;
     }
+    const size_t n = L.groups.size();
+    std::vector<uint32_t> path{L.verts[0]}, edges;
+    at.clear();
+    at[L.verts[0]] = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t next = L.verts[(i + 1) % n];
+      edges.push_back(L.groups[i]);
+      auto it = at.find(next);
+      if (it == at.end()) {
+        at[next] = path.size();
+        path.push_back(next);
+        continue;
+      }
+      const size_t j = it->second;
+      Loop C;
+      C.verts.assign(path.begin() + long(j), path.end());
+      C.groups.assign(edges.begin() + long(j), edges.end());
+      if (C.groups.size() >= 3) out.push_back(std::move(C));
+      for (size_t k = j + 1; k < path.size(); ++k) at.erase(path[k]);
+      path.resize(j + 1);
+      edges.resize(j);
+    }
+  }
+  return out;
+}
+
+// Fills closed boundary loops of at most `max_len` edges that are simple and
+// consistently directed: the minimum-area triangulation of the loop traversed against
+// its faces' direction, or else its ear-clipping triangulation, whichever first passes
+// every exact check of fill_defect; a loop that neither passes is left open, recorded
+// with the first candidate's reason. Fills accepted earlier count as mesh for later ones.
+void fill_holes(Work& w, size_t max_len, const ExactPredicates& ex, std::vector<HoleRecord>& holes, size_t& added,
+                size_t& longer) {
+  const FilteredPredicates fp(ex);
+  EdgeTable e = build_edges(w.tris, nullptr, w.pos.size());
+  std::vector<Loop> loops = simple_loops(boundary_loops(e));
+  std::unordered_map<uint64_t, uint32_t> edge_count;
+  std::unordered_map<uint64_t, uint8_t> faces;
+  auto fkey = [](const Tri& t) {
+    const auto k = sorted3(t);
+    return uint64_t(k[0]) * 0x9E3779B97F4A7C15ull ^ (uint64_t(k[1]) << 32 | k[2]);
+  };
+  bool any = false;
+  for (const Loop& L : loops) any = any || (L.closed && L.groups.size() <= max_len && L.groups.size() >= 3);
+  if (!any) {
+    for (const Loop& L : loops) longer += L.closed && L.groups.size() > max_len;
+    return;
+  }
+  for (size_t g = 0; g < e.groups(); ++g) edge_count[e.recs[e.start[g]].key] = e.size(g);
+  for (const Tri& t : w.tris) faces[fkey(t)] = 1;
+  // A tree of the mesh's triangles; fills accepted later are appended to w.tris and
+  // tested directly, outside the tree.
+  const size_t base = w.tris.size();
+  std::vector<Box3d> boxes(base);
+  for (size_t t = 0; t < base; ++t) {
+    boxes[t] = Box3d{w.pos[w.tris[t][0]], w.pos[w.tris[t][0]]};
+    boxes[t].extend(w.pos[w.tris[t][1]]);
+    boxes[t].extend(w.pos[w.tris[t][2]]);
+  }
+  BoxTree tree(boxes);
+  constexpr size_t kMaxTriangulated = 2000;  // the O(n^3) program takes seconds at this size
+  for (const Loop& L : loops) {
+    const size_t n = L.groups.size();
+    if (!L.closed || n < 3) continue;
+    if (n > max_len) { ++longer; continue; }
+    HoleRecord rec;
+    rec.edges = n;
     std::vector<uint32_t> sorted(L.verts);
     std::sort(sorted.begin(), sorted.end());
-    bool simple = std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
+    const bool simple = std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end();
     // Direction of each edge in its face: along the loop (verts[i] -> verts[i+1]) or not.
     int along = 0;
     for (size_t i = 0; i < n; ++i) {
       const EdgeRec& r = e.recs[e.start[L.groups[i]]];
-      uint32_t from = w.tris[r.tri][r.k];
-      along += from == L.verts[i] ? 1 : -1;
+      along += w.tris[r.tri][r.k] == L.verts[i] ? 1 : -1;
     }
-    if (!simple || (along != int(n) && along != -int(n))) {
-      ++skipped;
+    if (!simple) rec.reason = "not_simple";
+    else if (along != int(n) && along != -int(n)) rec.reason = "inconsistent_direction";
+    else if (n > kMaxTriangulated) rec.reason = "too_long_to_triangulate";
+    if (rec.reason) {
+      holes.push_back(rec);
       continue;
     }
+    // The candidates are computed on the loop in a canonical order (from its lowest
+    // vertex, towards the lower neighbour), so that they do not depend on where the walk
+    // started or on the faces' orientation, then turned to run against the faces.
     std::vector<uint32_t> poly(L.verts);
-    if (along > 0) std::reverse(poly.begin(), poly.end());
-    std::vector<Tri> fill;
-    triangulate_polygon(w.pos, poly, fill);
-    bool ok = true;
-    for (const Tri& t : fill)
-      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || fp.collinear(w.pos[t[0]], w.pos[t[1]], w.pos[t[2]])) ok = false;
-    if (!ok) {
-      ++skipped;
+    std::rotate(poly.begin(), std::min_element(poly.begin(), poly.end()), poly.end());
+    if (poly[n - 1] < poly[1]) std::reverse(poly.begin() + 1, poly.end());
+    const size_t at0 = size_t(std::find(L.verts.begin(), L.verts.end(), poly[0]) - L.verts.begin());
+    const bool walk_order = L.verts[(at0 + 1) % n] == poly[1];
+    const bool flip = walk_order == (along > 0);  // the fill runs against the faces' direction
+    auto is_edge = [&](uint32_t a, uint32_t b) {
+      return edge_count.count(a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a)) > 0;
+    };
+    std::vector<std::vector<Tri>> candidates(2);
+    if (!min_area_triangulation(w.pos, poly, is_edge, candidates[0])) candidates[0].clear();
+    triangulate_polygon(w.pos, poly, candidates[1]);
+    if (flip)
+      for (auto& fill : candidates)
+        for (Tri& t : fill) std::swap(t[1], t[2]);
+    const std::vector<Tri>* chosen = nullptr;
+    for (const auto& fill : candidates) {
+      if (fill.empty()) {
+        if (!rec.reason) rec.reason = "chord_is_an_edge";
+        continue;
+      }
+      const char* why = fill_defect(w.pos, fill, w.tris, tree, boxes, edge_count, faces, fp);
+      // Fills accepted before this one are not in the tree: test them directly.
+      for (size_t t = base; t < w.tris.size() && !why; ++t)
+        for (const Tri& f : fill)
+          if (pair_intersects(w.pos, f, w.tris[t], nullptr, fp)) { why = "self_intersection"; break; }
+      if (!why) { chosen = &fill; break; }
+      if (!rec.reason) rec.reason = why;
+    }
+    if (!chosen) {
+      holes.push_back(rec);
       continue;
     }
-    for (const Tri& t : fill) {
+    rec.filled = true;
+    rec.reason = nullptr;
+    rec.triangles = chosen->size();
+    for (const Tri& t : *chosen) {
       w.tris.push_back(t);
       w.src.push_back(kFilledHole);
+      faces[fkey(t)] = 1;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = t[size_t(k)], b = t[size_t((k + 1) % 3)];
+        ++edge_count[a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a)];
+      }
     }
-    ++filled;
-    added += fill.size();
+    added += chosen->size();
+    holes.push_back(rec);
   }
 }
 
@@ -1074,6 +1387,19 @@ size_t split_nonmanifold(Work& w, std::vector<uint32_t>& cls) {
   return copies;
 }
 
+// The shortest period p >= 3 with face[i] == face[i mod p] for every i (a polygon that
+// lists its vertex cycle several times over), else face.size().
+size_t repeated_cycle_period(const std::vector<uint32_t>& face) {
+  const size_t n = face.size();
+  for (size_t p = 3; p * 2 <= n; ++p) {
+    if (n % p != 0) continue;
+    bool repeats = true;
+    for (size_t i = p; i < n && repeats; ++i) repeats = face[i] == face[i - p];
+    if (repeats) return p;
+  }
+  return n;
+}
+
 }  // namespace
 
 Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& opt, const ExactPredicates& ex) {
@@ -1102,9 +1428,12 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
       continue;
     }
     buf.clear();
-    if (face.size() > 3) {
+    const size_t period = repeated_cycle_period(face);
+    if (period < face.size()) ++R.repeated_cycles_collapsed;
+    if (period > 3) {
       ++R.polygons_triangulated;
-      if (!triangulate_polygon(w.pos, face, buf)) ++R.fan_fallbacks;
+      const std::vector<uint32_t> cycle(face.begin(), face.begin() + long(period));
+      if (!triangulate_polygon(w.pos, cycle, buf)) ++R.fan_fallbacks;
     } else {
       buf.push_back({face[0], face[1], face[2]});
     }
@@ -1114,10 +1443,14 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
     }
   }
   R.input_triangles = w.tris.size();
+  if (w.tris.empty())
+    return Error{"no faces (" + std::to_string(R.input_vertices) + " vertices, " + std::to_string(R.input_faces) +
+                 " faces, none with three or more vertices): not a surface mesh"};
   R.steps.push_back({"triangulate",
                      {{"polygons_triangulated", R.polygons_triangulated},
                       {"triangles_from_polygons", R.input_triangles - (R.input_faces - R.removed.size() - R.polygons_triangulated)},
                       {"fan_fallbacks", R.fan_fallbacks},
+                      {"repeated_cycles_collapsed", R.repeated_cycles_collapsed},
                       {"short_faces_dropped", R.removed.size()}},
                      seconds_since(t0)});
 
@@ -1188,33 +1521,45 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
                       {"unreferenced_vertices_dropped", R.unreferenced_vertices}},
                      weld_seconds});
 
-  // Clean.
+  // Clean. Splitting T-junctions can recreate a face that is already there (the split
+  // of (a, b, c) at p yields (a, p, c), which may exist), and removing copies can open
+  // edges that hold T-junctions; so both run until a split finds nothing, which repair
+  // of the output then confirms (idempotence).
   t0 = clock::now();
   {
-    const size_t nt = w.tris.size();
-    std::vector<uint8_t> keep(nt, 1);
-    std::vector<const char*> reason(nt, "");
-    size_t repeated = 0, zero = 0, dups = 0, odups = 0;
-    for (size_t t = 0; t < nt; ++t) {
-      const Tri& f = w.tris[t];
-      if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
-        keep[t] = 0;
-        reason[t] = "repeated_vertex";
-        ++repeated;
-      } else if (fp.collinear(w.pos[f[0]], w.pos[f[1]], w.pos[f[2]])) {
-        keep[t] = 0;
-        reason[t] = "zero_area";
-        ++zero;
+    size_t repeated = 0, zero = 0, dups = 0, odups = 0, tj = 0, tj_added = 0;
+    auto clean_faces = [&] {
+      const size_t nt = w.tris.size();
+      std::vector<uint8_t> keep(nt, 1);
+      std::vector<const char*> reason(nt, "");
+      for (size_t t = 0; t < nt; ++t) {
+        const Tri& f = w.tris[t];
+        if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
+          keep[t] = 0;
+          reason[t] = "repeated_vertex";
+          ++repeated;
+        } else if (fp.collinear(w.pos[f[0]], w.pos[f[1]], w.pos[f[2]])) {
+          keep[t] = 0;
+          reason[t] = "zero_area";
+          ++zero;
+        }
       }
+      std::vector<uint8_t> dup = find_duplicates(w.tris, keep, w.pos.size());
+      for (size_t t = 0; t < nt; ++t) {
+        if (dup[t] == 1) { keep[t] = 0; reason[t] = "duplicate"; ++dups; }
+        if (dup[t] == 2) { keep[t] = 0; reason[t] = "opposite_duplicate"; ++odups; }
+      }
+      remove_triangles(w, keep, reason, R.removed);
+    };
+    clean_faces();
+    for (int round = 0; round < 16; ++round) {
+      size_t added = 0;
+      const size_t split = split_t_junctions(w, ex, added);
+      if (split == 0) break;
+      tj += split;
+      tj_added += added;
+      clean_faces();
     }
-    std::vector<uint8_t> dup = find_duplicates(w.tris, keep, w.pos.size());
-    for (size_t t = 0; t < nt; ++t) {
-      if (dup[t] == 1) { keep[t] = 0; reason[t] = "duplicate"; ++dups; }
-      if (dup[t] == 2) { keep[t] = 0; reason[t] = "opposite_duplicate"; ++odups; }
-    }
-    remove_triangles(w, keep, reason, R.removed);
-    size_t tj_added = 0;
-    size_t tj = split_t_junctions(w, ex, tj_added);
     R.steps.push_back({"clean",
                        {{"repeated_vertex_faces_removed", repeated},
                         {"zero_area_faces_removed", zero},
@@ -1232,19 +1577,39 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
                      {{"faces_flipped_for_consistency", os.consistency_flips},
                       {"components_turned_outward", os.outward_components},
                       {"faces_flipped_outward", os.outward_flips},
+                      {"cavities", os.cavities},
                       {"nonorientable_patches_left", os.nonorientable_skipped}},
                      seconds_since(t0)});
 
   // Fill holes.
   if (opt.fill_holes > 0) {
     t0 = clock::now();
-    size_t filled = 0, added = 0, skipped = 0;
-    fill_holes(w, opt.fill_holes, ex, filled, added, skipped);
+    // Passes until one fills nothing: a fill can change the boundary walk and the
+    // geometry later loops are checked against, and repair of the output must find
+    // nothing more to fill (idempotence). The report keeps every fill and the last
+    // pass's open loops.
+    size_t added = 0, longer = 0, filled = 0;
+    for (int pass = 0; pass < 8; ++pass) {
+      std::vector<HoleRecord> holes;
+      longer = 0;
+      fill_holes(w, opt.fill_holes, ex, holes, added, longer);
+      size_t now = 0;
+      for (const HoleRecord& h : holes) now += h.filled;
+      filled += now;
+      std::vector<HoleRecord> kept;
+      for (const HoleRecord& h : R.holes)
+        if (h.filled) kept.push_back(h);
+      for (const HoleRecord& h : holes)
+        if (h.filled || now == 0) kept.push_back(h);
+      R.holes = std::move(kept);
+      if (now == 0) break;
+    }
     OrientStats os2 = filled ? orient(w, ex) : OrientStats{};
     R.steps.push_back({"fill_holes",
                        {{"loops_filled", filled},
                         {"triangles_added", added},
-                        {"loops_not_fillable", skipped},
+                        {"loops_not_fillable", R.holes.size() - filled},
+                        {"loops_longer_than_limit", longer},
                         {"faces_flipped_after_filling", os2.consistency_flips + os2.outward_flips}},
                        seconds_since(t0)});
   }
@@ -1256,6 +1621,30 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
     t0 = clock::now();
     size_t copies = split_nonmanifold(w, cls);
     R.steps.push_back({"split_nonmanifold", {{"vertex_copies_added", copies}}, seconds_since(t0)});
+  }
+
+  // Vertices that removed faces left unused go (in order), as the next run would drop
+  // them as unreferenced.
+  {
+    std::vector<uint32_t> id(w.pos.size(), kNone);
+    for (const Tri& t : w.tris)
+      for (uint32_t v : t) id[v] = 0;
+    uint32_t next = 0;
+    for (uint32_t v = 0; v < w.pos.size(); ++v)
+      if (id[v] != kNone) {
+        id[v] = next;
+        w.pos[next] = w.pos[v];
+        ++next;
+      }
+    if (next != w.pos.size()) {
+      std::vector<uint32_t> c(next);
+      for (uint32_t v = 0; v < cls.size(); ++v)
+        if (id[v] != kNone) c[id[v]] = id[cls[v]] != kNone ? id[cls[v]] : id[v];
+      cls = std::move(c);
+      w.pos.resize(next);
+      for (Tri& t : w.tris)
+        for (uint32_t& v : t) v = id[v];
+    }
   }
 
   // Output triangles in input face order (stable; hole fillers last), so that the report
@@ -1282,7 +1671,18 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
   R.output.triangles = std::move(w.tris);
   R.output.double_precision = soup.double_precision;
   R.output_source = std::move(w.src);
-  R.after = analyze_mesh(R.output, ex, &cls);
+  // The analysis depends only on the mesh (and the vertex classes, identity unless
+  // split): when repair left the input as it was, the first analysis is the answer.
+  bool split_any = false;
+  for (size_t v = 0; v < cls.size() && !split_any; ++v) split_any = cls[v] != v;
+  const bool unchanged = !split_any && R.output.vertices == before.vertices && R.output.triangles == before.triangles;
+  if (unchanged) {
+    R.after = R.before;
+    R.after.defects.near_duplicate_vertices = 0;
+    R.after.seconds.clear();
+  } else {
+    R.after = analyze_mesh(R.output, ex, &cls);
+  }
   if (T > 0 && opt.weld_mode == WeldMode::Strict) {
     // Vertices strict mode refused to merge are still within T of another one.
     std::vector<uint8_t> orig(R.output.vertices.size(), 0);
@@ -1296,7 +1696,8 @@ Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& o
   }
   R.output_vertex_class = std::move(cls);
   R.steps.push_back({"analyze_output",
-                     {{"self_intersection_pairs_tested", R.after.self_intersection_pairs_tested}},
+                     {{"self_intersection_pairs_tested", unchanged ? 0 : R.after.self_intersection_pairs_tested},
+                      {"reused_input_analysis", unchanged ? 1 : 0}},
                      seconds_since(t0)});
 
   // Face accounting: every input face is in the output or has a removal record.

@@ -14,7 +14,8 @@
 //   - welding: |p - q| <= T decided exactly (compare_distance);
 //   - zero area: exact collinearity of the three corners;
 //   - T-junctions: exact collinearity plus exact coordinate comparisons;
-//   - outward orientation: exact sign of the enclosed volume;
+//   - outward orientation: exact sign of the enclosed volume, and exact nesting of closed
+//     shells (ray parity under a symbolic perturbation) so that cavities face inward;
 //   - self-intersection: exact triangle-triangle, segment-triangle and orientation tests.
 // No vertex is ever moved: a welded vertex takes the position of its lowest-index input
 // vertex, so output coordinates are input coordinates bit for bit.
@@ -81,7 +82,8 @@ struct DefectCounts {
   size_t nonmanifold_vertices = 0;      // more than one fan (not counting ends of non-manifold edges)
   size_t inconsistent_edges = 0;        // two-face edges traversed twice in one direction
   size_t nonorientable_components = 0;  // components admitting no consistent orientation
-  size_t inward_components = 0;         // closed, consistently oriented, negative volume
+  size_t inward_components = 0;         // closed, consistent, facing against its nesting: an outer
+                                        // shell with negative volume or a cavity with positive
   size_t zero_volume_components = 0;    // closed, consistently oriented, exactly zero volume
   size_t boundary_loops = 0;            // holes
   size_t self_intersections = 0;        // pairs of faces meeting beyond shared vertices/edges
@@ -96,12 +98,15 @@ struct ComponentInfo {
   bool orientable = true;   // no parity conflict across two-face edges
   bool consistent = true;   // no inconsistent edge
   int volume_sign = 0;      // closed and consistent only
+  int depth = -1;           // shells (volume_sign != 0): how many other shells contain it;
+                            // odd depth is a cavity, which faces inward
   int genus = -1;           // -1 where undefined (non-orientable or non-manifold)
 };
 
 struct Analysis {
   DefectCounts defects;
   size_t vertices = 0, triangles = 0, edges = 0, boundary_edges = 0, closed_components = 0;
+  size_t cavities = 0;  // shells at odd nesting depth
   std::vector<ComponentInfo> components;
   std::vector<std::vector<uint32_t>> boundary_loops;     // vertex sequences
   std::vector<std::array<uint32_t, 2>> nonmanifold_edges;  // vertex pairs
@@ -159,6 +164,18 @@ struct RemovedTriangle {
   const char* reason = "";  // "short_face", "repeated_vertex", "zero_area", "duplicate", "opposite_duplicate"
 };
 
+// A boundary loop that hole filling considered (closed, at most N edges).
+struct HoleRecord {
+  size_t edges = 0;
+  bool filled = false;
+  size_t triangles = 0;          // added when filled
+  const char* reason = nullptr;  // when left open: "not_simple", "inconsistent_direction",
+                                 // "too_long_to_triangulate", "chord_is_an_edge",
+                                 // "degenerate_triangle", "duplicate_face",
+                                 // "opposite_duplicate_face", "nonmanifold_edge",
+                                 // "self_intersection"
+};
+
 struct RepairResult {
   IndexedMesh output;                    // after repair (the input, welded exactly, with check_only)
   std::vector<uint32_t> output_source;   // per output triangle: input face, or kFilledHole;
@@ -166,16 +183,19 @@ struct RepairResult {
   std::vector<uint32_t> output_vertex_class;  // per output vertex: the vertex before splitting
   size_t input_vertices = 0, input_faces = 0, input_triangles = 0;
   size_t polygons_triangulated = 0, fan_fallbacks = 0, unreferenced_vertices = 0;
+  size_t repeated_cycles_collapsed = 0;  // polygons listing their vertex cycle k > 1 times, kept once
   Analysis before, after;                // `after` is left empty with check_only
   WeldResult weld;
   std::vector<StepRecord> steps;
   std::vector<RemovedTriangle> removed;  // every input triangle not in the output, with its reason
   size_t faces_in_output = 0, faces_removed = 0;  // input faces with some / no triangle in the output
   std::vector<uint32_t> before_source;   // per triangle of the `before` mesh: its input face
+  std::vector<HoleRecord> holes;         // with fill_holes: every loop considered, in loop order
 };
 
 // The whole repair (or, with check_only, the analysis of the input). Errors only for
-// bad options (negative or non-finite tolerance) or indices that exceed the vertex count.
+// bad options (negative or non-finite tolerance), indices that exceed the vertex count,
+// or a soup without any face of three or more vertices ("no faces").
 Result<RepairResult> repair_mesh(const PolygonSoup& soup, const RepairOptions& opt, const ExactPredicates& ex);
 
 }  // namespace visgate::mesh

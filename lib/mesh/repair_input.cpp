@@ -451,8 +451,11 @@ std::string audit_stl(const std::string& bytes, Counts& n) {
 }  // namespace
 
 Result<InputAudit> audit_input(const std::string& path, const std::string& bytes, PolygonSoup& soup) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  std::string ext = soup.format;
+  if (ext.empty()) {
+    ext = std::filesystem::path(path).extension().string();
+    for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  }
   Counts n;
   Coords c;
   std::string err;

@@ -34,7 +34,8 @@ struct InputAudit {
   size_t coordinates_restored = 0;   // vertices whose reader value (a float) was replaced
 };
 
-// Audits `bytes` (the content of `path`) against `soup` (read from the same file) and
+// Audits `bytes` (the content of `path` as decode_mesh_file decodes it, in the format
+// soup.format or else the one its extension names) against `soup` (read from it) and
 // restores double coordinates into `soup` (setting soup.double_precision). Errors name
 // the file and the element.
 Result<InputAudit> audit_input(const std::string& path, const std::string& bytes, PolygonSoup& soup);

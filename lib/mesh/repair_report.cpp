@@ -37,11 +37,13 @@ json details_json(const Analysis& a, const std::vector<uint32_t>& src) {
   j["boundary_edges"] = a.boundary_edges;
   j["components"] = a.components.size();
   j["closed_components"] = a.closed_components;
+  j["cavities"] = a.cavities;
   j["component_list"] = capped(a.components, [](const ComponentInfo& c) {
     json x{{"faces", c.faces}, {"vertices", c.vertices}, {"edges", c.edges}, {"closed", c.closed},
            {"orientable", c.orientable}, {"consistent", c.consistent}, {"boundary_loops", c.boundary_loops}};
     x["genus"] = c.genus >= 0 ? json(c.genus) : json(nullptr);
     if (c.closed && c.orientable && c.consistent) x["volume_sign"] = c.volume_sign;
+    if (c.depth >= 0) x["nesting_depth"] = c.depth;
     return x;
   });
   j["boundary_loop_lengths"] = capped(a.boundary_loops, [](const std::vector<uint32_t>& l) { return l.size(); });
@@ -125,6 +127,9 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
   json attrs = json::object();
   for (const auto& [name, n] : attributes_not_kept(soup, ctx.audit)) attrs[name] = n;
   j["input"]["attributes_not_kept"] = attrs;
+  j["input"]["format"] = soup.format;
+  j["input"]["warnings"] = soup.warnings;
+  j["input"]["repeated_cycles_collapsed"] = r.repeated_cycles_collapsed;
   if (check) {
     j["output"] = nullptr;
   } else {
@@ -132,8 +137,17 @@ json repair_report_json(const RepairResult& r, const PolygonSoup& soup, const Re
                    {"sha256", ctx.output_sha256},
                    {"vertices", r.output.vertices.size()},
                    {"triangles", r.output.triangles.size()},
-                   {"coordinate_digits", r.output.double_precision ? 17 : 9}};
+                   {"coordinate_digits", r.output.double_precision ? 17 : 9},
+                   {"coordinate_format", r.output.double_precision ? "double, 17 significant digits"
+                                                                   : "float, shortest round trip (at most 9 digits)"}};
   }
+  if (ctx.options.fill_holes > 0 && !check)
+    j["holes"] = capped(r.holes, [](const HoleRecord& h) {
+      json x{{"edges", h.edges}, {"filled", h.filled}};
+      if (h.filled) x["triangles"] = h.triangles;
+      else x["reason"] = h.reason ? h.reason : "";
+      return x;
+    });
   j["options"] = {{"weld_tolerance", ctx.options.weld_tolerance},
                   {"weld_mode", ctx.options.weld_mode == WeldMode::Strict ? "strict" : "chain"},
                   {"split_nonmanifold", ctx.options.split_nonmanifold},

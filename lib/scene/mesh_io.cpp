@@ -8,6 +8,7 @@
 #include <OpenMesh/Core/System/omstream.hh>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cctype>
@@ -19,6 +20,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <mutex>
 #include <sstream>
 
@@ -189,6 +191,25 @@ std::string number_error(const std::string& tok, size_t line, const std::string&
 // number, leaving counts uninitialised. The canonical text is the magic alone on line 1,
 // "nv nf 0" on line 2, then every vertex and face line with comments and blank lines
 // removed: exactly what was validated here.
+// The words of `line` as `istream >> std::string` finds them (separated by the "C"
+// locale's white space), without a stream per line; `toks` keeps its capacity.
+void split_words(const std::string& line, std::vector<std::string>& toks) {
+  size_t n = 0;
+  const char* p = line.data();
+  const char* end = p + line.size();
+  auto space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r'; };
+  while (p < end) {
+    while (p < end && space(*p)) ++p;
+    if (p == end) break;
+    const char* b = p;
+    while (p < end && !space(*p)) ++p;
+    if (n < toks.size()) toks[n].assign(b, p);
+    else toks.emplace_back(b, p);
+    ++n;
+  }
+  toks.resize(n);
+}
+
 std::string prescan_off(std::istream& in, std::string& canonical) {
   std::string line;
   size_t lineno = 0;
@@ -198,9 +219,7 @@ std::string prescan_off(std::istream& in, std::string& canonical) {
       ++lineno;
       auto hash = line.find('#');
       if (hash != std::string::npos) line.resize(hash);
-      std::istringstream ss(line);
-      toks.clear();
-      for (std::string t; ss >> t;) toks.push_back(t);
+      split_words(line, toks);
       if (!toks.empty()) return true;
     }
     return false;
@@ -702,22 +721,189 @@ std::mutex& io_mutex() {
   return m;
 }
 
+// Binary STL: 84 header bytes and 50 per facet, as its count says.
+bool binary_stl_size(const std::string& data) {
+  if (data.size() < 84) return false;
+  uint32_t n = 0;
+  std::memcpy(&n, data.data() + 80, 4);
+  return data.size() == 84 + 50ull * n;
+}
+
+// Format from content, for files without an extension: PLY and OFF by their magic, STL
+// by its binary size or `solid`, OBJ by its first keyword.
+std::string sniff_format(const std::string& data) {
+  if (binary_stl_size(data)) return ".stl";
+  std::istringstream in(data.substr(0, 4096));
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream ss(line);
+    std::string kw;
+    if (!(ss >> kw) || kw[0] == '#') continue;
+    if (kw == "ply") return ".ply";
+    if (kw.find("OFF") != std::string::npos) return ".off";
+    if (kw == "solid") return ".stl";
+    if (kw == "v" || kw == "vn" || kw == "vt" || kw == "f" || kw == "o" || kw == "g" || kw == "mtllib" ||
+        kw == "usemtl" || kw == "s" || kw == "l" || kw == "p")
+      return ".obj";
+    return "";
+  }
+  return "";
+}
+
+// Levenshtein distance of two short words.
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  std::iota(row.begin(), row.end(), size_t(0));
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// PLY header lines whose keyword the format does not know become comments (as other
+// readers skip them), each with a warning naming its line. A keyword within two edits of
+// a known one (`elemnt`) is a typo that would drop an element or a property and misread
+// the body: it stays, for prescan_ply to refuse.
+void soften_ply_header(std::string& data, std::vector<std::string>& warnings, bool& changed) {
+  size_t pos = 0, lineno = 0;
+  while (pos < data.size() && lineno < kMaxPlyHeaderLines) {
+    const size_t nl = data.find('\n', pos);
+    const size_t end = nl == std::string::npos ? data.size() : nl;
+    ++lineno;
+    std::istringstream ss(data.substr(pos, end - pos));
+    std::string kw;
+    ss >> kw;
+    if (kw == "end_header") return;
+    static const char* kKnown[] = {"ply", "format", "element", "property", "comment", "obj_info", "end_header"};
+    bool known = kw.empty() || lineno == 1;
+    for (const char* k : kKnown) known = known || edit_distance(kw.substr(0, 16), k) <= 2;
+    if (!known) {
+      std::string text = data.substr(pos, end - pos);
+      if (!text.empty() && text.back() == '\r') text.pop_back();
+      warnings.push_back("line " + std::to_string(lineno) + ": unknown PLY header line '" + text.substr(0, 64) +
+                         "' ignored");
+      data.insert(pos, "comment ");
+      changed = true;
+      pos = data.find('\n', pos);
+      if (pos == std::string::npos) return;
+      ++pos;
+      continue;
+    }
+    if (nl == std::string::npos) return;
+    pos = nl + 1;
+  }
+}
+
+Result<PolygonSoup> read_soup(const std::string& path, const std::string& read_path, const std::string& ext);
+
 }  // namespace
 
-Result<PolygonSoup> read_polygon_file(const std::string& path) {
+Result<DecodedMeshFile> decode_mesh_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) return Error{path + ": file not found"};
   if (fs::is_directory(path, ec)) return Error{path + ": is a directory"};
+  DecodedMeshFile d;
+  {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return Error{path + ": cannot open file"};
+    const std::streamoff size = in.tellg();
+    if (size < 0) return Error{path + ": cannot read file"};
+    d.bytes.resize(size_t(size));
+    in.seekg(0);
+    if (!in.read(d.bytes.data(), size)) return Error{path + ": read error"};
+  }
+  if (d.bytes.empty()) return Error{path + ": empty file (no faces)"};
   std::string ext = fs::path(path).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
+  const bool binary_stl = (ext == ".stl" || ext.empty()) && binary_stl_size(d.bytes);
+  const std::string& b = d.bytes;
+  if (!binary_stl && b.size() >= 3 && b.compare(0, 3, "\xEF\xBB\xBF") == 0) {
+    d.bytes.erase(0, 3);
+    d.changed = true;
+  } else if (!binary_stl && b.size() >= 2 && (b.compare(0, 2, "\xFF\xFE") == 0 || b.compare(0, 2, "\xFE\xFF") == 0)) {
+    const bool le = b[0] == '\xFF';
+    if (b.size() % 2 != 0) return Error{path + ": UTF-16 text (byte-order mark) with an odd number of bytes"};
+    std::string text;
+    text.reserve(b.size() / 2);
+    for (size_t i = 2; i < b.size(); i += 2) {
+      const unsigned lo = static_cast<unsigned char>(b[le ? i : i + 1]), hi = static_cast<unsigned char>(b[le ? i + 1 : i]);
+      const unsigned u = hi << 8 | lo;
+      if (u >= 0x80) {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "%04X", u);
+        return Error{path + ": UTF-16 text (byte-order mark): character " + std::to_string(i / 2 - 1) + " is U+" + hex +
+                     ", not ASCII (save the file as ASCII or UTF-8)"};
+      }
+      text.push_back(char(u));
+    }
+    d.bytes = std::move(text);
+    d.changed = true;
+  }
+  if (ext.empty()) {
+    ext = sniff_format(d.bytes);
+    if (ext.empty()) return Error{path + ": no extension, and the content is not OBJ, OFF, PLY or STL"};
+  } else if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl") {
     return Error{path + ": unsupported mesh format '" + ext + "' (OBJ, OFF, PLY, STL)"};
+  }
+  d.format = ext;
+  if (ext == ".ply") soften_ply_header(d.bytes, d.warnings, d.changed);
+  return d;
+}
 
+Result<PolygonSoup> read_polygon_file(const std::string& path) {
+  auto d = decode_mesh_file(path);
+  if (!d) return d.error();
+  return read_polygon_file(path, *d);
+}
+
+Result<PolygonSoup> read_polygon_file(const std::string& path, const DecodedMeshFile& decoded) {
+  namespace fs = std::filesystem;
+  const DecodedMeshFile* d = &decoded;
+  if (!d->changed && !fs::path(path).extension().empty()) {
+    auto soup = read_soup(path, path, d->format);
+    if (soup) soup->format = d->format;
+    return soup;
+  }
+  // Decoded text or an extension-less file: the readers take it from a temporary file
+  // with the format's extension.
+  static std::atomic<uint64_t> serial{0};
+  std::error_code ec;
+  const fs::path tmp = fs::temp_directory_path(ec) / ("visgate-mesh-" + std::to_string(::getpid()) + "-" +
+                                                     std::to_string(serial++) + d->format);
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out.write(d->bytes.data(), std::streamsize(d->bytes.size()));
+    if (!out) {
+      fs::remove(tmp, ec);
+      return Error{path + ": cannot write a temporary file in " + tmp.parent_path().string()};
+    }
+  }
+  auto soup = read_soup(path, tmp.string(), d->format);
+  fs::remove(tmp, ec);
+  if (soup) {
+    soup->format = d->format;
+    soup->warnings = d->warnings;
+  }
+  return soup;
+}
+
+namespace {
+
+// Reads `read_path` as format `ext`; errors name `path`.
+Result<PolygonSoup> read_soup(const std::string& path, const std::string& read_path, const std::string& ext) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
   std::string canonical;
   ObjFaces obj;
   StlFacets stl;
-  if (auto pre = prescan_mesh_file(path, ext, canonical, obj, stl); !pre.empty()) return Error{path + ": " + pre};
+  if (auto pre = prescan_mesh_file(read_path, ext, canonical, obj, stl); !pre.empty()) return Error{path + ": " + pre};
 
   SoupImporter imp;
   imp.faces_elsewhere = ext == ".obj" || ext == ".stl";
@@ -742,11 +928,11 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
           h << canonical.substr(0, canonical.find('\n') + 1);
           if (!h) return Error{path + ": cannot write a temporary file in " + head.parent_path().string()};
         }
-        std::istringstream body(canonical);
+        std::istringstream body(std::move(canonical));  // no second copy of a large file
         ok = OIO::OFFReader().can_u_read(head.string()) && OIO::OFFReader().read(body, imp, opt);
         fs::remove(head, ec);
       } else {
-        ok = OIO::IOManager().read(path, imp, opt);
+        ok = OIO::IOManager().read(read_path, imp, opt);
       }
     } catch (const std::exception& e) {
       return Error{path + ": cannot read mesh: " + e.what()};
@@ -795,6 +981,8 @@ Result<PolygonSoup> read_polygon_file(const std::string& path) {
   }
   return std::move(imp.soup);
 }
+
+}  // namespace
 
 Result<TriangleSoup> triangulate(const PolygonSoup& soup, const std::string& origin, size_t* short_faces) {
   TriangleSoup out;

@@ -4,7 +4,9 @@
 // (DESIGN section 7, issue 9.) Exit codes: 0 clean after repair (or clean input with
 // --check), 1 defects left (listed), 2 bad input or usage (nothing written), 3 internal.
 // The input is never modified unless --in-place; files are written through a temporary
-// file and a rename.
+// file and a rename. --in-place keeps the file's mode and owner, replaces the target of
+// a symbolic link (not the link), and warns that other hard links keep the old content.
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -42,7 +44,8 @@ class StagedFiles {
     std::error_code ec;
     for (const auto& [tmp, target] : staged_) std::filesystem::remove(tmp, ec);
   }
-  Status stage(const std::string& target, const std::string& bytes) {
+  // `like`: the file being replaced (--in-place), whose mode and owner the new file takes.
+  Status stage(const std::string& target, const std::string& bytes, const struct stat* like = nullptr) {
     namespace fs = std::filesystem;
     fs::path t(target);
     fs::path dir = t.parent_path().empty() ? fs::path(".") : t.parent_path();
@@ -53,6 +56,13 @@ class StagedFiles {
     out.write(bytes.data(), std::streamsize(bytes.size()));
     out.flush();
     if (!out) return Error{target + ": write failed (disk full?)"};
+    out.close();
+    if (like) {
+      // Owner first: chown may clear set-id bits, which chmod then restores.
+      if (::chown(tmp.c_str(), like->st_uid, like->st_gid) != 0 && (like->st_uid != ::geteuid()))
+        return Error{target + ": cannot keep its owner (uid " + std::to_string(like->st_uid) + ")"};
+      if (::chmod(tmp.c_str(), like->st_mode & 07777) != 0) return Error{target + ": cannot keep its mode"};
+    }
     return {};
   }
   Status commit() {
@@ -105,8 +115,10 @@ int run_repair(const RepairOpts& o) {
   if (!o.report.empty() && (same_path(o.report, o.in) || (!out.empty() && same_path(o.report, out))))
     return bad_input("--report " + o.report + ": must differ from the input and output meshes");
   mesh::MeshFormat fmt = mesh::MeshFormat::Obj;
+  // --in-place on a file without an extension writes the format its content had.
+  const bool format_from_content = o.in_place && std::filesystem::path(out).extension().empty();
   if (!o.check) {
-    auto f = mesh::format_from_path(out, o.stl_ascii);
+    auto f = format_from_content ? Result<mesh::MeshFormat>(mesh::MeshFormat::Obj) : mesh::format_from_path(out, o.stl_ascii);
     if (!f) return bad_input(f.error().message);
     fmt = *f;
     std::error_code ec;
@@ -125,12 +137,23 @@ int run_repair(const RepairOpts& o) {
   }
 
   // Read, then audit what the reader does not keep (attributes, double coordinates).
-  auto bytes = read_text_file(o.in);
+  auto decoded = decode_mesh_file(o.in);
+  if (!decoded) return bad_input(decoded.error().message);
+  // The report hashes the file's own bytes, which differ from the decoded ones only
+  // when decoding changed them.
+  const bool report = !o.report.empty();  // only the JSON report holds the hashes
+  Result<std::string> bytes = decoded->changed && report ? read_text_file(o.in) : Result<std::string>(std::string());
   if (!bytes) return bad_input(bytes.error().message);
-  auto soup = read_polygon_file(o.in);
+  auto soup = read_polygon_file(o.in, *decoded);
   if (!soup) return bad_input(soup.error().message);
-  auto audit = mesh::audit_input(o.in, *bytes, *soup);
+  if (format_from_content) {
+    auto f = mesh::format_from_path("in" + soup->format, o.stl_ascii);
+    if (!f) return bad_input(f.error().message);
+    fmt = *f;
+  }
+  auto audit = mesh::audit_input(o.in, decoded->bytes, *soup);
   if (!audit) return bad_input(audit.error().message);
+  for (const std::string& w : soup->warnings) std::fprintf(stderr, "warning: %s: %s\n", o.in.c_str(), w.c_str());
 
   // Repair.
   oracle::CgalExactPredicates ex;
@@ -140,7 +163,7 @@ int run_repair(const RepairOpts& o) {
 
   mesh::ReportContext ctx;
   ctx.input_path = o.in;
-  ctx.input_sha256 = mesh::sha256_hex(*bytes);
+  if (report) ctx.input_sha256 = mesh::sha256_hex(decoded->changed ? *bytes : decoded->bytes);
   ctx.options = ro;
   ctx.audit = *audit;
   std::string encoded;
@@ -149,7 +172,7 @@ int run_repair(const RepairOpts& o) {
     if (!enc) return bad_input(enc.error().message);
     encoded = std::move(*enc);
     ctx.output_path = out;
-    ctx.output_sha256 = mesh::sha256_hex(encoded);
+    if (report) ctx.output_sha256 = mesh::sha256_hex(encoded);
   }
   ctx.exit_code = mesh::remaining_defects(r, o.check).empty() ? kOk : kFound;
   ctx.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -158,8 +181,22 @@ int run_repair(const RepairOpts& o) {
   // both are complete, rename them into place.
   StagedFiles files;
   if (!o.check) {
-    Status st = files.stage(out, encoded);
-    if (!st) return bad_input(st.error().message);
+    if (o.in_place) {
+      // The file itself is replaced, not a symbolic link to it: the new content is
+      // renamed onto the link's final target, next to it, with its mode and owner.
+      std::error_code ec;
+      const std::string target = std::filesystem::canonical(out, ec).string();
+      struct stat st_in {};
+      if (ec || ::stat(target.c_str(), &st_in) != 0) return bad_input(out + ": cannot resolve the file to replace");
+      if (st_in.st_nlink > 1)
+        std::fprintf(stderr, "warning: %s: has %lu other hard links, which keep the old content\n", out.c_str(),
+                     static_cast<unsigned long>(st_in.st_nlink - 1));
+      Status st = files.stage(target, encoded, &st_in);
+      if (!st) return bad_input(st.error().message);
+    } else {
+      Status st = files.stage(out, encoded);
+      if (!st) return bad_input(st.error().message);
+    }
   }
   if (!o.report.empty()) {
     Status st = files.stage(o.report, mesh::repair_report_json(r, *soup, ctx).dump(2) + "\n");
