@@ -3,6 +3,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/tools/setup.sh"
+# Third-party meshes for the repair tests (never committed); without them those tests skip.
+"$root/tools/fetch-openscad-data.sh" >&2 || echo "test: OpenSCAD regression meshes not fetched; RepairOpenScad tests skip" >&2
 "$root/tools/build.sh"
 cd "${VISGATE_BUILD_DIR:-$root/build}"
 ctest --output-on-failure -j "$(nproc)"
