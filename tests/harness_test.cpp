@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "lib/scene/families.h"
+#include "tests/support/family_scene.h"
 #include "oracle/comparator.h"
 #include "tools/harness/check.h"
 #include "tools/harness/corpus.h"
@@ -18,16 +19,7 @@
 namespace visgate::harness {
 namespace {
 
-Scene family(const std::string& f, uint64_t seed, long tris = -1, long recv = -1, long samples = -1) {
-  FamilyParams p;
-  p.seed = seed;
-  p.triangles = tris;
-  p.receivers = recv;
-  p.samples = samples;
-  auto r = generate_family(f, p);
-  EXPECT_TRUE(r.ok());
-  return std::move(*r);
-}
+using visgate::test_support::family;
 
 TEST(ReceiverBits, CountVisibleEqualsTheBitByBitCountOnEveryRange) {
   // Every [begin, end) of 200 random bits (four words, ranges within one word, across

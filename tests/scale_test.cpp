@@ -14,6 +14,7 @@
 
 #include "lib/scene/exact_transform.h"
 #include "lib/scene/families.h"
+#include "tests/support/family_scene.h"
 #include "lib/solver.h"
 #include "oracle/comparator.h"
 #include "oracle/relation_oracle.h"
@@ -21,16 +22,7 @@
 namespace visgate {
 namespace {
 
-Scene family(const std::string& f, uint64_t seed, long tris, long recv, long samples) {
-  FamilyParams p;
-  p.seed = seed;
-  p.triangles = tris;
-  p.receivers = recv;
-  p.samples = samples;
-  auto r = generate_family(f, p);
-  EXPECT_TRUE(r.ok()) << f;
-  return std::move(*r);
-}
+using visgate::test_support::family;
 
 bool same_bits(const Vec3f& a, const Vec3f& b) {
   for (int k = 0; k < 3; ++k)

@@ -8,7 +8,7 @@
 // length (typical_relation_length) lies in [2, 4). Every float tolerance inside a method
 // is then relative to lengths near 2, as are Embree's (its robust intersector loses hits
 // when a scene's triple products of coordinate differences approach float32's
-// subnormals, near extent 2^-37), and a scene and all its exact 2^k copies reach the
+// subnormals, below extents of about 2^-40), and a scene and all its exact 2^k copies reach the
 // method as the same bits, so they get the same answers bit for bit. A median, not the
 // bounding box: one outlying point (an explicit sample 2^64 away) must not shrink the
 // rest of the scene towards subnormals.
