@@ -11,6 +11,7 @@
 
 #include "fuzz/decoder.h"
 #include "fuzz/gmp_pool.h"
+#include "lib/external/plugin_method.h"
 #include "lib/raycast/embree_solver.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
@@ -34,7 +35,16 @@ Target& target_state(const char* target) {
   if (it != targets.end()) return it->second;
   Target t;
   t.method = target_method(target);
-  t.solver = make_solver(t.method);
+  if (t.method.rfind("plugin:", 0) == 0) {
+    // fuzz_plugin: the crash guard off, so that a crash reaches the sanitizers.
+    try {
+      t.solver = std::make_unique<external::PluginSolver>(t.method.substr(7), false);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s\n", target, e.what());
+    }
+  } else {
+    t.solver = make_solver(t.method);
+  }
   if (t.solver)
     t.specs = t.solver->options();
   else
