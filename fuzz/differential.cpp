@@ -47,6 +47,8 @@ Target& target_state(const char* target) {
   }
   if (t.solver)
     t.specs = t.solver->options();
+  else if (t.method.empty() && std::string(target) == "fuzz_plugin")
+    std::fprintf(stderr, "%s: VISGATE_FUZZ_PLUGIN is not set (the plugin to fuzz); every input returns at once\n", target);
   else
     std::fprintf(stderr, "%s: method '%s' is not registered in this build; every input returns at once\n", target,
                  t.method.c_str());
