@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "lib/scene/exact_transform.h"
@@ -330,6 +331,11 @@ std::string target_method(const std::string& target) {
   if (target == "fuzz_ssv") return "ssv";
   if (target == "fuzz_plucker") return "plucker-bsp";
   if (target == "fuzz_embree") return "embree-robust";
+  // Your own method (fuzz_plugin.cpp): the library VISGATE_FUZZ_PLUGIN names; "" without it.
+  if (target == "fuzz_plugin") {
+    const char* path = std::getenv("VISGATE_FUZZ_PLUGIN");
+    return path && *path ? std::string("plugin:") + path : std::string();
+  }
   return "";
 }
 

@@ -11,6 +11,7 @@
 
 #include "fuzz/decoder.h"
 #include "fuzz/gmp_pool.h"
+#include "lib/external/plugin_method.h"
 #include "lib/raycast/embree_solver.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
@@ -34,9 +35,20 @@ Target& target_state(const char* target) {
   if (it != targets.end()) return it->second;
   Target t;
   t.method = target_method(target);
-  t.solver = make_solver(t.method);
+  if (t.method.rfind("plugin:", 0) == 0) {
+    // fuzz_plugin: the crash guard off, so that a crash reaches the sanitizers.
+    try {
+      t.solver = std::make_unique<external::PluginSolver>(t.method.substr(7), false);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s\n", target, e.what());
+    }
+  } else {
+    t.solver = make_solver(t.method);
+  }
   if (t.solver)
     t.specs = t.solver->options();
+  else if (t.method.empty() && std::string(target) == "fuzz_plugin")
+    std::fprintf(stderr, "%s: VISGATE_FUZZ_PLUGIN is not set (the plugin to fuzz); every input returns at once\n", target);
   else
     std::fprintf(stderr, "%s: method '%s' is not registered in this build; every input returns at once\n", target,
                  t.method.c_str());

@@ -1,5 +1,7 @@
 // The method registry: every built-in method by its DESIGN section 4 name. A new method
-// adds one line to each function.
+// adds one line to each function. External methods (exec:CMD, plugin:PATH) are made by
+// lib/external; solver_names() lists the built-in ones only.
+#include "lib/external/external_methods.h"
 #include "lib/iss/iss_solver.h"
 #include "lib/plucker/plucker_solver.h"
 #include "lib/raycast/brute.h"
@@ -18,6 +20,7 @@ std::unique_ptr<Solver> make_solver(const std::string& name) {
   if (name == "iss") return std::make_unique<iss::IssSolver>();
   if (name == "ssv") return std::make_unique<ssv::SsvSolver>();
   if (name == "plucker-bsp") return std::make_unique<plucker::PluckerSolver>();
+  if (external::is_external_method(name)) return external::make_external_solver(name);
   return nullptr;
 }
 

@@ -2,6 +2,7 @@
 // and family lists, scene generation (see bench.h).
 #include "tools/bench/bench.h"
 
+#include "lib/external/external_methods.h"
 #include "tools/bench/run_method.h"
 
 #include <chrono>
@@ -56,6 +57,7 @@ std::vector<std::string> BenchContext::methods() {
   for (const auto& m : opt.methods) {
     bool found = false;
     for (const auto& r : reg) found |= (r == m);
+    found |= external::is_external_method(m);  // exec:CMD, plugin:PATH
     if (found) out.push_back(m);
     else note("method " + m + " is not registered in this build: skipped");
   }
@@ -84,6 +86,7 @@ std::vector<std::string> BenchContext::families(const std::vector<std::string>& 
 bool BenchContext::has_method(const std::string& method, const std::string& what) {
   for (const auto& r : solver_names())
     if (r == method) return true;
+  if (external::is_external_method(method)) return true;
   note(method + " is not registered in this build: " + what + " skipped");
   return false;
 }

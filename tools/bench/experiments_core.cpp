@@ -1,10 +1,12 @@
 // The `visgate bench` experiments that need no exact oracle:
+//   overhead    an external method against the built-in it wraps, in paired rounds;
 //   complexity  seconds against receivers, samples and triangles for every method with
 //               fitted log-log slopes: the complexity cube of paper 000 Fig. 3.1, measured;
 //   iss         the analogue of paper 000 Tables 5.2 and 5.3 (section 5.2);
 //   ssv         the analogue of paper 001 Tables 1, 3 and 4 (section 5).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <utility>
@@ -446,9 +448,69 @@ Status run_ssv(BenchContext& ctx) {
   return {};
 }
 
+// ---------------------------------------------------------------------------------
+// overhead: what an external method's interface costs (docs/external-methods.md). The
+// first --methods entry is the reference (default embree); every other one (e.g. a
+// plugin wrapping the same built-in: tests/support/embree_plugin.cpp) runs against it on
+// the same scene in paired single-threaded rounds (reference, other, reference, ...), so
+// a slow phase of a shared machine falls on both. Reported: the ratio of the minima and
+// the median and range of the per-round ratios, for `seconds` and for CPU time.
+Status run_overhead(BenchContext& ctx) {
+  const auto& o = ctx.opt;
+  std::vector<std::string> methods = o.methods.empty() ? std::vector<std::string>{"embree"} : ctx.methods();
+  if (methods.size() < 2)
+    return Error{"overhead: give the reference and the methods to compare, e.g. --methods embree,plugin:PATH"};
+  auto fams = ctx.families({o.families.empty() ? std::string("random-soup") : o.families.front()});
+  if (fams.empty()) return Error{"overhead: no registered family to measure"};
+  FamilyParams p;
+  p.seed = o.seed;
+  p.receivers = o.quick ? 1024 : 16384;
+  p.samples = o.quick ? 16 : 64;
+  p.triangles = o.quick ? 100 : 800;
+  auto scene = ctx.scene(fams.front(), p);
+  if (!scene) return scene.error();
+  auto ref = ctx.solver(methods.front());
+  if (!ref) return Error{"overhead: method " + methods.front() + " unavailable"};
+  SolveOptions so;
+  so.seed = o.seed;
+  const int rounds = std::max(o.repeat, o.quick ? 5 : 15);
+  ctx.report.options["family"] = fams.front();
+  ctx.report.options["scene"] = {{"receivers", scene->receivers.size()}, {"samples", scene->samples_per_receiver()},
+                                 {"triangles", scene->mesh.size()}, {"relations", scene->relation_count()}};
+  ctx.report.options["rounds"] = rounds;
+  Table t{"overhead", "each method against the first in paired single-threaded rounds on one scene",
+          {"reference", "method", "rounds", "reference_min_seconds", "method_min_seconds", "ratio_of_minima",
+           "median_round_ratio", "min_round_ratio", "max_round_ratio", "cpu_ratio_of_minima", "cpu_median_round_ratio"},
+          {}};
+  for (size_t k = 1; k < methods.size(); ++k) {
+    auto other = ctx.solver(methods[k]);
+    if (!other) continue;
+    ctx.progress.step(methods[k] + " against " + methods.front());
+    const PairedTimes pt = measure_paired(*ref, *scene, so, *other, *scene, so, rounds, ctx.measure_config());
+    const RoundRatios w = round_ratios(pt.a_seconds, pt.b_seconds), c = round_ratios(pt.a_cpu, pt.b_cpu);
+    auto minimum = [](const std::vector<double>& v) {
+      return v.empty() ? std::numeric_limits<double>::quiet_NaN() : *std::min_element(v.begin(), v.end());
+    };
+    t.add_row({methods.front(), methods[k], int(pt.a_seconds.size()), minimum(pt.a_seconds), minimum(pt.b_seconds),
+               w.of_minima, w.median, w.lo, w.hi, c.of_minima, c.median});
+    char b[512];
+    std::snprintf(b, sizeof b,
+                  "%s against %s (%zu relations, %zu rounds): seconds x%.3f (minima %.4f / %.4f s), median round "
+                  "ratio %.3f (%.3f-%.3f), CPU x%.3f",
+                  methods[k].c_str(), methods.front().c_str(), scene->relation_count(), pt.a_seconds.size(),
+                  w.of_minima, minimum(pt.b_seconds), minimum(pt.a_seconds), w.median, w.lo, w.hi, c.of_minima);
+    ctx.note(b);
+  }
+  ctx.report.tables.push_back(std::move(t));
+  return {};
+}
+
 }  // namespace
 
 void add_core_experiments(std::vector<Experiment>& out) {
+  out.push_back({"overhead",
+                 "an external method (plugin:, exec:) against the built-in it wraps: paired rounds on one scene",
+                 run_overhead});
   out.push_back({"complexity", "seconds against receivers, samples and triangles per method, with log-log slopes",
                  run_complexity});
   out.push_back({"iss", "paper 000 Tables 5.2/5.3 analogue: ISS against embree", run_iss});

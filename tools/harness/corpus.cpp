@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
@@ -138,12 +139,27 @@ std::string corpus_entry_text(const Scene& scene, const CaseInfo& info) {
   return text + ",\n\"case\":" + c.dump(1) + "}\n";
 }
 
+namespace {
+// The corpus folder of a method (DESIGN section 8: corpus/<method>/...): its name, or for
+// an external method (exec:CMD, plugin:PATH, which hold slashes and spaces) the name
+// with every character outside [A-Za-z0-9._-] replaced by '_', its tail kept and a hash
+// of the whole name added when it is long.
+std::string method_folder(const std::string& method) {
+  if (method.rfind("exec:", 0) != 0 && method.rfind("plugin:", 0) != 0) return method;
+  std::string s = method;
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') c = '_';
+  if (s.size() > 64) s = s.substr(0, s.find('_')) + "-" + sha1_hex(method).substr(0, 8) + "-" + s.substr(s.size() - 40);
+  return s;
+}
+}  // namespace
+
 Result<std::string> write_corpus_entry(const std::string& root, const Scene& scene, const CaseInfo& info) {
   const auto& cls = corpus_classes();
   if (std::find(cls.begin(), cls.end(), info.class_name) == cls.end())
     return Error{"corpus class " + info.class_name + " is not one of DESIGN section 8"};
   std::string text = corpus_entry_text(scene, info);
-  fs::path dir = fs::path(root) / info.method / info.class_name;
+  fs::path dir = fs::path(root) / method_folder(info.method) / info.class_name;
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) return Error{dir.string() + ": cannot create folder: " + ec.message()};

@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -92,6 +93,10 @@ GateResult run_gate(const GateConfig& cfg, const std::function<void(const std::s
   cc.threads = cfg.threads;
   cc.metamorphic = true;
   cc.methods = gate_methods();
+  for (const auto& m : cfg.extra_methods) {
+    cc.methods.push_back(m);
+    g.extra_rows.push_back(m.row());
+  }
   g.report.tau = cc.tau;
   for (const auto& m : cc.methods) g.report.methods.push_back(m.row());
   g.report.shards = {"1/1"};
@@ -111,13 +116,20 @@ GateResult run_gate(const GateConfig& cfg, const std::function<void(const std::s
       progress(buf);
     }
   }
+  auto is_extra = [&](const std::string& row) {
+    return std::find(g.extra_rows.begin(), g.extra_rows.end(), row) != g.extra_rows.end();
+  };
   for (const auto& e : g.report.errors)
     for (const auto& m : cc.methods)
-      if (gate_method_must_pass(m.row()) && e.find("method " + m.row() + " threw") != std::string::npos)
+      if ((gate_method_must_pass(m.row()) || is_extra(m.row())) && e.find("method " + m.row() + " threw") != std::string::npos)
         g.failures.push_back(e);
-  for (const auto& [key, row] : g.report.rows)
+  for (const auto& [key, row] : g.report.rows) {
     if (gate_method_must_pass(key.second) && row.mismatches() > 0)
       g.failures.push_back(key.second + " on " + key.first + ": " + std::to_string(row.mismatches()) + " mismatches");
+    else if (is_extra(key.second) && row.mismatches() > row.metamorphic)
+      g.failures.push_back(key.second + " on " + key.first + ": " + std::to_string(row.mismatches() - row.metamorphic) +
+                           " mismatches");
+  }
 
   // Corpus replay.
   for (const auto& path : list_corpus(cfg.corpus_dir)) {
@@ -161,7 +173,11 @@ std::string format_gate_summary(const GateResult& g) {
   out += buf;
   for (const auto& [m, row] : per) {
     double rate = row.relations ? double(row.disagree) / double(row.relations) : 0.0;
-    const char* verdict = !gate_method_must_pass(m) ? "baseline (never fails)" : row.mismatches() ? "FAIL" : "pass";
+    const bool extra = std::find(g.extra_rows.begin(), g.extra_rows.end(), m) != g.extra_rows.end();
+    const char* verdict = extra ? (row.mismatches() > row.metamorphic ? "FAIL (added)" : "pass (added)")
+                          : !gate_method_must_pass(m) ? "baseline (never fails)"
+                          : row.mismatches()          ? "FAIL"
+                                                      : "pass";
     std::snprintf(buf, sizeof buf, "%-14s %10zu %9zu %9zu %6zu %10.3g %9.3f  %s\n", m.c_str(), row.relations,
                   row.disagree, row.mismatches(), row.metamorphic, rate, row.seconds, verdict);
     out += buf;

@@ -31,6 +31,11 @@ struct GateConfig {
   std::string corpus_dir;  // replayed corpus root
   int threads = 0;
   std::string gnuplot_script;  // tools/plot_stability.gp
+  // More methods to gate (`visgate gate --method M`: your own exec:/plugin: code or a
+  // built-in with options): each fails the gate on any oracle mismatch or failure (a
+  // crash, timeout, malformed result). Their metamorphic rows are shown, not gated: the
+  // scale contract of DESIGN section 2 binds visgate's own methods.
+  std::vector<MethodSpec> extra_methods;
 };
 
 struct GateCorpusLine {
@@ -44,6 +49,7 @@ struct GateResult {
   size_t corpus_regressions = 0, corpus_open_now_passing = 0, corpus_skipped = 0;
   std::vector<std::string> failures;  // why the gate fails (empty: passes)
   std::vector<std::string> notes;     // chart problems, open cases now passing
+  std::vector<std::string> extra_rows;  // row labels of GateConfig::extra_methods
   double seconds = 0.0;
   bool passed() const { return failures.empty(); }
 };

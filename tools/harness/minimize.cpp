@@ -173,7 +173,12 @@ Result<RelationVerdict> judge_relation(const Scene& scene, const CaseSpec& spec)
       spec.sample >= scene.lights[spec.light].samples)
     return Error{scene.name + ": relation (" + std::to_string(spec.receiver) + ", " + std::to_string(spec.light) + ", " +
                  std::to_string(spec.sample) + ") out of range"};
-  SolveResult res = solver->solve(scene, spec.options);
+  SolveResult res;
+  try {
+    res = solver->solve(scene, spec.options);
+  } catch (const std::exception& e) {  // an external method's failure (lib/external)
+    return Error{std::string("method ") + spec.method + " failed: " + e.what()};
+  }
   RelationVerdict v;
   v.method_visible = res.receivers[spec.receiver].visible(scene.light_offset(spec.light) + size_t(spec.sample));
   const Vec3f& q = sample_position(scene.lights[spec.light], int(spec.sample), spec.receiver);

@@ -82,7 +82,7 @@ void add_bench(CLI::App& app, Action& run) {
   auto o = std::make_shared<BenchOpts>();
   auto* sub = app.add_subcommand("bench", "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)");
   sub->add_option("experiment", o->b.experiment,
-                  "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair (see --list)");
+                  "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair, overhead (see --list)");
   sub->add_option("-o,--output", o->b.out_dir, "Output directory (default bench-results/EXPERIMENT)");
   sub->add_option("--repeat", o->b.repeat, "Runs per figure; the minimum counts (default 3)");
   sub->add_option("--threads", o->b.threads, "Threads of the all-threads runs (0: all hardware threads)");

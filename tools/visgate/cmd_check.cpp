@@ -14,6 +14,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "lib/external/external_methods.h"
 #include "lib/scene/families.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
@@ -66,15 +67,14 @@ int run_check(const CheckOpts& o) {
   for (const auto& m : methods) {
     // NAME#TAG runs NAME once more with the options given to NAME#TAG (its own row).
     auto solver = make_solver(method_of_label(m));
-    if (!solver) {
-      std::string known;
-      for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-      return bad_input("--methods " + m + ": unknown method (known: " + known + ")");
-    }
+    if (!solver) return bad_input("--methods " + external::describe_unknown_method(method_of_label(m)));
     MethodSpec spec{method_of_label(m), SolveOptions{}, m.find('#') == std::string::npos ? "" : m};
     spec.options.threads = o.threads;
     for (const auto& kv : o.opts) {
-      auto colon = kv.find(':'), eq = kv.find('=');
+      // METHOD is everything before the last ':' ahead of the '=' (exec:CMD and
+      // plugin:PATH names hold colons of their own).
+      auto eq = kv.find('=');
+      auto colon = eq == std::string::npos || eq == 0 ? std::string::npos : kv.rfind(':', eq - 1);
       if (colon == std::string::npos || eq == std::string::npos || eq < colon)
         return bad_input("--opt " + kv + ": expected METHOD:key=value");
       if (kv.substr(0, colon) == m) spec.options.opts[kv.substr(colon + 1, eq - colon - 1)] = kv.substr(eq + 1);

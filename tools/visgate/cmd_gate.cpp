@@ -1,4 +1,4 @@
-// visgate gate [--quick] [-o DIR] [--corpus DIR] [--threads N]
+// visgate gate [--quick] [-o DIR] [--corpus DIR] [--threads N] [--method M]... [--opt M:key=value]...
 // The CI correctness gate (tools/harness/gate.h): prints a summary table on stderr and
 // writes DIR/gate.json, DIR/stability.csv and the chart DIR/stability.png and .svg
 // (gnuplot, tools/plot_stability.gp). Exit: 0 passed, 1 failed, 2 bad input.
@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "lib/external/external_methods.h"
 #include "lib/scene/json_exact.h"
 #include "tools/harness/gate.h"
 #include "tools/visgate/cli.h"
@@ -22,6 +23,7 @@ struct GateOpts {
   bool quick = false;
   std::string out = "out/gate", corpus = VISGATE_SOURCE_DIR "/corpus";
   int threads = 0;
+  std::vector<std::string> methods, opts;  // extra gated methods (exec:, plugin:, built-ins) and their options
 };
 
 int run_gate_cmd(const GateOpts& o) {
@@ -37,8 +39,23 @@ int run_gate_cmd(const GateOpts& o) {
   cfg.out_dir = o.out;
   cfg.corpus_dir = o.corpus;
   cfg.threads = o.threads;
+  for (const auto& m : o.methods) {
+    auto solver = make_solver(harness::method_of_label(m));
+    if (!solver) return bad_input("--method " + external::describe_unknown_method(harness::method_of_label(m)));
+    MethodSpec spec{harness::method_of_label(m), SolveOptions{}, m.find('#') == std::string::npos ? "" : m};
+    spec.options.threads = o.threads;
+    for (const auto& kv : o.opts) {
+      auto eq = kv.find('=');
+      auto colon = eq == std::string::npos || eq == 0 ? std::string::npos : kv.rfind(':', eq - 1);
+      if (colon == std::string::npos) return bad_input("--opt " + kv + ": expected METHOD:key=value");
+      if (kv.substr(0, colon) == m) spec.options.opts[kv.substr(colon + 1, eq - colon - 1)] = kv.substr(eq + 1);
+    }
+    Status st = solver->check_options(spec.options);
+    if (!st) return bad_input(st.error().message);
+    cfg.extra_methods.push_back(spec);
+  }
   std::fprintf(stderr, "visgate gate%s: every family x every method (%zu methods), corpus %s\n", o.quick ? " --quick" : "",
-               solver_names().size(), o.corpus.c_str());
+               solver_names().size() + o.methods.size(), o.corpus.c_str());
   GateResult g = run_gate(cfg, [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); });
 
   // Chart: CSV, then gnuplot to PNG and SVG.
@@ -69,6 +86,10 @@ void add_gate(CLI::App& app, Action& run) {
   sub->add_option("-o,--output", o->out, "Output folder (default out/gate)");
   sub->add_option("--corpus", o->corpus, "Corpus root to replay (default the source tree's corpus/)");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
+  sub->add_option("--method", o->methods,
+                  "Also gate this method (repeatable; exec:CMD, plugin:PATH or a built-in): any oracle mismatch or "
+                  "failure of it fails the gate");
+  sub->add_option("--opt", o->opts, "Option of a --method: METHOD:key=value (repeatable)");
   sub->callback([o, &run] { run = [o] { return run_gate_cmd(*o); }; });
 }
 

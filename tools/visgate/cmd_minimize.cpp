@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "fuzz/decoder.h"
+#include "lib/external/external_methods.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "oracle/comparator.h"
@@ -51,7 +52,7 @@ uint64_t seed_from_name(const std::string& name) {
 int run_minimize(const MinimizeOpts& o) {
   using namespace visgate::harness;
   auto solver = make_solver(o.method);
-  if (!solver) return bad_input("--method " + o.method + ": unknown method");
+  if (!solver) return bad_input("--method " + external::describe_unknown_method(o.method));
   CaseSpec spec;
   spec.method = o.method;
   spec.options.threads = o.threads;

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "lib/external/external_methods.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
 #include "oracle/comparator.h"
@@ -50,11 +51,7 @@ int run_render(const RenderOpts& o) {
   so.seed = o.seed;
   if (!o.method.empty() && !o.oracle) {
     solver = make_solver(o.method);
-    if (!solver) {
-      std::string known;
-      for (const auto& n : solver_names()) known += (known.empty() ? "" : ", ") + n;
-      return bad_input("--method " + o.method + ": unknown method (known: " + known + ")");
-    }
+    if (!solver) return bad_input("--method " + external::describe_unknown_method(o.method));
     for (const auto& kv : o.opts) {
       auto eq = kv.find('=');
       if (eq == std::string::npos || eq == 0) return bad_input("--opt " + kv + ": expected key=value");

@@ -2,6 +2,8 @@
 #include <cstdio>
 #include <memory>
 
+#include "lib/external/exec_method.h"
+#include "lib/external/external_methods.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
@@ -19,11 +21,7 @@ struct SolveOpts {
 
 int run_solve(const SolveOpts& o) {
   auto solver = make_solver(o.method);
-  if (!solver) {
-    std::string known;
-    for (const auto& n : solver_names()) known += (known.empty() ? "" : ", ") + n;
-    return bad_input("--method " + o.method + ": unknown method (known: " + known + ")");
-  }
+  if (!solver) return bad_input("--method " + external::describe_unknown_method(o.method));
   SolveOptions so;
   so.threads = o.threads;
   so.seed = o.seed;
@@ -36,7 +34,13 @@ int run_solve(const SolveOpts& o) {
   if (!st) return bad_input(st.error().message);
   auto scene = read_scene_file(o.scene);
   if (!scene) return bad_input(scene.error().message);
-  SolveResult result = solver->solve(*scene, so);
+  SolveResult result;
+  try {
+    result = solver->solve(*scene, so);
+  } catch (const external::ExternalMethodError& e) {  // crash, timeout, malformed result
+    std::fprintf(stderr, "visgate: method failed: %s\n", e.what());
+    return kInternal;
+  }
   size_t relations = scene->relation_count(), visible = 0;
   for (const auto& rr : result.receivers)
     for (uint64_t w : rr.visible_bits) visible += size_t(__builtin_popcountll(w));
@@ -59,7 +63,7 @@ void add_solve(CLI::App& app, Action& run) {
   auto o = std::make_shared<SolveOpts>();
   auto* sub = app.add_subcommand("solve", "Solve every relation of a scene with one method");
   sub->add_option("scene", o->scene, "Scene JSON")->required();
-  sub->add_option("--method", o->method, "Method: embree, embree-robust, brute, iss, ssv, plucker-bsp")->required();
+  sub->add_option("--method", o->method, "Method: embree, embree-robust, brute, iss, ssv, plucker-bsp, exec:CMD, plugin:PATH")->required();
   sub->add_option("--opt", o->opts, "Method option key=value (repeatable)");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
   sub->add_option("--seed", o->seed, "Seed for randomised methods");
