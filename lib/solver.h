@@ -114,7 +114,7 @@ class Solver {
   virtual std::vector<OptionSpec> options() const { return {}; }
   virtual bool reports_fragments() const { return false; }
   // Whether solve() hands solve_scene the scene's unit copy (lib/scene/exact_transform.h:
-  // scaled by the power of two that brings its typical relation length into [2, 4)). True for the
+  // scaled by the power of two that brings its unit length into [2, 4)). True for the
   // production methods, so that they answer a scene and each of its exact 2^k copies
   // with the same bits (DESIGN section 2, "Scale"); the baselines (embree,
   // embree-robust, brute) answer the scene as given, as their users run them.

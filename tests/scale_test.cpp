@@ -14,6 +14,7 @@
 
 #include "lib/scene/exact_transform.h"
 #include "lib/scene/families.h"
+#include "lib/scene/scene_json.h"
 #include "tests/support/family_scene.h"
 #include "lib/solver.h"
 #include "oracle/comparator.h"
@@ -105,7 +106,7 @@ TEST(ExactScale, EveryExactCopyHasTheSameUnitCopy) {
     Scene s = family(f, 2, 80, 16, 8);
     const int u = unit_scale_exponent(s);
     const Scene unit = scaled_scene(s, u);
-    const double e = typical_relation_length(unit);
+    const double e = unit_length(unit);
     EXPECT_GE(e, 2.0) << f;
     EXPECT_LT(e, 4.0) << f;
     const ScaleRange r = exact_scale_range(s);
@@ -264,6 +265,36 @@ TEST(MethodsAtScale, ReceiversInTheLightsPlaneAtExtentsFrom2pMinus100To2p100) {
   for (const auto& c : exact.classes) blocked += size_t(std::count(c.begin(), c.end(), 'b'));
   ASSERT_GT(blocked, 0u);
   expect_scale_free(s, {-100, -64, -44, -37, 43, 64, 66, 100});
+}
+
+// fuzz_plucker 3318459b (torus at 2^94, a steep light through the origin, the receiver
+// 2^-54 beside the light's centroid): with the relation length alone as the unit, the
+// copy was scaled up to the edge of overflow and plucker-bsp answered a blocked relation
+// visible. The light's size keeps the unit copy near 1.
+TEST(MethodsAtScale, AReceiverOnTheLightDoesNotBlowTheSceneUp) {
+  const char* text = R"JSON({"format":"visgate-scene","version":1,"name":"torus-4864",
+"meshes":[{"vertices":[["0x1p+94","0x0p+0","-0x1.4p+95"],["-0x1p+94","0x1p+94","-0x1p+95"],["-0x1p+93","0x1p+94","-0x1.4p+95"],["0x1p+93","0x0p+0","-0x1.4000cp+95"],["-0x1p+93","0x1p+94","-0x1p+95"],["0x1p+93","0x0p+0","-0x1.4p+95"],["-0x1p+94","-0x1p+94","0x1p+95"],["-0x1p+93","0x1p+93","-0x1p+95"],["-0x1p+93","-0x1p+93","-0x1p+95"]],
+"triangles":[[0,2,1],[0,3,2],[3,4,2],[3,5,4],[5,1,4],[5,0,1],[1,7,6],[1,2,7],[2,8,7],[2,4,8],[4,6,8],[4,1,6],[6,3,0],[6,7,3],[7,5,3],[7,8,5],[8,0,5],[8,6,0]]}],
+"lights":[{"polygon":[["0x1p+94","-0x1p+94","0x1p+96"],["0x1p+94","0x1p+94","0x1p-20"],["-0x1p+94","0x1p+94","-0x1p+96"],["-0x1p+94","-0x1p+94","-0x0p+0"]],"samples":1,"pattern":"stratified","jitter":4,"seed":4864}],
+"receivers":[{"p":["0x1p-54","0x0p+0","-0x0p+0"],"n":["0x0p+0","0x0p+0","-0x1p+0"]}]})JSON";
+  auto s = read_scene_json(text, "fuzz_plucker 3318459b", ".");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_LT(typical_relation_length(*s), 0x1p-50);
+  EXPECT_LT(unit_scale_exponent(*s), -90);
+  const auto exact = oracle::run_relation_oracle(*s, 1);
+  for (const Method& m : production_methods()) {
+    SolveOptions o;
+    o.opts = m.opts;
+    o.threads = 1;
+    const SolveResult r = make_solver(m.name)->solve(*s, o);
+    EXPECT_EQ(oracle::compare_relations(*s, r, exact, 1e-5).mismatch_count(), 0u) << label(m);
+  }
+  // The fuzz target's own options.
+  SolveOptions o;
+  o.opts = {{"choice", "random"}, {"coherence", "off"}, {"tile", "7"}};
+  o.threads = 1;
+  const SolveResult r = make_solver("plucker-bsp")->solve(*s, o);
+  EXPECT_EQ(oracle::compare_relations(*s, r, exact, 1e-5).mismatch_count(), 0u);
 }
 
 TEST(MethodsAtScale, TheUnitCopyIsReportedAndBaselinesAnswerTheSceneAsGiven) {

@@ -29,7 +29,7 @@
 //
 // Domain (DESIGN section 2, "Scale"): every scene of finite float32 coordinates.
 // Solver::solve hands this method the scene's unit copy (lib/scene/exact_transform.h:
-// scaled by the power of two that brings its typical relation length into [2, 4)), so
+// scaled by the power of two that brings its unit length into [2, 4)), so
 // every tolerance below is relative to lengths near 2, and a scene and each of its exact
 // 2^k copies
 // get the same answers bit for bit.

@@ -131,8 +131,31 @@ double typical_relation_length(const Scene& scene) {
   return *mid;
 }
 
+double typical_light_size(const Scene& scene) {
+  std::vector<double> size;
+  for (const auto& l : scene.lights) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, e = 0.0;
+    for (const auto& p : l.polygon)
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(p[k])), hi[k] = std::max(hi[k], double(p[k]));
+    for (int k = 0; k < 3; ++k)
+      if (hi[k] >= lo[k]) e = std::max(e, hi[k] - lo[k]);
+    size.push_back(e);
+  }
+  if (size.empty()) return 0.0;
+  auto mid = size.begin() + std::ptrdiff_t(size.size() / 2);
+  std::nth_element(size.begin(), mid, size.end());
+  return *mid;
+}
+
+double unit_length(const Scene& scene) {
+  // The larger of the two: receivers sitting on a light (relation lengths near 0) must
+  // not blow the scene up towards overflow.
+  const double e = std::max(typical_relation_length(scene), typical_light_size(scene));
+  return e > 0.0 && std::isfinite(e) ? e : scene_extent(scene);
+}
+
 int unit_scale_exponent(const Scene& scene) {
-  double e = typical_relation_length(scene);
+  double e = unit_length(scene);
   if (!(e > 0.0) || !std::isfinite(e)) e = scene_extent(scene);
   if (!(e > 0.0) || !std::isfinite(e)) return 0;
   int exp2 = 0;

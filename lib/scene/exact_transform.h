@@ -4,14 +4,16 @@
 // Multiplying every coordinate by 2^k changes no exact class, no relative margin and no
 // visible fraction, and float arithmetic commutes with it while every value stays normal.
 // The production methods (iss, ssv, plucker-bsp) therefore never see a scene at its own
-// scale: Solver::solve hands them its *unit copy*, scaled so that the typical relation
-// length (typical_relation_length) lies in [2, 4). Every float tolerance inside a method
+// scale: Solver::solve hands them its *unit copy*, scaled so that its unit length
+// (unit_length: the typical relation length or the typical light size, the larger) lies
+// in [2, 4). Every float tolerance inside a method
 // is then relative to lengths near 2, as are Embree's (its robust intersector loses hits
 // when a scene's triple products of coordinate differences approach float32's
 // subnormals, below extents of about 2^-40), and a scene and all its exact 2^k copies reach the
-// method as the same bits, so they get the same answers bit for bit. A median, not the
+// method as the same bits, so they get the same answers bit for bit. Medians, not the
 // bounding box: one outlying point (an explicit sample 2^64 away) must not shrink the
-// rest of the scene towards subnormals.
+// rest of the scene towards subnormals; and the light's size as well, so that receivers
+// sitting on a light (relation lengths near 0) do not blow it up towards overflow.
 //
 // Permutations, mirrors and translations are exact too but do not commute with float
 // rounding: the metamorphic checks (tools/harness/check.h) allow a method to change its
@@ -24,7 +26,7 @@
 
 namespace visgate {
 
-// The binade the unit copy's typical relation length lies in: [2^kUnitExponent,
+// The binade the unit copy's unit length lies in: [2^kUnitExponent,
 // 2^(kUnitExponent + 1)) = [2, 4). It holds the built-in adversarial families (light at
 // z = 2 over receivers at z = 0), so they reach the methods unscaled.
 inline constexpr int kUnitExponent = 1;
@@ -48,9 +50,13 @@ ScaleRange exact_scale_range(const Scene& scene);
 // without receivers or lights. Computed in double: scales exactly with the scene.
 double typical_relation_length(const Scene& scene);
 
-// k with typical_relation_length(scene) * 2^k in [2, 4) (scene_extent when there is no
-// relation), clamped to exact_scale_range(scene) so that the unit copy is exact; 0 for
-// a scene without extent. unit_scale_exponent(scaled_scene(s, j)) ==
+// The median over lights of the polygon's largest axis extent; 0 without lights.
+double typical_light_size(const Scene& scene);
+// max(typical_relation_length, typical_light_size), or scene_extent when both are 0.
+double unit_length(const Scene& scene);
+
+// k with unit_length(scene) * 2^k in [2, 4), clamped to exact_scale_range(scene) so that
+// the unit copy is exact; 0 for a scene without extent. unit_scale_exponent(scaled_scene(s, j)) ==
 // unit_scale_exponent(s) - j for every j in exact_scale_range(s).
 int unit_scale_exponent(const Scene& scene);
 
