@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 #include "lib/scene/scene.h"
 
 namespace visgate {

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 #include "lib/scene/scene.h"
 #include "oracle/region_oracle.h"
 #include "oracle/relation_oracle.h"

@@ -12,7 +12,7 @@
 #include <memory>
 #include <optional>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 #include "lib/geom/float_mode.h"
 #include "lib/iss/blockers.h"
 #include "lib/iss/radial_pairing.h"

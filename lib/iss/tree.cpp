@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 
 namespace visgate::iss {
 

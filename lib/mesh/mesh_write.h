@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "lib/geom/vec.h"
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 
 namespace visgate::mesh {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <array>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 
 namespace visgate::plucker {
 

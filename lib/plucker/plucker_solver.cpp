@@ -12,7 +12,7 @@
 #include <memory>
 #include <mutex>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 #include "lib/geom/expansion.h"
 #include "lib/geom/float_mode.h"
 #include "lib/plucker/bsp.h"

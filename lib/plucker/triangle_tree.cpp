@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 #include "lib/geom/predicates.h"
 #include "lib/mesh/prepare.h"
 #include "lib/plucker/exact_orient.h"

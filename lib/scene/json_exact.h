@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 
 namespace visgate {
 

@@ -13,7 +13,7 @@
 
 #include "lib/geom/aabb.h"
 #include "lib/geom/vec.h"
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 #include "lib/scene/rng.h"
 
 namespace visgate {

@@ -11,7 +11,7 @@
 #include <emmintrin.h>
 #endif
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 
 namespace visgate::ssv {
 

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 
 namespace visgate::ssv {
 

@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 
 namespace visgate::ssv {
 

@@ -1,4 +1,4 @@
-// A plugin (include/visgate/plugin.h) for tests/external_test.cpp. `--opt mode=` picks
+// A plugin (include/visgate/plugin.h) for tests/external/external_test.cpp. `--opt mode=` picks
 // what it does:
 //   mt            the textbook Möller-Trumbore caster of examples/mt-caster (the default)
 //   crash         writes through a null pointer (SIGSEGV)

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 
 namespace visgate::bench {
 

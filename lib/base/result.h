@@ -1,4 +1,4 @@
-// Error values: bad input is reported as a value carrying a one-line message that names
+// Result and Error: bad input is reported as a value carrying a one-line message that names
 // the file and the element (../shared/STYLE.md "Errors"), never printed by the library.
 #pragma once
 
@@ -6,7 +6,7 @@
 #include <utility>
 #include <variant>
 
-#include "lib/geom/check.h"
+#include "lib/base/check.h"
 
 namespace visgate {
 

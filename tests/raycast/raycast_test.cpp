@@ -282,7 +282,7 @@ TEST(Raycast, MissesWithARejectedHitAreReportedAsDisputed) {
     EXPECT_TRUE(verified.occluded(centroid - n, centroid + n, 0.0f, 1.0f, disputed));
     EXPECT_FALSE(disputed);
   }
-  // fuzz_ssv cfbec7f8 (tests/ssv_test.cpp, ReferenceRayAlongAnInteriorEdgeIsNotConclusive):
+  // fuzz_ssv cfbec7f8 (tests/ssv/ssv_test.cpp, ReferenceRayAlongAnInteriorEdgeIsNotConclusive):
   // a segment 2e-8 from the interior edge 0-1 of a disk, crossing triangle 1 just inside
   // that edge by the double-precision test. Embree's watertight test gave the crossing
   // to triangle 0 and the verification rejected it: the verified query missed. Whichever

@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 
 // A light quad [-1,1]^2 at z = 2 with explicit samples on a 4 x 4 grid, one receiver at
 // the origin, and a triangle at z = 1 that blocks exactly the four samples with x, y > 0
-// (tests/raycast_test.cpp, Raycast.TriangleBetweenPointAndLightQuad, works it by hand).
+// (tests/raycast/raycast_test.cpp, Raycast.TriangleBetweenPointAndLightQuad, works it by hand).
 Scene quad_scene() {
   Scene s;
   s.name = "hand";

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ctest ExternalMethods.CheckCli (tests/CMakeLists.txt): `visgate check` on external
+# ctest ExternalMethods.CheckCli (tests/external/CMakeLists.txt): `visgate check` on external
 # methods from the build tree. The textbook caster (examples/mt-caster) as a plugin is
 # caught on shared-edge-fan (exit 1) and --store keeps its case minimised to at most 3
 # triangles; a crashing plugin and a hanging exec: program are reported with exit 3,

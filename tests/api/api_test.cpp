@@ -12,7 +12,7 @@ using namespace visgate;
 
 namespace {
 
-// tests/raycast_test.cpp's hand-worked scene from arrays: a light quad [-1,1]^2 at z = 2
+// tests/raycast/raycast_test.cpp's hand-worked scene from arrays: a light quad [-1,1]^2 at z = 2
 // facing down with explicit samples on a 4 x 4 grid, a receiver at the origin, and a
 // triangle at z = 1 that blocks exactly the four samples with x, y > 0.
 api::SceneDesc quad_desc() {
