@@ -44,7 +44,7 @@
 #include <string>
 #include <vector>
 
-#include "lib/scene/error.h"
+#include "lib/base/result.h"
 #include "lib/scene/scene.h"
 
 namespace visgate::fuzz {
