@@ -286,4 +286,16 @@ TEST(Families, FileFamilyKeepsTheMeshAndPlacesLightAndReceivers) {
 }
 
 }  // namespace
+TEST(Families, DeterministicBySeed) {
+  for (const char* f : {"random-soup", "columns", "rooms"}) {
+    FamilyParams p;
+    p.seed = 3;
+    p.receivers = 16;
+    p.samples = 4;
+    auto a = generate_family(f, p), b = generate_family(f, p);
+    ASSERT_TRUE(a.ok() && b.ok()) << f;
+    EXPECT_EQ(write_scene_json(*a), write_scene_json(*b)) << f;
+  }
+}
+
 }  // namespace visgate
