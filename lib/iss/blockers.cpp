@@ -100,8 +100,8 @@ int clamp_edge(const Vec3d& p0, const Vec3d& p1, int ax, double lo, double hi, V
     // ulp of 1 (a clip plane 1e-33 from an endpoint, relative to the edge's length:
     // a light node 3e-33 above the receivers' plane) that expression is the endpoint
     // itself, the clamp below kept it on the far side of the slab, and the clamped
-    // boundary cut diagonally through the slab, which changed its winding number about
-    // the test line: a false-blocked relation (corpus/iss/other, grid-snapped-19532).
+    // boundary cut diagonally through the slab, changing its winding number about the
+    // test line (corpus/iss/other, grid-snapped-19532).
     // The cross coordinates come from the endpoint nearer to the plane, so their error
     // is a few ulps of that endpoint's distance from it.
     double c = cs[i];
@@ -870,7 +870,7 @@ bool can_block_shaft(const AABBd& box, const ShaftGeometry& g) {
   // do: a boundary entirely below the receiver's clip plane, of a surface reaching up
   // through the shaft, is clamped onto that plane around the test segment's end, and
   // a segment from the top of the receiver box passes above it (corpus/iss/other,
-  // on-surface-110: a false-visible relation, since the surface was then removed).
+  // on-surface-110).
   AABBd c = clamped_box(box, g);
   Vec3d q1, q2;
   g.test_segment(q1, q2);
@@ -889,9 +889,7 @@ BlockTest blocking_test(const Surface& s, const ShaftGeometry& g) {
   // A shaft whose boxes are closer on the main axis than 2^-30 of the scale is thinner
   // than the tolerances of its planes (2^-40 of the scale, shaft.h) allow to resolve: its
   // test line and clamped boundaries lie in a slab where the winding number's signs are
-  // rounding (fuzz_iss c2dffefa...: a light sample 6.4e-44 above a flat receiver box, the
-  // products of such differences underflow, and a sliver 0.5 beside the shaft counted as
-  // blocking). Its relations go to the rays.
+  // rounding (products of such differences underflow). Its relations go to the rays.
   if (shaft_too_thin(g)) return BlockTest::Unknown;
   if (stands_beyond_clip_planes(s, g)) return BlockTest::Unknown;
   // Line 1, CAN-BLOCK-SHAFT.
@@ -908,10 +906,8 @@ BlockTest blocking_test(const Surface& s, const ShaftGeometry& g) {
   // sweeping only through space beyond it; shaft segments meet the plane only where
   // they end, on the node's outer face. So the winding about every shaft segment is the
   // one of the unclamped geometry unless a clamped part lands on that face: then it is
-  // not (fuzz_iss c4cfccdf..., corpus/iss/other/bef549c1...: a triangle 0.5 below a light sample,
-  // reaching 8.7e-19 into the slab at its far edge, flattened onto the sample's plane
-  // 3e-42 beside the sample, counted as crossed: false-blocked at margin 1e-3), and the
-  // shaft is not called blocked (its relations go to sub-shafts and rays).
+  // not (corpus/iss/other/bef549c1...), and the shaft is not called blocked (its
+  // relations go to sub-shafts and rays).
   const double face_tol = 0x1p-40 * g.scale();
   const AABBd& lo_face = g.dir() > 0 ? g.receiver() : g.light();
   const AABBd& hi_face = g.dir() > 0 ? g.light() : g.receiver();

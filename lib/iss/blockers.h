@@ -79,9 +79,8 @@ struct Surface {
   // splits, joined by combining, never shrunk. The boundary's `box` need not hold them:
   // MERGE-PATCHES (4.7.3) forgets the edges inside a merged patch and SIMPLIFY-PATCHES
   // (4.7.5) collapses outside edges away, so a pouch's merged patch keeps only its rim
-  // (fuzz_iss aa81c695..., corpus/iss/other/b8a6e1e8...: the rim flat on a receiver's
-  // level, the pouch rising above it) and a collapsed one may keep nothing near its
-  // triangles (fuzz_iss 2f7607fd..., corpus/iss/pouch/8f524c6c...). Whatever claims to
+  // (corpus/iss/other/b8a6e1e8...) and a collapsed one may keep nothing near its
+  // triangles (corpus/iss/pouch/8f524c6c...). Whatever claims to
   // know where the triangles are (beyond_clip_planes drops, the ray caster's slab
   // test) asks the hull, never the boundary.
   AABBd hull;
@@ -184,7 +183,7 @@ double main_axis_gap(const ShaftGeometry& g);
 // has no main axis): thinner than its planes' tolerances (2^-40 of the scale) resolve.
 // Clipping to such a slab and the winding signs inside it are rounding, so neither the
 // blocking test nor the empty-shaft rule may decide its relations (blocks_shaft,
-// iss_solver.cpp): they go to sub-shafts and rays.
+// traversal.cpp): they go to sub-shafts and rays.
 bool shaft_too_thin(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
 // misses_slab between the clip planes, touching counting as missing when the boxes have

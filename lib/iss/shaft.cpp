@@ -302,13 +302,12 @@ bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, con
   // projection that drops n's dominant axis, with every difference taken from a
   // triangle vertex. Orientations of the segment against the edges, det(q - p, a - p,
   // b - p), would take differences from p instead: for a triangle much smaller than
-  // its distance to p they round to zero (a 1e-45-wide sliver 1.4 units away, fuzz_iss)
-  // and the test took every such triangle as touched.
+  // its distance to p they round to zero (a 1e-45-wide sliver 1.4 units away) and the
+  // test would take every such triangle as touched.
   Vec3d x = std::abs(s1) <= std::abs(s2) ? p + (q - p) * (s1 / (s1 - s2)) : q + (p - q) * (s2 / (s2 - s1));
   // The closed test first requires x in the triangle's box (point_in_triangle_closed,
-  // lib/geom/predicates.h): on a 2.5e-32-wide sliver a point on the line of its long
-  // edges, 0.25 beyond it, passed the sign test alone (fuzz_iss 79223f0b...,
-  // corpus/iss/sliver/c979ba88..., a false block by the custom caster).
+  // lib/geom/predicates.h): on a sliver a point on the line of its long edges, far
+  // beyond it, passes the sign test alone (corpus/iss/sliver/c979ba88...).
   return point_in_triangle_closed(a, b, c, n, x);
 }
 

@@ -17,7 +17,7 @@
 
 #include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
-#include "lib/raycast/embree_solver.h"
+#include "lib/raycast/embree_scene.h"
 #include "lib/ssv/integrate.h"
 #include "lib/ssv/light_frame.h"
 #include "lib/ssv/wedge.h"
@@ -49,7 +49,7 @@ struct ThreadState {
 };
 
 // Float mode: every SSV computation runs in an IeeeFloatMode scope (lib/geom/float_mode.h:
-// Embree sets FTZ/DAZ in TBB workers; fuzz_ssv b23d6514).
+// Embree sets FTZ/DAZ in TBB workers).
 
 // Slivers. A triangle whose width 2 area / L (L its longest edge) is at most 2^-20 L
 // is left out of the integration and of the ray scenes alike. It blocks only segments
@@ -57,10 +57,9 @@ struct ThreadState {
 // margin of at most 2^-20 L / diagonal < 1e-6, below tau; no relation it leaves
 // visible can change. Kept, it defeats every float ray test: points on the supporting
 // line of its long edges, far outside it, get edge functions that are all zero after
-// rounding (fuzz_ssv 03e9716a: Embree's robust intersector, a sliver 3.5e-15 wide, a
-// segment 0.18 away on its line; b23d6514: the double-precision test of lib/raycast, a
-// sliver 1.2e-38 wide). Leaving it out of both keeps the counters and the rays about
-// the same scene. Zero-area triangles, which never block, go the same way.
+// rounding, in Embree's robust intersector and in the double-precision test of
+// lib/raycast alike. Leaving it out of both keeps the counters and the rays about the
+// same scene. Zero-area triangles, which never block, go the same way.
 TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
   TriangleSoup out;
   out.vertices = soup.vertices;
@@ -87,9 +86,7 @@ TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
 // the same query (segment_hits_triangle, or its ranged form), and one it does not
 // confirm is dropped (counted in stats as ray_disputes). The robust intersector can
 // report hits on the supporting line of a nearly zero-area triangle far outside it
-// (fuzz_ssv 03e9716a: a sliver 3.5e-15 wide, a segment 0.18 away on the extension of
-// its long edges, visible with margin 1e-3; corpus/embree-robust/). Disputes are rare
-// (none on columns, rooms or foliage).
+// (corpus/embree-robust/).
 class Caster {
  public:
   explicit Caster(const TriangleSoup& soup) : robust_(soup, true) {}
@@ -107,49 +104,23 @@ class Caster {
   raycast::EmbreeScene robust_;  // hit verification on (the default)
 };
 
-// Reference rays. The counters give each sample its depth complexity up to one
-// constant per receiver; one ray to a point of the minimum class tells whether that
-// class is visible (the rest is then blocked), and a check ray to the next class must
-// find it blocked. One ray decides a whole class, so it must not be near-degenerate:
-//
-// - Its light point q must be clear of every projected piece (silhouette edges and cut
-//   segments, ReceiverIntegrator::clearance): a sample within rounding of a projected
-//   silhouette has a counter and an Embree answer of either side. Up to kCandidates
-//   samples of the class are tried, in sample order.
-// - q is not the sample itself but a point at a quarter of the clearance threshold from
-//   it, in a direction hashed from the relation: no projected piece lies between them,
-//   so q has the sample's depth complexity, but q is in general position. A sample
-//   exactly on the projection of a mesh vertex or edge inside a surface (shared-edge-fan
-//   aims segments through shared vertices) is counted consistently by the integration
-//   (once per surface), while Embree may report either side for that one segment
-//   (fuzz_ssv finding 322875af: a segment through a fan's vertex was unblocked, the
-//   rest of its class blocked). Where float spacing cannot hold the offset (far from
-//   the origin) q is the sample.
-// - Hits within 2^-18 (in t) of either end are told apart from hits inside the segment
-//   by two ranged rays: A over [0, 1 + 2^-18] and B over [2^-18, 1 - 2^-18]. A
-//   unblocked: visible; B blocked: blocked; otherwise the only hits lie at the ends
-//   (a light point on a triangle in the light plane, which the counters rightly ignore
-//   but Embree's inclusive tfar reports: fuzz_ssv findings 1653e5da, 1dc1c280,
-//   9c17a27b, bc83a84f; a receiver on a face) and the answer is ambiguous: the next
-//   candidate is tried. 2^-18 = 3.8e-6 is about 30 times the relative error of
-//   Embree's t (a few float ulps), so a hit at the end is never mistaken for an
-//   interior one, and it is below tau = 1e-5: a crossing that close to an end has a
-//   margin below tau for its own relation. The ray that settles the expected answer
-//   is cast first (one ray in the common case); the outcome does not depend on the
-//   order.
-// - A miss of ray A whose verification rejected a candidate hit (EmbreeScene::occluded,
-//   `disputed`) is ambiguous too. The rejected hit means the segment passes within
-//   Embree's rounding of that triangle's boundary. Clearance only keeps q away from the
-//   projected silhouette pieces; the edges inside a surface are not projected, and the
-//   offset's direction depends on the relation's indices, not on the geometry, so q
-//   can stay on the projection of an interior edge (fuzz_ssv cfbec7f8: sample 0 on the
-//   projection of a fan's interior vertex, offset along the projection of one of its
-//   edges, 2e-8 from it). There the crossing is shared by the edge's two triangles:
-//   Embree's watertight test gave it to one, the double-precision test to the other,
-//   and the conjunction of the two missed both, answering a whole blocked class
-//   visible with margins up to 1e-2. Embree's watertight test reports at least one
-//   triangle of a shared edge, so such a miss always carries a dispute. A hit is
-//   confirmed in double and stands.
+// Reference rays (docs/methods/ssv.md, "The reference ray"). The counters give each
+// sample its depth complexity up to one constant per receiver; one ray to a point of the
+// minimum class tells whether that class is visible (the rest is then blocked), and a
+// check ray to the next class must find it blocked. One ray decides a whole class, so
+// it must not be near-degenerate:
+// - its light point q is a sample clear of every projected piece (clearance), up to
+//   kCandidates samples of the class tried in sample order;
+// - q is offset from the sample by a quarter of the clearance threshold in a hashed
+//   direction (general position, same depth complexity), unless float spacing cannot
+//   hold the offset or it would leave L' (reference_point);
+// - hits within kEndZone (in t) of either end are told apart from interior hits by two
+//   ranged rays (ranged_answer): 2^-18 is about 30 times the relative error of Embree's
+//   t and below tau, so an end hit is never taken for an interior one;
+// - a miss whose verification rejected a candidate hit (`disputed`) is ambiguous: the
+//   segment passes within Embree's rounding of a triangle edge that q may lie on.
+// An ambiguous answer moves on to the next candidate; the outcome does not depend on
+// which ray is cast first.
 enum class RefAnswer { Visible, Blocked, Ambiguous, NoCandidate };
 
 constexpr int kCandidates = 8;
@@ -203,11 +174,8 @@ Vec3f reference_point(const RefContext& c, int j) {
   if (!(du * du + dv * dv <= 4.0 * step * step)) return s;
   // And only inside L' (closed), where every sample lies (light_frame.h): the projected
   // pieces are clipped to L', so outside it a shadow boundary may lie between the sample
-  // and q unseen by the clearance (fuzz_ssv 84a48072..., corpus/ssv/other/a5f02684...:
-  // samples on the corners of a light 5e-4 wide, a triangle's edge projected 1e-5
-  // beside the light, outside it; a q moved off the corner crossed it, and its blocked
-  // ray answered the whole visible class). Both in a convex L', the segment between
-  // them is in it too.
+  // and q unseen by the clearance (corpus/ssv/other/a5f02684...). Both in a convex L',
+  // the segment between them is in it too.
   auto in_poly = [&](const Vec3d& f) {
     const std::vector<Vec2f>& P = c.frame.poly;
     for (size_t k = 0; k < P.size(); ++k) {
@@ -275,10 +243,9 @@ RefAnswer check_answer(const RefContext& c, int32_t dmin, int32_t second, double
 // a height error d moves the projection by d / h_r of that offset. With h_r > 2^-20 S
 // that is below 2^-30 S, far below the counter's margin (1e-6 of the light-plane
 // magnitudes) and the clearance threshold (2^-16 S). Below it the receiver lies in the
-// light plane up to rounding noise (fuzz_ssv b190d0b6: height 3e-30 against S = 3, its
-// segments to the light lying in the light's plane): the side planes of its pyramid
-// and the projection are meaningless, and the counters put visible and blocked
-// samples in one class (margins 6e-4 and 1e-3). Such a receiver sees the light at an
+// light plane up to rounding noise: the side planes of its pyramid and the projection
+// are meaningless, and the counters may put visible and blocked samples in one class.
+// Such a receiver sees the light at an
 // angle below 2^-20 and is answered by one ray per sample, like receivers on or behind
 // the light plane.
 bool grazing_receiver(const LightFrame& frame, const Vec3f& r) {

@@ -67,11 +67,7 @@ Plane to_float(const PlaneD& pl) {
 // "Negative side" allows L' only `rtol` (rounding) beyond the plane, not tol: a point x
 // reached through the edge point p from the light point l is x = p + t (p - l), where
 // f(x) = (1 + t) f(p) - t f(l), and t = |x - p| / |p - l| is unbounded for an edge that
-// passes next to L'. fuzz_ssv 5f3d9427 (corpus/ssv/sliver/b582982b...): an edge from a
-// corner of L to a vertex 4096 away at the receivers' level; the plane through it and
-// another vertex of L' had a corner of L' 2.4e-7 beyond it (tol was 4e-6), t was about
-// 8000, and the wedge excluded a receiver by 2.0 whose segments meet the edge: its
-// projection was dropped and a blocked sample counted visible.
+// passes next to L' (corpus/ssv/sliver/b582982b...).
 bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double tol, double rtol) {
   double lo = 0.0, hi = 0.0;
   for (const auto& l : light) {
