@@ -206,8 +206,8 @@ void Workspace::recycle(Surface&& s) {
   s.edges.clear();
   s.patches.clear();
   s.loose.clear();
-  s.box = AABBd{};
-  s.hull = AABBd{};
+  s.box = empty_box();
+  s.hull = empty_box();
   s.vsum = Vec3d(0, 0, 0);
   s.vcount = 0;
   s.refined = true;
@@ -310,7 +310,7 @@ size_t classify_edges(Surface& s, const ShaftGeometry& g) {
   return left;
 }
 
-int classify_box_plane(const AABBd& b, const Plane4d& pl) {
+int classify_box_plane(const AABBd& b, const ConservativePlane& pl) {
   // The smallest and largest eval() over the eight corners, as evaluated: each rounded
   // operation of n.q - d is monotone in its operands, so eval() is monotone in q_k
   // (non-decreasing for n_k > 0, non-increasing for n_k < 0, constant up to the sign of
@@ -332,7 +332,7 @@ size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGe
   for (Patch& p : s.patches) {
     if (p.facing != Facing::Inconsistent || p.tri < 0) continue;
     uint32_t t = uint32_t(p.tri);
-    Plane4d pl = plane_through(corner_d(*ctx.mesh, t, 0), corner_d(*ctx.mesh, t, 1), corner_d(*ctx.mesh, t, 2),
+    ConservativePlane pl = plane_through(corner_d(*ctx.mesh, t, 0), corner_d(*ctx.mesh, t, 1), corner_d(*ctx.mesh, t, 2),
                                g.scale());
     if (pl.n == Vec3d(0, 0, 0)) continue;  // zero-area triangle: stays inconsistent
     int rr = classify_box_plane(g.receiver(), pl), lr = classify_box_plane(g.light(), pl);
@@ -827,7 +827,7 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
 }
 
 void compute_bounds(Surface& s, const ShaftGeometry& g) {
-  s.box = AABBd{};
+  s.box = empty_box();
   s.vsum = Vec3d(0, 0, 0);
   s.vcount = 0;
   for (const RawEdge& re : s.raw) {

@@ -73,7 +73,7 @@ struct Surface {
   std::vector<Edge> edges;
   std::vector<Patch> patches;
   std::vector<int32_t> loose;  // loose edge labels (section 4.4.2)
-  AABBd box;   // of the raw edges (compute_bounds)
+  AABBd box = empty_box();  // of the raw edges (compute_bounds)
   // Box of the clipped triangles the surface stands for, a superset: set from the
   // triangles' edges when they are built into patches, carried through copies and
   // splits, joined by combining, never shrunk. The boundary's `box` need not hold them:
@@ -83,7 +83,7 @@ struct Surface {
   // triangles (corpus/iss/pouch/8f524c6c...). Whatever claims to
   // know where the triangles are (beyond_clip_planes drops, the ray caster's slab
   // test) asks the hull, never the boundary.
-  AABBd hull;
+  AABBd hull = empty_box();
   Vec3d vsum{0, 0, 0};  // vertex centre data (section 4.7.9): sum and count of the
   double vcount = 0;    // endpoints of edges inside the shaft
   bool refined = true;  // false when postponed in the last construction
@@ -156,7 +156,7 @@ size_t classify_edges(Surface& s, const ShaftGeometry& g);
 // CLASSIFY-AABB-PLANE (Figure 4.22): 0 FRONT (every corner beyond pl.tol), 1 BACK (every
 // corner below -pl.tol), 2 INTERSECTS (conservative); from the two corners the signs of
 // pl.n pick, the same answer as from all eight.
-int classify_box_plane(const AABBd& b, const Plane4d& pl);
+int classify_box_plane(const AABBd& b, const ConservativePlane& pl);
 // UPDATE-PATCH-FACINGS (Figure 4.22); returns the number of patches that became consistent.
 size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);
 void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23

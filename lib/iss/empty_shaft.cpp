@@ -36,9 +36,9 @@ bool Traversal::node_triangles_face_away(int r, const AABB& light_box) {
     ScopedTimer t(times_[kTree]);
     R.sides_state = 2;
     const auto& ord = rtree_->order();
-    AABBd rb = to_aabbd(R.box);
+    AABBd rb = to_double(R.box);
     for (uint32_t tri : R.inside) {
-      Plane4d pl = plane_through(to_double(mesh_.corner(tri, 0)), to_double(mesh_.corner(tri, 1)),
+      ConservativePlane pl = plane_through(to_double(mesh_.corner(tri, 0)), to_double(mesh_.corner(tri, 1)),
                                  to_double(mesh_.corner(tri, 2)), scale_);
       if (pl.n == Vec3d(0, 0, 0)) { R.sides_state = 1; break; }  // degenerate: no plane
       double mn = 1e300, mx = -1e300;
@@ -70,18 +70,18 @@ bool Traversal::node_triangles_face_away(int r, const AABB& light_box) {
     }
   }
   if (R.sides_state != 2) return false;
-  AABBd lb = to_aabbd(light_box);
-  auto box_max = [&](const Plane4d& pl) {
+  AABBd lb = to_double(light_box);
+  auto box_max = [&](const ConservativePlane& pl) {
     return pl.eval(Vec3d(pl.n.x > 0 ? lb.hi.x : lb.lo.x, pl.n.y > 0 ? lb.hi.y : lb.lo.y, pl.n.z > 0 ? lb.hi.z : lb.lo.z));
   };
-  auto box_min = [&](const Plane4d& pl) {
+  auto box_min = [&](const ConservativePlane& pl) {
     return pl.eval(Vec3d(pl.n.x > 0 ? lb.lo.x : lb.hi.x, pl.n.y > 0 ? lb.lo.y : lb.hi.y, pl.n.z > 0 ? lb.lo.z : lb.hi.z));
   };
   // The light box strictly on the points' (non-positive) side of every one-sided
   // plane, and strictly on either side of every plane that contains the points.
-  for (const Plane4d& pl : R.sides)
+  for (const ConservativePlane& pl : R.sides)
     if (!(box_max(pl) < -pl.tol)) return false;
-  for (const Plane4d& pl : R.flat)
+  for (const ConservativePlane& pl : R.flat)
     if (!(box_max(pl) < -pl.tol) && !(box_min(pl) > pl.tol)) return false;
   return true;
 }

@@ -53,7 +53,7 @@ struct TreeNode {
   // `flat` those that contain every point (within the tolerance); sides_state 0 = not
   // computed, 1 = some triangle has points strictly on both sides, 2 = all one-sided.
   uint8_t sides_state = 0;
-  std::vector<Plane4d> sides, flat;
+  std::vector<ConservativePlane> sides, flat;
 
   uint32_t size() const { return end - begin; }
   bool split_done() const { return left >= 0; }
