@@ -10,6 +10,7 @@
 #include <limits>
 #include <string>
 
+#include "lib/geom/error_bounds.h"
 #include "lib/geom/float_mode.h"
 #include "lib/geom/predicates.h"
 
@@ -113,14 +114,14 @@ bool certainly_crosses(const CrossingTerms& t, const Vec3d& d) {
   // n that of d, each permanent is at most 6 n m^2 (det's: 6 m^3), so 8 eps of it is
   // below 48 eps n m^2.
   const double m = t.m, n = max_component(vabs(d));
-  const double e = 48.0 * 0x1p-53 * n * m * m, edet = 48.0 * 0x1p-53 * m * m * m;
+  const double e = 48.0 * kUnitRoundoffD * n * m * m, edet = 48.0 * kUnitRoundoffD * m * m * m;
   const bool pos = wa > e && wb > e && wc > e, neg = wa < -e && wb < -e && wc < -e;
   if (!pos && !neg) return false;
   if (pos ? !(t.det > edet) : !(t.det < -edet)) return false;  // t > 0
   // t < 1: |det| < |w_a + w_b + w_c| (one sign), which is at least the sum of the
   // |w_i| less 3 e, less the rounding of the two additions (2 eps of the sum; 4 allowed).
   const double sum = std::abs(wa) + std::abs(wb) + std::abs(wc);
-  return std::abs(t.det) + edet < sum - 3.0 * e - 4.0 * 0x1p-53 * sum;
+  return std::abs(t.det) + edet < sum - 3.0 * e - 4.0 * kUnitRoundoffD * sum;
 }
 
 }  // namespace

@@ -302,7 +302,7 @@ void ReceiverIntegrator::begin(const Vec3f& receiver, const SampleStrips& strips
 
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   r_world_ = to_double(receiver);
-  r_ = frame_.to_frame_d(receiver);
+  r_ = frame_.to_local(receiver);
   VG_CHECK(r_.z > 0.0);
   pieces_.clear();
   doubtful_ = false;

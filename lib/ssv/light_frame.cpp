@@ -68,7 +68,7 @@ LightFrame make_light_frame(const Light& light) {
   n = base.size();
   f.jitter_uv.resize(light.jitter_points.size());
   for (size_t k = 0; k < light.jitter_points.size(); ++k) {
-    Vec3f q = f.to_frame(light.jitter_points[k]);
+    Vec3f q = f.to_local_f(light.jitter_points[k]);
     f.jitter_uv[k] = {q.x, q.y};
     f.max_jitter_h = std::max(f.max_jitter_h, std::abs(q.z));
   }

@@ -200,7 +200,7 @@ TEST(IssShaft, ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue) {
       AABB r = random_box(rng, o), l = random_box(rng, o);
       iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
       for (int k = 6; k < g.plane_count(); ++k) {
-        const iss::Plane4d& p = g.plane(k);
+        const iss::ConservativePlane& p = g.plane(k);
         int i = p.n.x != 0 ? 0 : 1, j = p.n.z != 0 ? 2 : 1;
         ASSERT_LT(i, j);
         double best = -1e300;
@@ -330,7 +330,7 @@ TEST(IssBvh, QueriesReturnEverySelectedTriangleSorted) {
       bvh.query_shaft(g, got);
       EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
       for (uint32_t i = 0; i < boxes.size(); ++i) {
-        if (g.may_intersect_box(iss::to_aabbd(boxes[i]))) {
+        if (g.may_intersect_box(iss::to_double(boxes[i]))) {
           EXPECT_TRUE(std::binary_search(got.begin(), got.end(), i)) << "box " << i << " missing";
         }
       }
@@ -461,7 +461,7 @@ TEST(IssBlockers, ValidateAcceptsATriangleAndRejectsBrokenLinks) {
   s.patches.push_back({0, 3, iss::Facing::TowardsReceiver, -1});
   EXPECT_EQ(iss::validate(s, nullptr), "");
   iss::Surface broken = s;
-  broken.hull = iss::AABBd{};  // patches stand for triangles somewhere
+  broken.hull = iss::empty_box();  // patches stand for triangles somewhere
   EXPECT_NE(iss::validate(broken, nullptr), "");
   broken = s;
   broken.hull.hi.z = 0.5;  // the hull holds every edge
@@ -489,10 +489,10 @@ TEST(IssBlockers, BoxPlaneClassificationEqualsTheEightCorners) {
       Vec3d a = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
       Vec3d b = to_double(o + Vec3f(u(rng), u(rng), u(rng))), c = to_double(o + Vec3f(u(rng), u(rng), u(rng)));
       if (zero(rng) == 0) b.z = c.z = a.z;  // normal along z: n.x = n.y = 0
-      iss::Plane4d pl = iss::plane_through(a, b, c, 2e5);
+      iss::ConservativePlane pl = iss::plane_through(a, b, c, 2e5);
       AABB box = random_box(rng, o);
       if (zero(rng) == 0) box.hi = box.lo;  // a point
-      iss::AABBd bd = iss::to_aabbd(box);
+      AABBd bd = iss::to_double(box);
       double mn = 1e300, mx = -1e300;
       for (int i = 0; i < 8; ++i) {
         Vec3d q(i & 1 ? bd.hi.x : bd.lo.x, i & 2 ? bd.hi.y : bd.lo.y, i & 4 ? bd.hi.z : bd.lo.z);
@@ -519,14 +519,14 @@ TEST(IssBlockers, CanBlockShaftUsesTheClampedBoxAndFaceToFaceSegments) {
   AABB r(Vec3f(0, 0, 1), Vec3f(1, 1, 1.5f)), l(Vec3f(0.25f, 0.25f, 4), Vec3f(0.75f, 0.75f, 4));
   iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 6.0);
   ASSERT_EQ(g.main_axis(), 2);
-  iss::AABBd below{Vec3d(-2, -2, 0), Vec3d(2, 2, 0.5)}, beside{Vec3d(5, -2, 0), Vec3d(6, 2, 0.5)};
+  AABBd below{Vec3d(-2, -2, 0), Vec3d(2, 2, 0.5)}, beside{Vec3d(5, -2, 0), Vec3d(6, 2, 0.5)};
   EXPECT_TRUE(iss::can_block_shaft(below, g));
   EXPECT_FALSE(iss::can_block_shaft(beside, g));
-  iss::AABBd c = iss::clamped_box(below, g);
+  AABBd c = iss::clamped_box(below, g);
   EXPECT_EQ(c.lo.z, 1.0);
   EXPECT_EQ(c.hi.z, 1.0);
   // A box across the whole slab is unchanged by the clamp and may block.
-  iss::AABBd across{Vec3d(-2, -2, 2), Vec3d(2, 2, 3)};
+  AABBd across{Vec3d(-2, -2, 2), Vec3d(2, 2, 3)};
   EXPECT_TRUE(iss::can_block_shaft(across, g));
   EXPECT_EQ(iss::clamped_box(across, g).lo.z, 2.0);
 }

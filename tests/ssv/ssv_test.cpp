@@ -386,7 +386,7 @@ TEST(SsvIntegration, RelativeDepthEqualsDirectCounting) {
     const Light& light = s.lights[0];
     LightFrame frame = make_light_frame(light);
     std::vector<Vec3d> fp(pm.vertex_pos.size());
-    for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame_d(pm.vertex_pos[v]);
+    for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_local(pm.vertex_pos[v]);
     std::vector<Edge> edges = mesh_edges(pm);
     ReceiverIntegrator integ(pm, fp, frame);
     for (size_t i = 0; i < s.receivers.size(); ++i) {
@@ -430,7 +430,7 @@ TEST(SsvWedge, WedgeContainsEveryPointFromWhichTheEdgeOverlapsTheLight) {
   mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
   LightFrame frame = make_light_frame(s.lights[0]);
   std::vector<Vec3d> fp(pm.vertex_pos.size());
-  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame_d(pm.vertex_pos[v]);
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_local(pm.vertex_pos[v]);
   std::vector<Edge> edges = mesh_edges(pm);
   WedgeBuildCounts counts;
   std::vector<Wedge> wedges = build_wedges(pm, edges, fp, frame, 1e-9 * 4, counts);
@@ -505,7 +505,7 @@ TEST(SsvWedge, WedgeOfAnEdgeTouchingTheLightContainsEveryPointThatSeesItOverTheL
   mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
   LightFrame frame = make_light_frame(s.lights[0]);
   std::vector<Vec3d> fp(pm.vertex_pos.size());
-  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame_d(pm.vertex_pos[v]);
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_local(pm.vertex_pos[v]);
   std::vector<Edge> edges = mesh_edges(pm);
   const AABB box = s.bounds();
   const double M = std::max(max_component(vabs(to_double(box.lo))), max_component(vabs(to_double(box.hi))));
@@ -548,7 +548,7 @@ TEST(SsvWedge, BspQueryReportsEveryWedgeContainingThePoint) {
   mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
   LightFrame frame = make_light_frame(s.lights[0]);
   std::vector<Vec3d> fp(pm.vertex_pos.size());
-  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame_d(pm.vertex_pos[v]);
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_local(pm.vertex_pos[v]);
   std::vector<Edge> edges = mesh_edges(pm);
   WedgeBuildCounts counts;
   std::vector<Wedge> wedges = build_wedges(pm, edges, fp, frame, 1e-9 * 4, counts);
@@ -743,7 +743,7 @@ TEST(SsvDegenerate, EdgeInTheLightPlaneKeepsItsWedge) {
   mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
   LightFrame frame = make_light_frame(s.lights[0]);
   std::vector<Vec3d> fp(pm.vertex_pos.size());
-  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_frame_d(pm.vertex_pos[v]);
+  for (size_t v = 0; v < fp.size(); ++v) fp[v] = frame.to_local(pm.vertex_pos[v]);
   std::vector<Edge> edges = mesh_edges(pm);
   WedgeBuildCounts counts;
   std::vector<Wedge> wedges = build_wedges(pm, edges, fp, frame, 1e-9 * 4, counts);
