@@ -4,7 +4,7 @@
 // UPDATE-PATCH-FACINGS (4.22, Table 4.1), MERGE-PATCHES (4.23), SIMPLIFY-PATCHES (4.7.5),
 // SPLIT-SURFACE (4.25), COMPUTE-LOOSE-EDGES (4.26), COMBINE-SURFACES with glue edges
 // (4.27-4.29), the blocking test BLOCKS-SHAFT (4.18) and its ray variant (4.10), and
-// validate() (4.13).
+// validate() (4.13). Implemented in one file per step (blockers.cpp lists them).
 //
 // Storage (section 4.13, "avoid copying, in place"): a surface owns three flat arrays.
 // Raw edges refer to patches by index, a patch owns a contiguous range of the edge
