@@ -2,7 +2,7 @@
 // and the guarantee): the workspace and surface pool, bounds, and validate(). The
 // operations live in one file per step: triangle_surface.cpp (4.7.1 with the clipping of
 // 4.5), patch_refinement.cpp (4.7.2-4.7.5), surface_combination.cpp (4.7.6, 4.7.7),
-// blocking_test.cpp (clamping of 4.5, the blocking test of 4.6 and BLOCKS-RAY of 4.10).
+// blocking.cpp (clamping of 4.5, the blocking test of 4.6 and BLOCKS-RAY of 4.10).
 #include <algorithm>
 #include <cmath>
 #include <numeric>
