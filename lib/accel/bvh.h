@@ -17,7 +17,8 @@
 // Guarantee: a node's box is the exact union (min/max) of its items' boxes, so a
 // traversal whose predicate is conservative (true for every box that contains a box the
 // caller wants) reaches every wanted item. Items come back in traversal order (right
-// subtree first); callers needing index order sort.
+// subtree first); callers needing index order sort. Boxes must not hold NaN (the scene
+// and mesh readers reject it): min/max unions would drop or keep it by argument order.
 #pragma once
 
 #include <array>
@@ -77,6 +78,10 @@ class Bvh {
   uint32_t item(uint32_t pos) const { return order_[pos]; }
   const Box& item_box(uint32_t pos) const { return item_boxes_[pos]; }
   std::span<const uint32_t> leaf_items(const Node& leaf) const { return {order_.data() + leaf.first, leaf.count}; }
+  // Whole arrays, for traversals that keep them in locals (bvh_pairs.h).
+  uint32_t leaf_size() const { return leaf_size_; }
+  std::span<const uint32_t> order() const { return order_; }
+  std::span<const Box> item_boxes() const { return item_boxes_; }
 
   // leaf(node) for every leaf whose box, and every ancestor's box, passes enter(box).
   template <class Enter, class Leaf>

@@ -23,53 +23,69 @@ namespace pairs_detail {
 
 using NodePair = std::pair<uint32_t, uint32_t>;
 
+// The dual traversal with the tree's arrays held in locals: the callback cannot change
+// them, so the leaf scans need not reload them after every call.
 template <class T, class F>
-void leaf_pairs(const Bvh<T>& t, const typename Bvh<T>::Node& na, const typename Bvh<T>::Node& nb, bool same, F& f) {
-  for (uint32_t i = na.first; i < na.first + na.count; ++i)
-    for (uint32_t j = same ? i + 1 : nb.first; j < nb.first + nb.count; ++j)
-      if (t.item_box(i).overlaps(t.item_box(j))) f(t.item(i), t.item(j));
-}
+struct PairWalk {
+  using Node = typename Bvh<T>::Node;
+  const Bvh<T>& t;
+  const AABBT<T>* box;    // item boxes in leaf order
+  const uint32_t* item;   // leaf order -> item
+  uint32_t leaf_size;
+  F& f;
 
-// One step of the dual traversal of node pair (a, b): leaf pairs are reported, other
-// pairs push their children pairs onto `out` (the larger node is split). Returns true
-// when it pushed anything.
-template <class T, class F>
-bool expand(const Bvh<T>& t, uint32_t a, uint32_t b, std::vector<NodePair>& out, F& f) {
-  const auto& na = t.node(a);
-  const auto& nb = t.node(b);
-  if (a == b) {
-    if (t.is_leaf(na)) {
-      leaf_pairs(t, na, na, true, f);
+  PairWalk(const Bvh<T>& tree, F& fn)
+      : t(tree), box(tree.item_boxes().data()), item(tree.order().data()), leaf_size(tree.leaf_size()), f(fn) {}
+
+  bool is_leaf(const Node& n) const { return n.count <= leaf_size; }
+
+  void leaf_pairs(const Node& na, const Node& nb, bool same) const {
+    for (uint32_t i = na.first; i < na.first + na.count; ++i) {
+      const AABBT<T> bi = box[i];
+      for (uint32_t j = same ? i + 1 : nb.first; j < nb.first + nb.count; ++j)
+        if (bi.overlaps(box[j])) f(item[i], item[j]);
+    }
+  }
+
+  // One step for node pair (a, b): leaf pairs are reported, other pairs push their
+  // children pairs onto `out` (the larger node is split). True when it pushed anything.
+  bool expand(uint32_t a, uint32_t b, std::vector<NodePair>& out) const {
+    const Node& na = t.node(a);
+    const Node& nb = t.node(b);
+    if (a == b) {
+      if (is_leaf(na)) {
+        leaf_pairs(na, na, true);
+        return false;
+      }
+      out.push_back({a + 1, a + 1});
+      out.push_back({na.first, na.first});
+      out.push_back({a + 1, na.first});
+      return true;
+    }
+    if (!na.box.overlaps(nb.box)) return false;
+    const bool la = is_leaf(na), lb = is_leaf(nb);
+    if (la && lb) {
+      leaf_pairs(na, nb, false);
       return false;
     }
-    out.push_back({t.left(a), t.left(a)});
-    out.push_back({t.right(a), t.right(a)});
-    out.push_back({t.left(a), t.right(a)});
+    if (lb || (!la && na.count >= nb.count)) {
+      out.push_back({a + 1, b});
+      out.push_back({na.first, b});
+    } else {
+      out.push_back({a, b + 1});
+      out.push_back({a, nb.first});
+    }
     return true;
   }
-  if (!na.box.overlaps(nb.box)) return false;
-  if (t.is_leaf(na) && t.is_leaf(nb)) {
-    leaf_pairs(t, na, nb, false, f);
-    return false;
-  }
-  if (t.is_leaf(nb) || (!t.is_leaf(na) && na.count >= nb.count)) {
-    out.push_back({t.left(a), b});
-    out.push_back({t.right(a), b});
-  } else {
-    out.push_back({a, t.left(b)});
-    out.push_back({a, t.right(b)});
-  }
-  return true;
-}
 
-template <class T, class F>
-void traverse(const Bvh<T>& t, std::vector<NodePair>& stack, F& f) {
-  while (!stack.empty()) {
-    const auto [a, b] = stack.back();
-    stack.pop_back();
-    expand(t, a, b, stack, f);
+  void traverse(std::vector<NodePair>& stack) const {
+    while (!stack.empty()) {
+      const auto [a, b] = stack.back();
+      stack.pop_back();
+      expand(a, b, stack);
+    }
   }
-}
+};
 
 }  // namespace pairs_detail
 
@@ -78,7 +94,7 @@ template <class T, class F>
 void self_pairs(const Bvh<T>& t, F&& f) {
   if (t.empty()) return;
   std::vector<pairs_detail::NodePair> stack{{0, 0}};
-  pairs_detail::traverse(t, stack, f);
+  pairs_detail::PairWalk<T, F>(t, f).traverse(stack);
 }
 
 // The same pairs, f(local, i, j) called concurrently from TBB worker threads with
@@ -91,11 +107,12 @@ void self_pairs_parallel(const Bvh<T>& t, tbb::enumerable_thread_specific<Local>
   {
     Local& mine = locals.local();
     auto g = [&](uint32_t i, uint32_t j) { f(mine, i, j); };
+    const pairs_detail::PairWalk<T, decltype(g)> walk(t, g);
     while (frontier.size() < 4096) {
       next.clear();
       bool grew = false;
       for (auto [a, b] : frontier)
-        if (pairs_detail::expand(t, a, b, next, g)) grew = true;
+        if (walk.expand(a, b, next)) grew = true;
       frontier.swap(next);
       if (!grew) break;
     }
@@ -103,10 +120,11 @@ void self_pairs_parallel(const Bvh<T>& t, tbb::enumerable_thread_specific<Local>
   tbb::parallel_for(tbb::blocked_range<size_t>(0, frontier.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
     Local& mine = locals.local();
     auto g = [&](uint32_t i, uint32_t j) { f(mine, i, j); };
+    const pairs_detail::PairWalk<T, decltype(g)> walk(t, g);
     std::vector<pairs_detail::NodePair> stack;
     for (size_t i = r.begin(); i < r.end(); ++i) {
       stack.assign(1, frontier[i]);
-      pairs_detail::traverse(t, stack, g);
+      walk.traverse(stack);
     }
   });
 }

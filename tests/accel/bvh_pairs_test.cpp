@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <array>
-#include <random>
 #include <vector>
 
 #include "lib/accel/bvh_pairs.h"
+#include "tests/support/random_boxes.h"
 
 using namespace visgate;
 using namespace visgate::accel;
@@ -16,22 +16,11 @@ namespace {
 
 using Pair = std::array<uint32_t, 2>;
 
+// Boxes of sides up to 6 in a cube of side 100, and box 1 touching box 0 on a face
+// (closed boxes overlap there).
 template <class T>
 std::vector<AABBT<T>> random_boxes(size_t n, uint32_t seed, double offset) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> pos(0.0, 100.0), size(0.0, 6.0);
-  std::vector<AABBT<T>> out;
-  for (size_t i = 0; i < n; ++i) {
-    if (i > 0 && rng() % 10 == 0) {  // duplicates: equal keys, pairs of equal boxes
-      out.push_back(out[rng() % out.size()]);
-      continue;
-    }
-    const Vec3<T> lo(T(offset + pos(rng)), T(offset + pos(rng)), T(offset + pos(rng)));
-    Vec3<T> hi = lo;
-    if (rng() % 4 != 0) hi = lo + Vec3<T>(T(size(rng)), T(size(rng)), T(size(rng)));
-    out.push_back(AABBT<T>(lo, hi));
-  }
-  // Touching boxes (closed boxes overlap on a shared face).
+  auto out = test::random_boxes<T>(n, seed, offset, 100.0, 6.0);
   if (n >= 2) out[1] = AABBT<T>(Vec3<T>(out[0].hi.x, out[0].lo.y, out[0].lo.z), out[0].hi + Vec3<T>(1, 1, 1));
   return out;
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "lib/accel/bvh.h"
+#include "tests/support/random_boxes.h"
 
 using namespace visgate;
 using namespace visgate::accel;
@@ -19,24 +20,9 @@ namespace {
 template <class T>
 using Boxes = std::vector<AABBT<T>>;
 
-// Boxes of mixed sizes in a cube of side `extent` around `offset`: a quarter points
-// (degenerate boxes), some exact duplicates (equal keys, so ties are broken by index).
 template <class T>
 Boxes<T> random_boxes(size_t n, uint32_t seed, double offset = 0.0, double extent = 100.0) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> pos(0.0, extent), size(0.0, extent / 20);
-  Boxes<T> out;
-  for (size_t i = 0; i < n; ++i) {
-    if (i > 0 && rng() % 10 == 0) {
-      out.push_back(out[rng() % out.size()]);
-      continue;
-    }
-    Vec3<T> lo(T(offset + pos(rng)), T(offset + pos(rng)), T(offset + pos(rng)));
-    Vec3<T> hi = lo;
-    if (rng() % 4 != 0) hi = lo + Vec3<T>(T(size(rng)), T(size(rng)), T(size(rng)));
-    out.push_back(AABBT<T>(lo, hi));
-  }
-  return out;
+  return test::random_boxes<T>(n, seed, offset, extent, extent / 20);
 }
 
 std::vector<BuildRule> every_rule() {
