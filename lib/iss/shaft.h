@@ -47,8 +47,6 @@ inline AABBd to_double(const AABB& b) {
   d.hi = to_double(b.hi);
   return d;
 }
-// The former name, still used by triangle_bvh.cpp (moving to lib/accel); use to_double.
-inline AABBd to_aabbd(const AABB& b) { return to_double(b); }
 
 // Main axis of a pair of disjoint boxes: the axis with the widest gap; dir = +1 when the
 // receiver box lies below the light box on it, -1 otherwise; -1 axis when they overlap.

@@ -24,7 +24,7 @@ void TriangleBvh::query_box(const AABB& box, std::vector<uint32_t>& out) const {
 void TriangleBvh::query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out) const {
   // The triangles of a visited leaf are returned untested: every consumer tests each
   // triangle against the shaft itself, so a second (box) test would only cost.
-  collect([&](const AABB& b) { return g.may_intersect_box(to_aabbd(b)); }, false, out);
+  collect([&](const AABB& b) { return g.may_intersect_box(to_double(b)); }, false, out);
 }
 
 }  // namespace visgate::iss
