@@ -5,8 +5,6 @@
 // --quiet; progress shows when stderr is a terminal.
 #include <cstdio>
 #include <cstdlib>
-#include <memory>
-#include <sstream>
 
 #include "tools/bench/bench.h"
 #include "tools/visgate/cli.h"
@@ -28,15 +26,6 @@ struct BenchOpts {
   BenchOpts() { b.budget = -1; }  // -1: the default for the chosen sizes
 };
 
-std::vector<std::string> split_commas(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 int run_bench(BenchOpts& o) {
   if (o.list) {
     for (const auto& e : bench::experiments()) std::printf("%-15s %s\n", e.name.c_str(), e.help.c_str());
@@ -53,8 +42,8 @@ int run_bench(BenchOpts& o) {
   if (o.b.budget < 0) o.b.budget = o.b.quick ? 5.0 : 60.0;
   if (!(o.b.budget > 0)) return bad_input("bench: --budget: expected a positive number of seconds");
   if (!(o.b.tau >= 0)) return bad_input("bench: --tau: expected a non-negative margin");
-  o.b.methods = split_commas(o.methods);
-  o.b.families = split_commas(o.families);
+  o.b.methods = split_list(o.methods);
+  o.b.families = split_list(o.families);
   if (o.b.out_dir.empty()) o.b.out_dir = "bench-results/" + o.b.experiment;
   o.b.progress = stderr_is_tty();
   const char* env = std::getenv("VISGATE_BENCH_SCRIPTS");
@@ -79,8 +68,8 @@ int run_bench(BenchOpts& o) {
 }  // namespace
 
 void add_bench(CLI::App& app, Action& run) {
-  auto o = std::make_shared<BenchOpts>();
-  auto* sub = app.add_subcommand("bench", "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)");
+  auto [sub, o] = add_command<BenchOpts>(
+      app, run, "bench", "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)", run_bench);
   sub->add_option("experiment", o->b.experiment,
                   "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair, overhead (see --list)");
   sub->add_option("-o,--output", o->b.out_dir, "Output directory (default bench-results/EXPERIMENT)");
@@ -95,7 +84,6 @@ void add_bench(CLI::App& app, Action& run) {
   sub->add_option("--tau", o->b.tau, "Mismatch margin threshold (default 1e-5)");
   sub->add_option("--seed", o->b.seed, "Scene and method seed (default 1)");
   sub->add_flag("--list", o->list, "List the experiments and exit");
-  sub->callback([o, &run] { run = [o] { return run_bench(*o); }; });
 }
 
 }  // namespace visgate::cli

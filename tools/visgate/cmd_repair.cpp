@@ -211,8 +211,8 @@ int run_repair(const RepairOpts& o) {
 }  // namespace
 
 void add_repair(CLI::App& app, Action& run) {
-  auto o = std::make_shared<RepairOpts>();
-  auto* sub = app.add_subcommand("repair", "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report");
+  auto [sub, o] = add_command<RepairOpts>(
+      app, run, "repair", "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report", run_repair);
   sub->add_option("input", o->in, "Input mesh")->required();
   sub->add_option("-o,--output", o->out, "Output mesh (.obj .off .ply .stl)");
   sub->add_option("--weld-tolerance", o->tolerance, "Merge vertices within this Euclidean distance (default 0: equal positions)");
@@ -223,7 +223,6 @@ void add_repair(CLI::App& app, Action& run) {
   sub->add_option("--fill-holes", o->fill_holes, "Fill boundary loops of at most N edges");
   sub->add_flag("--check", o->check, "Only analyse and report; write no mesh");
   sub->add_flag("--stl-ascii", o->stl_ascii, "Write ASCII STL instead of binary");
-  sub->callback([o, &run] { run = [o] { return run_repair(*o); }; });
 }
 
 }  // namespace visgate::cli
