@@ -20,7 +20,7 @@
 #include <tuple>
 #include <vector>
 
-#include "fuzz/decoder.h"
+#include "lib/scene/byte_decoder.h"
 #include "lib/mesh/prepare.h"
 #include "lib/scene/scene_json.h"
 

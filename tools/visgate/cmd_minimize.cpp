@@ -10,13 +10,13 @@
 //
 // The input may also be a fuzzer crash file of a differential target (fuzz_iss, fuzz_ssv,
 // fuzz_plucker, fuzz_embree: anything that is not JSON): it is decoded by the targets'
-// own decoder (fuzz/decoder.h), so the scene and, unless --opt is given, the method
+// own decoder (lib/scene/byte_decoder.h), so the scene and, unless --opt is given, the method
 // options are exactly the ones the target ran. Detected by the first byte not being '{';
 // --fuzz-input forces it (an input whose selector byte happens to be '{').
 #include <cstdio>
 #include <filesystem>
 
-#include "fuzz/decoder.h"
+#include "lib/scene/byte_decoder.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "oracle/comparator.h"
