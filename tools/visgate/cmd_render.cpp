@@ -1,14 +1,15 @@
 // visgate render scene.json (--method M | --oracle [--exact-region]) [--diff] [--opt k=v]...
 //                [--threads N] [--tau T] [--scale K] -o image.png
 // The receiver grid as an image (PNG through stb_image_write), one pixel block per
-// receiver, +v up:
+// receiver, +v up, the fraction in the viridis colour map with its legend, a scale bar
+// and the lights' outlines (tools/bench/image.h render_picture):
 //   --method M       M's visible fraction, summed over lights and divided by their count;
 //   --oracle         the same from the exact relation oracle (a degenerate relation
 //                    counts one half); with --exact-region the region oracle's exact
 //                    area fraction instead of the sampled relations;
-//   --diff           (with --method) where M disagrees with the relation oracle:
-//                    red = a mismatch (margin >= tau; brighter with more of them),
-//                    blue = only disagreements below tau, dim gray = agreement.
+//   --diff           (with --method) M's fraction with a mark on each receiver where M
+//                    disagrees with the relation oracle: red = a mismatch (margin >=
+//                    tau), orange = only disagreements below tau.
 // Exit 2 when the scene has no receiver grid.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -58,7 +59,8 @@ int run_render(const RenderOpts& o) {
     return bad_input(o.scene + ": receivers.grid: nu*nv does not match the receiver count");
   int scale = o.scale > 0 ? o.scale : bench::auto_scale(g);
 
-  std::vector<bench::Rgb> colors(s.receivers.size());
+  bench::Picture pic;
+  for (const Light& l : s.lights) pic.lights.push_back(l.polygon);
   if (o.oracle && o.exact_region) {
     size_t L = s.lights.size(), n = s.receivers.size() * L;
     std::vector<double> f(n);
@@ -66,47 +68,46 @@ int run_render(const RenderOpts& o) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k != r.end(); ++k) f[k] = oracle::visible_region(s, k / L, k % L).visible_fraction;
     });
+    pic.fraction.resize(s.receivers.size());
     for (size_t i = 0; i < s.receivers.size(); ++i) {
       double sum = 0;
       for (size_t l = 0; l < L; ++l) sum += f[i * L + l];
-      colors[i] = bench::gray(L ? sum / double(L) : 0.0);
+      pic.fraction[i] = L ? sum / double(L) : 0.0;
     }
     std::fprintf(stderr, "render %s: exact region fraction, %zu receivers x %zu lights\n", o.scene.c_str(),
                  s.receivers.size(), L);
   } else if (o.oracle) {
     auto exact = oracle::run_relation_oracle(s, o.m.threads);
-    auto f = bench::mean_class_fraction(s, exact.classes);
-    for (size_t i = 0; i < f.size(); ++i) colors[i] = bench::gray(f[i]);
+    pic.fraction = bench::mean_class_fraction(s, exact.classes);
     std::fprintf(stderr, "render %s: relation oracle fraction, %zu relations, %.3f s\n", o.scene.c_str(),
                  s.relation_count(), exact.seconds);
   } else {
     SolveResult result = method.solver->solve(s, method.options);
+    pic.fraction = bench::mean_visible_fraction(s, result);
     if (!o.diff) {
-      auto f = bench::mean_visible_fraction(s, result);
-      for (size_t i = 0; i < f.size(); ++i) colors[i] = bench::gray(f[i]);
-      std::fprintf(stderr, "render %s: %s visible fraction, %.3f s\n", o.scene.c_str(), o.m.method.c_str(), result.seconds);
+      std::fprintf(stderr, "render %s: %s visible fraction, %.3f s\n", o.scene.c_str(), o.m.method.c_str(),
+                   result.seconds);
     } else {
       auto exact = oracle::run_relation_oracle(s, o.m.threads);
-      auto diff = bench::diff_receivers(s, result, exact.classes, exact.margins, o.tau);
+      pic.diff = bench::diff_receivers(s, result, exact.classes, exact.margins, o.tau);
       // Fraction and fragment mismatches of fragment methods (DESIGN section 5) mark
       // their receivers too.
       auto cmp = oracle::compare_relations(s, result, exact, o.tau);
       for (const auto& m : cmp.mismatches)
-        if (m.sample < 0 && m.receiver < diff.size()) ++diff[m.receiver].mismatches;
+        if (m.sample < 0 && m.receiver < pic.diff.size()) ++pic.diff[m.receiver].mismatches;
       size_t mis_rec = 0, below_rec = 0, mis = 0, below = 0;
-      for (const auto& d : diff) {
+      for (const auto& d : pic.diff) {
         mis += d.mismatches, below += d.below_tau;
         mis_rec += d.mismatches > 0;
         below_rec += d.mismatches == 0 && d.below_tau > 0;
       }
-      colors = bench::diff_colors(diff, bench::mean_class_fraction(s, exact.classes), s.samples_per_receiver());
       std::fprintf(stderr,
                    "render %s: %s against the relation oracle (tau %g): %zu mismatches at %zu receivers (red), "
-                   "%zu disagreements below tau at %zu more receivers (blue)\n",
+                   "%zu disagreements below tau at %zu more receivers (orange)\n",
                    o.scene.c_str(), o.m.method.c_str(), o.tau, mis, mis_rec, below, below_rec);
     }
   }
-  if (Status ws = bench::write_png(o.out, bench::grid_image(g, colors, scale)); !ws) return bad_input(ws.error());
+  if (Status ws = bench::write_png(o.out, bench::render_picture(g, pic, scale)); !ws) return bad_input(ws.error());
   return kOk;
 }
 }  // namespace
