@@ -33,20 +33,15 @@ int bad_input(const Error& error);
 // True when stderr is a terminal (progress bars only then).
 bool stderr_is_tty();
 
-// Registers subcommand `name`: its options live in one Opts shared by the option
-// bindings and the run, and `body(opts)` becomes the action when it is chosen. Returns
-// the subcommand (for its options) and the Opts.
-template <class Opts>
-struct Command {
-  CLI::App* sub;
-  std::shared_ptr<Opts> opts;
-};
+// Registers subcommand `name`: its options live in one Opts, which binds them to the
+// subcommand (Opts::bind(CLI::App*)), and `body(opts)` becomes the action when the
+// subcommand is chosen.
 template <class Opts, class Body>
-Command<Opts> add_command(CLI::App& app, Action& run, const std::string& name, const std::string& help, Body body) {
+void add_command(CLI::App& app, Action& run, const std::string& name, const std::string& help, Body body) {
   auto o = std::make_shared<Opts>();
   CLI::App* sub = app.add_subcommand(name, help);
+  o->bind(sub);
   sub->callback([o, &run, body] { run = [o, body] { return body(*o); }; });
-  return {sub, o};
 }
 
 // The options of a command that runs one method: --method M, --opt key=value

@@ -24,6 +24,22 @@ struct BenchOpts {
   std::string methods, families;
   bool list = false;
   BenchOpts() { b.budget = -1; }  // -1: the default for the chosen sizes
+  void bind(CLI::App* sub) {
+    sub->add_option("experiment", b.experiment,
+                    "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair, overhead (see --list)");
+    sub->add_option("-o,--output", b.out_dir, "Output directory (default bench-results/EXPERIMENT)");
+    sub->add_option("--repeat", b.repeat, "Runs per figure; the minimum counts (default 3)");
+    sub->add_option("--threads", b.threads, "Threads of the all-threads runs (0: all hardware threads)");
+    sub->add_flag("--quick", b.quick, "CI-smoke sizes (seconds)");
+    sub->add_flag("--quiet", b.quiet, "No progress, notes or tables on stderr");
+    sub->add_option("--methods", methods, "Comma-separated methods (default: every registered method)");
+    sub->add_option("--families", families, "Comma-separated families (default: the experiment's own)");
+    sub->add_option("--budget", b.budget,
+                    "Seconds per run before a sweep stops growing for a method (default 60; 5 with --quick)");
+    sub->add_option("--tau", b.tau, "Mismatch margin threshold (default 1e-5)");
+    sub->add_option("--seed", b.seed, "Scene and method seed (default 1)");
+    sub->add_flag("--list", list, "List the experiments and exit");
+  }
 };
 
 int run_bench(BenchOpts& o) {
@@ -68,22 +84,8 @@ int run_bench(BenchOpts& o) {
 }  // namespace
 
 void add_bench(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<BenchOpts>(
-      app, run, "bench", "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)", run_bench);
-  sub->add_option("experiment", o->b.experiment,
-                  "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair, overhead (see --list)");
-  sub->add_option("-o,--output", o->b.out_dir, "Output directory (default bench-results/EXPERIMENT)");
-  sub->add_option("--repeat", o->b.repeat, "Runs per figure; the minimum counts (default 3)");
-  sub->add_option("--threads", o->b.threads, "Threads of the all-threads runs (0: all hardware threads)");
-  sub->add_flag("--quick", o->b.quick, "CI-smoke sizes (seconds)");
-  sub->add_flag("--quiet", o->b.quiet, "No progress, notes or tables on stderr");
-  sub->add_option("--methods", o->methods, "Comma-separated methods (default: every registered method)");
-  sub->add_option("--families", o->families, "Comma-separated families (default: the experiment's own)");
-  sub->add_option("--budget", o->b.budget,
-                  "Seconds per run before a sweep stops growing for a method (default 60; 5 with --quick)");
-  sub->add_option("--tau", o->b.tau, "Mismatch margin threshold (default 1e-5)");
-  sub->add_option("--seed", o->b.seed, "Scene and method seed (default 1)");
-  sub->add_flag("--list", o->list, "List the experiments and exit");
+  add_command<BenchOpts>(app, run, "bench",
+                         "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)", run_bench);
 }
 
 }  // namespace visgate::cli

@@ -33,6 +33,29 @@ struct CheckOpts {
   bool no_metamorphic = false;
   std::vector<int> scale_exponents;
   size_t region_pairs = 4096;
+  void bind(CLI::App* sub) {
+    sub->add_option("scenes", scenes, "Scene JSON files");
+    sub->add_option("--family", family, "Family (comma list, or 'all') to generate scenes from");
+    sub->add_option("--count", count, "Scenes per family (seeds S, S+1, ...)");
+    sub->add_option("--seed", seed, "First seed");
+    add_family_args(sub, params);  // of the generated scenes
+    sub->add_option("--methods", methods,
+                    "Methods, comma-separated, or 'all'; NAME#TAG runs NAME again in a row of its own with the options "
+                    "given to NAME#TAG")->required();
+    sub->add_option("--opt", opts, "Method option METHOD:key=value (repeatable; METHOD may be NAME#TAG)");
+    sub->add_option("--tau", tau, "Margin threshold: disagreements below it are not mismatches (default 1e-5)");
+    sub->add_option("--report", report, "Write the report JSON here");
+    sub->add_option("--store", store, "Minimise and store one corpus case per mismatch signature under DIR");
+    sub->add_option("--shard", shard, "Run shard k of N (1 <= k <= N) of the campaign");
+    sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_flag("--no-metamorphic", no_metamorphic, "Skip the scale, axis-map and translation checks");
+    sub->add_option("--scale-exponents", scale_exponents,
+                    "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "
+                    "over [-120, 124]")->delimiter(',');
+    sub->add_option("--region-pairs", region_pairs,
+                    "Fragment methods: receiver-light pairs per scene checked against the region oracle "
+                    "(fractions, fragments); every k-th receiver when more (default 4096, 0: none)");
+  }
 };
 
 int run_check(const CheckOpts& o) {
@@ -148,29 +171,8 @@ int run_check(const CheckOpts& o) {
 }  // namespace
 
 void add_check(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<CheckOpts>(
-      app, run, "check", "Compare methods with the exact oracle on scenes or generated families", run_check);
-  sub->add_option("scenes", o->scenes, "Scene JSON files");
-  sub->add_option("--family", o->family, "Family (comma list, or 'all') to generate scenes from");
-  sub->add_option("--count", o->count, "Scenes per family (seeds S, S+1, ...)");
-  sub->add_option("--seed", o->seed, "First seed");
-  add_family_args(sub, o->params);  // of the generated scenes
-  sub->add_option("--methods", o->methods,
-                  "Methods, comma-separated, or 'all'; NAME#TAG runs NAME again in a row of its own with the options "
-                  "given to NAME#TAG")->required();
-  sub->add_option("--opt", o->opts, "Method option METHOD:key=value (repeatable; METHOD may be NAME#TAG)");
-  sub->add_option("--tau", o->tau, "Margin threshold: disagreements below it are not mismatches (default 1e-5)");
-  sub->add_option("--report", o->report, "Write the report JSON here");
-  sub->add_option("--store", o->store, "Minimise and store one corpus case per mismatch signature under DIR");
-  sub->add_option("--shard", o->shard, "Run shard k of N (1 <= k <= N) of the campaign");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_flag("--no-metamorphic", o->no_metamorphic, "Skip the scale, axis-map and translation checks");
-  sub->add_option("--scale-exponents", o->scale_exponents,
-                  "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "
-                  "over [-120, 124]")->delimiter(',');
-  sub->add_option("--region-pairs", o->region_pairs,
-                  "Fragment methods: receiver-light pairs per scene checked against the region oracle "
-                  "(fractions, fragments); every k-th receiver when more (default 4096, 0: none)");
+  add_command<CheckOpts>(app, run, "check",
+                         "Compare methods with the exact oracle on scenes or generated families", run_check);
 }
 
 }  // namespace visgate::cli

@@ -22,6 +22,16 @@ struct GateOpts {
   std::string out = "out/gate", corpus = VISGATE_SOURCE_DIR "/corpus";
   int threads = 0;
   std::vector<std::string> methods, opts;  // extra gated methods (exec:, plugin:, built-ins) and their options
+  void bind(CLI::App* sub) {
+    sub->add_flag("--quick", quick, "The quick gate (twelve seeds per family, small scenes; under 3 minutes on 2 cores)");
+    sub->add_option("-o,--output", out, "Output folder (default out/gate)");
+    sub->add_option("--corpus", corpus, "Corpus root to replay (default the source tree's corpus/)");
+    sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_option("--method", methods,
+                    "Also gate this method (repeatable; exec:CMD, plugin:PATH or a built-in): any oracle mismatch or "
+                    "failure of it fails the gate");
+    sub->add_option("--opt", opts, "Option of a --method: METHOD:key=value (repeatable)");
+  }
 };
 
 int run_gate_cmd(const GateOpts& o) {
@@ -68,17 +78,8 @@ int run_gate_cmd(const GateOpts& o) {
 }  // namespace
 
 void add_gate(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<GateOpts>(
-      app, run, "gate",
-      "The CI correctness gate: every family and method, metamorphic checks, corpus replay", run_gate_cmd);
-  sub->add_flag("--quick", o->quick, "The quick gate (twelve seeds per family, small scenes; under 3 minutes on 2 cores)");
-  sub->add_option("-o,--output", o->out, "Output folder (default out/gate)");
-  sub->add_option("--corpus", o->corpus, "Corpus root to replay (default the source tree's corpus/)");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_option("--method", o->methods,
-                  "Also gate this method (repeatable; exec:CMD, plugin:PATH or a built-in): any oracle mismatch or "
-                  "failure of it fails the gate");
-  sub->add_option("--opt", o->opts, "Option of a --method: METHOD:key=value (repeatable)");
+  add_command<GateOpts>(app, run, "gate",
+                        "The CI correctness gate: every family and method, metamorphic checks, corpus replay", run_gate_cmd);
 }
 
 }  // namespace visgate::cli

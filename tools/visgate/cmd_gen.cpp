@@ -13,6 +13,13 @@ struct GenOpts {
   std::string family, out;
   FamilyParams params;
   bool hex = false;
+  void bind(CLI::App* sub) {
+    sub->add_option("family", family, "Scene family")->required();
+    sub->add_option("--seed", params.seed, "Seed");
+    add_family_args(sub, params);
+    sub->add_flag("--hex", hex, "Write coordinates as C99 hex-floats");
+    sub->add_option("-o,--output", out, "Output scene JSON ('-' for stdout)")->required();
+  }
 };
 
 int run_gen(const GenOpts& o) {
@@ -26,13 +33,7 @@ int run_gen(const GenOpts& o) {
 }  // namespace
 
 void add_gen(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<GenOpts>(
-      app, run, "gen", "Generate a scene of a family (deterministic by seed)", run_gen);
-  sub->add_option("family", o->family, "Scene family")->required();
-  sub->add_option("--seed", o->params.seed, "Seed");
-  add_family_args(sub, o->params);
-  sub->add_flag("--hex", o->hex, "Write coordinates as C99 hex-floats");
-  sub->add_option("-o,--output", o->out, "Output scene JSON ('-' for stdout)")->required();
+  add_command<GenOpts>(app, run, "gen", "Generate a scene of a family (deterministic by seed)", run_gen);
 }
 
 }  // namespace visgate::cli

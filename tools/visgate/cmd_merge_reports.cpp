@@ -14,6 +14,10 @@ namespace {
 struct MergeOpts {
   std::vector<std::string> inputs;
   std::string out;
+  void bind(CLI::App* sub) {
+    sub->add_option("reports", inputs, "Report JSON files")->required();
+    sub->add_option("-o,--output", out, "Merged report JSON")->required();
+  }
 };
 
 int run_merge(const MergeOpts& o) {
@@ -34,10 +38,7 @@ int run_merge(const MergeOpts& o) {
 }  // namespace
 
 void add_merge_reports(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<MergeOpts>(
-      app, run, "merge-reports", "Merge check reports of shards into one report", run_merge);
-  sub->add_option("reports", o->inputs, "Report JSON files")->required();
-  sub->add_option("-o,--output", o->out, "Merged report JSON")->required();
+  add_command<MergeOpts>(app, run, "merge-reports", "Merge check reports of shards into one report", run_merge);
 }
 
 }  // namespace visgate::cli

@@ -32,6 +32,16 @@ struct MinimizeOpts {
   long receiver = -1, light = -1, sample = -1;
   double tau = -1;
   bool fuzz_input = false;  // decode as a fuzzer input even if it starts with '{'
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON, corpus entry or fuzzer crash file")->required();
+    add_method_args(sub, m, {"Method", true, false});
+    sub->add_option("--receiver", receiver, "Receiver index of the relation");
+    sub->add_option("--light", light, "Light index of the relation");
+    sub->add_option("--sample", sample, "Sample index of the relation");
+    sub->add_option("--tau", tau, "Margin threshold (default: the entry's, else 1e-5)");
+    sub->add_option("-o,--output", out, "Corpus root folder")->required();
+    sub->add_flag("--fuzz-input", fuzz_input, "Decode the input as a differential fuzz target's input");
+  }
 };
 
 uint64_t seed_from_name(const std::string& name) {
@@ -185,16 +195,7 @@ int run_minimize(const MinimizeOpts& o) {
 }  // namespace
 
 void add_minimize(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<MinimizeOpts>(
-      app, run, "minimize", "Minimise a mismatching relation into a corpus entry", run_minimize);
-  sub->add_option("scene", o->scene, "Scene JSON, corpus entry or fuzzer crash file")->required();
-  add_method_args(sub, o->m, {"Method", true, false});
-  sub->add_option("--receiver", o->receiver, "Receiver index of the relation");
-  sub->add_option("--light", o->light, "Light index of the relation");
-  sub->add_option("--sample", o->sample, "Sample index of the relation");
-  sub->add_option("--tau", o->tau, "Margin threshold (default: the entry's, else 1e-5)");
-  sub->add_option("-o,--output", o->out, "Corpus root folder")->required();
-  sub->add_flag("--fuzz-input", o->fuzz_input, "Decode the input as a differential fuzz target's input");
+  add_command<MinimizeOpts>(app, run, "minimize", "Minimise a mismatching relation into a corpus entry", run_minimize);
 }
 
 }  // namespace visgate::cli

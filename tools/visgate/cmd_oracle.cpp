@@ -23,6 +23,13 @@ struct OracleOpts {
   bool regions = false;
   int threads = 0;
   double tau = oracle::kDefaultTau;
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON")->required();
+    sub->add_flag("--regions", regions, "Also compute the exact visible region per receiver and light");
+    sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_option("--tau", tau, "Margin threshold written to the file (default 1e-5)");
+    sub->add_option("-o,--output", out, "Oracle JSON ('-' for stdout)");
+  }
 };
 
 int run_oracle(const OracleOpts& o) {
@@ -59,13 +66,8 @@ int run_oracle(const OracleOpts& o) {
 }  // namespace
 
 void add_oracle(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<OracleOpts>(
-      app, run, "oracle", "Exact classes and margins of every relation (and visible regions)", run_oracle);
-  sub->add_option("scene", o->scene, "Scene JSON")->required();
-  sub->add_flag("--regions", o->regions, "Also compute the exact visible region per receiver and light");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_option("--tau", o->tau, "Margin threshold written to the file (default 1e-5)");
-  sub->add_option("-o,--output", o->out, "Oracle JSON ('-' for stdout)");
+  add_command<OracleOpts>(app, run, "oracle",
+                          "Exact classes and margins of every relation (and visible regions)", run_oracle);
 }
 
 }  // namespace visgate::cli

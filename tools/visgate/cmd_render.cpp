@@ -33,6 +33,16 @@ struct RenderOpts {
   bool oracle = false, exact_region = false, diff = false;
   int scale = 0;
   double tau = 1e-5;
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON with a receiver grid")->required();
+    add_method_args(sub, m, {"Method to draw (or to compare with --diff)", false, true});
+    sub->add_flag("--oracle", oracle, "Draw the exact relation-oracle fraction");
+    sub->add_flag("--exact-region", exact_region, "With --oracle: the region oracle's exact area fraction");
+    sub->add_flag("--diff", diff, "Heat map of where --method disagrees with the oracle");
+    sub->add_option("--tau", tau, "Mismatch margin threshold for --diff (default 1e-5)");
+    sub->add_option("--scale", scale, "Pixels per receiver (0: at least 512 pixels wide)");
+    sub->add_option("-o,--output", out, "Output PNG")->required();
+  }
 };
 
 int run_render(const RenderOpts& o) {
@@ -113,16 +123,8 @@ int run_render(const RenderOpts& o) {
 }  // namespace
 
 void add_render(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<RenderOpts>(
-      app, run, "render", "Draw the receiver grid: visible fraction, exact fraction or a diff (PNG)", run_render);
-  sub->add_option("scene", o->scene, "Scene JSON with a receiver grid")->required();
-  add_method_args(sub, o->m, {"Method to draw (or to compare with --diff)", false, true});
-  sub->add_flag("--oracle", o->oracle, "Draw the exact relation-oracle fraction");
-  sub->add_flag("--exact-region", o->exact_region, "With --oracle: the region oracle's exact area fraction");
-  sub->add_flag("--diff", o->diff, "Heat map of where --method disagrees with the oracle");
-  sub->add_option("--tau", o->tau, "Mismatch margin threshold for --diff (default 1e-5)");
-  sub->add_option("--scale", o->scale, "Pixels per receiver (0: at least 512 pixels wide)");
-  sub->add_option("-o,--output", o->out, "Output PNG")->required();
+  add_command<RenderOpts>(app, run, "render",
+                          "Draw the receiver grid: visible fraction, exact fraction or a diff (PNG)", run_render);
 }
 
 }  // namespace visgate::cli

@@ -12,6 +12,11 @@ namespace {
 struct SolveOpts {
   std::string scene, out;
   MethodArgs m;
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON")->required();
+    add_method_args(sub, m, {"Method: embree, embree-robust, brute, iss, ssv, plucker-bsp, exec:CMD, plugin:PATH"});
+    sub->add_option("-o,--output", out, "Result JSON ('-' for stdout)");
+  }
 };
 
 int run_solve(const SolveOpts& o) {
@@ -40,11 +45,7 @@ int run_solve(const SolveOpts& o) {
 }  // namespace
 
 void add_solve(CLI::App& app, Action& run) {
-  auto [sub, o] = add_command<SolveOpts>(
-      app, run, "solve", "Solve every relation of a scene with one method", run_solve);
-  sub->add_option("scene", o->scene, "Scene JSON")->required();
-  add_method_args(sub, o->m, {"Method: embree, embree-robust, brute, iss, ssv, plucker-bsp, exec:CMD, plugin:PATH"});
-  sub->add_option("-o,--output", o->out, "Result JSON ('-' for stdout)");
+  add_command<SolveOpts>(app, run, "solve", "Solve every relation of a scene with one method", run_solve);
 }
 
 }  // namespace visgate::cli
