@@ -20,6 +20,7 @@ namespace visgate::cli {
 
 namespace {
 struct BenchOpts {
+  static constexpr const char* kHelp = "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)";
   bench::BenchOptions b;
   std::string methods, families;
   bool list = false;
@@ -83,9 +84,6 @@ int run_bench(BenchOpts& o) {
 }
 }  // namespace
 
-void add_bench(CLI::App& app, Action& run) {
-  add_command<BenchOpts>(app, run, "bench",
-                         "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)", run_bench);
-}
+void add_bench(CLI::App& app, Action& run) { add_command<BenchOpts>(app, run, "bench", BenchOpts::kHelp, run_bench); }
 
 }  // namespace visgate::cli

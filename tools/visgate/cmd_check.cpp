@@ -23,6 +23,7 @@ namespace visgate::cli {
 
 namespace {
 struct CheckOpts {
+  static constexpr const char* kHelp = "Compare methods with the exact oracle on scenes or generated families";
   std::vector<std::string> scenes, opts;
   std::string family, methods, report, store, shard = "1/1";
   long count = 1;
@@ -170,9 +171,6 @@ int run_check(const CheckOpts& o) {
 }
 }  // namespace
 
-void add_check(CLI::App& app, Action& run) {
-  add_command<CheckOpts>(app, run, "check",
-                         "Compare methods with the exact oracle on scenes or generated families", run_check);
-}
+void add_check(CLI::App& app, Action& run) { add_command<CheckOpts>(app, run, "check", CheckOpts::kHelp, run_check); }
 
 }  // namespace visgate::cli

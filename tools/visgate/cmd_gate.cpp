@@ -18,6 +18,8 @@ namespace visgate::cli {
 
 namespace {
 struct GateOpts {
+  static constexpr const char* kHelp =
+      "The CI correctness gate: every family and method, metamorphic checks, corpus replay";
   bool quick = false;
   std::string out = "out/gate", corpus = VISGATE_SOURCE_DIR "/corpus";
   int threads = 0;
@@ -77,9 +79,6 @@ int run_gate_cmd(const GateOpts& o) {
 }
 }  // namespace
 
-void add_gate(CLI::App& app, Action& run) {
-  add_command<GateOpts>(app, run, "gate",
-                        "The CI correctness gate: every family and method, metamorphic checks, corpus replay", run_gate_cmd);
-}
+void add_gate(CLI::App& app, Action& run) { add_command<GateOpts>(app, run, "gate", GateOpts::kHelp, run_gate_cmd); }
 
 }  // namespace visgate::cli

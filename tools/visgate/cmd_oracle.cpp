@@ -19,6 +19,7 @@ namespace visgate::cli {
 
 namespace {
 struct OracleOpts {
+  static constexpr const char* kHelp = "Exact classes and margins of every relation (and visible regions)";
   std::string scene, out;
   bool regions = false;
   int threads = 0;
@@ -66,8 +67,7 @@ int run_oracle(const OracleOpts& o) {
 }  // namespace
 
 void add_oracle(CLI::App& app, Action& run) {
-  add_command<OracleOpts>(app, run, "oracle",
-                          "Exact classes and margins of every relation (and visible regions)", run_oracle);
+  add_command<OracleOpts>(app, run, "oracle", OracleOpts::kHelp, run_oracle);
 }
 
 }  // namespace visgate::cli

@@ -28,6 +28,7 @@ namespace visgate::cli {
 
 namespace {
 struct RenderOpts {
+  static constexpr const char* kHelp = "Draw the receiver grid: visible fraction, exact fraction or a diff (PNG)";
   std::string scene, out;
   MethodArgs m;
   bool oracle = false, exact_region = false, diff = false;
@@ -123,8 +124,7 @@ int run_render(const RenderOpts& o) {
 }  // namespace
 
 void add_render(CLI::App& app, Action& run) {
-  add_command<RenderOpts>(app, run, "render",
-                          "Draw the receiver grid: visible fraction, exact fraction or a diff (PNG)", run_render);
+  add_command<RenderOpts>(app, run, "render", RenderOpts::kHelp, run_render);
 }
 
 }  // namespace visgate::cli

@@ -29,6 +29,7 @@ namespace visgate::cli {
 namespace {
 
 struct RepairOpts {
+  static constexpr const char* kHelp = "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report";
   std::string in, out, report, weld_mode = "chain";
   double tolerance = 0.0;
   size_t fill_holes = 0;
@@ -223,8 +224,7 @@ int run_repair(const RepairOpts& o) {
 }  // namespace
 
 void add_repair(CLI::App& app, Action& run) {
-  add_command<RepairOpts>(app, run, "repair",
-                          "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report", run_repair);
+  add_command<RepairOpts>(app, run, "repair", RepairOpts::kHelp, run_repair);
 }
 
 }  // namespace visgate::cli
