@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "fuzz/decoder.h"
+#include "lib/scene/byte_decoder.h"
 #include "fuzz/gmp_pool.h"
 #include "lib/external/plugin_method.h"
 #include "lib/raycast/embree_solver.h"

@@ -1,5 +1,5 @@
 // The differential check shared by fuzz_iss, fuzz_ssv, fuzz_plucker and fuzz_embree
-// (DESIGN section 5): decode a small scene (fuzz/decoder.h), solve it with the method
+// (DESIGN section 5): decode a small scene (lib/scene/byte_decoder.h), solve it with the method
 // under the options the input selects, classify every relation with the exact relation
 // oracle, and, for fragment methods, compare one interior point of every fragment with
 // the relation oracle and the visible fractions of the receiver the input chooses

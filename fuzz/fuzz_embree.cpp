@@ -1,5 +1,5 @@
 // fuzz_embree: differential target for `embree-robust` (DESIGN sections 4 and 5). Each input decodes
-// (fuzz/decoder.h) to a small scene plus method options; Embree with RTC_SCENE_FLAG_ROBUST
+// (lib/scene/byte_decoder.h) to a small scene plus method options; Embree with RTC_SCENE_FLAG_ROBUST
 // is run on it and every relation is compared with the exact relation oracle.
 // A mismatch (margin >= tau) or an exception prints method, options, relation, exact
 // class, margin and the hex-float scene, then aborts (fuzz/differential.h).

@@ -1,5 +1,5 @@
 // fuzz_iss: differential target for `iss` (DESIGN sections 4 and 5). Each input decodes
-// (fuzz/decoder.h) to a small scene plus method options; Incremental Shaft Subdivision
+// (lib/scene/byte_decoder.h) to a small scene plus method options; Incremental Shaft Subdivision
 // (paper 000 chapter 4) is run on it and every relation is compared with the exact
 // relation oracle. A mismatch (margin >= tau) or an exception prints method, options,
 // relation, exact class, margin and the hex-float scene, then aborts

@@ -1,5 +1,5 @@
 // fuzz_plucker: differential target for `plucker-bsp` (DESIGN sections 4 and 5). Each input decodes
-// (fuzz/decoder.h) to a small scene plus method options; the lazy Plücker BSP (paper 002)
+// (lib/scene/byte_decoder.h) to a small scene plus method options; the lazy Plücker BSP (paper 002)
 // is run on it and every relation is compared with the exact relation oracle, one
 // interior point of every fragment too, and the visible fractions of one receiver (every
 // light), chosen by the input, with the exact region oracle.

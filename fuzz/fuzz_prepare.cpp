@@ -1,5 +1,5 @@
 // fuzz_prepare: mesh preparation (lib/mesh/prepare.h, paper 000 section 4.2) on decoded
-// blocker soups (fuzz/decoder.h; raw mode reaches shared and repeated vertices, -0/+0,
+// blocker soups (lib/scene/byte_decoder.h; raw mode reaches shared and repeated vertices, -0/+0,
 // duplicate and opposite-facing triangles, non-manifold edges). After prepare_mesh:
 //   - mesh::validate() passes;
 //   - no two vertex positions are equal and each is an input triangle corner;
@@ -20,7 +20,7 @@
 #include <tuple>
 #include <vector>
 
-#include "fuzz/decoder.h"
+#include "lib/scene/byte_decoder.h"
 #include "lib/mesh/prepare.h"
 #include "lib/scene/scene_json.h"
 

@@ -1,5 +1,5 @@
 // fuzz_ssv: differential target for `ssv` (DESIGN sections 4 and 5). Each input decodes
-// (fuzz/decoder.h) to a small scene plus method options; soft shadow volumes with the
+// (lib/scene/byte_decoder.h) to a small scene plus method options; soft shadow volumes with the
 // lazy wedge BSP (paper 001) are run on it and every relation is compared with the exact
 // relation oracle. A mismatch (margin >= tau) or an exception prints method, options,
 // relation, exact class, margin and the hex-float scene, then aborts

@@ -192,15 +192,32 @@ Comparison compare_regions(const Scene& scene, const SolveResult& method, const 
   return c;
 }
 
+void MismatchCounts::add(const MismatchCounts& o) {
+  relations += o.relations;
+  degenerate += o.degenerate;
+  agree += o.agree;
+  disagree += o.disagree;
+  false_visible += o.false_visible;
+  false_blocked += o.false_blocked;
+  fraction_mismatches += o.fraction_mismatches;
+  fragment_mismatches += o.fragment_mismatches;
+}
+
+void write_counts(nlohmann::ordered_json& j, const MismatchCounts& c, size_t mismatches, CountNames names) {
+  const bool row = names == CountNames::CheckRow;
+  j["relations"] = c.relations;
+  j["degenerate"] = c.degenerate;
+  j["agree"] = c.agree;
+  j["disagree"] = c.disagree;
+  j["mismatches"] = mismatches;
+  j["false_visible"] = c.false_visible;
+  j["false_blocked"] = c.false_blocked;
+  j[row ? "fraction" : "fraction_mismatches"] = c.fraction_mismatches;
+  j[row ? "fragment" : "fragment_mismatches"] = c.fragment_mismatches;
+}
+
 void merge(Comparison& into, const Comparison& o) {
-  into.relations += o.relations;
-  into.degenerate += o.degenerate;
-  into.agree += o.agree;
-  into.disagree += o.disagree;
-  into.false_visible += o.false_visible;
-  into.false_blocked += o.false_blocked;
-  into.fraction_mismatches += o.fraction_mismatches;
-  into.fragment_mismatches += o.fragment_mismatches;
+  into.add(o);
   for (size_t k = 0; k < into.disagreement_margins.buckets.size(); ++k)
     into.disagreement_margins.buckets[k] += o.disagreement_margins.buckets[k];
   into.disagreement_margins.below += o.disagreement_margins.below;
@@ -210,15 +227,7 @@ void merge(Comparison& into, const Comparison& o) {
 nlohmann::ordered_json comparison_json(const Comparison& c, size_t max_records) {
   using json = nlohmann::ordered_json;
   json j;
-  j["relations"] = c.relations;
-  j["degenerate"] = c.degenerate;
-  j["agree"] = c.agree;
-  j["disagree"] = c.disagree;
-  j["mismatches"] = c.mismatch_count();
-  j["false_visible"] = c.false_visible;
-  j["false_blocked"] = c.false_blocked;
-  j["fraction_mismatches"] = c.fraction_mismatches;
-  j["fragment_mismatches"] = c.fragment_mismatches;
+  write_counts(j, c, c.mismatch_count(), CountNames::Comparison);
   json h;
   h["below_1e-12"] = c.disagreement_margins.below;
   json dec = json::array();

@@ -41,14 +41,40 @@ struct DecadeHistogram {
   void add(double margin);
 };
 
-struct Comparison {
+// A mismatch's relation, answers and direction name copied into a record type with
+// these fields (the check report's MismatchRecord, the public API's Mismatch).
+template <class Record>
+void copy_mismatch(const Mismatch& m, Record& r) {
+  r.receiver = m.receiver;
+  r.light = m.light;
+  r.sample = m.sample;
+  r.exact = char(m.exact);
+  r.method_visible = m.method_visible;
+  r.margin = m.margin;
+  r.direction = direction_name(m.direction);
+}
+
+// The counts of a comparison: of one method on one scene (Comparison) or summed over a
+// campaign's scenes (the check report's rows, tools/harness/check.h).
+struct MismatchCounts {
   size_t relations = 0, degenerate = 0;
   size_t agree = 0, disagree = 0;
-  size_t false_visible = 0, false_blocked = 0;   // mismatches (margin >= tau)
+  size_t false_visible = 0, false_blocked = 0;  // mismatches (margin >= tau)
   size_t fraction_mismatches = 0, fragment_mismatches = 0;
-  DecadeHistogram disagreement_margins;           // every disagreement, any margin
-  std::vector<Mismatch> mismatches;
   size_t mismatch_count() const { return false_visible + false_blocked + fraction_mismatches + fragment_mismatches; }
+  void add(const MismatchCounts& o);
+};
+// The counts as members of `j`, in this order: relations, degenerate, agree, disagree,
+// mismatches (given: a check row adds its metamorphic violations), false_visible,
+// false_blocked, then the fraction and fragment counts under the names of the format:
+// "fraction_mismatches" and "fragment_mismatches" (comparison_json), "fraction" and
+// "fragment" (the rows of a check report).
+enum class CountNames { Comparison, CheckRow };
+void write_counts(nlohmann::ordered_json& j, const MismatchCounts& c, size_t mismatches, CountNames names);
+
+struct Comparison : MismatchCounts {
+  DecadeHistogram disagreement_margins;  // every disagreement, any margin
+  std::vector<Mismatch> mismatches;
 };
 
 // Relation by relation: receivers whose oracle row is empty (not computed) are skipped.

@@ -20,26 +20,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lib/scene/float_text.h"
+#include "lib/scene/scene_json.h"
 
 extern char** environ;
 
 namespace visgate::external {
 
 namespace {
-
-void put_vec(std::ostringstream& o, const Vec3f& v) {
-  o << '[' << float_to_decimal(v.x) << ',' << float_to_decimal(v.y) << ',' << float_to_decimal(v.z) << ']';
-}
-
-const char* pattern_text(SamplePattern p) {
-  switch (p) {
-    case SamplePattern::Random: return "random";
-    case SamplePattern::Grid: return "grid";
-    case SamplePattern::Explicit: return "explicit";
-    default: return "stratified";
-  }
-}
 
 std::string read_file_text(const std::string& path, bool& ok) {
   std::ifstream in(path, std::ios::binary);
@@ -84,62 +71,9 @@ std::string signal_name(int sig) {
 }  // namespace
 
 std::string write_explicit_scene_json(const Scene& scene) {
-  std::ostringstream o;
-  o << "{\"format\":\"visgate-scene\",\"version\":1,\"name\":" << nlohmann::json(scene.name).dump() << ",\n";
-  o << "\"meshes\":[{\"vertices\":[";
-  for (size_t v = 0; v < scene.mesh.vertices.size(); ++v) {
-    if (v) o << ',';
-    put_vec(o, scene.mesh.vertices[v]);
-  }
-  o << "],\n\"triangles\":[";
-  for (size_t t = 0; t < scene.mesh.triangles.size(); ++t) {
-    const auto& tr = scene.mesh.triangles[t];
-    o << (t ? "," : "") << '[' << tr[0] << ',' << tr[1] << ',' << tr[2] << ']';
-  }
-  o << "]}],\n\"lights\":[";
-  for (size_t l = 0; l < scene.lights.size(); ++l) {
-    const Light& L = scene.lights[l];
-    o << (l ? ",\n" : "") << "{\"polygon\":[";
-    for (size_t k = 0; k < L.polygon.size(); ++k) {
-      if (k) o << ',';
-      put_vec(o, L.polygon[k]);
-    }
-    o << "],\"samples\":" << L.samples << ",\"pattern\":\"" << pattern_text(L.pattern) << "\",\"jitter\":" << L.jitter
-      << ",\"seed\":" << L.seed;
-    if (L.pattern == SamplePattern::Explicit) {
-      o << ",\"explicit_samples\":[";
-      for (size_t j = 0; j < L.explicit_samples.size(); ++j) {
-        if (j) o << ',';
-        put_vec(o, L.explicit_samples[j]);
-      }
-      o << ']';
-    }
-    // Explicit samples with jitter 1 already state every point; any other light states
-    // its point per receiver and sample.
-    if (!(L.pattern == SamplePattern::Explicit && L.jitter == 1)) {
-      o << ",\n\"relation_points\":[";
-      for (size_t i = 0; i < scene.receivers.size(); ++i) {
-        o << (i ? ",\n[" : "[");
-        for (int j = 0; j < L.samples; ++j) {
-          if (j) o << ',';
-          put_vec(o, sample_position(L, j, i));
-        }
-        o << ']';
-      }
-      o << ']';
-    }
-    o << '}';
-  }
-  o << "],\n\"receivers\":[";
-  for (size_t i = 0; i < scene.receivers.size(); ++i) {
-    o << (i ? ",\n" : "") << "{\"p\":";
-    put_vec(o, scene.receivers[i].p);
-    o << ",\"n\":";
-    put_vec(o, scene.receivers[i].n);
-    o << '}';
-  }
-  o << "]}\n";
-  return o.str();
+  SceneWriteOptions opt;
+  opt.relation_points = true;
+  return write_scene_json(scene, opt);
 }
 
 Result<SolveResult> read_result_json(const std::string& text, const Scene& scene, const std::string& origin) {

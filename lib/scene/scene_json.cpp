@@ -288,10 +288,22 @@ std::string write_scene_json(const Scene& scene, const SceneWriteOptions& opt) {
       o << ",\"explicit_samples\":";
       w.vec_list(L.explicit_samples);
     }
+    if (opt.relation_points && !(L.pattern == SamplePattern::Explicit && L.jitter == 1)) {
+      o << ",\n\"relation_points\":[";
+      for (size_t i = 0; i < scene.receivers.size(); ++i) {
+        o << (i ? ",\n[" : "[");
+        for (int j = 0; j < L.samples; ++j) {
+          if (j) o << ',';
+          w.vec(sample_position(L, j, i));
+        }
+        o << ']';
+      }
+      o << ']';
+    }
     o << '}';
   }
   o << "],\n\"receivers\":";
-  if (scene.grid) {
+  if (scene.grid && !opt.relation_points) {
     const ReceiverGrid& g = *scene.grid;
     o << "{\"grid\":{\"origin\":";
     w.vec(g.origin);

@@ -25,9 +25,14 @@ Result<Scene> read_scene_json(const std::string& text, const std::string& origin
 
 struct SceneWriteOptions {
   bool hex = false;  // write coordinates as hex-float strings instead of 9-digit decimals
+  // Every relation's light point stated: each light gets "relation_points" (per receiver,
+  // its samples' positions; not for explicit samples with jitter 1, which already state
+  // them) and receivers are always a list. The form exec: methods read (lib/external/
+  // exec_method.h), so that they need not reimplement the sample patterns.
+  bool relation_points = false;
 };
 // Self-contained JSON: meshes inline (one mesh), lights with their inputs, receivers as
-// a grid when the scene has one, else as a list.
+// a grid when the scene has one (and relation_points is off), else as a list.
 std::string write_scene_json(const Scene& scene, const SceneWriteOptions& opt = {});
 
 }  // namespace visgate

@@ -62,13 +62,7 @@ Outcome<Comparison> compare(const Scene& scene, const Solution& solution, double
   for (const auto& m : c.mismatches) {
     if (out.mismatches.size() >= 1000) break;
     Mismatch x;
-    x.receiver = m.receiver;
-    x.light = m.light;
-    x.sample = m.sample;
-    x.exact = char(m.exact);
-    x.method_visible = m.method_visible;
-    x.margin = m.margin;
-    x.direction = oracle::direction_name(m.direction);
+    oracle::copy_mismatch(m, x);
     out.mismatches.push_back(std::move(x));
   }
   return out;

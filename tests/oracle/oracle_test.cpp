@@ -24,7 +24,7 @@
 #include <random>
 #include <tuple>
 
-#include "fuzz/decoder.h"
+#include "lib/scene/byte_decoder.h"
 #include "lib/scene/families.h"
 #include "lib/scene/scene_json.h"
 #include "oracle/comparator.h"

@@ -330,10 +330,8 @@ Status run_iss(BenchContext& ctx) {
       if (emb) embree_series.x.push_back(mrel), embree_series.y.push_back(e1), embree_series.labels.push_back(c.name);
     }
     configs[fam] = cj;
-    sort_by_x(iss_series);
-    chart.series.push_back(std::move(iss_series));
-    sort_by_x(embree_series);
-    chart.series.push_back(std::move(embree_series));
+    add_sorted(chart, std::move(iss_series));
+    add_sorted(chart, std::move(embree_series));
     ctx.report.charts.push_back(std::move(chart));
   }
   ctx.report.options["configs"] = configs;
@@ -434,12 +432,9 @@ Status run_ssv(BenchContext& ctx) {
       }
     }
   }
-  sort_by_x(ssv_series);
-    chart.series.push_back(std::move(ssv_series));
-  sort_by_x(ssv_off_series);
-    chart.series.push_back(std::move(ssv_off_series));
-  sort_by_x(embree_series);
-    chart.series.push_back(std::move(embree_series));
+  add_sorted(chart, std::move(ssv_series));
+  add_sorted(chart, std::move(ssv_off_series));
+  add_sorted(chart, std::move(embree_series));
   ctx.report.charts.push_back(std::move(chart));
   ctx.report.tables.push_back(std::move(t1));
   if (have_ssv) ctx.report.tables.push_back(std::move(t3));

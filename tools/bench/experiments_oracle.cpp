@@ -233,6 +233,38 @@ FamilyParams plucker_params(const BenchOptions& o, const std::string& fam) {
   return p;
 }
 
+// Figures 9 and 10: plucker-bsp (when `which.plucker`) and embree (`which.embree`) over
+// the points `xs`, one scene per point from `scene_at`; per run a row of `table` (from
+// `row`), a point of `time` and, for plucker-bsp, of `memory` (its trees' peak). A
+// method stops growing past its sweep budget.
+struct SweepMethods {
+  bool plucker = false, embree = false;
+};
+Status sweep_figure(BenchContext& ctx, SweepMethods which, const std::vector<double>& xs,
+                    const std::function<Result<Scene>(double)>& scene_at,
+                    const std::function<std::string(double)>& what,
+                    const std::function<std::vector<Json>(double, const std::string&, const Measured&)>& row,
+                    Table& table, Chart& time, Chart& memory) {
+  const std::string P = "plucker-bsp";
+  for (const std::string& m : {P, std::string("embree")}) {
+    if ((m == P && !which.plucker) || (m != P && !which.embree)) continue;
+    Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
+    SweepGuard guard(ctx.opt.budget);
+    for (double x : xs) {
+      auto s = scene_at(x);
+      if (!s) return s.error();
+      auto r = run_method(ctx, m, *s, what(x) + " " + m, &guard, x);
+      if (!r) continue;
+      table.add_row(row(x, m, *r));
+      ts.x.push_back(x), ts.y.push_back(r->seconds());
+      if (m == P) ms.x.push_back(x), ms.y.push_back(r->stats.get("peak_memory_kb"));
+    }
+    time.series.push_back(std::move(ts));
+    if (m == P) memory.series.push_back(std::move(ms));
+  }
+  return {};
+}
+
 Status run_plucker(BenchContext& ctx) {
   const auto& o = ctx.opt;
   const std::string P = "plucker-bsp";
@@ -432,28 +464,22 @@ Status run_plucker(BenchContext& ctx) {
             "time, single thread (s)", true, true, {}};
   Chart c9m{"plucker-fig9-memory", "Peak memory of plucker-bsp's trees against light area on " + f9fam,
             "light area (x the original)", "peak memory of the trees (KiB)", true, false, {}};
-  for (const std::string& m : {P, std::string("embree")}) {
-    if ((m == P && !have_p) || (m != P && !have_e)) continue;
-    Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
-    SweepGuard guard(o.budget);
-    for (double a : areas) {
-      FamilyParams q = plucker_params(o, f9fam);
-      q.samples = f9n;
-      q.light_scale = std::sqrt(a);
-      auto s = ctx.scene(f9fam, q);
-      if (!s) return s.error();
-      auto r = run_method(ctx, m, *s, f9fam + " light area x" + fmt_g(a) + " " + m, &guard, a);
-      if (!r) continue;
-      bool pm = m == P;
-      f9.add_row({a, m, pm ? Json("exact") : Json(f9n), r->seconds_1t, r->seconds_all,
-                  pm ? Json(r->stats.get("peak_memory_kb")) : Json(kNaN), r->peak_mb,
-                  pm ? Json(r->stats.get("bsp_nodes")) : Json(kNaN), pm ? Json(r->stats.get("fragments")) : Json(kNaN)});
-      ts.x.push_back(a), ts.y.push_back(r->seconds());
-      if (pm) ms.x.push_back(a), ms.y.push_back(r->stats.get("peak_memory_kb"));
-    }
-    c9t.series.push_back(std::move(ts));
-    if (m == P) c9m.series.push_back(std::move(ms));
-  }
+  auto area_scene = [&](double a) {
+    FamilyParams q = plucker_params(o, f9fam);
+    q.samples = f9n;
+    q.light_scale = std::sqrt(a);
+    return ctx.scene(f9fam, q);
+  };
+  auto f9_row = [&](double a, const std::string& m, const Measured& r) {
+    const bool pm = m == P;
+    return std::vector<Json>{a, m, pm ? Json("exact") : Json(f9n), r.seconds_1t, r.seconds_all,
+                             pm ? Json(r.stats.get("peak_memory_kb")) : Json(kNaN), r.peak_mb,
+                             pm ? Json(r.stats.get("bsp_nodes")) : Json(kNaN),
+                             pm ? Json(r.stats.get("fragments")) : Json(kNaN)};
+  };
+  Status st9 = sweep_figure(ctx, {have_p, have_e}, areas, area_scene,
+                            [&](double a) { return f9fam + " light area x" + fmt_g(a); }, f9_row, f9, c9t, c9m);
+  if (!st9) return st9;
   ctx.report.charts.push_back(std::move(c9t));
   ctx.report.charts.push_back(std::move(c9m));
 
@@ -468,29 +494,26 @@ Status run_plucker(BenchContext& ctx) {
              true, true, {}};
   Chart c10m{"plucker-fig10-memory", "Peak memory of plucker-bsp's trees against the number of lights on " + f10fam,
              "lights", "peak memory of the trees (KiB)", true, false, {}};
-  for (const std::string& m : {P, std::string("embree")}) {
-    if ((m == P && !have_p) || (m != P && !have_e)) continue;
-    Series ts{m, {}, {}, {}}, ms{m, {}, {}, {}};
-    SweepGuard guard(o.budget);
-    for (int k : counts) {
-      FamilyParams q = plucker_params(o, f10fam);
-      q.samples = f10n;
-      auto s = ctx.scene(f10fam, q);
-      if (!s) return s.error();
-      Status ls = set_light_count(*s, k, int(f10n));
-      if (!ls) return ls.error();
-      auto r = run_method(ctx, m, *s, f10fam + " " + std::to_string(k) + " lights " + m, &guard, double(k));
-      if (!r) continue;
-      bool pm = m == P;
-      f10.add_row({k, m, pm ? Json("exact") : Json(f10n), r->seconds_1t, r->seconds_all,
-                   pm ? Json(r->stats.get("peak_memory_kb")) : Json(kNaN), r->peak_mb,
-                   pm ? Json(r->stats.get("bsp_nodes")) : Json(kNaN)});
-      ts.x.push_back(k), ts.y.push_back(r->seconds());
-      if (pm) ms.x.push_back(k), ms.y.push_back(r->stats.get("peak_memory_kb"));
-    }
-    c10t.series.push_back(std::move(ts));
-    if (m == P) c10m.series.push_back(std::move(ms));
-  }
+  auto count_scene = [&](double k) -> Result<Scene> {
+    FamilyParams q = plucker_params(o, f10fam);
+    q.samples = f10n;
+    auto s = ctx.scene(f10fam, q);
+    if (!s) return s.error();
+    Status ls = set_light_count(*s, int(k), int(f10n));
+    if (!ls) return ls.error();
+    return s;
+  };
+  auto f10_row = [&](double k, const std::string& m, const Measured& r) {
+    const bool pm = m == P;
+    return std::vector<Json>{int(k), m, pm ? Json("exact") : Json(f10n), r.seconds_1t, r.seconds_all,
+                             pm ? Json(r.stats.get("peak_memory_kb")) : Json(kNaN), r.peak_mb,
+                             pm ? Json(r.stats.get("bsp_nodes")) : Json(kNaN)};
+  };
+  std::vector<double> count_xs(counts.begin(), counts.end());
+  Status st10 = sweep_figure(ctx, {have_p, have_e}, count_xs, count_scene,
+                             [&](double k) { return f10fam + " " + std::to_string(int(k)) + " lights"; }, f10_row, f10,
+                             c10t, c10m);
+  if (!st10) return st10;
   ctx.report.charts.push_back(std::move(c10t));
   ctx.report.charts.push_back(std::move(c10m));
 
@@ -744,10 +767,8 @@ Status run_oracle(BenchContext& ctx) {
     rel_series.x.push_back(tris), rel_series.y.push_back(ratio(rel, r1.seconds)), rel_series.labels.push_back(fam);
     reg_series.x.push_back(tris), reg_series.y.push_back(ratio(double(pairs), g1.seconds)), reg_series.labels.push_back(fam);
   }
-  sort_by_x(rel_series);
-    chart.series.push_back(std::move(rel_series));
-  sort_by_x(reg_series);
-    chart.series.push_back(std::move(reg_series));
+  add_sorted(chart, std::move(rel_series));
+  add_sorted(chart, std::move(reg_series));
   ctx.report.charts.push_back(std::move(chart));
   ctx.report.tables.push_back(std::move(t));
   return {};

@@ -1,5 +1,6 @@
-// Receiver-grid images for `visgate render`: per-receiver visible fractions and
-// method-versus-oracle disagreement maps, written as PNG through stb_image_write.
+// Receiver-grid images for `visgate render`: per-receiver visible fractions in a colour
+// map with a legend, scale bar and the lights' outlines, and method-versus-oracle
+// mismatches marked over them, written as PNG through stb_image_write.
 // Receiver (a, b) of a grid (index b*nu + a, DESIGN section 6) is pixel column a and
 // row nv-1-b, so +v points up in the image; each receiver is a `scale` x `scale` block.
 #pragma once
@@ -55,11 +56,35 @@ std::vector<ReceiverDiff> diff_receivers(const Scene& scene, const SolveResult& 
                                          const std::vector<std::string>& classes,
                                          const std::vector<std::vector<double>>& margins, double tau);
 
-// Colours of the diff map: a receiver with a mismatch is red (brighter with a larger
-// share of its relations), one with only below-tau disagreements blue, any other the
-// exact fraction in dim gray (at most 40% brightness) so the scene stays readable.
+// The viridis colour map (matplotlib's; perceptually uniform, readable in gray and by
+// colour-blind viewers) at v in [0, 1], clamped, NaN as 0: dark purple (0, fully
+// shadowed) through blue and green to yellow (1, fully lit). Linear between the map's
+// values at tenths.
+Rgb viridis(double v);
+
+// Marks drawn over a receiver's block: a mismatch (margin >= tau, DESIGN section 5) in
+// red, only below-tau disagreements in orange; neither colour is in viridis.
 extern const Rgb kMismatchColor, kBelowTauColor;
-std::vector<Rgb> diff_colors(const std::vector<ReceiverDiff>& diff, const std::vector<double>& exact_fraction,
-                             size_t relations_per_receiver);
+
+// What `visgate render` draws: the fraction per receiver in viridis with a legend (the
+// colour bar, 0 to 1) and a scale bar (a round length along the grid's u side), the
+// lights' outlines projected along the grid normal onto the grid's plane (white on a
+// black rim) and, when `diff` is given, each receiver's mismatch mark over its block.
+struct Picture {
+  std::vector<double> fraction;            // per receiver (nu*nv), in [0, 1]
+  std::vector<ReceiverDiff> diff;          // empty, or per receiver
+  std::vector<std::vector<Vec3f>> lights;  // light polygons, world coordinates
+};
+// Where the parts of a picture are, in pixels (x right, y down from the top-left).
+struct PictureLayout {
+  int width = 0, height = 0;
+  int grid_x = 0, grid_y = 0, grid_w = 0, grid_h = 0;  // the receivers
+  int bar_x = 0, bar_y = 0, bar_w = 0, bar_h = 0;      // colour bar: top row 1, bottom row 0
+  int scale_x = 0, scale_y = 0, scale_w = 0;           // scale bar (3 pixels high)
+  double scale_length = 0.0;                           // world length the scale bar stands for
+  int marks_y = 0;                                     // the diff legend's swatches
+};
+PictureLayout picture_layout(const ReceiverGrid& grid, int scale);
+Image render_picture(const ReceiverGrid& grid, const Picture& p, int scale);
 
 }  // namespace visgate::bench

@@ -208,6 +208,11 @@ std::string table_markdown(const Table& t, int digits) {
   return out;
 }
 
+void add_sorted(Chart& c, Series s) {
+  sort_by_x(s);
+  c.series.push_back(std::move(s));
+}
+
 void sort_by_x(Series& s) {
   std::vector<size_t> idx(std::min(s.x.size(), s.y.size()));
   for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;

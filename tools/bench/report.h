@@ -68,6 +68,8 @@ struct Chart {
   bool logx = false, logy = false;
   std::vector<Series> series;
 };
+// Adds `s` to `c` with its points ordered by x (sort_by_x).
+void add_sorted(Chart& c, Series s);
 // The gnuplot data file of a chart: one block per series (blocks separated by two blank
 // lines, so `index i` selects series i), points with non-positive coordinates on a log
 // axis dropped. Series left empty are omitted; `names` receives the kept names in order.

@@ -24,15 +24,8 @@ std::string decade_label(size_t d) {
 }
 
 void Row::merge(const Row& o) {
+  add(o);
   scenes += o.scenes;
-  relations += o.relations;
-  degenerate += o.degenerate;
-  agree += o.agree;
-  disagree += o.disagree;
-  false_visible += o.false_visible;
-  false_blocked += o.false_blocked;
-  fraction += o.fraction;
-  fragment += o.fragment;
   metamorphic += o.metamorphic;
   shaft_decided += o.shaft_decided;
   shaft_reported += o.shaft_reported;
@@ -205,16 +198,18 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
       report.errors.push_back(scene.name + ": method " + m.row() + " threw: " + e.what());
       continue;
     }
+    // The oracle's mismatches as records, at most kMaxRecords of one comparison.
+    auto add_records = [&](const oracle::Comparison& c) {
+      for (size_t k = 0; k < c.mismatches.size() && k < kMaxRecords; ++k) {
+        MismatchRecord rec = base_record(m.name, m.options, scene, origin);
+        oracle::copy_mismatch(c.mismatches[k], rec);
+        rec.kind = "oracle";
+        report.mismatches.push_back(rec);
+      }
+    };
     oracle::Comparison cmp = oracle::compare_relations(scene, res, exact, cfg.tau);
     row.scenes += 1;
-    row.relations += cmp.relations;
-    row.degenerate += cmp.degenerate;
-    row.agree += cmp.agree;
-    row.disagree += cmp.disagree;
-    row.false_visible += cmp.false_visible;
-    row.false_blocked += cmp.false_blocked;
-    row.fraction += cmp.fraction_mismatches;
-    row.fragment += cmp.fragment_mismatches;
+    row.add(cmp);
     if (const Stats::Entry* e = res.stats.find("relations_blocked_by_shaft")) {
       row.shaft_decided += size_t(e->second + res.stats.get("relations_visible_by_empty_shaft"));
       row.shaft_reported += scene.relation_count();
@@ -222,20 +217,7 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
     add_histogram(row.disagreements, cmp.disagreement_margins);
     for (size_t d = 0; d < kDecades; ++d) row.relations_per_decade[d] += rel_hist[d];
     row.seconds += res.seconds;
-    size_t kept = 0;
-    for (const auto& mm : cmp.mismatches) {
-      if (++kept > kMaxRecords) break;
-      MismatchRecord rec = base_record(m.name, m.options, scene, origin);
-      rec.receiver = mm.receiver;
-      rec.light = mm.light;
-      rec.sample = mm.sample;
-      rec.exact = char(mm.exact);
-      rec.method_visible = mm.method_visible;
-      rec.margin = mm.margin;
-      rec.direction = oracle::direction_name(mm.direction);
-      rec.kind = "oracle";
-      report.mismatches.push_back(rec);
-    }
+    add_records(cmp);
     // Fragment methods: fractions and fragments against the region and relation oracles.
     if (solver->reports_fragments() && cfg.region_pairs > 0 && !scene.lights.empty()) {
       const size_t n = scene.receivers.size(), per = scene.lights.size();
@@ -244,22 +226,12 @@ void check_scene(const Scene& scene, const SceneOrigin& origin, const CheckConfi
       std::vector<size_t> pick;
       for (size_t i = 0; i < n; i += stride) pick.push_back(i);
       oracle::Comparison reg = oracle::compare_regions(scene, res, pick, cfg.tau);
-      row.fraction += reg.fraction_mismatches;
-      row.fragment += reg.fragment_mismatches;
-      size_t kept_r = 0;
-      for (const auto& mm : reg.mismatches) {
-        if (++kept_r > kMaxRecords) break;
-        MismatchRecord rec = base_record(m.name, m.options, scene, origin);
-        rec.receiver = mm.receiver;
-        rec.light = mm.light;
-        rec.sample = -1;
-        rec.exact = mm.direction == oracle::Direction::FragmentBlocked ? 'b' : 'v';
-        rec.method_visible = mm.method_visible;
-        rec.margin = mm.margin;
-        rec.direction = oracle::direction_name(mm.direction);
-        rec.kind = "oracle";
-        report.mismatches.push_back(rec);
-      }
+      // Only the fraction and fragment counts: the relations were counted above.
+      row.fraction_mismatches += reg.fraction_mismatches;
+      row.fragment_mismatches += reg.fragment_mismatches;
+      // Region mismatches have sample -1 and exact 'b' (fragment-blocked: the point's
+      // class) or 'v' (fraction: Mismatch's default).
+      add_records(reg);
     }
 
     // Metamorphic: an exact 2^k copy must change no bit and no fraction; under the other
@@ -373,15 +345,7 @@ std::string report_to_json(const CheckReport& r) {
     o["family"] = key.first;
     o["method"] = key.second;
     o["scenes"] = row.scenes;
-    o["relations"] = row.relations;
-    o["degenerate"] = row.degenerate;
-    o["agree"] = row.agree;
-    o["disagree"] = row.disagree;
-    o["mismatches"] = row.mismatches();
-    o["false_visible"] = row.false_visible;
-    o["false_blocked"] = row.false_blocked;
-    o["fraction"] = row.fraction;
-    o["fragment"] = row.fragment;
+    oracle::write_counts(o, row, row.mismatches(), oracle::CountNames::CheckRow);
     o["metamorphic"] = row.metamorphic;
     o["shaft_decided"] = row.shaft_decided;
     o["shaft_reported"] = row.shaft_reported;
@@ -449,8 +413,8 @@ Result<CheckReport> report_from_json(const std::string& text, const std::string&
       row.disagree = o.at("disagree").get<size_t>();
       row.false_visible = o.at("false_visible").get<size_t>();
       row.false_blocked = o.at("false_blocked").get<size_t>();
-      row.fraction = o.at("fraction").get<size_t>();
-      row.fragment = o.at("fragment").get<size_t>();
+      row.fraction_mismatches = o.at("fraction").get<size_t>();
+      row.fragment_mismatches = o.at("fragment").get<size_t>();
       row.metamorphic = o.at("metamorphic").get<size_t>();
       row.shaft_decided = o.value("shaft_decided", size_t(0));
       row.shaft_reported = o.value("shaft_reported", size_t(0));
@@ -563,7 +527,7 @@ std::string format_table(const CheckReport& r) {
       std::snprintf(shafts, sizeof shafts, "%.1f%%", 100.0 * double(row.shaft_decided) / double(row.shaft_reported));
     std::snprintf(buf, sizeof buf, "%-18s %-18s %6zu %10zu %8zu %9zu %6zu %6zu %6zu %6zu %6zu  %-40s %9.3f %7s\n",
                   key.first.c_str(), key.second.c_str(), row.scenes, row.relations, row.degenerate, row.mismatches(),
-                  row.false_visible, row.false_blocked, row.fraction, row.fragment, row.metamorphic,
+                  row.false_visible, row.false_blocked, row.fraction_mismatches, row.fragment_mismatches, row.metamorphic,
                   ("[" + dec + "]").c_str(), row.seconds, shafts);
     out += buf;
   }

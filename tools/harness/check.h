@@ -71,10 +71,10 @@ struct MismatchRecord {
   std::string stored;     // corpus path when --store kept a case for it
 };
 
-// One row of the table: a (family, method) pair over every scene of the family.
-struct Row {
-  size_t scenes = 0, relations = 0, degenerate = 0, agree = 0, disagree = 0;
-  size_t false_visible = 0, false_blocked = 0, fraction = 0, fragment = 0, metamorphic = 0;
+// One row of the table: a (family, method) pair over every scene of the family; its
+// comparison counts summed over the scenes, plus the metamorphic violations.
+struct Row : oracle::MismatchCounts {
+  size_t scenes = 0, metamorphic = 0;
   // Relations a method decided by its own geometry rather than by rays, where it says
   // (iss: stats relations_blocked_by_shaft + relations_visible_by_empty_shaft), and the
   // relations of the scenes that reported it.
@@ -82,7 +82,7 @@ struct Row {
   DecadeCounts disagreements{};  // every disagreement (any margin) per margin decade
   DecadeCounts relations_per_decade{};  // non-degenerate relations per margin decade
   double seconds = 0.0;
-  size_t mismatches() const { return false_visible + false_blocked + fraction + fragment + metamorphic; }
+  size_t mismatches() const { return mismatch_count() + metamorphic; }
   void merge(const Row& o);
 };
 

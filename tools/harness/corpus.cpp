@@ -25,15 +25,8 @@ const std::vector<std::string>& corpus_classes() {
 
 namespace {
 
-double point_segment(const Vec3d& x, const Vec3d& a, const Vec3d& b) {
-  Vec3d ab = b - a;
-  double d = dot(ab, ab);
-  double t = d > 0 ? std::clamp(dot(x - a, ab) / d, 0.0, 1.0) : 0.0;
-  return length(x - (a + ab * t));
-}
-
 // Distance between segments p0p1 and q0q1 (closest points, clamped; Ericson, Real-Time
-// Collision Detection 5.1.9).
+// Collision Detection 5.1.9). A point x is the segment xx: its distance to a segment.
 double segment_segment(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0, const Vec3d& q1) {
   Vec3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
   double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
@@ -92,7 +85,7 @@ std::string classify_case(const Scene& scene, size_t receiver, size_t light, lon
       }
     }
     for (const Vec3d& v : {a, b, c})
-      if (point_segment(v, p, q) < on) vertex = true;
+      if (segment_segment(v, v, p, q) < on) vertex = true;
     for (int k = 0; k < 3; ++k) {
       Vec3d u = to_double(scene.mesh.corner(t, k)), w = to_double(scene.mesh.corner(t, (k + 1) % 3));
       if (segment_segment(p, q, u, w) < on) edge = true;

@@ -5,8 +5,6 @@
 // --quiet; progress shows when stderr is a terminal.
 #include <cstdio>
 #include <cstdlib>
-#include <memory>
-#include <sstream>
 
 #include "tools/bench/bench.h"
 #include "tools/visgate/cli.h"
@@ -22,20 +20,28 @@ namespace visgate::cli {
 
 namespace {
 struct BenchOpts {
+  static constexpr const char* kHelp = "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)";
   bench::BenchOptions b;
   std::string methods, families;
   bool list = false;
   BenchOpts() { b.budget = -1; }  // -1: the default for the chosen sizes
+  void bind(CLI::App* sub) {
+    sub->add_option("experiment", b.experiment,
+                    "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair, overhead (see --list)");
+    sub->add_option("-o,--output", b.out_dir, "Output directory (default bench-results/EXPERIMENT)");
+    sub->add_option("--repeat", b.repeat, "Runs per figure; the minimum counts (default 3)");
+    sub->add_option("--threads", b.threads, "Threads of the all-threads runs (0: all hardware threads)");
+    sub->add_flag("--quick", b.quick, "CI-smoke sizes (seconds)");
+    sub->add_flag("--quiet", b.quiet, "No progress, notes or tables on stderr");
+    sub->add_option("--methods", methods, "Comma-separated methods (default: every registered method)");
+    sub->add_option("--families", families, "Comma-separated families (default: the experiment's own)");
+    sub->add_option("--budget", b.budget,
+                    "Seconds per run before a sweep stops growing for a method (default 60; 5 with --quick)");
+    sub->add_option("--tau", b.tau, "Mismatch margin threshold (default 1e-5)");
+    sub->add_option("--seed", b.seed, "Scene and method seed (default 1)");
+    sub->add_flag("--list", list, "List the experiments and exit");
+  }
 };
-
-std::vector<std::string> split_commas(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 int run_bench(BenchOpts& o) {
   if (o.list) {
@@ -53,8 +59,8 @@ int run_bench(BenchOpts& o) {
   if (o.b.budget < 0) o.b.budget = o.b.quick ? 5.0 : 60.0;
   if (!(o.b.budget > 0)) return bad_input("bench: --budget: expected a positive number of seconds");
   if (!(o.b.tau >= 0)) return bad_input("bench: --tau: expected a non-negative margin");
-  o.b.methods = split_commas(o.methods);
-  o.b.families = split_commas(o.families);
+  o.b.methods = split_list(o.methods);
+  o.b.families = split_list(o.families);
   if (o.b.out_dir.empty()) o.b.out_dir = "bench-results/" + o.b.experiment;
   o.b.progress = stderr_is_tty();
   const char* env = std::getenv("VISGATE_BENCH_SCRIPTS");
@@ -78,24 +84,6 @@ int run_bench(BenchOpts& o) {
 }
 }  // namespace
 
-void add_bench(CLI::App& app, Action& run) {
-  auto o = std::make_shared<BenchOpts>();
-  auto* sub = app.add_subcommand("bench", "Measure methods side by side: CSV, JSON and charts (DESIGN section 10)");
-  sub->add_option("experiment", o->b.experiment,
-                  "speed-accuracy, complexity, iss, ssv, plucker, stability, oracle, repair, overhead (see --list)");
-  sub->add_option("-o,--output", o->b.out_dir, "Output directory (default bench-results/EXPERIMENT)");
-  sub->add_option("--repeat", o->b.repeat, "Runs per figure; the minimum counts (default 3)");
-  sub->add_option("--threads", o->b.threads, "Threads of the all-threads runs (0: all hardware threads)");
-  sub->add_flag("--quick", o->b.quick, "CI-smoke sizes (seconds)");
-  sub->add_flag("--quiet", o->b.quiet, "No progress, notes or tables on stderr");
-  sub->add_option("--methods", o->methods, "Comma-separated methods (default: every registered method)");
-  sub->add_option("--families", o->families, "Comma-separated families (default: the experiment's own)");
-  sub->add_option("--budget", o->b.budget,
-                  "Seconds per run before a sweep stops growing for a method (default 60; 5 with --quick)");
-  sub->add_option("--tau", o->b.tau, "Mismatch margin threshold (default 1e-5)");
-  sub->add_option("--seed", o->b.seed, "Scene and method seed (default 1)");
-  sub->add_flag("--list", o->list, "List the experiments and exit");
-  sub->callback([o, &run] { run = [o] { return run_bench(*o); }; });
-}
+void add_bench(CLI::App& app, Action& run) { add_command<BenchOpts>(app, run, "bench", BenchOpts::kHelp, run_bench); }
 
 }  // namespace visgate::cli

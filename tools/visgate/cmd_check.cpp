@@ -9,12 +9,9 @@
 // Exit: 0 no mismatch, 1 mismatches, 2 bad input, 3 a method threw.
 #include <cstdio>
 #include <map>
-#include <memory>
 #include <set>
-#include <sstream>
 #include <tuple>
 
-#include "lib/external/external_methods.h"
 #include "lib/scene/families.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
@@ -26,6 +23,7 @@ namespace visgate::cli {
 
 namespace {
 struct CheckOpts {
+  static constexpr const char* kHelp = "Compare methods with the exact oracle on scenes or generated families";
   std::vector<std::string> scenes, opts;
   std::string family, methods, report, store, shard = "1/1";
   long count = 1;
@@ -36,16 +34,30 @@ struct CheckOpts {
   bool no_metamorphic = false;
   std::vector<int> scale_exponents;
   size_t region_pairs = 4096;
+  void bind(CLI::App* sub) {
+    sub->add_option("scenes", scenes, "Scene JSON files");
+    sub->add_option("--family", family, "Family (comma list, or 'all') to generate scenes from");
+    sub->add_option("--count", count, "Scenes per family (seeds S, S+1, ...)");
+    sub->add_option("--seed", seed, "First seed");
+    add_family_args(sub, params);  // of the generated scenes
+    sub->add_option("--methods", methods,
+                    "Methods, comma-separated, or 'all'; NAME#TAG runs NAME again in a row of its own with the options "
+                    "given to NAME#TAG")->required();
+    sub->add_option("--opt", opts, "Method option METHOD:key=value (repeatable; METHOD may be NAME#TAG)");
+    sub->add_option("--tau", tau, "Margin threshold: disagreements below it are not mismatches (default 1e-5)");
+    sub->add_option("--report", report, "Write the report JSON here");
+    sub->add_option("--store", store, "Minimise and store one corpus case per mismatch signature under DIR");
+    sub->add_option("--shard", shard, "Run shard k of N (1 <= k <= N) of the campaign");
+    sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_flag("--no-metamorphic", no_metamorphic, "Skip the scale, axis-map and translation checks");
+    sub->add_option("--scale-exponents", scale_exponents,
+                    "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "
+                    "over [-120, 124]")->delimiter(',');
+    sub->add_option("--region-pairs", region_pairs,
+                    "Fragment methods: receiver-light pairs per scene checked against the region oracle "
+                    "(fractions, fragments); every k-th receiver when more (default 4096, 0: none)");
+  }
 };
-
-std::vector<std::string> split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, sep))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
 
 int run_check(const CheckOpts& o) {
   using namespace visgate::harness;
@@ -54,7 +66,7 @@ int run_check(const CheckOpts& o) {
   if (!(o.tau >= 0)) return bad_input("--tau: must be a non-negative number");
   if (o.count < 1) return bad_input("--count: must be at least 1");
   auto shard = parse_shard(o.shard);
-  if (!shard) return bad_input(shard.error().message);
+  if (!shard) return bad_input(shard.error());
   CheckConfig cfg;
   cfg.tau = o.tau;
   cfg.threads = o.threads;
@@ -62,30 +74,16 @@ int run_check(const CheckOpts& o) {
   cfg.scale_exponents = o.scale_exponents;
   cfg.region_pairs = o.region_pairs;
   auto names = solver_names();
-  std::vector<std::string> methods = o.methods == "all" ? names : split(o.methods, ',');
+  std::vector<std::string> methods = o.methods == "all" ? names : split_list(o.methods);
   if (methods.empty()) return bad_input("--methods: empty list");
   for (const auto& m : methods) {
-    // NAME#TAG runs NAME once more with the options given to NAME#TAG (its own row).
-    auto solver = make_solver(method_of_label(m));
-    if (!solver) return bad_input("--methods " + external::describe_unknown_method(method_of_label(m)));
-    MethodSpec spec{method_of_label(m), SolveOptions{}, m.find('#') == std::string::npos ? "" : m};
-    spec.options.threads = o.threads;
-    for (const auto& kv : o.opts) {
-      // METHOD is everything before the last ':' ahead of the '=' (exec:CMD and
-      // plugin:PATH names hold colons of their own).
-      auto eq = kv.find('=');
-      auto colon = eq == std::string::npos || eq == 0 ? std::string::npos : kv.rfind(':', eq - 1);
-      if (colon == std::string::npos || eq == std::string::npos || eq < colon)
-        return bad_input("--opt " + kv + ": expected METHOD:key=value");
-      if (kv.substr(0, colon) == m) spec.options.opts[kv.substr(colon + 1, eq - colon - 1)] = kv.substr(eq + 1);
-    }
-    Status st = solver->check_options(spec.options);
-    if (!st) return bad_input(st.error().message);
-    cfg.methods.push_back(spec);
+    auto spec = method_spec(m, o.opts, o.threads, "--methods");
+    if (!spec) return bad_input(spec.error());
+    cfg.methods.push_back(*spec);
   }
   std::vector<std::string> families;
   if (!o.family.empty()) {
-    families = o.family == "all" ? family_names() : split(o.family, ',');
+    families = o.family == "all" ? family_names() : split_list(o.family);
     for (const auto& f : families)
       if (!is_family(f)) return bad_input("--family " + f + ": unknown family");
   }
@@ -110,7 +108,7 @@ int run_check(const CheckOpts& o) {
     if (!o.scenes.empty()) {
       origin.file = o.scenes[job];
       scene = read_scene_file(origin.file);
-      if (!scene) return bad_input(scene.error().message);
+      if (!scene) return bad_input(scene.error());
       origin.family = family_from_scene_name(scene->name);
     } else {
       origin.family = families[job / size_t(o.count)];
@@ -118,7 +116,7 @@ int run_check(const CheckOpts& o) {
       origin.params = o.params;
       origin.params.seed = origin.seed;
       scene = generate_family(origin.family, origin.params);
-      if (!scene) return bad_input(scene.error().message);
+      if (!scene) return bad_input(scene.error());
     }
     size_t first_record = report.mismatches.size();
     check_scene(*scene, origin, cfg, report);
@@ -164,8 +162,7 @@ int run_check(const CheckOpts& o) {
   std::fputs(format_table(report).c_str(), stderr);
   for (const auto& e : report.errors) std::fprintf(stderr, "error: %s\n", e.c_str());
   if (!o.report.empty()) {
-    Status st = write_file_atomic(o.report, report_to_json(report));
-    if (!st) return bad_input(st.error().message);
+    if (Status st = write_file_atomic(o.report, report_to_json(report)); !st) return bad_input(st.error());
   }
   bool threw = false;
   for (const auto& e : report.errors) threw |= e.find(" threw: ") != std::string::npos;
@@ -174,36 +171,6 @@ int run_check(const CheckOpts& o) {
 }
 }  // namespace
 
-void add_check(CLI::App& app, Action& run) {
-  auto o = std::make_shared<CheckOpts>();
-  auto* sub = app.add_subcommand("check", "Compare methods with the exact oracle on scenes or generated families");
-  sub->add_option("scenes", o->scenes, "Scene JSON files");
-  sub->add_option("--family", o->family, "Family (comma list, or 'all') to generate scenes from");
-  sub->add_option("--count", o->count, "Scenes per family (seeds S, S+1, ...)");
-  sub->add_option("--seed", o->seed, "First seed");
-  sub->add_option("--triangles", o->params.triangles, "Target triangle count of generated scenes");
-  sub->add_option("--receivers", o->params.receivers, "Receivers of generated scenes");
-  sub->add_option("--samples", o->params.samples, "Samples per light of generated scenes");
-  sub->add_option("--light-scale", o->params.light_scale, "Light scale of generated scenes");
-  sub->add_option("--scale-exponent", o->params.scale_exponent,
-                  "Multiply the generated scene by 2^K (clamped to where the copy is exact)");
-  sub->add_option("--methods", o->methods,
-                  "Methods, comma-separated, or 'all'; NAME#TAG runs NAME again in a row of its own with the options "
-                  "given to NAME#TAG")->required();
-  sub->add_option("--opt", o->opts, "Method option METHOD:key=value (repeatable; METHOD may be NAME#TAG)");
-  sub->add_option("--tau", o->tau, "Margin threshold: disagreements below it are not mismatches (default 1e-5)");
-  sub->add_option("--report", o->report, "Write the report JSON here");
-  sub->add_option("--store", o->store, "Minimise and store one corpus case per mismatch signature under DIR");
-  sub->add_option("--shard", o->shard, "Run shard k of N (1 <= k <= N) of the campaign");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_flag("--no-metamorphic", o->no_metamorphic, "Skip the scale, axis-map and translation checks");
-  sub->add_option("--scale-exponents", o->scale_exponents,
-                  "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "
-                  "over [-120, 124]")->delimiter(',');
-  sub->add_option("--region-pairs", o->region_pairs,
-                  "Fragment methods: receiver-light pairs per scene checked against the region oracle "
-                  "(fractions, fragments); every k-th receiver when more (default 4096, 0: none)");
-  sub->callback([o, &run] { run = [o] { return run_check(*o); }; });
-}
+void add_check(CLI::App& app, Action& run) { add_command<CheckOpts>(app, run, "check", CheckOpts::kHelp, run_check); }
 
 }  // namespace visgate::cli

@@ -5,9 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <memory>
 
-#include "lib/external/external_methods.h"
 #include "lib/scene/json_exact.h"
 #include "tools/harness/gate.h"
 #include "tools/visgate/cli.h"
@@ -20,10 +18,22 @@ namespace visgate::cli {
 
 namespace {
 struct GateOpts {
+  static constexpr const char* kHelp =
+      "The CI correctness gate: every family and method, metamorphic checks, corpus replay";
   bool quick = false;
   std::string out = "out/gate", corpus = VISGATE_SOURCE_DIR "/corpus";
   int threads = 0;
   std::vector<std::string> methods, opts;  // extra gated methods (exec:, plugin:, built-ins) and their options
+  void bind(CLI::App* sub) {
+    sub->add_flag("--quick", quick, "The quick gate (twelve seeds per family, small scenes; under 3 minutes on 2 cores)");
+    sub->add_option("-o,--output", out, "Output folder (default out/gate)");
+    sub->add_option("--corpus", corpus, "Corpus root to replay (default the source tree's corpus/)");
+    sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_option("--method", methods,
+                    "Also gate this method (repeatable; exec:CMD, plugin:PATH or a built-in): any oracle mismatch or "
+                    "failure of it fails the gate");
+    sub->add_option("--opt", opts, "Option of a --method: METHOD:key=value (repeatable)");
+  }
 };
 
 int run_gate_cmd(const GateOpts& o) {
@@ -40,19 +50,9 @@ int run_gate_cmd(const GateOpts& o) {
   cfg.corpus_dir = o.corpus;
   cfg.threads = o.threads;
   for (const auto& m : o.methods) {
-    auto solver = make_solver(harness::method_of_label(m));
-    if (!solver) return bad_input("--method " + external::describe_unknown_method(harness::method_of_label(m)));
-    MethodSpec spec{harness::method_of_label(m), SolveOptions{}, m.find('#') == std::string::npos ? "" : m};
-    spec.options.threads = o.threads;
-    for (const auto& kv : o.opts) {
-      auto eq = kv.find('=');
-      auto colon = eq == std::string::npos || eq == 0 ? std::string::npos : kv.rfind(':', eq - 1);
-      if (colon == std::string::npos) return bad_input("--opt " + kv + ": expected METHOD:key=value");
-      if (kv.substr(0, colon) == m) spec.options.opts[kv.substr(colon + 1, eq - colon - 1)] = kv.substr(eq + 1);
-    }
-    Status st = solver->check_options(spec.options);
-    if (!st) return bad_input(st.error().message);
-    cfg.extra_methods.push_back(spec);
+    auto spec = method_spec(m, o.opts, o.threads, "--method");
+    if (!spec) return bad_input(spec.error());
+    cfg.extra_methods.push_back(*spec);
   }
   std::fprintf(stderr, "visgate gate%s: every family x every method (%zu methods), corpus %s\n", o.quick ? " --quick" : "",
                solver_names().size() + o.methods.size(), o.corpus.c_str());
@@ -61,7 +61,7 @@ int run_gate_cmd(const GateOpts& o) {
   // Chart: CSV, then gnuplot to PNG and SVG.
   std::string csv = o.out + "/stability.csv";
   Status st = write_file_atomic(csv, stability_csv(g.report));
-  if (!st) return bad_input(st.error().message);
+  if (!st) return bad_input(st.error());
   std::string methods;
   for (const auto& m : g.report.methods) methods += (methods.empty() ? "" : " ") + m;
   std::string script = VISGATE_SOURCE_DIR "/tools/plot_stability.gp";
@@ -71,7 +71,7 @@ int run_gate_cmd(const GateOpts& o) {
   if (rc != 0) g.notes.push_back("stability chart: gnuplot failed (exit " + std::to_string(rc) + "): " + cmd);
 
   st = write_file_atomic(o.out + "/gate.json", gate_to_json(g));
-  if (!st) return bad_input(st.error().message);
+  if (!st) return bad_input(st.error());
   std::fputs(format_gate_summary(g).c_str(), stderr);
   std::fprintf(stderr, "wrote %s/gate.json, %s, %s/stability.png, %s/stability.svg\n", o.out.c_str(), csv.c_str(),
                o.out.c_str(), o.out.c_str());
@@ -79,18 +79,6 @@ int run_gate_cmd(const GateOpts& o) {
 }
 }  // namespace
 
-void add_gate(CLI::App& app, Action& run) {
-  auto o = std::make_shared<GateOpts>();
-  auto* sub = app.add_subcommand("gate", "The CI correctness gate: every family and method, metamorphic checks, corpus replay");
-  sub->add_flag("--quick", o->quick, "The quick gate (twelve seeds per family, small scenes; under 3 minutes on 2 cores)");
-  sub->add_option("-o,--output", o->out, "Output folder (default out/gate)");
-  sub->add_option("--corpus", o->corpus, "Corpus root to replay (default the source tree's corpus/)");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_option("--method", o->methods,
-                  "Also gate this method (repeatable; exec:CMD, plugin:PATH or a built-in): any oracle mismatch or "
-                  "failure of it fails the gate");
-  sub->add_option("--opt", o->opts, "Option of a --method: METHOD:key=value (repeatable)");
-  sub->callback([o, &run] { run = [o] { return run_gate_cmd(*o); }; });
-}
+void add_gate(CLI::App& app, Action& run) { add_command<GateOpts>(app, run, "gate", GateOpts::kHelp, run_gate_cmd); }
 
 }  // namespace visgate::cli

@@ -1,10 +1,8 @@
 // visgate gen FAMILY [--seed N] [--triangles N] [--receivers N] [--samples N]
 //                    [--light-scale F] [--hex] -o scene.json
 #include <cstdio>
-#include <memory>
 
 #include "lib/scene/families.h"
-#include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "tools/visgate/cli.h"
 
@@ -15,18 +13,19 @@ struct GenOpts {
   std::string family, out;
   FamilyParams params;
   bool hex = false;
+  void bind(CLI::App* sub) {
+    sub->add_option("family", family, "Scene family")->required();
+    sub->add_option("--seed", params.seed, "Seed");
+    add_family_args(sub, params);
+    sub->add_flag("--hex", hex, "Write coordinates as C99 hex-floats");
+    sub->add_option("-o,--output", out, "Output scene JSON ('-' for stdout)")->required();
+  }
 };
 
 int run_gen(const GenOpts& o) {
   auto scene = generate_family(o.family, o.params);
-  if (!scene) return bad_input(scene.error().message);
-  std::string text = write_scene_json(*scene, SceneWriteOptions{o.hex});
-  if (o.out == "-") {
-    std::fwrite(text.data(), 1, text.size(), stdout);
-  } else {
-    Status st = write_file_atomic(o.out, text);
-    if (!st) return bad_input(st.error().message);
-  }
+  if (!scene) return bad_input(scene.error());
+  if (Status st = write_output(o.out, write_scene_json(*scene, SceneWriteOptions{o.hex})); !st) return bad_input(st.error());
   std::fprintf(stderr, "%s: %zu triangles, %zu lights, %zu receivers, %zu relations\n", scene->name.c_str(),
                scene->mesh.size(), scene->lights.size(), scene->receivers.size(), scene->relation_count());
   return kOk;
@@ -34,19 +33,7 @@ int run_gen(const GenOpts& o) {
 }  // namespace
 
 void add_gen(CLI::App& app, Action& run) {
-  auto o = std::make_shared<GenOpts>();
-  auto* sub = app.add_subcommand("gen", "Generate a scene of a family (deterministic by seed)");
-  sub->add_option("family", o->family, "Scene family")->required();
-  sub->add_option("--seed", o->params.seed, "Seed");
-  sub->add_option("--triangles", o->params.triangles, "Target blocker triangle count");
-  sub->add_option("--receivers", o->params.receivers, "Receiver count");
-  sub->add_option("--samples", o->params.samples, "Samples per light");
-  sub->add_option("--light-scale", o->params.light_scale, "Scale every light polygon about its centre");
-  sub->add_option("--scale-exponent", o->params.scale_exponent,
-                  "Multiply the generated scene by 2^K (clamped to where the copy is exact)");
-  sub->add_flag("--hex", o->hex, "Write coordinates as C99 hex-floats");
-  sub->add_option("-o,--output", o->out, "Output scene JSON ('-' for stdout)")->required();
-  sub->callback([o, &run] { run = [o] { return run_gen(*o); }; });
+  add_command<GenOpts>(app, run, "gen", "Generate a scene of a family (deterministic by seed)", run_gen);
 }
 
 }  // namespace visgate::cli

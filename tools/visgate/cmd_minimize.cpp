@@ -10,15 +10,13 @@
 //
 // The input may also be a fuzzer crash file of a differential target (fuzz_iss, fuzz_ssv,
 // fuzz_plucker, fuzz_embree: anything that is not JSON): it is decoded by the targets'
-// own decoder (fuzz/decoder.h), so the scene and, unless --opt is given, the method
+// own decoder (lib/scene/byte_decoder.h), so the scene and, unless --opt is given, the method
 // options are exactly the ones the target ran. Detected by the first byte not being '{';
 // --fuzz-input forces it (an input whose selector byte happens to be '{').
 #include <cstdio>
 #include <filesystem>
-#include <memory>
 
-#include "fuzz/decoder.h"
-#include "lib/external/external_methods.h"
+#include "lib/scene/byte_decoder.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "oracle/comparator.h"
@@ -29,12 +27,21 @@ namespace visgate::cli {
 
 namespace {
 struct MinimizeOpts {
-  std::string scene, method, out;
-  std::vector<std::string> opts;
+  std::string scene, out;
+  MethodArgs m;
   long receiver = -1, light = -1, sample = -1;
   double tau = -1;
-  int threads = 0;
   bool fuzz_input = false;  // decode as a fuzzer input even if it starts with '{'
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON, corpus entry or fuzzer crash file")->required();
+    add_method_args(sub, m, {"Method", true, false});
+    sub->add_option("--receiver", receiver, "Receiver index of the relation");
+    sub->add_option("--light", light, "Light index of the relation");
+    sub->add_option("--sample", sample, "Sample index of the relation");
+    sub->add_option("--tau", tau, "Margin threshold (default: the entry's, else 1e-5)");
+    sub->add_option("-o,--output", out, "Corpus root folder")->required();
+    sub->add_flag("--fuzz-input", fuzz_input, "Decode the input as a differential fuzz target's input");
+  }
 };
 
 uint64_t seed_from_name(const std::string& name) {
@@ -51,40 +58,34 @@ uint64_t seed_from_name(const std::string& name) {
 
 int run_minimize(const MinimizeOpts& o) {
   using namespace visgate::harness;
-  auto solver = make_solver(o.method);
-  if (!solver) return bad_input("--method " + external::describe_unknown_method(o.method));
+  auto method = make_method(o.m);
+  if (!method) return bad_input(method.error());
+  Solver& solver = *method->solver;
   CaseSpec spec;
-  spec.method = o.method;
-  spec.options.threads = o.threads;
-  for (const auto& kv : o.opts) {
-    auto eq = kv.find('=');
-    if (eq == std::string::npos || eq == 0) return bad_input("--opt " + kv + ": expected key=value");
-    spec.options.opts[kv.substr(0, eq)] = kv.substr(eq + 1);
-  }
-  Status ost = solver->check_options(spec.options);
-  if (!ost) return bad_input(ost.error().message);
+  spec.method = o.m.method;
+  spec.options = method->options;
   int given = (o.receiver >= 0) + (o.light >= 0) + (o.sample >= 0);
   if (given != 0 && given != 3) return bad_input("--receiver, --light and --sample go together");
-  ThreadLimit limit(o.threads);
+  ThreadLimit limit(o.m.threads);
 
   auto text = read_text_file(o.scene);
-  if (!text) return bad_input(text.error().message);
+  if (!text) return bad_input(text.error());
   bool is_entry = text->find("\"case\":") != std::string::npos;
   Scene scene;
   CaseInfo base;
   spec.tau = o.tau >= 0 ? o.tau : 1e-5;
   if (is_entry) {
     auto e = read_corpus_entry(o.scene);
-    if (!e) return bad_input(e.error().message);
+    if (!e) return bad_input(e.error());
     scene = std::move(e->scene);
-    if (e->info.method == o.method) {
+    if (e->info.method == o.m.method) {
       base = e->info;  // provenance, status and note carry over unchanged
       spec.receiver = e->info.receiver;
       spec.light = e->info.light;
       spec.sample = e->info.sample;
       if (o.tau < 0) spec.tau = e->info.tau;
       spec.direction = e->info.direction;
-      if (o.opts.empty()) spec.options.opts = e->info.options;
+      if (o.m.opts.empty()) spec.options.opts = e->info.options;
     } else {
       base.family = e->info.family;
       base.seed = e->info.seed;
@@ -94,17 +95,17 @@ int run_minimize(const MinimizeOpts& o) {
              (*text)[text->find_first_not_of(" \t\r\n")] != '{') {
     // A fuzzer input: [option selector][scene bytes], decoded as the target did.
     const auto* bytes = reinterpret_cast<const uint8_t*>(text->data());
-    auto c = fuzz::decode_case(bytes, text->size(), fuzz::method_limits(o.method));
+    auto c = fuzz::decode_case(bytes, text->size(), fuzz::method_limits(o.m.method));
     if (!c) return bad_input(o.scene + ": fuzzer input does not decode: " + c.error().message);
     scene = std::move(c->scene);
-    if (o.opts.empty()) spec.options.opts = fuzz::decode_options(c->option_selector, solver->options());
+    if (o.m.opts.empty()) spec.options.opts = fuzz::decode_options(c->option_selector, solver.options());
     base.family = family_from_scene_name(scene.name);
     base.seed = seed_from_name(scene.name);
     base.source_scene = scene.name + " (fuzzer input " + std::filesystem::path(o.scene).filename().string() + ")";
     base.status = "open";
   } else {
     auto s = read_scene_file(o.scene);
-    if (!s) return bad_input(s.error().message);
+    if (!s) return bad_input(s.error());
     scene = std::move(*s);
     base.family = family_from_scene_name(scene.name);
     base.seed = seed_from_name(scene.name);
@@ -118,8 +119,8 @@ int run_minimize(const MinimizeOpts& o) {
     spec.direction.clear();
   } else if (!is_entry || base.method.empty()) {
     // The first relation mismatch of the method on the scene.
-    SolveResult res = solver->solve(scene, spec.options);
-    auto exact = oracle::run_relation_oracle(scene, o.threads);
+    SolveResult res = solver.solve(scene, spec.options);
+    auto exact = oracle::run_relation_oracle(scene, o.m.threads);
     auto cmp = oracle::compare_relations(scene, res, exact, spec.tau);
     bool found = false;
     for (const auto& m : cmp.mismatches)
@@ -132,12 +133,12 @@ int run_minimize(const MinimizeOpts& o) {
       }
     // Fragment methods: a visible-fraction or fragment mismatch becomes the relation
     // mismatch of a light point its fragments get wrong (minimize.h FractionWitness).
-    if (!found && solver->reports_fragments()) {
+    if (!found && solver.reports_fragments()) {
       std::vector<size_t> all(scene.receivers.size());
       for (size_t i = 0; i < all.size(); ++i) all[i] = i;
       auto reg = oracle::compare_regions(scene, res, all, spec.tau);
       for (const auto& m : reg.mismatches) {
-        auto w = find_fraction_witness(scene, *solver, spec.options, m.receiver, m.light, spec.tau);
+        auto w = find_fraction_witness(scene, solver, spec.options, m.receiver, m.light, spec.tau);
         if (!w) {
           std::fprintf(stderr, "%s: %s mismatch of receiver %zu light %zu (fraction %.6g, exact %.6g): no lattice point "
                        "of the light is answered wrongly\n", o.scene.c_str(), oracle::direction_name(m.direction),
@@ -148,7 +149,7 @@ int run_minimize(const MinimizeOpts& o) {
         std::snprintf(note, sizeof note,
                       "%s: visible fraction %.6g where the exact fraction is %.6g (%s mismatch, receiver %zu light "
                       "%zu of %s, %zu triangles); stored as the %s relation of light point %ld of a 64 x 64 lattice",
-                      o.method.c_str(), m.method_fraction, m.exact_fraction, oracle::direction_name(m.direction),
+                      o.m.method.c_str(), m.method_fraction, m.exact_fraction, oracle::direction_name(m.direction),
                       m.receiver, m.light, base.source_scene.c_str(), scene.mesh.size(), w->direction.c_str(),
                       w->sample);
         if (base.note.empty()) base.note = note;
@@ -170,7 +171,7 @@ int run_minimize(const MinimizeOpts& o) {
     }
     if (!found) {
       std::fprintf(stderr, "%s: no relation mismatch of %s at tau %g: nothing to minimise\n", o.scene.c_str(),
-                   o.method.c_str(), spec.tau);
+                   o.m.method.c_str(), spec.tau);
       return kOk;
     }
   }
@@ -181,11 +182,11 @@ int run_minimize(const MinimizeOpts& o) {
     base.source_triangles = scene.mesh.size();
   }
   auto st = minimize_and_store(scene, spec, base, o.out);
-  if (!st) return bad_input(st.error().message);
+  if (!st) return bad_input(st.error());
   std::error_code ec;
   bool same = std::filesystem::equivalent(st->path, o.scene, ec);
   std::fprintf(stderr, "%s: %s %s, %zu -> %zu triangles, class %s, margin %.3g, %zu tests%s\n", st->path.c_str(),
-               o.method.c_str(), st->info.direction.c_str(), st->minimized.triangles_before,
+               o.m.method.c_str(), st->info.direction.c_str(), st->minimized.triangles_before,
                st->minimized.scene.mesh.size(), st->info.class_name.c_str(), st->info.margin, st->minimized.tests,
                same ? " (unchanged: the input is minimal)" : "");
   std::printf("%s\n", st->path.c_str());
@@ -194,19 +195,7 @@ int run_minimize(const MinimizeOpts& o) {
 }  // namespace
 
 void add_minimize(CLI::App& app, Action& run) {
-  auto o = std::make_shared<MinimizeOpts>();
-  auto* sub = app.add_subcommand("minimize", "Minimise a mismatching relation into a corpus entry");
-  sub->add_option("scene", o->scene, "Scene JSON, corpus entry or fuzzer crash file")->required();
-  sub->add_option("--method", o->method, "Method")->required();
-  sub->add_option("--receiver", o->receiver, "Receiver index of the relation");
-  sub->add_option("--light", o->light, "Light index of the relation");
-  sub->add_option("--sample", o->sample, "Sample index of the relation");
-  sub->add_option("--tau", o->tau, "Margin threshold (default: the entry's, else 1e-5)");
-  sub->add_option("--opt", o->opts, "Method option key=value (repeatable)");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_option("-o,--output", o->out, "Corpus root folder")->required();
-  sub->add_flag("--fuzz-input", o->fuzz_input, "Decode the input as a differential fuzz target's input");
-  sub->callback([o, &run] { run = [o] { return run_minimize(*o); }; });
+  add_command<MinimizeOpts>(app, run, "minimize", "Minimise a mismatching relation into a corpus entry", run_minimize);
 }
 
 }  // namespace visgate::cli

@@ -7,9 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <memory>
 
-#include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
 #include "oracle/oracle_json.h"
@@ -21,17 +19,25 @@ namespace visgate::cli {
 
 namespace {
 struct OracleOpts {
+  static constexpr const char* kHelp = "Exact classes and margins of every relation (and visible regions)";
   std::string scene, out;
   bool regions = false;
   int threads = 0;
   double tau = oracle::kDefaultTau;
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON")->required();
+    sub->add_flag("--regions", regions, "Also compute the exact visible region per receiver and light");
+    sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_option("--tau", tau, "Margin threshold written to the file (default 1e-5)");
+    sub->add_option("-o,--output", out, "Oracle JSON ('-' for stdout)");
+  }
 };
 
 int run_oracle(const OracleOpts& o) {
   if (o.threads < 0) return bad_input("--threads " + std::to_string(o.threads) + ": expected >= 0");
   if (!(o.tau >= 0.0) || !std::isfinite(o.tau)) return bad_input("--tau: expected a finite number >= 0");
   auto scene = read_scene_file(o.scene);
-  if (!scene) return bad_input(scene.error().message);
+  if (!scene) return bad_input(scene.error());
   oracle::RelationOracleResult rel = oracle::run_relation_oracle(*scene, o.threads);
   size_t counts[3] = {0, 0, 0};
   for (const auto& c : rel.classes)
@@ -53,27 +59,15 @@ int run_oracle(const OracleOpts& o) {
     std::fprintf(stderr, "regions: %zu receiver-light pairs, %.3f s\n", regions.size() * scene->lights.size(), secs);
   }
   if (!o.out.empty()) {
-    std::string text = oracle::write_oracle_json(*scene, rel, regions, o.tau);
-    if (o.out == "-") {
-      std::fwrite(text.data(), 1, text.size(), stdout);
-    } else {
-      Status ws = write_file_atomic(o.out, text);
-      if (!ws) return bad_input(ws.error().message);
-    }
+    Status st = write_output(o.out, oracle::write_oracle_json(*scene, rel, regions, o.tau));
+    if (!st) return bad_input(st.error());
   }
   return kOk;
 }
 }  // namespace
 
 void add_oracle(CLI::App& app, Action& run) {
-  auto o = std::make_shared<OracleOpts>();
-  auto* sub = app.add_subcommand("oracle", "Exact classes and margins of every relation (and visible regions)");
-  sub->add_option("scene", o->scene, "Scene JSON")->required();
-  sub->add_flag("--regions", o->regions, "Also compute the exact visible region per receiver and light");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_option("--tau", o->tau, "Margin threshold written to the file (default 1e-5)");
-  sub->add_option("-o,--output", o->out, "Oracle JSON ('-' for stdout)");
-  sub->callback([o, &run] { run = [o] { return run_oracle(*o); }; });
+  add_command<OracleOpts>(app, run, "oracle", OracleOpts::kHelp, run_oracle);
 }
 
 }  // namespace visgate::cli

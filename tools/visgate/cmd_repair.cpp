@@ -29,10 +29,23 @@ namespace visgate::cli {
 namespace {
 
 struct RepairOpts {
+  static constexpr const char* kHelp = "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report";
   std::string in, out, report, weld_mode = "chain";
   double tolerance = 0.0;
   size_t fill_holes = 0;
   bool in_place = false, split = false, check = false, stl_ascii = false;
+  void bind(CLI::App* sub) {
+    sub->add_option("input", in, "Input mesh")->required();
+    sub->add_option("-o,--output", out, "Output mesh (.obj .off .ply .stl)");
+    sub->add_option("--weld-tolerance", tolerance, "Merge vertices within this Euclidean distance (default 0: equal positions)");
+    sub->add_option("--weld-mode", weld_mode, "chain (merge whole chains) or strict (no cluster wider than T)");
+    sub->add_option("--report", report, "Write the JSON report here");
+    sub->add_flag("--in-place", in_place, "Overwrite the input file");
+    sub->add_flag("--split-nonmanifold", split, "Duplicate non-manifold vertices and edges");
+    sub->add_option("--fill-holes", fill_holes, "Fill boundary loops of at most N edges");
+    sub->add_flag("--check", check, "Only analyse and report; write no mesh");
+    sub->add_flag("--stl-ascii", stl_ascii, "Write ASCII STL instead of binary");
+  }
 };
 
 // Files written together: each is written to a temporary file next to its target, and
@@ -211,19 +224,7 @@ int run_repair(const RepairOpts& o) {
 }  // namespace
 
 void add_repair(CLI::App& app, Action& run) {
-  auto o = std::make_shared<RepairOpts>();
-  auto* sub = app.add_subcommand("repair", "Repair and weld a triangle mesh (OBJ, OFF, PLY, STL), with a report");
-  sub->add_option("input", o->in, "Input mesh")->required();
-  sub->add_option("-o,--output", o->out, "Output mesh (.obj .off .ply .stl)");
-  sub->add_option("--weld-tolerance", o->tolerance, "Merge vertices within this Euclidean distance (default 0: equal positions)");
-  sub->add_option("--weld-mode", o->weld_mode, "chain (merge whole chains) or strict (no cluster wider than T)");
-  sub->add_option("--report", o->report, "Write the JSON report here");
-  sub->add_flag("--in-place", o->in_place, "Overwrite the input file");
-  sub->add_flag("--split-nonmanifold", o->split, "Duplicate non-manifold vertices and edges");
-  sub->add_option("--fill-holes", o->fill_holes, "Fill boundary loops of at most N edges");
-  sub->add_flag("--check", o->check, "Only analyse and report; write no mesh");
-  sub->add_flag("--stl-ascii", o->stl_ascii, "Write ASCII STL instead of binary");
-  sub->callback([o, &run] { run = [o] { return run_repair(*o); }; });
+  add_command<RepairOpts>(app, run, "repair", RepairOpts::kHelp, run_repair);
 }
 
 }  // namespace visgate::cli

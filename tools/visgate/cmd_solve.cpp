@@ -1,42 +1,32 @@
 // visgate solve scene.json --method M [--opt k=v]... [--threads N] [--seed S] [-o result.json]
 #include <cstdio>
-#include <memory>
 
 #include "lib/external/exec_method.h"
 #include "lib/external/external_methods.h"
-#include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
-#include "lib/solver.h"
 #include "tools/visgate/cli.h"
 
 namespace visgate::cli {
 
 namespace {
 struct SolveOpts {
-  std::string scene, method, out;
-  std::vector<std::string> opts;
-  int threads = 0;
-  uint64_t seed = 1;
+  std::string scene, out;
+  MethodArgs m;
+  void bind(CLI::App* sub) {
+    sub->add_option("scene", scene, "Scene JSON")->required();
+    add_method_args(sub, m, {"Method: embree, embree-robust, brute, iss, ssv, plucker-bsp, exec:CMD, plugin:PATH"});
+    sub->add_option("-o,--output", out, "Result JSON ('-' for stdout)");
+  }
 };
 
 int run_solve(const SolveOpts& o) {
-  auto solver = make_solver(o.method);
-  if (!solver) return bad_input("--method " + external::describe_unknown_method(o.method));
-  SolveOptions so;
-  so.threads = o.threads;
-  so.seed = o.seed;
-  for (const auto& kv : o.opts) {
-    auto eq = kv.find('=');
-    if (eq == std::string::npos || eq == 0) return bad_input("--opt " + kv + ": expected key=value");
-    so.opts[kv.substr(0, eq)] = kv.substr(eq + 1);
-  }
-  Status st = solver->check_options(so);
-  if (!st) return bad_input(st.error().message);
+  auto method = make_method(o.m);
+  if (!method) return bad_input(method.error());
   auto scene = read_scene_file(o.scene);
-  if (!scene) return bad_input(scene.error().message);
+  if (!scene) return bad_input(scene.error());
   SolveResult result;
   try {
-    result = solver->solve(*scene, so);
+    result = method->solver->solve(*scene, method->options);
   } catch (const external::ExternalMethodError& e) {  // crash, timeout, malformed result
     std::fprintf(stderr, "visgate: method failed: %s\n", e.what());
     return kInternal;
@@ -45,30 +35,17 @@ int run_solve(const SolveOpts& o) {
   for (const auto& rr : result.receivers)
     for (uint64_t w : rr.visible_bits) visible += size_t(__builtin_popcountll(w));
   if (!o.out.empty()) {
-    std::string text = write_result_json(*scene, o.method, so, result);
-    if (o.out == "-") {
-      std::fwrite(text.data(), 1, text.size(), stdout);
-    } else {
-      Status ws = write_file_atomic(o.out, text);
-      if (!ws) return bad_input(ws.error().message);
-    }
+    Status st = write_output(o.out, write_result_json(*scene, o.m.method, method->options, result));
+    if (!st) return bad_input(st.error());
   }
-  std::fprintf(stderr, "%s on %s: %zu relations, %.2f%% visible, %.3f s\n", o.method.c_str(), o.scene.c_str(), relations,
-               relations ? 100.0 * double(visible) / double(relations) : 0.0, result.seconds);
+  std::fprintf(stderr, "%s on %s: %zu relations, %.2f%% visible, %.3f s\n", o.m.method.c_str(), o.scene.c_str(),
+               relations, relations ? 100.0 * double(visible) / double(relations) : 0.0, result.seconds);
   return kOk;
 }
 }  // namespace
 
 void add_solve(CLI::App& app, Action& run) {
-  auto o = std::make_shared<SolveOpts>();
-  auto* sub = app.add_subcommand("solve", "Solve every relation of a scene with one method");
-  sub->add_option("scene", o->scene, "Scene JSON")->required();
-  sub->add_option("--method", o->method, "Method: embree, embree-robust, brute, iss, ssv, plucker-bsp, exec:CMD, plugin:PATH")->required();
-  sub->add_option("--opt", o->opts, "Method option key=value (repeatable)");
-  sub->add_option("--threads", o->threads, "Threads (0: all)");
-  sub->add_option("--seed", o->seed, "Seed for randomised methods");
-  sub->add_option("-o,--output", o->out, "Result JSON ('-' for stdout)");
-  sub->callback([o, &run] { run = [o] { return run_solve(*o); }; });
+  add_command<SolveOpts>(app, run, "solve", "Solve every relation of a scene with one method", run_solve);
 }
 
 }  // namespace visgate::cli

@@ -1,27 +1,11 @@
 // visgate: exact-geometry validation toolkit and fuzz harness for soft-shadow and
 // visibility algorithms. Entry point: parses the subcommand, runs it, maps failures to
 // the exit codes of DESIGN section 7.
-#include <unistd.h>
-
 #include <cstdio>
 #include <exception>
 #include <iostream>
 
 #include "tools/visgate/cli.h"
-
-namespace visgate::cli {
-
-int bad_input(const std::string& message) {
-  std::string line = message;
-  for (auto& c : line)
-    if (c == '\n') c = ' ';
-  std::fprintf(stderr, "visgate: %s\n", line.c_str());
-  return kBadInput;
-}
-
-bool stderr_is_tty() { return ::isatty(2) == 1; }
-
-}  // namespace visgate::cli
 
 int main(int argc, char** argv) {
   using namespace visgate::cli;

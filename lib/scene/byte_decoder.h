@@ -3,9 +3,10 @@
 // never throws, never crashes and keeps every scene tiny (hard caps below) so one run of
 // a differential target stays in milliseconds.
 //
-// This is a library (target vg_fuzz_decode, links vg_scene only) so that `visgate
-// minimize` can read a fuzzer crash file through exactly the same decoding as the target
-// that wrote it:
+// It lives in lib/scene (library target vg_fuzz_decode, built by fuzz/CMakeLists.txt with
+// the fuzz builds' coverage flags; links vg_scene only) so that `visgate minimize` reads a
+// fuzzer crash file through exactly the same decoding as the target that wrote it,
+// without a tool including a fuzz header:
 //
 //   auto bytes = read the crash file;
 //   auto c = visgate::fuzz::decode_case(bytes.data(), bytes.size(), visgate::fuzz::method_limits(method));

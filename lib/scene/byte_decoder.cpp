@@ -1,5 +1,5 @@
-// Structure-aware scene decoder for the fuzz targets; see decoder.h for the byte layout.
-#include "fuzz/decoder.h"
+// Structure-aware scene decoder for the fuzz targets; see byte_decoder.h for the byte layout.
+#include "lib/scene/byte_decoder.h"
 
 #include <fuzzer/FuzzedDataProvider.h>
 

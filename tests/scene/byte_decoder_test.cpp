@@ -1,4 +1,4 @@
-// fuzz/decoder: the structure-aware scene decoder of the fuzz targets (fuzz/decoder.h).
+// lib/scene/byte_decoder: the structure-aware scene decoder of the fuzz targets.
 // Inputs are built with a small encoder that writes FuzzedDataProvider choices in the
 // order the decoder consumes them (integers from the end of the buffer, most significant
 // byte first), so every expected scene below is worked out by hand from the documented
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "fuzz/decoder.h"
+#include "lib/scene/byte_decoder.h"
 #include "lib/scene/exact_transform.h"
 #include "lib/scene/rng.h"
 #include "lib/scene/scene_json.h"
@@ -36,7 +36,7 @@ struct Encoder {
 
 struct RawVertex { int x, y, z; };
 
-// A raw-mode scene (decoder.h): step 2^0, origin 0, one triangle over `verts`, one light
+// A raw-mode scene (byte_decoder.h): step 2^0, origin 0, one triangle over `verts`, one light
 // centred at (0, 0, 32) with half-size 2 and one explicit sample at (sx, sy, 32), one
 // receiver at (rx, ry, 0).
 Encoder raw_scene(const std::vector<RawVertex>& verts, int sx, int sy, int rx, int ry) {
@@ -120,7 +120,7 @@ TEST(FuzzDecoder, RawModeGivesTheHandWorkedExactScene) {
   EXPECT_EQ(s->mesh.vertices[0].y, sample_position(L, 0, 0).y);
 }
 
-// The exact transforms at the end of the decoding (decoder.h step 4), worked by hand:
+// The exact transforms at the end of the decoding (byte_decoder.h step 4), worked by hand:
 // axis map 13 = permutation (1, 2, 0) with signs (-, +, -), i.e. new x = -old y,
 // new y = old z, new z = -old x (an even permutation with two mirrors: handedness kept),
 // then the value 164 meaning k = 124 - 164 = -40.
@@ -298,7 +298,7 @@ TEST(FuzzDecoder, RandomInputsRespectCapsAndNeverYieldNonFiniteScenes) {
 }
 
 TEST(FuzzDecoder, TargetLimitsArePerMethod) {
-  // fuzz_plucker's smaller triangle cap (decoder.h target_limits) reaches every reader
+  // fuzz_plucker's smaller triangle cap (byte_decoder.h target_limits) reaches every reader
   // through the method name as well as the target name; the other targets keep the
   // defaults.
   const DecodeLimits d;
