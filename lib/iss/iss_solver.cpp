@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "lib/base/check.h"
+#include "lib/base/memory_budget.h"
 #include "lib/geom/float_mode.h"
 #include "lib/iss/blockers.h"
 #include "lib/iss/radial_pairing.h"
@@ -217,6 +218,7 @@ class Traversal {
   }
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
+  void set_memory_budget(MemoryBudget* b) { budget_ = b; }  // counts the live shafts
   // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
   // Bits start blocked (make_empty_result), so a relation no rule reached would read as
   // blocked without a word: solve checks that these add up to every relation.
@@ -287,12 +289,14 @@ class Traversal {
     for (const Surface& s : sh.surfaces) sh.bytes += s.bytes();
     live_bytes_ += sh.bytes;
     peak_bytes_ = std::max(peak_bytes_, live_bytes_);
+    if (budget_) budget_->change(int64_t(sh.bytes), "shafts");
     ++n_shafts_;
   }
   // The shaft is done: its surfaces, and its two arrays, go back to the pools (section
   // 4.13), so that the next shaft's arrays need no allocation.
   void release(Shaft& sh) {
     live_bytes_ -= sh.bytes;
+    if (budget_) budget_->change(-int64_t(sh.bytes), "shafts");
     for (Surface& s : sh.surfaces) ws_.recycle(std::move(s));
     sh.surfaces.clear();
     sh.ghosts.clear();
@@ -917,6 +921,7 @@ class Traversal {
   std::vector<std::vector<Surface>> surface_lists_;
   std::vector<std::vector<AABBd>> ghost_lists_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
+  MemoryBudget* budget_ = nullptr;
 };
 
 }  // namespace
@@ -955,8 +960,10 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   auto tb = Clock::now();
   raycast::EmbreeScene es(scene.mesh, true);
   embree_build = std::chrono::duration<double>(Clock::now() - tb).count();
+  MemoryBudget budget("iss", opt.memory_budget_mb);  // outlives the traversal
   Traversal tr(scene, m, p, result);
   tr.set_embree(&es);
+  tr.set_memory_budget(&budget);
   for (size_t l = 0; l < scene.lights.size(); ++l) tr.run_light(l);
   auto t1 = Clock::now();
   // Exact: integer counts far below 2^53.

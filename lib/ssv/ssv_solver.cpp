@@ -330,6 +330,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const double tol = 1e-9 * M;
 
   double init_seconds = 0, peak_memory = 0;
+  MemoryBudget budget("ssv", opt.memory_budget_mb);
   WedgeBuildCounts counts;
   double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0, nodes = 0;
   double unclear_rays = 0;
@@ -352,7 +353,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
+    MemoryCharge wedge_charge;
+    wedge_charge.bind(&budget, "wedges");
+    wedge_charge.set(wedges.capacity() * sizeof(Wedge));
     WedgeBsp bsp(wedges, root, min_node, eps, use_region);
+    bsp.set_memory_budget(&budget);
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 

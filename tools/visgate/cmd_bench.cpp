@@ -92,6 +92,9 @@ void add_bench(CLI::App& app, Action& run) {
   sub->add_option("--families", o->families, "Comma-separated families (default: the experiment's own)");
   sub->add_option("--budget", o->b.budget,
                   "Seconds per run before a sweep stops growing for a method (default 60; 5 with --quick)");
+  sub->add_option("--memory-budget", o->b.memory_budget_mb,
+                  "MB a method's growing structures may hold; a run past it is a noted skip (0, the default: half "
+                  "of physical memory, at most 8192)");
   sub->add_option("--tau", o->b.tau, "Mismatch margin threshold (default 1e-5)");
   sub->add_option("--seed", o->b.seed, "Scene and method seed (default 1)");
   sub->add_flag("--list", o->list, "List the experiments and exit");

@@ -33,6 +33,7 @@ struct CheckOpts {
   FamilyParams params;
   double tau = 1e-5;
   int threads = 0;
+  uint64_t memory_budget_mb = 0;
   bool no_metamorphic = false;
   std::vector<int> scale_exponents;
   size_t region_pairs = 4096;
@@ -70,6 +71,7 @@ int run_check(const CheckOpts& o) {
     if (!solver) return bad_input("--methods " + external::describe_unknown_method(method_of_label(m)));
     MethodSpec spec{method_of_label(m), SolveOptions{}, m.find('#') == std::string::npos ? "" : m};
     spec.options.threads = o.threads;
+    spec.options.memory_budget_mb = o.memory_budget_mb;  // past it the method throws: exit 3
     for (const auto& kv : o.opts) {
       // METHOD is everything before the last ':' ahead of the '=' (exec:CMD and
       // plugin:PATH names hold colons of their own).
@@ -196,6 +198,8 @@ void add_check(CLI::App& app, Action& run) {
   sub->add_option("--store", o->store, "Minimise and store one corpus case per mismatch signature under DIR");
   sub->add_option("--shard", o->shard, "Run shard k of N (1 <= k <= N) of the campaign");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
+  sub->add_option("--memory-budget", o->memory_budget_mb,
+                  "MB each method's growing structures may hold (0, the default: half of physical memory, at most 8192)");
   sub->add_flag("--no-metamorphic", o->no_metamorphic, "Skip the scale, axis-map and translation checks");
   sub->add_option("--scale-exponents", o->scale_exponents,
                   "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "

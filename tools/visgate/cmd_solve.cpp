@@ -4,6 +4,7 @@
 
 #include "lib/external/exec_method.h"
 #include "lib/external/external_methods.h"
+#include "lib/base/memory_budget.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/scene_json.h"
 #include "lib/solver.h"
@@ -17,6 +18,7 @@ struct SolveOpts {
   std::vector<std::string> opts;
   int threads = 0;
   uint64_t seed = 1;
+  uint64_t memory_budget_mb = 0;
 };
 
 int run_solve(const SolveOpts& o) {
@@ -25,6 +27,7 @@ int run_solve(const SolveOpts& o) {
   SolveOptions so;
   so.threads = o.threads;
   so.seed = o.seed;
+  so.memory_budget_mb = o.memory_budget_mb;
   for (const auto& kv : o.opts) {
     auto eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) return bad_input("--opt " + kv + ": expected key=value");
@@ -39,6 +42,9 @@ int run_solve(const SolveOpts& o) {
     result = solver->solve(*scene, so);
   } catch (const external::ExternalMethodError& e) {  // crash, timeout, malformed result
     std::fprintf(stderr, "visgate: method failed: %s\n", e.what());
+    return kInternal;
+  } catch (const MemoryBudgetExceeded& e) {  // the method's failure, as a timeout (DESIGN section 4): nothing written
+    std::fprintf(stderr, "visgate: %s on %s\n", e.what(), o.scene.c_str());
     return kInternal;
   }
   size_t relations = scene->relation_count(), visible = 0;
@@ -67,6 +73,9 @@ void add_solve(CLI::App& app, Action& run) {
   sub->add_option("--opt", o->opts, "Method option key=value (repeatable)");
   sub->add_option("--threads", o->threads, "Threads (0: all)");
   sub->add_option("--seed", o->seed, "Seed for randomised methods");
+  sub->add_option("--memory-budget", o->memory_budget_mb,
+                  "MB the method's growing structures may hold (iss, ssv, plucker-bsp; 0, the default: half of "
+                  "physical memory, at most 8192)");
   sub->add_option("-o,--output", o->out, "Result JSON ('-' for stdout)");
   sub->callback([o, &run] { run = [o] { return run_solve(*o); }; });
 }
