@@ -99,6 +99,9 @@ void add_core_experiments(std::vector<Experiment>& out);
 void add_oracle_experiments(std::vector<Experiment>& out);
 // The mesh repair throughput experiment (experiments_repair.cpp).
 void add_repair_experiment(std::vector<Experiment>& out);
+// The paper-scale experiments iss-paper, ssv-paper, plucker-paper and scan
+// (experiments_paper.cpp).
+void add_paper_experiments(std::vector<Experiment>& out);
 
 // Runs one experiment and writes its report to opt.out_dir. Returns the files written;
 // the report itself goes to `report_out` when given.
