@@ -612,10 +612,11 @@ Status run_stability(BenchContext& ctx) {
       p.seed = o.seed + uint64_t(sd);
       p.receivers = receivers;
       p.samples = samples;
-      // Small meshes with --quick; rooms (30k triangles, 27 lights by default) reduced
-      // so the exact methods finish in minutes.
+      // Small meshes with --quick; rooms (30k triangles, 27 lights by default) and scan
+      // (20k, 10 lights) reduced so the exact methods finish in minutes.
       if (o.quick) p.triangles = 300;
       else if (fam == "rooms") p.triangles = 6000;
+      else if (fam == "scan") p.triangles = 3000;
       auto s = ctx.scene(fam, p);
       if (!s) {
         ctx.note("family " + fam + " seed " + std::to_string(p.seed) + ": " + s.error().message + ": skipped");
