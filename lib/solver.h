@@ -61,6 +61,9 @@ struct SolveOptions {
   std::map<std::string, std::string> opts;
   uint64_t seed = 1;
   int threads = 0;  // 0: all hardware threads
+  // Bytes the method's growing structures may hold, in MB (lib/base/memory_budget.h);
+  // 0: default_memory_budget_mb(). iss, ssv and plucker-bsp throw MemoryBudgetExceeded.
+  uint64_t memory_budget_mb = 0;
 
   std::string get(const std::string& k, const std::string& fallback) const {
     auto it = opts.find(k);

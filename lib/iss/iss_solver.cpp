@@ -48,8 +48,10 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   auto tb = Clock::now();
   raycast::EmbreeScene es(scene.mesh, true);
   embree_build = std::chrono::duration<double>(Clock::now() - tb).count();
+  MemoryBudget budget("iss", opt.memory_budget_mb);  // outlives the traversal
   Traversal tr(scene, m, p, result);
   tr.set_embree(&es);
+  tr.set_memory_budget(&budget);
   for (size_t l = 0; l < scene.lights.size(); ++l) tr.run_light(l);
   auto t1 = Clock::now();
   // Exact: integer counts far below 2^53.

@@ -11,6 +11,7 @@ namespace visgate::iss {
 // 4.13), so that the next shaft's arrays need no allocation.
 void Traversal::release(Shaft& sh) {
   live_bytes_ -= sh.bytes;
+  if (budget_) budget_->change(-int64_t(sh.bytes), "shafts");
   for (Surface& s : sh.surfaces) ws_.recycle(std::move(s));
   sh.surfaces.clear();
   sh.ghosts.clear();

@@ -21,6 +21,7 @@
 #include <x86intrin.h>
 #endif
 
+#include "lib/base/memory_budget.h"
 #include "lib/iss/blockers.h"
 #include "lib/iss/shaft.h"
 #include "lib/iss/tree.h"
@@ -123,6 +124,7 @@ class Traversal {
   void run_light(size_t li);
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
+  void set_memory_budget(MemoryBudget* b) { budget_ = b; }  // counts the live shafts
   // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
   // Bits start blocked (make_empty_result), so a relation no rule reached would read as
   // blocked without a word: solve checks that these add up to every relation.
@@ -150,6 +152,7 @@ class Traversal {
     for (const Surface& s : sh.surfaces) sh.bytes += s.bytes();
     live_bytes_ += sh.bytes;
     peak_bytes_ = std::max(peak_bytes_, live_bytes_);
+    if (budget_) budget_->change(int64_t(sh.bytes), "shafts");
     ++n_shafts_;
   }
   void release(Shaft& sh);
@@ -211,6 +214,7 @@ class Traversal {
   std::vector<std::vector<Surface>> surface_lists_;
   std::vector<std::vector<AABBd>> ghost_lists_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
+  MemoryBudget* budget_ = nullptr;
 };
 
 }  // namespace visgate::iss

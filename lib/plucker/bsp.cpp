@@ -158,6 +158,7 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
     vis.occ_count = uint32_t(l.size());
     lists_.insert(lists_.end(), l.begin(), l.end());
   }
+  budget_charge_.set(memory_bytes());
 }
 
 void LazyBsp::begin_query(const Vec3d& r) {

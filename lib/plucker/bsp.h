@@ -45,6 +45,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "lib/base/memory_budget.h"
 #include "lib/geom/vec.h"
 #include "lib/plucker/fragment.h"
 #include "lib/plucker/lines.h"
@@ -190,6 +191,12 @@ class LazyBsp {
   // Bytes held by the tree, its occluder lists, the occluders and their vvsets.
   size_t memory_bytes() const;
   const BspCounters& counters() const { return counters_; }
+  // Counts memory_bytes() against `budget` from now on, after every development (which
+  // throws MemoryBudgetExceeded past it); nullptr: not counted.
+  void set_memory_budget(MemoryBudget* budget) {
+    budget_charge_.bind(budget, "BSP nodes and occluder lists");
+    budget_charge_.set(memory_bytes());
+  }
 
  private:
   enum Kind : uint8_t { kInner, kLeaf, kInvisible };
@@ -278,6 +285,7 @@ class LazyBsp {
   std::vector<uint32_t> plane_stamp_;   // per occluder edge: stamp_ when plane_cache_ is valid
   std::vector<NodePlane> plane_cache_;
   LightBounds light_bounds_;  // every query fragment is a piece of the light (node_plane)
+  MemoryCharge budget_charge_;
 };
 
 }  // namespace visgate::plucker

@@ -339,6 +339,7 @@ struct Totals {
 struct MemoryMeter {
   std::atomic<int64_t> current{0};
   std::atomic<int64_t> peak{0};
+  MemoryBudget* budget = nullptr;  // SolveOptions::memory_budget_mb, counted by the trees
   void change(int64_t delta) {
     int64_t now = current.fetch_add(delta) + delta;
     int64_t p = peak.load();
@@ -982,6 +983,7 @@ void shade_group(const Context& ctx, size_t li, const LightFrame& lf, const std:
   if (!work.tree) work.tree = std::make_unique<LazyBsp>(nullptr, 0, std::vector<Occluder>{}, 0);
   LazyBsp& bsp = *work.tree;  // the thread's tree, rebuilt per group (GroupScratch)
   bsp.rebuild(lf.poly.data(), int(lf.poly.size()), occluders, tree_seed, region.data(), int(region.size()));
+  bsp.set_memory_budget(ctx.memory->budget);
   bsp.set_choice(ctx.choice);
   bsp.set_light_plane(lf.plane);
   ++tot.trees;
@@ -1505,6 +1507,8 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   int tile = int(opt.get_int("tile", 8));
   LazyBsp::Choice choice = opt.get("choice", "relevant") == "random" ? LazyBsp::Choice::Random : LazyBsp::Choice::Relevant;
   MemoryMeter memory;
+  MemoryBudget budget("plucker-bsp", opt.memory_budget_mb);  // outlives the trees in thread_work
+  memory.budget = &budget;
   // The triangle hierarchy for occluder selection, built once (counted as selection).
   Clock::time_point tt = Clock::now();
   TriangleTree tree(scene.mesh);

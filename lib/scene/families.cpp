@@ -3,6 +3,7 @@
 #include "lib/scene/families.h"
 
 #include "lib/scene/exact_transform.h"
+#include "lib/scene/family_scan.h"
 
 #include <algorithm>
 #include <cmath>
@@ -628,6 +629,7 @@ const std::map<std::string, Generator>& generators() {
       {"sliver-soup", gen_sliver_soup},
       {"on-surface", gen_on_surface},
       {"foliage", gen_foliage},
+      {"scan", gen_scan},
   };
   return g;
 }

@@ -15,6 +15,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "lib/base/memory_budget.h"
 #include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_scene.h"
@@ -514,6 +515,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const SceneSetup sc{scene, embree, edges, eps};
 
   double init_seconds = 0, peak_memory = 0, nodes = 0;
+  MemoryBudget budget("ssv", opt.memory_budget_mb);
   WedgeBuildCounts counts;
   Counts total;
 
@@ -533,7 +535,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
+    MemoryCharge wedge_charge;
+    wedge_charge.bind(&budget, "wedges");
+    wedge_charge.set(wedges.capacity() * sizeof(Wedge));
     WedgeBsp bsp(wedges, root, min_node, eps, use_region);
+    bsp.set_memory_budget(&budget);
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 

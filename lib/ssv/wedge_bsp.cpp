@@ -96,6 +96,7 @@ void WedgeBsp::split_leaf(Node& n) {
     std::lock_guard<std::mutex> guard(arena_lock_);
     pair = arena_.emplace_back().data();
     lists = allocate_locked(total);
+    budget_charge_.set(memory_bytes() + 2 * sizeof(Node));
   }
   Node* left = pair;
   Node* right = pair + 1;

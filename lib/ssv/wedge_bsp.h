@@ -26,6 +26,7 @@
 #include <mutex>
 #include <vector>
 
+#include "lib/base/memory_budget.h"
 #include "lib/ssv/wedge.h"
 
 namespace visgate::ssv {
@@ -51,6 +52,12 @@ class WedgeBsp {
   size_t entry_count() const { return entries_.load(); }  // wedge entries in all nodes
   // Bytes held by nodes and their wedge lists.
   size_t memory_bytes() const;
+  // Counts memory_bytes() against `budget` from now on, after every split (which throws
+  // MemoryBudgetExceeded past it); call before the queries.
+  void set_memory_budget(MemoryBudget* budget) {
+    budget_charge_.bind(budget, "wedge BSP");
+    budget_charge_.set(memory_bytes());
+  }
 
  private:
   struct Node {
@@ -88,6 +95,7 @@ class WedgeBsp {
   size_t chunk_used_ = 0, chunk_size_ = 0, list_capacity_ = 0;
   std::mutex arena_lock_;
   std::array<std::mutex, 64> locks_;
+  MemoryCharge budget_charge_;  // set under arena_lock_
   std::atomic<size_t> nodes_{0}, entries_{0};
 };
 

@@ -2,6 +2,7 @@
 // and family lists, scene generation (see bench.h).
 #include "tools/bench/bench.h"
 
+#include "lib/base/memory_budget.h"
 #include "lib/external/external_methods.h"
 #include "tools/bench/run_method.h"
 
@@ -143,13 +144,20 @@ std::optional<Measured> run_method(BenchContext& ctx, const std::string& method,
   SolveOptions so;
   so.seed = ctx.opt.seed;
   so.opts = opts;
+  so.memory_budget_mb = ctx.opt.memory_budget_mb;
   Status st = solver->check_options(so);
   if (!st) {
     ctx.note(method + " at " + label + ": " + st.error().message + ": skipped");
     return std::nullopt;
   }
   ctx.progress.step(method + " " + label);
-  Measured m = measure_solve(*solver, scene, so, config ? *config : ctx.measure_config());
+  Measured m;
+  try {
+    m = measure_solve(*solver, scene, so, config ? *config : ctx.measure_config());
+  } catch (const MemoryBudgetExceeded& e) {
+    ctx.note(method + " at " + label + ": " + e.what() + ": skipped");
+    return std::nullopt;
+  }
   if (guard) guard->record(method, size, m.seconds());
   return m;
 }

@@ -25,6 +25,7 @@ struct BenchOptions {
   bool progress = false;    // progress line on stderr (set when it is a terminal)
   double budget = 60.0;     // seconds per run before sweeps stop growing for a method
   double tau = 1e-5;        // mismatch margin threshold (DESIGN section 5)
+  uint64_t memory_budget_mb = 0;  // SolveOptions::memory_budget_mb of the runs (0: the default)
   uint64_t seed = 1;
   std::vector<std::string> methods;   // empty: every registered method
   std::vector<std::string> families;  // empty: the experiment's own list
@@ -98,6 +99,9 @@ void add_core_experiments(std::vector<Experiment>& out);
 void add_oracle_experiments(std::vector<Experiment>& out);
 // The mesh repair throughput experiment (experiments_repair.cpp).
 void add_repair_experiment(std::vector<Experiment>& out);
+// The paper-scale experiments iss-paper, ssv-paper, plucker-paper and scan
+// (experiments_paper.cpp).
+void add_paper_experiments(std::vector<Experiment>& out);
 
 // Runs one experiment and writes its report to opt.out_dir. Returns the files written;
 // the report itself goes to `report_out` when given.

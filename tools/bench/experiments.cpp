@@ -13,8 +13,10 @@ const std::vector<Experiment>& experiments() {
     add_oracle_experiments(v);
     add_core_experiments(v);
     add_repair_experiment(v);
+    add_paper_experiments(v);
     // Documented order: as the issue lists them.
-    const char* order[] = {"speed-accuracy", "complexity", "iss", "iss-target", "ssv", "plucker", "stability", "oracle", "repair", "overhead"};
+    const char* order[] = {"speed-accuracy", "complexity", "iss", "iss-target", "ssv", "plucker", "stability", "oracle", "repair", "overhead",
+                           "iss-paper", "ssv-paper", "plucker-paper", "scan"};
     std::vector<Experiment> sorted;
     for (const char* n : order)
       for (auto& e : v)

@@ -194,9 +194,9 @@ Status set_light_count(Scene& s, int count, int samples) {
   return {};
 }
 
-// Root mean square error of the visible fraction over the penumbra pairs: (receiver,
-// light) pairs whose exact fraction is strictly between 0.001 and 0.999. `count`
-// receives their number. NaN when there is none.
+}  // namespace
+
+// Declared in run_method.h (the paper-scale experiments use it too).
 double penumbra_rms(const std::vector<double>& got, const std::vector<double>& exact, size_t* count) {
   double sum = 0.0;
   size_t n = 0;
@@ -209,6 +209,8 @@ double penumbra_rms(const std::vector<double>& got, const std::vector<double>& e
   if (count) *count = n;
   return n ? std::sqrt(sum / double(n)) : kNaN;
 }
+
+namespace {
 
 // The share of a plucker-bsp solve spent in the tree: stat tree_seconds (every BSP walk
 // and development of the queries) over the solver's timed total.
@@ -633,10 +635,11 @@ Status run_stability(BenchContext& ctx) {
       p.seed = o.seed + uint64_t(sd);
       p.receivers = receivers;
       p.samples = samples;
-      // Small meshes with --quick; rooms (30k triangles, 27 lights by default) reduced
-      // so the exact methods finish in minutes.
+      // Small meshes with --quick; rooms (30k triangles, 27 lights by default) and scan
+      // (20k, 10 lights) reduced so the exact methods finish in minutes.
       if (o.quick) p.triangles = 300;
       else if (fam == "rooms") p.triangles = 6000;
+      else if (fam == "scan") p.triangles = 3000;
       auto s = ctx.scene(fam, p);
       if (!s) {
         ctx.note("family " + fam + " seed " + std::to_string(p.seed) + ": " + s.error().message + ": skipped");

@@ -30,4 +30,9 @@ void add_stat_rows(Table& t, const std::vector<Json>& prefix, const Stats& stats
 // "NaN" safe ratio a / b (NaN when either is missing or b is 0).
 double ratio(double a, double b);
 
+// Root mean square error of the visible fraction over the penumbra pairs: (receiver,
+// light) pairs whose exact fraction is strictly between 0.001 and 0.999. `count`
+// receives their number. NaN when there is none (experiments_oracle.cpp).
+double penumbra_rms(const std::vector<double>& got, const std::vector<double>& exact, size_t* count);
+
 }  // namespace visgate::bench

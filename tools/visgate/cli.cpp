@@ -28,6 +28,9 @@ void add_method_args(CLI::App* sub, MethodArgs& m, const MethodArgsHelp& help) {
   if (help.required) method->required();
   sub->add_option("--opt", m.opts, "Method option key=value (repeatable)");
   sub->add_option("--threads", m.threads, "Threads (0: all)");
+  sub->add_option("--memory-budget", m.memory_budget_mb,
+                  "MB the method's growing structures may hold (iss, ssv, plucker-bsp; 0, the default: half of "
+                  "physical memory, at most 8192)");
   if (help.seed) sub->add_option("--seed", m.seed, "Seed for randomised methods");
 }
 
@@ -46,6 +49,7 @@ Result<Method> make_method(const MethodArgs& m) {
   if (!out.solver) return Error{"--method " + external::describe_unknown_method(m.method)};
   out.options.threads = m.threads;
   out.options.seed = m.seed;
+  out.options.memory_budget_mb = m.memory_budget_mb;
   for (const auto& kv : m.opts) {
     auto eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) return Error{"--opt " + kv + ": expected key=value"};

@@ -45,12 +45,13 @@ void add_command(CLI::App& app, Action& run, const std::string& name, const std:
 }
 
 // The options of a command that runs one method: --method M, --opt key=value
-// (repeatable), --threads N and (when `seed`) --seed S.
+// (repeatable), --threads N, --memory-budget MB and (when `seed`) --seed S.
 struct MethodArgs {
   std::string method;
   std::vector<std::string> opts;
   int threads = 0;
   uint64_t seed = 1;
+  uint64_t memory_budget_mb = 0;  // SolveOptions::memory_budget_mb (0: the default)
 };
 struct MethodArgsHelp {
   std::string method;  // help of --method

@@ -37,6 +37,9 @@ struct BenchOpts {
     sub->add_option("--families", families, "Comma-separated families (default: the experiment's own)");
     sub->add_option("--budget", b.budget,
                     "Seconds per run before a sweep stops growing for a method (default 60; 5 with --quick)");
+    sub->add_option("--memory-budget", b.memory_budget_mb,
+                    "MB a method's growing structures may hold; a run past it is a noted skip (0, the default: half "
+                    "of physical memory, at most 8192)");
     sub->add_option("--tau", b.tau, "Mismatch margin threshold (default 1e-5)");
     sub->add_option("--seed", b.seed, "Scene and method seed (default 1)");
     sub->add_flag("--list", list, "List the experiments and exit");

@@ -31,6 +31,7 @@ struct CheckOpts {
   FamilyParams params;
   double tau = 1e-5;
   int threads = 0;
+  uint64_t memory_budget_mb = 0;
   bool no_metamorphic = false;
   std::vector<int> scale_exponents;
   size_t region_pairs = 4096;
@@ -49,6 +50,8 @@ struct CheckOpts {
     sub->add_option("--store", store, "Minimise and store one corpus case per mismatch signature under DIR");
     sub->add_option("--shard", shard, "Run shard k of N (1 <= k <= N) of the campaign");
     sub->add_option("--threads", threads, "Threads (0: all)");
+    sub->add_option("--memory-budget", memory_budget_mb,
+                    "MB each method's growing structures may hold (0, the default: half of physical memory, at most 8192)");
     sub->add_flag("--no-metamorphic", no_metamorphic, "Skip the scale, axis-map and translation checks");
     sub->add_option("--scale-exponents", scale_exponents,
                     "Metamorphic scale exponents k (2^k copies), comma-separated; default two per scene spread "
@@ -79,6 +82,7 @@ int run_check(const CheckOpts& o) {
   for (const auto& m : methods) {
     auto spec = method_spec(m, o.opts, o.threads, "--methods");
     if (!spec) return bad_input(spec.error());
+    spec->options.memory_budget_mb = o.memory_budget_mb;  // past it the method throws: exit 3
     cfg.methods.push_back(*spec);
   }
   std::vector<std::string> families;

@@ -1,6 +1,7 @@
-// visgate solve scene.json --method M [--opt k=v]... [--threads N] [--seed S] [-o result.json]
+// visgate solve scene.json --method M [--opt k=v]... [--threads N] [--memory-budget MB] [--seed S] [-o result.json]
 #include <cstdio>
 
+#include "lib/base/memory_budget.h"
 #include "lib/external/exec_method.h"
 #include "lib/external/external_methods.h"
 #include "lib/scene/scene_json.h"
@@ -29,6 +30,9 @@ int run_solve(const SolveOpts& o) {
     result = method->solver->solve(*scene, method->options);
   } catch (const external::ExternalMethodError& e) {  // crash, timeout, malformed result
     std::fprintf(stderr, "visgate: method failed: %s\n", e.what());
+    return kInternal;
+  } catch (const MemoryBudgetExceeded& e) {  // the method's failure, as a timeout (DESIGN section 4): nothing written
+    std::fprintf(stderr, "visgate: %s on %s\n", e.what(), o.scene.c_str());
     return kInternal;
   }
   size_t relations = scene->relation_count(), visible = 0;
