@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 
+#include "tests/support/binary_bytes.h"
 #include "tests/support/repair_fixtures.h"
 
 using namespace visgate;
@@ -35,14 +36,6 @@ Audited audit_bytes(const std::string& name, const std::string& bytes) {
   a.audit = *r;
   for (const auto& [k, v] : r->not_kept) a.counts[k] = v;
   return a;
-}
-
-template <class T>
-void put_bin(std::string& out, T v, bool big) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if (big) std::reverse(b, b + sizeof(T));
-  out.append(b, sizeof(T));
 }
 
 const char* kTetObjFaces = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";

@@ -3,28 +3,20 @@
 // exactly (binary) or with its token (ASCII), on both byte orders.
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <cstring>
 #include <string>
 #include <vector>
 
 #include "lib/scene/ply.h"
+#include "tests/support/binary_bytes.h"
 
 using namespace visgate;
+using visgate::test::put_bin;
 
 namespace {
 
 std::string header_error(const std::string& data) {
   ply::Header h;
   return ply::read_header(data, h);
-}
-
-template <class T>
-void put(std::string& out, T v, bool big) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if (big) std::reverse(b, b + sizeof(T));
-  out.append(b, sizeof(T));
 }
 
 }  // namespace
@@ -70,11 +62,11 @@ TEST(Ply, BinaryScalarsAreExactOnBothByteOrders) {
     std::string data = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
                        " 1.0\nelement vertex 1\nproperty double x\nproperty float y\nproperty short z\n"
                        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
-    put<double>(data, 0.1, big);
-    put<float>(data, 1.5f, big);
-    put<int16_t>(data, -7, big);
-    put<uint8_t>(data, 3, big);
-    for (int32_t i : {0, 0, 0}) put<int32_t>(data, i, big);
+    put_bin<double>(data, 0.1, big);
+    put_bin<float>(data, 1.5f, big);
+    put_bin<int16_t>(data, -7, big);
+    put_bin<uint8_t>(data, 3, big);
+    for (int32_t i : {0, 0, 0}) put_bin<int32_t>(data, i, big);
     ply::Header h;
     ASSERT_EQ(ply::read_header(data, h), "");
     std::vector<double> values;
