@@ -10,8 +10,8 @@
 namespace visgate::mesh {
 
 // Edge records bucketed by their lower vertex (a counting sort, stable in triangle
-// order), then each bucket sorted by its upper vertex: O(records) plus small sorts,
-// where a global comparison sort of 3 records per triangle dominated the analysis.
+// order), then each bucket sorted by its upper vertex: O(records) plus small sorts
+// rather than a comparison sort of all 3 records per triangle.
 EdgeTable build_edges(const std::vector<Tri>& tris, const std::vector<uint8_t>* active, size_t nverts) {
   EdgeTable e;
   std::vector<uint32_t> off(nverts + 1, 0);

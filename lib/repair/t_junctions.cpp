@@ -24,8 +24,8 @@ bool strictly_inside_segment(const Vec3d& a, const Vec3d& b, const Vec3d& p, con
 
 // Each boundary edge queries a tree of the boundary vertices with the segment itself:
 // a node is visited only when its box overlaps the segment's box and the segment's line
-// may meet it (line_may_meet_box, a conservative filter). Querying edge boxes with
-// points instead made every vertex a candidate of every long diagonal edge around it.
+// may meet it (line_may_meet_box, a conservative filter), so a long diagonal edge does
+// not see every vertex inside its box.
 std::vector<TJunction> find_t_junctions(const std::vector<Vec3d>& pos, const EdgeTable& e,
                                         const FilteredPredicates& fp) {
   std::vector<uint32_t> bedges;
