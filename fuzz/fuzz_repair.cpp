@@ -16,8 +16,8 @@
 
 #include <tbb/global_control.h>
 
-#include "lib/mesh/repair.h"
-#include "oracle/exact_predicates.h"
+#include "lib/repair/repair.h"
+#include "lib/repair/cgal_predicates.h"
 
 namespace {
 
@@ -50,7 +50,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 2) return 0;
   // One thread: the soups are tiny, and fuzz builds compile CGAL without thread safety.
   static const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-  static const oracle::CgalExactPredicates ex;
+  static const mesh::CgalExactPredicates ex;
   RepairOptions o;
   o.weld_tolerance = data[0] & 1 ? 0.25 : 0.0;
   o.fill_holes = data[0] & 2 ? 64 : 0;

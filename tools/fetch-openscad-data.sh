@@ -2,7 +2,7 @@
 # Fetches OpenSCAD's regression data (Debian package openscad-testing-data: CAD bug
 # report meshes with back-to-back faces, zero-area triangles and bad exports) with
 # `apt-get download` into a cache folder, never committed, and extracts its STL files
-# there for tests/repair/repair_zoo_test.cpp (RepairOpenScad.*), which skip when it is absent.
+# there for tests/repair/openscad_meshes_test.cpp (RepairOpenScad.*), which skip when it is absent.
 #
 #   tools/fetch-openscad-data.sh [CACHE_DIR]   (default: .cache/openscad-testing-data)
 #

@@ -61,8 +61,7 @@ size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGe
 
 void merge_patches(Surface& s, Workspace& ws) {
   size_t np = s.patches.size();
-  ws.uf.resize(np);
-  std::iota(ws.uf.begin(), ws.uf.end(), 0);
+  uf_reset(ws.uf, np);
   bool any = false;
   for (const RawEdge& re : s.raw) {
     if (!re.inside || re.nb[0] == kNoPatch || re.nb[1] == kNoPatch || re.nb[0] == re.nb[1]) continue;

@@ -13,8 +13,7 @@ namespace visgate::iss {
 void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws) {
   size_t np = s.patches.size();
   if (np == 0) return;
-  ws.uf.resize(np);
-  std::iota(ws.uf.begin(), ws.uf.end(), 0);
+  uf_reset(ws.uf, np);
   for (const RawEdge& re : s.raw)
     if (re.inside && re.nb[0] != kNoPatch && re.nb[1] != kNoPatch) uf_union(ws.uf, re.nb[0], re.nb[1]);
   ws.remap2.assign(np, -1);
@@ -95,8 +94,7 @@ void combine_surfaces(const BlockerContext& ctx, std::vector<Surface>& in, std::
   size_t ns = in.size();
   ws.reset_labels(ctx.mesh->edge_count());
   std::vector<int32_t>& suf = ws.sets;
-  suf.resize(ns);
-  std::iota(suf.begin(), suf.end(), 0);
+  uf_reset(suf, ns);
   bool any = false;
   for (size_t i = 0; i < ns; ++i) {
     for (int32_t label : in[i].loose) {

@@ -24,6 +24,9 @@
 #include <mutex>
 #include <sstream>
 
+#include "lib/scene/mesh_text.h"
+#include "lib/scene/ply.h"
+
 namespace visgate {
 
 namespace {
@@ -118,45 +121,9 @@ class SoupImporter : public OIO::BaseImporter {
 // Strict pre-scan of what OpenMesh's readers do not check. Its OFF and ASCII readers
 // ignore stream failures (a "nan" token or a truncated file leaves uninitialised values
 // that may pass as coordinates or in-range indices), and its binary STL reader trusts
-// the triangle count. Returns an empty string when the file may be handed to OpenMesh,
-// else a message naming the line and element.
-// Numbers exactly as the C++ streams OpenMesh's readers use parse them (num_get: strtod
-// or strtof on [+-]digits[.digits][(e|E)[+-]digits]): hex floats ("0x1p3" reads as 0
-// and leaves "x1p3"), "inf" and "nan" fail the stream, and so does a float that
-// overflows float32 ("1e39"): each would leave later values uninitialised.
-bool decimal_syntax(const std::string& tok) {
-  size_t i = 0, n = tok.size();
-  if (i < n && (tok[i] == '+' || tok[i] == '-')) ++i;
-  size_t digits = 0;
-  while (i < n && std::isdigit(static_cast<unsigned char>(tok[i]))) ++i, ++digits;
-  if (i < n && tok[i] == '.') {
-    ++i;
-    while (i < n && std::isdigit(static_cast<unsigned char>(tok[i]))) ++i, ++digits;
-  }
-  if (digits == 0) return false;
-  if (i < n && (tok[i] == 'e' || tok[i] == 'E')) {
-    ++i;
-    if (i < n && (tok[i] == '+' || tok[i] == '-')) ++i;
-    size_t exp = 0;
-    while (i < n && std::isdigit(static_cast<unsigned char>(tok[i]))) ++i, ++exp;
-    if (exp == 0) return false;
-  }
-  return i == n;
-}
-
-bool finite_number(const std::string& tok, double& out) {
-  if (!decimal_syntax(tok)) return false;
-  out = std::strtod(tok.c_str(), nullptr);
-  return std::isfinite(out);
-}
-
-// A decimal number that a float read accepts (underflow to zero or a subnormal is
-// accepted by the stream; overflow is not).
-bool float_number(const std::string& tok, double& out) {
-  if (!finite_number(tok, out)) return false;
-  const float f = std::strtof(tok.c_str(), nullptr);
-  return std::isfinite(f);
-}
+// the triangle count. Each returns an empty string when the file may be handed to
+// OpenMesh, else a message naming the line and element; numbers are checked as
+// mesh_text.h says.
 
 // A count or an index: plain digits (an optional '+'; a stream read of an unsigned
 // integer would wrap "-1" to 4294967295), at most `limit`.
@@ -169,18 +136,6 @@ bool count_number(const std::string& tok, uint64_t limit, uint64_t& out) {
     out = out * 10 + uint64_t(tok[i] - '0');
   }
   return out <= limit;
-}
-
-std::string number_error(const std::string& tok, size_t line, const std::string& what) {
-  const std::string at = "line " + std::to_string(line) + ": " + what + ": ";
-  double v = 0;
-  if (finite_number(tok, v)) return at + "'" + tok.substr(0, 32) + "' overflows float32";
-  if (decimal_syntax(tok)) return at + "'" + tok.substr(0, 32) + "' overflows double";
-  std::string lower;
-  for (char c : tok.substr(0, 16)) lower += char(std::tolower(static_cast<unsigned char>(c)));
-  const size_t sign = lower.size() > 0 && (lower[0] == '+' || lower[0] == '-') ? 1 : 0;
-  if (lower.compare(sign, 3, "nan") == 0 || lower.compare(sign, 3, "inf") == 0) return at + "coordinate is NaN or infinite";
-  return at + "not a decimal number: '" + tok.substr(0, 32) + "'";
 }
 
 // OFF files are handed to OpenMesh in a canonical form that this pre-scan writes
@@ -439,240 +394,12 @@ std::string prescan_ascii_stl(std::istream& in, StlFacets& facets) {
   return {};
 }
 
-// PLY (Turk's format as OpenMesh 9 reads it). OpenMesh's PLY reader crashes on a
-// property of an unknown type, loops allocating element records when the header never
-// ends, and resizes vectors to whatever count the file states. So the whole file is
-// checked first: the header strictly (`ply`, one `format` line, `element NAME COUNT`,
-// `property TYPE NAME` or `property list COUNT_TYPE ITEM_TYPE NAME` of the known types,
-// `comment`/`obj_info`, `end_header`), every element count against the bytes the body has
-// (an item takes at least the sum of its scalar sizes and list-count sizes in binary, at
-// least two bytes per property in ASCII: one digit and a separator), then the body
-// itself: every list fits in the file, and in ASCII every token is a finite number
-// (integers in range for integer types). Errors name the header line, or the element and
-// item of the body.
-struct PlyType {
-  const char* name;
-  int size;        // bytes in binary
-  bool integer;
-  bool is_signed;
-};
-
-const PlyType* ply_type(const std::string& name) {
-  static const PlyType kTypes[] = {
-      {"char", 1, true, true},     {"int8", 1, true, true},      {"uchar", 1, true, false},
-      {"uint8", 1, true, false},   {"short", 2, true, true},     {"int16", 2, true, true},
-      {"ushort", 2, true, false},  {"uint16", 2, true, false},   {"int", 4, true, true},
-      {"int32", 4, true, true},    {"uint", 4, true, false},     {"uint32", 4, true, false},
-      {"float", 4, false, true},   {"float32", 4, false, true},  {"double", 8, false, true},
-      {"float64", 8, false, true}};
-  for (const auto& t : kTypes)
-    if (name == t.name) return &t;
-  return nullptr;
-}
-
-struct PlyProperty {
-  std::string name;
-  const PlyType* type = nullptr;   // scalar type, or list item type
-  const PlyType* count = nullptr;  // list count type; nullptr for a scalar
-};
-
-struct PlyElement {
-  std::string name;
-  uint64_t count = 0;
-  size_t line = 0;
-  std::vector<PlyProperty> props;
-};
-
-// Header limits: far above any real file (a few elements with a dozen properties each),
-// low enough that a hostile header cannot make the scan itself slow.
-constexpr size_t kMaxPlyHeaderLines = 4096;
-constexpr size_t kMaxPlyProperties = 1024;
-
-bool parse_count(const std::string& tok, uint64_t& out) {
-  if (tok.empty() || tok.size() > 18) return false;  // <= 10^18 - 1: no overflow below
-  out = 0;
-  for (char c : tok) {
-    if (c < '0' || c > '9') return false;
-    out = out * 10 + uint64_t(c - '0');
-  }
-  return true;
-}
-
-// Reads an integer of `t` (little- or big-endian) at p.
-int64_t read_ply_int(const unsigned char* p, const PlyType& t, bool big_endian) {
-  uint64_t u = 0;
-  for (int k = 0; k < t.size; ++k) u |= uint64_t(p[big_endian ? t.size - 1 - k : k]) << (8 * k);
-  if (t.is_signed && t.size < 8 && (u >> (8 * t.size - 1)) & 1u) u |= ~uint64_t(0) << (8 * t.size);
-  return int64_t(u);
-}
-
-// Integer range of an integer type.
-bool ply_int_in_range(double v, const PlyType& t) {
-  const double bits = 8.0 * t.size;
-  const double lo = t.is_signed ? -std::ldexp(1.0, int(bits) - 1) : 0.0;
-  const double hi = t.is_signed ? std::ldexp(1.0, int(bits) - 1) - 1.0 : std::ldexp(1.0, int(bits)) - 1.0;
-  return v == std::floor(v) && v >= lo && v <= hi;
-}
-
+// PLY: the shared reader's strict checks (ply.h), every one of them, before OpenMesh
+// reads the file.
 std::string prescan_ply(const std::string& data) {
-  size_t pos = 0, lineno = 0;
-  std::vector<std::string> toks;
-  auto next_line = [&]() -> bool {
-    if (pos >= data.size()) return false;
-    size_t nl = data.find('\n', pos);
-    std::string line = data.substr(pos, nl == std::string::npos ? std::string::npos : nl - pos);
-    pos = nl == std::string::npos ? data.size() : nl + 1;
-    ++lineno;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ss(line);
-    toks.clear();
-    for (std::string t; ss >> t;) toks.push_back(t);
-    return true;
-  };
-  auto at = [&](const std::string& msg) { return "line " + std::to_string(lineno) + ": " + msg; };
-  if (!next_line() || toks.size() != 1 || toks[0] != "ply") return "line 1: missing 'ply' magic";
-  int format = -1;  // 0 ascii, 1 binary little-endian, 2 binary big-endian
-  std::vector<PlyElement> elements;
-  size_t props = 0;
-  bool ended = false;
-  while (!ended) {
-    if (!next_line()) return at("file ends before 'end_header'");
-    if (lineno > kMaxPlyHeaderLines) return at("header longer than " + std::to_string(kMaxPlyHeaderLines) + " lines");
-    if (toks.empty()) return at("empty header line");
-    const std::string& kw = toks[0];
-    if (kw == "comment" || kw == "obj_info") continue;
-    if (kw == "format") {
-      if (format >= 0) return at("second 'format' line");
-      if (toks.size() != 3 || toks[2] != "1.0") return at("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
-      if (toks[1] == "ascii") format = 0;
-      else if (toks[1] == "binary_little_endian") format = 1;
-      else if (toks[1] == "binary_big_endian") format = 2;
-      else return at("unknown format '" + toks[1].substr(0, 32) + "'");
-      continue;
-    }
-    if (format < 0) return at("'" + kw.substr(0, 32) + "' before the 'format' line");
-    if (kw == "element") {
-      PlyElement e;
-      if (toks.size() != 3 || !parse_count(toks[2], e.count)) return at("expected 'element NAME COUNT'");
-      e.name = toks[1];
-      e.line = lineno;
-      elements.push_back(std::move(e));
-    } else if (kw == "property") {
-      if (elements.empty()) return at("property before any element");
-      if (++props > kMaxPlyProperties) return at("more than " + std::to_string(kMaxPlyProperties) + " properties");
-      PlyProperty p;
-      if (toks.size() == 3 && toks[1] != "list") {
-        p.type = ply_type(toks[1]);
-        if (!p.type) return at("property '" + toks[2].substr(0, 32) + "': unknown type '" + toks[1].substr(0, 32) + "'");
-        p.name = toks[2];
-      } else if (toks.size() == 5 && toks[1] == "list") {
-        p.count = ply_type(toks[2]);
-        p.type = ply_type(toks[3]);
-        p.name = toks[4];
-        if (!p.count || !p.count->integer)
-          return at("list '" + p.name.substr(0, 32) + "': count type '" + toks[2].substr(0, 32) + "' is not an integer type");
-        if (!p.type) return at("list '" + p.name.substr(0, 32) + "': unknown item type '" + toks[3].substr(0, 32) + "'");
-      } else {
-        return at("expected 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME'");
-      }
-      elements.back().props.push_back(std::move(p));
-    } else if (kw == "end_header") {
-      if (toks.size() != 1) return at("'end_header' followed by text");
-      ended = true;
-    } else {
-      return at("unknown header keyword '" + kw.substr(0, 32) + "'");
-    }
-  }
-  if (format < 0) return "missing 'format' line";
-  const size_t header_lines = lineno;
-  const uint64_t body = data.size() - pos;
-
-  // Counts against the body size.
-  for (const auto& e : elements) {
-    if (e.count == 0) continue;
-    if (e.props.empty())
-      return "line " + std::to_string(e.line) + ": element '" + e.name.substr(0, 32) + "' has items but no properties";
-    uint64_t min_item = 0;
-    for (const auto& p : e.props) min_item += format == 0 ? 2 : uint64_t(p.count ? p.count->size : p.type->size);
-    // ASCII: the last token of the file needs no separator.
-    const uint64_t room = (body + (format == 0 ? 1 : 0)) / min_item;
-    if (e.count > room)
-      return "line " + std::to_string(e.line) + ": element '" + e.name.substr(0, 32) + "' announces " +
-             std::to_string(e.count) + " items, the file has room for at most " + std::to_string(room);
-  }
-
-  if (format != 0) {
-    // Binary: walk every item so that each list's entries lie inside the file.
-    const auto* bytes = reinterpret_cast<const unsigned char*>(data.data());
-    uint64_t at_byte = pos;
-    const uint64_t end = data.size();
-    for (const auto& e : elements)
-      for (uint64_t i = 0; i < e.count; ++i)
-        for (const auto& p : e.props) {
-          const uint64_t head = uint64_t(p.count ? p.count->size : p.type->size);
-          if (at_byte + head > end)
-            return "element '" + e.name.substr(0, 32) + "' item " + std::to_string(i) + ": file ends early";
-          if (!p.count) {
-            at_byte += head;
-            continue;
-          }
-          const int64_t n = read_ply_int(bytes + at_byte, *p.count, format == 2);
-          at_byte += head;
-          if (n < 0 || uint64_t(n) > (end - at_byte) / uint64_t(p.type->size))
-            return "element '" + e.name.substr(0, 32) + "' item " + std::to_string(i) + ": list '" +
-                   p.name.substr(0, 32) + "' of " + std::to_string(n) + " entries does not fit in the file";
-          at_byte += uint64_t(n) * uint64_t(p.type->size);
-        }
-    return {};
-  }
-
-  // ASCII: every token in place, finite, integers in range.
-  size_t tline = header_lines + 1;
-  auto next_token = [&](std::string& tok) -> bool {
-    while (pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos]))) {
-      if (data[pos] == '\n') ++tline;
-      ++pos;
-    }
-    if (pos >= data.size()) return false;
-    size_t b = pos;
-    while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
-    tok.assign(data, b, pos - b);
-    return true;
-  };
-  std::string tok;
-  for (const auto& e : elements)
-    for (uint64_t i = 0; i < e.count; ++i)
-      for (const auto& p : e.props) {
-        const std::string what = "element '" + e.name.substr(0, 32) + "' item " + std::to_string(i) + " property '" +
-                                 p.name.substr(0, 32) + "'";
-        auto value = [&](const PlyType& t, double& v) -> std::string {
-          if (!next_token(tok)) return what + ": file ends early";
-          // A float property is read into a float, any other into a double or an integer.
-          const bool ok = !t.integer && t.size == 4 ? float_number(tok, v) : finite_number(tok, v);
-          if (!ok) return number_error(tok, tline, what);
-          // Integers as plain digits: OpenMesh reads them with operator>> on an integer,
-          // which stops at '.', 'e' or 'x' and leaves the rest for the next value.
-          if (t.integer && (tok.find_first_not_of("+-0123456789") != std::string::npos || !ply_int_in_range(v, t)))
-            return "line " + std::to_string(tline) + ": " + what + ": '" + tok.substr(0, 32) + "' is not an integer of type " + t.name;
-          return {};
-        };
-        double v = 0;
-        if (!p.count) {
-          if (auto err = value(*p.type, v); !err.empty()) return err;
-          continue;
-        }
-        if (auto err = value(*p.count, v); !err.empty()) return err;
-        if (v < 0) return "line " + std::to_string(tline) + ": " + what + ": negative list length";
-        // Each entry needs at least two bytes: bounded by the rest of the file.
-        if (v > double(data.size() - pos))
-          return "line " + std::to_string(tline) + ": " + what + ": list of " + tok.substr(0, 32) +
-                 " entries does not fit in the file";
-        for (uint64_t k = 0; k < uint64_t(v); ++k) {
-          double x = 0;
-          if (auto err = value(*p.type, x); !err.empty()) return err;
-        }
-      }
-  return {};
+  ply::Header h;
+  if (auto err = ply::read_header(data, h); !err.empty()) return err;
+  return ply::read_body(data, h, nullptr);
 }
 
 // `canonical` receives the text to hand to OpenMesh instead of the file (OFF only).
@@ -772,7 +499,7 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 // the body: it stays, for prescan_ply to refuse.
 void soften_ply_header(std::string& data, std::vector<std::string>& warnings, bool& changed) {
   size_t pos = 0, lineno = 0;
-  while (pos < data.size() && lineno < kMaxPlyHeaderLines) {
+  while (pos < data.size() && lineno < ply::kMaxHeaderLines) {
     const size_t nl = data.find('\n', pos);
     const size_t end = nl == std::string::npos ? data.size() : nl;
     ++lineno;

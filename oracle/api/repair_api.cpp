@@ -1,8 +1,8 @@
 // The public API's mesh repair (include/visgate/visgate.h, target visgate::repair):
-// lib/mesh/repair.h with the exact CGAL predicates.
+// lib/repair/repair.h with the exact CGAL predicates.
 #include "lib/api/api_internal.h"
-#include "lib/mesh/repair.h"
-#include "oracle/exact_predicates.h"
+#include "lib/repair/repair.h"
+#include "lib/repair/cgal_predicates.h"
 
 namespace visgate::api {
 
@@ -16,7 +16,7 @@ Outcome<RepairedMesh> repair(const std::vector<double>& vertices, const std::vec
   mesh::RepairOptions opt;
   opt.weld_tolerance = settings.weld_tolerance;
   opt.fill_holes = settings.fill_holes;
-  oracle::CgalExactPredicates exact;
+  mesh::CgalExactPredicates exact;
   auto r = mesh::repair_mesh(soup, opt, exact);
   if (!r) return O::failure(r.error().message);
   RepairedMesh out;

@@ -1,6 +1,6 @@
 // The `visgate bench repair` experiment: throughput of the mesh repair of
-// lib/mesh/repair.h (`visgate repair`, DESIGN section 7) with the exact predicates of
-// oracle/exact_predicates.h, on family meshes of growing size: the analysis alone
+// lib/repair/repair.h (`visgate repair`, DESIGN section 7) with the exact predicates of
+// lib/repair/cgal_predicates.h, on family meshes of growing size: the analysis alone
 // (check_only), repair with exact-position welding (T = 0) and with T = 1e-6.
 //
 // Sizes: 2000, 16000, 128000 and 1024000 triangles on rooms, columns and torus (a messy
@@ -31,9 +31,9 @@
 #include <thread>
 #include <unordered_map>
 
-#include "lib/mesh/repair.h"
-#include "lib/mesh/repair_input.h"
-#include "oracle/exact_predicates.h"
+#include "lib/repair/repair.h"
+#include "lib/repair/repair_input.h"
+#include "lib/repair/cgal_predicates.h"
 #include "tools/bench/bench.h"
 
 namespace visgate::bench {
@@ -114,7 +114,7 @@ Status run_repair_end_to_end(BenchContext& ctx) {
     std::ofstream f(in, std::ios::binary);
     f << *bytes;
   }
-  oracle::CgalExactPredicates ex;
+  mesh::CgalExactPredicates ex;
   Table t{"end_to_end", "visgate repair end to end on a smooth closed surface, one thread (min of --repeat runs)",
           {"triangles", "load_s", "parse_s", "audit_s", "read_s", "repair_s", "analysis_s", "write_s", "total_s", "triangles_per_s", "cpu_s", "triangles_per_cpu_s", "defects_after",
            "pairs_tested", "second_analysis_reused"},
@@ -205,7 +205,7 @@ Status run_repair(BenchContext& ctx) {
   ctx.report.options["modes"] = {"check-only", "repair T=0", "repair T=1e-6"};
   int all_threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
 
-  oracle::CgalExactPredicates ex;
+  mesh::CgalExactPredicates ex;
   Table t{"throughput", "mesh repair throughput (min of --repeat runs)",
           {"family", "mode", "input_vertices", "input_triangles", "seconds_1t", "seconds_all", "cpu_seconds_1t",
            "cpu_seconds_all", "triangles_per_s_1t", "triangles_per_s_all", "peak_mb", "defects_before", "defects_after",

@@ -15,13 +15,13 @@
 #include <fstream>
 #include <memory>
 
-#include "lib/mesh/repair.h"
-#include "lib/mesh/repair_input.h"
-#include "lib/mesh/repair_report.h"
-#include "lib/mesh/sha256.h"
+#include "lib/repair/repair.h"
+#include "lib/repair/repair_input.h"
+#include "lib/repair/repair_report.h"
+#include "lib/repair/sha256.h"
 #include "lib/scene/json_exact.h"
 #include "lib/scene/mesh_io.h"
-#include "oracle/exact_predicates.h"
+#include "lib/repair/cgal_predicates.h"
 #include "tools/visgate/cli.h"
 
 namespace visgate::cli {
@@ -169,7 +169,7 @@ int run_repair(const RepairOpts& o) {
   for (const std::string& w : soup->warnings) std::fprintf(stderr, "warning: %s: %s\n", o.in.c_str(), w.c_str());
 
   // Repair.
-  oracle::CgalExactPredicates ex;
+  mesh::CgalExactPredicates ex;
   auto res = mesh::repair_mesh(*soup, ro, ex);
   if (!res) return bad_input(o.in + ": " + res.error().message);
   const mesh::RepairResult& r = *res;

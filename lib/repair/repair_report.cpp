@@ -1,5 +1,5 @@
 // Repair report (see repair_report.h).
-#include "lib/mesh/repair_report.h"
+#include "lib/repair/repair_report.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -1,11 +1,11 @@
-// CGAL implementation of the mesh-repair exact predicates (see exact_predicates.h).
-#include "oracle/exact_predicates.h"
+// CGAL implementation of the mesh-repair exact predicates (see cgal_predicates.h).
+#include "lib/repair/cgal_predicates.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
 #include <CGAL/Interval_nt.h>
 
-namespace visgate::oracle {
+namespace visgate::mesh {
 
 namespace {
 
@@ -86,4 +86,4 @@ int CgalExactPredicates::volume_sign(const std::vector<Vec3d>& v, const std::vec
   return CGAL::sign(sum) == CGAL::POSITIVE ? 1 : (CGAL::sign(sum) == CGAL::NEGATIVE ? -1 : 0);
 }
 
-}  // namespace visgate::oracle
+}  // namespace visgate::mesh

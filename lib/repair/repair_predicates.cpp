@@ -1,6 +1,6 @@
 // Filtered exact intersection tests (see repair_predicates.h): CGAL 5.5's algorithms
 // over the filtered orientation predicate; coplanar configurations go to CGAL whole.
-#include "lib/mesh/repair_predicates.h"
+#include "lib/repair/repair_predicates.h"
 
 #include <utility>
 

@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "lib/mesh/repair.h"
-#include "lib/mesh/repair_input.h"
+#include "lib/repair/repair.h"
+#include "lib/repair/repair_input.h"
 
 namespace visgate::mesh {
 

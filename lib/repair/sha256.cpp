@@ -1,5 +1,5 @@
 // SHA-256 as FIPS 180-4 section 6.2 specifies it (see sha256.h).
-#include "lib/mesh/sha256.h"
+#include "lib/repair/sha256.h"
 
 #include <array>
 #include <cstdint>

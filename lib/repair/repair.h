@@ -8,9 +8,9 @@
 // Guarantee: every combinatorial decision that depends on geometry is exact. Float
 // (double) code only proposes candidates (spatial hashing cells, bounding-box overlaps,
 // ear-clipping order); every decision goes through ExactPredicates, which the caller
-// implements exactly (oracle/exact_predicates.h does it with CGAL; the library never
-// includes CGAL), behind the double filters of repair_predicates.h, which answer only
-// when a proven error bound makes the sign certain:
+// implements exactly (cgal_predicates.h does it with CGAL, the only file of lib/repair
+// that includes CGAL), behind the double filters of repair_predicates.h, which answer
+// only when a proven error bound makes the sign certain:
 //   - welding: |p - q| <= T decided exactly (compare_distance);
 //   - zero area: exact collinearity of the three corners;
 //   - T-junctions: exact collinearity plus exact coordinate comparisons;
@@ -27,7 +27,7 @@
 #include <utility>
 #include <vector>
 
-#include "lib/mesh/mesh_write.h"
+#include "lib/repair/mesh_write.h"
 #include "lib/scene/mesh_io.h"
 
 namespace visgate::mesh {

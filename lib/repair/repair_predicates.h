@@ -1,16 +1,19 @@
 // Exact predicates for mesh repair with a double-precision static filter in front of the
-// exact ones (lib/mesh/repair.h ExactPredicates, implemented with CGAL by
-// oracle/exact_predicates.h).
+// exact ones (lib/repair/repair.h ExactPredicates, implemented with CGAL by
+// cgal_predicates.h).
 //
-// Guarantee: exact. Each filter evaluates the predicate's polynomial in double and
-// compares it with a proven bound on its rounding error (derived at each constant
-// below); it answers only when the sign is certain and returns kUnknown otherwise, in
-// which case the exact predicate decides. An exactly zero value is certified only where
-// it is zero by structure (the points share a coordinate exactly: coplanar in an
-// axis-aligned plane, as the faces of boxes standing on a floor are); every other
-// degenerate case (coplanar, collinear, touching) goes to the exact predicate. The bounds hold for round-to-nearest and for directed rounding (|delta| <=
-// 2u per operation; u = 2^-53), and for any finite double input: where a product could
-// overflow or underflow the filter returns kUnknown.
+// Guarantee: exact. Each filter (`*_filtered`, geogram naming as lib/geom/sign.h)
+// evaluates the predicate's polynomial in double and compares it with a proven bound on
+// its rounding error (derived at each constant below, in the gamma notation of
+// lib/geom/error_bounds.h); it answers only when the sign is certain and returns
+// Sign::Uncertain otherwise, in which case the exact predicate decides. An exactly zero
+// value is certified only where it is zero by structure (the points share a coordinate
+// exactly: coplanar in an axis-aligned plane, as the faces of boxes standing on a floor
+// are); every other degenerate case (coplanar, collinear, touching) goes to the exact
+// predicate. The bounds hold for round-to-nearest and for directed rounding (unit
+// roundoff u' = 2u, u = kUnitRoundoffD = 2^-53, so gamma'(n) = gamma_d(2n)), and for any
+// finite double input: where a product could overflow or underflow the filter returns
+// Uncertain.
 //
 // The triangle/triangle and segment/triangle tests below are CGAL's own algorithms
 // (Guigue and Devillers, CGAL 5.5 Triangle_3_Triangle_3_do_intersect.h and
@@ -22,46 +25,44 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lib/mesh/repair.h"
+#include "lib/geom/error_bounds.h"
+#include "lib/geom/sign.h"
+#include "lib/repair/repair.h"
 
 namespace visgate::mesh {
 
-constexpr int kUnknown = 2;  // a filter could not certify the sign
-
 // Sign of u1 * v1 - u2 * v2 where each factor is a double difference fl(s - t) of two
 // doubles. Error bound: the exact value is e = x - y with x = (s1 - t1)(s3 - t3) etc.;
-// X = fl(u1 v1) = x (1 + theta_3), |theta_3| <= gamma_3, likewise Y, and F = fl(X - Y)
-// = (X - Y)(1 + delta). So |F - e| <= |delta| |X - Y| + gamma_3 (|x| + |y|)
-// <= (u' + gamma_3 / (1 - gamma_3)) (|X| + |Y|) with u' the unit roundoff, about
-// 4 u' (|X| + |Y|): 8u (|X| + |Y|) for round-to-nearest (u' = u) and directed rounding
-// (u' = 2u). kDet2Err = 2^-49 = 16u leaves a factor 2 on top. A product that underflows
-// adds an absolute error below 2^-1074; requiring |X| + |Y| >= 2^-900 makes that
-// negligible against the slack. An overflow makes X, Y or the bound infinite or NaN, and
-// the comparisons below are then false: kUnknown.
-constexpr double kDet2Err = 0x1p-49;
-inline int det2_filter(double u1, double v1, double u2, double v2) {
+// X = fl(u1 v1) = x (1 + theta_3), |theta_3| <= gamma'(3), likewise Y, and
+// F = fl(X - Y) = (X - Y)(1 + delta). So |F - e| <= (u' + gamma'(3) / (1 - gamma'(3)))
+// (|X| + |Y|), about 8u (|X| + |Y|); kDet2Err = 16u leaves a factor of almost 2 on top.
+// A product that underflows adds an absolute error below 2^-1074; requiring |X| + |Y| >=
+// 2^-900 makes that negligible against the slack. An overflow makes X, Y or the bound
+// infinite or NaN, and the comparisons below are then false: Uncertain.
+constexpr double kDet2Err = 16 * kUnitRoundoffD;
+static_assert(kDet2Err >= 1.99 * (2 * kUnitRoundoffD + gamma_d(6) / (1 - gamma_d(6))));
+inline Sign det2_filtered(double u1, double v1, double u2, double v2) {
   const double X = u1 * v1, Y = u2 * v2, F = X - Y;
   const double mag = std::fabs(X) + std::fabs(Y);
-  if (!(mag >= 0x1p-900)) return kUnknown;
-  const double err = kDet2Err * mag;
-  if (F > err) return 1;
-  if (F < -err) return -1;
-  return kUnknown;
+  if (!(mag >= 0x1p-900)) return Sign::Uncertain;
+  return sign_with_bound(F, kDet2Err * mag);
 }
 
 // Sign of det[b - a, c - a, d - a] (ExactPredicates::orientation), filtered. Computed as
 // n . q with e1 = b - a, e2 = c - a, n = e1 x e2, q = d - a. Error bound: each of the six
 // monomials of the exact determinant (e.g. (b-a)_y (c-a)_z (d-a)_x) reaches the result
 // through at most 8 roundings (3 differences, the product e1y e2z, the subtraction in
-// n_x, the product n_x q_x, two additions), so |D - det| <= gamma_8 S with S the sum of
+// n_x, the product n_x q_x, two additions), so |D - det| <= gamma'(8) S with S the sum of
 // the monomials' absolute values. The permanent P (the same monomials in absolute value,
 // summed in double) also carries at most 8 roundings per monomial, so S <= P / (1 -
-// gamma_8), and |D - det| <= gamma_8 / (1 - gamma_8) P, about 8u' P: 16u P under directed
-// rounding. kOrient3dErr = 3 * 2^-50 = 24u leaves room for the underflow terms: with
-// every difference at most 2^301 in magnitude (checked), products stay below 2^903 (no
-// overflow) and an underflowing product contributes at most 2^-1075 * 2^302 * 4 < 2^-770
-// absolutely, below 2^-70 P once P >= 2^-700 (checked).
-constexpr double kOrient3dErr = 3 * 0x1p-50;
+// gamma'(8)), and |D - det| <= gamma'(8) / (1 - gamma'(8)) P, about 16u P. kOrient3dErr
+// = 24u leaves room for the underflow terms: with every difference at most 2^301 in
+// magnitude (checked), products stay below 2^903 (no overflow) and an underflowing
+// product contributes at most 2^-1075 * 2^302 * 4 < 2^-770 absolutely, below 2^-70 P once
+// P >= 2^-700 (checked).
+constexpr double kOrient3dErr = 24 * kUnitRoundoffD;
+static_assert(kOrient3dErr >= 1.4 * gamma_d(16) / (1 - gamma_d(16)));
+
 // Four points with one coordinate exactly equal lie in an axis-aligned plane: their
 // determinant has a zero column, so it is exactly 0.
 inline bool axis_coplanar(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
@@ -69,24 +70,23 @@ inline bool axis_coplanar(const Vec3d& a, const Vec3d& b, const Vec3d& c, const 
     if (a[k] == b[k] && a[k] == c[k] && a[k] == d[k]) return true;
   return false;
 }
-inline int orient3d_filter(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+inline Sign orient3d_filtered(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
   const double e1x = b.x - a.x, e1y = b.y - a.y, e1z = b.z - a.z;
   const double e2x = c.x - a.x, e2y = c.y - a.y, e2z = c.z - a.z;
   const double qx = d.x - a.x, qy = d.y - a.y, qz = d.z - a.z;
   // Differences of finite doubles are never NaN (at worst infinite), so std::max is safe.
   const double m = std::max({std::fabs(e1x), std::fabs(e1y), std::fabs(e1z), std::fabs(e2x), std::fabs(e2y),
                              std::fabs(e2z), std::fabs(qx), std::fabs(qy), std::fabs(qz)});
-  if (!(m <= 0x1p301)) return axis_coplanar(a, b, c, d) ? 0 : kUnknown;
+  if (!(m <= 0x1p301)) return axis_coplanar(a, b, c, d) ? Sign::Zero : Sign::Uncertain;
   const double a1 = e1y * e2z, a2 = e1z * e2y, b1 = e1z * e2x, b2 = e1x * e2z, c1 = e1x * e2y, c2 = e1y * e2x;
   const double D = (a1 - a2) * qx + (b1 - b2) * qy + (c1 - c2) * qz;
   const double P = (std::fabs(a1) + std::fabs(a2)) * std::fabs(qx) + (std::fabs(b1) + std::fabs(b2)) * std::fabs(qy) +
                    (std::fabs(c1) + std::fabs(c2)) * std::fabs(qz);
   if (P >= 0x1p-700) {
-    const double err = kOrient3dErr * P;
-    if (D > err) return 1;
-    if (D < -err) return -1;
+    const Sign s = sign_with_bound(D, kOrient3dErr * P);
+    if (is_certain(s)) return s;
   }
-  return axis_coplanar(a, b, c, d) ? 0 : kUnknown;
+  return axis_coplanar(a, b, c, d) ? Sign::Zero : Sign::Uncertain;
 }
 
 // False when the line through a and b certainly misses the closed box [lo, hi] (so no
@@ -94,7 +94,7 @@ inline int orient3d_filter(const Vec3d& a, const Vec3d& b, const Vec3d& c, const
 // (i, j), f(p) = (p_i - a_i) d_j - (p_j - a_j) d_i (d = b - a) vanishes on the line and
 // is linear in p: its extreme values over the box are at the corners picked by the signs
 // of d (exact: a difference of doubles has the sign of the exact difference). If the
-// minimum is certainly positive or the maximum certainly negative (det2_filter), the line
+// minimum is certainly positive or the maximum certainly negative (det2_filtered), the line
 // misses the box. With lo == hi == p this is a filtered collinearity test of p.
 inline bool line_may_meet_box(const Vec3d& a, const Vec3d& b, const Vec3d& lo, const Vec3d& hi) {
   const Vec3d d = b - a;
@@ -104,8 +104,8 @@ inline bool line_may_meet_box(const Vec3d& a, const Vec3d& b, const Vec3d& lo, c
     // maximises (p_j - a_j) d_i; the maximum of f takes the other ends.
     const double pi_min = d[j] >= 0 ? lo[i] : hi[i], pj_min = d[i] >= 0 ? hi[j] : lo[j];
     const double pi_max = d[j] >= 0 ? hi[i] : lo[i], pj_max = d[i] >= 0 ? lo[j] : hi[j];
-    if (det2_filter(pi_min - a[i], d[j], pj_min - a[j], d[i]) == 1) return false;
-    if (det2_filter(pi_max - a[i], d[j], pj_max - a[j], d[i]) == -1) return false;
+    if (det2_filtered(pi_min - a[i], d[j], pj_min - a[j], d[i]) == Sign::Positive) return false;
+    if (det2_filtered(pi_max - a[i], d[j], pj_max - a[j], d[i]) == Sign::Negative) return false;
   }
   return true;
 }
@@ -117,15 +117,15 @@ class FilteredPredicates {
   const ExactPredicates& exact() const { return ex_; }
 
   int orientation(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) const {
-    const int s = orient3d_filter(a, b, c, d);
-    return s != kUnknown ? s : ex_.orientation(a, b, c, d);
+    const Sign s = orient3d_filtered(a, b, c, d);
+    return is_certain(s) ? int(s) : ex_.orientation(a, b, c, d);
   }
   // a, b, c on one line: false as soon as one component of (b - a) x (c - a) is
   // certainly non-zero.
   bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3, k = (i + 2) % 3;
-      if (det2_filter(b[j] - a[j], c[k] - a[k], b[k] - a[k], c[j] - a[j]) != kUnknown) return false;
+      if (is_certain(det2_filtered(b[j] - a[j], c[k] - a[k], b[k] - a[k], c[j] - a[j]))) return false;
     }
     return ex_.collinear(a, b, c);
   }
@@ -152,8 +152,8 @@ class FilteredPredicates {
   // that 2D determinant.
   int orient2d(const Vec3d& p, const Vec3d& q, const Vec3d& r, int ax) const {
     const int u = (ax + 1) % 3, w = (ax + 2) % 3;
-    const int s = det2_filter(q[u] - p[u], r[w] - p[w], q[w] - p[w], r[u] - p[u]);
-    if (s != kUnknown) return s;
+    const Sign s = det2_filtered(q[u] - p[u], r[w] - p[w], q[w] - p[w], r[u] - p[u]);
+    if (is_certain(s)) return int(s);
     // Three points sharing one 2D coordinate exactly are collinear.
     if ((p[u] == q[u] && p[u] == r[u]) || (p[w] == q[w] && p[w] == r[w])) return 0;
     return ex_.orientation(Vec3d(p[u], p[w], 0), Vec3d(q[u], q[w], 0), Vec3d(r[u], r[w], 0), Vec3d(p[u], p[w], 1));

@@ -1,15 +1,15 @@
-// Exact predicates for mesh repair (lib/mesh/repair.h ExactPredicates), implemented with
-// CGAL: Epick's filtered predicates are exact on double input (collinearity,
-// orientation, coplanar orientation, segment/triangle and triangle/triangle
-// intersection); distances and volume sums use interval filters backed by exact
-// rationals. DESIGN section 2: the library decides nothing geometric by itself.
+// Repair's exact backend: ExactPredicates (lib/repair/repair.h) implemented with CGAL.
+// Epick's filtered predicates are exact on double input (collinearity, orientation,
+// coplanar orientation, segment/triangle and triangle/triangle intersection); distances
+// and volume sums use interval filters backed by exact rationals. The only file of
+// lib/repair that includes CGAL (DESIGN section 2: production methods never do).
 #pragma once
 
-#include "lib/mesh/repair.h"
+#include "lib/repair/repair.h"
 
-namespace visgate::oracle {
+namespace visgate::mesh {
 
-class CgalExactPredicates final : public mesh::ExactPredicates {
+class CgalExactPredicates final : public ExactPredicates {
  public:
   bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) const override;
   int orientation(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) const override;
@@ -23,4 +23,4 @@ class CgalExactPredicates final : public mesh::ExactPredicates {
                   const std::vector<uint32_t>& subset) const override;
 };
 
-}  // namespace visgate::oracle
+}  // namespace visgate::mesh

@@ -1,5 +1,5 @@
 // Input audit (see repair_input.h).
-#include "lib/mesh/repair_input.h"
+#include "lib/repair/repair_input.h"
 
 #include <algorithm>
 #include <array>
@@ -9,6 +9,8 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+
+#include "lib/scene/ply.h"
 
 namespace visgate::mesh {
 
@@ -209,45 +211,6 @@ std::string audit_off(const std::string& bytes, Counts& n, Coords& c) {
   return err;
 }
 
-struct PlyProp {
-  std::string name, type, count_type;  // count_type empty: scalar
-};
-struct PlyElem {
-  std::string name;
-  uint64_t count = 0;
-  std::vector<PlyProp> props;
-};
-
-int ply_size(const std::string& t) {
-  if (t == "char" || t == "int8" || t == "uchar" || t == "uint8") return 1;
-  if (t == "short" || t == "int16" || t == "ushort" || t == "uint16") return 2;
-  if (t == "int" || t == "int32" || t == "uint" || t == "uint32" || t == "float" || t == "float32") return 4;
-  if (t == "double" || t == "float64") return 8;
-  return 0;
-}
-
-// A PLY binary value of type t at p as a double (exact for every PLY type).
-double ply_value(const unsigned char* p, const std::string& t, bool big) {
-  const int sz = ply_size(t);
-  unsigned char b[8];
-  for (int k = 0; k < sz; ++k) b[k] = p[big ? sz - 1 - k : k];
-  if (t == "float" || t == "float32") {
-    float f;
-    std::memcpy(&f, b, 4);
-    return f;
-  }
-  if (t == "double" || t == "float64") {
-    double d;
-    std::memcpy(&d, b, 8);
-    return d;
-  }
-  uint64_t u = 0;
-  for (int k = 0; k < sz; ++k) u |= uint64_t(b[k]) << (8 * k);
-  const bool is_signed = t == "char" || t == "int8" || t == "short" || t == "int16" || t == "int" || t == "int32";
-  if (is_signed && (u >> (8 * sz - 1)) & 1u) return double(int64_t(u | (~uint64_t(0) << (8 * sz))));
-  return double(u);
-}
-
 // Where a PLY property's values go in the report.
 std::string ply_attribute(const std::string& elem, const std::string& prop) {
   static const char* kNormals[] = {"nx", "ny", "nz"};
@@ -263,49 +226,16 @@ std::string ply_attribute(const std::string& elem, const std::string& prop) {
   return "ply_property " + elem + "." + prop;
 }
 
+// PLY through the shared parser (lib/scene/ply.h), which the reader's pre-scan ran on
+// the same bytes: attributes from the header, coordinates from the body walk.
 std::string audit_ply(const std::string& bytes, Counts& n, Coords& c) {
-  // Header.
-  std::vector<std::string_view> tok;
-  std::vector<PlyElem> elems;
-  int format = -1;
-  size_t body = std::string::npos, header_lines = 0;
-  std::string err;
-  for_lines(bytes, false, [&](Line l, size_t line) {
-    tokens(l.b, l.e, tok);
-    header_lines = line;
-    if (tok.empty()) return true;
-    if (tok[0] == "format" && tok.size() >= 2)
-      format = tok[1] == "ascii" ? 0 : (tok[1] == "binary_little_endian" ? 1 : (tok[1] == "binary_big_endian" ? 2 : -1));
-    else if (tok[0] == "element" && tok.size() >= 3) {
-      PlyElem e;
-      e.name = std::string(tok[1]);
-      std::from_chars(tok[2].data(), tok[2].data() + tok[2].size(), e.count);
-      elems.push_back(std::move(e));
-    } else if (tok[0] == "property" && !elems.empty()) {
-      PlyProp p;
-      if (tok.size() >= 5 && tok[1] == "list") {
-        p.count_type = std::string(tok[2]);
-        p.type = std::string(tok[3]);
-        p.name = std::string(tok[4]);
-      } else if (tok.size() >= 3) {
-        p.type = std::string(tok[1]);
-        p.name = std::string(tok[2]);
-      }
-      elems.back().props.push_back(std::move(p));
-    } else if (tok[0] == "end_header") {
-      body = size_t((l.e - bytes.data()));
-      while (body < bytes.size() && bytes[body] != '\n') ++body;
-      if (body < bytes.size()) ++body;
-      return false;
-    }
-    return true;
-  });
-  if (format < 0 || body == std::string::npos) return "PLY header not readable by the audit";
-  for (const PlyElem& e : elems) {
+  ply::Header h;
+  if (!ply::read_header(bytes, h).empty()) return "PLY header not readable by the audit";
+  for (const ply::Element& e : h.elements) {
     if (e.name == "vertex" || e.name == "face") {
       // One count per item and attribute (nx, ny, nz are one normal).
       std::vector<std::string> seen;
-      for (const PlyProp& p : e.props) {
+      for (const ply::Property& p : e.props) {
         if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z")) continue;
         if (e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index")) continue;
         const std::string a = ply_attribute(e.name, p.name);
@@ -317,86 +247,36 @@ std::string audit_ply(const std::string& bytes, Counts& n, Coords& c) {
       n.add("ply_element " + e.name, size_t(e.count));
     }
   }
-  // Vertex coordinates, in file order.
+  // Vertex coordinates, in file order: element `ei`'s items start at row first[ei].
+  // Missing axes stay 0.
   const size_t none = size_t(-1);
-  for (const PlyElem& e : elems) {
+  std::vector<size_t> first(h.elements.size(), none);
+  for (size_t ei = 0; ei < h.elements.size(); ++ei) {
+    const ply::Element& e = h.elements[ei];
     if (e.name != "vertex") continue;
-    for (const PlyProp& p : e.props)
-      if ((p.name == "x" || p.name == "y" || p.name == "z") && (p.type == "double" || p.type == "float64"))
+    first[ei] = c.d.size();
+    c.d.resize(c.d.size() + size_t(e.count), {0, 0, 0});
+    c.f.resize(c.f.size() + size_t(e.count), {0, 0, 0});
+    for (const ply::Property& p : e.props)
+      if ((p.name == "x" || p.name == "y" || p.name == "z") && p.type->size == 8 && !p.type->integer)
         c.double_data = true;
   }
-  if (format == 0) {
-    // ASCII: a token walk over the whole body.
-    size_t pos = body;
-    size_t tline = header_lines + 1;
-    auto next = [&](std::string_view& t) {
-      while (pos < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[pos]))) {
-        if (bytes[pos] == '\n') ++tline;
-        ++pos;
-      }
-      if (pos >= bytes.size()) return false;
-      const size_t b = pos;
-      while (pos < bytes.size() && !std::isspace(static_cast<unsigned char>(bytes[pos]))) ++pos;
-      t = std::string_view(bytes.data() + b, pos - b);
-      return true;
-    };
-    for (const PlyElem& e : elems)
-      for (uint64_t i = 0; i < e.count; ++i) {
-        std::array<double, 3> d{};
-        std::array<float, 3> f{};
-        for (const PlyProp& p : e.props) {
-          std::string_view t;
-          if (!next(t)) return "element '" + e.name + "' item " + std::to_string(i) + ": file ends early (audit)";
-          size_t k = none;
-          if (e.name == "vertex") k = p.name == "x" ? 0 : (p.name == "y" ? 1 : (p.name == "z" ? 2 : none));
-          if (p.count_type.empty()) {
-            if (k != none && !parse_number(t, d[k], f[k]))
-              return at_line(tline) + "vertex " + std::to_string(i) + ": coordinate not readable by the audit";
-            continue;
-          }
-          uint64_t cnt = 0;
-          std::from_chars(t.data(), t.data() + t.size(), cnt);
-          for (uint64_t q = 0; q < cnt; ++q)
-            if (!next(t)) return "element '" + e.name + "' item " + std::to_string(i) + ": file ends early (audit)";
-        }
-        if (e.name == "vertex") {
-          c.d.push_back(d);
-          c.f.push_back(f);
-        }
-      }
-    return {};
-  }
-  // Binary: walk every item.
-  const bool big = format == 2;
-  const auto* p0 = reinterpret_cast<const unsigned char*>(bytes.data());
-  size_t at = body;
-  for (const PlyElem& e : elems)
-    for (uint64_t i = 0; i < e.count; ++i) {
-      std::array<double, 3> d{};
-      for (const PlyProp& p : e.props) {
-        const int hs = ply_size(p.count_type.empty() ? p.type : p.count_type);
-        if (hs == 0 || at + size_t(hs) > bytes.size())
-          return "element '" + e.name + "' item " + std::to_string(i) + ": file ends early (audit)";
-        const double v = ply_value(p0 + at, p.count_type.empty() ? p.type : p.count_type, big);
-        at += size_t(hs);
-        if (p.count_type.empty()) {
-          if (e.name == "vertex") {
-            if (p.name == "x") d[0] = v;
-            if (p.name == "y") d[1] = v;
-            if (p.name == "z") d[2] = v;
-          }
-          continue;
-        }
-        const int is = ply_size(p.type);
-        if (v < 0 || is == 0 || v > double(bytes.size() - at) / is)
-          return "element '" + e.name + "' item " + std::to_string(i) + ": list does not fit (audit)";
-        at += size_t(v) * size_t(is);
-      }
-      if (e.name == "vertex") {
-        c.d.push_back(d);
-        c.f.push_back({float(d[0]), float(d[1]), float(d[2])});
-      }
+  const bool ascii = h.format == ply::Format::Ascii;
+  auto visit = [&](const ply::Scalar& v) -> std::string {
+    if (first[v.element] == none) return {};
+    const std::string& name = h.elements[v.element].props[v.property].name;
+    const size_t k = name == "x" ? 0 : (name == "y" ? 1 : (name == "z" ? 2 : none));
+    if (k == none) return {};
+    const size_t row = first[v.element] + size_t(v.item);
+    if (!ascii) {
+      c.d[row][k] = v.value;
+      c.f[row][k] = float(v.value);
+    } else if (!parse_number(v.token, c.d[row][k], c.f[row][k])) {
+      return at_line(v.line) + "vertex " + std::to_string(v.item) + ": coordinate not readable by the audit";
     }
+    return {};
+  };
+  if (auto err = ply::read_body(bytes, h, visit); !err.empty()) return err + " (audit)";
   return {};
 }
 

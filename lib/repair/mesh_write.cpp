@@ -1,5 +1,5 @@
 // Mesh writers (see mesh_write.h).
-#include "lib/mesh/mesh_write.h"
+#include "lib/repair/mesh_write.h"
 
 #include <charconv>
 #include <cmath>
@@ -42,6 +42,23 @@ void put_xyz(std::string& out, const Vec3d& p, int digits) {
   put_coord(out, p.y, digits);
   out.push_back(' ');
   put_coord(out, p.z, digits);
+}
+
+// The body OFF and PLY share: a vertex per line, then "3 a b c" per triangle (0-based).
+void put_off_body(std::string& out, const IndexedMesh& m, int digits) {
+  for (const auto& p : m.vertices) {
+    put_xyz(out, p, digits);
+    out.push_back('\n');
+  }
+  for (const auto& t : m.triangles) {
+    out += "3 ";
+    put_uint(out, t[0]);
+    out.push_back(' ');
+    put_uint(out, t[1]);
+    out.push_back(' ');
+    put_uint(out, t[2]);
+    out.push_back('\n');
+  }
 }
 
 // Facet normal for STL (informative only; readers recompute it), in double.
@@ -108,19 +125,7 @@ Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::s
       out.push_back(' ');
       put_uint(out, nt);
       out += " 0\n";
-      for (const auto& p : m.vertices) {
-        put_xyz(out, p, digits);
-        out.push_back('\n');
-      }
-      for (const auto& t : m.triangles) {
-        out += "3 ";
-        put_uint(out, t[0]);
-        out.push_back(' ');
-        put_uint(out, t[1]);
-        out.push_back(' ');
-        put_uint(out, t[2]);
-        out.push_back('\n');
-      }
+      put_off_body(out, m, digits);
       break;
     }
     case MeshFormat::Ply: {
@@ -132,19 +137,7 @@ Result<std::string> encode_mesh(const IndexedMesh& m, MeshFormat f, const std::s
       out += "element face ";
       put_uint(out, nt);
       out += "\nproperty list uchar int vertex_indices\nend_header\n";
-      for (const auto& p : m.vertices) {
-        put_xyz(out, p, digits);
-        out.push_back('\n');
-      }
-      for (const auto& t : m.triangles) {
-        out += "3 ";
-        put_uint(out, t[0]);
-        out.push_back(' ');
-        put_uint(out, t[1]);
-        out.push_back(' ');
-        put_uint(out, t[2]);
-        out.push_back('\n');
-      }
+      put_off_body(out, m, digits);
       break;
     }
     case MeshFormat::StlAscii: {
