@@ -88,7 +88,7 @@ struct GroupState {
   const std::vector<uint32_t>* group = nullptr;
   float sigma = 1.0f;            // the receivers' side of the light plane (+1 or -1)
 
-  // Occluder selection: the slab (plucker_solver.h, shade_group). g points towards the
+  // Occluder selection: the slab (occluder_selection.cpp). g points towards the
   // light; g-values are relative to `ref` (a receiver); gmin, gmax bound the receivers'
   // g-values; a part beyond gcut = gmax + delta is between every receiver and the light.
   std::vector<Vec3d> rloc;       // the receivers, local
@@ -113,7 +113,7 @@ struct GroupState {
   std::vector<double> vals;
   std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;
   FragmentList frags, tmp;
-  std::vector<Box2> boxes, tmp_boxes;
+  std::vector<UVBox> boxes, tmp_boxes;
 
   void start(const SolveContext& c, size_t light, const LocalLight& l, const std::vector<uint32_t>& g_,
              float side) {

@@ -27,7 +27,7 @@ void decide_planarity(const Light& light, LocalLight& f) {
   f.planar = std::abs(cn) > bound;
   f.emit_sign = cn > 0.0f ? 1 : -1;
   for (size_t k = 0; k < v.size() && f.planar; ++k)
-    f.planar = orient3d_exact_sign(v[0], v[size_t(f.p1)], v[size_t(f.p2)], v[k]) == 0;
+    f.planar = orient3d_exact(v[0], v[size_t(f.p1)], v[size_t(f.p2)], v[k]) == Sign::Zero;
 }
 
 // A light whose float vertices are not coplanar (DESIGN allows 1e-5 of its extent) is,
@@ -42,10 +42,10 @@ void lift_onto_newell_plane(const Light& light, LocalLight& f) {
   // The dropped axis is the region oracle's, decided on the exact Newell normal
   // (exact_orient.h newell_dominant_axis), not the float normal's largest component.
   const int axis = newell_dominant_axis(light.polygon.data(), int(light.polygon.size()));
-  if (axis != 3 - f.frame.u - f.frame.v) {
-    f.frame.u = (axis + 1) % 3;
-    f.frame.v = (axis + 2) % 3;
-    f.frame.flip = f.n[axis] < 0.0f;
+  if (axis != 3 - f.axes.u - f.axes.v) {
+    f.axes.u = (axis + 1) % 3;
+    f.axes.v = (axis + 2) % 3;
+    f.axes.flip = f.n[axis] < 0.0f;
   }
   // The Newell normal is translation invariant, so it is taken on the local coordinates.
   Vec3d nn(0, 0, 0), cc(0, 0, 0);
@@ -55,7 +55,7 @@ void lift_onto_newell_plane(const Light& light, LocalLight& f) {
     cc += f.poly[k];
   }
   cc = cc / double(m);
-  const int u = f.frame.u, v = f.frame.v, w = 3 - u - v;
+  const int u = f.axes.u, v = f.axes.v, w = 3 - u - v;
   if (nn[w] == 0.0) return;
   for (Vec3d& p : f.poly) p[w] = cc[w] - (nn[u] * (p[u] - cc[u]) + nn[v] * (p[v] - cc[v])) / nn[w];
   Vec3d p0d(0, 0, 0);
@@ -91,7 +91,7 @@ void place_samples(const Light& light, LocalLight& f) {
     Vec3f d = to_local(light.jitter_points[k], f.origin) - f.p0;
     float h = dot(f.n, d);
     float tol = f.plane_tol + kDotErr * norm1(f.n) * norm1(d);
-    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.frame, f.poly.data(), int(f.poly.size()), f.samples[k]);
+    f.on_light[k] = std::abs(h) <= tol && point_in_fragment(f.axes, f.poly.data(), int(f.poly.size()), f.samples[k]);
   }
 }
 
@@ -116,13 +116,13 @@ LocalLight make_local_light(const Light& light, const Vec3d& focus) {
     float h = std::abs(dot(f.n, d)) + kDotErr * norm1(f.n) * norm1(d);
     f.plane_tol = std::max(f.plane_tol, h);
   }
-  f.frame = PlaneFrame::from_normal(f.n);
+  f.axes = UVAxes::from_normal(f.n);
   f.extent = max_component(f.box.extent());
   decide_planarity(light, f);
   if (!f.planar) lift_onto_newell_plane(light, f);
   if (f.planar || f.nd == Vec3d(0, 0, 0)) f.nd = to_double(f.n);
-  f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.frame.u, f.frame.v);
-  f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.frame, f.nd, f.h0};
+  f.lift = LiftedLight(light.polygon.data(), int(light.polygon.size()), f.axes.u, f.axes.v);
+  f.plane = LightPlane{f.n, f.plane_tol, f.extent, f.axes, f.nd, f.h0};
   f.bounds = LightBounds::of(f.poly.data(), int(f.poly.size()));
   place_samples(light, f);
   return f;

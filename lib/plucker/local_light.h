@@ -33,8 +33,8 @@ struct LocalLight {
   float plane_tol = 0.0f;  // max |h| of the light's own vertices plus the h error bound
   AABB box;                // local
   float extent = 0.0f;     // largest side of box
-  PlaneFrame frame;
-  LightPlane plane;        // n, plane_tol, extent, frame: for shadow boxes (fragment.h)
+  UVAxes axes;
+  LightPlane plane;        // n, plane_tol, extent, axes: for shadow boxes (fragment.h)
   // The plane in double (LightPlane::nd, h0): h(x) = nd . x - h0 in the slab tests.
   Vec3d nd{};
   double h0 = 0.0;

@@ -127,7 +127,7 @@ int light_side(const LocalLight& lf, const Vec3f& p) {
   int sd = h > tol ? 1 : (h < -tol ? -1 : 0);
   if (sd == 0) {
     const auto& v = lf.light->polygon;
-    sd = lf.planar ? lf.emit_sign * orient3d_exact_sign(v[0], v[size_t(lf.p1)], v[size_t(lf.p2)], p)
+    sd = lf.planar ? lf.emit_sign * to_int(orient3d_exact(v[0], v[size_t(lf.p1)], v[size_t(lf.p2)], p))
                    : newell_side_exact(v.data(), int(v.size()), p);
   }
   return sd;

@@ -59,8 +59,8 @@ class ReceiverShading {
   void shade_float();
   void pyramid_planes();
   void bound_all() {
-    all_ = Box2{};
-    for (const Box2& b : gs_.boxes) all_.extend(b);
+    all_ = UVBox{};
+    for (const UVBox& b : gs_.boxes) all_.extend(b);
   }
   bool exact_once(uint32_t t);
   bool exact_near(const NearPoly& np);
@@ -78,7 +78,7 @@ class ReceiverShading {
   const Receiver& rec_;
   const Vec3d& r_;  // local
   const double rmax_;
-  Box2 all_;        // the union of the fragments' boxes (bound_all)
+  UVBox all_;        // the union of the fragments' boxes (bound_all)
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
 };
 
@@ -107,10 +107,10 @@ bool ReceiverShading::is_extreme() const {
 // nothing, when the receiver lies in its plane.
 bool ReceiverShading::subtract_exact(uint32_t t) {
   const Vec3f wtri[3] = {scene_.mesh.corner(t, 0), scene_.mesh.corner(t, 1), scene_.mesh.corner(t, 2)};
-  const int side_exact = orient3d_exact_sign(wtri[0], wtri[1], wtri[2], rec_.p);
+  const int side_exact = to_int(orient3d_exact(wtri[0], wtri[1], wtri[2], rec_.p));
   if (side_exact == 0) return false;
   ++tot_.exact_triangles;
-  subtract_triangle_exact(rec_.p, wtri, side_exact, lf_.origin, lf_.frame, lf_.lift, gs_.frags, gs_.tmp,
+  subtract_triangle_exact(rec_.p, wtri, side_exact, lf_.origin, lf_.axes, lf_.lift, gs_.frags, gs_.tmp,
                           gs_.tmp_boxes, gs_.cur);
   std::swap(gs_.frags, gs_.tmp);
   std::swap(gs_.boxes, gs_.tmp_boxes);
@@ -122,7 +122,7 @@ void ReceiverShading::shade_exact() {
   ++tot_.exact_receivers;
   gs_.frags.clear();
   gs_.frags.add(lf_.poly.data(), lf_.poly.size());
-  gs_.boxes.assign(1, Box2::of(lf_.frame, lf_.poly.data(), int(lf_.poly.size())));
+  gs_.boxes.assign(1, UVBox::of(lf_.axes, lf_.poly.data(), int(lf_.poly.size())));
   for (uint32_t t : gs_.cand) {
     if (gs_.frags.size() == 0) break;
     subtract_exact(t);
@@ -292,9 +292,9 @@ void ReceiverShading::subtract_near(const NearPoly& np) {
     return;
   }
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
-  Box2 qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
+  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return;
-  if (!subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.frame, lf_.bounds, gs_.frags, gs_.boxes,
+  if (!subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
                         gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
     return;
   std::swap(gs_.frags, gs_.tmp);
@@ -317,7 +317,7 @@ void ReceiverShading::shade_float() {
   if (!hidden) frags.add(lf_.poly.data(), lf_.poly.size());
   pyramid_planes();
   gs_.boxes.clear();
-  for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(Box2::of(lf_.frame, frags.data(f), frags.count(f)));
+  for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
   bound_all();
   gs_.exact_done.clear();
   // Far-reaching triangles and those within rounding of the light plane (occluder
@@ -388,7 +388,7 @@ void ReceiverShading::report_fragments(double& area, double& irr) {
     Vec3d pl = inside - od;
     const double h_p = dot(lf_.nd, pl) - lf_.h0;
     if (h_r != h_p) pl = r_ + (pl - r_) * (h_r / (h_r - h_p));
-    if (best > 0.0 && point_in_fragment(lf_.frame, frags.data(f), frags.count(f), pl)) {
+    if (best > 0.0 && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), pl)) {
       out.push_back(std::move(wf));
     } else {
       ++tot_.unreported_slivers;
@@ -410,19 +410,19 @@ void ReceiverShading::report_fragments(double& area, double& irr) {
 void ReceiverShading::sample_bits() {
   const Light& light = scene_.lights[gs_.li];
   const FragmentList& frags = gs_.frags;
-  std::vector<Box2>& boxes = gs_.boxes;
+  std::vector<UVBox>& boxes = gs_.boxes;
   std::vector<uint32_t>&cell_start = gs_.cell_start, &cell_items = gs_.cell_items, &cell_fill = gs_.cell_fill;
   ReceiverResult& rr = gs_.ctx->result->receivers[i_];
   const size_t off = scene_.light_offset(gs_.li);
   const double grow = double(lf_.extent) * 0x1p-38;
   const double slack = double(lf_.extent) * 0x1p-40;
-  for (Box2& b : boxes) b = Box2{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
+  for (UVBox& b : boxes) b = UVBox{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
   const size_t nf = frags.size();
   int grid = 0;
   double gu0 = 0, gv0 = 0, gwu = 0, gwv = 0;
   if (nf > 8 && light.samples > 32) {
-    Box2 gb;
-    for (const Box2& b : boxes) gb.extend(b);
+    UVBox gb;
+    for (const UVBox& b : boxes) gb.extend(b);
     grid = std::clamp(int(std::sqrt(double(nf))), 2, 16);
     gu0 = gb.ulo, gv0 = gb.vlo;
     gwu = (gb.uhi - gb.ulo) / grid, gwv = (gb.vhi - gb.vlo) / grid;
@@ -436,7 +436,7 @@ void ReceiverShading::sample_bits() {
     cell_start.assign(size_t(grid) * size_t(grid) + 1, 0u);
     for (int pass = 0; pass < 2; ++pass) {
       for (size_t f = 0; f < nf; ++f) {
-        const Box2& b = boxes[f];
+        const UVBox& b = boxes[f];
         int u0 = cell(b.ulo, gu0, gwu, grid), u1 = cell(b.uhi, gu0, gwu, grid);
         int v0 = cell(b.vlo, gv0, gwv, grid), v1 = cell(b.vhi, gv0, gwv, grid);
         for (int cv = v0; cv <= v1; ++cv)
@@ -458,16 +458,16 @@ void ReceiverShading::sample_bits() {
     bool vis = false;
     if (lf_.on_light[k]) {
       const Vec3d& sp = lf_.samples[k];
-      const double su = sp[lf_.frame.u], sv = sp[lf_.frame.v];
+      const double su = sp[lf_.axes.u], sv = sp[lf_.axes.v];
       if (grid > 0) {
         size_t c = size_t(cell(sv, gv0, gwv, grid)) * size_t(grid) + size_t(cell(su, gu0, gwu, grid));
         for (uint32_t e = cell_start[c]; e < cell_start[c + 1] && !vis; ++e) {
           uint32_t f = cell_items[e];
-          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.frame, frags.data(f), frags.count(f), sp, slack);
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack);
         }
       } else {
         for (size_t f = 0; f < nf && !vis; ++f)
-          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.frame, frags.data(f), frags.count(f), sp, slack);
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack);
       }
     } else {
       // Off the light polygon (explicit samples): the segment r -> sample itself.
@@ -499,7 +499,7 @@ void ReceiverShading::run() {
   }
   gs_.boxes.clear();
   for (size_t f = 0; f < gs_.frags.size(); ++f)
-    gs_.boxes.push_back(Box2::of(lf_.frame, gs_.frags.data(f), gs_.frags.count(f)));
+    gs_.boxes.push_back(UVBox::of(lf_.axes, gs_.frags.data(f), gs_.frags.count(f)));
   // Fragments, fraction, bits by point-in-fragment, irradiance.
   double area = 0.0, irr = 0.0;
   report_fragments(area, irr);

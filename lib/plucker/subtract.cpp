@@ -10,17 +10,17 @@
 
 namespace visgate::plucker {
 
-void keep_whole(const FragmentList& in, size_t f, const Box2& box, size_t first, FragmentList& out,
-                std::vector<Box2>& out_boxes) {
+void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first, FragmentList& out,
+                std::vector<UVBox>& out_boxes) {
   out.truncate(first);
   out_boxes.resize(first);
   out.add(in.data(f), size_t(in.count(f)));
   out_boxes.push_back(box);
 }
 
-bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
-                      const PlaneFrame& frame, const LightBounds& light, const FragmentList& in,
-                      const std::vector<Box2>& boxes, FragmentList& out, std::vector<Box2>& out_boxes,
+bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
+                      const UVAxes& axes, const LightBounds& light, const FragmentList& in,
+                      const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
   // each written before it is read. Per thread rather than per call: constructing them
@@ -38,7 +38,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   };
   auto keep = [&](const Vec3d* p, size_t n) {
     out.add(p, n);
-    out_boxes.push_back(Box2::of(frame, p, int(n)));
+    out_boxes.push_back(UVBox::of(axes, p, int(n)));
   };
   int hint = 0;
   // A fragment entirely on the negative side of one edge plane misses q: kept whole,
@@ -98,8 +98,8 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
 }
 
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
-                             const PlaneFrame& frame, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
-                             std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur) {
+                             const UVAxes& axes, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
+                             std::vector<UVBox>& out_boxes, std::vector<Vec3d>& cur) {
   out.clear();
   out_boxes.clear();
   // Scratch reused across calls (one set per thread): the exact path runs once per
@@ -112,7 +112,7 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
   // lifted light point of x's (u, v) (LiftedLight: a vertex kept in 3D lies its rounding
   // off the light's plane, which decides the side for a receiver that close to the
   // plane), with accurate values: the clip below interpolates with them.
-  LiftedLight::Plane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
+  LiftedPlane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
                                   lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
   const int lu = lift.u(), lv = lift.v();
   // accurate: within 2^-30 (clip interpolation); else only the sign is exact.
@@ -150,7 +150,7 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
       clip_by_values(cur.data(), w.data(), int(cur.size()), true, inside);
       if (!outside.empty()) {
         out.add(outside.data(), outside.size());
-        out_boxes.push_back(Box2::of(frame, outside.data(), int(outside.size())));
+        out_boxes.push_back(UVBox::of(axes, outside.data(), int(outside.size())));
       }
       cur.swap(inside);
       if (cur.empty()) break;
@@ -160,7 +160,7 @@ void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, cons
       // another) make up the whole fragment, which is kept instead, unsplit; else every
       // triangle whose shadow misses a fragment would still cut it along the planes
       // through its edges (test ShadowBesideAFragmentLeavesItWhole).
-      keep_whole(in, f, Box2::of(frame, in.data(f), in.count(f)), first_piece, out, out_boxes);
+      keep_whole(in, f, UVBox::of(axes, in.data(f), in.count(f)), first_piece, out, out_boxes);
     }
     // Otherwise what is left is inside all four half-spaces: hidden, dropped.
   }

@@ -19,8 +19,8 @@ namespace visgate::plucker {
 // and then found nothing of it hidden returns the fragment instead of its pieces (a
 // shadow beside a fragment still cuts it along the planes through its edges). With
 // first == out.size() it only keeps the fragment.
-void keep_whole(const FragmentList& in, size_t f, const Box2& box, size_t first, FragmentList& out,
-                std::vector<Box2>& out_boxes);
+void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first, FragmentList& out,
+                std::vector<UVBox>& out_boxes);
 
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
@@ -33,9 +33,9 @@ void keep_whole(const FragmentList& in, size_t f, const Box2& box, size_t first,
 // Returns false, with `out` and `out_boxes` untouched, when q's shadow misses every
 // fragment (box or edge plane): the fragments stay as they are and nothing is copied
 // (about half of the calls on columns).
-bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const Box2& qbox,
-                      const PlaneFrame& frame, const LightBounds& light, const FragmentList& in,
-                      const std::vector<Box2>& boxes, FragmentList& out, std::vector<Box2>& out_boxes,
+bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
+                      const UVAxes& axes, const LightBounds& light, const FragmentList& in,
+                      const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c);
 
 // The exact near-plane path: removes from the fragments (local coordinates relative to
@@ -54,7 +54,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
 // receivers, and triangles reaching far away or lying within rounding of the light's
 // plane (occluder_selection.cpp, shade_receiver.cpp).
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
-                             const PlaneFrame& frame, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
-                             std::vector<Box2>& out_boxes, std::vector<Vec3d>& cur);
+                             const UVAxes& axes, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
+                             std::vector<UVBox>& out_boxes, std::vector<Vec3d>& cur);
 
 }  // namespace visgate::plucker

@@ -1,6 +1,8 @@
 // Tests of lib/geom/predicates.h: orientation predicates and the segment/triangle test.
 #include <gtest/gtest.h>
 
+#include <gmp.h>
+
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -10,6 +12,36 @@
 #include "lib/scene/rng.h"
 
 using namespace visgate;
+
+namespace {
+// det[b - a, c - a, d - a] of float points in exact rationals (GMP), the reference for
+// orient3d_exact.
+int orient3d_gmp_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d, double* value = nullptr) {
+  mpq_t m[3][3], t, u, det;
+  mpq_inits(t, u, det, nullptr);
+  const Vec3f* q[3] = {&b, &c, &d};
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) {
+      mpq_init(m[r][k]);
+      mpq_set_d(m[r][k], double((*q[r])[k]));
+      mpq_set_d(t, double(a[k]));
+      mpq_sub(m[r][k], m[r][k], t);
+    }
+  static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+  for (int p = 0; p < 6; ++p) {
+    mpq_mul(t, m[0][perm[p][0]], m[1][perm[p][1]]);
+    mpq_mul(u, t, m[2][perm[p][2]]);
+    if (p < 3) mpq_add(det, det, u);
+    else mpq_sub(det, det, u);
+  }
+  int sign = mpq_sgn(det);
+  if (value) *value = mpq_get_d(det);
+  for (auto& row : m)
+    for (auto& e : row) mpq_clear(e);
+  mpq_clears(t, u, det, nullptr);
+  return sign;
+}
+}  // namespace
 
 TEST(Predicates, Orient3dSignsByHand) {
   Vec3f a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
@@ -93,4 +125,35 @@ TEST(Predicates, FarFromOriginKeepsTheAnswerForLargeMargins) {
   float off = 1e5f;
   Vec3f v0(off - 1, off - 1, off + 1), v1(off + 1, off - 1, off + 1), v2(off, off + 1, off + 1);
   EXPECT_TRUE(segment_hits_triangle_mt(Vec3f(off, off, off), Vec3f(0, 0, 2), v0, v1, v2));
+}
+
+TEST(Predicates, Orient3dExactAgreesWithRationalArithmetic) {
+  // orient3d_exact against the determinant in GMP rationals (and orient3d_filtered, where
+  // certain, with the same sign), on
+  // near-degenerate float quadruples: a point moved by a few ulps off the plane of three
+  // others, at scales from 2^-100 to 2^100, and exactly coplanar grid points.
+  Rng rng(31);
+  int nonzero = 0, zero = 0, certain = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    double scale = std::ldexp(1.0, int(rng.below(201)) - 100);
+    Vec3f p[4];
+    for (int k = 0; k < 3; ++k) p[k] = Vec3f(Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * scale);
+    double u = rng.uniform(), w = rng.uniform();
+    Vec3d on = to_double(p[0]) + (to_double(p[1]) - to_double(p[0])) * u + (to_double(p[2]) - to_double(p[0])) * w;
+    p[3] = Vec3f(on);
+    int steps = int(rng.below(5));
+    for (int s = 0; s < steps; ++s) p[3].z = std::nextafter(p[3].z, rng.below(2) ? 1e38f : -1e38f);
+    if (trial % 10 == 0) {  // exactly coplanar: small integers in the plane z = 3
+      for (auto& v : p) v = Vec3f(float(rng.below(17)) - 8, float(rng.below(17)) - 8, 3);
+    }
+    int want = orient3d_gmp_sign(p[0], p[1], p[2], p[3]);
+    EXPECT_EQ(orient3d_exact(p[0], p[1], p[2], p[3]), sign_of_int(want)) << trial;
+    const Sign filtered = orient3d_filtered(p[0], p[1], p[2], SumPoint(p[3]));
+    if (is_certain(filtered)) EXPECT_EQ(filtered, sign_of_int(want)) << trial;
+    certain += is_certain(filtered);
+    ++(want == 0 ? zero : nonzero);
+  }
+  EXPECT_GT(zero, 200);
+  EXPECT_GT(nonzero, 1000);
+  EXPECT_GT(certain, 0);
 }

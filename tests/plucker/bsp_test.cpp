@@ -49,7 +49,7 @@ LightPlane plane_at(double height, float extent) {
   LightPlane lp;
   lp.n = Vec3f(0, 0, -1);
   lp.extent = extent;
-  lp.frame = PlaneFrame::from_normal(lp.n);
+  lp.axes = UVAxes::from_normal(lp.n);
   lp.nd = Vec3d(0, 0, -1);
   lp.h0 = -height;
   return lp;

@@ -23,7 +23,7 @@ TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
   // A node plane's one error bound per plane (fragment.h LightBounds, the largest over
   // the light polygon): on pieces of random lights (far from the local origin too), made
   // by random splits so that their vertices are interpolated, every decided side of a
-  // vertex is the exact sign of det[x - r, a - r, b - r] (orient3d_exact), and a piece a
+  // vertex is the exact sign of det[x - r, a - r, b - r] (orient3d_exact_value), and a piece a
   // plane split off is never judged to lie on the wrong side by that plane.
   Rng rng(33);
   int decided = 0;
@@ -75,8 +75,8 @@ TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
     for (const auto& pc : last)
       for (const Vec3d& x : pc) {
         const SplitResult sr = classify_fragment(pl, &x, 1);
-        const int exact = orient3d_exact(SumPoint(Vec3f(), r), SumPoint(Vec3f(), x), SumPoint(Vec3f(), a),
-                                         SumPoint(Vec3f(), b)).sign;
+        const int exact = orient3d_exact_value(SumPoint(Vec3f(), r), SumPoint(Vec3f(), x), SumPoint(Vec3f(), a),
+                                               SumPoint(Vec3f(), b)).sign;
         if (sr == SplitResult::ZeroArea) continue;  // within the bound: undecided
         ++decided;
         EXPECT_EQ(sr == SplitResult::Positive ? 1 : -1, exact);
@@ -114,26 +114,26 @@ TEST(PluckerFragment, ShadowBoxHoldsTheCentralProjection) {
   lp.n = Vec3f(0, 0, -1);
   lp.plane_tol = 0;
   lp.extent = 2;
-  lp.frame = PlaneFrame::from_normal(lp.n);
+  lp.axes = UVAxes::from_normal(lp.n);
   for (int trial = 0; trial < 300; ++trial) {
     // Local frame: the light plane is z = 0, the receiver below at z = -2.
     Vec3d r(rng.uniform(-1, 1), rng.uniform(-1, 1), -2);
     Vec3d q[3];
     for (auto& v : q) v = Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1.9, -0.1));
-    Box2 b = shadow_box(lp, r, q, 3);
+    UVBox b = shadow_box(lp, r, q, 3);
     for (int k = 0; k < 30; ++k) {
       double u = rng.uniform(), w = rng.uniform() * (1 - u);
       Vec3d x = q[0] + (q[1] - q[0]) * u + (q[2] - q[0]) * w;
       Vec3d rd = r;
       double t = -rd.z / (x.z - rd.z);
       Vec3d y = rd + (x - rd) * t;
-      EXPECT_TRUE(b.contains(float(y[lp.frame.u]), float(y[lp.frame.v])));
+      EXPECT_TRUE(b.contains(float(y[lp.axes.u]), float(y[lp.axes.v])));
     }
   }
   // A vertex at the receiver's height (or behind it): no useful bound.
   Vec3d r(0, 0, -2);
   Vec3d q[3] = {Vec3d(0.5, 0, -2), Vec3d(1, 0, -1), Vec3d(0, 1, -1)};
-  Box2 b = shadow_box(lp, r, q, 3);
+  UVBox b = shadow_box(lp, r, q, 3);
   EXPECT_TRUE(b.contains(1e30f, -1e30f));
 }
 
@@ -146,7 +146,7 @@ TEST(PluckerFragment, PointInFragmentToleratesANoiseEdge) {
                          to_double(Vec3f(-0.859376073f, 0.703119755f, 6.0640626f)),
                          to_double(Vec3f(-0.859375f, 0.703125f, 6.0640626f)),
                          to_double(Vec3f(-0.63122803f, 0.532933354f, 6.08687735f))};
-  PlaneFrame f = PlaneFrame::from_normal(Vec3f(0.0995037f, 0, -0.995037f));
+  UVAxes f = UVAxes::from_normal(Vec3f(0.0995037f, 0, -0.995037f));
   const Vec3d inside = to_double(Vec3f(-1.09503269f, -0.433688283f, 6.04049683f));
   EXPECT_FALSE(point_in_fragment(f, poly, 4, inside));
   const double slack = 3.0 * 0x1p-20;  // as plucker_solver.cpp had for float fragments

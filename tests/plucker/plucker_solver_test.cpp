@@ -222,7 +222,7 @@ TEST(PluckerSolver, FragmentsAreDisjointInsideTheLightAndSumToTheFraction) {
   const Scene& s = *scene;
   SolveResult r = run(s);
   const Light& light = s.lights[0];
-  PlaneFrame frame = PlaneFrame::from_normal(light.normal);
+  UVAxes frame = UVAxes::from_normal(light.normal);
   Rng rng(9);
   for (size_t i = 0; i < s.receivers.size(); ++i) {
     const auto& frags = r.receivers[i].fragments[0];
