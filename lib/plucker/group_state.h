@@ -87,6 +87,7 @@ struct GroupState {
   const LocalLight* lf = nullptr;
   const std::vector<uint32_t>* group = nullptr;
   float sigma = 1.0f;            // the receivers' side of the light plane (+1 or -1)
+  size_t light_offset = 0;       // the light's first sample bit (Scene::light_offset)
 
   // Occluder selection: the slab (occluder_selection.cpp). g points towards the
   // light; g-values are relative to `ref` (a receiver); gmin, gmax bound the receivers'
@@ -123,6 +124,7 @@ struct GroupState {
     lf = &l;
     group = &g_;
     sigma = side;
+    light_offset = c.scene->light_offset(light);
   }
   void clear();
 };

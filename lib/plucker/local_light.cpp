@@ -128,10 +128,6 @@ LocalLight make_local_light(const Light& light, const Vec3d& focus) {
   return f;
 }
 
-size_t sample_index(const Light& light, int j, size_t i) {
-  return size_t(&sample_position(light, j, i) - light.jitter_points.data());
-}
-
 bool segment_blocked_by_scene(const Scene& scene, const Vec3f& origin, const Vec3f& r, const Vec3f& s) {
   for (size_t t = 0; t < scene.mesh.size(); ++t)
     if (segment_blocked(r, s, to_local(scene.mesh.corner(t, 0), origin), to_local(scene.mesh.corner(t, 1), origin),

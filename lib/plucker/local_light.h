@@ -73,7 +73,9 @@ inline bool translates_exactly(const Vec3f& x, const Vec3f& origin) {
 }
 
 // Index of sample_position(light, j, i) in light.jitter_points (and LocalLight::samples).
-size_t sample_index(const Light& light, int j, size_t i);
+inline size_t sample_index(const Light& light, int j, size_t i) {
+  return size_t(&sample_position(light, j, i) - light.jitter_points.data());
+}
 
 // The open segment r -> s (local) against every triangle of the scene, each translated
 // to the local frame as it is tested (lines.h segment_blocked).

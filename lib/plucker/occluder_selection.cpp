@@ -195,7 +195,7 @@ void Selection::receivers_and_slab() {
 // working scale that stays below 2^-33 of it, the level the far-receiver bound
 // (shade_receiver.cpp) accepts; beyond, such triangles are subtracted exactly per
 // receiver (subtract_triangle_exact on the float inputs), never clipped in double (test
-// WallReachingThroughATiltedLightFromAFarVertex). The receivers that set the scale are
+// TriangleReachingFarBeyondTheSceneIsSubtractedExactly). The receivers that set the scale are
 // those the float path shades: one more than 2^20 light widths from the light is extreme
 // and shaded exactly, so it does not count (test
 // ExtremeReceiverDoesNotSetTheGroupsWorkingScale).

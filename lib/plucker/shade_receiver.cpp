@@ -89,7 +89,7 @@ class ReceiverShading {
 // rounding of about 2^-53 |r - origin|, which stays below 2^-33 of the light's extent,
 // far under the fraction tolerance, only while r is within 2^20 extents of the light
 // (test ReceiverFarFromTheLight). The extent that counts is the light's width (area
-// over its longest side) when that is smaller (test SmallLightSeenPastDistantOccluders).
+// over its longest side) when that is smaller.
 // For a long light the grazing bound is tighter by its aspect (extent over width): a
 // shadow line running along the long axis meets the light's long edge at an angle of
 // about width / extent, so a lateral error moves where it ends by extent / width times
@@ -413,7 +413,7 @@ void ReceiverShading::sample_bits() {
   std::vector<UVBox>& boxes = gs_.boxes;
   std::vector<uint32_t>&cell_start = gs_.cell_start, &cell_items = gs_.cell_items, &cell_fill = gs_.cell_fill;
   ReceiverResult& rr = gs_.ctx->result->receivers[i_];
-  const size_t off = scene_.light_offset(gs_.li);
+  const size_t off = gs_.light_offset;
   const double grow = double(lf_.extent) * 0x1p-38;
   const double slack = double(lf_.extent) * 0x1p-40;
   for (UVBox& b : boxes) b = UVBox{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};

@@ -10,6 +10,13 @@
 
 namespace visgate::plucker {
 
+namespace {
+
+// Keeps fragment f of `in` whole in `out` (box `box` in `out_boxes`), after taking back
+// the pieces `out` received from index `first` on: a subtraction that split the fragment
+// and then found nothing of it hidden returns the fragment instead of its pieces (a
+// shadow beside a fragment still cuts it along the planes through its edges). With
+// first == out.size() it only keeps the fragment.
 void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first, FragmentList& out,
                 std::vector<UVBox>& out_boxes) {
   out.truncate(first);
@@ -17,6 +24,8 @@ void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first
   out.add(in.data(f), size_t(in.count(f)));
   out_boxes.push_back(box);
 }
+
+}  // namespace
 
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
                       const UVAxes& axes, const LightBounds& light, const FragmentList& in,

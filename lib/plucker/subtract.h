@@ -14,14 +14,6 @@
 
 namespace visgate::plucker {
 
-// Keeps fragment f of `in` whole in `out` (box `box` in `out_boxes`), after taking back
-// the pieces `out` received from index `first` on: a subtraction that split the fragment
-// and then found nothing of it hidden returns the fragment instead of its pieces (a
-// shadow beside a fragment still cuts it along the planes through its edges). With
-// first == out.size() it only keeps the fragment.
-void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first, FragmentList& out,
-                std::vector<UVBox>& out_boxes);
-
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
 // `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
