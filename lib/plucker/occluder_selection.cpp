@@ -86,7 +86,8 @@ class Selection {
   void candidates();
   bool select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]);
   void select_triangle(uint32_t t, const Vec3d tri[3]);
-  NearPoly make_near(uint32_t t, const Vec3d tri[3], double tmax, const std::vector<Vec3d>& part) const;
+  [[gnu::always_inline]] inline NearPoly make_near(uint32_t t, const Vec3d tri[3], double tmax,
+                                                   const std::vector<Vec3d>& part) const;
   void add_near(const NearPoly& np, const std::vector<Vec3d>& part) {
     gs_.near.push_back(np);
     gs_.near_verts.insert(gs_.near_verts.end(), part.begin(), part.end());

@@ -64,7 +64,9 @@ class ReceiverShading {
   }
   bool exact_once(uint32_t t);
   bool exact_near(const NearPoly& np);
-  void subtract_near(const NearPoly& np);
+  // Inlined into shade_float's loop over the near polygons (a call per polygon and
+  // receiver costs measurably on columns).
+  [[gnu::always_inline]] inline void subtract_near(const NearPoly& np);
   void report_fragments(double& area, double& irr);
   void sample_bits();
 
