@@ -9,7 +9,7 @@ include(CMakePackageConfigHelpers)
 # The public targets and every library they link. The internal libraries keep their names
 # (visgate::vg_scene, ...): consumers link the public ones, which bring the rest.
 set(_vg_public vg_api_scene vg_api_methods vg_api_oracle vg_api_repair visgate_plugin_abi)
-set(_vg_internal visgate_warnings vg_geom vg_scene vg_mesh vg_solver_core vg_raycast vg_iss vg_ssv vg_plucker
+set(_vg_internal visgate_warnings vg_geom vg_accel vg_scene vg_mesh vg_solver_core vg_raycast vg_iss vg_ssv vg_plucker
     vg_external vg_solver vg_oracle)
 
 # The libraries' include folder is the source root (root-relative includes, STYLE); it

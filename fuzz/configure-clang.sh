@@ -2,28 +2,24 @@
 # Configures a clang-14 libFuzzer build of visgate (DESIGN section 9) in BUILD_DIR: the
 # fuzz targets with -fsanitize=fuzzer,address,undefined (fuzz/CMakeLists.txt), every
 # library with -fsanitize=fuzzer-no-link,address,undefined (coverage for libFuzzer),
-# -O2 with line tables, no tests (OSS-Fuzz uses -O1; README "Speed (exec/s)": -O2 with
-# the string_view stats replayed fuzz_iss's seeds in 2.7-3.1 CPU-seconds against
-# 3.3-3.5, fuzz_plucker's within the noise).
+# -O2 with line tables, no tests (OSS-Fuzz uses -O1; -O2 runs more inputs a second,
+# docs/log/fuzzing.md).
 # UBSan's vptr check is left out of the libraries: CGAL's arrangement iterators (region
 # oracle) downcast to a type the object does not have
 # (CGAL/Arrangement_2/Arrangement_2_iterators.h:458), a third-party finding that would
 # stop every fuzz_plucker run; the fuzz targets' own code keeps it.
 # UBSan's object-size check is left out everywhere: next to ASan it adds nothing (both
 # flag an access past the allocated object, ASan also the ones the compiler cannot size),
-# and clang-14 inlines no function that carries it, at -O1 or -O2 (lib/iss/shaft.cpp: 52
-# out-of-line calls of dot, cross and Vec3 operators with it, 9 without), so every
-# small inline helper of the code under test became a call (fuzz_iss: README "Speed").
+# and clang-14 inlines no function that carries it, at -O1 or -O2, so every small inline
+# helper of the code under test (dot, cross, Vec3 operators) would become a call.
 # Single-threaded: CGAL without thread safety (VISGATE_CGAL_NO_THREADS, the root
-# CMakeLists.txt): the targets run one input at a time on one thread, and CGAL's
-# call_once per exact evaluation cost a system call each.
+# CMakeLists.txt): the targets run one input at a time on one thread.
 # Used by tools/fuzz-smoke.sh and tools/fuzz-campaign.sh; then build with
 #   cmake --build BUILD_DIR -j2 --target visgate_fuzzers
 #
 # VISGATE_FUZZ_SANITIZE=0 configures the same targets with libFuzzer alone (no ASan or
 # UBSan): about three times the runs per second, for hunting mismatches (logic errors
-# need no sanitizer; 2026-12-02 such a build found in 20 minutes of 30 s runs four ISS
-# mismatches that 40 minutes of ASan runs had not). Crashes it finds are replayed in
+# need no sanitizer; docs/log/fuzzing.md). Crashes it finds are replayed in
 # the sanitized build before they are judged.
 #
 # Usage: [VISGATE_FUZZ_SANITIZE=0] fuzz/configure-clang.sh BUILD_DIR

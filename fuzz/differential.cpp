@@ -146,8 +146,8 @@ int run_differential(const char* target, const uint8_t* data, size_t size) {
     report_and_abort(target, "relation oracle", opt, scene, std::string("exception: ") + e.what() + "\n");
   }
   oracle::Comparison cmp = oracle::compare_relations(scene, result, exact, kTau);
-  // fuzz_embree: Embree's known robust-mode false hit (corpus/embree-robust/sliver/
-  // 4c8dae81..., open, third-party) is recorded once and not reported again: a
+  // fuzz_embree: Embree's known robust-mode false hit (the open third-party case in
+  // corpus/embree-robust/sliver/) is recorded once and not reported again: a
   // false-blocked relation that Embree with hit verification (EmbreeScene's default,
   // lib/raycast/embree_solver.h) answers visible is that hit. Every other mismatch,
   // including false-visible ones and false hits the double-precision test confirms,

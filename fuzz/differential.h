@@ -33,11 +33,9 @@ int run_differential(const char* target, const uint8_t* data, size_t size);
 // are checked against the region oracle, from the option selector's unused bits
 // (decoder.h selector_rest): one receiver, rest % receivers. Every relation's bit and
 // every fragment's interior point are still checked for all receivers. Why one: the
-// exact region check (Epeck, CGAL's Boolean operations) of every receiver and light was
-// 61% of fuzz_plucker's samples, 95% of run_differential's (perf, 2026-12-02; the seeds
-// decode to 3.68 pairs per run, one receiver has 1.12 on average); with one receiver
-// chosen by the input a run takes about half the CPU time (README "Speed (exec/s) and
-// campaigns", also for the trade-off), and the fuzzer still reaches every receiver:
+// exact region check (Epeck, CGAL's Boolean operations) dominates a run; with one
+// receiver chosen by the input a run takes about half the CPU time (measurements and
+// the trade-off: docs/log/fuzzing.md), and the fuzzer still reaches every receiver:
 // mutating the selector's high bytes changes the receiver and nothing else of the
 // decoded case.
 // `visgate minimize` and `visgate check` check every receiver, so a finding found

@@ -33,9 +33,8 @@ std::string_view intern_stats_name(std::string_view name) {
 // keyed by the name's address answers them with one comparison of the contents (needed:
 // a name built in a temporary string may reuse an address with other text). The
 // address is hashed (Fibonacci) into 256 sets of two slots, the most recent first:
-// literals lie next to each other, and with the low address bits as the index half of
-// fuzz_iss's lookups went to the set (perf, 2026-12-03); one slot per set still missed
-// 3.7 times per solve.
+// literals lie next to each other, so the low address bits alone would crowd a few sets;
+// two slots because one per set still missed several times per solve.
 std::string_view stats_key(std::string_view name) {
   struct Slot {
     const char* data = nullptr;

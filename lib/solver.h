@@ -24,15 +24,11 @@ using Polygon3f = std::vector<Vec3f>;
 
 // Named figures of one solve. Names are interned: one process-wide copy of each, made
 // the first time any Stats uses it (stats_key), so setting a figure allocates nothing
-// once its name is known. A method sets 20 to 60 of them per solve, most longer than the
-// short-string buffer: as a std::map of std::string they were 17% of fuzz_iss's
-// allocations and 2.6% of fuzz_plucker's (ASan's allocator is a quarter to a third of
-// those targets' samples; 2026-12-03). Entries stay in the order they were first set and
-// are found by the interned name's address, so set() and add() compare no strings: kept
-// sorted by name, the lower_bound's string compares and the interning's std::set lookup
-// (each compare a memcmp through ASan's interceptor and libFuzzer's comparison hook) were
-// 4.6% of fuzz_iss's samples and 2.8% of fuzz_plucker's (perf, 2026-12-03). sorted()
-// gives them by name for output.
+// once its name is known (a method sets 20 to 60 per solve, most longer than the
+// short-string buffer). Entries stay in the order they were first set and are found by
+// the interned name's address, so set() and add() compare no strings (string compares
+// showed up in fuzz profiles: docs/log/fuzzing.md). sorted() gives them by name for
+// output.
 std::string_view stats_key(std::string_view name);
 
 struct Stats {

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CI for issue 38 ("bring your own code"; docs/external-methods.md): installs the built
+# CI check of the installed package (docs/external-methods.md): installs the built
 # visgate into a clean prefix, then, against that prefix only,
 #   1. builds the example method (examples/mt-caster: a textbook float Möller-Trumbore
 #      caster as an exec: program and a plugin) with find_package(visgate);

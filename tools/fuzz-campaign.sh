@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzing campaign for one target (issue 8; README "Fuzzing"): builds the clang libFuzzer
+# Fuzzing campaign for one target (docs/fuzzing.md): builds the clang libFuzzer
 # targets in build-fuzz-clang (fuzz/configure-clang.sh), runs TARGET for SECONDS with
 # libFuzzer's -fork over every core (crashes, timeouts and OOMs are collected, not
 # fatal), merges the inputs that add coverage into the seed corpus corpus/fuzz/TARGET/,

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CI fuzz smoke (issue 8, DESIGN section 9): configures and builds the libFuzzer targets
+# CI fuzz smoke (DESIGN section 9, docs/fuzzing.md): configures and builds the libFuzzer targets
 # with clang-14 (-fsanitize=fuzzer,address,undefined; the libraries with
 # -fsanitize=fuzzer-no-link,address,undefined) in build-fuzz-clang, then runs every
 # target for SECONDS (default 30) from its seeds in corpus/fuzz/<target>/, two at a time.

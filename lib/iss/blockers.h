@@ -4,7 +4,7 @@
 // UPDATE-PATCH-FACINGS (4.22, Table 4.1), MERGE-PATCHES (4.23), SIMPLIFY-PATCHES (4.7.5),
 // SPLIT-SURFACE (4.25), COMPUTE-LOOSE-EDGES (4.26), COMBINE-SURFACES with glue edges
 // (4.27-4.29), the blocking test BLOCKS-SHAFT (4.18) and its ray variant (4.10), and
-// validate() (4.13).
+// validate() (4.13). Implemented in one file per step (blockers.cpp lists them).
 //
 // Storage (section 4.13, "avoid copying, in place"): a surface owns three flat arrays.
 // Raw edges refer to patches by index, a patch owns a contiguous range of the edge
@@ -73,18 +73,17 @@ struct Surface {
   std::vector<Edge> edges;
   std::vector<Patch> patches;
   std::vector<int32_t> loose;  // loose edge labels (section 4.4.2)
-  AABBd box;   // of the raw edges (compute_bounds)
+  AABBd box = empty_box();  // of the raw edges (compute_bounds)
   // Box of the clipped triangles the surface stands for, a superset: set from the
   // triangles' edges when they are built into patches, carried through copies and
   // splits, joined by combining, never shrunk. The boundary's `box` need not hold them:
   // MERGE-PATCHES (4.7.3) forgets the edges inside a merged patch and SIMPLIFY-PATCHES
   // (4.7.5) collapses outside edges away, so a pouch's merged patch keeps only its rim
-  // (fuzz_iss aa81c695..., corpus/iss/other/b8a6e1e8...: the rim flat on a receiver's
-  // level, the pouch rising above it) and a collapsed one may keep nothing near its
-  // triangles (fuzz_iss 2f7607fd..., corpus/iss/pouch/8f524c6c...). Whatever claims to
+  // (corpus/iss/other/b8a6e1e8...) and a collapsed one may keep nothing near its
+  // triangles (corpus/iss/pouch/8f524c6c...). Whatever claims to
   // know where the triangles are (beyond_clip_planes drops, the ray caster's slab
   // test) asks the hull, never the boundary.
-  AABBd hull;
+  AABBd hull = empty_box();
   Vec3d vsum{0, 0, 0};  // vertex centre data (section 4.7.9): sum and count of the
   double vcount = 0;    // endpoints of edges inside the shaft
   bool refined = true;  // false when postponed in the last construction
@@ -157,7 +156,7 @@ size_t classify_edges(Surface& s, const ShaftGeometry& g);
 // CLASSIFY-AABB-PLANE (Figure 4.22): 0 FRONT (every corner beyond pl.tol), 1 BACK (every
 // corner below -pl.tol), 2 INTERSECTS (conservative); from the two corners the signs of
 // pl.n pick, the same answer as from all eight.
-int classify_box_plane(const AABBd& b, const Plane4d& pl);
+int classify_box_plane(const AABBd& b, const ConservativePlane& pl);
 // UPDATE-PATCH-FACINGS (Figure 4.22); returns the number of patches that became consistent.
 size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);
 void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23
@@ -184,7 +183,7 @@ double main_axis_gap(const ShaftGeometry& g);
 // has no main axis): thinner than its planes' tolerances (2^-40 of the scale) resolve.
 // Clipping to such a slab and the winding signs inside it are rounding, so neither the
 // blocking test nor the empty-shaft rule may decide its relations (blocks_shaft,
-// iss_solver.cpp): they go to sub-shafts and rays.
+// traversal.cpp): they go to sub-shafts and rays.
 bool shaft_too_thin(const ShaftGeometry& g);
 // True when a surface with this box meets no open segment between the shaft's boxes:
 // misses_slab between the clip planes, touching counting as missing when the boxes have

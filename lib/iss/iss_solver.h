@@ -4,7 +4,8 @@
 // surfaces (4.4.2), clipping and clamping (4.5), the winding-number blocking test (4.6),
 // incremental sub-shaft construction (4.7, with postponing 4.7.9 as an option), the two
 // traversal stages with CHOOSE-SPLIT (4.8, 4.9), leaf relations by Embree rays or by the
-// custom ray caster (4.10), jitter boxes (4.11) and empty shafts (4.12).
+// custom ray caster (4.10), jitter boxes (4.11) and empty shafts (4.12). Where each step
+// lives: traversal.h (4.7-4.12) and blockers.h (4.4.2-4.7).
 //
 // Options: leaf_receivers, leaf_samples (maximum points in a leaf), ray_caster =
 // embree | custom, postpone = on | off.
@@ -19,7 +20,7 @@
 // Every geometric predicate is evaluated in double with the outward margins of shaft.h,
 // so float rounding only ever sends a relation down to a ray. The remaining relations
 // are answered by the leaf ray caster and carry its guarantee: Embree with
-// RTC_SCENE_FLAG_ROBUST (float32, endpoint behaviour as embree_solver.h; one 16-wide
+// RTC_SCENE_FLAG_ROBUST (float32, endpoint behaviour as embree_scene.h; one 16-wide
 // packet per receiver and up to 16 samples of the light leaf), or the custom
 // caster (double-precision orientation tests and winding numbers, falling back to the
 // Embree ray where a removed surface's box meets the ray). Both can misjudge only

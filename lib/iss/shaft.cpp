@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lib/geom/haines_shaft.h"
 #include "lib/geom/predicates.h"
 
 namespace visgate::iss {
@@ -28,8 +29,8 @@ MainAxis choose_main_axis(const AABB& receiver, const AABB& light) {
   return m;
 }
 
-Plane4d plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double scale) {
-  Plane4d p;
+ConservativePlane plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double scale) {
+  ConservativePlane p;
   p.n = cross(b - a, c - a);
   p.d = dot(p.n, a);
   p.tol = kTolFactor * l1(p.n) * scale;
@@ -37,7 +38,7 @@ Plane4d plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double sca
 }
 
 void ShaftGeometry::add_plane(const Vec3d& n, double d) {
-  Plane4d p;
+  ConservativePlane p;
   p.n = n;
   p.d = d;
   p.tol = kTolFactor * l1(n) * scale_;
@@ -45,7 +46,7 @@ void ShaftGeometry::add_plane(const Vec3d& n, double d) {
 }
 
 ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis axis, double scale)
-    : r_(to_aabbd(receiver)), l_(to_aabbd(light)), axis_(axis), scale_(scale) {
+    : r_(to_double(receiver)), l_(to_double(light)), axis_(axis), scale_(scale) {
   // Axis-aligned planes: the common bounding box.
   AABBd all = r_;
   all.extend(l_);
@@ -57,66 +58,57 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
     add_plane(n, -all.lo[k]);
   }
   // Oblique planes: supporting lines of the 2D hull of the two projected rectangles
-  // that pass through one corner of each (Figure 4.3b). Differences of float
+  // that pass through one corner of each (Figure 4.3b; lib/geom/haines_shaft.h). Differences of float
   // coordinates are exact in double, so the support test is exact up to one rounding
   // per product; a plane that fails it only makes the shaft larger (conservative).
-  for (int i = 0; i < 3; ++i) {
-    for (int j = i + 1; j < 3; ++j) {
-      // A duplicate can only come from this projection: planes of two projections have
-      // normals (n_i, n_j, 0) and (n_i', 0, n_k') (say) with every listed component a
-      // non-zero difference of floats, so their cross product has no zero component
-      // (products of such differences neither underflow nor overflow in double).
-      const int first_of_projection = count_;
-      double rx[2] = {r_.lo[i], r_.hi[i]}, ry[2] = {r_.lo[j], r_.hi[j]};
-      double lx[2] = {l_.lo[i], l_.hi[i]}, ly[2] = {l_.lo[j], l_.hi[j]};
-      // Each rectangle's smaller and larger coordinate on both axes (for dmax below).
-      const double rx0 = std::min(rx[0], rx[1]), rx1 = std::max(rx[0], rx[1]);
-      const double ry0 = std::min(ry[0], ry[1]), ry1 = std::max(ry[0], ry[1]);
-      const double lx0 = std::min(lx[0], lx[1]), lx1 = std::max(lx[0], lx[1]);
-      const double ly0 = std::min(ly[0], ly[1]), ly1 = std::max(ly[0], ly[1]);
-      // The support point of either rectangle in an oblique outward direction is the
-      // corner picked by the direction's signs, the same corner type for both, so only
-      // corresponding corners can span an oblique hull edge.
-      for (int a = 0; a < 4; ++a) {
-        for (int b = a; b == a; ++b) {
-          double px = rx[a & 1], py = ry[a >> 1], qx = lx[b & 1], qy = ly[b >> 1];
-          double dx = qx - px, dy = qy - py;
-          if (dx == 0.0 || dy == 0.0) continue;  // axis-aligned: covered by the box
-          // Line normal (dy, -dx); pick the sign that puts every corner on the <= side.
-          for (double s : {1.0, -1.0}) {
-            double nx = s * dy, ny = -s * dx;
-            // Support test with a rounding margin: the line passes through both corners
-            // exactly, but n.q rounds differently for the second corner, and a strict
-            // test rejected the true hull edge about half of the time (leaving a much
-            // larger shaft). d is then raised to the largest computed n.c over the eight
-            // corners, so every corner is on the <= side as evaluated, and the plane
-            // tolerance of eval() covers the rounding of n.c (file comment of shaft.h);
-            // the plane stays conservative. The margin 2^-40 |n|_1 S is the same bound.
-            // The largest computed n.c over a rectangle's four corners is the one at the
-            // corner the signs of n pick (nx, ny != 0 here): fl(fl(nx x) + fl(ny y)) is
-            // monotone in x and in y, rounding being monotone, so no other corner gives a
-            // larger double. Bit for bit the maximum of all eight evaluations (test
-            // IssShaft.ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue).
-            double d = nx * px + ny * py;
-            const bool ux = nx > 0, uy = ny > 0;
-            double dmax = std::max({d, nx * (ux ? rx1 : rx0) + ny * (uy ? ry1 : ry0),
-                                    nx * (ux ? lx1 : lx0) + ny * (uy ? ly1 : ly0)});
-            if (dmax - d > kTolFactor * (std::abs(nx) + std::abs(ny)) * scale_) continue;
-            d = dmax;
-            Vec3d n(0, 0, 0);
-            n[i] = nx;
-            n[j] = ny;
-            bool dup = false;
-            for (int k = first_of_projection; k < count_; ++k) {
-              const Plane4d& o = planes_[size_t(k)].p;
-              if (cross(o.n, n) == Vec3d(0, 0, 0) && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
-            }
-            if (!dup && count_ < int(planes_.size())) add_plane(n, d);
-          }
-        }
+  // A duplicate can only come from the same projection: planes of two projections have
+  // normals (n_i, n_j, 0) and (n_i', 0, n_k') (say) with every listed component a
+  // non-zero difference of floats, so their cross product has no zero component
+  // (products of such differences neither underflow nor overflow in double).
+  int first_of_projection = count_;
+  for_each_shaft_corner_line(r_, l_, [&](const ShaftCornerLine& line) {
+    const int i = line.i, j = line.j;
+    if (line.corner == 0) first_of_projection = count_;
+    // Each rectangle's smaller and larger coordinate on both axes (for dmax below).
+    const double rx0 = std::min(r_.lo[i], r_.hi[i]), rx1 = std::max(r_.lo[i], r_.hi[i]);
+    const double ry0 = std::min(r_.lo[j], r_.hi[j]), ry1 = std::max(r_.lo[j], r_.hi[j]);
+    const double lx0 = std::min(l_.lo[i], l_.hi[i]), lx1 = std::max(l_.lo[i], l_.hi[i]);
+    const double ly0 = std::min(l_.lo[j], l_.hi[j]), ly1 = std::max(l_.lo[j], l_.hi[j]);
+    const double px = line.ai, py = line.aj, qx = line.bi, qy = line.bj;
+    const double dx = qx - px, dy = qy - py;
+    if (dx == 0.0 || dy == 0.0) return;  // axis-aligned: covered by the box
+    // Line normal (dy, -dx); pick the sign that puts every corner on the <= side.
+    for (double sg : {1.0, -1.0}) {
+      double nx = sg * dy, ny = -sg * dx;
+      // Support test with a rounding margin: the line passes through both corners
+      // exactly, but n.q rounds differently for the second corner, and a strict test
+      // rejected the true hull edge about half of the time (leaving a much larger
+      // shaft). d is then raised to the largest computed n.c over the eight corners, so
+      // every corner is on the <= side as evaluated, and the plane tolerance of eval()
+      // covers the rounding of n.c (file comment of shaft.h); the plane stays
+      // conservative. The margin 2^-40 |n|_1 S is the same bound.
+      // The largest computed n.c over a rectangle's four corners is the one at the
+      // corner the signs of n pick (nx, ny != 0 here): fl(fl(nx x) + fl(ny y)) is
+      // monotone in x and in y, rounding being monotone, so no other corner gives a
+      // larger double. Bit for bit the maximum of all eight evaluations (test
+      // IssShaft.ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue).
+      double d = nx * px + ny * py;
+      const bool ux = nx > 0, uy = ny > 0;
+      double dmax = std::max({d, nx * (ux ? rx1 : rx0) + ny * (uy ? ry1 : ry0),
+                              nx * (ux ? lx1 : lx0) + ny * (uy ? ly1 : ly0)});
+      if (dmax - d > kTolFactor * (std::abs(nx) + std::abs(ny)) * scale_) continue;
+      d = dmax;
+      Vec3d n(0, 0, 0);
+      n[i] = nx;
+      n[j] = ny;
+      bool dup = false;
+      for (int k = first_of_projection; k < count_; ++k) {
+        const ConservativePlane& o = planes_[size_t(k)].p;
+        if (cross(o.n, n) == Vec3d(0, 0, 0) && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
       }
+      if (!dup && count_ < int(planes_.size())) add_plane(n, d);
     }
-  }
+  });
   if (axis_.axis >= 0) {
     int a = axis_.axis;
     if (axis_.dir > 0) {
@@ -148,7 +140,7 @@ bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const 
   const double ak[3] = {ax, ay, az}, bk[3] = {bx, by, bz};
   double t0 = 0.0, t1 = 1.0;
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& p = planes_[size_t(i)].p;
+    const ConservativePlane& p = planes_[size_t(i)].p;
     const double pd = p.d, tol = p.tol;
     double ea, eb;
     if (i < 6) {
@@ -178,7 +170,7 @@ bool ShaftGeometry::may_intersect_triangle(const Vec3d& a, const Vec3d& b, const
 
 bool ShaftGeometry::separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& p = planes_[size_t(i)].p;
+    const ConservativePlane& p = planes_[size_t(i)].p;
     if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
   }
   return false;
@@ -186,7 +178,7 @@ bool ShaftGeometry::separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, con
 
 bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
   // Every box corner strictly on one side of the triangle's plane.
-  Plane4d tp = plane_through(a, b, c, scale_);
+  ConservativePlane tp = plane_through(a, b, c, scale_);
   if (tp.n == Vec3d(0, 0, 0)) return false;
   bool all_pos = true, all_neg = true;
   // Both boxes' corners, the receiver's first (bit i of the index: hi on axis i).
@@ -203,7 +195,7 @@ bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, 
 
 bool ShaftGeometry::may_intersect_box(const AABBd& b) const {
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& p = planes_[size_t(i)].p;
+    const ConservativePlane& p = planes_[size_t(i)].p;
     // Box corner nearest to the plane's inside.
     Vec3d q(p.n.x > 0 ? b.lo.x : b.hi.x, p.n.y > 0 ? b.lo.y : b.hi.y, p.n.z > 0 ? b.lo.z : b.hi.z);
     if (p.eval(q) > p.tol) return false;
@@ -231,7 +223,7 @@ bool ShaftGeometry::prism_may_intersect(const AABBd& face_box, int away_sign, co
   }
   // Separated by the triangle's plane: the face corners strictly on one side and the
   // sweep direction not leading back towards the plane.
-  Plane4d tp = plane_through(a, b, c, scale_);
+  ConservativePlane tp = plane_through(a, b, c, scale_);
   if (tp.n == Vec3d(0, 0, 0)) return true;
   int i1 = (ax + 1) % 3, i2 = (ax + 2) % 3;
   bool all_pos = true, all_neg = true;
@@ -271,7 +263,7 @@ double ShaftGeometry::boundary_distance(const Vec3d& p) const {
   double inside = 1e300, outside = 0.0;
   bool is_out = false;
   for (int i = 0; i < count_; ++i) {
-    const Plane4d& pl = planes_[size_t(i)].p;
+    const ConservativePlane& pl = planes_[size_t(i)].p;
     double e = pl.eval(p) / length(pl.n);
     if (e > 0) {
       is_out = true;
@@ -302,13 +294,12 @@ bool segment_hits_triangle_d(const Vec3d& p, const Vec3d& q, const Vec3d& a, con
   // projection that drops n's dominant axis, with every difference taken from a
   // triangle vertex. Orientations of the segment against the edges, det(q - p, a - p,
   // b - p), would take differences from p instead: for a triangle much smaller than
-  // its distance to p they round to zero (a 1e-45-wide sliver 1.4 units away, fuzz_iss)
-  // and the test took every such triangle as touched.
+  // its distance to p they round to zero (a 1e-45-wide sliver 1.4 units away) and the
+  // test would take every such triangle as touched.
   Vec3d x = std::abs(s1) <= std::abs(s2) ? p + (q - p) * (s1 / (s1 - s2)) : q + (p - q) * (s2 / (s2 - s1));
   // The closed test first requires x in the triangle's box (point_in_triangle_closed,
-  // lib/geom/predicates.h): on a 2.5e-32-wide sliver a point on the line of its long
-  // edges, 0.25 beyond it, passed the sign test alone (fuzz_iss 79223f0b...,
-  // corpus/iss/sliver/c979ba88..., a false block by the custom caster).
+  // lib/geom/predicates.h): on a sliver a point on the line of its long edges, far
+  // beyond it, passes the sign test alone (corpus/iss/sliver/c979ba88...).
   return point_in_triangle_closed(a, b, c, n, x);
 }
 

@@ -18,25 +18,37 @@
 #include <cstdint>
 
 #include "lib/geom/aabb.h"
+#include "lib/geom/plane.h"
 #include "lib/geom/vec.h"
 
 namespace visgate::iss {
 
-struct Plane4d {
-  Vec3d n{};
-  double d = 0.0;
-  double tol = 0.0;  // conservative evaluation margin, see the file comment
-  double eval(const Vec3d& p) const { return dot(n, p) - d; }
+// A plane of lib/geom (n.x = d, n not normalised) with the conservative evaluation
+// margin of the file comment: a point is beyond it only when eval(p) > tol.
+struct ConservativePlane : Planed {
+  double tol = 0.0;
 };
 
-struct AABBd {
-  Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  void extend(const Vec3d& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
-  void extend(const AABBd& b) { lo = vmin(lo, b.lo); hi = vmax(hi, b.hi); }
-  bool empty() const { return lo.x > hi.x; }
-};
+// The empty box ISS starts its blocker boxes from: +-1e300 rather than AABBd's
+// infinities, so that plane evaluations of an empty box's corners stay finite (with
+// infinite corners, 0 * inf in an axis plane's dot product would be NaN, and every
+// comparison with it false).
+inline AABBd empty_box() {
+  AABBd b;
+  b.lo = Vec3d(1e300, 1e300, 1e300);
+  b.hi = Vec3d(-1e300, -1e300, -1e300);
+  return b;
+}
 
-inline AABBd to_aabbd(const AABB& b) { return AABBd{to_double(b.lo), to_double(b.hi)}; }
+// A float box in double (exact).
+inline AABBd to_double(const AABB& b) {
+  AABBd d;
+  d.lo = to_double(b.lo);
+  d.hi = to_double(b.hi);
+  return d;
+}
+// The former name, still used by triangle_bvh.cpp (moving to lib/accel); use to_double.
+inline AABBd to_aabbd(const AABB& b) { return to_double(b); }
 
 // Main axis of a pair of disjoint boxes: the axis with the widest gap; dir = +1 when the
 // receiver box lies below the light box on it, -1 otherwise; -1 axis when they overlap.
@@ -63,7 +75,7 @@ class ShaftGeometry {
   double clip_hi() const { return clip_hi_; }
   double scale() const { return scale_; }
   int plane_count() const { return count_; }
-  const Plane4d& plane(int i) const { return planes_[size_t(i)].p; }
+  const ConservativePlane& plane(int i) const { return planes_[size_t(i)].p; }
 
   bool may_contain_point(const Vec3d& p) const;
   bool may_intersect_segment(const Vec3d& a, const Vec3d& b) const;
@@ -94,7 +106,7 @@ class ShaftGeometry {
   // read; the constructor writes each before counting it.
   union PlaneSlot {
     PlaneSlot() {}
-    Plane4d p;
+    ConservativePlane p;
   };
 
   AABBd r_, l_;
@@ -106,7 +118,7 @@ class ShaftGeometry {
 };
 
 // Plane through three points in double with its tolerance for coordinates up to `scale`.
-Plane4d plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double scale);
+ConservativePlane plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, double scale);
 
 // Open-segment / triangle test in double (touching the interior of the segment counts
 // as a hit, an endpoint on the triangle does not), used by the custom ray caster for

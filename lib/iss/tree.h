@@ -47,13 +47,13 @@ struct TreeNode {
   std::vector<uint32_t> gone;    // parent's triangles that do not intersect this node
   bool is_leaf = false;          // a real leaf: never split
   bool had_triangles = false;    // inside was non-empty (section 4.12)
-  // Extension of section 4.12 (filled lazily by the traversal, iss_solver.cpp): when
+  // Extension of section 4.12 (filled lazily by the traversal, empty_shaft.cpp): when
   // every inside triangle has all of the node's points on one closed side of its plane,
   // `sides` holds those planes oriented so that the points are on the non-positive side,
   // `flat` those that contain every point (within the tolerance); sides_state 0 = not
   // computed, 1 = some triangle has points strictly on both sides, 2 = all one-sided.
   uint8_t sides_state = 0;
-  std::vector<Plane4d> sides, flat;
+  std::vector<ConservativePlane> sides, flat;
 
   uint32_t size() const { return end - begin; }
   bool split_done() const { return left >= 0; }

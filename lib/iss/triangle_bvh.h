@@ -5,21 +5,22 @@
 // triangles whose box may meet the root shaft (the triangle array that COMPUTE-SHADOWS,
 // Figure 4.32, starts PRE-TRAVERSE with, which the thesis fills with every triangle).
 //
-// Build: Morton order of the box centres (radix sort), then balanced halving of that
-// order down to leaves of 8; linear in the triangle count.
+// The shared hierarchy (lib/accel/bvh.h) with its Morton rule: Morton order of the box
+// centres (radix sort), then balanced halving of that order down to leaves of 8; linear
+// in the triangle count.
 //
 // Guarantee: both queries return a superset, sorted by index, of what they select:
 // a triangle is left out only when its box (float32, exact) is disjoint from the query
 // box, or when a node box that contains it is outside a shaft plane by more than the
 // plane's tolerance (ShaftGeometry::may_intersect_box, conservative; the shaft query
-// returns whole leaves). Every consumer
-// re-tests each returned triangle exactly as it tested the whole mesh before, so the
-// results do not change, only the cost.
+// returns whole leaves). Every consumer re-tests each returned triangle exactly as it
+// tested the whole mesh before, so the results do not change, only the cost.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "lib/accel/bvh.h"
 #include "lib/geom/aabb.h"
 #include "lib/iss/shaft.h"
 
@@ -27,6 +28,9 @@ namespace visgate::iss {
 
 class TriangleBvh {
  public:
+  static constexpr accel::BuildRule kRule{accel::Split::MortonHalves, 8, false};
+
+  // The boxes must outlive the tree (the box query tests them).
   explicit TriangleBvh(const std::vector<AABB>& triangle_boxes);
 
   // Triangles whose box overlaps `box` (closed boxes).
@@ -34,21 +38,15 @@ class TriangleBvh {
   // Triangles whose box may intersect the shaft `g` (and others of the same leaves).
   void query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out) const;
 
-  size_t node_count() const { return nodes_.size(); }
-  size_t memory_bytes() const { return nodes_.size() * sizeof(Node) + index_.size() * sizeof(uint32_t); }
+  size_t node_count() const { return bvh_.node_count(); }
+  size_t memory_bytes() const { return bvh_.memory_bytes(); }
 
  private:
-  struct Node {
-    AABB box;
-    uint32_t first = 0;  // leaf: range in index_; inner: index of the left child
-    uint32_t count = 0;  // leaf: triangle count; inner: 0 (right child = left + 1)
-  };
   template <class Pred>
   void collect(Pred&& visit, bool test_leaf_triangles, std::vector<uint32_t>& out) const;
 
   const std::vector<AABB>& boxes_;
-  std::vector<Node> nodes_;
-  std::vector<uint32_t> index_;
+  accel::Bvh<float> bvh_;
 };
 
 }  // namespace visgate::iss

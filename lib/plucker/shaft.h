@@ -1,7 +1,8 @@
 // Haines' shaft between two axis-aligned boxes ("Shaft culling for efficient ray-cast
 // radiosity", Haines & Wallace 1991; Haines, "Graphics Gems" / [Hai00] as cited by paper
 // 002 section 4.4 implementation details): the bounding box of both boxes cut by the
-// planes through one edge of each box that support the convex hull of the two. Used to
+// planes through one edge of each box that support the convex hull of the two (candidate
+// planes shared with ISS: lib/geom/haines_shaft.h, which names the differences). Used to
 // select the occluders of a receiver group and a light.
 //
 // Guarantee: conservative. The planes are built and evaluated in double on float inputs
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "lib/geom/aabb.h"
+#include "lib/geom/plane.h"
 #include "lib/geom/vec.h"
 
 namespace visgate::plucker {
@@ -31,13 +33,9 @@ class Shaft {
   size_t plane_count() const { return planes_.size(); }
 
  private:
-  struct PlaneD {
-    Vec3d n;
-    double d;
-  };
   Vec3d lo_, hi_;
   double margin_ = 0.0;
-  std::vector<PlaneD> planes_;
+  std::vector<Planed> planes_;  // unit normals
 };
 
 }  // namespace visgate::plucker

@@ -3,6 +3,9 @@
 // Without it every group tested every triangle against its shaft: on `rooms` (26k
 // triangles, 27 lights, 64 groups) that was 45M shaft tests per solve.
 //
+// The shared hierarchy (lib/accel/bvh.h) with median splits on the centres' longest axis
+// and four triangles per leaf: built once per solve, queried once per group and light.
+//
 // Guarantee: conservative. A node is skipped only when Shaft::culls_box says its box
 // misses the shaft; the box translated to a light's local frame (coordinates relative to
 // an origin, rounded once per corner) still contains every triangle vertex translated and
@@ -16,6 +19,7 @@
 #include <span>
 #include <vector>
 
+#include "lib/accel/bvh.h"
 #include "lib/geom/aabb.h"
 #include "lib/plucker/shaft.h"
 #include "lib/scene/scene.h"
@@ -24,6 +28,8 @@ namespace visgate::plucker {
 
 class TriangleTree {
  public:
+  static constexpr accel::BuildRule kRule{accel::Split::MedianAxis, 4, false};
+
   explicit TriangleTree(const TriangleSoup& mesh);
 
   // Appends to `out` (cleared first), in increasing order, the index of every triangle
@@ -31,10 +37,9 @@ class TriangleTree {
   // relative to `origin`. Callers still test each triangle.
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const;
 
-  size_t node_count() const { return nodes_.size(); }
+  size_t node_count() const { return bvh_.node_count(); }
   size_t memory_bytes() const {
-    return nodes_.capacity() * sizeof(Node) + index_.capacity() * sizeof(uint32_t) +
-           patch_of_.capacity() * sizeof(int32_t) + patches_.capacity() * sizeof(Patch) +
+    return bvh_.memory_bytes() + patch_of_.capacity() * sizeof(int32_t) + patches_.capacity() * sizeof(Patch) +
            patch_tris_.capacity() * sizeof(uint32_t) + patch_poly_.capacity() * sizeof(Vec3f);
   }
 
@@ -67,13 +72,7 @@ class TriangleTree {
 
  private:
   void find_patches(const TriangleSoup& mesh);
-  struct Node {
-    AABB box;
-    uint32_t first = 0;  // leaf: first index in index_; inner: right child (left is this + 1)
-    uint32_t count = 0;  // leaf: triangle count; inner: 0
-  };
-  std::vector<Node> nodes_;
-  std::vector<uint32_t> index_;
+  accel::Bvh<float> bvh_;
   struct Patch {
     uint32_t tri_begin = 0, tri_count = 0, poly_begin = 0, poly_count = 0;
   };

@@ -78,13 +78,45 @@ Vec3d uniform3(Rng& rng, const Vec3d& lo, const Vec3d& hi) {
   return Vec3d(x, y, z);
 }
 
+// The start every family shares: the scene named "<family>-<seed>".
+Scene named_scene(const std::string& family, const FamilyParams& p) {
+  Scene s;
+  s.name = family + "-" + std::to_string(p.seed);
+  return s;
+}
+
+// The counts asked for (--triangles, --receivers, --samples), or the family's default.
+long triangles_or(const FamilyParams& p, long fallback) { return p.triangles > 0 ? p.triangles : fallback; }
+long receivers_or(const FamilyParams& p, long fallback) { return p.receivers > 0 ? p.receivers : fallback; }
+int samples_or(const FamilyParams& p, int fallback) { return p.samples > 0 ? int(p.samples) : fallback; }
+
+// A receiver grid on the floor z = 0 over [x0, x1] x [y0, y1], grid_side(--receivers,
+// side) points per side.
+ReceiverGrid floor_grid(const FamilyParams& p, double x0, double x1, double y0, double y1, int side, float offset) {
+  const int n = grid_side(p.receivers, side);
+  return make_floor_grid(x0, x1, y0, y1, 0.0, n, n, offset);
+}
+
+// The frame of most families: a square light of half-size `half` centred at `c`
+// emitting down (samples_or(p, samples)), over a floor grid on [-extent, extent]^2.
+void add_light_and_floor(Scene& s, const FamilyParams& p, const Vec3d& c, double half, int samples, double extent,
+                         int side, float offset) {
+  s.lights.push_back(make_square_light_down(c, half, samples_or(p, samples), p.seed));
+  s.grid = floor_grid(p, -extent, extent, -extent, extent, side, offset);
+}
+
+Result<Scene> finished(Scene& s) {
+  Status st = finish_scene(s);
+  if (!st) return st.error();
+  return std::move(s);
+}
+
 // random-soup: random triangles of size ~0.1-0.4 in the slab 0.3 < z < 1.7 between a
 // receiver grid on z = 0 and a square light at z = 2.
 Result<Scene> gen_random_soup(const FamilyParams& p) {
-  Scene s;
-  s.name = "random-soup-" + std::to_string(p.seed);
+  Scene s = named_scene("random-soup", p);
   Rng rng(p.seed);
-  long n = p.triangles > 0 ? p.triangles : 200;
+  const long n = triangles_or(p, 200);
   for (long t = 0; t < n; ++t) {
     const Vec3d c = uniform3(rng, Vec3d(-1, -1, 0.3), Vec3d(1, 1, 1.7));
     double size = rng.uniform(0.1, 0.4);
@@ -93,22 +125,17 @@ Result<Scene> gen_random_soup(const FamilyParams& p) {
       s.mesh.vertices.push_back(Vec3f(c + uniform3(rng, Vec3d(-1, -1, -1), Vec3d(1, 1, 1)) * size));
     s.mesh.triangles.push_back({base, base + 1, base + 2});
   }
-  s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.5, p.samples > 0 ? int(p.samples) : 16, p.seed));
-  int side = grid_side(p.receivers, 16);
-  s.grid = make_floor_grid(-1.2, 1.2, -1.2, 1.2, 0.0, side, side, 0.0f);
+  add_light_and_floor(s, p, Vec3d(0, 0, 2), 0.5, 16, 1.2, 16, 0.0f);
   scale_lights(s, p.light_scale);
-  Status st = finish_scene(s);
-  if (!st) return st.error();
-  return s;
+  return finished(s);
 }
 
 // columns: the COLUMNS scene of paper 000 (section 5.1.1): cylindrical columns standing
 // on a floor plane under one rectangular area light; about 2.5k triangles, 256 samples.
 Result<Scene> gen_columns(const FamilyParams& p) {
-  Scene s;
-  s.name = "columns-" + std::to_string(p.seed);
+  Scene s = named_scene("columns", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 2500;
+  const long target = triangles_or(p, 2500);
   const int segments = 16;            // 16 segments: 32 side + 28 cap triangles
   const long per_column = 4L * segments - 4;
   long columns = std::max(1L, (target - 2) / per_column);
@@ -128,15 +155,12 @@ Result<Scene> gen_columns(const FamilyParams& p) {
   double hw = 1.5, hh = 0.75;
   light.polygon = {Vec3f(Vec3d(-hw, -hh, 6.0)), Vec3f(Vec3d(-hw, hh, 6.0)), Vec3f(Vec3d(hw, hh, 6.3)),
                    Vec3f(Vec3d(hw, -hh, 6.3))};
-  light.samples = p.samples > 0 ? int(p.samples) : 256;
+  light.samples = samples_or(p, 256);
   light.seed = p.seed;
   s.lights.push_back(light);
-  int g = grid_side(p.receivers, 64);
-  s.grid = make_floor_grid(-5, 5, -5, 5, 0.0, g, g, 1e-3f);
+  s.grid = floor_grid(p, -5, 5, -5, 5, 64, 1e-3f);
   scale_lights(s, p.light_scale);
-  Status st = finish_scene(s);
-  if (!st) return st.error();
-  return s;
+  return finished(s);
 }
 
 // rooms: the SODA analogue. A building of `floors` storeys of nx x ny rooms (4 m x 4 m,
@@ -145,10 +169,9 @@ Result<Scene> gen_columns(const FamilyParams& p) {
 // square ceiling light per room. Receivers cover the ground floor. The triangle target
 // scales the tessellation of the decorative objects and the number of storeys and rooms.
 Result<Scene> gen_rooms(const FamilyParams& p) {
-  Scene s;
-  s.name = "rooms-" + std::to_string(p.seed);
+  Scene s = named_scene("rooms", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 30000;
+  const long target = triangles_or(p, 30000);
   // Layout: 3 storeys of 3 x 3 rooms up to 100k triangles, then more rooms per storey.
   int floors = 3, nx = 3, ny = 3;
   if (target > 100000) {
@@ -214,22 +237,17 @@ Result<Scene> gen_rooms(const FamilyParams& p) {
         }
         // Ceiling light.
         s.lights.push_back(make_square_light_down(o + Vec3d(W / 2, W / 2, H - T - 0.02), 0.3,
-                                                  p.samples > 0 ? int(p.samples) : 64, p.seed * 1000 + s.lights.size()));
+                                                  samples_or(p, 64), p.seed * 1000 + s.lights.size()));
       }
   }
-  int g = grid_side(p.receivers, 64);
-  s.grid = make_floor_grid(0, nx * W, 0, ny * W, 0.0, g, g, 1e-2f);
+  s.grid = floor_grid(p, 0, nx * W, 0, ny * W, 64, 1e-2f);
   scale_lights(s, p.light_scale);
-  Status st = finish_scene(s);
-  if (!st) return st.error();
-  return s;
+  return finished(s);
 }
 
 // ---------------------------------------------------------------------------------------
 // Adversarial families. Common frame unless stated: blockers in the slab 0.3 < z < 1.7,
 // a square light at z = 2 emitting down, receivers on or near z = 0.
-
-int samples_or(const FamilyParams& p, int fallback) { return p.samples > 0 ? int(p.samples) : fallback; }
 
 Vec3d random_unit(Rng& rng) {
   for (;;) {
@@ -237,12 +255,6 @@ Vec3d random_unit(Rng& rng) {
     double l = length(v);
     if (l > 0.1 && l <= 1.0) return v / l;
   }
-}
-
-Result<Scene> finished(Scene& s) {
-  Status st = finish_scene(s);
-  if (!st) return st.error();
-  return std::move(s);
 }
 
 // Explicit samples: `n` points on the square light of half-size `half` centred at
@@ -269,13 +281,26 @@ Receiver aimed_receiver(const Vec3d& q, const Vec3f& l) {
   return r;
 }
 
+// An explicit square light at z = 2 of half-size 0.5 * --light-scale and receivers_or(p,
+// 64) receivers, the i-th aimed through sample i (cyclically) at the point target()
+// draws.
+template <class Target>
+void add_aimed_receivers(Scene& s, const FamilyParams& p, Rng& rng, Target&& target) {
+  s.lights.push_back(explicit_square_light(2.0, 0.5 * p.light_scale, samples_or(p, 16), rng, p.seed));
+  const Light& L = s.lights[0];
+  const long nr = receivers_or(p, 64);
+  for (long i = 0; i < nr; ++i) {
+    const Vec3f& l = L.explicit_samples[size_t(i) % L.explicit_samples.size()];
+    s.receivers.push_back(aimed_receiver(target(), l));
+  }
+}
+
 // torus: a torus (paper 000 Fig. 4.16) between the light and the receivers, slightly
 // tilted, with shafts through its hole onto the receiver grid.
 Result<Scene> gen_torus(const FamilyParams& p) {
-  Scene s;
-  s.name = "torus-" + std::to_string(p.seed);
+  Scene s = named_scene("torus", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 1024;
+  const long target = triangles_or(p, 1024);
   int nv = std::max(3, int(std::lround(std::sqrt(double(target) / 8.0))));  // minor segments
   int nu = std::max(3, int(target / (2 * nv)));                               // major segments
   double R = rng.uniform(0.45, 0.7), r = R * rng.uniform(0.2, 0.45);
@@ -284,9 +309,7 @@ Result<Scene> gen_torus(const FamilyParams& p) {
   const double axis_y = rng.uniform(-1, 1);
   const double axis_x = rng.uniform(-1, 1);
   shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1), normalize(Vec3d(axis_x, axis_y, 0.0) + Vec3d(1e-3, 0, 0)), tilt);
-  s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.4 * p.light_scale, samples_or(p, 16), p.seed));
-  int side = grid_side(p.receivers, 16);
-  s.grid = make_floor_grid(-1.2, 1.2, -1.2, 1.2, 0.0, side, side, 0.0f);
+  add_light_and_floor(s, p, Vec3d(0, 0, 2), 0.4 * p.light_scale, 16, 1.2, 16, 0.0f);
   return finished(s);
 }
 
@@ -294,26 +317,18 @@ Result<Scene> gen_torus(const FamilyParams& p) {
 // and the opening faces the receivers; odd seeds: the reverse, the body wraps around the
 // receivers and the opening faces the light. Surfaces bend behind the shaft's nodes.
 Result<Scene> gen_pouch(const FamilyParams& p) {
-  Scene s;
-  s.name = "pouch-" + std::to_string(p.seed);
+  Scene s = named_scene("pouch", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 1024;
+  const long target = triangles_or(p, 1024);
   int slices = std::max(6, int(std::lround(std::sqrt(double(target)))));
   int stacks = std::max(2, int(target / (2 * slices)));
   double opening = rng.uniform(0.5, 1.1);  // radians from the open pole
-  bool around_light = p.seed % 2 == 0;
-  int side = grid_side(p.receivers, 16);
-  if (around_light) {
-    double rad = rng.uniform(0.6, 0.8);
-    shapes::add_open_sphere(s.mesh, Vec3d(0, 0, 2), rad, slices, stacks, opening, /*open_top=*/false);
-    s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.25 * p.light_scale, samples_or(p, 16), p.seed));
-    s.grid = make_floor_grid(-1.5, 1.5, -1.5, 1.5, 0.0, side, side, 0.0f);
-  } else {
-    double rad = rng.uniform(0.6, 0.8);
-    shapes::add_open_sphere(s.mesh, Vec3d(0, 0, 0.1), rad, slices, stacks, opening, /*open_top=*/true);
-    s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.5 * p.light_scale, samples_or(p, 16), p.seed));
-    s.grid = make_floor_grid(-0.4, 0.4, -0.4, 0.4, 0.0, side, side, 0.0f);
-  }
+  const bool around_light = p.seed % 2 == 0;
+  const double rad = rng.uniform(0.6, 0.8);
+  shapes::add_open_sphere(s.mesh, Vec3d(0, 0, around_light ? 2 : 0.1), rad, slices, stacks, opening,
+                          /*open_top=*/!around_light);
+  add_light_and_floor(s, p, Vec3d(0, 0, 2), (around_light ? 0.25 : 0.5) * p.light_scale, 16, around_light ? 1.5 : 0.4,
+                      16, 0.0f);
   shapes::rotate(s.mesh, 0, around_light ? Vec3d(0, 0, 2) : Vec3d(0, 0, 0.1), Vec3d(1, 0, 0), rng.uniform(-0.3, 0.3));
   return finished(s);
 }
@@ -322,19 +337,16 @@ Result<Scene> gen_pouch(const FamilyParams& p) {
 // two-sheeted surface with consistent orientation whose one boundary loop winds twice
 // around the shaft from the receivers to the light.
 Result<Scene> gen_double_surface(const FamilyParams& p) {
-  Scene s;
-  s.name = "double-surface-" + std::to_string(p.seed);
+  Scene s = named_scene("double-surface", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 1024;
+  const long target = triangles_or(p, 1024);
   // Triangles: 2 spokes (centre fan) + (rings - 1) * 4 spokes.
   int rings = std::max(1, int(std::lround(std::sqrt(double(target) / 8.0))));
   int spokes = std::max(3, int(target / (4 * rings)));
   double R = rng.uniform(0.5, 0.8), h = rng.uniform(0.2, 0.6);
   shapes::add_double_cover_disc(s.mesh, Vec3d(0, 0, rng.uniform(0.8, 1.2)), R, h, rings, spokes);
   shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1), Vec3d(0, 0, 1), rng.uniform(0, 2 * std::numbers::pi));
-  s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.3 * p.light_scale, samples_or(p, 16), p.seed));
-  int side = grid_side(p.receivers, 16);
-  s.grid = make_floor_grid(-1.0, 1.0, -1.0, 1.0, 0.0, side, side, 0.0f);
+  add_light_and_floor(s, p, Vec3d(0, 0, 2), 0.3 * p.light_scale, 16, 1.0, 16, 0.0f);
   return finished(s);
 }
 
@@ -343,10 +355,9 @@ Result<Scene> gen_double_surface(const FamilyParams& p) {
 // receiver and a sample (step 1/8) and the quarter points lie on blocker vertices, edges
 // and planes exactly.
 Result<Scene> gen_grid_snapped(const FamilyParams& p) {
-  Scene s;
-  s.name = "grid-snapped-" + std::to_string(p.seed);
+  Scene s = named_scene("grid-snapped", p);
   Rng rng(p.seed);
-  long n = p.triangles > 0 ? p.triangles : 200;
+  const long n = triangles_or(p, 200);
   const double g = 0.25;
   auto gi = [&](int lo, int hi) { return double(lo + long(rng.below(uint64_t(hi - lo + 1)))) * g; };
   for (long t = 0; t < n; ++t) {
@@ -394,7 +405,7 @@ Result<Scene> gen_grid_snapped(const FamilyParams& p) {
     l.explicit_samples.push_back(Vec3f(Vec3d(x, y, 2.0)));
   }
   s.lights.push_back(l);
-  long nr = p.receivers > 0 ? p.receivers : 64;
+  const long nr = receivers_or(p, 64);
   for (long i = 0; i < nr; ++i) {
     const double y = gi(-6, 6);
     const double x = gi(-6, 6);
@@ -410,10 +421,9 @@ Result<Scene> gen_grid_snapped(const FamilyParams& p) {
 // rounding. The crack test for ray casters: a segment through a shared edge must not
 // slip between the two triangles.
 Result<Scene> gen_shared_edge_fan(const FamilyParams& p) {
-  Scene s;
-  s.name = "shared-edge-fan-" + std::to_string(p.seed);
+  Scene s = named_scene("shared-edge-fan", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 400;
+  const long target = triangles_or(p, 400);
   struct Edge { uint32_t a, b; };
   std::vector<uint32_t> shared_vertices;
   std::vector<Edge> shared_edges;
@@ -453,23 +463,14 @@ Result<Scene> gen_shared_edge_fan(const FamilyParams& p) {
       if (cnt == 2) shared_edges.push_back({e.first, e.second});
     made += long(s.mesh.triangles.size() - t0);
   }
-  int ns = samples_or(p, 16);
-  s.lights.push_back(explicit_square_light(2.0, 0.5 * p.light_scale, ns, rng, p.seed));
-  const Light& L = s.lights[0];
-  long nr = p.receivers > 0 ? p.receivers : 64;
-  for (long i = 0; i < nr; ++i) {
-    const Vec3f& l = L.explicit_samples[size_t(i) % L.explicit_samples.size()];
-    Vec3d q;
-    if (!shared_vertices.empty() && (shared_edges.empty() || rng.below(3) == 0)) {
-      q = to_double(s.mesh.vertices[shared_vertices[rng.below(shared_vertices.size())]]);
-    } else {
-      const Edge& e = shared_edges[rng.below(shared_edges.size())];
-      uint64_t kind = rng.below(3);
-      double t = kind == 0 ? 0.5 : kind == 1 ? 1.0 / 3.0 : rng.uniform(0.05, 0.95);
-      q = to_double(s.mesh.vertices[e.a]) * (1 - t) + to_double(s.mesh.vertices[e.b]) * t;
-    }
-    s.receivers.push_back(aimed_receiver(q, l));
-  }
+  add_aimed_receivers(s, p, rng, [&] {
+    if (!shared_vertices.empty() && (shared_edges.empty() || rng.below(3) == 0))
+      return to_double(s.mesh.vertices[shared_vertices[rng.below(shared_vertices.size())]]);
+    const Edge& e = shared_edges[rng.below(shared_edges.size())];
+    uint64_t kind = rng.below(3);
+    double t = kind == 0 ? 0.5 : kind == 1 ? 1.0 / 3.0 : rng.uniform(0.05, 0.95);
+    return to_double(s.mesh.vertices[e.a]) * (1 - t) + to_double(s.mesh.vertices[e.b]) * t;
+  });
   return finished(s);
 }
 
@@ -477,10 +478,9 @@ Result<Scene> gen_shared_edge_fan(const FamilyParams& p) {
 // the length, some exactly collinear after rounding), with receivers aimed at points
 // inside the slivers so the segments cross them within a sliver's width of its edges.
 Result<Scene> gen_sliver_soup(const FamilyParams& p) {
-  Scene s;
-  s.name = "sliver-soup-" + std::to_string(p.seed);
+  Scene s = named_scene("sliver-soup", p);
   Rng rng(p.seed);
-  long n = p.triangles > 0 ? p.triangles : 200;
+  const long n = triangles_or(p, 200);
   for (long t = 0; t < n; ++t) {
     const Vec3d c = uniform3(rng, Vec3d(-0.8, -0.8, 0.5), Vec3d(0.8, 0.8, 1.5));
     const double half_length = rng.uniform(0.5, 2.0) / 2;
@@ -493,18 +493,12 @@ Result<Scene> gen_sliver_soup(const FamilyParams& p) {
     s.mesh.vertices.push_back(Vec3f(c + d * rng.uniform(-0.9, 0.9) + side * width));
     s.mesh.triangles.push_back({base, base + 1, base + 2});
   }
-  int ns = samples_or(p, 16);
-  s.lights.push_back(explicit_square_light(2.0, 0.5 * p.light_scale, ns, rng, p.seed));
-  const Light& L = s.lights[0];
-  long nr = p.receivers > 0 ? p.receivers : 64;
-  for (long i = 0; i < nr; ++i) {
-    const Vec3f& l = L.explicit_samples[size_t(i) % L.explicit_samples.size()];
+  add_aimed_receivers(s, p, rng, [&] {
     size_t t = rng.below(s.mesh.size());
     double a = rng.uniform(0.05, 0.9), b = rng.uniform(0.05, 0.95 - a);
-    Vec3d q = to_double(s.mesh.corner(t, 0)) * (1 - a - b) + to_double(s.mesh.corner(t, 1)) * a +
-              to_double(s.mesh.corner(t, 2)) * b;
-    s.receivers.push_back(aimed_receiver(q, l));
-  }
+    return to_double(s.mesh.corner(t, 0)) * (1 - a - b) + to_double(s.mesh.corner(t, 1)) * a +
+           to_double(s.mesh.corner(t, 2)) * b;
+  });
   return finished(s);
 }
 
@@ -513,10 +507,9 @@ Result<Scene> gen_sliver_soup(const FamilyParams& p) {
 // boxes standing on it, and on tilted quads (points rounded onto the face's
 // neighbourhood, within one rounding of the plane); a few boxes above cast shadows.
 Result<Scene> gen_on_surface(const FamilyParams& p) {
-  Scene s;
-  s.name = "on-surface-" + std::to_string(p.seed);
+  Scene s = named_scene("on-surface", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 300;
+  const long target = triangles_or(p, 300);
   int cells = std::max(1, int(std::sqrt(double(std::max(2L, target / 2)) / 2.0)));
   const double F = 1.5;
   shapes::add_patch(s.mesh, Vec3d(-F, -F, 0), Vec3d(2 * F, 0, 0), Vec3d(0, 2 * F, 0), cells, cells);
@@ -544,7 +537,7 @@ Result<Scene> gen_on_surface(const FamilyParams& p) {
     }
   }
   s.lights.push_back(make_square_light_down(Vec3d(0, 0, 2), 0.5 * p.light_scale, samples_or(p, 16), p.seed));
-  long nr = p.receivers > 0 ? p.receivers : 64;
+  const long nr = receivers_or(p, 64);
   const double cell = 2 * F / cells;
   for (long i = 0; i < nr; ++i) {
     uint64_t kind = rng.below(4);
@@ -573,10 +566,9 @@ Result<Scene> gen_on_surface(const FamilyParams& p) {
 // foliage: the TREE analogue of paper 000: thousands of small disjoint leaf triangles in
 // a crown above a trunk, under a square light; receivers on the ground.
 Result<Scene> gen_foliage(const FamilyParams& p) {
-  Scene s;
-  s.name = "foliage-" + std::to_string(p.seed);
+  Scene s = named_scene("foliage", p);
   Rng rng(p.seed);
-  long target = p.triangles > 0 ? p.triangles : 4000;
+  const long target = triangles_or(p, 4000);
   shapes::add_cylinder(s.mesh, Vec3d(0, 0, 0), 0.06, 0.9, 12);
   long leaves = std::max(1L, target - long(s.mesh.size()));
   // Leaf size shrinks with the count so the crown's density stays about constant.
@@ -592,9 +584,7 @@ Result<Scene> gen_foliage(const FamilyParams& p) {
     s.mesh.vertices.push_back(Vec3f(c - (b * 0.866 + a * 0.5) * sz));
     s.mesh.triangles.push_back({base, base + 1, base + 2});
   }
-  s.lights.push_back(make_square_light_down(Vec3d(0.3, 0.2, 3.0), 0.5 * p.light_scale, samples_or(p, 64), p.seed));
-  int side = grid_side(p.receivers, 32);
-  s.grid = make_floor_grid(-1.5, 1.5, -1.5, 1.5, 0.0, side, side, 1e-3f);
+  add_light_and_floor(s, p, Vec3d(0.3, 0.2, 3.0), 0.5 * p.light_scale, 64, 1.5, 32, 1e-3f);
   return finished(s);
 }
 
@@ -614,7 +604,7 @@ Result<Scene> gen_file(const std::string& path, const FamilyParams& p) {
   double d = std::max(b.diagonal(), 1e-30);
   s.lights.push_back(make_square_light_down(Vec3d(c.x, c.y, hi.z + 0.5 * d), 0.25 * d * p.light_scale,
                                             samples_or(p, 16), p.seed));
-  int side = grid_side(p.receivers, 16);
+  const int side = grid_side(p.receivers, 16);
   double ex = 0.5 * (hi.x - lo.x) + 0.25 * d, ey = 0.5 * (hi.y - lo.y) + 0.25 * d;
   s.grid = make_floor_grid(c.x - ex, c.x + ex, c.y - ey, c.y + ey, lo.z - 0.25 * d, side, side, 0.0f);
   return finished(s);

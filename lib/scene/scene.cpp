@@ -77,14 +77,10 @@ Status prepare_light(Light& light, const std::string& where) {
 
   // The Newell normal exactly (products of two floats are exact in double, summed by
   // expansion arithmetic), rounded per component, and the centroid in double. Summed in
-  // double the normal can be far off: four vertices on the line y = 0, z = 2,
-  // (-3.4e-43, 0, 2) (0, 0, 2) (6.4e-21, 0, 2) (0, 0, 2), summed 2a + 2b - 2b - 2a to
-  // -2a, a normal along -y and a "twice area" of 6.7e-43 (fuzz_plucker 35cf7d01); the
-  // same light folded back on itself (4602bcaf) or with a vertex 4.5e-44 off the line
-  // (d36d5128: exact normal along z, 2.9e-64 long) got the same wrong normal, and the
-  // region oracle's exact frame failed or plucker-bsp lifted the light along an axis
-  // whose exact normal component was 0. Zero is zero area; the area, the normal and the
-  // exact checks below use the exact normal.
+  // double, cancellation can give a collinear light a non-zero normal along an axis whose
+  // exact component is 0 (test SceneJson.RejectsOutOfRangeIndicesAndBadLights).
+  // Zero is zero area; the area, the normal and the exact checks below use the exact
+  // normal.
   Vec3d ne(0, 0, 0), c(0, 0, 0);
   for (int k = 0; k < 3; ++k) ne[k] = expansion::estimate(expansion::newell_component(P.data(), n, k));
   for (size_t i = 0; i < n; ++i) c += to_double(P[i]);
@@ -120,10 +116,9 @@ Status prepare_light(Light& light, const std::string& where) {
     return Error{where + ".polygon: not a simple convex polygon (winds " + std::to_string(turning / (2 * std::numbers::pi)) + " times)"};
   // Convexity exactly, in the frame the region oracle uses (oracle/region_oracle.h "Exact
   // frame": the float vertices with the axis of the largest Newell component dropped).
-  // The tolerance above admits a turn of -1e-9 |e0| |e1|; on a sliver light 4 wide and
-  // 400k long that let a vertex through whose frame polygon self-intersects (exact
-  // corner orientations -16, -16, +934542, +934542), and the oracle's frame check
-  // failed (fuzz_plucker 9177ea83). Every axis whose Newell component is within half of
+  // The tolerance above admits a turn of -1e-9 |e0| |e1|, which on a sliver light can
+  // pass a polygon whose exact frame polygon self-intersects (test
+  // SceneJson.RejectsOutOfRangeIndicesAndBadLights). Every axis whose Newell component is within half of
   // the largest is checked, so the oracle's exact choice is among them whatever double
   // rounding did to the normal; a corner may be exactly straight (the oracle drops it),
   // never turned against the normal.

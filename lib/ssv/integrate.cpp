@@ -191,8 +191,7 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   // of the magnitudes (a distance), is well beyond that band. Samples within `margin` of
   // the line are marked unclear (answered by their own ray: their count may be off by
   // the piece's weight, and the relation may still be decided, far from degenerate, by
-  // another triangle: fuzz_ssv 879e57f8, a sample 7e-10 from a projected edge of a
-  // triangle seen nearly edge-on, blocked by another with margin 1.5e-3). Every sample
+  // another triangle). Every sample
   // classified in bulk lies further than `margin` from the line.
   const double margin =
       1e-6 * (extent_ + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
@@ -303,7 +302,7 @@ void ReceiverIntegrator::begin(const Vec3f& receiver, const SampleStrips& strips
 
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   r_world_ = to_double(receiver);
-  r_ = frame_.to_frame_d(receiver);
+  r_ = frame_.to_local(receiver);
   VG_CHECK(r_.z > 0.0);
   pieces_.clear();
   doubtful_ = false;
@@ -343,10 +342,7 @@ int ReceiverIntegrator::facing(size_t t) const {
   // Nearly edge-on. With r within 2^-20 (relative to its distance from the triangle) of
   // the triangle's plane, T projects to a sliver narrower than float resolution in the
   // light plane: its three pieces round onto one line and the strict-left tests of
-  // samples on that line no longer agree between them (fuzz_ssv: a grid-snapped
-  // triangle 1.3e-21 off the plane x = 0 through the receiver gave samples on its
-  // projection a depth of -1, and they were blocked by another triangle with margin
-  // 0.04). The sign itself is right (double error about 1e-16 of the same scale), but
+  // samples on that line no longer agree between them. The sign itself is right (double error about 1e-16 of the same scale), but
   // the receiver is answered by rays. f = 0 exactly is harmless: T then adds no piece
   // at all, and no open segment from r crosses it properly. The test is f^2 <= 2^-40
   // |n|^2 max |r - v|^2; max |r - v|^2 <= 2 (|r - c|^2 + rad^2) rules most out cheaply.

@@ -48,9 +48,8 @@ LightFrame make_light_frame(const Light& light) {
   f.V = cross(f.N, f.U);
 
   // The polygon in the frame without (nearly) coincident vertices: an edge shorter than
-  // 2^-20 of the extent has no usable direction (fuzz_ssv: a light vertex 1.5e-44 from
-  // the next gave the side plane through the receiver and that edge a zero normal in
-  // double, and every piece was clipped away). Dropping such a vertex changes the
+  // 2^-20 of the extent has no usable direction (the side plane through the receiver
+  // and such an edge can get a zero normal in double). Dropping such a vertex changes the
   // polygon by a sliver of that width; L' below must still hold every jitter point.
   std::vector<Vec2f> base;
   const double min_edge = 0x1p-20 * f.extent;
@@ -69,7 +68,7 @@ LightFrame make_light_frame(const Light& light) {
   n = base.size();
   f.jitter_uv.resize(light.jitter_points.size());
   for (size_t k = 0; k < light.jitter_points.size(); ++k) {
-    Vec3f q = f.to_frame(light.jitter_points[k]);
+    Vec3f q = f.to_local_f(light.jitter_points[k]);
     f.jitter_uv[k] = {q.x, q.y};
     f.max_jitter_h = std::max(f.max_jitter_h, std::abs(q.z));
   }

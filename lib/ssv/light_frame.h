@@ -12,6 +12,7 @@
 
 #include <vector>
 
+#include "lib/geom/frame.h"
 #include "lib/scene/scene.h"
 
 namespace visgate::ssv {
@@ -22,8 +23,9 @@ struct Vec2f {
 
 inline float cross2(const Vec2f& a, const Vec2f& b) { return a.u * b.v - a.v * b.u; }
 
-struct LightFrame {
-  Vec3d origin{}, U{}, V{}, N{};  // right-handed: U x V = N
+// The light's frame (Frame3d: origin, U, V, N, right-handed, U x V = N; to_local and
+// to_local_f give (u, v, h) of a world point in double, or rounded once) with L'.
+struct LightFrame : Frame3d {
   double extent = 0.0;            // diagonal of the light polygon's bounding box
 
   std::vector<Vec2f> poly;         // L' in frame coordinates, counter-clockwise
@@ -32,18 +34,6 @@ struct LightFrame {
   std::vector<Vec2f> jitter_uv;    // per jitter point of the light, frame (u, v)
   float max_jitter_h = 0.0f;       // largest |h| of a jitter point (samples off the plane)
   bool usable = true;              // false: some jitter point lies far outside L (see make_light_frame)
-
-  // (u, v, h) of a world point, computed in double and rounded once.
-  Vec3f to_frame(const Vec3f& p) const {
-    Vec3d d = to_double(p) - origin;
-    return Vec3f(float(dot(d, U)), float(dot(d, V)), float(dot(d, N)));
-  }
-  // The same without the final rounding.
-  Vec3d to_frame_d(const Vec3f& p) const {
-    Vec3d d = to_double(p) - origin;
-    return Vec3d(dot(d, U), dot(d, V), dot(d, N));
-  }
-  double height(const Vec3d& p) const { return dot(p - origin, N); }
 };
 
 // Builds the frame and L' for a prepared light (prepare_light has run).

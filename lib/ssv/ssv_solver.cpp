@@ -17,7 +17,7 @@
 
 #include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
-#include "lib/raycast/embree_solver.h"
+#include "lib/raycast/embree_scene.h"
 #include "lib/ssv/integrate.h"
 #include "lib/ssv/light_frame.h"
 #include "lib/ssv/wedge.h"
@@ -30,6 +30,31 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
+// The per-receiver counters of the stats (reference rays, fallbacks, phase times); one
+// per thread, summed per light in the threads' order.
+struct Counts {
+  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0,
+         unchecked = 0;
+  double unclear_rays = 0;
+  double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
+  Counts& operator+=(const Counts& o) {
+    reported += o.reported;
+    validated += o.validated;
+    queries += o.queries;
+    fallback += o.fallback;
+    rays += o.rays;
+    inconsistent += o.inconsistent;
+    doubtful += o.doubtful;
+    unchecked += o.unchecked;
+    unclear_rays += o.unclear_rays;
+    t_query += o.t_query;
+    t_valid += o.t_valid;
+    t_integrate += o.t_integrate;
+    t_ray += o.t_ray;
+    return *this;
+  }
+};
+
 struct ThreadState {
   ThreadState(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes, const std::vector<Vec3d>& fp,
               const LightFrame& f)
@@ -40,16 +65,14 @@ struct ThreadState {
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
   std::vector<uint8_t> unclear;  // DepthCounter::finish
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0;
-  double unclear_rays = 0;
-  double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
+  Counts c;
   // The last reference answer of this thread: which ranged ray to cast first. It only
   // changes how many rays are cast (stat reference_rays), never an answer.
   bool expect_blocked = false;
 };
 
 // Float mode: every SSV computation runs in an IeeeFloatMode scope (lib/geom/float_mode.h:
-// Embree sets FTZ/DAZ in TBB workers; fuzz_ssv b23d6514).
+// Embree sets FTZ/DAZ in TBB workers).
 
 // Slivers. A triangle whose width 2 area / L (L its longest edge) is at most 2^-20 L
 // is left out of the integration and of the ray scenes alike. It blocks only segments
@@ -57,10 +80,9 @@ struct ThreadState {
 // margin of at most 2^-20 L / diagonal < 1e-6, below tau; no relation it leaves
 // visible can change. Kept, it defeats every float ray test: points on the supporting
 // line of its long edges, far outside it, get edge functions that are all zero after
-// rounding (fuzz_ssv 03e9716a: Embree's robust intersector, a sliver 3.5e-15 wide, a
-// segment 0.18 away on its line; b23d6514: the double-precision test of lib/raycast, a
-// sliver 1.2e-38 wide). Leaving it out of both keeps the counters and the rays about
-// the same scene. Zero-area triangles, which never block, go the same way.
+// rounding, in Embree's robust intersector and in the double-precision test of
+// lib/raycast alike. Leaving it out of both keeps the counters and the rays about the
+// same scene. Zero-area triangles, which never block, go the same way.
 TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
   TriangleSoup out;
   out.vertices = soup.vertices;
@@ -87,9 +109,7 @@ TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
 // the same query (segment_hits_triangle, or its ranged form), and one it does not
 // confirm is dropped (counted in stats as ray_disputes). The robust intersector can
 // report hits on the supporting line of a nearly zero-area triangle far outside it
-// (fuzz_ssv 03e9716a: a sliver 3.5e-15 wide, a segment 0.18 away on the extension of
-// its long edges, visible with margin 1e-3; corpus/embree-robust/). Disputes are rare
-// (none on columns, rooms or foliage).
+// (corpus/embree-robust/).
 class Caster {
  public:
   explicit Caster(const TriangleSoup& soup) : robust_(soup, true) {}
@@ -107,49 +127,23 @@ class Caster {
   raycast::EmbreeScene robust_;  // hit verification on (the default)
 };
 
-// Reference rays. The counters give each sample its depth complexity up to one
-// constant per receiver; one ray to a point of the minimum class tells whether that
-// class is visible (the rest is then blocked), and a check ray to the next class must
-// find it blocked. One ray decides a whole class, so it must not be near-degenerate:
-//
-// - Its light point q must be clear of every projected piece (silhouette edges and cut
-//   segments, ReceiverIntegrator::clearance): a sample within rounding of a projected
-//   silhouette has a counter and an Embree answer of either side. Up to kCandidates
-//   samples of the class are tried, in sample order.
-// - q is not the sample itself but a point at a quarter of the clearance threshold from
-//   it, in a direction hashed from the relation: no projected piece lies between them,
-//   so q has the sample's depth complexity, but q is in general position. A sample
-//   exactly on the projection of a mesh vertex or edge inside a surface (shared-edge-fan
-//   aims segments through shared vertices) is counted consistently by the integration
-//   (once per surface), while Embree may report either side for that one segment
-//   (fuzz_ssv finding 322875af: a segment through a fan's vertex was unblocked, the
-//   rest of its class blocked). Where float spacing cannot hold the offset (far from
-//   the origin) q is the sample.
-// - Hits within 2^-18 (in t) of either end are told apart from hits inside the segment
-//   by two ranged rays: A over [0, 1 + 2^-18] and B over [2^-18, 1 - 2^-18]. A
-//   unblocked: visible; B blocked: blocked; otherwise the only hits lie at the ends
-//   (a light point on a triangle in the light plane, which the counters rightly ignore
-//   but Embree's inclusive tfar reports: fuzz_ssv findings 1653e5da, 1dc1c280,
-//   9c17a27b, bc83a84f; a receiver on a face) and the answer is ambiguous: the next
-//   candidate is tried. 2^-18 = 3.8e-6 is about 30 times the relative error of
-//   Embree's t (a few float ulps), so a hit at the end is never mistaken for an
-//   interior one, and it is below tau = 1e-5: a crossing that close to an end has a
-//   margin below tau for its own relation. The ray that settles the expected answer
-//   is cast first (one ray in the common case); the outcome does not depend on the
-//   order.
-// - A miss of ray A whose verification rejected a candidate hit (EmbreeScene::occluded,
-//   `disputed`) is ambiguous too. The rejected hit means the segment passes within
-//   Embree's rounding of that triangle's boundary. Clearance only keeps q away from the
-//   projected silhouette pieces; the edges inside a surface are not projected, and the
-//   offset's direction depends on the relation's indices, not on the geometry, so q
-//   can stay on the projection of an interior edge (fuzz_ssv cfbec7f8: sample 0 on the
-//   projection of a fan's interior vertex, offset along the projection of one of its
-//   edges, 2e-8 from it). There the crossing is shared by the edge's two triangles:
-//   Embree's watertight test gave it to one, the double-precision test to the other,
-//   and the conjunction of the two missed both, answering a whole blocked class
-//   visible with margins up to 1e-2. Embree's watertight test reports at least one
-//   triangle of a shared edge, so such a miss always carries a dispute. A hit is
-//   confirmed in double and stands.
+// Reference rays (docs/methods/ssv.md, "The reference ray"). The counters give each
+// sample its depth complexity up to one constant per receiver; one ray to a point of the
+// minimum class tells whether that class is visible (the rest is then blocked), and a
+// check ray to the next class must find it blocked. One ray decides a whole class, so
+// it must not be near-degenerate:
+// - its light point q is a sample clear of every projected piece (clearance), up to
+//   kCandidates samples of the class tried in sample order;
+// - q is offset from the sample by a quarter of the clearance threshold in a hashed
+//   direction (general position, same depth complexity), unless float spacing cannot
+//   hold the offset or it would leave L' (reference_point);
+// - hits within kEndZone (in t) of either end are told apart from interior hits by two
+//   ranged rays (ranged_answer): 2^-18 is about 30 times the relative error of Embree's
+//   t and below tau, so an end hit is never taken for an interior one;
+// - a miss whose verification rejected a candidate hit (`disputed`) is ambiguous: the
+//   segment passes within Embree's rounding of a triangle edge that q may lie on.
+// An ambiguous answer moves on to the next candidate; the outcome does not depend on
+// which ray is cast first.
 enum class RefAnswer { Visible, Blocked, Ambiguous, NoCandidate };
 
 constexpr int kCandidates = 8;
@@ -198,16 +192,13 @@ Vec3f reference_point(const RefContext& c, int j) {
   const Vec3d qd = to_double(s) + c.frame.U * (step * std::cos(phi)) + c.frame.V * (step * std::sin(phi));
   const Vec3f q(qd);
   // Keep q only when its rounding left it within half the threshold of the sample.
-  const Vec3d fs = c.frame.to_frame_d(s), fq = c.frame.to_frame_d(q);
+  const Vec3d fs = c.frame.to_local(s), fq = c.frame.to_local(q);
   const double du = fq.x - fs.x, dv = fq.y - fs.y;
   if (!(du * du + dv * dv <= 4.0 * step * step)) return s;
   // And only inside L' (closed), where every sample lies (light_frame.h): the projected
   // pieces are clipped to L', so outside it a shadow boundary may lie between the sample
-  // and q unseen by the clearance (fuzz_ssv 84a48072..., corpus/ssv/other/a5f02684...:
-  // samples on the corners of a light 5e-4 wide, a triangle's edge projected 1e-5
-  // beside the light, outside it; a q moved off the corner crossed it, and its blocked
-  // ray answered the whole visible class). Both in a convex L', the segment between
-  // them is in it too.
+  // and q unseen by the clearance (corpus/ssv/other/a5f02684...). Both in a convex L',
+  // the segment between them is in it too.
   auto in_poly = [&](const Vec3d& f) {
     const std::vector<Vec2f>& P = c.frame.poly;
     for (size_t k = 0; k < P.size(); ++k) {
@@ -275,16 +266,208 @@ RefAnswer check_answer(const RefContext& c, int32_t dmin, int32_t second, double
 // a height error d moves the projection by d / h_r of that offset. With h_r > 2^-20 S
 // that is below 2^-30 S, far below the counter's margin (1e-6 of the light-plane
 // magnitudes) and the clearance threshold (2^-16 S). Below it the receiver lies in the
-// light plane up to rounding noise (fuzz_ssv b190d0b6: height 3e-30 against S = 3, its
-// segments to the light lying in the light's plane): the side planes of its pyramid
-// and the projection are meaningless, and the counters put visible and blocked
-// samples in one class (margins 6e-4 and 1e-3). Such a receiver sees the light at an
-// angle below 2^-20 and is answered by one ray per sample, like receivers on or behind
-// the light plane.
+// light plane up to rounding noise: the side planes of its pyramid and the projection
+// are meaningless, and the counters may put visible and blocked samples in one class.
+// Such a receiver sees the light at an angle below 2^-20 and is answered by one ray per
+// sample, like receivers on or behind the light plane.
 bool grazing_receiver(const LightFrame& frame, const Vec3f& r) {
-  const Vec3d f = frame.to_frame_d(r);
+  const Vec3d f = frame.to_local(r);
   const double S = frame.extent + std::abs(f.x) + std::abs(f.y) + std::abs(f.z);
   return !(f.z > 0x1p-20 * S);
+}
+
+// One light's data shared by its receivers: the frame, the wedges and their BSP, the
+// light-plane cuts and the sample strips (paper 001 section 2.1 and 4.1).
+struct LightSetup {
+  const Light& light;
+  size_t index, offset;
+  const LightFrame& frame;
+  bool light_fallback;  // the projection model does not hold: rays for every relation
+  const std::vector<Wedge>& wedges;
+  const std::vector<uint32_t>& cut_triangles;
+  WedgeBsp& bsp;  // lazy: queries refine it (thread-safe, wedge_bsp.h)
+  const SampleStrips& strips;
+};
+
+// Per-scene data: the blocker mesh, its edges and the ray caster.
+struct SceneSetup {
+  const Scene& scene;
+  const Caster& embree;
+  const std::vector<Edge>& edges;
+  float eps;
+};
+
+// One ray per sample of the light (the fallback of every receiver-level doubt).
+void cast_all(const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResult& rr) {
+  const Vec3f& r = sc.scene.receivers[i].p;
+  for (int j = 0; j < ls.light.samples; ++j)
+    rr.set_visible(ls.offset + size_t(j), !sc.embree.occluded(r, sample_position(ls.light, j, i)));
+}
+
+// Bits of the minimum class dmin, set a word at a time (the bits start cleared), four
+// samples per SSE2 compare.
+void set_class_bits(ReceiverResult& rr, size_t offset, int samples, const std::vector<int32_t>& depth,
+                    int32_t dmin) {
+  for (int j = 0; j < samples;) {
+    const size_t bit = offset + size_t(j);
+    const int run = std::min(samples - j, 64 - int(bit & 63));
+    uint64_t word = 0;
+    int k = 0;
+#if defined(__SSE2__)
+    const __m128i dm = _mm_set1_epi32(dmin);
+    for (; k + 4 <= run; k += 4) {
+      const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(depth.data() + j + k));
+      word |= uint64_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(x, dm)))) << k;
+    }
+#endif
+    for (; k < run; ++k) word |= uint64_t(depth[size_t(j + k)] == dmin) << k;
+    rr.visible_bits[bit >> 6] |= word << (bit & 63);
+    j += run;
+  }
+}
+
+// Paper 001 section 2.1 for one receiver: BSP query, validation of the wedges found
+// (receiver inside the wedge, the edge a silhouette from it), projection and
+// integration into per-sample depth complexity (st.depth, st.unclear).
+void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i) {
+  const Vec3f& r = sc.scene.receivers[i].p;
+  auto a = Clock::now();
+  st.candidates.clear();
+  ls.bsp.query(r, st.candidates);
+  auto b = Clock::now();
+  // The jitter point of every sample (sample_position, DESIGN section 3): hash prefix
+  // once per receiver, a power-of-two jitter count by mask.
+  st.pick.resize(size_t(ls.light.samples));
+  {
+    const uint64_t prefix = relation_hash_prefix(i, ls.light.seed), K = uint64_t(ls.light.jitter);
+    const bool pow2 = (K & (K - 1)) == 0;
+    for (int j = 0; j < ls.light.samples; ++j) {
+      const uint64_t h = relation_hash_step(prefix, uint64_t(j));
+      st.pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
+    }
+  }
+  st.integrator.begin(r, ls.strips, st.pick);
+  auto c = Clock::now();
+  // Validation. Only the planes still active in the node the wedge was found in are
+  // tested: the others contain the node's box, hence r. Accepting a wedge that excludes
+  // r is harmless anyway: its edge's projection misses L' and is clipped away.
+  st.valid.clear();
+  for (const WedgeState& ws : st.candidates) {
+    const Wedge& w = ls.wedges[ws.wedge];
+    if (!point_in_wedge(w, ws.mask, r, sc.eps)) continue;
+    int weight = st.integrator.edge_weight(sc.edges[w.edge]);
+    if (weight != 0) st.valid.emplace_back(w.edge, weight);
+  }
+  auto d = Clock::now();
+  for (const auto& [edge, weight] : st.valid) st.integrator.add_edge(sc.edges[edge], weight);
+  for (uint32_t t : ls.cut_triangles) st.integrator.add_cut(t);
+  st.integrator.finish(st.depth, &st.unclear);
+  auto e = Clock::now();
+  st.c.queries += 1;
+  st.c.reported += double(st.candidates.size());
+  st.c.validated += double(st.valid.size());
+  st.c.t_query += seconds_between(a, b);
+  st.c.t_integrate += seconds_between(b, c) + seconds_between(d, e);
+  st.c.t_valid += seconds_between(c, d);
+}
+
+// The receiver's bits from its depth complexities: reference ray to the minimum class
+// and check ray to the classes above it (see "Reference rays" above). When the
+// integration was doubtful, no reference is conclusive, or the check finds a class
+// above the minimum unblocked (the counters are inconsistent), the receiver is answered
+// by one ray per sample. Unclear samples (within the margin of a projected piece,
+// DepthCounter::finish) take no part in the classes: their depth becomes kUnclear and
+// each gets its own ray.
+void answer_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResult& rr) {
+  const Vec3f& r = sc.scene.receivers[i].p;
+  const int samples = ls.light.samples;
+  int32_t dmin = kUnclear, second = kUnclear;  // lowest and second-lowest class
+  size_t unclear = 0;
+  for (size_t j = 0; j < st.depth.size(); ++j) {
+    const bool u = st.unclear[j] != 0;
+    unclear += u;
+    const int32_t x = u ? kUnclear : st.depth[j];
+    st.depth[j] = x;
+    second = x < dmin ? dmin : (x > dmin ? std::min(second, x) : second);
+    dmin = std::min(dmin, x);
+  }
+  const bool one_class = second == kUnclear;
+  RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
+  if (dmin == kUnclear && !st.integrator.doubtful()) {
+    ref = RefAnswer::Blocked;  // no clear sample: every one gets its own ray below
+  } else if (!st.integrator.doubtful()) {
+    const RefContext ctx{sc.embree, ls.light, ls.frame, st.integrator, st.depth, r, i, ls.index};
+    ref = class_answer(ctx, dmin, st.expect_blocked, st.c.rays);
+    const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
+    if (decided) st.expect_blocked = ref == RefAnswer::Blocked;
+    if (decided && !one_class) check = check_answer(ctx, dmin, second, st.c.rays);
+    if (check == RefAnswer::NoCandidate) {
+      st.c.unchecked += 1;
+      check = RefAnswer::Blocked;
+    }
+  }
+  const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
+  if (!decided || check == RefAnswer::Ambiguous) st.c.doubtful += 1;
+  else if (check == RefAnswer::Visible) st.c.inconsistent += 1;
+  if (!decided || check != RefAnswer::Blocked) {
+    cast_all(sc, ls, i, rr);
+    st.c.fallback += samples;
+    unclear = 0;
+  } else if (ref == RefAnswer::Visible) {
+    set_class_bits(rr, ls.offset, samples, st.depth, dmin);
+  }
+  if (unclear > 0) {
+    for (int j = 0; j < samples; ++j)
+      if (st.unclear[size_t(j)])
+        rr.set_visible(ls.offset + size_t(j), !sc.embree.occluded(r, sample_position(ls.light, j, i)));
+    st.c.unclear_rays += double(unclear);
+  }
+}
+
+// Every receiver of one light (paper 001 section 2.1), in parallel.
+void solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
+                 SolveResult& result) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
+    const IeeeFloatMode range_float_mode;
+    ThreadState& st = states.local();
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      ReceiverResult& rr = result.receivers[i];
+      if (ls.light_fallback || grazing_receiver(ls.frame, sc.scene.receivers[i].p)) {
+        auto a = Clock::now();
+        cast_all(sc, ls, i, rr);
+        st.c.fallback += ls.light.samples;
+        st.c.t_ray += seconds_between(a, Clock::now());
+        continue;
+      }
+      integrate_receiver(st, sc, ls, i);
+      auto e = Clock::now();
+      answer_receiver(st, sc, ls, i, rr);
+      st.c.t_ray += seconds_between(e, Clock::now());
+    }
+  });
+}
+
+// The stats of paper 001's Tables 2-4 and the fallback counters (docs/methods/ssv.md).
+void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, double nodes) {
+  const std::pair<const char*, double> values[] = {
+      {"edges", double(counts.edges)},
+      {"edges_below_light", double(counts.below_light)},
+      {"edges_never_silhouette", double(counts.not_silhouette)},
+      {"wedges", double(counts.wedges)},
+      {"wedge_planes_dropped", double(counts.planes_dropped)},
+      {"bsp_nodes", nodes},
+      {"queries", n.queries},
+      {"wedges_reported", n.queries > 0 ? n.reported / n.queries : 0.0},
+      {"wedges_validated", n.queries > 0 ? n.validated / n.queries : 0.0},
+      {"acceptance_ratio", n.reported > 0 ? n.validated / n.reported : 0.0},
+      {"reference_rays", n.rays},
+      {"fallback_relations", n.fallback},
+      {"inconsistent_receivers", n.inconsistent},
+      {"doubtful_receivers", n.doubtful},
+      {"unchecked_receivers", n.unchecked},
+      {"unclear_relations", n.unclear_rays},
+  };
+  for (const auto& [key, value] : values) s.set(key, value);
 }
 
 }  // namespace
@@ -328,16 +511,14 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const double M = std::max(max_component(vabs(scene_box.lo)), max_component(vabs(scene_box.hi))) + double(grow);
   const float eps = float(4e-6 * M);
   const double tol = 1e-9 * M;
+  const SceneSetup sc{scene, embree, edges, eps};
 
-  double init_seconds = 0, peak_memory = 0;
+  double init_seconds = 0, peak_memory = 0, nodes = 0;
   WedgeBuildCounts counts;
-  double reported = 0, validated = 0, queries = 0, fallback = 0, rays = 0, inconsistent = 0, doubtful = 0, unchecked = 0, nodes = 0;
-  double unclear_rays = 0;
-  double t_query = 0, t_valid = 0, t_integrate = 0, t_ray = 0;
+  Counts total;
 
   for (size_t l = 0; l < scene.lights.size(); ++l) {
     const Light& light = scene.lights[l];
-    const size_t offset = scene.light_offset(l);
     auto ti0 = Clock::now();
     const LightFrame frame = make_light_frame(light);
     // Samples off the light plane by more than 1e-5 of the light's extent, or far outside
@@ -345,7 +526,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     // projection model: cast rays for that light.
     const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent || !frame.usable;
     std::vector<Vec3d> frame_pos(pm.vertex_pos.size());
-    for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_frame_d(pm.vertex_pos[v]);
+    for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
     std::vector<Wedge> wedges;
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback) {
@@ -356,145 +537,10 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
+    const LightSetup ls{light, l, scene.light_offset(l), frame, light_fallback, wedges, cut_triangles, bsp, strips};
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
-      const IeeeFloatMode range_float_mode;
-      ThreadState& st = states.local();
-      for (size_t i = range.begin(); i != range.end(); ++i) {
-        ReceiverResult& rr = result.receivers[i];
-        const Vec3f& r = scene.receivers[i].p;
-        if (light_fallback || grazing_receiver(frame, r)) {
-          auto a = Clock::now();
-          for (int j = 0; j < light.samples; ++j)
-            rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
-          st.fallback += light.samples;
-          st.t_ray += seconds_between(a, Clock::now());
-          continue;
-        }
-        auto a = Clock::now();
-        st.candidates.clear();
-        bsp.query(r, st.candidates);
-        auto b = Clock::now();
-        // The jitter point of every sample (sample_position, DESIGN section 3): hash
-        // prefix once per receiver, a power-of-two jitter count by mask.
-        st.pick.resize(size_t(light.samples));
-        {
-          const uint64_t prefix = relation_hash_prefix(i, light.seed), K = uint64_t(light.jitter);
-          const bool pow2 = (K & (K - 1)) == 0;
-          for (int j = 0; j < light.samples; ++j) {
-            const uint64_t h = relation_hash_step(prefix, uint64_t(j));
-            st.pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
-          }
-        }
-        st.integrator.begin(r, strips, st.pick);
-        auto c = Clock::now();
-        // Validation: receiver inside the wedge and the edge a silhouette from it.
-        st.valid.clear();
-        // Only the planes still active in the node the wedge was found in are tested:
-        // the others contain the node's box, hence r. Accepting a wedge that excludes r
-        // is harmless anyway: its edge's projection misses L' and is clipped away.
-        for (const WedgeState& ws : st.candidates) {
-          const Wedge& w = wedges[ws.wedge];
-          if (!point_in_wedge(w, ws.mask, r, eps)) continue;
-          int weight = st.integrator.edge_weight(edges[w.edge]);
-          if (weight != 0) st.valid.emplace_back(w.edge, weight);
-        }
-        auto d = Clock::now();
-        for (const auto& [e, weight] : st.valid) st.integrator.add_edge(edges[e], weight);
-        for (uint32_t t : cut_triangles) st.integrator.add_cut(t);
-        st.integrator.finish(st.depth, &st.unclear);
-        auto e = Clock::now();
-        // Reference ray to the minimum class and check ray to the classes above it (see
-        // "Reference rays" above). When the integration was doubtful, no reference is
-        // conclusive, or the check finds a class above the minimum unblocked (the
-        // counters are inconsistent), the receiver is answered by one ray per sample.
-        // Unclear samples (within the margin of a projected piece, DepthCounter::finish)
-        // take no part in the classes: their depth becomes kUnclear and each gets its
-        // own ray below.
-        int32_t dmin = kUnclear, second = kUnclear;  // lowest and second-lowest class
-        size_t unclear = 0;
-        for (size_t j = 0; j < st.depth.size(); ++j) {
-          const bool u = st.unclear[j] != 0;
-          unclear += u;
-          const int32_t x = u ? kUnclear : st.depth[j];
-          st.depth[j] = x;
-          second = x < dmin ? dmin : (x > dmin ? std::min(second, x) : second);
-          dmin = std::min(dmin, x);
-        }
-        const bool one_class = second == kUnclear;
-        RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
-        if (dmin == kUnclear && !st.integrator.doubtful()) {
-          ref = RefAnswer::Blocked;  // no clear sample: every one gets its own ray below
-        } else if (!st.integrator.doubtful()) {
-          const RefContext ctx{embree, light, frame, st.integrator, st.depth, r, i, l};
-          ref = class_answer(ctx, dmin, st.expect_blocked, st.rays);
-          const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
-          if (decided) st.expect_blocked = ref == RefAnswer::Blocked;
-          if (decided && !one_class) check = check_answer(ctx, dmin, second, st.rays);
-          if (check == RefAnswer::NoCandidate) {
-            st.unchecked += 1;
-            check = RefAnswer::Blocked;
-          }
-        }
-        const bool decided = ref == RefAnswer::Visible || ref == RefAnswer::Blocked;
-        if (!decided || check == RefAnswer::Ambiguous) st.doubtful += 1;
-        else if (check == RefAnswer::Visible) st.inconsistent += 1;
-        if (!decided || check != RefAnswer::Blocked) {
-          for (int j = 0; j < light.samples; ++j)
-            rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
-          st.fallback += light.samples;
-          unclear = 0;
-        } else if (ref == RefAnswer::Visible) {
-          // Bits of the minimum class, set a word at a time (the bits start cleared),
-          // four samples per SSE2 compare.
-          for (int j = 0; j < light.samples;) {
-            const size_t bit = offset + size_t(j);
-            const int run = std::min(light.samples - j, 64 - int(bit & 63));
-            uint64_t word = 0;
-            int k = 0;
-#if defined(__SSE2__)
-            const __m128i dm = _mm_set1_epi32(dmin);
-            for (; k + 4 <= run; k += 4) {
-              const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(st.depth.data() + j + k));
-              word |= uint64_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(x, dm)))) << k;
-            }
-#endif
-            for (; k < run; ++k) word |= uint64_t(st.depth[size_t(j + k)] == dmin) << k;
-            rr.visible_bits[bit >> 6] |= word << (bit & 63);
-            j += run;
-          }
-        }
-        if (unclear > 0) {
-          for (int j = 0; j < light.samples; ++j)
-            if (st.unclear[size_t(j)])
-              rr.set_visible(offset + size_t(j), !embree.occluded(r, sample_position(light, j, i)));
-          st.unclear_rays += double(unclear);
-        }
-        auto f = Clock::now();
-        st.queries += 1;
-        st.reported += double(st.candidates.size());
-        st.validated += double(st.valid.size());
-        st.t_query += seconds_between(a, b);
-        st.t_integrate += seconds_between(b, c) + seconds_between(d, e);
-        st.t_valid += seconds_between(c, d);
-        st.t_ray += seconds_between(e, f);
-      }
-    });
-    for (const ThreadState& st : states) {
-      reported += st.reported;
-      validated += st.validated;
-      queries += st.queries;
-      fallback += st.fallback;
-      rays += st.rays;
-      inconsistent += st.inconsistent;
-      doubtful += st.doubtful;
-      unchecked += st.unchecked;
-      unclear_rays += st.unclear_rays;
-      t_query += st.t_query;
-      t_valid += st.t_valid;
-      t_integrate += st.t_integrate;
-      t_ray += st.t_ray;
-    }
+    solve_light(sc, ls, states, result);
+    for (const ThreadState& st : states) total += st.c;
     nodes += double(bsp.node_count());
     double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3d)) +
                  double(edges.size() * sizeof(Edge));
@@ -508,27 +554,12 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   s.set("prepare_seconds", seconds_between(tp0, t0));
   s.set("embree_build_seconds", seconds_between(t0, t1));
   s.set("init_seconds", init_seconds);
-  s.set("bsp_build_query_seconds", t_query);
-  s.set("validation_seconds", t_valid);
-  s.set("projection_integration_seconds", t_integrate);
-  s.set("reference_ray_seconds", t_ray);
+  s.set("bsp_build_query_seconds", total.t_query);
+  s.set("validation_seconds", total.t_valid);
+  s.set("projection_integration_seconds", total.t_integrate);
+  s.set("reference_ray_seconds", total.t_ray);
   s.set("relations", double(scene.relation_count()));
-  s.set("edges", double(counts.edges));
-  s.set("edges_below_light", double(counts.below_light));
-  s.set("edges_never_silhouette", double(counts.not_silhouette));
-  s.set("wedges", double(counts.wedges));
-  s.set("wedge_planes_dropped", double(counts.planes_dropped));
-  s.set("bsp_nodes", nodes);
-  s.set("queries", queries);
-  s.set("wedges_reported", queries > 0 ? reported / queries : 0.0);
-  s.set("wedges_validated", queries > 0 ? validated / queries : 0.0);
-  s.set("acceptance_ratio", reported > 0 ? validated / reported : 0.0);
-  s.set("reference_rays", rays);
-  s.set("fallback_relations", fallback);
-  s.set("inconsistent_receivers", inconsistent);
-  s.set("doubtful_receivers", doubtful);
-  s.set("unchecked_receivers", unchecked);
-  s.set("unclear_relations", unclear_rays);
+  write_stats(s, total, counts, nodes);
   s.set("ray_disputes", double(embree.disputes()));
   s.set("slivers_dropped", double(slivers));
   s.set("memory_mb", peak_memory / (1024.0 * 1024.0));

@@ -45,13 +45,15 @@ std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m) {
 
 namespace {
 
-struct PlaneD {
+// A plane in point-normal form, evaluated as n.(x - p) rather than as Planed's n.x - d:
+// the rounding is relative to |x - p|, not to |x| (a wedge far from the origin).
+struct PointNormalPlane {
   Vec3d n;  // unit
   Vec3d p;  // a point on the plane
   double eval(const Vec3d& x) const { return dot(n, x - p); }
 };
 
-Plane to_float(const PlaneD& pl) {
+Plane to_float(const PointNormalPlane& pl) {
   Plane f;
   f.n = Vec3f(pl.n);
   f.d = float(dot(pl.n, pl.p));
@@ -67,12 +69,8 @@ Plane to_float(const PlaneD& pl) {
 // "Negative side" allows L' only `rtol` (rounding) beyond the plane, not tol: a point x
 // reached through the edge point p from the light point l is x = p + t (p - l), where
 // f(x) = (1 + t) f(p) - t f(l), and t = |x - p| / |p - l| is unbounded for an edge that
-// passes next to L'. fuzz_ssv 5f3d9427 (corpus/ssv/sliver/b582982b...): an edge from a
-// corner of L to a vertex 4096 away at the receivers' level; the plane through it and
-// another vertex of L' had a corner of L' 2.4e-7 beyond it (tol was 4e-6), t was about
-// 8000, and the wedge excluded a receiver by 2.0 whose segments meet the edge: its
-// projection was dropped and a blocked sample counted visible.
-bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double tol, double rtol) {
+// passes next to L' (corpus/ssv/sliver/b582982b...).
+bool orient_against_light(PointNormalPlane& pl, const std::vector<Vec3d>& light, double tol, double rtol) {
   double lo = 0.0, hi = 0.0;
   for (const auto& l : light) {
     double f = pl.eval(l);
@@ -91,7 +89,7 @@ bool orient_against_light(PlaneD& pl, const std::vector<Vec3d>& light, double to
 // Unit plane with normal n through p, or false when n is negligible relative to `scale2`
 // (the product of the two spanning lengths): 1e-12 relative leaves the direction of a
 // double cross product of float-derived vectors meaningful to about 1e-4.
-bool make_plane(const Vec3d& n, const Vec3d& p, double scale2, PlaneD& out) {
+bool make_plane(const Vec3d& n, const Vec3d& p, double scale2, PointNormalPlane& out) {
   double len = length(n);
   if (!(len > 1e-12 * scale2)) return false;
   out = {n / len, p};
@@ -234,12 +232,12 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     planes = &own;
   }
   // Unit plane of a triangle, front (normal) side positive.
-  auto triangle_plane = [&](size_t t) { return PlaneD{(*planes)[t].unit, (*planes)[t].a}; };
+  auto triangle_plane = [&](size_t t) { return PointNormalPlane{(*planes)[t].unit, (*planes)[t].a}; };
   std::vector<Wedge> wedges;
   const auto& L = frame.poly_world;
   const size_t nl = L.size();
   counts.edges += edges.size();
-  std::vector<PlaneD> cand;
+  std::vector<PointNormalPlane> cand;
   // The rounding of a double plane test (unit normal, coordinates up to M, tol = 1e-9 M
   // in the solver): about 1e-15 M; rtol = 1e-13 M keeps a hundredfold margin.
   const double rtol = 1e-4 * tol;
@@ -262,7 +260,7 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     // active one (its facing is 0, integrate.h): no silhouette region, no culling by the
     // pair's planes.
     const bool pair = act1 && act2;
-    PlaneD p1 = triangle_plane(size_t(act1 ? e.t1 : e.t2)), p2{};
+    PointNormalPlane p1 = triangle_plane(size_t(act1 ? e.t1 : e.t2)), p2{};
     if (pair) {
       // Potential silhouette w.r.t. L' (section 2.1): some light point sees exactly one
       // of the two triangles front-facing.
@@ -289,7 +287,7 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     cand.push_back({frame.N, frame.origin});  // the light plane: h >= 0
     Vec3d AB = B - A;
     for (size_t i = 0; i < nl; ++i) {  // through the edge and a light vertex
-      PlaneD pl;
+      PointNormalPlane pl;
       if (!make_plane(cross(AB, L[i] - A), A, length(AB) * length(L[i] - A), pl)) continue;
       if (orient_against_light(pl, L, tol, rtol)) cand.push_back(pl);
     }
@@ -299,7 +297,7 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
       for (size_t i = 0; i < nl; ++i) {
         const Vec3d& l0 = L[i];
         const Vec3d& l1 = L[(i + 1) % nl];
-        PlaneD pl;
+        PointNormalPlane pl;
         if (!make_plane(cross(l1 - l0, P - l0), l0, length(l1 - l0) * length(P - l0), pl)) continue;
         if (!orient_against_light(pl, L, tol, rtol)) continue;
         if (pl.eval(Q) < -rtol) continue;  // the edge must lie on the inner side (rtol: as above)

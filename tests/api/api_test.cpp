@@ -12,9 +12,10 @@ using namespace visgate;
 
 namespace {
 
-// tests/raycast/raycast_test.cpp's hand-worked scene from arrays: a light quad [-1,1]^2 at z = 2
-// facing down with explicit samples on a 4 x 4 grid, a receiver at the origin, and a
-// triangle at z = 1 that blocks exactly the four samples with x, y > 0.
+// The hand-worked scene of tests/support/scenes.h (quad_scene with add_quad_blocker),
+// built from arrays through the public API only: a light quad [-1,1]^2 at z = 2 facing
+// down with explicit samples on a 4 x 4 grid, a receiver at the origin, and a triangle
+// at z = 1 that blocks exactly the four samples with x, y > 0.
 api::SceneDesc quad_desc() {
   api::SceneDesc d;
   d.name = "hand";

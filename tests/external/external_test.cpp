@@ -21,6 +21,7 @@
 #include "oracle/comparator.h"
 #include "oracle/relation_oracle.h"
 #include "tools/harness/check.h"
+#include "tests/support/scenes.h"
 
 using namespace visgate;
 using visgate::external::ExternalMethodError;
@@ -29,22 +30,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A light quad [-1,1]^2 at z = 2 with explicit samples on a 4 x 4 grid, one receiver at
-// the origin, and a triangle at z = 1 that blocks exactly the four samples with x, y > 0
-// (tests/raycast/raycast_test.cpp, Raycast.TriangleBetweenPointAndLightQuad, works it by hand).
+// The worked quad scene with its blocker (tests/support/scenes.h): a triangle at z = 1
+// blocks exactly the four samples with x, y > 0.
 Scene quad_scene() {
-  Scene s;
-  s.name = "hand";
-  Light l = make_square_light_down(Vec3d(0, 0, 2), 1.0, 16, 1);
-  l.jitter = 1;
-  l.pattern = SamplePattern::Explicit;
-  for (int b = 0; b < 4; ++b)
-    for (int a = 0; a < 4; ++a) l.explicit_samples.push_back(Vec3f(-0.75f + 0.5f * a, -0.75f + 0.5f * b, 2.0f));
-  s.lights.push_back(l);
-  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
-  s.mesh.vertices = {Vec3f(0.05f, 0.05f, 1), Vec3f(1.05f, 0.05f, 1), Vec3f(0.05f, 1.05f, 1)};
-  s.mesh.triangles = {{0, 1, 2}};
-  EXPECT_TRUE(finish_scene(s).ok());
+  Scene s = test_support::quad_scene();
+  test_support::add_quad_blocker(s);
   return s;
 }
 

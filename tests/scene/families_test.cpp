@@ -102,6 +102,33 @@ TEST(Families, SizesFollowTheParameters) {
   EXPECT_EQ(c.lights[0].samples, 256);
 }
 
+TEST(Families, NamesAndDefaultsAreTheDocumentedOnes) {
+  // docs/harness.md's family table: triangles (0: not exact there), receivers and samples
+  // per light without parameters; every scene named "<family>-<seed>".
+  struct Want {
+    const char* family;
+    size_t triangles, receivers;
+    int samples;
+  };
+  for (const Want& w : {Want{"random-soup", 200, 256, 16}, Want{"columns", 0, 4096, 256},
+                        Want{"grid-snapped", 200, 64, 16}, Want{"shared-edge-fan", 0, 64, 16},
+                        Want{"sliver-soup", 200, 64, 16}, Want{"on-surface", 0, 64, 16}, Want{"foliage", 0, 1024, 64}}) {
+    Scene s = gen(w.family, 11);
+    EXPECT_EQ(s.name, std::string(w.family) + "-11");
+    if (w.triangles > 0) {
+      EXPECT_EQ(s.mesh.size(), w.triangles) << w.family;
+    }
+    EXPECT_EQ(s.receivers.size(), w.receivers) << w.family;
+    for (const auto& l : s.lights) EXPECT_EQ(l.samples, w.samples) << w.family;
+  }
+  for (const auto& f : family_names()) {
+    if (f != "far-origin" && f != "rooms") {
+      EXPECT_EQ(gen(f, 4).name, f + "-4");
+    }
+  }
+  EXPECT_EQ(gen("rooms", 4, 3000).name, "rooms-4");
+}
+
 TEST(Families, RoomsScaleToMillionsOfTriangles) {
   Scene s = gen("rooms", 1, 1'000'000, 16, 4);
   EXPECT_GE(double(s.mesh.size()), 0.85e6);
@@ -286,4 +313,16 @@ TEST(Families, FileFamilyKeepsTheMeshAndPlacesLightAndReceivers) {
 }
 
 }  // namespace
+TEST(Families, DeterministicBySeed) {
+  for (const char* f : {"random-soup", "columns", "rooms"}) {
+    FamilyParams p;
+    p.seed = 3;
+    p.receivers = 16;
+    p.samples = 4;
+    auto a = generate_family(f, p), b = generate_family(f, p);
+    ASSERT_TRUE(a.ok() && b.ok()) << f;
+    EXPECT_EQ(write_scene_json(*a), write_scene_json(*b)) << f;
+  }
+}
+
 }  // namespace visgate

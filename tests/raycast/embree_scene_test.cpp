@@ -1,130 +1,25 @@
-// lib/raycast: the embree, embree-robust and brute solvers on hand-worked scenes.
+// lib/raycast/embree_scene.h: Embree's input domain and the double-precision fallback, hit
+// verification, certain crossings, ranged queries and packet fans.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
-
-#include "lib/raycast/brute.h"
-#include "lib/raycast/embree_solver.h"
-#include "lib/scene/families.h"
-#include "lib/scene/shapes.h"
-#include "lib/solver.h"
-#include "oracle/relation_oracle.h"
-
 #include <random>
 
+#include "lib/raycast/embree_scene.h"
+#include "lib/scene/families.h"
+#include "lib/solver.h"
+#include "oracle/relation_oracle.h"
+#include "tests/support/family_scene.h"
+#include "tests/support/scenes.h"
+
 using namespace visgate;
-
-namespace {
-
-const char* kMethods[] = {"embree", "embree-robust", "brute"};
-
-// A light quad [-1,1]^2 at z = 2 with explicit samples on a 4 x 4 grid (x, y in
-// {-0.75, -0.25, 0.25, 0.75}), one receiver at the origin.
-Scene quad_scene() {
-  Scene s;
-  s.name = "hand";
-  Light l = make_square_light_down(Vec3d(0, 0, 2), 1.0, 16, 1);
-  l.jitter = 1;
-  l.pattern = SamplePattern::Explicit;
-  for (int b = 0; b < 4; ++b)
-    for (int a = 0; a < 4; ++a) l.explicit_samples.push_back(Vec3f(-0.75f + 0.5f * a, -0.75f + 0.5f * b, 2.0f));
-  s.lights.push_back(l);
-  s.receivers.push_back({Vec3f(0, 0, 0), Vec3f(0, 0, 1)});
-  EXPECT_TRUE(finish_scene(s).ok());
-  return s;
-}
-
-}  // namespace
-
-TEST(Raycast, TriangleBetweenPointAndLightQuad) {
-  // Triangle at z = 1 covering x >= 0.05, y >= 0.05 in the region x + y <= 1.05 (a right
-  // triangle with legs of length 1). Segment from the origin to sample (x, y, 2) crosses
-  // z = 1 at (x/2, y/2): blocked iff x/2 >= 0.05, y/2 >= 0.05 and (x + y)/2 <= 1.05.
-  // Samples with x, y in {0.25, 0.75}: (0.25,0.25), (0.25,0.75), (0.75,0.25), (0.75,0.75):
-  // all satisfy (x + y)/2 <= 0.75 < 1.05, so exactly those four are blocked.
-  Scene s = quad_scene();
-  s.mesh.vertices = {Vec3f(0.05f, 0.05f, 1), Vec3f(1.05f, 0.05f, 1), Vec3f(0.05f, 1.05f, 1)};
-  s.mesh.triangles = {{0, 1, 2}};
-  for (const char* m : kMethods) {
-    SolveResult r = make_solver(m)->solve(s, SolveOptions{});
-    for (int b = 0; b < 4; ++b)
-      for (int a = 0; a < 4; ++a) {
-        bool blocked = a >= 2 && b >= 2;
-        EXPECT_EQ(r.receivers[0].visible(size_t(b * 4 + a)), !blocked) << m << " sample " << a << "," << b;
-      }
-    EXPECT_FLOAT_EQ(r.receivers[0].visible_fraction[0], 12.0f / 16.0f) << m;
-  }
-}
-
-TEST(Raycast, PointInsideAndBehindAClosedBox) {
-  Scene s = quad_scene();
-  shapes::add_box(s.mesh, Vec3d(-3, -3, 0.5), Vec3d(3, 3, 1.5));  // a slab box between receiver and light
-  s.receivers.push_back({Vec3f(0, 0, 1), Vec3f(0, 0, 1)});          // inside the box
-  s.receivers.push_back({Vec3f(10, 0, 0), Vec3f(0, 0, 1)});         // beside it: segments pass outside
-  for (const char* m : kMethods) {
-    SolveResult r = make_solver(m)->solve(s, SolveOptions{});
-    for (size_t j = 0; j < 16; ++j) {
-      EXPECT_FALSE(r.receivers[0].visible(j)) << m;
-      EXPECT_FALSE(r.receivers[1].visible(j)) << m;
-      // From (10,0,0) to (sx, sy, 2): the segment leaves the slab's side x = 3 at
-      // t = 7 / (10 - sx), height z = 2t; it passes into the box iff z <= 1.5, i.e.
-      // sx <= 2/3. Samples with sx = 0.75 (column a = 3) pass over the top edge
-      // (z = 1.514), all others are blocked.
-      EXPECT_EQ(r.receivers[2].visible(j), j % 4 == 3) << m << " sample " << j;
-    }
-  }
-}
-
-TEST(Raycast, UnblockedReceiverAndEmptyMesh) {
-  Scene s = quad_scene();
-  for (const char* m : kMethods) {
-    SolveResult r = make_solver(m)->solve(s, SolveOptions{});
-    EXPECT_FLOAT_EQ(r.receivers[0].visible_fraction[0], 1.0f) << m;
-  }
-}
-
-TEST(Raycast, ResultsIndependentOfThreadCount) {
-  FamilyParams p;
-  p.seed = 4;
-  p.receivers = 64;
-  p.samples = 16;
-  auto scene = generate_family("random-soup", p);
-  ASSERT_TRUE(scene.ok());
-  for (const char* m : kMethods) {
-    SolveOptions one, all;
-    one.threads = 1;
-    all.threads = 0;
-    SolveResult a = make_solver(m)->solve(*scene, one);
-    SolveResult b = make_solver(m)->solve(*scene, all);
-    for (size_t i = 0; i < a.receivers.size(); ++i) EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << m;
-  }
-}
-
-TEST(Raycast, BruteAgreesWithEmbreeRobustAwayFromDegeneracy) {
-  // Random soups in general position: no shared edges, so float cracks cannot occur;
-  // the two casters must agree on all but a vanishing fraction of relations (those
-  // within float rounding of an edge). Bound: fewer than 1 in 10^4.
-  FamilyParams p;
-  p.seed = 11;
-  p.receivers = 256;
-  p.samples = 64;
-  auto scene = generate_family("random-soup", p);
-  ASSERT_TRUE(scene.ok());
-  SolveResult a = make_solver("brute")->solve(*scene, SolveOptions{});
-  SolveResult b = make_solver("embree-robust")->solve(*scene, SolveOptions{});
-  size_t differ = 0, total = scene->relation_count();
-  for (size_t i = 0; i < a.receivers.size(); ++i)
-    for (size_t j = 0; j < scene->samples_per_receiver(); ++j) differ += a.receivers[i].visible(j) != b.receivers[i].visible(j);
-  EXPECT_LT(differ * 10000, total) << differ << " of " << total;
-}
-
-namespace {
+using namespace visgate::test_support;
 
 // quad_scene with the blocker of TriangleBetweenPointAndLightQuad, every coordinate
 // (mesh, light, receiver) multiplied by `scale`, a power of two, so the scaled scene is
 // exactly similar to the unscaled one and has the same answers.
-Scene scaled_triangle_scene(float scale) {
+static Scene scaled_triangle_scene(float scale) {
   Scene s;
   s.name = "scaled";
   Light l;
@@ -141,8 +36,6 @@ Scene scaled_triangle_scene(float scale) {
   EXPECT_TRUE(finish_scene(s).ok());
   return s;
 }
-
-}  // namespace
 
 TEST(Raycast, EmbreeDomainBoundIsTheDerivedPowerOfTwo) {
   // 2^9 B^3 < 2^128 with B = 2^39 (embree_solver.h), and 2B below Embree's FLT_LARGE.
@@ -212,19 +105,15 @@ TEST(Raycast, FarReceiverDoesNotBlurASmallTriangle) {
 TEST(Raycast, FallbackAgreesWithEmbreeRobustAwayFromDegeneracy) {
   // The fallback (double orientation tests) against Embree on in-range random soups in
   // general position; same bound as the brute-force comparison above.
-  FamilyParams p;
-  p.seed = 12;
-  p.receivers = 128;
-  p.samples = 32;
-  auto scene = generate_family("random-soup", p);
-  ASSERT_TRUE(scene.ok());
-  SolveResult b = make_solver("embree-robust")->solve(*scene, SolveOptions{});
-  size_t differ = 0, total = scene->relation_count(), blocked = 0;
-  for (size_t i = 0; i < scene->receivers.size(); ++i) {
+  const Scene scene = family("random-soup", 12, -1, 128, 32);
+  ASSERT_FALSE(scene.receivers.empty());
+  SolveResult b = make_solver("embree-robust")->solve(scene, SolveOptions{});
+  size_t differ = 0, total = scene.relation_count(), blocked = 0;
+  for (size_t i = 0; i < scene.receivers.size(); ++i) {
     size_t bit = 0;
-    for (const Light& light : scene->lights)
+    for (const Light& light : scene.lights)
       for (int j = 0; j < light.samples; ++j, ++bit) {
-        const bool occ = raycast::fallback_occluded(scene->mesh, scene->receivers[i].p, sample_position(light, j, i));
+        const bool occ = raycast::fallback_occluded(scene.mesh, scene.receivers[i].p, sample_position(light, j, i));
         differ += occ == b.receivers[i].visible(bit);
         blocked += occ;
       }
@@ -282,7 +171,7 @@ TEST(Raycast, MissesWithARejectedHitAreReportedAsDisputed) {
     EXPECT_TRUE(verified.occluded(centroid - n, centroid + n, 0.0f, 1.0f, disputed));
     EXPECT_FALSE(disputed);
   }
-  // fuzz_ssv cfbec7f8 (tests/ssv/ssv_test.cpp, ReferenceRayAlongAnInteriorEdgeIsNotConclusive):
+  // fuzz_ssv cfbec7f8 (tests/ssv/ssv_solver_test.cpp, ReferenceRayAlongAnInteriorEdgeIsNotConclusive):
   // a segment 2e-8 from the interior edge 0-1 of a disk, crossing triangle 1 just inside
   // that edge by the double-precision test. Embree's watertight test gave the crossing
   // to triangle 0 and the verification rejected it: the verified query missed. Whichever
@@ -317,20 +206,16 @@ TEST(Raycast, DoubleTestRejectsPointsBeyondASliver) {
 TEST(Raycast, VerifiedHitsAreConfirmedByTheDoubleTest) {
   // Property: a verified scene reports a hit only where segment_hits_triangle confirms
   // one, and on general-position soups it agrees with the unverified robust scene.
-  FamilyParams p;
-  p.seed = 5;
-  p.receivers = 64;
-  p.samples = 16;
-  auto scene = generate_family("sliver-soup", p);
-  ASSERT_TRUE(scene.ok());
-  raycast::EmbreeScene verified(scene->mesh, true), plain(scene->mesh, true, false);
+  const Scene scene = family("sliver-soup", 5, -1, 64, 16);
+  ASSERT_FALSE(scene.receivers.empty());
+  raycast::EmbreeScene verified(scene.mesh, true), plain(scene.mesh, true, false);
   size_t differ = 0, total = 0;
-  for (size_t i = 0; i < scene->receivers.size(); ++i)
-    for (int j = 0; j < scene->lights[0].samples; ++j, ++total) {
-      const Vec3f r = scene->receivers[i].p, l = sample_position(scene->lights[0], j, i);
+  for (size_t i = 0; i < scene.receivers.size(); ++i)
+    for (int j = 0; j < scene.lights[0].samples; ++j, ++total) {
+      const Vec3f r = scene.receivers[i].p, l = sample_position(scene.lights[0], j, i);
       const bool v = verified.occluded(r, l);
       if (v) {
-        EXPECT_TRUE(raycast::fallback_occluded(scene->mesh, r, l)) << i << " " << j;
+        EXPECT_TRUE(raycast::fallback_occluded(scene.mesh, r, l)) << i << " " << j;
       }
       differ += v != plain.occluded(r, l);
     }
@@ -435,13 +320,9 @@ TEST(Raycast, PacketFanAgreesWithSingleRays) {
   // Embree's domain (every lane through the fallback), checked against the hand-worked
   // answers of TriangleBetweenPointAndLightQuad.
   for (float off : {0.0f, 4096.0f}) {
-    FamilyParams p;
-    p.seed = 5;
-    p.receivers = 64;
-    p.samples = 20;
-    auto scene = generate_family("random-soup", p);
-    ASSERT_TRUE(scene.ok());
-    Scene s = *scene;
+    const Scene scene = family("random-soup", 5, -1, 64, 20);
+    ASSERT_FALSE(scene.receivers.empty());
+    Scene s = scene;
     for (auto& v : s.mesh.vertices) v.x += off;
     for (auto& r : s.receivers) r.p.x += off;
     raycast::EmbreeScene es(s.mesh, true);
@@ -476,14 +357,4 @@ TEST(Raycast, PacketFanAgreesWithSingleRays) {
   for (int b = 0; b < 4; ++b)
     for (int a = 0; a < 4; ++a) EXPECT_EQ(out[b * 4 + a], a >= 2 && b >= 2) << a << "," << b;
   EXPECT_EQ(es.fallback_rays(), 16u);
-}
-
-TEST(Solver, OptionsAreChecked) {
-  auto s = make_solver("embree");
-  SolveOptions o;
-  o.opts["nope"] = "1";
-  Status st = s->check_options(o);
-  ASSERT_FALSE(st.ok());
-  EXPECT_NE(st.error().message.find("nope"), std::string::npos);
-  EXPECT_EQ(make_solver("no-such-method"), nullptr);
 }

@@ -1,0 +1,159 @@
+// Build of the shared hierarchy; see bvh.h.
+#include "lib/accel/bvh.h"
+
+#include <algorithm>
+#include <map>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
+namespace visgate::accel {
+
+namespace {
+
+// Below these sizes the TBB overhead exceeds the work; above, the key pass and the two
+// halves of a node run in parallel. The tree does not depend on the thread count.
+constexpr uint32_t kParallelGrain = 1u << 14;
+constexpr uint32_t kParallelSubtree = 1u << 15;
+
+// 10 bits of x spread to every third bit.
+uint32_t spread_bits(uint32_t x) {
+  x &= 0x3ffu;
+  x = (x | (x << 16)) & 0x030000ffu;
+  x = (x | (x << 8)) & 0x0300f00fu;
+  x = (x | (x << 4)) & 0x030c30c3u;
+  x = (x | (x << 2)) & 0x09249249u;
+  return x;
+}
+
+// Nodes of the subtree over m items (halving: floor(m / 2) on the left).
+uint32_t subtree_nodes(uint32_t m, uint32_t leaf, std::map<uint32_t, uint32_t>& memo) {
+  if (m <= leaf) return 1;
+  auto it = memo.find(m);
+  if (it != memo.end()) return it->second;
+  const uint32_t s = 1 + subtree_nodes(m / 2, leaf, memo) + subtree_nodes(m - m / 2, leaf, memo);
+  memo[m] = s;
+  return s;
+}
+
+}  // namespace
+
+// The split key: the box centre rounded to float, packed with the item so that the
+// partitioning moves small records in place.
+template <class T>
+struct Bvh<T>::Key {
+  float c[3];
+  uint32_t idx;
+};
+
+template <class T>
+Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(rule.leaf_size) {
+  VG_CHECK(rule.leaf_size >= 1);
+  const uint32_t n = uint32_t(boxes.size());
+  if (n == 0) return;
+  std::vector<Key> keys(n);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kParallelGrain), [&](const tbb::blocked_range<uint32_t>& r) {
+    for (uint32_t i = r.begin(); i < r.end(); ++i) {
+      const Vec3<T> c = boxes[i].center();
+      keys[i] = Key{{float(c.x), float(c.y), float(c.z)}, i};
+    }
+  });
+  if (rule.split == Split::MortonHalves) {
+    // Morton codes over the centres' box, ordered by a stable LSD radix sort from index
+    // order, so equal codes stay in index order.
+    AABB cb;
+    for (const Key& k : keys) cb.extend(Vec3f(k.c[0], k.c[1], k.c[2]));
+    const Vec3f ext = cb.extent();
+    std::vector<uint32_t> code(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      uint32_t q[3];
+      for (int a = 0; a < 3; ++a) {
+        const float f = ext[a] > 0 ? (keys[i].c[a] - cb.lo[a]) / ext[a] : 0.0f;
+        q[a] = uint32_t(std::min(1023.0f, std::max(0.0f, f * 1024.0f)));
+      }
+      code[i] = (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
+    }
+    std::vector<Key> tmp(n);
+    std::vector<uint32_t> count(1u << 10);
+    for (int pass = 0; pass < 3; ++pass) {
+      const int shift = 10 * pass;
+      std::fill(count.begin(), count.end(), 0u);
+      for (const Key& k : keys) ++count[(code[k.idx] >> shift) & 1023u];
+      uint32_t sum = 0;
+      for (uint32_t& c : count) {
+        const uint32_t v = c;
+        c = sum;
+        sum += v;
+      }
+      for (const Key& k : keys) tmp[count[(code[k.idx] >> shift) & 1023u]++] = k;
+      keys.swap(tmp);
+    }
+  }
+  // Pre-order slots: the right child of a node over m items follows the left subtree's
+  // subtree_nodes(floor(m / 2)) nodes.
+  std::map<uint32_t, uint32_t> memo;
+  nodes_.resize(subtree_nodes(n, leaf_size_, memo));
+  struct Builder {
+    Bvh& t;
+    const std::vector<Box>& boxes;
+    std::vector<Key>& keys;
+    const std::map<uint32_t, uint32_t>& memo;
+    bool median;
+    uint32_t nodes(uint32_t m) const { return m <= t.leaf_size_ ? 1 : memo.at(m); }
+    // The subtree over keys[begin, end) as node id and the following nodes(end - begin) - 1
+    // slots, left subtree first. Returns its box.
+    Box operator()(uint32_t begin, uint32_t end, uint32_t id) const {
+      Node& nd = t.nodes_[id];
+      nd.count = end - begin;
+      if (end - begin <= t.leaf_size_) {
+        Box box = boxes[keys[begin].idx];
+        for (uint32_t i = begin + 1; i < end; ++i) box.extend(boxes[keys[i].idx]);
+        nd.box = box;
+        nd.first = begin;
+        return box;
+      }
+      const uint32_t mid = begin + (end - begin) / 2;
+      if (median) {
+        // The axis of the centres' largest spread; ties by index, so the halves depend on
+        // the keys only.
+        Vec3f lo(keys[begin].c[0], keys[begin].c[1], keys[begin].c[2]), hi = lo;
+        for (uint32_t i = begin + 1; i < end; ++i)
+          for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], keys[i].c[k]);
+            hi[k] = std::max(hi[k], keys[i].c[k]);
+          }
+        const int axis = max_axis(hi - lo);
+        std::nth_element(keys.begin() + begin, keys.begin() + mid, keys.begin() + end,
+                         [axis](const Key& x, const Key& y) {
+                           return x.c[axis] != y.c[axis] ? x.c[axis] < y.c[axis] : x.idx < y.idx;
+                         });
+      }
+      const uint32_t left = id + 1, right = left + nodes(mid - begin);
+      nd.first = right;
+      Box bl, br;
+      if (end - begin >= kParallelSubtree) {
+        tbb::parallel_invoke([&] { bl = (*this)(begin, mid, left); }, [&] { br = (*this)(mid, end, right); });
+      } else {
+        bl = (*this)(begin, mid, left);
+        br = (*this)(mid, end, right);
+      }
+      bl.extend(br);
+      t.nodes_[id].box = bl;
+      return bl;
+    }
+  };
+  Builder{*this, boxes, keys, memo, rule.split == Split::MedianAxis}(0, n, 0);
+  order_.resize(n);
+  if (rule.item_boxes) item_boxes_.resize(n);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kParallelGrain), [&](const tbb::blocked_range<uint32_t>& r) {
+    for (uint32_t i = r.begin(); i < r.end(); ++i) {
+      order_[i] = keys[i].idx;
+      if (rule.item_boxes) item_boxes_[i] = boxes[keys[i].idx];  // leaf scans read memory in sequence
+    }
+  });
+}
+
+template class Bvh<float>;
+template class Bvh<double>;
+
+}  // namespace visgate::accel

@@ -1,0 +1,231 @@
+// Shaft construction (paper 000 sections 4.7 and 4.8): CONSTRUCT-SUB-SHAFT (Figure 4.19)
+// with the refinement of each surface (4.7.2-4.7.7, blockers.h), CONSTRUCT-INITIAL-SHAFT
+// (Figure 4.31), the blocker probe before it, and the shaft pools of section 4.13.
+#include <algorithm>
+
+#include "lib/iss/traversal.h"
+
+namespace visgate::iss {
+
+// The shaft is done: its surfaces, and its two arrays, go back to the pools (section
+// 4.13), so that the next shaft's arrays need no allocation.
+void Traversal::release(Shaft& sh) {
+  live_bytes_ -= sh.bytes;
+  for (Surface& s : sh.surfaces) ws_.recycle(std::move(s));
+  sh.surfaces.clear();
+  sh.ghosts.clear();
+  if (surface_lists_.size() < 256) {
+    surface_lists_.push_back(std::move(sh.surfaces));
+    ghost_lists_.push_back(std::move(sh.ghosts));
+  }
+}
+
+// A shaft with pooled (empty) arrays.
+void Traversal::init_shaft(Shaft& sh) {
+  if (surface_lists_.empty()) return;
+  sh.surfaces = std::move(surface_lists_.back());
+  sh.ghosts = std::move(ghost_lists_.back());
+  surface_lists_.pop_back();
+  ghost_lists_.pop_back();
+}
+
+// ---- section 4.7: sub-shaft construction ---------------------------------------------
+// Lines 14-18 of Figure 4.19 for one surface. `settled`: the surface is as the parent
+// shaft's construction left it (merged, simplified, one component), not a new triangle
+// surface and not postponed there.
+void Traversal::refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out, bool settled) {
+  size_t left, became;
+  { ScopedTimer t(times_[kClassify]); left = classify_edges(s, g); }
+  check(s, "classify_edges");
+  { ScopedTimer t(times_[kFacings]); became = update_patch_facings(ctx_, s, g); }
+  check(s, "update_patch_facings");
+  // Early exit (section 4.13). Merging needs a patch whose facing just became
+  // consistent (inside edges only ever leave, facings only ever settle), simplifying
+  // an edge that just left the shaft (the fresh marks), splitting a connecting edge
+  // that just left; with none of them the three passes would reproduce the surface.
+  if (settled && left == 0 && became == 0) {
+    s.unchanged = true;
+    ++n_unchanged_;
+    out.push_back(std::move(s));
+    return;
+  }
+  s.unchanged = false;
+  { ScopedTimer t(times_[kMerge]); merge_patches(s, ws_); }
+  check(s, "merge_patches");
+  { ScopedTimer t(times_[kSimplify]); simplify_patches(s, g, ws_); }
+  check(s, "simplify_patches");
+  size_t before = out.size();
+  { ScopedTimer t(times_[kSplit]); split_surface(std::move(s), out, ws_); }
+  for (size_t k = before; k < out.size(); ++k) {
+    out[k].refined = true;
+    check(out[k], "split_surface");
+  }
+}
+
+void Traversal::finish_surfaces(Shaft& sh, std::vector<Surface>& temp) {
+  {
+    ScopedTimer t(times_[kLoose]);
+    for (Surface& s : temp)
+      if (!s.unchanged) compute_loose_edges(ctx_, s);  // unchanged: still current
+  }
+  {
+    ScopedTimer t(times_[kCombine]);
+    size_t before = temp.size();
+    sh.surfaces.reserve(before);
+    combine_surfaces(ctx_, temp, sh.surfaces, sh.g, ws_);
+    if (sh.surfaces.size() < before) n_combined_ += double(before - sh.surfaces.size());
+  }
+  {
+    ScopedTimer t(times_[kBounds]);
+    for (Surface& s : sh.surfaces)
+      if (!s.unchanged) compute_bounds(s, sh.g);
+  }
+  for (const Surface& s : sh.surfaces) check(s, "combine_surfaces");
+}
+
+// CONSTRUCT-SUB-SHAFT (Figure 4.19). The parent's surfaces are copied for the first
+// child and moved into the second (section 4.13: no needless copies).
+// `made`: this sub-shaft's geometry when choose_split has built it already (the same
+// nodes, main axis and scale, so the same bits).
+Shaft Traversal::construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent,
+                          const ShaftGeometry* made) {
+  MainAxis ax{parent.g.main_axis(), parent.g.dir()};
+  // The geometry is built in place: a default-constructed one assigned afterwards cost
+  // two fills and a copy of its plane and corner arrays (1.2 kB) per shaft.
+  // Two whole initialisers: each branch's prvalue initialises `sub` itself, so the
+  // geometry() branch still builds in place (no temporary and copy).
+  Shaft sub = made ? Shaft{r, l, *made, {}, {}, 0} : Shaft{r, l, geometry(r, l, ax), {}, {}, 0};
+  init_shaft(sub);
+  for (const AABBd& gb : parent.ghosts)
+    if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
+  std::vector<Surface>& temp = temp_;  // not re-entrant: no traversal in between
+  temp.clear();
+  for (Surface& ps : parent.surfaces) {
+    // Early exit (section 4.13): a surface whose box, clamped to the sub-shaft's clip
+    // planes, misses the sub-shaft has every edge outside it, cannot block it (the
+    // clamped boundary lies in that box, and a plane through the test line separates
+    // them) nor any later sub-shaft (their clamped boxes miss them too: the receiver
+    // or light box of the sub-shaft lies between), and has no loose edge to combine
+    // through, so SHAFT-TRAVERSE would remove it as redundant (section 4.7.8) right
+    // after the refinement. It is dropped before the copy; no removed-surface box is
+    // needed either, since no segment inside the shaft meets it.
+    if (!sub.g.may_intersect_box(clamped_box(ps.box, sub.g))) {
+      ++n_dropped_;
+      continue;
+    }
+    // A surface beyond a clip plane (the outer faces of the node boxes on the main
+    // axis) meets no segment of the shaft, and one touching it meets only segments'
+    // end points there (the boxes are disjoint along the main axis, so every segment
+    // leaves that plane at once), which do not block (DESIGN 3). Clamping would instead
+    // flatten it onto the plane, where the receiver may be, into a sliver through it.
+    // The test is the hull's (Surface::hull): a merged or collapsed patch's boundary
+    // may lie beyond while the triangles it stands for cross the sub-shaft; such a
+    // surface is kept, never blocks and is never removed (stands_beyond_clip_planes),
+    // so its relations go to the rays.
+    if (beyond_clip_planes(ps.hull, sub.g)) {
+      ++n_dropped_;
+      continue;
+    }
+    if (beyond_clip_planes(ps.box, sub.g)) ++n_kept_beyond_;
+    Surface s;
+    {
+      ScopedTimer t(times_[kCopy]);
+      if (move_parent) {
+        s = std::move(ps);
+      } else {
+        s = ws_.take_surface();
+        s = ps;  // DUPLICATE-SURFACE into pooled arrays: no allocation when they fit
+      }
+    }
+    // Section 4.7.9: postpone the refinement when the vertex centre stays inside and
+    // the surface cannot block the shaft yet.
+    if (p_.postpone && s.vcount > 0 && sub.g.may_contain_point(s.vsum * (1.0 / s.vcount)) &&
+        !can_block_shaft(s.box, sub.g)) {
+      s.refined = false;
+      s.unchanged = true;  // loose edges and bounds stay as computed for the parent
+      ++n_postponed_;
+      temp.push_back(std::move(s));
+      continue;
+    }
+    bool settled = s.refined;
+    refine(std::move(s), sub.g, temp, settled);
+  }
+  Surface nt;
+  {
+    ScopedTimer t(times_[kTriangleSurface]);
+    nt = construct_triangle_surface(ctx_, split_node.gone, sub.g, rn(r), ln(l), ws_);
+  }
+  check(nt, "construct_triangle_surface");
+  if (!nt.patches.empty()) refine(std::move(nt), sub.g, temp, false);
+  else ws_.recycle(std::move(nt));
+  finish_surfaces(sub, temp);
+  temp.clear();
+  account(sub);
+  return sub;
+}
+
+// Blocker probe before CONSTRUCT-INITIAL-SHAFT (an addition to section 4.8, in the
+// spirit of the early exits of section 4.13). A surface built from any subset of the
+// valid blockers of a shaft (triangles that meet the shaft and neither node) that
+// passes BLOCKS-SHAFT blocks every box-to-box segment (blockers.h), whatever the other
+// triangles are. A blocking surface spans the shaft's cross-section, so the probe
+// builds the surfaces of the few triangles whose box is at least as wide as the
+// narrower node on both cross axes, and tests them. On rooms this decides the shafts
+// from the ground-floor receivers to every upper-floor light with a handful of slab
+// triangles instead of the whole mesh. The probe is skipped when the candidates are
+// not few (then it would cost about as much as the full construction).
+bool Traversal::probe_blocked(int r, int l, MainAxis ax, size_t n_tris) {
+  ScopedTimer timer(times_[kProbe]);
+  const TreeNode& R = rn(r);
+  const TreeNode& L = ln(l);
+  int a = ax.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+  Vec3f re = R.box.extent(), le = L.box.extent();
+  float thr = std::min(std::min(re[b], le[b]), std::min(re[c], le[c]));
+  const std::vector<float>& ext = wide_extent_[a];
+  // Number of triangles with cross extent >= thr (ext is descending; a full prefix
+  // means more than any cap).
+  size_t n = size_t(std::lower_bound(ext.begin(), ext.end(), thr, [](float x, float v) { return x >= v; }) - ext.begin());
+  size_t cap = std::max<size_t>(64, n_tris / 16);
+  if (n == 0 || n > cap || (wide_truncated_ && n == ext.size())) return false;
+  probe_tris_.assign(wide_[a].begin(), wide_[a].begin() + long(n));
+  ShaftGeometry g = geometry(r, l, ax);
+  Surface s = construct_triangle_surface(ctx_, probe_tris_, g, R, L, ws_);
+  check(s, "construct_triangle_surface (probe)");
+  if (s.patches.empty()) {
+    ws_.recycle(std::move(s));
+    return false;
+  }
+  probe_out_.clear();
+  refine(std::move(s), g, probe_out_, false);
+  bool blocked = false;
+  for (Surface& ps : probe_out_) {
+    compute_bounds(ps, g);
+    ++n_blocking_tests_;
+    if (!blocked && blocks_shaft(ps, g)) {
+      ++n_probe_blocked_;
+      blocked = true;
+    }
+    ws_.recycle(std::move(ps));
+  }
+  probe_out_.clear();
+  return blocked;
+}
+
+// CONSTRUCT-INITIAL-SHAFT (Figure 4.31).
+Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris) {
+  Shaft sh{r, l, geometry(r, l, ax), {}, {}, 0};  // in place, as in construct_sub_shaft
+  init_shaft(sh);
+  Surface s;
+  {
+    ScopedTimer t(times_[kTriangleSurface]);
+    s = construct_triangle_surface(ctx_, tris, sh.g, rn(r), ln(l), ws_);
+  }
+  check(s, "construct_triangle_surface");
+  std::vector<Surface> temp;
+  if (!s.patches.empty()) refine(std::move(s), sh.g, temp, false);
+  finish_surfaces(sh, temp);
+  account(sh);
+  return sh;
+}
+
+}  // namespace visgate::iss

@@ -1,0 +1,216 @@
+// The ISS traversal over one light's sample tree and the shared receiver tree (paper 000
+// sections 4.7-4.12; the `iss` Solver in iss_solver.h states the guarantee). One class,
+// its member functions in one file per paper step:
+//   traversal.cpp           4.8 PRE-TRAVERSE (Fig. 4.32), 4.9 SHAFT-TRAVERSE (Fig. 4.33)
+//                           and CHOOSE-SPLIT, automatic rays, setup and statistics
+//   shaft_construction.cpp  4.7 CONSTRUCT-SUB-SHAFT (Fig. 4.19), 4.8 CONSTRUCT-INITIAL-
+//                           SHAFT (Fig. 4.31) and the blocker probe, 4.13 shaft pools
+//   leaf_rays.cpp           4.10 CAST-SHADOW-RAYS: Embree leaf rays, the custom caster
+//   empty_shaft.cpp         4.12 the empty-shaft rule and its sloped-floor extension
+// Internal to lib/iss.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+#if defined(__x86_64__) || defined(__i386__)
+#include <x86intrin.h>
+#endif
+
+#include "lib/iss/blockers.h"
+#include "lib/iss/shaft.h"
+#include "lib/iss/tree.h"
+#include "lib/iss/triangle_bvh.h"
+#include "lib/mesh/prepare.h"
+#include "lib/raycast/embree_scene.h"
+#include "lib/solver.h"
+
+namespace visgate::iss {
+
+// validate() after every operation on every surface (iss_solver.h set_validate_all).
+extern bool g_validate;
+
+using Clock = std::chrono::steady_clock;
+
+// Time breakdown of Table 5.4, one timer per row of the table (plus the blocker probe,
+// which the thesis does not have); "miscellaneous" is the rest of the traversal.
+enum TimerId {
+  kTree, kShaftGeometry, kTriangleSurface, kCopy, kClassify, kFacings, kMerge, kSimplify, kSplit,
+  kCombine, kLoose, kBounds, kBlocking, kRays, kProbe, kTimerCount
+};
+
+// Timer ticks: the time-stamp counter where available. The breakdown timers run around
+// every refinement step of every surface, and steady_clock (clock_gettime, a system call
+// on some virtual machines) cost about 8% of the whole solve there (perf, rooms). Ticks
+// are converted to seconds with the tick rate measured over the whole traversal.
+inline uint64_t ticks() {
+#if defined(__x86_64__) || defined(__i386__)
+  return __rdtsc();
+#else
+  return uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count());
+#endif
+}
+
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double& acc) : acc_(acc), t0_(ticks()) {}
+  ~ScopedTimer() { acc_ += double(ticks() - t0_); }
+  ScopedTimer(const ScopedTimer&) = delete;
+  ScopedTimer& operator=(const ScopedTimer&) = delete;
+
+ private:
+  double& acc_;
+  uint64_t t0_;
+};
+
+struct Shaft {
+  int r = 0, l = 0;
+  ShaftGeometry g;
+  std::vector<Surface> surfaces;
+  std::vector<AABBd> ghosts;  // boxes of removed redundant surfaces (section 4.7.8)
+  size_t bytes = 0;
+};
+
+enum class SplitMode { Receiver, Light };
+
+// Leaf sizes (section 4.3; the thesis sets them per scene, Table 5.1, SODA 16/16).
+// Defaults measured with `visgate bench iss` and CPU-time A/B runs
+// (docs/log/iss-performance.md): 16 receivers, because the shafts of the rooms family are
+// decided by walls only once the receiver nodes are a few grid cells wide; 256 samples,
+// i.e. a light of up to 256 samples is one light-tree leaf and never split: light splits
+// decided few relations on rooms and none on columns, and their leaf rays go 16 per
+// Embree packet anyway.
+struct Params {
+  int leaf_receivers = 16;
+  int leaf_samples = 256;
+  bool custom_rays = false;
+  bool postpone = true;
+  bool auto_rays = true;
+};
+
+// Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
+// Embree leaf rays only). The thesis sets the leaf sizes by hand per scene (Table 5.1)
+// and names choosing them automatically as missing (sections 5.1 and 5.4). Here the
+// traversal measures that balance as it goes, per light, for shafts grouped by size
+// (bucket = floor(log2(receivers x samples))): for every undecided shaft it subdivides
+// it counts the shafts built below it and the relations they decide (blocked or empty).
+// Once kAutoRayMinShafts shafts of a bucket have been subdivided and they decided fewer
+// than kAutoRayRelationsPerShaft relations per shaft built below them, further undecided
+// shafts of that bucket cast their relations directly (the leaf caster over the node
+// ranges), except every kAutoRayExplore-th, which is still subdivided so that the
+// bucket's figures follow the scene. Counts, not times: the choice, and with it every
+// answer, is the same on every run. kAutoRayRelationsPerShaft is a quarter of what a
+// shaft costs in leaf rays (220 to 400 rays on columns and rooms; the measurements are in
+// docs/log/iss-performance.md). Every relation is still decided by a shaft or by a
+// verified Embree ray, so no guarantee changes.
+constexpr int kAutoRayMinShafts = 8;
+constexpr int kAutoRayExplore = 8;
+constexpr double kAutoRayRelationsPerShaft = 64.0;
+struct AutoRayBucket {
+  int subdivided = 0, skipped = 0;
+  double shafts_below = 0, decided_below = 0;
+};
+
+class Traversal {
+ public:
+  Traversal(const Scene& scene, const mesh::PreparedMesh& m, const Params& p, SolveResult& result);
+
+  // COMPUTE-SHADOWS (Figure 4.32) for light `li`.
+  void run_light(size_t li);
+
+  void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
+  // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
+  // Bits start blocked (make_empty_result), so a relation no rule reached would read as
+  // blocked without a word: solve checks that these add up to every relation.
+  double decided_relations() const { return n_blocked_shaft_ + n_empty_ + n_rays_; }
+  void finish_stats(Stats& st) const;
+
+ private:
+  // ---- helpers -------------------------------------------------------------------------
+  TreeNode& rn(int i) { return rtree_->node(i); }
+  TreeNode& ln(int i) { return ltree_->node(i); }
+
+  void check(const Surface& s, const char* after) {
+    if (!g_validate) return;
+    std::string err = validate(s, &mesh_);
+    if (!err.empty()) throw InternalError(err + " (after " + after + ")");
+  }
+
+  ShaftGeometry geometry(int r, int l, MainAxis ax) {
+    ScopedTimer t(times_[kShaftGeometry]);
+    return ShaftGeometry(rn(r).box, ln(l).box, ax, scale_);
+  }
+
+  void account(Shaft& sh) {
+    sh.bytes = sizeof(Shaft) + sh.ghosts.capacity() * sizeof(AABBd);
+    for (const Surface& s : sh.surfaces) sh.bytes += s.bytes();
+    live_bytes_ += sh.bytes;
+    peak_bytes_ = std::max(peak_bytes_, live_bytes_);
+    ++n_shafts_;
+  }
+  void release(Shaft& sh);
+  void init_shaft(Shaft& sh);
+
+  void record_blocked(int r, int l) { n_blocked_shaft_ += double(rn(r).size()) * double(ln(l).size()); }
+
+  // ---- section 4.10: leaf rays (leaf_rays.cpp) -------------------------------------------
+  void cast_rays(int r, int l, const Shaft* sh, const std::vector<uint32_t>* tris);
+  bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
+                       const std::vector<uint32_t>* tris);
+
+  // ---- sections 4.7, 4.8: shaft construction (shaft_construction.cpp) --------------------
+  void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out, bool settled);
+  void finish_surfaces(Shaft& sh, std::vector<Surface>& temp);
+  Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent,
+                            const ShaftGeometry* made = nullptr);
+  bool probe_blocked(int r, int l, MainAxis ax, size_t n_tris);
+  Shaft construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris);
+
+  // ---- section 4.12: empty shafts (empty_shaft.cpp) --------------------------------------
+  void record_visible(int r, int l);
+  bool node_triangles_face_away(int r, const AABB& light_box);
+
+  // ---- sections 4.8, 4.9: traversal (traversal.cpp) --------------------------------------
+  using SplitGeometries = std::array<std::optional<ShaftGeometry>, 4>;
+  SplitMode choose_split(const Shaft& sh, SplitGeometries& cand);
+  void shaft_traverse(Shaft& sh);
+  bool pre_traverse_children(SplitMode mode, int r, int l, const std::vector<uint32_t>& tris);
+  void pre_traverse(int r, int l, const std::vector<uint32_t>& tris, bool probe = true);
+
+  const Scene& scene_;
+  const mesh::PreparedMesh& mesh_;
+  Params p_;
+  SolveResult& result_;
+  BlockerContext ctx_;
+  double scale_ = 1.0;
+  std::vector<AABB> tri_boxes_;
+  std::unique_ptr<TriangleBvh> bvh_;
+  std::unique_ptr<PointTree> rtree_, ltree_;
+  const Light* light_ = nullptr;
+  size_t light_offset_ = 0;
+  const raycast::EmbreeScene* embree_ = nullptr;
+  Workspace ws_;
+  double times_[kTimerCount] = {};  // in ticks()
+  Clock::time_point clock0_ = Clock::now();
+  uint64_t tick0_ = ticks();
+  double n_blocked_shaft_ = 0, n_empty_ = 0, n_rays_ = 0, n_rays_blocked_ = 0, n_shafts_ = 0, n_blocking_tests_ = 0;
+  double n_removed_ = 0, n_postponed_ = 0, n_combined_ = 0, n_fallback_ = 0, n_unchanged_ = 0, n_dropped_ = 0;
+  double n_kept_beyond_ = 0;
+  double n_leaf_surfaces_ = 0, n_leaf_ghosts_ = 0, n_leaf_node_tris_ = 0, n_probe_blocked_ = 0;
+  double n_auto_shafts_ = 0, n_auto_relations_ = 0;
+  std::array<AutoRayBucket, 64> auto_buckets_{};
+  std::vector<uint32_t> wide_[3];
+  std::vector<float> wide_extent_[3], cross_;
+  bool wide_truncated_ = false;
+  std::vector<uint32_t> probe_tris_;
+  std::vector<Surface> probe_out_, temp_;
+  std::vector<std::vector<Surface>> surface_lists_;
+  std::vector<std::vector<AABBd>> ghost_lists_;
+  size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;
+};
+
+}  // namespace visgate::iss

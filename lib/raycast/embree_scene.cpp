@@ -1,0 +1,403 @@
+// The verified Embree scene that ISS and SSV cast their rays with (see embree_scene.h).
+#include "lib/raycast/embree_scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "lib/geom/error_bounds.h"
+#include "lib/geom/float_mode.h"
+#include "lib/geom/predicates.h"
+
+namespace visgate::raycast {
+
+namespace {
+
+// The process-wide Embree device (see EmbreeScene): created once, thread-safe by the
+// C++ static initialisation guarantee; never released (reachable through the static, so
+// leak checkers do not count it), which avoids tearing Embree down after TBB at exit.
+// VISGATE_EMBREE_CONFIG, when set, is appended to the device configuration (e.g.
+// "max_isa=avx" or "isa=sse4.2"): Embree picks its BVH and intersection kernels by the
+// CPU at run time, so a finding of another machine (AVX-512) may need another ISA's
+// kernels to show, and this is the way to run a target on them.
+RTCDevice shared_device() {
+  static RTCDevice device = [] {
+    std::string config = "verbose=0";
+    if (const char* extra = std::getenv("VISGATE_EMBREE_CONFIG"); extra && *extra) config += std::string(",") + extra;
+    RTCDevice d = rtcNewDevice(config.c_str());
+    VG_CHECK(d != nullptr);
+    return d;
+  }();
+  return device;
+}
+
+// Sign of a double as -1, 0, +1.
+int sign_of(double v) { return (v > 0.0) - (v < 0.0); }
+
+// The ranged test of fallback_occluded(soup, from, to, t0, t1) for one triangle.
+bool line_range_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, const Vec3f& from, const Vec3f& to,
+                              double t0, double t1) {
+  const Vec3d p = to_double(from), q = to_double(to);
+  const Vec3d a = to_double(fa), b = to_double(fb), c = to_double(fc);
+  // The line's crossing parameter t = dp / (dp - dq) (from the triangle's own normal,
+  // as in segment_hits_triangle); a line in or parallel to the plane is a miss.
+  const Vec3d n = cross(b - a, c - a);
+  const double dp = dot(n, p - a), dq = dot(n, q - a);
+  if (dp == dq) return false;
+  const double tc = dp / (dp - dq);
+  if (!(tc >= t0 && tc <= t1)) return false;
+  const Vec3d x = tc == 1.0 ? q : p + (q - p) * tc;
+  return point_in_triangle_closed(a, b, c, n, x);
+}
+
+}  // namespace
+
+bool within_embree_bound(const Vec3f& p) {
+  return std::abs(p.x) <= kEmbreeCoordinateBound && std::abs(p.y) <= kEmbreeCoordinateBound &&
+         std::abs(p.z) <= kEmbreeCoordinateBound;
+}
+
+bool segment_hits_triangle(const Vec3f& fa, const Vec3f& fb, const Vec3f& fc, const Vec3f& from, const Vec3f& to) {
+  const Vec3d p = to_double(from), q = to_double(to);
+  const Vec3d a = to_double(fa), b = to_double(fb), c = to_double(fc);
+  // Signed distances (times |n|) of the endpoints from the triangle's plane; the
+  // receiver end strictly off the plane, the light end on the other side or on it
+  // (t in (0, 1]). n comes from the triangle alone, so its relative error is 1e-16
+  // whatever the endpoints' magnitude.
+  const Vec3d n = cross(b - a, c - a);
+  const double dp = dot(n, p - a), dq = dot(n, q - a);
+  const int sp = sign_of(dp), sq = sign_of(dq);
+  if (sp == 0 || sp == sq) return false;
+  // The crossing point, computed from the endpoint nearer to the plane so that its
+  // error is 1e-16 of that endpoint's distance, not of the segment's length (a far
+  // receiver, 1e22 away, must not blur a unit triangle).
+  Vec3d x;
+  if (sq == 0) x = q;
+  else if (std::abs(dq) <= std::abs(dp)) x = q + (p - q) * (dq / (dq - dp));
+  else x = p + (q - p) * (dp / (dp - dq));
+  return point_in_triangle_closed(a, b, c, n, x);
+}
+
+// Proof of a hit without the double-precision test (embree_scene.h).
+namespace {
+
+// The query-independent half of certainly_crosses_interior for one origin p and one
+// triangle: the origin-relative corners' cross products, their triple product and the
+// largest coordinate. A fan's lanes share p, and neighbouring lanes mostly hit the same
+// triangle, so the verification filter keeps the last triangle's terms (perf, columns:
+// the setup was two thirds of the 185 instructions of a proof). Splitting the function
+// changes no rounding: every product is the expression of the single-call form.
+struct CrossingTerms {
+  Vec3d bc, ca, ab;
+  double det = 0.0, m = 0.0;
+};
+
+CrossingTerms crossing_terms(const Vec3d& p, const Vec3f& fa, const Vec3f& fb, const Vec3f& fc) {
+  const Vec3d A = to_double(fa) - p, B = to_double(fb) - p, C = to_double(fc) - p;
+  CrossingTerms t;
+  t.bc = cross(B, C);
+  t.ca = cross(C, A);
+  t.ab = cross(A, B);
+  t.det = dot(A, t.bc);
+  t.m = max_component(vmax(vabs(A), vmax(vabs(B), vabs(C))));
+  return t;
+}
+
+bool certainly_crosses(const CrossingTerms& t, const Vec3d& d) {
+  const double wa = dot(d, t.bc), wb = dot(d, t.ca), wc = dot(d, t.ab);
+  // One bound for all four products: with m the largest |coordinate| of A, B, C and
+  // n that of d, each permanent is at most 6 n m^2 (det's: 6 m^3), so 8 eps of it is
+  // below 48 eps n m^2.
+  const double m = t.m, n = max_component(vabs(d));
+  const double e = 48.0 * kUnitRoundoffD * n * m * m, edet = 48.0 * kUnitRoundoffD * m * m * m;
+  const bool pos = wa > e && wb > e && wc > e, neg = wa < -e && wb < -e && wc < -e;
+  if (!pos && !neg) return false;
+  if (pos ? !(t.det > edet) : !(t.det < -edet)) return false;  // t > 0
+  // t < 1: |det| < |w_a + w_b + w_c| (one sign), which is at least the sum of the
+  // |w_i| less 3 e, less the rounding of the two additions (2 eps of the sum; 4 allowed).
+  const double sum = std::abs(wa) + std::abs(wb) + std::abs(wc);
+  return std::abs(t.det) + edet < sum - 3.0 * e - 4.0 * kUnitRoundoffD * sum;
+}
+
+}  // namespace
+
+bool certainly_crosses_interior(const Vec3d& p, const Vec3d& q, const Vec3f& fa, const Vec3f& fb, const Vec3f& fc) {
+  return certainly_crosses(crossing_terms(p, fa, fb, fc), q - p);
+}
+
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to) {
+  const IeeeFloatMode ieee;
+  for (const auto& t : soup.triangles)
+    if (segment_hits_triangle(soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]], from, to)) return true;
+  return false;
+}
+
+bool fallback_occluded(const TriangleSoup& soup, const Vec3f& from, const Vec3f& to, double t0, double t1) {
+  const IeeeFloatMode ieee;
+  for (const auto& t : soup.triangles)
+    if (line_range_hits_triangle(soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]], from, to, t0, t1))
+      return true;
+  return false;
+}
+
+namespace {
+
+// The intersect context of a verified query: Embree passes it to the filter, which
+// needs the query's float endpoints (org + dir would be rounded again) and its range.
+struct VerifyContext {
+  RTCIntersectContext base;  // first member: Embree sees a plain RTCIntersectContext
+  Vec3f from, to;
+  double t0 = 0.0, t1 = 1.0;
+  bool ranged = false;       // false: the segment test, t in (0, 1]
+  const Vec3f* fan_to = nullptr;  // a packet from `from`: lane k (ray id k) ends at fan_to[k]
+  const TriangleSoup* soup = nullptr;
+  unsigned csr = IeeeFloatMode::current_csr();  // the querying thread's MXCSR (the filter runs on it)
+  size_t rejected = 0;
+  // Bit k: the filter let a hit of ray id k stand (fan ids are below 16, a single query's
+  // id is 0). A query that comes back blocked without its bit was not verified
+  // (EmbreeScene::unverified_hits).
+  uint32_t accepted = 0;
+  // Segment queries: crossing_terms of the triangle `terms_prim` seen last from `from`
+  // (~0u: none yet), shared by the lanes and packets of the query.
+  unsigned terms_prim = ~0u;
+  CrossingTerms terms;
+};
+
+// Occlusion filter of a verified scene: a candidate hit stands only when the double-
+// precision test of the same query agrees (see embree_scene.h, "Hit verification"),
+// or, for segment queries, when certainly_crosses_interior proves it first.
+void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
+  // The filter runs on the querying thread, which may be a TBB worker with FTZ/DAZ on.
+  auto* vc = reinterpret_cast<VerifyContext*>(args->context);
+  const IeeeFloatMode ieee(vc->csr);
+  const Vec3d p = to_double(vc->from);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    const auto& t = vc->soup->triangles[prim];
+    const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
+    const unsigned id = vc->fan_to ? RTCRayN_id(args->ray, args->N, i) : 0u;
+    const Vec3f& to = vc->fan_to ? vc->fan_to[id] : vc->to;
+    if (!vc->ranged && prim != vc->terms_prim) {
+      vc->terms = crossing_terms(p, a, b, c);
+      vc->terms_prim = prim;
+    }
+    const bool confirmed =
+        (!vc->ranged && certainly_crosses(vc->terms, to_double(to) - p)) ||
+        (vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
+                    : segment_hits_triangle(a, b, c, vc->from, to));
+    if (confirmed) {
+      vc->accepted |= 1u << (id & 31u);
+    } else {
+      args->valid[i] = 0;
+      ++vc->rejected;
+    }
+  }
+}
+
+}  // namespace
+
+EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits)
+    : soup_(&soup), verify_(verify_hits) {
+  for (const Vec3f& v : soup.vertices)
+    if (!within_embree_bound(v)) {
+      mesh_in_bound_ = false;  // every query goes to the fallback; no Embree scene
+      return;
+    }
+  RTCDevice device = shared_device();
+  RTCScene scene = rtcNewScene(device);
+  rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  if (soup.size() > 0) {
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Embree-allocated buffers have the tail padding its SIMD loads need.
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), soup.vertices.size()));
+    std::memcpy(vb, soup.vertices.data(), soup.vertices.size() * 3 * sizeof(float));
+    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(uint32_t), soup.triangles.size()));
+    std::memcpy(ib, soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
+    if (verify_) rtcSetGeometryOccludedFilterFunction(geom, verify_hit_filter);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene, geom);
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(scene);
+  scene_ = scene;
+}
+
+EmbreeScene::~EmbreeScene() {
+  if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
+}
+
+bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to) const {
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to);
+  }
+  return occluded_embree(from, to, 0.0f, 1.0f, false);
+}
+
+bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
+  VG_CHECK(tnear >= 0.0f && tnear <= tfar);
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to, tnear, tfar);
+  }
+  return occluded_embree(from, to, tnear, tfar, true);
+}
+
+bool EmbreeScene::occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool& disputed) const {
+  VG_CHECK(tnear >= 0.0f && tnear <= tfar);
+  disputed = false;
+  if (!mesh_in_bound_ || !within_embree_bound(from) || !within_embree_bound(to)) {
+    fallback_rays_.fetch_add(1, std::memory_order_relaxed);
+    return fallback_occluded(*soup_, from, to, tnear, tfar);
+  }
+  size_t rejected = 0;
+  const bool hit = occluded_embree(from, to, tnear, tfar, true, &rejected);
+  disputed = rejected > 0;
+  return hit;
+}
+
+bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged,
+                                  size_t* rejected) const {
+  VerifyContext vc;
+  rtcInitIntersectContext(&vc.base);
+  vc.from = from;
+  vc.to = to;
+  vc.t0 = tnear;
+  vc.t1 = tfar;
+  vc.ranged = ranged;
+  vc.soup = soup_;
+  RTCRay ray;
+  ray.org_x = from.x;
+  ray.org_y = from.y;
+  ray.org_z = from.z;
+  Vec3f d = to - from;
+  ray.dir_x = d.x;
+  ray.dir_y = d.y;
+  ray.dir_z = d.z;
+  ray.tnear = tnear;
+  ray.tfar = tfar;
+  ray.time = 0.0f;
+  ray.mask = 0xFFFFFFFFu;
+  ray.id = 0;
+  ray.flags = 0;
+  rtcOccluded1(static_cast<RTCScene>(scene_), &vc.base, &ray);
+  if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
+  if (rejected) *rejected = vc.rejected;
+  const bool hit = ray.tfar == -std::numeric_limits<float>::infinity();
+  if (hit && verify_ && !(vc.accepted & 1u)) {  // blocked, but no hit passed the filter
+    unverified_hits_.fetch_add(1, std::memory_order_relaxed);
+    return ranged ? fallback_occluded(*soup_, from, to, tnear, tfar) : fallback_occluded(*soup_, from, to);
+  }
+  return hit;
+}
+
+namespace {
+
+// Width of the packets occluded_fan traces: 16 where Embree has a native 16-wide kernel
+// (AVX-512), else 8. On AVX2 machines Embree answers rtcOccluded16 through its ray-
+// stream path, which repacks the rays into 8-wide packets (measured on columns, ISS's
+// leaf rays, 9 runs beside a compile: median 0.155 s with rtcOccluded16, 0.133 s with
+// two rtcOccluded8; the minimum the same).
+int native_packet_width() {
+  static const int width = rtcGetDeviceProperty(shared_device(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) ? 16 : 8;
+  return width;
+}
+
+// One packet of W rays from a common origin; the constant fields (tnear, time, mask,
+// id, flags) are set once per thread, each trace writes origin, directions, tfar and
+// the lane mask. Lane k of packet `base` is fan lane base + k (its ray id, which the
+// verification filter maps to its end point).
+template <int W, class Ray>
+struct alignas(64) FanPacket {
+  Ray ray;
+  alignas(64) int valid[W];
+  FanPacket() {
+    for (int k = 0; k < W; ++k) {
+      ray.tnear[k] = 0.0f;
+      ray.time[k] = 0.0f;
+      ray.mask[k] = 0xFFFFFFFFu;
+      ray.flags[k] = 0;
+      ray.dir_x[k] = ray.dir_y[k] = 0.0f;
+      ray.dir_z[k] = 1.0f;  // inactive lanes keep a valid direction
+    }
+  }
+  // Sets lanes [0, n) to the segments from `from` to to[0..n); lanes whose end point is
+  // outside Embree's domain stay inactive (valid[k] == 0), as do lanes n..W-1.
+  void set(const Vec3f& from, const Vec3f* to, int n, unsigned base) {
+    for (int k = 0; k < W; ++k) {
+      ray.org_x[k] = from.x;
+      ray.org_y[k] = from.y;
+      ray.org_z[k] = from.z;
+      ray.tfar[k] = 1.0f;
+      ray.id[k] = base + unsigned(k);
+      valid[k] = 0;
+    }
+    for (int k = 0; k < n; ++k) {
+      if (!within_embree_bound(to[k])) continue;
+      valid[k] = -1;
+      const Vec3f d = to[k] - from;
+      ray.dir_x[k] = d.x;
+      ray.dir_y[k] = d.y;
+      ray.dir_z[k] = d.z;
+    }
+  }
+};
+
+}  // namespace
+
+void EmbreeScene::recheck_unverified(const Vec3f& from, const Vec3f* to, int n, unsigned base, uint32_t accepted,
+                                     bool* out) const {
+  if (!verify_) return;
+  for (int k = 0; k < n; ++k)
+    if (out[k] && !((accepted >> ((base + unsigned(k)) & 31u)) & 1u) && within_embree_bound(to[k])) {
+      unverified_hits_.fetch_add(1, std::memory_order_relaxed);
+      out[k] = fallback_occluded(*soup_, from, to[k]);
+    }
+}
+
+void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* out) const {
+  if (n <= 0) return;
+  if (n > 16) {
+    occluded_fan(from, to, 16, out);
+    occluded_fan(from, to + 16, n - 16, out + 16);
+    return;
+  }
+  if (!mesh_in_bound_ || !within_embree_bound(from)) {
+    for (int k = 0; k < n; ++k) out[k] = occluded(from, to[k]);
+    return;
+  }
+  // The verification filter reads a VerifyContext (lane k's end point is to[ray id]).
+  VerifyContext vc;
+  rtcInitIntersectContext(&vc.base);
+  vc.from = from;
+  vc.fan_to = to;
+  vc.soup = soup_;
+  constexpr float kHit = -std::numeric_limits<float>::infinity();
+  if (native_packet_width() == 16) {
+    thread_local FanPacket<16, RTCRay16> pk;
+    pk.set(from, to, n, 0);
+    rtcOccluded16(pk.valid, static_cast<RTCScene>(scene_), &vc.base, &pk.ray);
+    for (int k = 0; k < n; ++k) out[k] = pk.valid[k] ? pk.ray.tfar[k] == kHit : occluded(from, to[k]);
+    recheck_unverified(from, to, n, 0, vc.accepted, out);
+  } else {
+    thread_local FanPacket<8, RTCRay8> pk;
+    for (int b = 0; b < n; b += 8) {
+      const int m = std::min(8, n - b);
+      pk.set(from, to + b, m, unsigned(b));
+      rtcOccluded8(pk.valid, static_cast<RTCScene>(scene_), &vc.base, &pk.ray);
+      for (int k = 0; k < m; ++k) out[b + k] = pk.valid[k] ? pk.ray.tfar[k] == kHit : occluded(from, to[b + k]);
+      recheck_unverified(from, to + b, m, unsigned(b), vc.accepted, out + b);
+    }
+  }
+  if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);
+}
+
+}  // namespace visgate::raycast

@@ -1,0 +1,305 @@
+// lib/accel/bvh.h: the shared hierarchy, float and double, every build rule. Queries
+// (boxes, segments) against brute force over random boxes; the shape and the rules'
+// orders checked as properties.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "lib/accel/bvh.h"
+#include "tests/support/random_boxes.h"
+
+using namespace visgate;
+using namespace visgate::accel;
+
+namespace {
+
+template <class T>
+using Boxes = std::vector<AABBT<T>>;
+
+template <class T>
+Boxes<T> random_boxes(size_t n, uint32_t seed, double offset = 0.0, double extent = 100.0) {
+  return test::random_boxes<T>(n, seed, offset, extent, extent / 20);
+}
+
+std::vector<BuildRule> every_rule() {
+  std::vector<BuildRule> rules;
+  for (Split s : {Split::MortonHalves, Split::MedianAxis})
+    for (uint32_t leaf : {1u, 4u, 8u})
+      for (bool keep : {false, true}) rules.push_back(BuildRule{s, leaf, keep});
+  return rules;
+}
+
+std::string name(const BuildRule& r) {
+  return std::string(r.split == Split::MortonHalves ? "morton" : "median") + "/leaf " + std::to_string(r.leaf_size) +
+         (r.item_boxes ? "/item boxes" : "");
+}
+
+// Items reached by a conservative predicate, each leaf item tested by it too.
+template <class T, class Pred>
+std::vector<uint32_t> tree_query(const Bvh<T>& t, const Boxes<T>& boxes, Pred pred, bool use_item_boxes) {
+  std::vector<uint32_t> out;
+  if (use_item_boxes) {
+    t.query_if(pred, [&](uint32_t i) { out.push_back(i); });
+  } else {
+    t.for_each_leaf(pred, [&](const typename Bvh<T>::Node& leaf) {
+      for (uint32_t i : t.leaf_items(leaf))
+        if (pred(boxes[i])) out.push_back(i);
+    });
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+template <class T, class Pred>
+std::vector<uint32_t> brute_query(const Boxes<T>& boxes, Pred pred) {
+  std::vector<uint32_t> out;
+  for (uint32_t i = 0; i < boxes.size(); ++i)
+    if (pred(boxes[i])) out.push_back(i);
+  return out;
+}
+
+// Segment p + t (q - p), t in [0, 1], against a box by slabs, in double. Monotone under
+// box containment (every rounding is), so conservative for node boxes.
+template <class T>
+bool segment_meets_box(const Vec3d& p, const Vec3d& q, const AABBT<T>& b) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    const double d = q[a] - p[a], lo = double(b.lo[a]) - p[a], hi = double(b.hi[a]) - p[a];
+    if (d == 0.0) {
+      if (lo > 0.0 || hi < 0.0) return false;
+      continue;
+    }
+    double ta = lo / d, tb = hi / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+// Every node: count of items below, halving shape, box = exact union of the items' boxes;
+// the leaves cover every item once; kept item boxes are the items' boxes.
+template <class T>
+void expect_shape(const Bvh<T>& t, const Boxes<T>& boxes, const BuildRule& rule) {
+  const uint32_t leaf_size = rule.leaf_size;
+  std::vector<int> seen(boxes.size(), 0);
+  // (node, first position, count) from the root down.
+  struct Item {
+    uint32_t node, first, count;
+  };
+  std::vector<Item> stack{{0, 0, uint32_t(boxes.size())}};
+  size_t nodes = 0;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    ++nodes;
+    const auto& nd = t.node(it.node);
+    ASSERT_EQ(nd.count, it.count);
+    AABBT<T> u;
+    for (uint32_t k = it.first; k < it.first + it.count; ++k) u.extend(boxes[t.item(k)]);
+    EXPECT_EQ(nd.box.lo, u.lo);
+    EXPECT_EQ(nd.box.hi, u.hi);
+    if (it.count <= leaf_size) {
+      ASSERT_TRUE(t.is_leaf(nd));
+      EXPECT_EQ(nd.first, it.first);
+      for (uint32_t k = it.first; k < it.first + it.count; ++k) {
+        ++seen[t.item(k)];
+        if (rule.item_boxes) {
+          EXPECT_EQ(t.item_box(k).lo, boxes[t.item(k)].lo);
+          EXPECT_EQ(t.item_box(k).hi, boxes[t.item(k)].hi);
+        }
+      }
+      continue;
+    }
+    ASSERT_FALSE(t.is_leaf(nd));
+    stack.push_back({t.left(it.node), it.first, it.count / 2});
+    stack.push_back({t.right(it.node), it.first + it.count / 2, it.count - it.count / 2});
+  }
+  EXPECT_EQ(nodes, t.node_count());
+  for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << "item " << i;
+}
+
+template <class T>
+class BvhTest : public ::testing::Test {};
+using Scalars = ::testing::Types<float, double>;
+TYPED_TEST_SUITE(BvhTest, Scalars);
+
+}  // namespace
+
+TYPED_TEST(BvhTest, EmptyAndSingle) {
+  using T = TypeParam;
+  for (const BuildRule& r : every_rule()) {
+    Bvh<T> none(Boxes<T>{}, r);
+    EXPECT_TRUE(none.empty());
+    EXPECT_EQ(none.node_count(), 0u);
+    int calls = 0;
+    none.for_each_leaf([](const AABBT<T>&) { return true; }, [&](const auto&) { ++calls; });
+    EXPECT_EQ(calls, 0);
+    Boxes<T> one{AABBT<T>(Vec3<T>(1, 2, 3), Vec3<T>(4, 5, 6))};
+    Bvh<T> single(one, r);
+    EXPECT_EQ(single.node_count(), 1u);
+    EXPECT_EQ(tree_query(single, one, [](const AABBT<T>&) { return true; }, r.item_boxes),
+              std::vector<uint32_t>{0});
+  }
+}
+
+TYPED_TEST(BvhTest, ShapeIsHalvingWithExactUnionBoxes) {
+  using T = TypeParam;
+  for (size_t n : {2u, 5u, 9u, 40u, 333u, 1000u})
+    for (const BuildRule& r : every_rule()) {
+      SCOPED_TRACE(name(r) + " n=" + std::to_string(n));
+      const Boxes<T> boxes = random_boxes<T>(n, uint32_t(n) * 7 + 1);
+      Bvh<T> t(boxes, r);
+      expect_shape(t, boxes, r);
+    }
+}
+
+TYPED_TEST(BvhTest, BoxQueriesMatchBruteForce) {
+  using T = TypeParam;
+  for (const BuildRule& r : every_rule())
+    for (double offset : {0.0, -1e6, 3e7}) {
+      SCOPED_TRACE(name(r) + " offset " + std::to_string(offset));
+      const Boxes<T> boxes = random_boxes<T>(700, 11, offset);
+      Bvh<T> t(boxes, r);
+      const Boxes<T> queries = random_boxes<T>(60, 12, offset - 10, 120);
+      for (const AABBT<T>& q : queries) {
+        auto pred = [&](const AABBT<T>& b) { return b.overlaps(q); };
+        EXPECT_EQ(tree_query(t, boxes, pred, r.item_boxes), brute_query(boxes, pred));
+      }
+      // Every item, and the item itself, when the query is an item's own box.
+      for (uint32_t i = 0; i < boxes.size(); i += 37) {
+        auto pred = [&](const AABBT<T>& b) { return b.overlaps(boxes[i]); };
+        const auto got = tree_query(t, boxes, pred, r.item_boxes);
+        EXPECT_TRUE(std::binary_search(got.begin(), got.end(), i));
+        EXPECT_EQ(got, brute_query(boxes, pred));
+      }
+    }
+}
+
+TYPED_TEST(BvhTest, SegmentQueriesMatchBruteForce) {
+  using T = TypeParam;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-20.0, 120.0);
+  for (const BuildRule& r : every_rule()) {
+    SCOPED_TRACE(name(r));
+    const Boxes<T> boxes = random_boxes<T>(500, 21);
+    Bvh<T> t(boxes, r);
+    for (int k = 0; k < 80; ++k) {
+      Vec3d p(u(rng), u(rng), u(rng)), q(u(rng), u(rng), u(rng));
+      if (k % 8 == 0) q = Vec3d(p.x, p.y, q.z);  // axis-parallel: zero direction components
+      auto pred = [&](const AABBT<T>& b) { return segment_meets_box(p, q, b); };
+      EXPECT_EQ(tree_query(t, boxes, pred, r.item_boxes), brute_query(boxes, pred));
+    }
+  }
+}
+
+TYPED_TEST(BvhTest, InfiniteBoxesAreFound) {
+  using T = TypeParam;
+  const T inf = std::numeric_limits<T>::infinity();
+  Boxes<T> boxes = random_boxes<T>(100, 3);
+  boxes[17].hi.x = inf;
+  boxes[42].lo = Vec3<T>(-inf, -inf, -inf);
+  for (const BuildRule& r : every_rule()) {
+    SCOPED_TRACE(name(r));
+    Bvh<T> t(boxes, r);
+    // Far along +x beside item 17, far along -x beside item 42.
+    for (auto [i, x] : {std::pair<uint32_t, T>{17, T(1e4)}, std::pair<uint32_t, T>{42, T(-1e4)}}) {
+      const AABBT<T> q(Vec3<T>(x, boxes[i].hi.y, boxes[i].hi.z), Vec3<T>(x + 1, boxes[i].hi.y + 1, boxes[i].hi.z + 1));
+      auto pred = [&](const AABBT<T>& b) { return b.overlaps(q); };
+      const auto got = tree_query(t, boxes, pred, r.item_boxes);
+      EXPECT_EQ(got, brute_query(boxes, pred));
+      EXPECT_TRUE(std::binary_search(got.begin(), got.end(), i));
+    }
+  }
+}
+
+TYPED_TEST(BvhTest, MedianRuleSplitsAtTheMedianOfTheWidestAxis) {
+  // Each inner node's left half holds the floor(n / 2) smallest (centre, index) keys on
+  // the axis of the largest centre spread of its items.
+  using T = TypeParam;
+  const Boxes<T> boxes = random_boxes<T>(300, 9);
+  auto key = [&](uint32_t i, int a) { return float(boxes[i].center()[a]); };
+  Bvh<T> t(boxes, BuildRule{Split::MedianAxis, 4, false});
+  struct Item {
+    uint32_t node, first, count;
+  };
+  std::vector<Item> stack{{0, 0, uint32_t(boxes.size())}};
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    if (it.count <= 4) continue;
+    const float inf = std::numeric_limits<float>::infinity();
+    Vec3f lo(inf, inf, inf), hi(-inf, -inf, -inf);
+    for (uint32_t k = it.first; k < it.first + it.count; ++k)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], key(t.item(k), a));
+        hi[a] = std::max(hi[a], key(t.item(k), a));
+      }
+    const Vec3f ext = hi - lo;
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+    const uint32_t mid = it.first + it.count / 2;
+    auto less = [&](uint32_t x, uint32_t y) { return key(x, axis) != key(y, axis) ? key(x, axis) < key(y, axis) : x < y; };
+    for (uint32_t a = it.first; a < mid; ++a)
+      for (uint32_t b = mid; b < it.first + it.count; ++b) ASSERT_TRUE(less(t.item(a), t.item(b)));
+    stack.push_back({t.left(it.node), it.first, it.count / 2});
+    stack.push_back({t.right(it.node), mid, it.count - it.count / 2});
+  }
+}
+
+TYPED_TEST(BvhTest, MortonRuleOrdersByCodeThenIndex) {
+  // Leaf order is the stable sort by Morton code: codes never decrease, and equal codes
+  // keep index order. Codes computed here from the definition (bit interleaving).
+  using T = TypeParam;
+  const Boxes<T> boxes = random_boxes<T>(400, 13);
+  AABB cb;
+  for (const auto& b : boxes) {
+    const Vec3<T> c = b.center();
+    cb.extend(Vec3f(float(c.x), float(c.y), float(c.z)));
+  }
+  auto code = [&](uint32_t i) {
+    const Vec3<T> c = boxes[i].center();
+    const float cf[3] = {float(c.x), float(c.y), float(c.z)};
+    uint32_t q[3];
+    for (int a = 0; a < 3; ++a) {
+      const float ext = cb.hi[a] - cb.lo[a];
+      const float f = ext > 0 ? (cf[a] - cb.lo[a]) / ext : 0.0f;
+      q[a] = uint32_t(std::min(1023.0f, std::max(0.0f, f * 1024.0f)));
+    }
+    uint64_t m = 0;
+    for (int bit = 9; bit >= 0; --bit)
+      for (int a = 0; a < 3; ++a) m = (m << 1) | ((q[a] >> bit) & 1u);
+    return m;
+  };
+  Bvh<T> t(boxes, BuildRule{Split::MortonHalves, 8, false});
+  for (uint32_t k = 1; k < boxes.size(); ++k) {
+    const uint32_t a = t.item(k - 1), b = t.item(k);
+    ASSERT_TRUE(code(a) < code(b) || (code(a) == code(b) && a < b)) << k;
+  }
+}
+
+TYPED_TEST(BvhTest, AllCentresEqual) {
+  // No spread on any axis: the median rule falls back to index order, the Morton rule to
+  // one code; both still find every item.
+  using T = TypeParam;
+  Boxes<T> boxes;
+  for (int i = 0; i < 50; ++i) boxes.push_back(AABBT<T>(Vec3<T>(T(-i), 0, 0), Vec3<T>(T(i), 0, 0)));
+  for (const BuildRule& r : every_rule()) {
+    SCOPED_TRACE(name(r));
+    Bvh<T> t(boxes, r);
+    expect_shape(t, boxes, r);
+    // Index order down to the leaves (inside a median leaf, nth_element's order).
+    t.for_each_leaf([](const AABBT<T>&) { return true; }, [&](const typename Bvh<T>::Node& leaf) {
+      std::vector<uint32_t> items(t.leaf_items(leaf).begin(), t.leaf_items(leaf).end());
+      std::sort(items.begin(), items.end());
+      for (uint32_t k = 0; k < leaf.count; ++k) EXPECT_EQ(items[k], leaf.first + k);
+    });
+    const AABBT<T> q(Vec3<T>(T(30.5), 0, 0), Vec3<T>(T(40), 0, 0));
+    auto pred = [&](const AABBT<T>& b) { return b.overlaps(q); };
+    EXPECT_EQ(tree_query(t, boxes, pred, r.item_boxes), brute_query(boxes, pred));
+  }
+}

@@ -1,0 +1,43 @@
+// lib/iss/traversal.cpp: automatic ray casting of shafts whose subdivision does not pay.
+#include <gtest/gtest.h>
+
+#include "lib/solver.h"
+#include "oracle/relation_oracle.h"
+#include "tests/support/family_scene.h"
+#include "tests/support/iss_fixtures.h"
+
+using namespace visgate;
+using namespace visgate::test_support;
+
+// ---- the exact oracle on the scene families ------------------------------------------------
+
+TEST(IssOracle, AutomaticRaysEngageOnColumnsAndMatchTheOracle) {
+  // Columns at 1024 receivers: every receiver node sees some column edge-on against the
+  // light, so shafts of 16..128 receivers decide nothing and the automatic rule
+  // (traversal.h, kAutoRayRelationsPerShaft) casts their relations after the first few. Its answers
+  // must match the exact oracle like the full subdivision's, and with the rule off no
+  // shaft is skipped.
+  const double tau = 1e-5;
+  Scene s = family("columns", 3, 2500, 1024, 64);
+  ASSERT_FALSE(s.receivers.empty());
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+  SolveResult on = run_iss(s, {}), off = run_iss(s, {{"auto_rays", "off"}});
+  EXPECT_GT(on.stats.get("auto_ray_shafts"), 0.0);
+  EXPECT_LT(on.stats.get("shafts_built"), off.stats.get("shafts_built"));
+  EXPECT_EQ(off.stats.get("auto_ray_shafts"), 0.0);
+  EXPECT_EQ(on.stats.get("relations_ray_cast") + on.stats.get("relations_blocked_by_shaft") +
+                on.stats.get("relations_visible_by_empty_shaft"),
+            double(s.relation_count()));
+  size_t bad_on = 0, bad_off = 0, checked = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      char cls = ex.classes[i][k];
+      if (cls == 'd' || ex.margins[i][k] < tau) continue;
+      ++checked;
+      bad_on += on.receivers[i].visible(k) != (cls == 'v');
+      bad_off += off.receivers[i].visible(k) != (cls == 'v');
+    }
+  EXPECT_GT(checked, s.relation_count() / 2);
+  EXPECT_EQ(bad_on, 0u);
+  EXPECT_EQ(bad_off, 0u);
+}
