@@ -4,13 +4,13 @@
 Run from the repository root: python3 fuzz/make_seeds.py. Inputs found by campaigns are
 merged into the same folders by tools/fuzz-campaign.sh; this script only (re)writes the
 files named seed-*. Structure-aware targets get inputs whose decoder choices cover every
-mode of fuzz/decoder.h (the mode is the last byte's value mod 12)."""
+mode of lib/scene/byte_decoder.h (the mode is the last byte's value mod 12)."""
 import os
 import random
 import struct
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "corpus", "fuzz")
-MODES = 12  # fuzz/decoder.cpp decoder_modes()
+MODES = 12  # lib/scene/byte_decoder.cpp decoder_modes()
 
 
 def put(target, name, data):

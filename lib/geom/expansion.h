@@ -1,6 +1,7 @@
 // Shewchuk's expansion arithmetic in double ("Adaptive precision floating-point arithmetic
-// and fast robust geometric predicates", 1997), the pieces the exact predicates share:
-// lib/geom/predicates.h orient2d_exact_sign and lib/plucker/exact_orient.cpp. Valid in
+// and fast robust geometric predicates", 1997), the one copy every exact predicate uses:
+// lib/geom/predicates.h (orient2d_exact, orient3d_exact), lib/plucker/exact_orient.cpp
+// (the lifted light plane, the Newell side) and the region oracle's exact frame. Valid in
 // round-to-nearest without overflow or underflow (the callers bound their inputs).
 #pragma once
 
@@ -13,8 +14,8 @@ namespace visgate::expansion {
 
 // An expansion whose components live inline up to 16 (a Newell component of a polygon of
 // up to 8 vertices, a product of two short expansions), on the heap beyond: the exact
-// paths of plucker-bsp form them per plane and per evaluation, and as std::vector they
-// were 7% of fuzz_plucker's allocations (ASan's allocator is a quarter of its samples).
+// paths of plucker-bsp form them per plane and per evaluation, where heap vectors showed
+// in the allocator's profile.
 using Small = boost::container::small_vector<double, 16>;
 
 // Two-Sum: a + b = x + y exactly, x = fl(a + b) (Knuth).
@@ -141,6 +142,38 @@ V newell_component(const P* poly, size_t m, int k) {
   return e;
 }
 
+// out += sign * e * x for a double x, exactly: Scale-Expansion, then one merging
+// Fast-Expansion-Sum, linear in the lengths, in a per-thread scratch buffer so that
+// intermediate lengths beyond Small's inline 16 allocate nothing. sign is +-1, so
+// sign * x is exact.
+inline void add_scaled(Small& out, const Small& e, double x, double sign = 1.0) {
+  if (x == 0.0 || e.empty()) return;
+  thread_local std::vector<double> scratch;
+  const size_t ns = 2 * e.size(), nh = out.size() + ns;
+  if (scratch.size() < ns + nh) scratch.resize(ns + nh);
+  double* s = scratch.data();
+  double* h = s + ns;
+  const int n_s = scale_expansion(e.data(), int(e.size()), sign * x, s);
+  const int n_h = sum_expansions(out.data(), int(out.size()), s, n_s, h);
+  out.assign(h, h + n_h);
+}
+
+// out += sign * e * f, exactly.
+inline void add_product(Small& out, const Small& e, const Small& f, double sign = 1.0) {
+  for (double x : f) add_scaled(out, e, x, sign);
+}
+
+// a - b for floats, exactly (Two-Sum: at most two components).
+inline Small float_difference(float a, float b) {
+  Small e;
+  double x, y;
+  two_sum(double(a), -double(b), x, y);
+  if (y != 0.0) e.push_back(y);
+  if (x != 0.0) e.push_back(x);
+  return e;
+}
+
+// The expansion's value rounded within a few ulps (components summed from the smallest).
 template <class V>
 inline double estimate(const V& e) {
   double v = 0.0;

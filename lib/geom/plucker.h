@@ -4,7 +4,8 @@
 // (paper 002 section 3.3 writes pi_l = (l0..l5) = (u, v)). The side operator is
 //   side(l, r) = l3 r0 + l4 r1 + l5 r2 + l0 r3 + l1 r4 + l2 r5 = u_l . v_r + v_l . u_r,
 // zero iff the lines meet or are parallel; its sign gives their relative orientation.
-// Written once over the number type: float32 in production, exact in the oracle.
+// Written once over the number type: float32 in plucker-bsp (lib/plucker/lines.h),
+// double in the tests; the oracles decide with CGAL's predicates and do not use it.
 #pragma once
 
 #include "lib/geom/vec.h"

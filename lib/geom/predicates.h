@@ -1,16 +1,26 @@
-// Orientation predicates and the textbook float32 segment/triangle test.
-//
-// orient3d(a, b, c, d) = det[b - a, c - a, d - a]: positive when d lies on the side of
-// the plane (a, b, c) that the normal (b - a) x (c - a) points to. Written once as a
-// template; `orient3d_f32` is the plain float evaluation (no error bound: it can return
-// the wrong sign near zero, which is exactly the failure the oracle measures), the
-// oracle instantiates the same formula with CGAL's exact number type.
+// Orientation predicates in one family of names (lib/geom/sign.h, geogram-style):
+//   orient2d, orient3d                    the plain value in the inputs' number type (no
+//                                         error bound: near zero its sign can be wrong,
+//                                         which is exactly the failure the oracle measures);
+//   orient2d_filtered, orient3d_filtered  the sign of a double evaluation when it exceeds
+//                                         a forward error bound, else Sign::Uncertain;
+//   orient2d_exact, orient3d_exact        the exact sign (Shewchuk's expansion
+//                                         arithmetic, lib/geom/expansion.h), never
+//                                         Uncertain.
+// orient3d(a, b, c, d) = det[b - a, c - a, d - a]: positive when d lies on the side of the
+// plane (a, b, c) that the normal (b - a) x (c - a) points to; orient2d(a, b, c) =
+// (b - a) x (c - a): positive for a counter-clockwise turn. The plain forms are templates
+// over the number type; the oracle instantiates the same formula with CGAL's exact type.
+// Also: the closed point-in-triangle test of the ray verification and the textbook
+// float32 segment/triangle test.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
+#include "lib/geom/error_bounds.h"
 #include "lib/geom/expansion.h"
+#include "lib/geom/sign.h"
 #include "lib/geom/vec.h"
 
 namespace visgate {
@@ -24,25 +34,28 @@ inline float orient3d_f32(const Vec3f& a, const Vec3f& b, const Vec3f& c, const 
   return orient3d<float>(a, b, c, d);
 }
 
-// The exact sign of the 2D orientation (b - a) x (c - a) of float points given by their
-// two coordinates (ax, ay), ...: positive for a counter-clockwise turn. Shewchuk's
-// expansion arithmetic in double: each difference of two floats is an exact Two-Sum
-// (hi + lo), each product of two such sums four exact Two-Products (by fused multiply-
-// add), the sixteen terms summed exactly (Grow-Expansion) and the sign read from the
-// largest component. Float inputs keep everything inside double's range (products below
-// 2^260, roundoff terms above 2^-360). For light validation (lib/scene prepare_light),
-// which must agree with the region oracle's exact frame polygon.
-inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx, float cy) {
-  // Shewchuk's filter (orient2d's ccwerrboundA = (3 + 16 u) u, u = 2^-53, for double
-  // inputs, which the floats are): the double evaluation's sign when its magnitude
-  // exceeds the bound, else the exact sum below.
-  {
-    const double l = (double(bx) - double(ax)) * (double(cy) - double(ay));
-    const double r = (double(by) - double(ay)) * (double(cx) - double(ax));
-    const double det = l - r, bound = (3.0 + 16.0 * 0x1p-53) * 0x1p-53 * (std::abs(l) + std::abs(r));
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
-  }
+template <class T>
+T orient2d(T ax, T ay, T bx, T by, T cx, T cy) {
+  return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+}
+
+// orient2d of float points (ax, ay), ... in double against Shewchuk's bound
+// ccwerrboundA = (3 + 16 u) u of |l| + |r| (u = 2^-53; the floats are exact doubles).
+inline Sign orient2d_filtered(float ax, float ay, float bx, float by, float cx, float cy) {
+  const double l = (double(bx) - double(ax)) * (double(cy) - double(ay));
+  const double r = (double(by) - double(ay)) * (double(cx) - double(ax));
+  const double det = l - r, bound = (3.0 + 16.0 * kUnitRoundoffD) * kUnitRoundoffD * (std::abs(l) + std::abs(r));
+  return sign_with_bound(det, bound);
+}
+
+// The exact sign: orient2d_filtered's when certain, else each difference of two floats
+// as an exact Two-Sum (hi + lo), each product of two such sums four exact Two-Products
+// (by fused multiply-add), the sixteen terms summed exactly (Grow-Expansion) and the sign
+// read from the largest component. Float inputs keep everything inside double's range
+// (products below 2^260, roundoff terms above 2^-360). Light validation (lib/scene
+// prepare_light) uses it to agree with the region oracle's exact frame polygon.
+inline Sign orient2d_exact(float ax, float ay, float bx, float by, float cx, float cy) {
+  if (const Sign s = orient2d_filtered(ax, ay, bx, by, cx, cy); is_certain(s)) return s;
   using expansion::grow;
   using expansion::two_product;
   using expansion::two_sum;
@@ -65,18 +78,56 @@ inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx,
         grow(e, n, sg * y);
       }
   }
-  if (n == 0) return 0;
-  return e[n - 1] > 0.0 ? 1 : -1;
+  if (n == 0) return Sign::Zero;
+  return e[n - 1] > 0.0 ? Sign::Positive : Sign::Negative;
+}
+
+// The same as an int (-1, 0, 1), the form lib/scene and lib/plucker/triangle_tree call.
+inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx, float cy) {
+  return to_int(orient2d_exact(ax, ay, bx, by, cx, cy));
+}
+
+// A point as the exact sum of a float vector and a double vector (an input point: lo =
+// 0; plucker-bsp's fragment vertex: a light's local origin plus its local coordinates).
+struct SumPoint {
+  Vec3f hi{};
+  Vec3d lo{};
+  SumPoint() = default;
+  SumPoint(const Vec3f& h) : hi(h) {}  // NOLINT: an input point is its own sum
+  SumPoint(const Vec3f& h, const Vec3d& l) : hi(h), lo(l) {}
+};
+
+// An exact sign with the value it belongs to, rounded to double (within a few ulps).
+struct ExactOrient {
+  int sign = 0;
+  double value = 0.0;
+};
+
+// orient3d of three float points and a sum point in double (d rounded to double from
+// hi + lo) against a forward error bound: twice Shewchuk's orient3d errboundA
+// (7 + 56 u) u of the permanent, plus the rounding of d moved through |(b - a) x (c - a)|_1.
+// Uncertain within the bound.
+Sign orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& d);
+
+// The exact orientation of sum points: each coordinate difference an exact expansion
+// (Two-Sum), each product of three components an exact expansion (Two-Product by fused
+// multiply-add), the terms of det[b - a, c - a, d - a] summed exactly (Grow-Expansion).
+// Exact for every finite float input (and double parts of local coordinates): products
+// of three differences stay below 2^390, nonzero products and their roundoff terms above
+// 2^-500. Microseconds: callers use it where a float bound leaves a decision open.
+ExactOrient orient3d_exact_value(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d);
+
+// Its sign for float points.
+inline Sign orient3d_exact(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
+  return sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign);
 }
 
 // Closed point-in-triangle test of a point x in the triangle's plane (n its normal).
 // The point must lie in the triangle's box (grown by 2^-40 of the largest magnitude,
-// far above the rounding of x): without this a sliver fails the sign test below, for a
-// triangle of area 4e-25 the edge products of a point on the extension of its long
-// edges all round to zero or agree, and a point 0.7 beyond the sliver passed as inside
-// (fuzz_embree campaign, corpus/embree-robust/sliver/6cbacd9b: a robust-mode false hit
-// that this test then confirmed; fuzz_iss 79223f0b, corpus/iss/sliver/c979ba88: the same
-// for ISS's custom caster). Then, in the projection that drops n's dominant axis, the
+// far above the rounding of x): for a sliver the edge products of a point on the
+// extension of its long edges all round to zero or agree, so the sign test alone accepts
+// points far beyond it (corpus cases embree-robust/sliver/6cbacd9b and
+// iss/sliver/c979ba88). Then, in the projection that drops n's dominant axis, the
 // three edge cross products agree in sign (zeros allowed). Used by the ray verification
 // (lib/raycast) and ISS's segment_hits_triangle_d.
 inline bool point_in_triangle_closed(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n,

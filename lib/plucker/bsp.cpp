@@ -63,7 +63,7 @@ size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
          (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
          stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + shadow_stamp_.capacity() * sizeof(uint32_t) +
-         shadow_box_.capacity() * sizeof(Box2) + miss_edge_.capacity() + plane_stamp_.capacity() * sizeof(uint32_t) +
+         shadow_box_.capacity() * sizeof(UVBox) + miss_edge_.capacity() + plane_stamp_.capacity() * sizeof(uint32_t) +
          plane_cache_.capacity() * sizeof(NodePlane);
 }
 
@@ -190,7 +190,7 @@ const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
   return plane_cache_[slot];
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox) {
   if (have_plane_) {
     if (shadow_stamp_[id] != stamp_) {
       shadow_box_[id] = shadow_box(plane_, r, occ_[id].v, size_t(occ_[id].n));
@@ -257,7 +257,7 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     }
     if (nd.occ_count == 0 || choice_ == Choice::Random) return false;
     int64_t cover = -1;
-    const Box2 fbox = have_plane_ ? Box2::of(plane_.frame, f, n) : Box2::everything();
+    const UVBox fbox = have_plane_ ? UVBox::of(plane_.axes, f, n) : UVBox::everything();
     for (uint32_t k = 0; k < nd.occ_count && cover < 0; ++k) {
       uint32_t id = lists_[nd.occ_begin + k];
       ++counters_.occlusion_tests;
@@ -376,7 +376,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       // random one among those hiding part of it, else the fragment is visible.
       int64_t cover = -1;
       candidates_.clear();
-      const Box2 fbox = have_plane_ ? Box2::of(plane_.frame, cur_.data(), int(cur_.size())) : Box2::everything();
+      const UVBox fbox = have_plane_ ? UVBox::of(plane_.axes, cur_.data(), int(cur_.size())) : UVBox::everything();
       for (uint32_t k = 0; k < nd.occ_count; ++k) {
         uint32_t id = lists_[nd.occ_begin + k];
         ++counters_.occlusion_tests;
@@ -399,7 +399,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   }
 }
 
-uint32_t LazyBsp::largest_overlap(const Box2& fbox) const {
+uint32_t LazyBsp::largest_overlap(const UVBox& fbox) const {
   // Overlap of the boxes as the area the occluder's shadow can take from the fragment:
   // the one that can hide the most makes the largest invisible class first, where the
   // fragment's pieces (and later queries' fragments) end without further splits.
@@ -412,7 +412,7 @@ uint32_t LazyBsp::largest_overlap(const Box2& fbox) const {
   uint32_t best_id = candidates_.front();
   double best = -1.0;
   for (uint32_t id : candidates_) {
-    const Box2& b = shadow_box_[id];
+    const UVBox& b = shadow_box_[id];
     const double du = std::min(b.uhi, fbox.uhi) - std::max(b.ulo, fbox.ulo);
     const double dv = std::min(b.vhi, fbox.vhi) - std::max(b.vlo, fbox.vlo);
     const double a = std::max(du, 0.0) * std::max(dv, 0.0);

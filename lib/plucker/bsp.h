@@ -37,7 +37,7 @@
 //    than 3 vertices) are dropped: they hold no area and their points are boundary
 //    points of other fragments.
 //  - occluders must lie strictly between the receivers and the light: the caller clips
-//    them (plucker_solver.cpp); occluders touching the light plane give vvset lines in
+//    them (occluder_selection.cpp); occluders touching the light plane give vvset lines in
 //    the light plane whose sides are undecided, hence mixed: handled by conservative
 //    insertion.
 #pragma once
@@ -55,7 +55,7 @@ namespace visgate::plucker {
 
 // An occluder is a triangle or a coplanar convex patch of up to 8 corners
 // (triangle_tree.h kMaxPatchVertices) clipped to the slab between the receivers and the
-// light: a triangle gains at most 2 corners (two clips), a patch 1 (plucker_solver.cpp
+// light: a triangle gains at most 2 corners (two clips), a patch 1 (occluder_selection.cpp
 // clips patches at one plane only); one more for safety.
 constexpr int kMaxOccluderVertices = 10;
 
@@ -132,7 +132,7 @@ class LazyBsp {
 
   // The same tree initialisation on an existing object, which keeps the capacity of its
   // lists (nodes, occluder lists, query scratch): the solver keeps one tree per thread
-  // and rebuilds it for every group (plucker_solver.cpp shade_group). `occluders` is
+  // and rebuilds it for every group (group_tree.cpp). `occluders` is
   // taken by swapping: it comes back empty, holding the previous tree's storage.
   // Everything else is as after the constructor (choice Relevant, no light plane).
   void rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluders, uint64_t seed,
@@ -179,7 +179,7 @@ class LazyBsp {
   // light polygon, walked without splitting, reaches an invisible class (a node whose
   // plane splits it, a visible class or an undefined leaf without an occluder hiding
   // all of it give false; with Choice::Relevant such an occluder is merged, as the
-  // query would). A cheap first step of a query (plucker_solver.cpp).
+  // query would). A cheap first step of a query (shade_receiver.cpp).
   bool hides_all(const Vec3d& r);
 
   // The paper's "modified version" (section 5.1): back to the root holding every
@@ -236,11 +236,11 @@ class LazyBsp {
   enum class Occlusion : uint8_t { Miss, Partial, Cover };
   Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n);
   // occlusion() preceded by the shadow-box test against the fragment's box `fbox`.
-  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const Box2& fbox);
+  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox);
   // Among candidates_ (occluders hiding part of a fragment with box fbox, their shadow
   // boxes valid for this query): the one whose shadow box overlaps fbox the most, the
   // first of equal ones (Choice::Relevant with the light's plane known).
-  uint32_t largest_overlap(const Box2& fbox) const;
+  uint32_t largest_overlap(const UVBox& fbox) const;
   // The per-query caches (shadow boxes, edge planes) and the per-occluder edge hints of
   // occlusion(), sized here; the caches are valid for query point shadow_r_.
   void begin_query(const Vec3d& r);
@@ -280,7 +280,7 @@ class LazyBsp {
   Vec3d shadow_r_{};
   uint32_t stamp_ = 0;
   std::vector<uint32_t> shadow_stamp_;  // per occluder: stamp_ when shadow_box_ is valid
-  std::vector<Box2> shadow_box_;
+  std::vector<UVBox> shadow_box_;
   std::vector<uint8_t> miss_edge_;      // per occluder: the edge occlusion() last found separating
   std::vector<uint32_t> plane_stamp_;   // per occluder edge: stamp_ when plane_cache_ is valid
   std::vector<NodePlane> plane_cache_;

@@ -1,9 +1,10 @@
-// Exact orientation of float points by expansion arithmetic; see exact_orient.h.
+// The region oracle's exact light plane by expansion arithmetic; see exact_orient.h.
 #include "lib/plucker/exact_orient.h"
 
 #include <cmath>
 #include <vector>
 
+#include "lib/geom/error_bounds.h"
 #include "lib/geom/expansion.h"
 
 namespace visgate::plucker {
@@ -12,140 +13,15 @@ namespace {
 
 using Expansion = expansion::Small;  // nonoverlapping, increasing magnitude, no zeros
 
+using expansion::add_product;
+using expansion::add_scaled;
 using expansion::estimate;
-using expansion::grow;
+using expansion::float_difference;
 using expansion::two_product;
 using expansion::two_sum;
 
 // Grow-Expansion on a vector (lib/geom/expansion.h grow_vector): e += b exactly.
 inline void grow(Expansion& e, double b) { expansion::grow_vector(e, b); }
-
-// (The fixed-array Grow-Expansion, lib/geom/expansion.h, serves orient3d_exact: no
-// allocation; the fuzz_plucker profile showed the vector form spending as much in the
-// allocator as in the arithmetic.)
-
-// An expansion of at most four components: a coordinate difference.
-struct Diff {
-  double c[4];
-  int n = 0;
-};
-
-// The exact difference of two points' coordinates k as an expansion: (a.hi + a.lo) -
-// (b.hi + b.lo), four doubles summed exactly.
-Diff difference(const SumPoint& a, const SumPoint& b, int k) {
-  Diff e;
-  grow(e.c, e.n, double(a.hi[k]));
-  grow(e.c, e.n, double(a.lo[k]));
-  grow(e.c, e.n, -double(b.hi[k]));
-  grow(e.c, e.n, -double(b.lo[k]));
-  return e;
-}
-
-}  // namespace
-
-ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d) {
-  Diff u[3], v[3], w[3];
-  for (int k = 0; k < 3; ++k) {
-    u[k] = difference(b, a, k);
-    v[k] = difference(c, a, k);
-    w[k] = difference(d, a, k);
-  }
-  // det[u, v, w] = sum over the permutations (i, j, k) of sign * u_i v_j w_k, each
-  // product expanded over the components: at most 6 * 4 * 4 * 4 * 4 terms, so the sum
-  // never has more components than that.
-  static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
-  constexpr int kMaxTerms = 6 * 4 * 4 * 4 * 4;
-  double sum[kMaxTerms + 1];
-  int n = 0;
-  for (int p = 0; p < 6; ++p) {
-    const double sign = p < 3 ? 1.0 : -1.0;
-    const Diff &ui = u[perm[p][0]], &vj = v[perm[p][1]], &wk = w[perm[p][2]];
-    for (int i = 0; i < ui.n; ++i)
-      for (int j = 0; j < vj.n; ++j) {
-        double x, y;
-        two_product(ui.c[i], vj.c[j], x, y);
-        for (int k = 0; k < wk.n; ++k) {
-          double t[4];
-          two_product(x, wk.c[k], t[0], t[1]);
-          two_product(y, wk.c[k], t[2], t[3]);
-          for (double term : t)
-            if (term != 0.0) grow(sum, n, sign * term);
-        }
-      }
-  }
-  ExactOrient r;
-  if (n == 0) return r;
-  // The largest component of a nonoverlapping expansion carries its sign; summing the
-  // components from the smallest rounds the value to within a few ulps (each component
-  // is below an ulp of the next).
-  r.sign = sum[n - 1] > 0.0 ? 1 : -1;
-  for (int i = 0; i < n; ++i) r.value += sum[i];
-  return r;
-}
-
-namespace {
-
-// orient3d_filtered's double evaluation and its forward error bound.
-double orient3d_estimate(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d, double& bound) {
-  constexpr double kU = 0x1p-53;
-  Vec3d a = to_double(af);
-  Vec3d u = to_double(bf) - a, v = to_double(cf) - a;
-  Vec3d dd = to_double(d.hi) + d.lo;
-  Vec3d w = dd - a;
-  Vec3d uv = cross(u, v);
-  double val = dot(uv, w);
-  double perm = std::abs(w.x) * (std::abs(u.y * v.z) + std::abs(u.z * v.y)) +
-                std::abs(w.y) * (std::abs(u.z * v.x) + std::abs(u.x * v.z)) +
-                std::abs(w.z) * (std::abs(u.x * v.y) + std::abs(u.y * v.x));
-  // The differences u, v, w are exact or rounded once (relative u each); the rounding
-  // of dd (u |dd|_inf per coordinate) enters through the first-order term.
-  bound = 2.0 * (7.0 + 56.0 * kU) * kU * perm +
-          2.0 * (std::abs(uv.x) + std::abs(uv.y) + std::abs(uv.z)) * kU * max_component(vabs(dd));
-  return val;
-}
-
-}  // namespace
-
-ExactOrient orient3d_filtered(const Vec3f& af, const Vec3f& bf, const Vec3f& cf, const SumPoint& d) {
-  double bound = 0.0;
-  const double val = orient3d_estimate(af, bf, cf, d, bound);
-  if (std::abs(val) > bound) return ExactOrient{val > 0.0 ? 1 : -1, val};
-  return orient3d_exact(SumPoint(af), SumPoint(bf), SumPoint(cf), d);
-}
-
-namespace {
-
-// out += sign * e * x for a double x, exactly: Scale-Expansion, then one merging
-// Fast-Expansion-Sum (lib/geom/expansion.h), linear in the lengths (growing each
-// component's Two-Product into out was quadratic), in a per-thread scratch buffer so
-// that intermediate lengths beyond Small's inline 16 allocate nothing. sign is +-1, so
-// sign * x is exact.
-void add_scaled(Expansion& out, const Expansion& e, double x, double sign = 1.0) {
-  if (x == 0.0 || e.empty()) return;
-  thread_local std::vector<double> scratch;
-  const size_t ns = 2 * e.size(), nh = out.size() + ns;
-  if (scratch.size() < ns + nh) scratch.resize(ns + nh);
-  double* s = scratch.data();
-  double* h = s + ns;
-  const int n_s = expansion::scale_expansion(e.data(), int(e.size()), sign * x, s);
-  const int n_h = expansion::sum_expansions(out.data(), int(out.size()), s, n_s, h);
-  out.assign(h, h + n_h);
-}
-
-// out += sign * e * f, exactly.
-void add_product(Expansion& out, const Expansion& e, const Expansion& f, double sign = 1.0) {
-  for (double x : f) add_scaled(out, e, x, sign);
-}
-
-
-Expansion float_difference(float a, float b) {
-  Expansion e;
-  double x, y;
-  two_sum(double(a), -double(b), x, y);
-  if (y != 0.0) e.push_back(y);
-  if (x != 0.0) e.push_back(x);
-  return e;
-}
 
 }  // namespace
 
@@ -161,13 +37,13 @@ LiftedLight::LiftedLight(const Vec3f* poly, int m, int u, int v) : m_(m), u_(u),
   nw_sign_ = n_[w_].empty() || n_[w_].back() > 0.0 ? 1 : -1;
 }
 
-LiftedLight::Plane LiftedLight::plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const {
+LiftedPlane LiftedLight::plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const {
   // In double with forward error bounds (kU = 2^-53; each bound generous by a factor
   // of about 2). d = q - p: exact or rounded once (|e| <= u |d|). c = d1 x d2: each
   // product's rounding plus the d's, |e_c| <= 4 u (|d1_k1 d2_k2| + |d1_k2 d2_k1|). The
   // rounded N_k and N . S are within 2 u of the exact values (expansions rounded).
-  constexpr double kU = 0x1p-53;
-  Plane pl;
+  constexpr double kU = kUnitRoundoffD;
+  LiftedPlane pl;
   pl.p = p;
   pl.q1 = q1;
   pl.q2 = q2;
@@ -207,7 +83,7 @@ LiftedLight::Plane LiftedLight::plane(const Vec3f& p, const Vec3f& q1, const Vec
   return pl;
 }
 
-void LiftedLight::make_exact(Plane& pl) const {
+void LiftedLight::make_exact(LiftedPlane& pl) const {
   const Vec3f &p = pl.p, &q1 = pl.q1, &q2 = pl.q2;
   // c = (q1 - p) x (q2 - p), exactly.
   Expansion d1[3], d2[3], c[3];
@@ -253,10 +129,10 @@ void LiftedLight::make_exact(Plane& pl) const {
   pl.exact_ready = true;
 }
 
-double LiftedLight::double_value(const Plane& pl, float hu, double lu, float hv, double lv, double& err) {
+double LiftedLight::double_value(const LiftedPlane& pl, float hu, double lu, float hv, double lv, double& err) {
   // g = a + b hu + b lu + c hv + c lv in double, off by the coefficients' bounds times
   // |u|, |v| plus the rounding of four products and four sums (8 u of the terms).
-  constexpr double kU = 0x1p-53;
+  constexpr double kU = kUnitRoundoffD;
   const double t0 = pl.b * double(hu), t1 = pl.b * lu, t2 = pl.c * double(hv), t3 = pl.c * lv;
   const double g = pl.a + t0 + t1 + t2 + t3;
   err = pl.ea + pl.eb * (std::abs(double(hu)) + std::abs(lu)) + pl.ec * (std::abs(double(hv)) + std::abs(lv)) +
@@ -264,16 +140,15 @@ double LiftedLight::double_value(const Plane& pl, float hu, double lu, float hv,
   return g;
 }
 
-ExactOrient LiftedLight::sign(Plane& pl, float hu, double lu, float hv, double lv) const {
+ExactOrient LiftedLight::sign(LiftedPlane& pl, float hu, double lu, float hv, double lv) const {
   double err = 0.0;
   const double g = double_value(pl, hu, lu, hv, lv, err);
   if (std::abs(g) > err) return ExactOrient{(g > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * g};
   return value(pl, hu, lu, hv, lv);
 }
 
-ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double lv) const {
+ExactOrient LiftedLight::value(LiftedPlane& pl, float hu, double lu, float hv, double lv) const {
   // Double first (double_value), accepted when its bound is below 2^-30 of it.
-  constexpr double kU = 0x1p-53;
   double err = 0.0;
   const double g = double_value(pl, hu, lu, hv, lv, err);
   if (std::abs(g) * 0x1p-30 > err) return ExactOrient{(g > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * g};
@@ -286,9 +161,8 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
     // |res - sum| <= u |sum| + gamma_(n-1)^2 sum |p_i|, gamma_k = k u / (1 - k u)),
     // plus the omitted components: |A - A'| + |B - B'| |u| + |C - C'| |v|. Accepted
     // when that total is below (2^-30 - 2^-52) |res|: then res has the sign of g and is
-    // within 2^-30 of it. Where the double evaluation above cancels (edge-on receivers,
-    // fuzz_plucker), this answers without growing expansions, which was 13% of that
-    // target's samples under ASan (perf, 2026-12-03).
+    // within 2^-30 of it. Where the double evaluation above cancels (edge-on receivers),
+    // this answers without growing expansions.
     const double mult[5] = {1.0, double(hu), lu, double(hv), lv};
     const int coef[5] = {0, 1, 1, 2, 2};
     double p[20];
@@ -309,7 +183,7 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
       mag += std::abs(p[i]);
     }
     const double res = sum + comp;
-    constexpr double kGamma = 19.0 * kU / (1.0 - 19.0 * kU);
+    constexpr double kGamma = gamma_d(19);
     const double trunc = pl.rest[0] + pl.rest[1] * (std::abs(double(hu)) + std::abs(lu)) +
                          pl.rest[2] * (std::abs(double(hv)) + std::abs(lv));
     const double bound = (kGamma * kGamma * mag + trunc) * (1.0 + 0x1p-40) + 20.0 * 0x1p-1074;
@@ -317,8 +191,8 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
       return ExactOrient{(res > 0.0 ? 1 : -1) * nw_sign_, double(nw_sign_) * res};
   }
   // Third stage: the exact expansion, where the vertex lies exactly on the plane (a zero
-  // the second stage cannot certify; 48,161 times over the 150 slowest fuzz_plucker
-  // seeds, on coefficients of 1-8 components). add_scaled is linear since stop 30.
+  // the second stage cannot certify; coefficients of a few components, add_scaled
+  // linear in their lengths).
   thread_local Expansion e;
   e = pl.xa;
   add_scaled(e, pl.xb, double(hu));
@@ -330,10 +204,6 @@ ExactOrient LiftedLight::value(Plane& pl, float hu, double lu, float hv, double 
   r.sign = (e.back() > 0.0 ? 1 : -1) * nw_sign_;
   r.value = double(nw_sign_) * estimate(e);
   return r;
-}
-
-int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
-  return orient3d_exact(SumPoint(a), SumPoint(b), SumPoint(c), SumPoint(d)).sign;
 }
 
 int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x) {

@@ -1,55 +1,36 @@
-// Exact 3D orientation of float32 points, for the decisions of plucker-bsp that float
+// The exact light plane of the region oracle, for the decisions of plucker-bsp that float
 // rounding cannot make and that change a whole region rather than a sliver of it: which
-// side of a blocker's plane a receiver lies on when it is within rounding of that plane
-// (fuzz_plucker 68d82337...: a receiver 6e-9 below a face, every segment to the light
-// blocked; float called it "on the face" and skipped the face), and, for such a receiver,
-// which light points the face hides (plucker_solver.cpp, exact near-plane path).
+// light points a triangle hides from a receiver within rounding of its plane (the exact
+// near-plane path, subtract.h), which side of the light's plane a point lies on, and
+// which axis the oracle drops for the light's frame. The exact orientation of float
+// points itself is lib/geom/predicates.h orient3d_exact.
 //
-// Guarantee: exact for every finite float input. Shewchuk's expansion arithmetic
-// ("Adaptive precision floating-point arithmetic and fast robust geometric predicates",
-// 1997) in double: a point is the exact sum hi + lo of a float and a double vector (lo =
-// 0 for an input point; a fragment vertex in a light's local frame is origin + local,
-// summed exactly), each coordinate difference is an exact expansion (Two-Sum), each product of
-// three components an exact expansion (Two-Product by fused multiply-add), and the terms
-// of det[b - a, c - a, d - a] are summed exactly (Grow-Expansion). Float inputs keep every
-// intermediate inside double's range: products of three differences of floats are below
-// 2^390, and nonzero products and their roundoff terms above 2^-500, far from overflow
-// and underflow. No CGAL (DESIGN section 1: lib never includes it). Costs microseconds:
-// callers use it only where a float bound leaves a decision open.
+// Guarantee: exact for every finite float input, by Shewchuk's expansion arithmetic
+// (lib/geom/expansion.h) in double. No CGAL (DESIGN section 1: lib never includes it).
+// Costs microseconds: callers use it only where a float bound leaves a decision open.
 #pragma once
 
 #include <vector>
 
 #include "lib/geom/expansion.h"
+#include "lib/geom/predicates.h"
 #include "lib/geom/vec.h"
 
 namespace visgate::plucker {
 
-// A point as the exact sum of a float vector and a double vector (an input point:
-// lo = 0; a fragment vertex: the light's local origin plus its local coordinates).
-struct SumPoint {
-  Vec3f hi{};
-  Vec3d lo{};
-  SumPoint() = default;
-  SumPoint(const Vec3f& h) : hi(h) {}  // NOLINT: an input point is its own sum
-  SumPoint(const Vec3f& h, const Vec3d& l) : hi(h), lo(l) {}
+// One plane's affine function over the lifted light (LiftedLight::plane). The
+// coefficients in double with forward error bounds answer most evaluations; the exact
+// expansions are formed on the first evaluation those bounds leave open (an edge-on
+// receiver: B and C cancel).
+struct LiftedPlane {
+  double a = 0, b = 0, c = 0, ea = 0, eb = 0, ec = 0;  // A, B, C rounded, and bounds
+  Vec3f p{}, q1{}, q2{};
+  bool exact_ready = false;
+  expansion::Small xa, xb, xc;  // exact A, B, C (once exact_ready)
+  // Their two largest components and a bound on the sum of the others (value()'s
+  // second stage), set with them.
+  double top[3][2] = {{0, 0}, {0, 0}, {0, 0}}, rest[3] = {0, 0, 0};
 };
-
-struct ExactOrient {
-  int sign = 0;        // sign of det[b - a, c - a, d - a]: exact
-  double value = 0.0;  // the determinant rounded to double (within a few ulps)
-};
-
-// det[b - a, c - a, d - a], positive when d lies on the side of the plane (a, b, c)
-// that (b - a) x (c - a) points to (lib/geom/predicates.h orient3d).
-ExactOrient orient3d_exact(const SumPoint& a, const SumPoint& b, const SumPoint& c, const SumPoint& d);
-
-// The same, filtered: evaluated first in double (d rounded to double from hi + lo)
-// against a forward error bound (twice Shewchuk's orient3d errboundA (7 + 56 u) u of the
-// permanent, plus the rounding of d moved through |(b - a) x (c - a)|_1), exact only
-// when that leaves the sign open. Same sign as orient3d_exact; the value is then the
-// double evaluation (within its bound of the exact one).
-ExactOrient orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& d);
 
 // The light's exact plane, parametrised by two coordinate axes: the region oracle's light
 // (oracle/region_oracle.h "Exact frame") is the polygon of its float vertices' (u, v)
@@ -61,16 +42,16 @@ ExactOrient orient3d_filtered(const Vec3f& a, const Vec3f& b, const Vec3f& c, co
 // float), orient3d(p, q1, q2, X) = c . (X - p) is affine in (u, v); times m N_w it is
 //   g(u, v) = B u + C v + A,  B = m (N_w c_u - N_u c_w),  C = m (N_w c_v - N_v c_w),
 //   A = c_w (N . S) - m N_w (c . p),
-// with A, B, C exact expansions of float products (degree 4 and 5). LiftedPlane::value
+// with A, B, C exact expansions of float products (degree 4 and 5). LiftedLight::value
 // evaluates sign(N_w) g exactly (the sign of orient3d(p, q1, q2, X) for the exact lifted
 // point X of (u, v)) and rounds it within a few ulps.
 //
 // Why: a fragment vertex kept as a 3D double point lies up to its rounding (1e-17 of its
 // coordinates) off the light's plane; seen from a receiver within that distance of the
 // plane (an edge-on light), that offset decides which side of a plane through the
-// receiver and a triangle edge the vertex is on (fuzz_plucker 9386076d, 3d8b5bf8,
-// 71a1d636: receivers 1e-22 .. 1e-35 from tilted lights' planes, fractions off by
-// 0.003 to 0.07). On (u, v) and the exact lift the answer is the region oracle's.
+// receiver and a triangle edge the vertex is on (test
+// ReceiverWithinRoundingOfATiltedLightsPlaneUsesTheExactLift). On (u, v) and the exact
+// lift the answer is the region oracle's.
 //
 // Range: with float inputs every term stays within double's range (below 2^660; the
 // float products and their roundoffs above 2^-960). The double parts lu, lv of a
@@ -86,43 +67,33 @@ class LiftedLight {
   int v() const { return v_; }
   bool valid() const { return m_ > 0; }
 
-  // One plane's affine function. The coefficients in double with forward error bounds
-  // answer most evaluations; the exact expansions are formed on the first evaluation
-  // those bounds leave open (an edge-on receiver: B and C cancel).
-  struct Plane {
-    double a = 0, b = 0, c = 0, ea = 0, eb = 0, ec = 0;  // A, B, C rounded, and bounds
-    Vec3f p{}, q1{}, q2{};
-    bool exact_ready = false;
-    expansion::Small xa, xb, xc;  // exact A, B, C (once exact_ready)
-    // Their two largest components and a bound on the sum of the others (value()'s
-    // second stage), set with them.
-    double top[3][2] = {{0, 0}, {0, 0}, {0, 0}}, rest[3] = {0, 0, 0};
-  };
   // The affine function of the plane through p with normal (q1 - p) x (q2 - p).
-  Plane plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const;
+  LiftedPlane plane(const Vec3f& p, const Vec3f& q1, const Vec3f& q2) const;
   // sign(N_w) g at u = hu + lu, v = hv + lv: exact sign, value within 2^-30 (the double
   // evaluation where its bound allows that, then a compensated sum of the exact
   // coefficients' two leading components with its error bound, else the exact
   // expansion rounded).
-  ExactOrient value(Plane& pl, float hu, double lu, float hv, double lv) const;
+  ExactOrient value(LiftedPlane& pl, float hu, double lu, float hv, double lv) const;
   // The same exact sign, with a value that is only the double evaluation's (not within
   // 2^-30) when its error bound decides the sign, else value()'s: for decisions that
-  // read the sign alone. In fuzz_plucker's inputs 41% of evaluations needed more than
-  // the double stage for 2^-30, and 89% of those had a certain sign in double.
-  ExactOrient sign(Plane& pl, float hu, double lu, float hv, double lv) const;
+  // read the sign alone (most evaluations that need more than the double stage for
+  // 2^-30 have a certain sign in double).
+  ExactOrient sign(LiftedPlane& pl, float hu, double lu, float hv, double lv) const;
 
  private:
-  void make_exact(Plane& pl) const;
+  void make_exact(LiftedPlane& pl) const;
   // The double evaluation of g and its forward error bound.
-  static double double_value(const Plane& pl, float hu, double lu, float hv, double lv, double& err);
+  static double double_value(const LiftedPlane& pl, float hu, double lu, float hv, double lv, double& err);
   expansion::Small n_[3];       // Newell normal N, exact
   expansion::Small ns_exact_;   // N . S (S the vertex sum), exact: every plane's A uses it
   double nd_[3] = {0, 0, 0}, ns_ = 0;  // N and N . S rounded (within a few ulps)
   int m_ = 0, u_ = 0, v_ = 1, w_ = 2, nw_sign_ = 1;
 };
 
-// Its sign for plain float points.
-int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d);
+// orient3d_exact as an int (-1, 0, 1), the form lib/plucker/triangle_tree.cpp calls.
+inline int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
+  return to_int(orient3d_exact(a, b, c, d));
+}
 
 // The exact side of x against the plane the region oracle takes as a light's plane
 // (oracle/region_oracle.h "Exact frame": the Newell normal N = sum v_i x v_(i+1) of the m
@@ -130,17 +101,16 @@ int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Ve
 // the sign of N . (m x - sum v_i), exactly (the same expansions; m x is exact for m <
 // 2^29). For a light that is not exactly planar this is the side the oracle's fraction
 // is defined on; plane tests in float cannot decide it for a receiver within the
-// light's rounding bound (a light 5.5e6 long has a bound above 2 at its base, fuzz_plucker
-// crash-61c69374...).
+// light's rounding bound, which grows with the light's length (test
+// ReceiverBelowALongLightUndecidedInFloat).
 int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x);
 
 // The axis the region oracle drops for a light's frame (oracle/region_oracle.h "Exact
 // frame"): k with the largest |N_k| of the exact Newell normal of the m float vertices,
 // the lowest such k on a tie (k = 0, then j = 1, 2 replaces it when |N_j| > |N_k|). For
 // a light that is not exactly planar the lifted polygon depends on it; the rounded
-// normal cannot tell components that differ by less than its rounding (fuzz_plucker
-// e50d5948: |N_y| - |N_x| = 2^-71 at 1.7e6, the float normal's equal components picked
-// x, the oracle y, and the two liftings differ by 0.06% of the light).
+// normal cannot tell components that differ by less than its rounding (test
+// NonPlanarLightIsLiftedAlongTheOraclesAxis).
 int newell_dominant_axis(const Vec3f* poly, int m);
 
 }  // namespace visgate::plucker

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "lib/geom/error_bounds.h"
 #include "lib/plucker/lines.h"
 
 namespace visgate::plucker {
@@ -12,14 +13,14 @@ namespace visgate::plucker {
 namespace {
 constexpr int kMaxStack = 64;
 // Unit roundoff of double.
-constexpr double kUd = 0x1p-53;
+constexpr double kUd = kUnitRoundoffD;
 
 // makePlane(xyz, hyperplane) (Algorithm 1 line 18) in double: the plane through r and
 // the line a -> b, N = (a - r) x (b - r), from the float inputs in double (the data stay
 // float32; the plane is evaluated in double, as ISS evaluates its predicates: in float a
-// node's plane is known only to u = 6e-8 of the distance from its base to the light, which
-// for a light 1e-3 across seen past occluders 1 away moved shadow edges by 1e-4 of the
-// light and fractions by more than the tolerance, fuzz_plucker crash-8426a007...).
+// node's plane is known only to u = 6e-8 of the distance from its base to the light,
+// which moves the shadow edges of a small light seen past distant occluders by more
+// than the tolerance).
 // N is the cross product of the two shortest of a - r, b - r, b - a (lines.h
 // edge_plane_normal: (a - r) x (b - r) = (a - r) x (b - a) = (b - r) x (b - a)), with a
 // per-component error bound 8 u_d times the component's permanent (lines.h
@@ -31,15 +32,13 @@ constexpr double kUd = 0x1p-53;
 // The plane is evaluated through the one of r, a, b nearest to the light's centroid
 // (lines.h nearest_base; (x - a) . N = (x - r) . N because N is orthogonal to a - r), so
 // every vertex of every fragment is judged against the same plane: for a receiver far
-// from the light (fuzz_plucker 597a1279...: 7e22 away) x - r is -r to within rounding
-// and (x - r) . N cancels catastrophically.
+// from the light x - r is -r to within rounding and (x - r) . N cancels catastrophically.
 // The bound of d . N is 8 u_d |N|_inf |d|_1 (its evaluation) plus 2 u_d |N|_1 |x|_inf: a
 // fragment vertex x was rounded (when it was interpolated) by up to u_d |x_i| per
 // coordinate, so a vertex within that of the plane is on it. Both are taken at their
 // largest over the light polygon (fragment.h LightBounds: |d|_1 <= |centroid - base|_1 +
-// radius1, |x|_inf <= mag), one number per plane: the per-vertex norms were 6-8 of
-// the loop's instructions per vertex (columns 4096 x 16: 1.316G -> 1.25G instructions
-// for |x|_inf alone). The tolerance so grows to rounding of the light's size, far below
+// radius1, |x|_inf <= mag), one number per plane rather than per-vertex norms (a
+// measurable part of the loop's instructions). The tolerance so grows to rounding of the light's size, far below
 // every fragment the comparator or the fraction can see. Without the vertex term, vertices
 // that lie on a plane only to float precision (shared boundaries of earlier splits) were
 // split off as slivers: measured on columns, 6x the developments and 2.3x the fragments.
@@ -48,9 +47,8 @@ constexpr double kUd = 0x1p-53;
 // affine function at its ends (opposite signs): interpolated from the end nearer the
 // plane (smaller |s|), p_near + (p_far - p_near) s_near / (s_near - s_far). From the far
 // end, p0 + (p1 - p0) t with t = s0 / (s0 - s1) close to 1 loses everything below u_d of
-// the edge's length: a triangle with a vertex 7e22 away, clipped at the light plane,
-// got its crossing 0.34 below it (t rounded to 1, z = 7e22 - 7e22 = 0), which moved a
-// shadow edge by 6% of the light (fuzz_plucker crash-8f6fea11...). From the near end the
+// the edge's length: for a triangle with a vertex far away, clipped at the light plane,
+// t rounds to 1 and the crossing lands far from the plane. From the near end the
 // error is u_d times the distance to the crossing. The choice depends only on the two
 // ends, not on the direction the edge is walked in (ties broken by the coordinates), so
 // the two polygons sharing an edge get the same point.
@@ -209,8 +207,8 @@ double polygon_area(const Vec3d* poly, int n) {
   return 0.5 * length(acc);
 }
 
-PlaneFrame PlaneFrame::from_normal(const Vec3f& n) {
-  PlaneFrame f;
+UVAxes UVAxes::from_normal(const Vec3f& n) {
+  UVAxes f;
   int w = max_axis(vabs(n));
   f.u = (w + 1) % 3;
   f.v = (w + 2) % 3;
@@ -220,8 +218,8 @@ PlaneFrame PlaneFrame::from_normal(const Vec3f& n) {
   return f;
 }
 
-Box2 Box2::of(const PlaneFrame& f, const Vec3d* poly, int n) {
-  Box2 b;
+UVBox UVBox::of(const UVAxes& f, const Vec3d* poly, int n) {
+  UVBox b;
   if (n <= 0) return b;
   b.ulo = b.uhi = poly[0][f.u];
   b.vlo = b.vhi = poly[0][f.v];
@@ -234,12 +232,12 @@ Box2 Box2::of(const PlaneFrame& f, const Vec3d* poly, int n) {
   return b;
 }
 
-Box2 Box2::everything() {
+UVBox UVBox::everything() {
   constexpr double inf = std::numeric_limits<double>::infinity();
-  return Box2{-inf, inf, -inf, inf};
+  return UVBox{-inf, inf, -inf, inf};
 }
 
-void Box2::extend(const Box2& b) {
+void UVBox::extend(const UVBox& b) {
   if (b.ulo > b.uhi) return;
   if (ulo > uhi) {
     *this = b;
@@ -251,16 +249,16 @@ void Box2::extend(const Box2& b) {
   vhi = std::max(vhi, b.vhi);
 }
 
-Box2 shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
+UVBox shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
   const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
   const double hr = dot(nd, rd) - lp.h0;
-  if (!(std::abs(hr) > 0.0)) return Box2::everything();
-  const int fu = lp.frame.u, fv = lp.frame.v;
+  if (!(std::abs(hr) > 0.0)) return UVBox::everything();
+  const int fu = lp.axes.u, fv = lp.axes.v;
   double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
   for (size_t k = 0; k < n; ++k) {
     const Vec3d& p = q[k];
     double hp = dot(nd, p) - lp.h0;
-    if (!(hp / hr <= 1.0 - 0x1p-10)) return Box2::everything();
+    if (!(hp / hr <= 1.0 - 0x1p-10)) return UVBox::everything();
     double t = hr / (hr - hp);
     Vec3d x = rd + (p - rd) * t;
     double u = x[fu], v = x[fv];
@@ -269,15 +267,15 @@ Box2 shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n)
   }
   double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
   double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
-  return Box2{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+  return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
 }
 
-bool point_in_fragment(const PlaneFrame& f, const Vec3d* poly, int n, const Vec3d& p, double slack) {
+bool point_in_fragment(const UVAxes& f, const Vec3d* poly, int n, const Vec3d& p, double slack) {
   // 2D orientation (b - a) x (p - a) in double: 2 differences per factor, 2 products,
   // 1 subtraction, < 5.01 u_d of the permanent |bu - au||pv - av| + |bv - av||pu - au|;
   // 8 u_d accepts points on the boundary (shared edges of neighbouring fragments are the
   // same segment, so no sample falls between them).
-  const double bound_k = 8.0 * 0x1p-53;
+  const double bound_k = 8.0 * kUnitRoundoffD;
   for (int k = 0; k < n; ++k) {
     const Vec3d& a = poly[k];
     const Vec3d& b = poly[(k + 1 == n) ? 0 : k + 1];

@@ -5,11 +5,10 @@
 //
 // Precision: double throughout, on double local coordinates computed from the float32
 // inputs (fragment vertices are points of the light in its local frame; query points and
-// occluders the solver's local coordinates). Float fragments were not enough: a light
-// 4e5 long had its shadow boundaries moved by u |x| = 0.015 at its far end, 1% of its
-// area (fuzz_plucker f71e1b21...). Planes through a query point and a node's line are
-// evaluated against forward error bounds (a vertex within the bound lies "on" the plane
-// and goes to both pieces).
+// occluders the solver's local coordinates). Float fragments are not enough: on a long
+// light u |x| at its far end is a visible part of its area. Planes through a query point
+// and a node's line are evaluated against forward error bounds (a vertex within the
+// bound lies "on" the plane and goes to both pieces).
 #pragma once
 
 #include <cstdint>
@@ -77,8 +76,7 @@ SplitResult classify_fragment(const NodePlane& plane, const Vec3d* poly, int n);
 // vertices are computed in double (callers evaluate the affine function in double on
 // the float vertices) and each new vertex is rounded once to float: a float
 // interpolation along an edge of length E errs by u E, which for an edge from a vertex
-// 6e5 away put the clipped occluder 0.04 off at a light of size 2 (fuzz_plucker
-// dfb33fdd...).
+// far away puts the clipped occluder visibly off at a small light.
 // With `on_plane`, on_plane[k] tells whether output vertex k lies on the plane value = 0
 // (an interpolated vertex, or an input vertex whose value is exactly 0).
 void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3f>& out,
@@ -91,23 +89,25 @@ void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_no
 // Area of a planar polygon (Newell, double).
 double polygon_area(const Vec3d* poly, int n);
 
-// A 2D frame on the light plane: drop the axis where the light normal is largest; `flip`
-// makes counter-clockwise (about the light normal) polygons positive in 2D.
-struct PlaneFrame {
+// The two kept axes (u, v) of the projection of the light plane that drops the axis where
+// the light normal is largest (not a Frame3d: no origin, no rotation, coordinates are the
+// points' own); `flip` makes counter-clockwise (about the light normal) polygons positive
+// in 2D.
+struct UVAxes {
   int u = 0, v = 1;
   bool flip = false;
-  static PlaneFrame from_normal(const Vec3f& n);
+  static UVAxes from_normal(const Vec3f& n);
 };
 
-// A 2D box in a PlaneFrame (coordinates u, v of the 3D points). Used only to skip work
+// A box in the (u, v) coordinates of UVAxes (of the 3D points). Used only to skip work
 // that cannot change a result: two fragments whose boxes are disjoint are disjoint.
-struct Box2 {
+struct UVBox {
   double ulo = 0, uhi = -1, vlo = 0, vhi = -1;  // empty by default
-  static Box2 of(const PlaneFrame& f, const Vec3d* poly, int n);
-  static Box2 everything();
-  bool overlaps(const Box2& b) const { return ulo <= b.uhi && b.ulo <= uhi && vlo <= b.vhi && b.vlo <= vhi; }
+  static UVBox of(const UVAxes& f, const Vec3d* poly, int n);
+  static UVBox everything();
+  bool overlaps(const UVBox& b) const { return ulo <= b.uhi && b.ulo <= uhi && vlo <= b.vhi && b.vlo <= vhi; }
   bool contains(double u, double v) const { return u >= ulo && u <= uhi && v >= vlo && v <= vhi; }
-  void extend(const Box2& b);
+  void extend(const UVBox& b);
 };
 
 // The light's plane in a local frame: n . x = 0 (the frame's origin is a light vertex),
@@ -116,17 +116,17 @@ struct LightPlane {
   Vec3f n{};
   float plane_tol = 0.0f;
   float extent = 0.0f;
-  PlaneFrame frame;
+  UVAxes axes;
   // The plane in double: nd . x = h0, nd = n in double and h0 = 0 when it passes through
   // the local origin (a light vertex). A light whose float vertices are not coplanar is
   // lifted onto its Newell plane: nd is then its unit Newell normal in double and h0
-  // that of the lifted origin vertex (plucker_solver.cpp make_frame). Zero nd: n.
+  // that of the lifted origin vertex (local_light.cpp make_local_light). Zero nd: n.
   Vec3d nd{0, 0, 0};
   double h0 = 0.0;
 };
 
 // A box holding the shadow of the convex polygon q (n vertices) cast from r onto the
-// light, in the light's PlaneFrame, or Box2::everything() when a vertex of q is not
+// light, in the light's UVAxes, or UVBox::everything() when a vertex of q is not
 // between r and the light plane by at least 2^-10 of r's height (its projection is then
 // unbounded or too far out to bound usefully). Central projection onto n . x = 0:
 // x = r + (p - r) t, t = h(r) / (h(r) - h(p)) with h(x) = n . x, computed in double from
@@ -137,7 +137,7 @@ struct LightPlane {
 // for the double rounding (about 1e-16 relative, times t <= 2^10). Conservative: it only
 // makes the box larger than the shadow. Used to skip a polygon whose shadow cannot meet
 // a fragment (two disjoint boxes: disjoint convex sets).
-Box2 shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
+UVBox shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
@@ -150,8 +150,8 @@ Box2 shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 // The bound then grows by the orientation's change under such a move,
 // 2 slack (|p_u - a_u| + |p_v - a_v|) + slack (|e_u| + |e_v|): a short edge's line
 // constrains only points near it. Far from every edge the answer is unchanged; callers
-// that need a tight outer limit test a box first (plucker_solver.cpp).
-bool point_in_fragment(const PlaneFrame& f, const Vec3d* poly, int n, const Vec3d& p, double slack = 0.0);
+// that need a tight outer limit test a box first (shade_receiver.cpp sample_bits).
+bool point_in_fragment(const UVAxes& f, const Vec3d* poly, int n, const Vec3d& p, double slack = 0.0);
 
 // Lambert irradiance at r with unit normal nr from a uniformly emitting polygon of unit
 // radiance (Nishita-Nakamae: E = 1/2 sum_k theta_k (nr . gamma_k)), the polygon first

@@ -35,7 +35,7 @@ Orientation vvset_orientation(const Vec3f* occ, int n, const Vec3f* dir, int m, 
 }
 
 void EdgeFan::set(const Vec3d& a_, const Vec3d& b, const Vec3d* p, int m) {
-  constexpr double kDetErrD = 12.0 * 0x1p-53;
+  constexpr double kDetErrD = 12.0 * kUnitRoundoffD;
   a = a_;
   Vec3d ab = b - a;
   double nab = std::abs(ab.x) + std::abs(ab.y) + std::abs(ab.z);
@@ -82,12 +82,12 @@ Orientation EdgeFan::orientation(const Vec3d* x, int n, bool toward) const {
 bool segment_blocked(const Vec3f& r, const Vec3f& s, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
   // Plane sides: det[r - a, b - a, c - a] and det[s - a, b - a, c - a].
   Sign sr = side_sign(a, r, b, c);
-  if (sr == Sign::Zero) return false;
+  if (sr == Sign::Uncertain) return false;
   Sign ss = side_sign(a, s, b, c);
-  if (ss == Sign::Zero || ss == sr) return false;
+  if (ss == Sign::Uncertain || ss == sr) return false;
   // Edge lines: det[s - r, v_k - r, v_k+1 - r] = side(r -> s, v_k -> v_k+1).
   Sign e0 = side_sign(r, s, a, b);
-  if (e0 == Sign::Zero) return false;
+  if (e0 == Sign::Uncertain) return false;
   return side_sign(r, s, b, c) == e0 && side_sign(r, s, c, a) == e0;
 }
 

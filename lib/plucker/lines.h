@@ -10,22 +10,21 @@
 //
 // Precision: the float32 forms (side_sign, segment_blocked, vvset_orientation) decide
 // every sign with a forward error bound (kDetErr below): a value within the bound is
-// classified Zero, never given a sign it may not have. Signs outside the bound are exact
-// for the float inputs; Zero means "undecided in float" and callers treat it
-// conservatively. The double forms (EdgeFan, the Vec3d edge_plane_normal_err) are the
-// same with double's unit roundoff, for the solver's double local coordinates.
+// Sign::Uncertain (lib/geom/sign.h), never given a sign it may not have. Signs outside
+// the bound are exact for the float inputs; callers treat Uncertain conservatively.
+// The double forms (EdgeFan, the Vec3d edge_plane_normal_err) are the same with
+// double's unit roundoff, for the solver's double local coordinates.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "lib/geom/error_bounds.h"
 #include "lib/geom/plucker.h"
+#include "lib/geom/sign.h"
 #include "lib/geom/vec.h"
 
 namespace visgate::plucker {
-
-// Unit roundoff of float32 (round to nearest): 2^-24.
-constexpr float kUnitRoundoff = 0x1p-24f;
 
 // Error bound of det[d, a, b] = d . (a x b) where d, a, b are float differences of float
 // inputs (e.g. d = x - p, a = a' - p, b = b' - p, or b = b' - a', edge_plane_normal): 3 roundings in the differences, 2 in each cross
@@ -34,10 +33,10 @@ constexpr float kUnitRoundoff = 0x1p-24f;
 // the six terms, which is at most |d|_1 |a|_1 |b|_1. The bound itself is evaluated in
 // float with at most 9 more roundings of non-negative terms (factor >= 1 - 9.1u), so
 // 12 u |d|_1 |a|_1 |b|_1 (Shewchuk's orient3d errboundA is (7 + 56u) u) is safe.
-constexpr float kDetErr = 12.0f * kUnitRoundoff;
+constexpr float kDetErr = 12.0f * kUnitRoundoffF;
 // Error bound of one component of a x b (a, b float differences): 2 difference
 // roundings per factor pair, 1 product, 1 subtraction: < 4.01 u of |a|_1 |b|_1; doubled.
-constexpr float kCrossErr = 8.0f * kUnitRoundoff;
+constexpr float kCrossErr = 8.0f * kUnitRoundoffF;
 
 inline float norm1(const Vec3f& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); }
 inline double norm1(const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); }
@@ -48,9 +47,8 @@ inline double norm1(const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std
 // product of their 1-norms, the scale of its rounding error (kCrossErr per component;
 // with a third float difference d, kDetErr |d|_1 scale for d . N). For a short edge far
 // from p this is |a - p| |b - a| instead of |a - p| |b - p|: the plane is then known
-// to the precision of the geometry, not to u |a - p| / |b - a| (measured: a column
-// face clipped 3e-5 above the floor left a 1.6e-5 long edge whose plane through a
-// receiver 4 units away was "undecided" with the textbook form, columns seed 101).
+// to the precision of the geometry, not to u |a - p| / |b - a| (a short edge far from a
+// receiver is undecided in the textbook form).
 inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, float& scale) {
   Vec3f pa = a - p, pb = b - p, ab = b - a;
   float na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
@@ -70,10 +68,8 @@ inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, f
 // permanent of component i of u x v (|u_y v_z| + |u_z v_y| for x, ...), for the two
 // vectors u, v actually crossed. |u|_1 |v|_1 bounds every permanent, but for two long,
 // nearly parallel vectors (an edge far from p and nearly in line with it) it is
-// dominated by the product of their long components, which no cross component holds:
-// measured on fuzz_plucker seed-mode07-1, an edge 3e8 away and 5e-9 rad off the line to
-// the receiver: |N| 8e9 against a |u|_1 |v|_1 bound of 8e11 (so "r on the line") and a
-// permanent bound of about 1e3.
+// dominated by the product of their long components, which no cross component holds, and
+// would call r "on the line" where the permanents decide.
 inline Vec3f edge_plane_normal_err(const Vec3f& p, const Vec3f& a, const Vec3f& b, Vec3f& err) {
   Vec3f pa = a - p, pb = b - p, ab = b - a;
   float na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
@@ -102,11 +98,11 @@ inline Vec3d edge_plane_normal_err(const Vec3d& p, const Vec3d& a, const Vec3d& 
   }
   err = Vec3d(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
               std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
-        (8.0 * 0x1p-53);
+        (8.0 * kUnitRoundoffD);
   return cross(*u, *v);
 }
 inline double dot_err(const Vec3d& d, const Vec3d& nrm, const Vec3d& err) {
-  constexpr double k = 8.0 * 0x1p-53;
+  constexpr double k = 8.0 * kUnitRoundoffD;
   return std::abs(d.x) * (err.x + k * std::abs(nrm.x)) + std::abs(d.y) * (err.y + k * std::abs(nrm.y)) +
          std::abs(d.z) * (err.z + k * std::abs(nrm.z));
 }
@@ -118,9 +114,9 @@ inline bool on_line(const Vec3d& nrm, const Vec3d& err) {
 // N's component errors times |d_i|, plus the rounding of d and of the dot product
 // (5 roundings of sum |d_i N_i|, counted as 8 u).
 inline float dot_err(const Vec3f& d, const Vec3f& nrm, const Vec3f& err) {
-  return std::abs(d.x) * (err.x + 8.0f * kUnitRoundoff * std::abs(nrm.x)) +
-         std::abs(d.y) * (err.y + 8.0f * kUnitRoundoff * std::abs(nrm.y)) +
-         std::abs(d.z) * (err.z + 8.0f * kUnitRoundoff * std::abs(nrm.z));
+  return std::abs(d.x) * (err.x + 8.0f * kUnitRoundoffF * std::abs(nrm.x)) +
+         std::abs(d.y) * (err.y + 8.0f * kUnitRoundoffF * std::abs(nrm.y)) +
+         std::abs(d.z) * (err.z + 8.0f * kUnitRoundoffF * std::abs(nrm.z));
 }
 
 // r on the line a -> b within rounding: every component of the computed normal within
@@ -133,10 +129,8 @@ inline bool on_line(const Vec3f& nrm, const Vec3f& err) {
 // N = edge_plane_normal(p, a, b): any of p, a, b gives the same determinant (N is
 // orthogonal to a - p, b - p and b - a), and the computed plane is held to the rounding
 // of N's direction times |x - base|, so the one nearest to x (1-norm, x a representative
-// point of those evaluated) is used. Measured: a receiver 7e22 from the light needs a or b
-// (fuzz_plucker 597a1279...: (x - p) . N cancels and overflows), an occluder vertex 6e5
-// from the light needs p or the other vertex (dfb33fdd...: (x - a) . N put the plane
-// 0.04 off at the light).
+// point of those evaluated) is used: for a receiver p far from the light, (x - p) . N
+// cancels, and for an occluder vertex a far from the light, (x - a) . N does.
 template <class T, class U>
 inline const Vec3<T>& nearest_base(const Vec3<T>& p, const Vec3<T>& a, const Vec3<T>& b, const Vec3<U>& xu) {
   Vec3<T> x(xu);
@@ -146,10 +140,8 @@ inline const Vec3<T>& nearest_base(const Vec3<T>& p, const Vec3<T>& a, const Vec
   return da <= db ? a : b;
 }
 
-enum class Sign : int8_t { Negative = -1, Zero = 0, Positive = 1 };
-
 // side(line(p, x), line(a, b)) = det[x - p, a - p, b - p] (lib/geom/plucker.h), with its
-// sign decided against kDetErr. Translation invariant, so far-from-origin inputs keep
+// sign decided against kDetErr (Uncertain within it). Translation invariant, so far-from-origin inputs keep
 // their relative precision. Evaluated as (x - base) . N with N = edge_plane_normal_err(p,
 // a, b) and the base of nearest_base, so a point far from the other three costs no
 // precision (fragment.cpp, kDotErr), decided against dot_err.
@@ -159,7 +151,7 @@ inline Sign side_sign(const Vec3f& p, const Vec3f& x, const Vec3f& a, const Vec3
   Vec3f nrm = edge_plane_normal_err(p, a, b, err);
   float s = dot(d, nrm);
   float bound = dot_err(d, nrm, err);
-  return s > bound ? Sign::Positive : (s < -bound ? Sign::Negative : Sign::Zero);
+  return sign_with_bound(s, bound);
 }
 
 // Section 3.2: the line stabs the convex polygon (its interior, properly) iff its

@@ -6,13 +6,15 @@
 //    triangle): tiles of `tile` x `tile` receivers of the scene's receiver grid, or, for
 //    scattered receivers, runs of tile^2 receivers in Morton order;
 //  - lights are handled in turn; for each light the groups are shaded in parallel (TBB);
-//  - per group and light: occluders are selected with Haines' shaft between the group's
-//    bounding box and the light's (occluder selection), clipped to the slab strictly
-//    between the light plane and the group's nearest receiver plane and oriented (tree
-//    initialisation: vvsets, lazy BSP with one undefined leaf), then every receiver of
-//    the group is queried in grid order, and the tree is dropped (bounded memory);
+//  - per group and light, the three phases Figure 8 times (group_state.h): occluders are
+//    selected with Haines' shaft between the group's bounding box and the light's and
+//    clipped to the slab strictly between the light plane and the group's nearest
+//    receiver plane (occluder selection, occluder_selection.cpp), oriented and put in a
+//    tree (tree initialisation, group_tree.cpp: vvsets, lazy BSP with one undefined
+//    leaf), then every receiver of the group is queried in grid order (per-receiver
+//    shading, shade_receiver.cpp), and the tree is dropped (bounded memory);
 //  - triangle parts that are not strictly in front of every receiver of the group (the
-//    band of the group's receiver plane, see shade_group), or whose plane separates the
+//    band of the group's receiver plane, see occluder_selection.cpp), or whose plane separates the
 //    group's receivers (two-sided: measured 25x more developments when kept in the
 //    tree), are "near" polygons: rejected per receiver by the pyramid (r, light), else
 //    clipped to that receiver's slab and subtracted from the fragments with the same
@@ -21,7 +23,7 @@
 //    and receiver region-occluder (bsp.h), the first decided one wins;
 //  - coplanar convex patches of triangles (triangle_tree.h, exact predicates) are one
 //    occluder or near polygon when all their triangles take the plain float path: the
-//    same blocked set without node planes along inner edges (shade_group shade_patch).
+//    same blocked set without node planes along inner edges (occluder_selection.cpp).
 // Per receiver and light: the visible fragments (convex polygons on the light plane,
 // counter-clockwise about the light normal), the visible fraction (sum of fragment areas
 // over the light area), per-sample bits by point-in-fragment of sample_position(light, j,

@@ -1,0 +1,152 @@
+// The state of paper 002's soft-shadow framework (section 4.4, Algorithm 2) for one group
+// of receivers and one light, and its three phases as Figure 8 (section 5.1) times them:
+//  - occluder selection (Figure 8 "SC"; occluder_selection.cpp): Haines' shaft between
+//    the group's box and the light's, clipped to the slab between the light plane and the
+//    group's receivers, split into tree occluders and per-receiver "near" polygons;
+//  - tree initialisation (Figure 8 "I"; group_tree.cpp): vvsets and one undefined leaf;
+//  - per-receiver shading (Figure 8 "Q"; shade_receiver.cpp): near polygons, Algorithm 1
+//    on what they leave, the exact paths, and the fraction, bits and irradiance.
+// plucker_solver.cpp runs them per group (shade_group). Internal to lib/plucker.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "lib/plucker/bsp.h"
+#include "lib/plucker/local_light.h"
+#include "lib/plucker/triangle_tree.h"
+#include "lib/solver.h"
+
+namespace visgate::plucker {
+
+// A triangle part handled per receiver (plucker_solver.h "near" polygons).
+struct NearPoly {
+  uint32_t triangle;  // the scene triangle whose part this is (its plane, world coordinates)
+  uint32_t begin, count;
+  // Group-level data for the per-receiver tests: the polygon's box, and its triangle in
+  // double local coordinates with the plane normal N = edge_plane_normal_err(t0, t1, t2)
+  // (and N's error bound) and the 1-norms of two edges (near_side).
+  Vec3d lo, hi;
+  Vec3d t[3], n, err;
+  double e1 = 0, e2 = 0, tmax = 0;
+  // A part of a coplanar convex patch (occluder_selection.cpp; `triangle` is its first):
+  // the patch, all of whose triangles the exact paths subtract. Else -1.
+  int32_t patch = -1;
+};
+
+// The solve's counters and timings (plucker_solver.h "Stats"), one per parallel task,
+// merged at its end.
+struct Totals {
+  double select_s = 0, init_s = 0, query_s = 0, bsp_query_s = 0, tree_s = 0, irradiance = 0;
+  uint64_t trees = 0, queries = 0, occluders = 0, near = 0, fragments = 0, fallback = 0, segment_relations = 0;
+  uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
+  uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
+  uint64_t plane_point_triangles = 0, patches = 0, patch_triangles = 0;
+  uint64_t bsp_nodes_max = 0;
+  BspCounters bsp;
+  void merge(const Totals& o);
+};
+
+// Live bytes of the trees shaded at the same time, and their maximum (Figure 8 "MS").
+struct MemoryMeter {
+  std::atomic<int64_t> current{0};
+  std::atomic<int64_t> peak{0};
+  MemoryBudget* budget = nullptr;  // SolveOptions::memory_budget_mb, counted by the trees
+  void change(int64_t delta) {
+    int64_t now = current.fetch_add(delta) + delta;
+    int64_t p = peak.load();
+    while (now > p && !peak.compare_exchange_weak(p, now)) {
+    }
+  }
+};
+
+// What every group of one solve shares.
+struct SolveContext {
+  const Scene* scene;
+  SolveResult* result;
+  std::vector<double>* irradiance;
+  bool coherence;
+  LazyBsp::Choice choice;
+  const TriangleTree* tree;
+  uint64_t seed;
+  MemoryMeter* memory;
+};
+
+// One group and one light: the inputs, what occluder selection finds, and the working
+// lists of the per-receiver shading. The lists are kept from group to group, one set per
+// thread of a solve (ThreadWork): a group starts them empty but with the capacity earlier
+// groups gave them, and the solve frees them when it returns (a thread-local set would
+// outlive the solve and keep a larger scene's memory). shade_group runs no parallel work
+// of its own, so a thread never uses two at once.
+struct GroupState {
+  // Inputs (set by start).
+  const SolveContext* ctx = nullptr;
+  size_t li = 0;                 // the light's index
+  const LocalLight* lf = nullptr;
+  const std::vector<uint32_t>* group = nullptr;
+  float sigma = 1.0f;            // the receivers' side of the light plane (+1 or -1)
+  size_t light_offset = 0;       // the light's first sample bit (Scene::light_offset)
+
+  // Occluder selection: the slab (occluder_selection.cpp). g points towards the
+  // light; g-values are relative to `ref` (a receiver); gmin, gmax bound the receivers'
+  // g-values; a part beyond gcut = gmax + delta is between every receiver and the light.
+  std::vector<Vec3d> rloc;       // the receivers, local
+  Vec3d dlo{}, dhi{};            // their box (local, double)
+  Vec3f wcorners[8];             // its corners in world coordinates (float box)
+  Vec3d corners[8];              // its corners (local)
+  Vec3d ref{}, g{};
+  double gmin = 0, gmax = 0, delta = 0, gcut = 0;
+  double light_width = 0;        // the light's longest side, or area over it when smaller
+  double work_scale = 0;         // the extent the float path's roundings are relative to
+  std::vector<Occluder> occluders;  // the tree's (bsp.h)
+  std::vector<NearPoly> near;       // per receiver, largest over distance first
+  std::vector<Vec3d> near_verts;    // their vertices (NearPoly::begin, count)
+  std::vector<uint32_t> exact_tris;  // subtracted exactly per receiver
+  std::vector<uint32_t> cand;        // the shaft's candidate triangles (sorted)
+
+  // Scratch of the phases.
+  std::vector<Vec3d> poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;
+  std::vector<NearPoly> near_sorted;
+  std::vector<std::pair<double, uint32_t>> near_key;
+  std::vector<uint8_t> on_plane0, on_level, skip, merged;
+  std::vector<double> vals;
+  std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;
+  FragmentList frags, tmp;
+  std::vector<UVBox> boxes, tmp_boxes;
+
+  void start(const SolveContext& c, size_t light, const LocalLight& l, const std::vector<uint32_t>& g_,
+             float side) {
+    clear();
+    ctx = &c;
+    li = light;
+    lf = &l;
+    group = &g_;
+    sigma = side;
+    light_offset = c.scene->light_offset(light);
+  }
+  void clear();
+};
+
+struct ThreadWork {
+  GroupState state;
+  std::unique_ptr<LazyBsp> tree;  // made at the thread's first group, rebuilt per group
+};
+
+// Figure 8 "SC": fills the slab, the occluders, the near polygons and the exact list.
+void select_occluders(GroupState& gs, Totals& tot);
+
+// Figure 8 "I": the group's tree over gs.occluders (vvsets, one undefined leaf).
+LazyBsp& init_group_tree(GroupState& gs, ThreadWork& work, uint64_t tree_seed, Totals& tot);
+
+// Figure 8 "Q": receiver gk of the group, its fragments, fraction, bits and irradiance
+// written to the solve's result. `near_counters` gathers the near polygons' splits.
+void shade_receiver(GroupState& gs, LazyBsp& bsp, size_t gk, BspCounters& near_counters, Totals& tot);
+
+// One receiver on the light plane: float segment tests in the local frame
+// (plucker_solver.h, degenerate).
+void shade_fallback(const SolveContext& ctx, size_t li, const LocalLight& lf, size_t i, Totals& tot);
+
+}  // namespace visgate::plucker

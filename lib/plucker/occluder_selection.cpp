@@ -1,0 +1,462 @@
+// Occluder selection for one group of receivers and one light (paper 002 section 4.4,
+// "Implementation details": Haines' shaft between the group's box and the light's;
+// Figure 8 column "SC"), with the slab of DESIGN section 3 (plucker_solver.h): each
+// candidate triangle is clipped to the light side of the light plane and split at the
+// group's g-plane cut into a tree occluder (beyond it, between every receiver and the
+// light) and a near polygon (the rest, handled per receiver). Triangles that rounding
+// cannot place this way go to the exact list, subtracted per receiver exactly.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <span>
+
+#include "lib/base/check.h"
+#include "lib/plucker/group_state.h"
+#include "lib/plucker/shaft.h"
+
+namespace visgate::plucker {
+
+namespace {
+
+// True when a polygon clipped at the light plane has a clip point and a neighbour that
+// rounding cannot tell apart: two consecutive vertices at most eps apart, one of them
+// on the plane, eps = 2^-36 of the two points' own coordinates (local frame; a clip
+// point is interpolated from its edge's near end, fragment.h, so its rounding is
+// relative to its own magnitude, not the polygon's). Such an edge's direction is
+// rounding noise, and merging the two points instead can drop a sliver seen edge-on
+// (test SliverSeenEdgeOnIsNotMergedAwayAtTheLightPlane): such triangles are subtracted
+// exactly per receiver (subtract_triangle_exact, which needs no clipping at the light
+// plane), as those within rounding of the plane (`plane_point_triangles`).
+// `poly` has at least 3 vertices.
+bool close_plane_points(const std::vector<Vec3d>& poly, const std::vector<uint8_t>& on_plane) {
+  auto close = [](const Vec3d& a, const Vec3d& b) {
+    const double eps = 0x1p-36 * std::max(max_component(vabs(a)), max_component(vabs(b)));
+    return max_component(vabs(a - b)) <= eps;
+  };
+  const size_t n = poly.size();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t k1 = (k + 1) % n;
+    if ((on_plane[k] || on_plane[k1]) && close(poly[k], poly[k1])) return true;
+  }
+  return false;
+}
+
+// Side of the 8 corners of the receivers' box against the plane of the triangle t, in
+// world coordinates (the inputs as given: the local frame's rounding moves points by
+// u |x - o|, enough to put a receiver just below a face above it; test
+// ReceiverWithinRoundingOfAFace): per corner x the sign of orient3d(t0, t1, t2, x), in
+// float as (x - base) . N with N = edge_plane_normal_err(t0, t1, t2) (the cross product
+// of its two shortest edges, which keeps the plane of a sliver with a far vertex) and
+// base the vertex nearest to x (lines.h nearest_base), decided against dot_err;
+// undecided counts for neither side. +1 when every corner is strictly on the positive
+// side, -1 when every one is strictly negative, else 0; the normal and its bound are
+// computed once and the loop stops at the first corner that breaks the common sign.
+int box_side(const Vec3f t[3], const Vec3f corners[8]) {
+  Vec3f err;
+  const Vec3f nrm = edge_plane_normal_err(t[0], t[1], t[2], err);
+  int side = 0;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3f d = corners[c] - nearest_base(t[0], t[1], t[2], corners[c]);
+    const float s = dot(d, nrm), bound = dot_err(d, nrm, err);
+    const int sd = s > bound ? 1 : (s < -bound ? -1 : 0);
+    if (sd == 0 || (c > 0 && sd != side)) return 0;
+    side = sd;
+  }
+  return side;
+}
+
+// The selection over one group's state; each step one method.
+class Selection {
+ public:
+  Selection(GroupState& gs, Totals& tot)
+      : gs_(gs), tot_(tot), scene_(*gs.ctx->scene), lf_(*gs.lf), sigma_(gs.sigma) {}
+
+  void run() {
+    receivers_and_slab();
+    working_scale();
+    shaft_.emplace(rbox_, lf_.box);
+    candidates();
+    sort_near();
+  }
+
+ private:
+  void receivers_and_slab();
+  void working_scale();
+  void candidates();
+  bool select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]);
+  void select_triangle(uint32_t t, const Vec3d tri[3]);
+  [[gnu::always_inline]] inline NearPoly make_near(uint32_t t, const Vec3d tri[3], double tmax,
+                                                   const std::vector<Vec3d>& part) const;
+  void add_near(const NearPoly& np, const std::vector<Vec3d>& part) {
+    gs_.near.push_back(np);
+    gs_.near_verts.insert(gs_.near_verts.end(), part.begin(), part.end());
+  }
+  void sort_near();
+
+  GroupState& gs_;
+  Totals& tot_;
+  const Scene& scene_;
+  const LocalLight& lf_;
+  const float sigma_;
+  AABB rbox_;  // the receivers' float box for the shaft (its margin covers the rounding)
+  std::optional<Shaft> shaft_;  // made once the receivers' box is known
+};
+
+// Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
+// light point x and receiver r. A point p on the line r -> x lies strictly between r
+// and x iff g . p > g . r and h(p) > 0 (h: distance from the light plane, positive on
+// the receivers' side): along the line g grows from r to x and h falls to 0 at x. With
+// gmax the largest g . r of the group, a triangle part with g . p >= gmax + delta and
+// h >= 0 is between every receiver of the group and the light (tree occluders); the
+// band g . p <= gmax + delta is clipped per receiver (near polygons). g is the receiver
+// grid's normal when the light lies beyond the group's grid plane (flat tiles: a band
+// of rounding width), else the light's normal (the band spans the group's depth).
+void Selection::receivers_and_slab() {
+  const std::vector<uint32_t>& group = *gs_.group;
+  // Everything below is in the light's local frame (plucker_solver.h): the group's
+  // receivers are translated here, the triangles as they are selected.
+  std::vector<Vec3d>& rloc = gs_.rloc;
+  rloc.resize(group.size());
+  Vec3d dlo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity());
+  Vec3d dhi = -dlo;
+  for (size_t k = 0; k < group.size(); ++k) {
+    rloc[k] = to_local_d(scene_.receivers[group[k]].p, lf_.origin);
+    rbox_.extend(Vec3f(rloc[k]));
+    dlo = vmin(dlo, rloc[k]);
+    dhi = vmax(dhi, rloc[k]);
+  }
+  gs_.dlo = dlo;
+  gs_.dhi = dhi;
+  // g-values are taken relative to a reference receiver (g . p keeps the digits of the
+  // differences, not those of the local coordinates).
+  const Vec3d ref = rloc[0];
+  gs_.ref = ref;
+  AABB both = rbox_;
+  both.extend(lf_.box);
+  double coord_max = max_component(vmax(vabs(to_double(both.lo) - ref), vabs(to_double(both.hi) - ref)));
+  auto gval = [&](const Vec3d& g, const Vec3d& p) { return dot(g, p - ref); };
+  auto group_plane = [&](const Vec3d& g, double& gmin, double& gmax) {
+    gmin = std::numeric_limits<double>::infinity();
+    gmax = -gmin;
+    for (const Vec3d& p : rloc) {
+      double v = gval(g, p);
+      gmin = std::min(gmin, v);
+      gmax = std::max(gmax, v);
+    }
+  };
+  // delta: a separation of the tree occluders from every receiver's g-plane far above
+  // the rounding of g . (p - ref) (in float it had error < 5.01 u |g|_1 |p - ref|_1;
+  // now in double, the float-sized delta is kept as a wide, conservative band): with
+  // |p - ref|_inf <= coord_max inside the shaft, 16 u |g|_1 3 coord_max.
+  Vec3d g = lf_.nd * double(-sigma_);
+  double gmin = 0, gmax = 0;
+  group_plane(g, gmin, gmax);
+  if (scene_.grid) {
+    Vec3d gn = to_double(normalize(scene_.grid->normal));
+    double nmin = 0, nmax = 0;
+    group_plane(gn, nmin, nmax);
+    double dlt = 16.0 * double(kUnitRoundoffF) * (std::abs(gn.x) + std::abs(gn.y) + std::abs(gn.z)) * 3.0 * coord_max;
+    bool beyond = true, below = true;
+    for (const Vec3d& v : lf_.poly) {
+      double gv = gval(gn, v);
+      beyond &= gv > nmax + 2 * dlt;
+      below &= gv < nmin - 2 * dlt;
+    }
+    if (below) {
+      gn = -gn;
+      group_plane(gn, nmin, nmax);
+    }
+    if (beyond || below) {
+      g = gn;
+      gmin = nmin;
+      gmax = nmax;
+    }
+  }
+  gs_.g = g;
+  gs_.gmin = gmin;
+  gs_.gmax = gmax;
+  gs_.delta = 16.0 * double(kUnitRoundoffF) * (std::abs(g.x) + std::abs(g.y) + std::abs(g.z)) * 3.0 * coord_max;
+  gs_.gcut = gmax + gs_.delta;
+  // World corners of the receivers' box, for the one-sided test (box_side).
+  AABB wbox;
+  for (uint32_t i : group) wbox.extend(scene_.receivers[i].p);
+  for (int c = 0; c < 8; ++c)
+    gs_.wcorners[c] =
+        Vec3f((c & 1) ? wbox.hi.x : wbox.lo.x, (c & 2) ? wbox.hi.y : wbox.lo.y, (c & 4) ? wbox.hi.z : wbox.lo.z);
+  for (int c = 0; c < 8; ++c)
+    gs_.corners[c] = Vec3d((c & 1) ? dhi.x : dlo.x, (c & 2) ? dhi.y : dlo.y, (c & 4) ? dhi.z : dlo.z);
+}
+
+// Triangles reaching far beyond the group's working scale (the light's extent and the
+// receivers' distance from it): every double quantity of their clipping carries an
+// absolute rounding of about 2^-53 of their coordinates (and the translation to the local
+// frame one of u_d |x| when exponents differ by more than 29). Up to 2^20 times the
+// working scale that stays below 2^-33 of it, the level the far-receiver bound
+// (shade_receiver.cpp) accepts; beyond, such triangles are subtracted exactly per
+// receiver (subtract_triangle_exact on the float inputs), never clipped in double (test
+// TriangleReachingFarBeyondTheSceneIsSubtractedExactly). The receivers that set the scale are
+// those the float path shades: one more than 2^20 light widths from the light is extreme
+// and shaded exactly, so it does not count (test
+// ExtremeReceiverDoesNotSetTheGroupsWorkingScale).
+void Selection::working_scale() {
+  // The light's width: its longest side, or its area over that side when that is smaller.
+  gs_.light_width = std::min(double(lf_.extent), double(scene_.lights[gs_.li].area) / double(lf_.extent));
+  double work_scale = double(lf_.extent);
+  for (const Vec3d& rl : gs_.rloc) {
+    const double d = max_component(vabs(rl - lf_.bounds.centroid));
+    if (std::max(d, double(lf_.extent)) <= 0x1p20 * gs_.light_width) work_scale = std::max(work_scale, d);
+  }
+  gs_.work_scale = work_scale;
+}
+
+// tmax: the largest |local coordinate| of the triangle (the selection loop's).
+NearPoly Selection::make_near(uint32_t t, const Vec3d tri[3], double tmax, const std::vector<Vec3d>& part) const {
+  NearPoly np;
+  np.triangle = t;
+  np.begin = uint32_t(gs_.near_verts.size());
+  np.count = uint32_t(part.size());
+  np.lo = np.hi = part[0];
+  for (const Vec3d& v : part) np.lo = vmin(np.lo, v), np.hi = vmax(np.hi, v);
+  for (int k = 0; k < 3; ++k) np.t[k] = tri[k];
+  np.n = edge_plane_normal_err(tri[0], tri[1], tri[2], np.err);
+  Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
+  np.e1 = std::abs(e1.x) + std::abs(e1.y) + std::abs(e1.z);
+  np.e2 = std::abs(e2.x) + std::abs(e2.y) + std::abs(e2.z);
+  np.tmax = tmax;
+  return np;
+}
+
+// The shaft's candidates in order; a coplanar convex patch is taken from its first
+// triangle when all of its triangles are candidates (select_patch), every other
+// triangle alone (select_triangle).
+void Selection::candidates() {
+  std::vector<uint32_t>& cand = gs_.cand;
+  const TriangleTree& tree = *gs_.ctx->tree;
+  tree.candidates(*shaft_, lf_.origin, cand);
+  std::vector<uint8_t>& merged = gs_.merged;  // per candidate: shaded as part of a patch
+  merged.assign(cand.size(), 0);
+  for (size_t ci = 0; ci < cand.size(); ++ci) {
+    const uint32_t t = cand[ci];
+    if (merged[ci]) continue;
+    Vec3d tri[3] = {to_local_d(scene_.mesh.corner(t, 0), lf_.origin), to_local_d(scene_.mesh.corner(t, 1), lf_.origin),
+                    to_local_d(scene_.mesh.corner(t, 2), lf_.origin)};
+    if (shaft_->culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
+    if (const int32_t pid = tree.patch(t); pid >= 0 && tree.patch_triangles(pid)[0] == t) {
+      const std::span<const uint32_t> tris = tree.patch_triangles(pid);
+      std::vector<uint32_t>& at = gs_.patch_at;  // positions of tris[1..] in cand
+      at.clear();
+      for (size_t j = 1; j < tris.size(); ++j) {
+        const auto it = std::lower_bound(cand.begin() + ptrdiff_t(ci) + 1, cand.end(), tris[j]);
+        if (it == cand.end() || *it != tris[j]) break;
+        at.push_back(uint32_t(it - cand.begin()));
+      }
+      if (at.size() + 1 == tris.size() && select_patch(pid, tris, tri)) {
+        for (uint32_t k : at) merged[k] = 1;
+        continue;
+      }
+    }
+    select_triangle(t, tri);
+  }
+}
+
+// A coplanar convex patch (triangle_tree.h; its triangles tris, the first of them with
+// local coordinates tt) shaded as one polygon: only when each triangle would take the
+// plain float path of select_triangle without a clip at the light plane (kept by the
+// shaft, translated exactly, not far reaching, every vertex before the light plane
+// beyond its rounding, not behind every receiver). Then the polygon's parts beyond and
+// below gcut are the unions of the triangles' parts: beyond gcut one occluder (bsp.h)
+// when the receivers lie strictly on one side of the plane, else one near polygon, and
+// below gcut one near polygon; a near polygon of a patch names it for the exact paths,
+// which subtract all its triangles (NearPoly::patch). Else false, having added nothing.
+bool Selection::select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]) {
+  static_assert(TriangleTree::kMaxPatchVertices + 1 <= kMaxOccluderVertices, "a patch clipped once is an occluder");
+  const Vec3d nd = lf_.nd, gd = gs_.g, refd = gs_.ref;
+  double tmax = 0.0;
+  Vec3d tri0[3];
+  for (size_t j = 0; j < tris.size(); ++j) {
+    Vec3d loc[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f& w = scene_.mesh.corner(tris[j], k);
+      if (!translates_exactly(w, lf_.origin)) return false;
+      loc[k] = j == 0 ? tt[k] : to_local_d(w, lf_.origin);
+    }
+    if (j == 0) std::copy(loc, loc + 3, tri0);
+    if (j > 0 && shaft_->culls(Vec3f(loc[0]), Vec3f(loc[1]), Vec3f(loc[2]))) return false;
+    const double tm = std::max({max_component(vabs(loc[0])), max_component(vabs(loc[1])), max_component(vabs(loc[2]))});
+    if (!(tm <= 0x1p20 * gs_.work_scale)) return false;
+    tmax = std::max(tmax, tm);
+    double gmx = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      if (!(double(sigma_) * (dot(nd, loc[k]) - lf_.h0) > double(lf_.plane_tol))) return false;
+      gmx = std::max(gmx, dot(gd, loc[k] - refd));
+    }
+    if (gmx <= gs_.gmin - gs_.delta) return false;
+  }
+  const std::span<const Vec3f> wq = gs_.ctx->tree->patch_polygon(pid);
+  const int bside = box_side(wq.data(), gs_.wcorners);  // three corners of the polygon: its plane, in its orientation
+  std::vector<Vec3d>& q = gs_.patch;
+  std::vector<double>& vals = gs_.vals;
+  q.resize(wq.size());
+  vals.resize(wq.size());
+  for (size_t k = 0; k < wq.size(); ++k) {
+    q[k] = to_local_d(wq[k], lf_.origin);
+    vals[k] = dot(gd, q[k] - refd) - gs_.gcut;
+  }
+  auto add_patch_near = [&](const std::vector<Vec3d>& part) {
+    NearPoly np = make_near(tris[0], tri0, tmax, part);
+    np.patch = pid;
+    add_near(np, part);
+  };
+  std::vector<Vec3d>&lower = gs_.lower, &upper = gs_.upper;
+  clip_by_values(q.data(), vals.data(), int(q.size()), true, lower);
+  if (!lower.empty()) {
+    if (bside != 0) {
+      VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
+      Occluder o;
+      o.n = int(lower.size());
+      for (int k = 0; k < o.n; ++k) o.v[k] = lower[size_t(bside > 0 ? o.n - 1 - k : k)];
+      gs_.occluders.push_back(o);
+    } else {
+      add_patch_near(lower);
+    }
+  }
+  clip_by_values(q.data(), vals.data(), int(q.size()), false, upper);
+  if (!upper.empty()) add_patch_near(upper);
+  ++tot_.patches;
+  tot_.patch_triangles += tris.size();
+  return true;
+}
+
+// One candidate triangle (local coordinates tri): to the exact list, culled, or clipped
+// to the slab and split at gcut into a tree occluder and a near polygon.
+void Selection::select_triangle(uint32_t t, const Vec3d tri[3]) {
+  const Light& light = scene_.lights[gs_.li];
+  const Vec3d nd = lf_.nd, gd = gs_.g, refd = gs_.ref;
+  // Far reaching (working_scale): exact, per receiver, before the double rejections
+  // below (their values carry the same rounding).
+  const double tmax = std::max({max_component(vabs(tri[0])), max_component(vabs(tri[1])), max_component(vabs(tri[2]))});
+  if (!(tmax <= 0x1p20 * gs_.work_scale)) {
+    gs_.exact_tris.push_back(t);
+    ++tot_.far_triangles;
+    return;
+  }
+  // A triangle whose translation to the local frame was rounded (a coordinate below
+  // 2^-29 of the light origin's, or far above it) may have lost its shape there (test
+  // SliverLostInTheLocalFrameIsSubtractedExactly). The rounding moves a vertex by at
+  // most 2^-53 of its largest local coordinate; a rounded triangle whose height (twice
+  // its area over its longest edge) is not above 2^-32 of that coordinate is subtracted
+  // exactly per receiver from its float inputs, as the far-reaching ones. Fatter ones
+  // keep their shape to 2^-20 and stay on the float path, whose bounds count the
+  // translation's rounding.
+  if (!(translates_exactly(scene_.mesh.corner(t, 0), lf_.origin) &&
+        translates_exactly(scene_.mesh.corner(t, 1), lf_.origin) &&
+        translates_exactly(scene_.mesh.corner(t, 2), lf_.origin))) {
+    const Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0], e3 = tri[2] - tri[1];
+    const double longest = std::max({length(e1), length(e2), length(e3)});
+    if (!(length(cross(e1, e2)) > 0x1p-32 * tmax * longest)) {
+      gs_.exact_tris.push_back(t);
+      ++tot_.rounded_triangles;
+      return;
+    }
+  }
+  // Heights over the light plane and g-values in double on the float vertices (the
+  // clipping below interpolates in double, fragment.h clip_by_values).
+  double h[3], gv[3];
+  for (int k = 0; k < 3; ++k) {
+    const Vec3d& x = tri[k];
+    h[k] = double(sigma_) * (dot(nd, x) - lf_.h0);
+    gv[k] = dot(gd, x - refd);
+  }
+  // Beyond, or lying in, the light plane: it never meets an open segment (occluders
+  // touching the light plane with a vertex or an edge are kept). Within the plane's
+  // rounding bound h cannot tell; there the exact side of each such vertex against the
+  // light's plane (the region oracle's Newell plane, exact_orient.h newell_side_exact)
+  // decides: a triangle with a vertex strictly before it is subtracted exactly per
+  // receiver, which needs no clipping at the light plane (subtract_triangle_exact hides
+  // a light point only beyond the triangle's plane as seen from r; test
+  // TriangleWithinRoundingBeforeTheLightPlane).
+  if (const double hmax = std::max(h[0], std::max(h[1], h[2])); hmax <= double(lf_.plane_tol)) {
+    if (hmax < -double(lf_.plane_tol)) return;
+    bool before = false;
+    for (int k = 0; k < 3 && !before; ++k)
+      before = h[k] >= -double(lf_.plane_tol) &&
+               double(sigma_) * newell_side_exact(light.polygon.data(), int(light.polygon.size()),
+                                                  scene_.mesh.corner(t, k)) > 0.0;
+    if (before) {
+      gs_.exact_tris.push_back(t);
+      ++tot_.band_triangles;
+    }
+    return;
+  }
+  // Behind every receiver's g-plane.
+  if (std::max(gv[0], std::max(gv[1], gv[2])) <= gs_.gmin - gs_.delta) return;
+  // Clip to the light side h >= 0.
+  std::vector<Vec3d>&poly0 = gs_.poly0, &lower = gs_.lower, &upper = gs_.upper;
+  clip_by_values(tri, h, 3, true, poly0, &gs_.on_plane0);
+  if (poly0.size() < 3) return;
+  if (close_plane_points(poly0, gs_.on_plane0)) {
+    gs_.exact_tris.push_back(t);
+    ++tot_.plane_point_triangles;
+    return;
+  }
+  // Split at gmax + delta: beyond it, between every receiver and the light (tree);
+  // the rest per receiver.
+  std::vector<double>& vals = gs_.vals;
+  vals.resize(poly0.size());
+  for (size_t k = 0; k < poly0.size(); ++k) vals[k] = dot(gd, poly0[k] - refd) - gs_.gcut;
+  clip_by_values(poly0.data(), vals.data(), int(poly0.size()), true, lower);
+  clip_by_values(poly0.data(), vals.data(), int(poly0.size()), false, upper);
+  if (!lower.empty()) {
+    // Orientation (bsp.h Occluder): receivers strictly on one side of the triangle's
+    // plane (decided in float on the corners of their box; undecided counts for
+    // neither) give a one-sided occluder, else two-sided.
+    const Vec3f wtri[3] = {scene_.mesh.corner(t, 0), scene_.mesh.corner(t, 1), scene_.mesh.corner(t, 2)};
+    const int bside = box_side(wtri, gs_.wcorners);
+    VG_CHECK(lower.size() <= size_t(kMaxOccluderVertices));
+    Occluder o;
+    o.n = int(lower.size());
+    o.two_sided = bside == 0;
+    for (int k = 0; k < o.n; ++k) o.v[k] = lower[size_t(bside > 0 ? o.n - 1 - k : k)];
+    if (o.two_sided) {
+      // Two-sided occluders in the tree are mixed against most hyperplanes and multiply
+      // the developments (about 25x on columns); per receiver they cost one
+      // subtraction. So they go to the near list.
+      add_near(make_near(t, tri, tmax, lower), lower);
+    } else {
+      gs_.occluders.push_back(o);
+    }
+  }
+  if (!upper.empty()) add_near(make_near(t, tri, tmax, upper), upper);
+}
+
+// The near polygons in decreasing size over distance from the receivers' box centre
+// (box diagonal squared over the squared distance of the box centres): per receiver
+// they are subtracted in this order, and the big, close ones first leave fewer and
+// larger fragments to cut for the others (measured on columns: fewer splits and
+// instructions than nearest, largest or largest solid angle first). The visible set does
+// not depend on the order (each subtraction removes exactly its shadow).
+void Selection::sort_near() {
+  std::vector<NearPoly>& near = gs_.near;
+  const Vec3d cen = (gs_.dlo + gs_.dhi) * 0.5;
+  std::vector<std::pair<double, uint32_t>>& key = gs_.near_key;
+  key.resize(near.size());
+  for (size_t k = 0; k < near.size(); ++k) {
+    const Vec3d d = near[k].hi - near[k].lo, m = (near[k].hi + near[k].lo) * 0.5 - cen;
+    double q = dot(d, d) / std::max(dot(m, m), std::numeric_limits<double>::min());
+    if (!(q >= 0.0)) q = 0.0;  // inf / inf: any place, but a strict weak order
+    key[k] = {-q, uint32_t(k)};
+  }
+  std::sort(key.begin(), key.end());
+  std::vector<NearPoly>& sorted = gs_.near_sorted;
+  sorted.resize(near.size());
+  for (size_t k = 0; k < near.size(); ++k) sorted[k] = near[key[k].second];
+  near.swap(sorted);
+}
+
+}  // namespace
+
+void select_occluders(GroupState& gs, Totals& tot) { Selection(gs, tot).run(); }
+
+}  // namespace visgate::plucker

@@ -1,0 +1,540 @@
+// Per-receiver shading (paper 002 section 4.4, Algorithm 2 lines 9-11; Figure 8 column
+// "Q"): the visible fragments of the light from one receiver of a group, then the
+// fraction, the samples' bits and the Lambert irradiance over them [NN85]. The near
+// polygons are subtracted from the light first (subtract.h), then Algorithm 1 (section
+// 4.2, LazyBsp::query) runs on what they leave; receivers and triangles that rounding
+// cannot place take the exact near-plane path (subtract_triangle_exact).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "lib/plucker/group_state.h"
+#include "lib/plucker/subtract.h"
+
+namespace visgate::plucker {
+
+namespace {
+
+// Side of the (local, double) point r against a near polygon's triangle plane: +1, -1, or
+// 0 when undecided. Decided against dot_err plus the rounding of the local frame: every
+// local point is within u_d |x|_inf of its exact translation (to_local_d), which moves
+// det[t1 - t0, t2 - t0, r - t0] by at most 2 delta (|e1|_1 |e2|_1 + (|e1|_1 + |e2|_1)
+// |r - base|_1) with delta = 2 u_d max |coordinate|, so a decided sign is the sign of
+// the exact world configuration (the inputs as given).
+int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
+  const Vec3d& base = nearest_base(np.t[0], np.t[1], np.t[2], r);
+  Vec3d d = r - base;
+  double s = dot(d, np.n);
+  double d1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  double delta = 2.0 * kUnitRoundoffD * std::max(rmax, np.tmax);
+  double bound = dot_err(d, np.n, np.err) + 2.0 * delta * (np.e1 * np.e2 + (np.e1 + np.e2) * d1);
+  return s > bound ? 1 : (s < -bound ? -1 : 0);
+}
+
+// The translation to the local frame is exact in double unless exponents differ by
+// more than 29, else rounded at u_d: 4 u_d of the coordinates is far above it.
+constexpr double kUd = kUnitRoundoffD;
+
+class ReceiverShading {
+ public:
+  ReceiverShading(GroupState& gs, LazyBsp& bsp, size_t gk, BspCounters& near_counters, Totals& tot)
+      : gs_(gs),
+        bsp_(bsp),
+        nc_(near_counters),
+        tot_(tot),
+        scene_(*gs.ctx->scene),
+        lf_(*gs.lf),
+        i_(size_t((*gs.group)[gk])),
+        rec_(scene_.receivers[i_]),
+        r_(gs.rloc[gk]),
+        rmax_(max_component(vabs(r_))) {}
+
+  void run();
+
+ private:
+  bool is_extreme() const;
+  bool subtract_exact(uint32_t t);
+  void shade_exact();
+  void shade_float();
+  void pyramid_planes();
+  void bound_all() {
+    all_ = UVBox{};
+    for (const UVBox& b : gs_.boxes) all_.extend(b);
+  }
+  bool exact_once(uint32_t t);
+  bool exact_near(const NearPoly& np);
+  // Inlined into shade_float's loop over the near polygons (a call per polygon and
+  // receiver costs measurably on columns).
+  [[gnu::always_inline]] inline void subtract_near(const NearPoly& np);
+  void report_fragments(double& area, double& irr);
+  void sample_bits();
+
+  GroupState& gs_;
+  LazyBsp& bsp_;
+  BspCounters& nc_;
+  Totals& tot_;
+  const Scene& scene_;
+  const LocalLight& lf_;
+  const size_t i_;  // the receiver's index in the scene
+  const Receiver& rec_;
+  const Vec3d& r_;  // local
+  const double rmax_;
+  UVBox all_;        // the union of the fragments' boxes (bound_all)
+  Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
+};
+
+// Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
+// from the light than from its plane), where even double planes through r move shadow
+// edges by more than the tolerance (test ReceiverAtAGrazingAngle). Far receivers too:
+// every double quantity through r (r + t (v - r), planes through r) carries an absolute
+// rounding of about 2^-53 |r - origin|, which stays below 2^-33 of the light's extent,
+// far under the fraction tolerance, only while r is within 2^20 extents of the light
+// (test ReceiverFarFromTheLight). The extent that counts is the light's width (area
+// over its longest side) when that is smaller.
+// For a long light the grazing bound is tighter by its aspect (extent over width): a
+// shadow line running along the long axis meets the light's long edge at an angle of
+// about width / extent, so a lateral error moves where it ends by extent / width times
+// that (test GrazingReceiverOfALongLightTakesTheExactPath). Such a receiver is shaded by
+// the exact path alone: every candidate triangle of the group subtracted exactly, no
+// tree and no near polygons.
+bool ReceiverShading::is_extreme() const {
+  const double hr = double(gs_.sigma) * (dot(lf_.nd, r_) - lf_.h0);
+  const double far = std::max(max_component(vabs(r_ - lf_.bounds.centroid)), double(lf_.extent));
+  const double aspect = std::max(1.0, double(lf_.extent) / gs_.light_width);
+  return !(far * aspect <= 0x1p20 * hr) || !(far <= 0x1p20 * gs_.light_width);
+}
+
+// Subtracts triangle t exactly from the fragments (boxes follow); false, subtracting
+// nothing, when the receiver lies in its plane.
+bool ReceiverShading::subtract_exact(uint32_t t) {
+  const Vec3f wtri[3] = {scene_.mesh.corner(t, 0), scene_.mesh.corner(t, 1), scene_.mesh.corner(t, 2)};
+  const int side_exact = to_int(orient3d_exact(wtri[0], wtri[1], wtri[2], rec_.p));
+  if (side_exact == 0) return false;
+  ++tot_.exact_triangles;
+  subtract_triangle_exact(rec_.p, wtri, side_exact, lf_.origin, lf_.axes, lf_.lift, gs_.frags, gs_.tmp,
+                          gs_.tmp_boxes, gs_.cur);
+  std::swap(gs_.frags, gs_.tmp);
+  std::swap(gs_.boxes, gs_.tmp_boxes);
+  return true;
+}
+
+// Every candidate triangle of the group, exactly, from the whole light.
+void ReceiverShading::shade_exact() {
+  ++tot_.exact_receivers;
+  gs_.frags.clear();
+  gs_.frags.add(lf_.poly.data(), lf_.poly.size());
+  gs_.boxes.assign(1, UVBox::of(lf_.axes, lf_.poly.data(), int(lf_.poly.size())));
+  for (uint32_t t : gs_.cand) {
+    if (gs_.frags.size() == 0) break;
+    subtract_exact(t);
+  }
+}
+
+// Side planes of the pyramid (r, light), oriented so the light's centroid is positive: a
+// near polygon entirely on the negative side of one misses every segment from r to the
+// light. Each plane through r and light edge (l_j, l_j+1) has N = edge_plane_normal (its
+// two shortest of l_j - r, l_j+1 - r, l_j+1 - l_j: for a receiver far from a small light
+// the textbook (l_j - r) x (l_j+1 - r) crosses two nearly parallel long vectors) and is
+// evaluated through l_j: (x - l_j) . N, rejected only below -16 dot_err (16 times its
+// error bound). A plane only culls when the whole light is on its positive side (then it
+// supports the pyramid, whatever edge it came from): an edge far shorter than the
+// rounding of its lifted ends has no direction, and its plane is dropped (a zero normal
+// culls nothing; test PyramidPlaneOfAnEdgeShorterThanItsRoundingCullsNothing).
+void ReceiverShading::pyramid_planes() {
+  const size_t m = lf_.poly.size();
+  gs_.pyramid.resize(m);
+  gs_.pyramid_err.resize(m);
+  for (size_t j = 0; j < m; ++j) {
+    Vec3d err;
+    Vec3d nrm = edge_plane_normal_err(r_, lf_.poly[j], lf_.poly[(j + 1) % m], err);
+    if (dot(nrm, lf_.bounds.centroid - lf_.poly[j]) < 0.0) nrm = -nrm;
+    for (size_t k = 0; k < m; ++k) {
+      const Vec3d d = lf_.poly[k] - lf_.poly[j];
+      if (dot(nrm, d) < -16.0 * dot_err(d, nrm, err)) {
+        nrm = Vec3d(0, 0, 0);
+        err = Vec3d(0, 0, 0);
+        break;
+      }
+    }
+    gs_.pyramid[j] = nrm;
+    gs_.pyramid_err[j] = err;
+  }
+}
+
+// A near polygon's whole triangle, exactly, once for this receiver; true when it was
+// subtracted (false: already done, or r lies in its plane).
+bool ReceiverShading::exact_once(uint32_t t) {
+  std::vector<uint32_t>& done = gs_.exact_done;
+  if (std::find(done.begin(), done.end(), t) != done.end()) return false;
+  done.push_back(t);
+  if (!subtract_exact(t)) return false;
+  bound_all();
+  return true;
+}
+
+// A near polygon's triangles (all of a patch), exactly.
+bool ReceiverShading::exact_near(const NearPoly& np) {
+  if (np.patch < 0) return exact_once(np.triangle);
+  bool done = false;
+  for (uint32_t pt : gs_.ctx->tree->patch_triangles(np.patch)) done = exact_once(pt) || done;
+  return done;
+}
+
+// One near polygon against this receiver: rejected by the receiver's slab and pyramid,
+// sent to the exact path where rounding cannot place it, else clipped to the slab and
+// its shadow subtracted from the fragments (subtract_polygon).
+void ReceiverShading::subtract_near(const NearPoly& np) {
+  if (np.hi.x < plo_.x || np.lo.x > phi_.x || np.hi.y < plo_.y || np.lo.y > phi_.y || np.hi.z < plo_.z ||
+      np.lo.z > phi_.z)
+    return;
+  const Vec3d* pv = gs_.near_verts.data() + np.begin;
+  // Cheap rejections first, conservative also against the rounding of the local
+  // frame (a point moves by u |x| when translated; see the exact path below):
+  // this receiver's slab (g . p > g . r somewhere, else the polygon is at or behind
+  // its g-plane), then the side planes of its pyramid.
+  std::vector<double>& vals = gs_.vals;
+  const Vec3d& gd = gs_.g;
+  vals.resize(np.count);
+  double maxv = -1.0, pmax = 0.0;
+  for (uint32_t k = 0; k < np.count; ++k) {
+    vals[k] = dot(gd, pv[k] - r_);
+    maxv = std::max(maxv, vals[k]);
+    pmax = std::max(pmax, max_component(vabs(pv[k])));
+  }
+  const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
+  if (maxv < -4.0 * kUd * gn1 * (pmax + rmax_)) return;
+  bool outside = false;
+  const size_t m = lf_.poly.size();
+  for (size_t j = 0; j < m && !outside; ++j) {
+    outside = true;
+    const Vec3d& pn = gs_.pyramid[j];
+    const double shift =
+        4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) * (pmax + double(lf_.extent) + rmax_);
+    const Vec3d& lj = lf_.poly[j];
+    for (uint32_t k = 0; k < np.count && outside; ++k) {
+      Vec3d d = pv[k] - lj;
+      outside = dot(pn, d) < -16.0 * dot_err(d, pn, gs_.pyramid_err[j]) - shift;
+    }
+  }
+  if (outside) return;
+  // The side of r against the triangle's plane (near_side: decided on the local double
+  // coordinates with a bound that covers their rounding, so it is the side in the
+  // inputs as given). A receiver within rounding of the plane (but not on it) sees the
+  // triangle across a sliver of space that rounding cannot resolve, and what the
+  // triangle hides can be the whole light (tests ReceiverWithinRoundingOfAFace,
+  // ReceiverASubnormalDistanceFromAFace): such a triangle is subtracted exactly, whole,
+  // once per receiver (subtract_triangle_exact). Exactly on the plane the triangle
+  // cannot meet an open segment from r properly (it only touches or contains it):
+  // skipped.
+  int side_r = near_side(np, r_, rmax_);
+  if (side_r == 0) {
+    exact_near(np);
+    return;
+  }
+  // Vertices within the rounding of r's level count as on it: just above it, a vertex
+  // next to one below makes a clip point within rounding of itself, and the plane
+  // through r and that edge of ulps takes any direction about the line from r (test
+  // NearPolygonVertexWithinRoundingOfTheReceiversLevelCountsAsOnIt). On the level such
+  // a vertex starts or ends only edges along the level (skipped below) or edges to
+  // well-separated points. A vertex further above the level but still close to it
+  // (within 2^-24 of the coordinates) has clip points whose rounding turns their planes
+  // about a point far beyond the light by an angle the light can see; and a triangle
+  // whose only part above the level is within its rounding may still hide much of the
+  // light from a receiver right under it (test
+  // TriangleAboveTheReceiversLevelOnlyByRoundingGoesExact). Both go to the exact path
+  // (`level_triangles`; none on the built-in families, whose vertices are at a
+  // receiver's level exactly or far from it).
+  {
+    const double on_tol = 4.0 * kUd * gn1 * (pmax + rmax_), near_tol = 0x1p-24 * gn1 * (pmax + rmax_);
+    const bool above = maxv > 0.0;
+    bool near_level = false;
+    maxv = 0.0;
+    for (double& v : vals) {
+      if (std::abs(v) <= on_tol) v = 0.0;
+      near_level |= v > 0.0 && v <= near_tol;
+      maxv = std::max(maxv, v);
+    }
+    if (maxv <= 0.0 && !above) return;  // float path: at or behind r's g-plane
+    if (maxv <= 0.0 || near_level) {    // above it only by rounding, or close to it
+      if (exact_near(np)) ++tot_.level_triangles;
+      return;
+    }
+  }
+  std::vector<Vec3d>& q = gs_.q;
+  std::vector<uint8_t>&on_level = gs_.on_level, &skip = gs_.skip;
+  clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
+  if (q.empty()) return;
+  // Oriented so that r is on the negative side (bsp.h Occluder).
+  if (side_r > 0) {
+    std::reverse(q.begin(), q.end());
+    std::reverse(on_level.begin(), on_level.end());
+  }
+  // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies in the
+  // level plane through r, so the plane through r and that edge is the level plane
+  // itself, and every light point is strictly beyond it, on q's side: the edge cannot cut
+  // a light line away and is skipped. Testing it would be wrong near degeneracy: when r
+  // is within rounding of the triangle's plane, the edge passes within rounding of r and
+  // float calls r "on its line" (test ReceiverWithinRoundingOfAFace).
+  skip.assign(q.size(), 0);
+  for (size_t k = 0; k < q.size(); ++k) skip[k] = on_level[k] && on_level[(k + 1) % q.size()];
+  // The planes through r and q's edges are only as good as q's vertices: a vertex
+  // rounded by u of its coordinates, at a distance d from r, turns such a plane by up to
+  // u |q| / d. A vertex that close to r (the clip at r's level of an edge passing within
+  // 2^-24 of the coordinates of r) sends the triangle to the exact path (test
+  // NearPolygonClippedNextToTheReceiverGoesExact).
+  bool too_close = false;
+  for (size_t k = 0; k < q.size() && !too_close; ++k) {
+    if (skip[k] && skip[(k + q.size() - 1) % q.size()]) continue;  // starts and ends no tested edge
+    const double d = max_component(vabs(q[k] - r_)), scale = std::max(max_component(vabs(q[k])), rmax_);
+    too_close = !(d > 0x1p-24 * scale);
+  }
+  if (too_close) {
+    if (exact_near(np)) ++tot_.close_triangles;
+    return;
+  }
+  // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
+  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
+  if (!qbox.overlaps(all_)) return;
+  if (!subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
+                        gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+    return;
+  std::swap(gs_.frags, gs_.tmp);
+  std::swap(gs_.boxes, gs_.tmp_boxes);
+  bound_all();
+}
+
+// The float path: a light the tree hides as a whole from r needs nothing else
+// (LazyBsp::hides_all: a walk without splits). Otherwise the near polygons first,
+// subtracted from the whole light: they are the closest to r, so their shadows are the
+// largest, and the BSP is then walked (and developed) only for what they leave visible
+// (measured on columns: about 30% fewer instructions than the BSP first; rooms needs the
+// hides_all walk for lights on other storeys).
+void ReceiverShading::shade_float() {
+  FragmentList& frags = gs_.frags;
+  frags.clear();
+  const auto th = std::chrono::steady_clock::now();
+  const bool hidden = bsp_.hides_all(r_);
+  tot_.tree_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - th).count();
+  if (!hidden) frags.add(lf_.poly.data(), lf_.poly.size());
+  pyramid_planes();
+  gs_.boxes.clear();
+  for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
+  bound_all();
+  gs_.exact_done.clear();
+  // Far-reaching triangles and those within rounding of the light plane (occluder
+  // selection), exactly.
+  for (uint32_t t : gs_.exact_tris) {
+    if (frags.size() == 0) break;
+    if (!subtract_exact(t)) continue;
+    bound_all();
+  }
+  // The box of this receiver's pyramid (r and the light), grown by 2^-20 of its
+  // size: a near polygon whose box misses it misses every segment from r to the light.
+  plo_ = vmin(r_, to_double(lf_.box.lo));
+  phi_ = vmax(r_, to_double(lf_.box.hi));
+  {
+    const double grow_p = 0x1p-20 * (max_component(phi_ - plo_) + max_component(vmax(vabs(plo_), vabs(phi_))));
+    plo_ = plo_ - Vec3d(grow_p, grow_p, grow_p);
+    phi_ = phi_ + Vec3d(grow_p, grow_p, grow_p);
+  }
+  for (const NearPoly& np : gs_.near) {
+    if (gs_.frags.size() == 0) break;
+    subtract_near(np);
+  }
+  // Algorithm 1 on the pieces the near polygons left visible.
+  const auto tb = std::chrono::steady_clock::now();
+  if (gs_.frags.size() > 0) {
+    bsp_.query(r_, gs_.frags, gs_.tmp);
+    std::swap(gs_.frags, gs_.tmp);
+  }
+  const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+  tot_.bsp_query_s += tbs;
+  tot_.tree_s += tbs;
+}
+
+// Fragments reported in world coordinates: one float rounding per vertex
+// (plucker_solver.h). A fragment thinner than the float spacing there is not reported
+// when its rounded polygon no longer holds its own interior point (the centroid of its
+// largest fan triangle, as the comparator takes it): rounded slivers far from the origin
+// can put that point into blocked space, far beyond tau. The fraction and the bits use
+// the double fragments and are unaffected. Sums the fragments' areas and irradiance.
+void ReceiverShading::report_fragments(double& area, double& irr) {
+  const FragmentList& frags = gs_.frags;
+  ReceiverResult& rr = gs_.ctx->result->receivers[i_];
+  auto& out = rr.fragments[gs_.li];
+  out.clear();
+  out.reserve(frags.size());
+  area = 0.0;
+  irr = 0.0;
+  const Vec3d od = to_double(lf_.origin);
+  const double h_r = dot(lf_.nd, r_) - lf_.h0;  // r's height over the light's plane (below)
+  for (size_t f = 0; f < frags.size(); ++f) {
+    area += polygon_area(frags.data(f), frags.count(f));
+    irr += lambert_irradiance(r_, rec_.n, frags.data(f), frags.count(f));
+    Polygon3f wf;
+    wf.reserve(size_t(frags.count(f)));
+    for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
+    double best = 0.0;
+    Vec3d inside{};
+    for (size_t k = 1; k + 1 < wf.size(); ++k) {
+      Vec3d a = to_double(wf[0]), b = to_double(wf[k]), c = to_double(wf[k + 1]);
+      double ar = length(cross(b - a, c - a));
+      if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+    }
+    // The comparator's segment runs from r to that rounded point, which rounding also
+    // moved off the light's plane (by up to half the spacing): its test is the point
+    // where the segment meets the plane, the central projection from r, not the point
+    // with an axis dropped (test
+    // ReportedFragmentsHoldTheComparatorsPointWhereItsSegmentMeetsTheLight).
+    Vec3d pl = inside - od;
+    const double h_p = dot(lf_.nd, pl) - lf_.h0;
+    if (h_r != h_p) pl = r_ + (pl - r_) * (h_r / (h_r - h_p));
+    if (best > 0.0 && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), pl)) {
+      out.push_back(std::move(wf));
+    } else {
+      ++tot_.unreported_slivers;
+    }
+  }
+}
+
+// The samples' bits. A sample is visible when it lies in the box of a fragment grown by
+// 2^-38 of the light's extent and in the fragment by point_in_fragment with a vertex
+// slack of 2^-40 of the extent (fragment.h: the fragments are double, so this is about
+// 2^13 ulps of the coordinates, far above the rounding of the interpolated vertices and
+// far below tau). The box bounds what the slack accepts near short edges; together they
+// accept exactly the points within about 2^-38 of the extent of a fragment.
+// Many samples and fragments: the fragments bucketed by a G x G grid over their boxes,
+// so a sample tests only the fragments whose (grown) box overlaps its cell. The same
+// test on a subset that contains every fragment whose box holds the sample: cell indices
+// floor((x - x0) / w), clamped, are monotone in x, so a point inside a box falls in a
+// cell of the box's cell range.
+void ReceiverShading::sample_bits() {
+  const Light& light = scene_.lights[gs_.li];
+  const FragmentList& frags = gs_.frags;
+  std::vector<UVBox>& boxes = gs_.boxes;
+  std::vector<uint32_t>&cell_start = gs_.cell_start, &cell_items = gs_.cell_items, &cell_fill = gs_.cell_fill;
+  ReceiverResult& rr = gs_.ctx->result->receivers[i_];
+  const size_t off = gs_.light_offset;
+  const double grow = double(lf_.extent) * 0x1p-38;
+  const double slack = double(lf_.extent) * 0x1p-40;
+  for (UVBox& b : boxes) b = UVBox{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
+  const size_t nf = frags.size();
+  int grid = 0;
+  double gu0 = 0, gv0 = 0, gwu = 0, gwv = 0;
+  if (nf > 8 && light.samples > 32) {
+    UVBox gb;
+    for (const UVBox& b : boxes) gb.extend(b);
+    grid = std::clamp(int(std::sqrt(double(nf))), 2, 16);
+    gu0 = gb.ulo, gv0 = gb.vlo;
+    gwu = (gb.uhi - gb.ulo) / grid, gwv = (gb.vhi - gb.vlo) / grid;
+    if (!(gwu > 0.0) || !(gwv > 0.0)) grid = 0;
+  }
+  auto cell = [](double x, double x0, double w, int n) {
+    double c = std::floor((x - x0) / w);
+    return c < 0.0 ? 0 : (c >= double(n - 1) ? n - 1 : int(c));
+  };
+  if (grid > 0) {
+    cell_start.assign(size_t(grid) * size_t(grid) + 1, 0u);
+    for (int pass = 0; pass < 2; ++pass) {
+      for (size_t f = 0; f < nf; ++f) {
+        const UVBox& b = boxes[f];
+        int u0 = cell(b.ulo, gu0, gwu, grid), u1 = cell(b.uhi, gu0, gwu, grid);
+        int v0 = cell(b.vlo, gv0, gwv, grid), v1 = cell(b.vhi, gv0, gwv, grid);
+        for (int cv = v0; cv <= v1; ++cv)
+          for (int cu = u0; cu <= u1; ++cu) {
+            size_t c = size_t(cv) * size_t(grid) + size_t(cu);
+            if (pass == 0) ++cell_start[c + 1];
+            else cell_items[cell_fill[c]++] = uint32_t(f);
+          }
+      }
+      if (pass == 0) {
+        for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+        cell_items.resize(cell_start.back());
+        cell_fill.assign(cell_start.begin(), cell_start.end() - 1);
+      }
+    }
+  }
+  for (int j = 0; j < light.samples; ++j) {
+    size_t k = sample_index(light, j, i_);
+    bool vis = false;
+    if (lf_.on_light[k]) {
+      const Vec3d& sp = lf_.samples[k];
+      const double su = sp[lf_.axes.u], sv = sp[lf_.axes.v];
+      if (grid > 0) {
+        size_t c = size_t(cell(sv, gv0, gwv, grid)) * size_t(grid) + size_t(cell(su, gu0, gwu, grid));
+        for (uint32_t e = cell_start[c]; e < cell_start[c + 1] && !vis; ++e) {
+          uint32_t f = cell_items[e];
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack);
+        }
+      } else {
+        for (size_t f = 0; f < nf && !vis; ++f)
+          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack);
+      }
+    } else {
+      // Off the light polygon (explicit samples): the segment r -> sample itself.
+      vis = !segment_blocked_by_scene(scene_, lf_.origin, to_local(rec_.p, lf_.origin), Vec3f(lf_.samples[k]));
+      ++tot_.segment_relations;
+    }
+    rr.set_visible(off + size_t(j), vis);
+  }
+}
+
+void ReceiverShading::run() {
+  // Plane tests this receiver's float path could not decide (on_line: r within rounding
+  // of the line of an occluder's or near polygon's edge) before and after it.
+  const uint64_t undecided0 = bsp_.counters().on_line + nc_.on_line;
+  if (is_extreme()) {
+    shade_exact();
+  } else {
+    shade_float();
+    // An undecided plane was taken as "outside that edge" (bsp.cpp, subtract_polygon):
+    // right when r is exactly on the edge's line (the line lies in the triangle's plane,
+    // so r does too and the triangle is edge-on to it, hiding nothing), but a guess
+    // within rounding of it (test OccluderEdgeUndecidedInFloatIsShadedExactly). Such a
+    // receiver is shaded again by the exact path (rare: for tree occluders the group's
+    // receivers are strictly on one side of the plane, so only rounding gets here).
+    if (bsp_.counters().on_line + nc_.on_line != undecided0) {
+      ++tot_.undecided_receivers;
+      shade_exact();
+    }
+  }
+  gs_.boxes.clear();
+  for (size_t f = 0; f < gs_.frags.size(); ++f)
+    gs_.boxes.push_back(UVBox::of(lf_.axes, gs_.frags.data(f), gs_.frags.count(f)));
+  // Fragments, fraction, bits by point-in-fragment, irradiance.
+  double area = 0.0, irr = 0.0;
+  report_fragments(area, irr);
+  const Light& light = scene_.lights[gs_.li];
+  gs_.ctx->result->receivers[i_].visible_fraction[gs_.li] = float(std::min(1.0, area / light.area));
+  sample_bits();
+  if (gs_.ctx->irradiance) (*gs_.ctx->irradiance)[i_ * scene_.lights.size() + gs_.li] = irr;
+  tot_.irradiance += irr;
+  tot_.fragments += gs_.frags.size();
+}
+
+}  // namespace
+
+void shade_receiver(GroupState& gs, LazyBsp& bsp, size_t gk, BspCounters& near_counters, Totals& tot) {
+  ReceiverShading(gs, bsp, gk, near_counters, tot).run();
+}
+
+void shade_fallback(const SolveContext& ctx, size_t li, const LocalLight& lf, size_t i, Totals& tot) {
+  const Scene& scene = *ctx.scene;
+  const Light& light = scene.lights[li];
+  ReceiverResult& rr = ctx.result->receivers[i];
+  size_t off = scene.light_offset(li);
+  const Vec3f r = to_local(scene.receivers[i].p, lf.origin);
+  int vis = 0;
+  for (int j = 0; j < light.samples; ++j) {
+    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, Vec3f(lf.samples[sample_index(light, j, i)]));
+    rr.set_visible(off + size_t(j), !blocked);
+    vis += !blocked;
+  }
+  tot.segment_relations += size_t(light.samples);
+  rr.visible_fraction[li] = float(double(vis) / double(light.samples));
+  rr.fragments[li].clear();
+  ++tot.fallback;
+}
+
+}  // namespace visgate::plucker

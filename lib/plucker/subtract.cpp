@@ -1,0 +1,179 @@
+// Subtracting a polygon's shadow from light fragments; see subtract.h.
+#include "lib/plucker/subtract.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <limits>
+
+#include "lib/base/check.h"
+
+namespace visgate::plucker {
+
+namespace {
+
+// Keeps fragment f of `in` whole in `out` (box `box` in `out_boxes`), after taking back
+// the pieces `out` received from index `first` on: a subtraction that split the fragment
+// and then found nothing of it hidden returns the fragment instead of its pieces (a
+// shadow beside a fragment still cuts it along the planes through its edges). With
+// first == out.size() it only keeps the fragment.
+void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first, FragmentList& out,
+                std::vector<UVBox>& out_boxes) {
+  out.truncate(first);
+  out_boxes.resize(first);
+  out.add(in.data(f), size_t(in.count(f)));
+  out_boxes.push_back(box);
+}
+
+}  // namespace
+
+bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
+                      const UVAxes& axes, const LightBounds& light, const FragmentList& in,
+                      const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
+                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
+  // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
+  // each written before it is read. Per thread rather than per call: constructing them
+  // per call costs measurably on columns.
+  static thread_local NodePlane planes[2 * kMaxOccluderVertices + 2];
+  VG_CHECK(nq <= int(std::size(planes)));
+  bool have_planes = false;
+  auto plane = [&](int m) -> const NodePlane& {
+    if (!have_planes) {
+      for (int k = 0; k < nq; ++k)
+        if (!skip[k]) planes[k] = node_plane(r, q[k], q[(k + 1) % nq], light);
+      have_planes = true;
+    }
+    return planes[m];
+  };
+  auto keep = [&](const Vec3d* p, size_t n) {
+    out.add(p, n);
+    out_boxes.push_back(UVBox::of(axes, p, int(n)));
+  };
+  int hint = 0;
+  // A fragment entirely on the negative side of one edge plane misses q: kept whole,
+  // without the splits the walk below would make before reaching that edge. Tried
+  // from the edge that separated the previous fragment (neighbours mostly share it).
+  auto misses = [&](size_t f) {
+    if (!qbox.overlaps(boxes[f])) return true;
+    for (int mi = 0; mi < nq; ++mi) {
+      const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
+      if (skip[m]) continue;
+      SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
+      if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
+      if (s == SplitResult::Negative || s == SplitResult::OnLine) {
+        hint = m;
+        return true;
+      }
+    }
+    return false;
+  };
+  // The first fragment q's shadow may meet; none: nothing changes.
+  size_t first = 0;
+  while (first < in.size() && misses(first)) ++first;
+  if (first == in.size()) return false;
+  out.clear();
+  out_boxes.clear();
+  for (size_t f = 0; f < first; ++f) keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
+  for (size_t f = first; f < in.size(); ++f) {
+    if (f > first && misses(f)) {
+      keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
+      continue;
+    }
+    cur.assign(in.data(f), in.data(f) + in.count(f));
+    const size_t first_piece = out.size();
+    bool alive = true;
+    for (int m = 0; m < nq && alive; ++m) {
+      if (skip[m]) continue;
+      SplitResult s = split_fragment(plane(m), cur.data(), int(cur.size()), pos, neg);
+      switch (s) {
+        case SplitResult::Positive: break;
+        case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
+        case SplitResult::Negative:  // what is left misses q: nothing of the fragment is hidden
+          keep_whole(in, f, boxes[f], first_piece, out, out_boxes);
+          alive = false;
+          break;
+        case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
+        case SplitResult::Both:
+          ++c.splits;
+          if (!neg.empty()) keep(neg.data(), neg.size());
+          if (pos.empty()) alive = false;
+          else cur.swap(pos);
+          break;
+      }
+    }
+    // A piece positive against every edge stabs q: blocked, dropped.
+  }
+  return true;
+}
+
+void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
+                             const UVAxes& axes, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
+                             std::vector<UVBox>& out_boxes, std::vector<Vec3d>& cur) {
+  out.clear();
+  out_boxes.clear();
+  // Scratch reused across calls (one set per thread): the exact path runs once per
+  // candidate triangle and fragment list.
+  thread_local std::vector<double> w;
+  thread_local std::vector<Vec3d> inside, outside;
+  // w > 0 inside plane k's half-space of the blocked set. The planes: the triangle's
+  // (orient3d(t0, t1, t2, x)) and those through rw and each edge (det[x - rw, t_e - rw,
+  // t_e+1 - rw] = orient3d(rw, t_e, t_e+1, x), cyclic columns), evaluated at the exact
+  // lifted light point of x's (u, v) (LiftedLight: a vertex kept in 3D lies its rounding
+  // off the light's plane, which decides the side for a receiver that close to the
+  // plane), with accurate values: the clip below interpolates with them.
+  LiftedPlane planes[4] = {lift.plane(tw[0], tw[1], tw[2]), lift.plane(rw, tw[0], tw[1]),
+                                  lift.plane(rw, tw[1], tw[2]), lift.plane(rw, tw[2], tw[0])};
+  const int lu = lift.u(), lv = lift.v();
+  // accurate: within 2^-30 (clip interpolation); else only the sign is exact.
+  auto value = [&](int k, const Vec3d& x, bool accurate) {
+    ExactOrient o = accurate ? lift.value(planes[k], origin[lu], x[lu], origin[lv], x[lv])
+                             : lift.sign(planes[k], origin[lu], x[lu], origin[lv], x[lv]);
+    if (o.sign == 0) return 0.0;
+    double v = std::abs(o.value);
+    if (!(v > 0.0)) v = std::numeric_limits<double>::min();
+    return -double(sigma) * double(o.sign) * v;
+  };
+  for (size_t f = 0; f < in.size(); ++f) {
+    cur.assign(in.data(f), in.data(f) + in.count(f));
+    // The pieces split off this fragment start here; when nothing of it turns out hidden
+    // they are taken back and the fragment kept whole (below).
+    const size_t first_piece = out.size();
+    bool blocked = true;
+    for (int k = 0; k < 4; ++k) {
+      w.resize(cur.size());
+      bool pos = false, neg = false;
+      for (size_t j = 0; j < cur.size(); ++j) {
+        w[j] = value(k, cur[j], false);
+        pos |= w[j] > 0.0;
+        neg |= w[j] < 0.0;
+      }
+      if (!pos) {  // all of it outside this half-space: not hidden
+        blocked = false;
+        break;
+      }
+      if (!neg) continue;
+      // A split interpolates with the values: those within 2^-30 (signs unchanged).
+      for (size_t j = 0; j < cur.size(); ++j) w[j] = value(k, cur[j], true);
+      // Split: the outside part is kept, the inside part goes on to the next plane.
+      clip_by_values(cur.data(), w.data(), int(cur.size()), false, outside);
+      clip_by_values(cur.data(), w.data(), int(cur.size()), true, inside);
+      if (!outside.empty()) {
+        out.add(outside.data(), outside.size());
+        out_boxes.push_back(UVBox::of(axes, outside.data(), int(outside.size())));
+      }
+      cur.swap(inside);
+      if (cur.empty()) break;
+    }
+    if (!blocked || cur.empty()) {
+      // Nothing of the fragment is hidden: the pieces split off it (outside one plane or
+      // another) make up the whole fragment, which is kept instead, unsplit; else every
+      // triangle whose shadow misses a fragment would still cut it along the planes
+      // through its edges (test ShadowBesideAFragmentLeavesItWhole).
+      keep_whole(in, f, UVBox::of(axes, in.data(f), in.count(f)), first_piece, out, out_boxes);
+    }
+    // Otherwise what is left is inside all four half-spaces: hidden, dropped.
+  }
+}
+
+
+}  // namespace visgate::plucker

@@ -1,0 +1,52 @@
+// Subtracting one polygon's shadow from a receiver's light fragments (paper 002 section
+// 4.2: Algorithm 1 lines 17-29 on bsp(o) walked once and never stored): the float path
+// for near polygons and the exact near-plane path for triangles that rounding cannot
+// place. Used by the per-receiver shading (shade_receiver.cpp). Internal to lib/plucker.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "lib/plucker/bsp.h"
+#include "lib/plucker/exact_orient.h"
+#include "lib/plucker/fragment.h"
+
+namespace visgate::plucker {
+
+// Subtracts the near polygon q (oriented: the receiver on its negative side) from the
+// fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
+// `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
+// is disjoint from the shadow and kept whole. `boxes` is parallel to `in`, `out_boxes`
+// to `out`.
+// Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows every
+// light line from r is on their inner side (the edge q has at r's own level, see the
+// near-polygon loop in shade_receiver.cpp).
+// Returns false, with `out` and `out_boxes` untouched, when q's shadow misses every
+// fragment (box or edge plane): the fragments stay as they are and nothing is copied
+// (about half of the calls on columns).
+bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
+                      const UVAxes& axes, const LightBounds& light, const FragmentList& in,
+                      const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
+                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c);
+
+// The exact near-plane path: removes from the fragments (local coordinates relative to
+// `origin`) the light points x whose open segment from rw crosses the triangle tw
+// properly (DESIGN section 3), with rw on side sigma (exact, nonzero) of tw's plane:
+// x strictly on the other side of the plane, and the line rw -> x strictly on the
+// stabbing side of every edge line (lines.h: side(rw -> x, t_e -> t_e+1) has the sign
+// -sigma for lines crossing from side sigma). Then the crossing point lies strictly
+// inside the triangle and strictly between rw and x, so no slab clipping is needed.
+// Every sign is exact, taken at the region oracle's own light point of x: the exact
+// lift onto the light's plane of x's (u, v) coordinates (origin + local, summed
+// exactly; exact_orient.h LiftedLight); new vertices are interpolated in double from
+// values accurate to 2^-30, so only points within rounding of a plane can be
+// misjudged. Used where float cannot tell which way the planes through rw and the
+// edges lean: receivers within rounding of a triangle's plane, extreme and undecided
+// receivers, and triangles reaching far away or lying within rounding of the light's
+// plane (occluder_selection.cpp, shade_receiver.cpp).
+void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
+                             const UVAxes& axes, const LiftedLight& lift, const FragmentList& in, FragmentList& out,
+                             std::vector<UVBox>& out_boxes, std::vector<Vec3d>& cur);
+
+}  // namespace visgate::plucker
