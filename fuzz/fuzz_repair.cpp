@@ -1,4 +1,4 @@
-// fuzz_repair: `visgate repair` as a property (issue 36). The input decodes to a small
+// fuzz_repair: `visgate repair` as a property. The input decodes to a small
 // polygon soup on a quarter-unit grid, where coplanar, collinear, coincident and
 // T-junction configurations are common, and to options (weld tolerance 0 or one grid
 // step, hole filling off or on). Checked:

@@ -5,8 +5,8 @@
 // inside parallel_for bodies, 0x1fa0 on the main thread). Under DAZ a denormal input
 // reads as 0 and under FTZ a denormal result becomes 0: a method would solve a slightly
 // different scene than the one it was given, its answers would depend on which thread
-// ran a receiver (fuzz_ssv b23d6514: a vertex at 1.2e-38 became 0 and flipped a relation
-// of margin 1e-3), and CGAL's filtered predicates, whose error bounds assume IEEE
+// ran a receiver (a vertex at 1.2e-38 read as 0 can flip a relation of margin 1e-3), and
+// CGAL's filtered predicates, whose error bounds assume IEEE
 // gradual underflow, could return a wrong sign. Code that must see the inputs as given
 // (the oracles, the methods, the double-precision ray tests) opens an IeeeFloatMode
 // scope: both modes cleared, the previous MXCSR restored on exit. Rounding stays

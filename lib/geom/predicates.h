@@ -82,11 +82,6 @@ inline Sign orient2d_exact(float ax, float ay, float bx, float by, float cx, flo
   return e[n - 1] > 0.0 ? Sign::Positive : Sign::Negative;
 }
 
-// The same as an int (-1, 0, 1), the form lib/scene and lib/plucker/triangle_tree call.
-inline int orient2d_exact_sign(float ax, float ay, float bx, float by, float cx, float cy) {
-  return to_int(orient2d_exact(ax, ay, bx, by, cx, cy));
-}
-
 // A point as the exact sum of a float vector and a double vector (an input point: lo =
 // 0; plucker-bsp's fragment vertex: a light's local origin plus its local coordinates).
 struct SumPoint {

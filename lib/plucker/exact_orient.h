@@ -90,11 +90,6 @@ class LiftedLight {
   int m_ = 0, u_ = 0, v_ = 1, w_ = 2, nw_sign_ = 1;
 };
 
-// orient3d_exact as an int (-1, 0, 1), the form lib/plucker/triangle_tree.cpp calls.
-inline int orient3d_exact_sign(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
-  return to_int(orient3d_exact(a, b, c, d));
-}
-
 // The exact side of x against the plane the region oracle takes as a light's plane
 // (oracle/region_oracle.h "Exact frame": the Newell normal N = sum v_i x v_(i+1) of the m
 // float vertices, through their exact centroid c): the sign of N . (x - c), computed as

@@ -58,7 +58,7 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
     const int u = (w + 1) % 3, v = (w + 2) % 3;
     auto turn = [&](uint32_t x, uint32_t y, uint32_t z) {
       const Vec3f &p = pos[x], &q = pos[y], &r = pos[z];
-      return orient2d_exact_sign(p[u], p[v], q[u], q[v], r[u], r[v]);
+      return to_int(orient2d_exact(p[u], p[v], q[u], q[v], r[u], r[v]));
     };
     const int s = turn(c[0], c[1], c[2]);
     if (s == 0) continue;
@@ -95,7 +95,7 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
         // The 2D turns first (cheaper); they mean something once d is in the plane.
         const uint32_t prev = poly[(i + poly.size() - 1) % poly.size()], next = poly[(i + 2) % poly.size()];
         if (turn(pa, d, pb) != s || turn(prev, pa, d) != s || turn(d, pb, next) != s) continue;
-        if (orient3d_exact_sign(a, b, cc, pos[d]) != 0) continue;
+        if (to_int(orient3d_exact(a, b, cc, pos[d])) != 0) continue;
         poly.insert(poly.begin() + ptrdiff_t(i) + 1, d);
         owner[i] = q;
         owner.insert(owner.begin() + ptrdiff_t(i) + 1, q);

@@ -1,4 +1,4 @@
-// Mesh repair and welding for `visgate repair` (DESIGN section 7, issue 9): polygon
+// Mesh repair and welding for `visgate repair` (DESIGN section 7): polygon
 // triangulation, welding by true Euclidean distance, cleaning (repeated-vertex,
 // zero-area and duplicate faces, T-junction splitting), consistent and outward
 // orientation, topology report (non-manifold edges and vertices, boundary loops,

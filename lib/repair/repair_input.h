@@ -1,4 +1,4 @@
-// What `visgate repair` would lose from its input (issue 9: "attributes that cannot be
+// What `visgate repair` would lose from its input ("attributes that cannot be
 // kept are reported, not silently dropped"; "nothing the user gave is lost"), found by a
 // scan of the file's own bytes next to the polygon soup that lib/scene/mesh_io read from
 // them.

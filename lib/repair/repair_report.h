@@ -1,4 +1,4 @@
-// The `visgate repair` report (DESIGN section 7, issue 9): a JSON document (format
+// The `visgate repair` report (DESIGN section 7): a JSON document (format
 // "visgate-repair-report", version 1) with the input and output hashes, the options and
 // tolerances, every defect count before and after, every step's changes and time, the
 // accounting of every input face, and the remaining defects with their elements; and the

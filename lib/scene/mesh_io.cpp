@@ -142,7 +142,7 @@ bool count_number(const std::string& tok, uint64_t limit, uint64_t& out) {
 // (`canonical`): OpenMesh's OFF reader takes the first line as the header and reads the
 // counts and vertices token by token after it, so it silently reads "OFF 3 1 0" (counts
 // on the header line, which many writers produce) as an empty mesh or as a huge vertex
-// count (fuzz_mesh_files oom d7b33115: 3 GB), and it reads a '#' comment as a failed
+// count (gigabytes), and it reads a '#' comment as a failed
 // number, leaving counts uninitialised. The canonical text is the magic alone on line 1,
 // "nv nf 0" on line 2, then every vertex and face line with comments and blank lines
 // removed: exactly what was validated here.
@@ -183,13 +183,13 @@ std::string prescan_off(std::istream& in, std::string& canonical) {
   std::string magic = toks[0];
   if (magic.find("OFF") == std::string::npos) return "line 1: missing OFF header";
   // Binary OFF is refused: OpenMesh 9's binary OFF reader ignores read failures and
-  // sizes vectors from whatever it read (fuzz_mesh_files timeout 8e4b251f: a 16-byte file
-  // made it allocate and loop for over 15 s).
+  // sizes vectors from whatever it read (a 16-byte file can make it allocate and loop
+  // for seconds; fuzz_mesh_files seeds).
   if (magic.find("BINARY") != std::string::npos || (toks.size() > 1 && toks[1] == "BINARY"))
     return "line " + std::to_string(lineno) + ": binary OFF is not supported (convert it to ASCII OFF, PLY or OBJ)";
   if (magic != "OFF" && magic != "COFF" && magic != "NOFF" && magic != "CNOFF" && magic != "STOFF" && magic != "NCOFF")
     // Other variants (4OFF, nOFF, "OFF:", ...) are refused: OpenMesh reads their counts
-    // unchecked (fuzz_mesh_files timeout 4c2e1ebf: "OFF:" with -14 vertices looped).
+    // unchecked (a negative count loops).
     return "line " + std::to_string(lineno) + ": unsupported OFF header '" + magic.substr(0, 32) +
            "' (OFF, COFF, NOFF, CNOFF, NCOFF, STOFF)";
   toks.erase(toks.begin());
@@ -205,8 +205,8 @@ std::string prescan_off(std::istream& in, std::string& canonical) {
   // size and that many indices token by token, and the rest of the line only when the
   // header has face colours (C). So a vertex line needs its coordinates, and a face line
   // keeps exactly the tokens the reader will take: anything else would become the next
-  // face (fuzz_mesh_files oom 867bfe69: "0 2147483648 2 0", a face of size 0 followed by a
-  // size of 2^31 that OpenMesh then pushed into a vector).
+  // face (e.g. "0 2147483648 2 0": a face of size 0, then a size of 2^31 that OpenMesh
+  // would push into a vector).
   const bool normals = magic.find('N') != std::string::npos, face_colours = magic.find('C') != std::string::npos;
   const size_t coords = normals ? 6 : 3;
   auto keep_line = [&](size_t n) {
@@ -307,8 +307,8 @@ std::string prescan_obj(std::istream& in, ObjFaces& out) {
       // vertex part is not a number. So a face needs a valid reference before any `#`
       // (`f   #4 /1(f0` asserted; `f #4 1 2 3` reads a triangle but is refused here too).
       // The reader takes each number as an int and skips one that does not fit, so a
-      // reference out of int range counts as bad too (fuzz_mesh_files ee5ddf7f:
-      // `f  42949672951 #4 /1` left the face without a vertex before `/1` and asserted).
+      // reference out of int range counts as bad too (else the face is left without a
+      // vertex before a `/1` and OpenMesh asserts).
       const size_t face = faces++;
       std::vector<uint32_t> idx;
       for (std::string t; ss >> t;) {

@@ -129,7 +129,7 @@ Status prepare_light(Light& light, const std::string& where) {
       const int i1 = (k + 1) % 3, i2 = (k + 2) % 3, want = ne[k] > 0 ? 1 : -1;
       for (size_t i = 0; i < n; ++i) {
         const Vec3f &a = P[(i + n - 1) % n], &b = P[i], &d = P[(i + 1) % n];
-        const int o = orient2d_exact_sign(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]);
+        const int o = to_int(orient2d_exact(a[i1], a[i2], b[i1], b[i2], d[i1], d[i2]));
         if (o == -want)
           return Error{fmt_index(where, "polygon", i) + ": polygon is not convex (reflex vertex in exact arithmetic)"};
       }

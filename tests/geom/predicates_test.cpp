@@ -84,7 +84,7 @@ TEST(Predicates, Orient2dExactSignAgainstInt128OnNearCollinearFloats) {
     if (step) cy = std::nextafter(cy, step > 0 ? 0x1p41f : 0.0f);
     i128 det = (fix(bx) - fix(ax)) * (fix(cy) - fix(ay)) - (fix(by) - fix(ay)) * (fix(cx) - fix(ax));
     int expect = det > 0 ? 1 : det < 0 ? -1 : 0;
-    ASSERT_EQ(orient2d_exact_sign(ax, ay, bx, by, cx, cy), expect) << it;
+    ASSERT_EQ(to_int(orient2d_exact(ax, ay, bx, by, cx, cy)), expect) << it;
     zero += expect == 0;
   }
   EXPECT_GT(zero, 1000);  // the exactly collinear triples came out zero
@@ -100,12 +100,12 @@ TEST(Predicates, Orient2dExactSignAgainstInt128OnNearCollinearFloats) {
       if (!(cx >= 8 && cy >= 8 && cx < 0x1p40f && cy < 0x1p40f)) continue;
     }
     i128 det = (fix(bx) - fix(ax)) * (fix(cy) - fix(ay)) - (fix(by) - fix(ay)) * (fix(cx) - fix(ax));
-    ASSERT_EQ(orient2d_exact_sign(ax, ay, bx, by, cx, cy), det > 0 ? 1 : det < 0 ? -1 : 0) << it;
+    ASSERT_EQ(to_int(orient2d_exact(ax, ay, bx, by, cx, cy)), det > 0 ? 1 : det < 0 ? -1 : 0) << it;
   }
   // Hand cases: a counter-clockwise, a clockwise and a collinear triple.
-  EXPECT_EQ(orient2d_exact_sign(0, 0, 1, 0, 0, 1), 1);
-  EXPECT_EQ(orient2d_exact_sign(0, 0, 0, 1, 1, 0), -1);
-  EXPECT_EQ(orient2d_exact_sign(1, 1, 2, 2, 3, 3), 0);
+  EXPECT_EQ(to_int(orient2d_exact(0, 0, 1, 0, 0, 1)), 1);
+  EXPECT_EQ(to_int(orient2d_exact(0, 0, 0, 1, 1, 0)), -1);
+  EXPECT_EQ(to_int(orient2d_exact(1, 1, 2, 2, 3, 3)), 0);
 }
 
 TEST(Predicates, MollerTrumboreOpenSegment) {
@@ -149,7 +149,9 @@ TEST(Predicates, Orient3dExactAgreesWithRationalArithmetic) {
     int want = orient3d_gmp_sign(p[0], p[1], p[2], p[3]);
     EXPECT_EQ(orient3d_exact(p[0], p[1], p[2], p[3]), sign_of_int(want)) << trial;
     const Sign filtered = orient3d_filtered(p[0], p[1], p[2], SumPoint(p[3]));
-    if (is_certain(filtered)) EXPECT_EQ(filtered, sign_of_int(want)) << trial;
+    if (is_certain(filtered)) {
+      EXPECT_EQ(filtered, sign_of_int(want)) << trial;
+    }
     certain += is_certain(filtered);
     ++(want == 0 ? zero : nonzero);
   }

@@ -167,7 +167,7 @@ Table doubling_rounds(BenchContext& ctx, const std::vector<std::pair<std::string
   return t;
 }
 
-// The issue-5 target configuration (README, ISS results): rooms at 500k+ triangles
+// The ISS target configuration (docs/methods/iss.md): rooms at 500k+ triangles
 // with 256x256 receivers and 64 samples per light, the same with twice the receivers
 // and with twice the samples per light, and columns at its paper size; single-threaded
 // only, ISS and embree on the very same scene one after the other. Ratios: embree / ISS
@@ -510,8 +510,8 @@ void add_core_experiments(std::vector<Experiment>& out) {
                  run_complexity});
   out.push_back({"iss", "paper 000 Tables 5.2/5.3 analogue: ISS against embree", run_iss});
   // The target rows of `iss` alone (the tables before them take several minutes), for
-  // measuring the issue-5 targets repeatedly.
-  out.push_back({"iss-target", "the issue-5 target rows of `iss` only: rooms 500k and its doublings, columns",
+  // measuring the ISS targets repeatedly.
+  out.push_back({"iss-target", "the ISS target rows of `iss` only: rooms 500k and its doublings, columns",
                  [](BenchContext& ctx) -> Status {
                    if (!ctx.has_method("iss", "the iss-target experiment") ||
                        !ctx.has_method("embree", "the iss-target experiment"))

@@ -267,6 +267,8 @@ Status sweep_figure(BenchContext& ctx, SweepMethods which, const std::vector<dou
   return {};
 }
 
+// Over 150 lines by design: paper 002's Figures 7 to 10 in order, one block a table, all
+// sharing the scenes, the embree sweep and the equal-quality N computed at the top.
 Status run_plucker(BenchContext& ctx) {
   const auto& o = ctx.opt;
   const std::string P = "plucker-bsp";
@@ -274,7 +276,7 @@ Status run_plucker(BenchContext& ctx) {
   bool have_e = ctx.has_method("embree", "the embree comparison");
   auto fams = ctx.families(o.families.empty() ? std::vector<std::string>{"columns", "rooms"} : o.families);
   if (fams.empty()) return Error{"plucker: no registered family to measure"};
-  // Equal quality (issue 6): the smallest N at which embree's RMS error of the visible
+  // Equal quality: the smallest N at which embree's RMS error of the visible
   // fraction over the penumbra pairs is at most 0.5%.
   const double quality = 0.005;
   std::vector<long> ns = o.quick ? std::vector<long>{16, 64, 256, 1024} : std::vector<long>{16, 64, 256, 512, 1024, 2048};

@@ -387,7 +387,7 @@ Status run_plucker_paper(BenchContext& ctx) {
   return {};
 }
 
-// The scan family at 75k and 300k triangles (issue 39's dense-mesh rows): 1024
+// The scan family at 75k and 300k triangles: 1024
 // receivers, 64 samples per light (10 lights).
 Status run_scan(BenchContext& ctx) {
   const auto& o = ctx.opt;

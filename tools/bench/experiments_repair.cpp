@@ -4,7 +4,7 @@
 // (check_only), repair with exact-position welding (T = 0) and with T = 1e-6.
 //
 // Sizes: 2000, 16000, 128000 and 1024000 triangles on rooms, columns and torus (a messy
-// and a clean 1M-triangle mesh: issue 9 asks for 1M in under 10 s). random-soup stops at
+// and a clean 1M-triangle mesh: the target is 1M in under 10 s). random-soup stops at
 // 16000: its triangles keep their size in a fixed box, so intersecting pairs grow as n^2
 // (371k at 16k triangles, 23.5M at 128k, some 1.5e9 at 1M) and every pair has to be
 // decided and counted exactly. A size that gives the same mesh as the previous one (rooms
@@ -14,7 +14,7 @@
 // the process CPU seconds of those runs (user + system, min over runs): on a shared
 // machine the CPU figure is the stable one.
 //
-// End to end (issue 36): a smooth closed surface, an icosahedron subdivided 8 times
+// End to end: a smooth closed surface, an icosahedron subdivided 8 times
 // (1,310,720 triangles; 5 times with --quick) with its radius modulated smoothly, as a
 // scan would be, written as an OFF file and then read, audited, repaired and written
 // again by what `visgate repair` runs, on one thread; each phase timed, and the process CPU

@@ -1,4 +1,4 @@
-// The CI correctness gate (`visgate gate`, issue 4): fixed seeds over every scene family
+// The CI correctness gate (`visgate gate`): fixed seeds over every scene family
 // and every registered method, metamorphic checks, the corpus replay, a summary table,
 // a JSON report and the stability chart (per method, the disagreement rate per margin
 // decade: CSV, then gnuplot to PNG and SVG).

@@ -1,7 +1,7 @@
 // visgate repair IN -o OUT [--weld-tolerance T] [--weld-mode=chain|strict] [--report r.json]
 //                [--in-place] [--split-nonmanifold] [--fill-holes N] [--stl-ascii]
 // visgate repair --check IN [--weld-tolerance T] [--report r.json]
-// (DESIGN section 7, issue 9.) Exit codes: 0 clean after repair (or clean input with
+// (DESIGN section 7.) Exit codes: 0 clean after repair (or clean input with
 // --check), 1 defects left (listed), 2 bad input or usage (nothing written), 3 internal.
 // The input is never modified unless --in-place; files are written through a temporary
 // file and a rename. --in-place keeps the file's mode and owner, replaces the target of
