@@ -77,7 +77,7 @@ TEST(Raycast, ResultsIndependentOfThreadCount) {
 TEST(Solver, OptionsAreChecked) {
   auto s = make_solver("embree");
   SolveOptions o;
-  o.opts["nope"] = "1";
+  o.opts.emplace("nope", "1");  // (operator[] = "1" trips GCC 12's false -Wrestrict, PR 105329)
   Status st = s->check_options(o);
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.error().message.find("nope"), std::string::npos);
