@@ -12,20 +12,13 @@
 #include "lib/mesh/prepare.h"
 #include "lib/scene/families.h"
 #include "lib/scene/scene_json.h"
+#include "tests/support/family_scene.h"
 
 namespace visgate {
 namespace {
 
 Scene gen(const std::string& f, uint64_t seed, long tris = -1, long recv = -1, long samples = -1, double ls = 1.0) {
-  FamilyParams p;
-  p.seed = seed;
-  p.triangles = tris;
-  p.receivers = recv;
-  p.samples = samples;
-  p.light_scale = ls;
-  auto r = generate_family(f, p);
-  EXPECT_TRUE(r.ok()) << f << ": " << (r.ok() ? "" : r.error().message);
-  return r.ok() ? std::move(*r) : Scene{};
+  return test_support::family(f, seed, tris, recv, samples, ls);
 }
 
 // Distance from p to segment ab, in double.
@@ -146,13 +139,7 @@ TEST(Families, LightScaleScalesTheLightArea) {
 TEST(Families, TorusIsClosedAndConsistentlyOutward) {
   for (uint64_t seed : {1, 2, 3}) {
     Scene s = gen("torus", seed);
-    mesh::PrepareCounts c;
-    mesh::PreparedMesh m = mesh::prepare_mesh(s.mesh, &c);
-    EXPECT_EQ(mesh::validate(m), "");
-    EXPECT_EQ(c.single_edges, 0u);
-    EXPECT_EQ(c.inconsistent_joins, 0u);
-    EXPECT_EQ(c.nonmanifold_edges, 0u);
-    EXPECT_EQ(c.degenerate_removed, 0u);
+    test_support::expect_closed_manifold(s);
     EXPECT_GT(signed_volume(s.mesh), 0.0);  // outward: positive enclosed volume
     // A shaft through the hole: the receiver under the torus centre sees the light.
     AABB b = s.mesh.bounds();

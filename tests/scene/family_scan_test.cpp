@@ -6,30 +6,19 @@
 #include "lib/mesh/prepare.h"
 #include "lib/scene/family_scan.h"
 #include "lib/scene/scene_json.h"
+#include "tests/support/family_scene.h"
 
 namespace visgate {
 namespace {
 
 Scene scan(uint64_t seed, long triangles, long receivers = 16, long samples = 4) {
-  FamilyParams p;
-  p.seed = seed;
-  p.triangles = triangles;
-  p.receivers = receivers;
-  p.samples = samples;
-  auto r = generate_family("scan", p);
-  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
-  return r.ok() ? std::move(*r) : Scene{};
+  return test_support::family("scan", seed, triangles, receivers, samples);
 }
 
+// Closed, and prepare keeps every triangle.
 void expect_closed_manifold(const Scene& s) {
-  mesh::PrepareCounts c;
-  mesh::PreparedMesh m = mesh::prepare_mesh(s.mesh, &c);
-  EXPECT_EQ(mesh::validate(m), "");
-  EXPECT_EQ(c.single_edges, 0u);
-  EXPECT_EQ(c.inconsistent_joins, 0u);
-  EXPECT_EQ(c.nonmanifold_edges, 0u);
-  EXPECT_EQ(c.degenerate_removed, 0u);
-  EXPECT_EQ(m.triangles.size(), s.mesh.size());
+  test_support::expect_closed_manifold(s);
+  EXPECT_EQ(mesh::prepare_mesh(s.mesh).triangles.size(), s.mesh.size());
 }
 
 TEST(FamilyScan, ClosedManifoldAfterPrepare) {
