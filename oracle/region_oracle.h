@@ -35,7 +35,7 @@
 // to the light crosses its interior strictly between the endpoints, the fraction is 0.
 // Anything not certain in double (near-degenerate, crossing a slab plane, partial) is
 // Unknown and goes to the exact path, so the answers are those of the exact path (checked
-// bit for bit against RegionOptions{false} in tests/oracle/oracle_test.cpp). With no Unknown
+// bit for bit against RegionOptions{false} in tests/oracle/region_oracle_test.cpp). With no Unknown
 // triangle the region is the light polygon itself, without an arrangement.
 // Receiver on the light plane (g_r = 0): edge_on = true, no region is computed
 // (fraction 0, no polygons, irradiance 0); the comparator skips such pairs.
