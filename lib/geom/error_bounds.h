@@ -8,7 +8,6 @@ namespace visgate {
 constexpr float kUnitRoundoffF = 0x1p-24f;   // float32, round to nearest
 constexpr double kUnitRoundoffD = 0x1p-53;   // double, round to nearest
 
-constexpr float gamma_f(int n) { return (float(n) * kUnitRoundoffF) / (1.0f - float(n) * kUnitRoundoffF); }
 constexpr double gamma_d(int n) { return (double(n) * kUnitRoundoffD) / (1.0 - double(n) * kUnitRoundoffD); }
 
 }  // namespace visgate

@@ -19,7 +19,6 @@ struct Frame3d {
     const Vec3d l = to_local(p);
     return Vec3f(float(l.x), float(l.y), float(l.z));
   }
-  Vec3d to_world(const Vec3d& l) const { return origin + U * l.x + V * l.y + N * l.z; }
   double height(const Vec3d& p) const { return dot(p - origin, N); }
 };
 

@@ -19,9 +19,6 @@ constexpr Sign sign_of_int(int v) { return v > 0 ? Sign::Positive : (v < 0 ? Sig
 constexpr Sign sign_with_bound(double v, double bound) {
   return v > bound ? Sign::Positive : (v < -bound ? Sign::Negative : Sign::Uncertain);
 }
-constexpr Sign negate(Sign s) {
-  return s == Sign::Positive ? Sign::Negative : (s == Sign::Negative ? Sign::Positive : s);
-}
 constexpr bool is_certain(Sign s) { return s != Sign::Uncertain; }
 constexpr int to_int(Sign s) { return s == Sign::Uncertain ? 0 : int(s); }
 
