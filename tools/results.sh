@@ -7,8 +7,10 @@
 #                 tools/results.sh format /tmp/results > docs/results.md
 set -euo pipefail
 
-# The experiments and their settings (quick sizes: the page is a current snapshot on the
-# machine that ran it, not the full-size runs of docs/log/bench-runs.md).
+# The experiments and their settings: the speed targets at their full sizes (about 15
+# minutes on 2 cores), the rest at quick sizes (a current snapshot on the machine that
+# ran it, not the full-size runs of docs/log/bench-runs.md).
+FULL="targets"
 EXPERIMENTS="stability oracle complexity speed-accuracy iss ssv plucker repair"
 SETTINGS="--quick --quiet"
 
@@ -17,6 +19,10 @@ case "${1:-}" in
     [ $# -eq 3 ] || { echo "usage: $0 run VISGATE WORKDIR" >&2; exit 2; }
     bin=$2 dir=$3
     mkdir -p "$dir"
+    for e in $FULL; do
+      echo "results: $e (full size)" >&2
+      "$bin" bench "$e" --quiet -o "$dir/$e"
+    done
     for e in $EXPERIMENTS; do
       echo "results: $e" >&2
       "$bin" bench "$e" $SETTINGS -o "$dir/$e"
@@ -24,9 +30,10 @@ case "${1:-}" in
     ;;
   format)
     [ $# -eq 2 ] || { echo "usage: $0 format WORKDIR" >&2; exit 2; }
-    python3 - "$2" "$EXPERIMENTS" "$SETTINGS" <<'PY'
+    python3 - "$2" "$FULL" "$EXPERIMENTS" "$SETTINGS" <<'PY'
 import json, math, os, sys
-root, experiments, settings = sys.argv[1], sys.argv[2].split(), sys.argv[3]
+root, full, quick, settings = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
+experiments = full + quick
 
 def cell(v):
     if isinstance(v, bool): return "true" if v else "false"
@@ -49,8 +56,11 @@ out = ["# Results", "",
        "regenerate:", "", "```",
        "tools/results.sh run build/tools/visgate /tmp/results",
        "tools/results.sh format /tmp/results > docs/results.md", "```", "",
-       "Experiments: %s, each run as `visgate bench NAME %s` (quick sizes: a" % (", ".join(d["experiment"] for d in docs), settings),
-       "snapshot of the current code, not the full-size runs of [log/bench-runs.md](log/bench-runs.md)).",
+       "Experiments: %s at full size (`visgate bench NAME --quiet`); %s, each run as" % (
+           ", ".join(d["experiment"] for d in docs if d["experiment"] in full),
+           ", ".join(d["experiment"] for d in docs if d["experiment"] in quick)),
+       "`visgate bench NAME %s` (quick sizes: a snapshot of the current code, not the full-size" % settings,
+       "runs of [log/bench-runs.md](log/bench-runs.md)).",
        "The columns are explained in [bench.md](bench.md). Timings are of the one machine and",
        "moment below: compare methods within a table (they ran side by side), not across pages.", "",
        "Machine: %s, %d hardware threads, %.1f GB; commit `%s`; compiler %s." % (

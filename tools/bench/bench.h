@@ -102,6 +102,8 @@ void add_repair_experiment(std::vector<Experiment>& out);
 // The paper-scale experiments iss-paper, ssv-paper, plucker-paper and scan
 // (experiments_paper.cpp).
 void add_paper_experiments(std::vector<Experiment>& out);
+// The speed targets with their verdicts (experiments_targets.cpp).
+void add_target_experiment(std::vector<Experiment>& out);
 
 // Runs one experiment and writes its report to opt.out_dir. Returns the files written;
 // the report itself goes to `report_out` when given.
