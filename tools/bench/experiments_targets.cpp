@@ -169,16 +169,21 @@ class TargetRunner {
     const double rel = double(s.relation_count());
     const double ray = t.equal_quality ? kNaN : ray_cast_pct(t.method, first.stats, rel);
     const double max_peak = t.scan ? double(kScanMemoryMb) : kNaN;
+    // The run's own growth of the process can miss memory a method reuses from earlier
+    // runs' freed heap; the method's count of its structures (the memory budget's) cannot.
+    double own = stat_or_nan(first.stats, {"peak_memory_mb", "memory_mb"});
+    if (std::isnan(own)) own = stat_or_nan(first.stats, {"peak_memory_kb"}) / 1024.0;
+    const double peak = std::isnan(own) ? first.peak_mb : std::max(first.peak_mb, own);
     std::string why;
     if (!(rr.of_minima >= t.min_ratio)) why += "ratio " + fmt(rr.of_minima) + " < " + fmt(t.min_ratio) + "; ";
     if (!std::isnan(t.max_ray_pct) && !(ray <= t.max_ray_pct))
       why += "ray-cast " + fmt(ray) + "% > " + fmt(t.max_ray_pct) + "%; ";
-    if (t.scan && first.peak_mb > max_peak) why += "peak " + fmt(first.peak_mb) + " MB > 1024 MB; ";
+    if (t.scan && peak > max_peak) why += "peak " + fmt(peak) + " MB > 1024 MB; ";
     const bool pass = why.empty();
     if (!pass) ++failed, why.resize(why.size() - 2);
     rows.add_row({t.name, t.method, t.family, s.mesh.size(), s.lights.size(), s.receivers.size(),
                   s.samples_per_receiver(), rel / 1e6, emb_n, emb_rms, ray, sec, esec, int(pt.a_seconds.size()),
-                  rr.of_minima, rr.median, rr.lo, rr.hi, rc.of_minima, first.peak_mb, t.min_ratio, t.max_ray_pct,
+                  rr.of_minima, rr.median, rr.lo, rr.hi, rc.of_minima, peak, t.min_ratio, t.max_ray_pct,
                   max_peak, pass, why});
     if (t.scan) {
       auto it = scan_seconds_.find(t.method);
