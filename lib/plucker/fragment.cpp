@@ -84,9 +84,16 @@ NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Light
   Vec3d err;
   p.n = edge_plane_normal_err(r, a, b, err);
   p.on_line = on_line(p.n, err);
-  p.base = nearest_base(r, a, b, light.centroid);
-  const Vec3d dc = light.centroid - p.base;
-  const double d1 = (std::abs(dc.x) + std::abs(dc.y) + std::abs(dc.z)) * (1.0 + 0x1p-50) + light.radius1;
+  // nearest_base (lines.h) against the centroid, keeping the chosen 1-norm |centroid -
+  // base|_1 for the bound (the same sums, computed once).
+  const Vec3d& x = light.centroid;
+  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  const double dr = n1(x - r), da = n1(x - a), db = n1(x - b);
+  double dn = 0.0;
+  if (dr <= da && dr <= db) p.base = r, dn = dr;
+  else if (da <= db) p.base = a, dn = da;
+  else p.base = b, dn = db;
+  const double d1 = dn * (1.0 + 0x1p-50) + light.radius1;
   p.bound = 8.0 * kUd * max_component(vabs(p.n)) * d1 +
             2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z)) * light.mag;
   return p;
