@@ -61,7 +61,7 @@ void LazyBsp::reset() {
 
 size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
-         (work_.capacity() + cur_.capacity() + pos_.capacity() + neg_.capacity()) * sizeof(Vec3d) +
+         work_.capacity() * sizeof(Vec3d) +
          stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + shadow_stamp_.capacity() * sizeof(uint32_t) +
          shadow_box_.capacity() * sizeof(UVBox) + miss_edge_.capacity() + plane_stamp_.capacity() * sizeof(uint32_t) +
          plane_cache_.capacity() * sizeof(NodePlane);
@@ -277,12 +277,21 @@ void LazyBsp::query(const Vec3d& r, FragmentList& out) {
 void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   begin_query(r);
   out.clear();
-  work_.clear();
   stack_.clear();
   splits_.clear();
+  // Every fragment of the query lives in work_ up to wtop (used as a buffer: its size only
+  // grows, so no vertex is value-initialised twice): the input pieces, then per split
+  // the two pieces, written there by split_fragment. A fragment being walked is a range
+  // of it, and the fragment a split cut stays where it is for the undoing below.
+  size_t wtop = 0;
+  auto reserve = [&](size_t more) {
+    if (work_.size() < wtop + more) work_.resize(std::max(wtop + more, 2 * work_.size()));
+  };
   for (size_t f = in.size(); f-- > 0;) {
-    stack_.push_back(Work{0, uint32_t(work_.size()), uint32_t(in.count(f)), kNoSplit});
-    work_.insert(work_.end(), in.data(f), in.data(f) + in.count(f));
+    reserve(size_t(in.count(f)));
+    stack_.push_back(Work{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit});
+    std::copy(in.data(f), in.data(f) + in.count(f), work_.begin() + std::ptrdiff_t(wtop));
+    wtop += size_t(in.count(f));
   }
   // A piece of split `split` is finished, visible or not. A split all of whose pieces
   // came out visible is undone: its pieces' output (everything after its out_mark, as
@@ -308,9 +317,9 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
     }
   };
   while (!stack_.empty()) {
-    Work w = stack_.back();
+    const Work w = stack_.back();
     stack_.pop_back();
-    cur_.assign(work_.begin() + w.begin, work_.begin() + w.begin + w.count);
+    uint32_t cb = w.begin, cn = w.count;  // the fragment being walked: work_[cb, cb + cn)
     int32_t node = w.node;
     uint32_t split = w.split;
     for (;;) {
@@ -318,7 +327,12 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       if (nd.kind == kInner) {
         // Lines 17-27: position of the fragment against makePlane(xyz, hyperplane).
         ++counters_.visits;
-        SplitResult s = split_fragment(edge_plane(nd.occ, nd.edge), cur_.data(), int(cur_.size()), pos_, neg_);
+        // Room for both pieces (2 cn each) before taking pointers into work_.
+        reserve(4 * size_t(cn));
+        Vec3d* negp = work_.data() + wtop;
+        Vec3d* posp = negp + 2 * size_t(cn);
+        int npos = 0, nneg = 0;
+        SplitResult s = split_fragment(edge_plane(nd.occ, nd.edge), work_.data() + cb, int(cn), posp, npos, negp, nneg);
         if (s == SplitResult::Positive) {
           node = nd.left;
         } else if (s == SplitResult::Negative) {
@@ -333,37 +347,37 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
         } else {
           // Line 25, with the right piece on the explicit stack.
           ++counters_.splits;
-          if (neg_.empty() && pos_.empty()) {
+          if (nneg == 0 && npos == 0) {
             counters_.zero_area += 2;
             finish(split, false);
             break;
           }
           const uint32_t id = uint32_t(splits_.size());
-          Split sp{split, uint32_t(work_.size()), uint32_t(cur_.size()), uint32_t(out.size()), 0, true};
-          work_.insert(work_.end(), cur_.begin(), cur_.end());
-          if (neg_.empty() || pos_.empty()) {  // a piece of zero area dropped: no undoing
+          Split sp{split, cb, cn, uint32_t(out.size()), 0, true};
+          if (nneg == 0 || npos == 0) {  // a piece of zero area dropped: no undoing
             ++counters_.zero_area;
             sp.visible = false;
           }
-          sp.pending = uint8_t(!neg_.empty()) + uint8_t(!pos_.empty());
+          sp.pending = uint8_t(nneg != 0) + uint8_t(npos != 0);
           splits_.push_back(sp);
-          if (!neg_.empty()) {
-            stack_.push_back(Work{nd.right, uint32_t(work_.size()), uint32_t(neg_.size()), id});
-            work_.insert(work_.end(), neg_.begin(), neg_.end());
-          }
-          if (pos_.empty()) break;
-          cur_.swap(pos_);
+          const uint32_t nb = uint32_t(wtop), pb = uint32_t(wtop + 2 * size_t(cn));
+          wtop = size_t(pb) + size_t(npos);
+          if (nneg != 0) stack_.push_back(Work{nd.right, nb, uint32_t(nneg), id});
+          if (npos == 0) break;
+          cb = pb;
+          cn = uint32_t(npos);
           node = nd.left;
           split = id;
         }
         continue;
       }
+      const Vec3d* cur = work_.data() + cb;
       if (nd.kind == kInvisible) {  // line 29: invisible class, discarded
         finish(split, false);
         break;
       }
       if (nd.occ_count == 0) {  // line 29: visible class, returned
-        out.add(cur_.data(), cur_.size());
+        out.add(cur, cn);
         finish(split, true);
         break;
       }
@@ -376,11 +390,11 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       // random one among those hiding part of it, else the fragment is visible.
       int64_t cover = -1;
       candidates_.clear();
-      const UVBox fbox = have_plane_ ? UVBox::of(plane_.axes, cur_.data(), int(cur_.size())) : UVBox::everything();
+      const UVBox fbox = have_plane_ ? UVBox::of(plane_.axes, cur, int(cn)) : UVBox::everything();
       for (uint32_t k = 0; k < nd.occ_count; ++k) {
         uint32_t id = lists_[nd.occ_begin + k];
         ++counters_.occlusion_tests;
-        Occlusion oc = occlusion(id, r, cur_.data(), int(cur_.size()), fbox);
+        Occlusion oc = occlusion(id, r, cur, int(cn), fbox);
         if (oc == Occlusion::Cover) {
           cover = id;
           break;
@@ -389,7 +403,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       }
       if (cover < 0 && candidates_.empty()) {
         ++counters_.lazy_visible;
-        out.add(cur_.data(), cur_.size());
+        out.add(cur, cn);
         finish(split, true);
         break;
       }

@@ -267,7 +267,7 @@ class LazyBsp {
   BspCounters counters_;
 
   // Scratch reused across queries.
-  std::vector<Vec3d> work_, cur_, pos_, neg_;
+  std::vector<Vec3d> work_;  // query(): every fragment of a query, used as a buffer
   std::vector<Work> stack_;
   std::vector<Split> splits_;
   std::vector<uint32_t> list_scratch_;

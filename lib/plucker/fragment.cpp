@@ -84,9 +84,16 @@ NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Light
   Vec3d err;
   p.n = edge_plane_normal_err(r, a, b, err);
   p.on_line = on_line(p.n, err);
-  p.base = nearest_base(r, a, b, light.centroid);
-  const Vec3d dc = light.centroid - p.base;
-  const double d1 = (std::abs(dc.x) + std::abs(dc.y) + std::abs(dc.z)) * (1.0 + 0x1p-50) + light.radius1;
+  // nearest_base (lines.h) against the centroid, keeping the chosen 1-norm |centroid -
+  // base|_1 for the bound (the same sums, computed once).
+  const Vec3d& x = light.centroid;
+  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  const double dr = n1(x - r), da = n1(x - a), db = n1(x - b);
+  double dn = 0.0;
+  if (dr <= da && dr <= db) p.base = r, dn = dr;
+  else if (da <= db) p.base = a, dn = da;
+  else p.base = b, dn = db;
+  const double d1 = dn * (1.0 + 0x1p-50) + light.radius1;
   p.bound = 8.0 * kUd * max_component(vabs(p.n)) * d1 +
             2.0 * kUd * (std::abs(p.n.x) + std::abs(p.n.y) + std::abs(p.n.z)) * light.mag;
   return p;
@@ -119,48 +126,60 @@ SplitResult split_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, const
 
 SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
                            std::vector<Vec3d>& neg) {
+  if (pos.size() < size_t(2 * n)) pos.resize(size_t(2 * n));
+  if (neg.size() < size_t(2 * n)) neg.resize(size_t(2 * n));
+  int np = 0, nn = 0;
+  const SplitResult s = split_fragment(pl, poly, n, pos.data(), np, neg.data(), nn);
+  if (s == SplitResult::Both) {
+    pos.resize(size_t(np));
+    neg.resize(size_t(nn));
+  }
+  return s;
+}
+
+SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, Vec3d* pos, int& npos, Vec3d* neg,
+                           int& nneg) {
   // det[x - r, a - r, b - r] = (x - base) . N = side(line(r, x), line(a, b)) (node_plane).
   // Query point on the node's line: N vanishes within its error bound.
   if (pl.on_line) return SplitResult::OnLine;
 
   double val_buf[kMaxStack];  // NOLINT
-  std::vector<double> val_heap;
   double* val = val_buf;
   if (n > kMaxStack) {
+    thread_local std::vector<double> val_heap;  // rare: fragments of more than 64 vertices
     val_heap.resize(size_t(n));
     val = val_heap.data();
   }
-  int npos = 0, nneg = 0;
+  int cpos = 0, cneg = 0;
   for (int k = 0; k < n; ++k) {
     Vec3d d = poly[k] - pl.base;
     double s = dot(d, pl.n);
-    if (s > pl.bound) ++npos;
-    else if (s < -pl.bound) ++nneg;
+    if (s > pl.bound) ++cpos;
+    else if (s < -pl.bound) ++cneg;
     else s = 0.0;  // on the plane within the error bound: belongs to both pieces
     val[k] = s;
   }
-  if (nneg == 0 && npos == 0) return SplitResult::ZeroArea;
-  if (nneg == 0) return SplitResult::Positive;
-  if (npos == 0) return SplitResult::Negative;
+  if (cneg == 0 && cpos == 0) return SplitResult::ZeroArea;
+  if (cneg == 0) return SplitResult::Positive;
+  if (cpos == 0) return SplitResult::Negative;
 
   // Line 25: L cap p+ and L cap p-; vertices on the plane go to both, edges crossing
   // strictly get one vertex, interpolated in double and rounded once, shared by both
   // pieces.
-  pos.clear();
-  neg.clear();
+  int p = 0, q = 0;
   for (int k = 0; k < n; ++k) {
     int k1 = (k + 1 == n) ? 0 : k + 1;
     double s0 = val[k], s1 = val[k1];
-    if (s0 >= 0.0) pos.push_back(poly[k]);
-    if (s0 <= 0.0) neg.push_back(poly[k]);
+    if (s0 >= 0.0) pos[p++] = poly[k];
+    if (s0 <= 0.0) neg[q++] = poly[k];
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
       Vec3d x = edge_crossing(poly[k], poly[k1], s0, s1);
-      pos.push_back(x);
-      neg.push_back(x);
+      pos[p++] = x;
+      neg[q++] = x;
     }
   }
-  if (pos.size() < 3) pos.clear();
-  if (neg.size() < 3) neg.clear();
+  npos = p >= 3 ? p : 0;
+  nneg = q >= 3 ? q : 0;
   return SplitResult::Both;
 }
 

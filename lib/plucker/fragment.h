@@ -69,6 +69,13 @@ SplitResult classify_fragment(const Vec3d& r, const Vec3d& a, const Vec3d& b, co
 SplitResult split_fragment(const NodePlane& plane, const Vec3d* poly, int n, std::vector<Vec3d>& pos,
                            std::vector<Vec3d>& neg);
 SplitResult classify_fragment(const NodePlane& plane, const Vec3d* poly, int n);
+// The same split into caller buffers, each with room for 2n vertices (a piece holds each
+// vertex at most once and at most one crossing per edge): `npos` and `nneg` receive the
+// pieces' sizes (0 when rounding leaves fewer than 3). Identical arithmetic to the
+// vector form; the BSP walk writes the pieces straight into its work list with it (no
+// per-vertex capacity checks, no copies of the pieces).
+SplitResult split_fragment(const NodePlane& plane, const Vec3d* poly, int n, Vec3d* pos, int& npos, Vec3d* neg,
+                           int& nneg);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to

@@ -79,12 +79,19 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
       continue;
     }
-    cur.assign(in.data(f), in.data(f) + in.count(f));
+    // The piece still walked: the input fragment itself until the first split, then
+    // `cur`. The pieces are written into pos and neg (room for 2n each, fragment.h); the
+    // buffers only grow.
+    const Vec3d* cp = in.data(f);
+    int cn = in.count(f);
     const size_t first_piece = out.size();
     bool alive = true;
     for (int m = 0; m < nq && alive; ++m) {
       if (skip[m]) continue;
-      SplitResult s = split_fragment(plane(m), cur.data(), int(cur.size()), pos, neg);
+      if (pos.size() < size_t(2 * cn)) pos.resize(size_t(2 * cn));
+      if (neg.size() < size_t(2 * cn)) neg.resize(size_t(2 * cn));
+      int np = 0, nn = 0;
+      SplitResult s = split_fragment(plane(m), cp, cn, pos.data(), np, neg.data(), nn);
       switch (s) {
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
@@ -95,9 +102,14 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
         case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
         case SplitResult::Both:
           ++c.splits;
-          if (!neg.empty()) keep(neg.data(), neg.size());
-          if (pos.empty()) alive = false;
-          else cur.swap(pos);
+          if (nn != 0) keep(neg.data(), size_t(nn));
+          if (np == 0) {
+            alive = false;
+          } else {
+            cur.swap(pos);
+            cp = cur.data();
+            cn = np;
+          }
           break;
       }
     }

@@ -178,3 +178,62 @@ TEST(PluckerFragment, ClippedCrossingIsInterpolatedFromTheNearEnd) {
     EXPECT_EQ(crossings, 2) << dir;
   }
 }
+
+TEST(PluckerFragment, NodePlaneBaseAndBoundAreNearestBasesAndTheDocumentedBound) {
+  // node_plane picks its base with the sums of lines.h nearest_base (computed once for
+  // the bound too): the same base, and the bound of fragment.cpp from |centroid - base|_1.
+  Rng rng(71);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double off = trial % 2 ? rng.uniform(-1e4, 1e4) : 0.0;
+    std::vector<Vec3d> light = {Vec3d(off, off, 2), Vec3d(off, off + 1, 2), Vec3d(off + 1.5, off + 1, 2.25)};
+    const LightBounds lb = LightBounds::of(light.data(), 3);
+    auto pt = [&](double s) { return Vec3d(off + s * rng.uniform(-3, 3), off + s * rng.uniform(-3, 3), rng.uniform(-2, 4)); };
+    // Ties too: r, a or b at the same 1-norm distance from the centroid.
+    const Vec3d r = pt(1), a = trial % 7 == 0 ? r : pt(1), b = trial % 11 == 0 ? a : pt(2);
+    const NodePlane pl = node_plane(r, a, b, lb);
+    const Vec3d& want = nearest_base(r, a, b, lb.centroid);
+    EXPECT_EQ(pl.base.x, want.x);
+    EXPECT_EQ(pl.base.y, want.y);
+    EXPECT_EQ(pl.base.z, want.z);
+    const Vec3d dc = lb.centroid - want;
+    const double d1 = (std::abs(dc.x) + std::abs(dc.y) + std::abs(dc.z)) * (1.0 + 0x1p-50) + lb.radius1;
+    const double bound = 8.0 * kUnitRoundoffD * max_component(vabs(pl.n)) * d1 +
+                         2.0 * kUnitRoundoffD * (std::abs(pl.n.x) + std::abs(pl.n.y) + std::abs(pl.n.z)) * lb.mag;
+    EXPECT_EQ(pl.bound, bound);
+  }
+}
+
+TEST(PluckerFragment, SplitIntoBuffersStaysWithinTwiceTheVertexCount) {
+  // The buffer form writes at most 2n vertices per piece (fragment.h): sentinels right
+  // after 2n slots stay untouched, also when vertices lie on the plane (they go to both
+  // pieces), and the pieces are the vector form's.
+  Rng rng(72);
+  const Vec3d sentinel(1e300, -1e300, 7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int n = 3 + int(rng.below(6));
+    std::vector<Vec3d> poly;
+    for (int k = 0; k < n; ++k) {  // convex: a regular polygon, some vertices snapped onto x = 0
+      const double t = 2.0 * M_PI * k / n;
+      Vec3d v(std::cos(t), std::sin(t), 1.0);
+      if (trial % 3 == 0 && std::abs(v.x) < 0.6) v.x = 0.0;
+      poly.push_back(v);
+    }
+    const LightBounds lb = LightBounds::of(poly.data(), n);
+    // Planes through the origin's vertical line x = 0 (on some vertices) or random ones.
+    const Vec3d r(trial % 3 == 0 ? 0.0 : rng.uniform(-1, 1), rng.uniform(-1, 1), -1.0);
+    const Vec3d a(r.x, r.y + 1.0, 0.5), b(trial % 3 == 0 ? 0.0 : rng.uniform(-1, 1), r.y, 0.5);
+    const NodePlane pl = node_plane(r, a, b, lb);
+    std::vector<Vec3d> pos(size_t(2 * n) + 1, sentinel), neg(size_t(2 * n) + 1, sentinel);
+    int np = -1, nn = -1;
+    const SplitResult s = split_fragment(pl, poly.data(), n, pos.data(), np, neg.data(), nn);
+    EXPECT_EQ(pos[size_t(2 * n)].x, sentinel.x);
+    EXPECT_EQ(neg[size_t(2 * n)].x, sentinel.x);
+    std::vector<Vec3d> vp, vn;
+    EXPECT_EQ(split_fragment(pl, poly.data(), n, vp, vn), s);
+    if (s != SplitResult::Both) continue;
+    ASSERT_EQ(size_t(np), vp.size());
+    ASSERT_EQ(size_t(nn), vn.size());
+    for (int k = 0; k < np; ++k) EXPECT_EQ(pos[size_t(k)].x, vp[size_t(k)].x);
+    for (int k = 0; k < nn; ++k) EXPECT_EQ(neg[size_t(k)].y, vn[size_t(k)].y);
+  }
+}
