@@ -203,11 +203,14 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   SolveContext ctx{&scene, &result, irradiance, coherence, choice, &tree, opt.seed, &memory};
   // Closed surfaces (closed_surfaces.h), found once per solve (counted as selection).
   std::optional<ClosedSurfaces> closed;
+  MemoryCharge closed_charge;  // counted against the budget like the trees (declared after it)
   if (opt.get_bool("closed", true)) {
     tt = Clock::now();
     closed.emplace(scene.mesh);
     tree_s += seconds_since(tt);
     memory.change(int64_t(closed->memory_bytes()));
+    closed_charge.bind(&budget, "closed surfaces");
+    closed_charge.set(closed->memory_bytes());
     if (closed->count() > 0) ctx.closed = &*closed;
   }
   auto groups = receiver_groups(scene, tile);
