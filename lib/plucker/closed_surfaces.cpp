@@ -1,6 +1,8 @@
 // Closed surfaces of the scene; see closed_surfaces.h.
 #include "lib/plucker/closed_surfaces.h"
 
+#include <cmath>
+
 #include "lib/base/union_find.h"
 #include "lib/mesh/prepare.h"
 
@@ -35,7 +37,24 @@ ClosedSurfaces::ClosedSurfaces(const TriangleSoup& mesh) {
     ++sizes_[size_t(s)];
     any = true;
   }
-  if (any) surface_of_ = std::move(of);
+  if (!any) return;
+  surface_of_ = std::move(of);
+  // Signed volumes about each box's centre, in double, with the sum of the terms'
+  // magnitudes as the scale below which the sign is not trusted.
+  std::vector<double> vol(boxes_.size(), 0.0), mag(boxes_.size(), 0.0);
+  for (uint32_t t = 0; t < mesh.size(); ++t) {
+    const int32_t s = surface_of_[t];
+    if (s < 0) continue;
+    const Vec3d o = (to_double(boxes_[size_t(s)].lo) + to_double(boxes_[size_t(s)].hi)) * 0.5;
+    const Vec3d a = to_double(mesh.corner(t, 0)) - o, b = to_double(mesh.corner(t, 1)) - o,
+                c = to_double(mesh.corner(t, 2)) - o;
+    const double v = dot(a, cross(b, c));
+    vol[size_t(s)] += v;
+    mag[size_t(s)] += std::abs(v);
+  }
+  orient_.resize(boxes_.size());
+  for (size_t s = 0; s < boxes_.size(); ++s)
+    orient_[s] = int8_t(vol[s] > 1e-9 * mag[s] ? 1 : (vol[s] < -1e-9 * mag[s] ? -1 : 0));
 }
 
 }  // namespace visgate::plucker

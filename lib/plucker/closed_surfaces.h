@@ -38,15 +38,21 @@ class ClosedSurfaces {
   const AABB& box(int32_t s) const { return boxes_[size_t(s)]; }
   // Triangles of surface s.
   uint32_t triangles(int32_t s) const { return sizes_[size_t(s)]; }
+  // +1 when the triangles face outwards (signed volume clearly positive), -1 inwards, 0
+  // when the double sum cannot tell. A choice of which crossing side to keep, never a
+  // condition of correctness (occluder_selection.cpp).
+  int orientation(int32_t s) const { return orient_[size_t(s)]; }
   size_t memory_bytes() const {
     return surface_of_.capacity() * sizeof(int32_t) + boxes_.capacity() * sizeof(AABB) +
-           sizes_.capacity() * sizeof(uint32_t);
+           sizes_.capacity() * sizeof(uint32_t) +
+           orient_.capacity();
   }
 
  private:
   std::vector<int32_t> surface_of_;  // empty when the scene has no closed surface
   std::vector<AABB> boxes_;
   std::vector<uint32_t> sizes_;
+  std::vector<int8_t> orient_;
 };
 
 }  // namespace visgate::plucker

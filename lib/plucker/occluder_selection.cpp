@@ -286,14 +286,17 @@ int strict_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint* 
 // box and from the light: w = 0 at every receiver and light point, so every segment in
 // general position that crosses the surface crosses it with r on the positive side of
 // the crossed triangle's plane and with r on the negative side. Per candidate the sides
-// of the receivers' box (8 corners) and of the light (its vertices: a planar convex
-// polygon) are decided exactly; a crossing with r positive needs r's side not all
+// of the receivers' box (8 corners) and of the light (points whose convex hull holds
+// it, below) are decided exactly; a crossing with r positive needs r's side not all
 // negative and l's side not all positive (l is on the other side), and symmetrically.
-// Per surface the crossing side with fewer crossable candidates is kept; candidates
+// Per surface the side kept is where the segments enter it (r on the outer side, the
+// surface's faces towards the receivers: measured on scan 75k, 1.7x faster than keeping
+// the exits, with fewer developments), or, when the double signed volume cannot tell
+// outer from inner, the side with fewer crossable candidates; candidates
 // that cannot be crossed from it are marked in closed_drop. Since the other crossing of
 // each blocked segment is kept, the same segments in general position stay blocked and
 // the closed shadows cover the same light region (closed_surfaces.h). Nothing is marked
-// for surfaces too close, or a light lifted onto a plane (not planar).
+// for surfaces too close, or for a lifted light with a vertex not translated exactly.
 void Selection::closed_surface_culling() {
   std::vector<uint8_t>& drop = gs_.closed_drop;
   drop.clear();
@@ -368,7 +371,8 @@ void Selection::closed_surface_culling() {
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     if (!drop[ci]) continue;
     const int32_t k = slot[size_t(cs->surface(cand[ci]))];
-    const uint8_t need = count[2 * size_t(k)] <= count[2 * size_t(k) + 1] ? 1 : 2;
+    const int orient = cs->orientation(cs->surface(cand[ci]));
+    const uint8_t need = orient != 0 ? (orient > 0 ? 1 : 2) : (count[2 * size_t(k)] <= count[2 * size_t(k) + 1] ? 1 : 2);
     drop[ci] = (drop[ci] & need) ? 0 : 1;
   }
   for (int32_t s : used) slot[size_t(s)] = -1;
