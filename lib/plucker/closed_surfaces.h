@@ -13,7 +13,7 @@
 // can only be crossed with r on the negative side (or not at all) can be dropped, and
 // those kept block the same segments in general position. Occluder selection decides
 // "can only be crossed that way" from the sides of the group's receiver box and of the
-// light polygon (keep_positive in occluder_selection.cpp); the closed shadows of the
+// light polygon (occluder_selection.cpp closed_surface_culling); the closed shadows of the
 // kept triangles then cover the same light region, since the segments in general
 // position are dense in every triangle's shadow.
 #pragma once
