@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "lib/plucker/bsp.h"
+#include "lib/plucker/closed_surfaces.h"
 #include "lib/plucker/local_light.h"
 #include "lib/plucker/triangle_tree.h"
 #include "lib/solver.h"
@@ -45,6 +46,7 @@ struct Totals {
   uint64_t exact_triangles = 0, exact_receivers = 0, undecided_receivers = 0, unreported_slivers = 0;
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
   uint64_t plane_point_triangles = 0, patches = 0, patch_triangles = 0;
+  uint64_t closed_dropped = 0;  // candidates of closed surfaces left out (closed_surfaces.h)
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o);
@@ -73,6 +75,7 @@ struct SolveContext {
   const TriangleTree* tree;
   uint64_t seed;
   MemoryMeter* memory;
+  const ClosedSurfaces* closed = nullptr;  // null: every candidate is modelled
 };
 
 // One group and one light: the inputs, what occluder selection finds, and the working
@@ -106,6 +109,12 @@ struct GroupState {
   std::vector<Vec3d> near_verts;    // their vertices (NearPoly::begin, count)
   std::vector<uint32_t> exact_tris;  // subtracted exactly per receiver
   std::vector<uint32_t> cand;        // the shaft's candidate triangles (sorted)
+  // Per candidate: 0 kept, else left out as a closed surface's (occluder_selection.cpp);
+  // per closed surface met: its slot in closed_count (-1 none), reset after each group.
+  std::vector<uint8_t> closed_drop;
+  std::vector<int32_t> closed_slot;
+  std::vector<uint32_t> closed_count;  // per slot: candidates crossable with r positive, negative
+  std::vector<int32_t> closed_used;    // the surfaces with a slot
 
   // Scratch of the phases.
   std::vector<Vec3d> poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;

@@ -84,6 +84,7 @@ class Selection {
   void receivers_and_slab();
   void working_scale();
   void candidates();
+  void closed_surface_culling();
   bool select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]);
   void select_triangle(uint32_t t, const Vec3d tri[3]);
   [[gnu::always_inline]] inline NearPoly make_near(uint32_t t, const Vec3d tri[3], double tmax,
@@ -235,11 +236,16 @@ void Selection::candidates() {
   std::vector<uint32_t>& cand = gs_.cand;
   const TriangleTree& tree = *gs_.ctx->tree;
   tree.candidates(*shaft_, lf_.origin, cand);
+  closed_surface_culling();
   std::vector<uint8_t>& merged = gs_.merged;  // per candidate: shaded as part of a patch
   merged.assign(cand.size(), 0);
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
     if (merged[ci]) continue;
+    if (!gs_.closed_drop.empty() && gs_.closed_drop[ci]) {
+      ++tot_.closed_dropped;
+      continue;
+    }
     Vec3d tri[3] = {to_local_d(scene_.mesh.corner(t, 0), lf_.origin), to_local_d(scene_.mesh.corner(t, 1), lf_.origin),
                     to_local_d(scene_.mesh.corner(t, 2), lf_.origin)};
     if (shaft_->culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
@@ -259,6 +265,118 @@ void Selection::candidates() {
     }
     select_triangle(t, tri);
   }
+}
+
+// Strict side of every point of pts against the plane of the triangle a, b, c (world
+// floats): +1 / -1 when orient3d(a, b, c, p) has that sign for every p (filtered, exact
+// where the filter cannot tell), else 0.
+int strict_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint* pts, size_t n) {
+  int side = 0;
+  for (size_t k = 0; k < n; ++k) {
+    Sign sg = orient3d_filtered(a, b, c, pts[k]);
+    if (sg == Sign::Uncertain) sg = sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), pts[k]).sign);
+    const int sd = sg == Sign::Positive ? 1 : (sg == Sign::Negative ? -1 : 0);
+    if (sd == 0 || (k > 0 && sd != side)) return 0;
+    side = sd;
+  }
+  return side;
+}
+
+// Closed surfaces (closed_surfaces.h) whose box is strictly apart from the receivers'
+// box and from the light: w = 0 at every receiver and light point, so every segment in
+// general position that crosses the surface crosses it with r on the positive side of
+// the crossed triangle's plane and with r on the negative side. Per candidate the sides
+// of the receivers' box (8 corners) and of the light (points whose convex hull holds
+// it, below) are decided exactly; a crossing with r positive needs r's side not all
+// negative and l's side not all positive (l is on the other side), and symmetrically.
+// Per surface the side kept is where the segments enter it (r on the outer side, the
+// surface's faces towards the receivers: measured on scan 75k, 1.7x faster than keeping
+// the exits, with fewer developments), or, when the double signed volume cannot tell
+// outer from inner, the side with fewer crossable candidates; candidates
+// that cannot be crossed from it are marked in closed_drop. Since the other crossing of
+// each blocked segment is kept, the same segments in general position stay blocked and
+// the closed shadows cover the same light region (closed_surfaces.h). Nothing is marked
+// for surfaces too close, or for a lifted light with a vertex not translated exactly.
+void Selection::closed_surface_culling() {
+  std::vector<uint8_t>& drop = gs_.closed_drop;
+  drop.clear();
+  const ClosedSurfaces* cs = gs_.ctx->closed;
+  if (!cs) return;
+  const std::vector<uint32_t>& cand = gs_.cand;
+  const Light& light = scene_.lights[gs_.li];
+  AABB lbox, rbox;
+  for (const Vec3f& v : light.polygon) lbox.extend(v);
+  for (uint32_t i : *gs_.group) rbox.extend(scene_.receivers[i].p);
+  SumPoint rc[8];
+  for (int c = 0; c < 8; ++c)
+    rc[c] = SumPoint(Vec3f(c & 1 ? rbox.hi.x : rbox.lo.x, c & 2 ? rbox.hi.y : rbox.lo.y, c & 4 ? rbox.hi.z : rbox.lo.z));
+  // The light's points: a planar light is its float polygon. A lifted one (local_light.h)
+  // is the oracle's polygon of the vertices moved along axis w onto its Newell plane;
+  // lf_.poly holds that lift rounded in double (a few ulps of the light's coordinates),
+  // so each exact lifted vertex lies on the segment along w from its float vertex to
+  // lf_.poly's, widened by 2^-30 of the light's local coordinates at both ends: every
+  // light point is a convex combination of those ends (exact as origin + local double).
+  std::vector<SumPoint> lpts;
+  for (const Vec3f& v : light.polygon) lpts.emplace_back(v);
+  if (!lf_.planar) {
+    for (const Vec3f& v : light.polygon)
+      if (!translates_exactly(v, lf_.origin)) return;  // lf_.poly's (u, v) rounded: no culling
+    const int w = 3 - lf_.axes.u - lf_.axes.v;
+    double scale = 0.0;
+    for (const Vec3d& p : lf_.poly) scale = std::max(scale, max_component(vabs(p)));
+    const double m = 0x1p-30 * scale;
+    for (size_t k = 0; k < lf_.poly.size(); ++k) {
+      const double wf = to_local_d(light.polygon[k], lf_.origin)[w], wl = lf_.poly[k][w];
+      Vec3d lo = lf_.poly[k], hi = lf_.poly[k];
+      lo[w] = std::min(wf, wl) - m;
+      hi[w] = std::max(wf, wl) + m;
+      lpts.emplace_back(lf_.origin, lo);
+      lpts.emplace_back(lf_.origin, hi);
+    }
+  }
+  auto apart = [](const AABB& a, const AABB& b) {
+    return a.hi.x < b.lo.x || b.hi.x < a.lo.x || a.hi.y < b.lo.y || b.hi.y < a.lo.y || a.hi.z < b.lo.z ||
+           b.hi.z < a.lo.z;
+  };
+  std::vector<int32_t>& slot = gs_.closed_slot;
+  if (slot.size() != cs->count()) slot.assign(cs->count(), -1);
+  std::vector<uint32_t>& count = gs_.closed_count;
+  std::vector<int32_t>& used = gs_.closed_used;
+  count.clear();
+  used.clear();
+  drop.assign(cand.size(), 0);  // here: bit 0 crossable with r positive, bit 1 with r negative, 4 none
+  bool any = false;
+  for (size_t ci = 0; ci < cand.size(); ++ci) {
+    const uint32_t t = cand[ci];
+    const int32_t s = cs->surface(t);
+    if (s < 0) continue;
+    if (slot[size_t(s)] == -1) {
+      const bool usable = apart(cs->box(s), rbox) && apart(cs->box(s), lbox);
+      slot[size_t(s)] = usable ? int32_t(used.size()) : -2;
+      used.push_back(s);
+      count.push_back(0);
+      count.push_back(0);
+    }
+    const int32_t k = slot[size_t(s)];
+    if (k < 0) continue;
+    const Vec3f &a = scene_.mesh.corner(t, 0), &b = scene_.mesh.corner(t, 1), &c = scene_.mesh.corner(t, 2);
+    const int sr = strict_side(a, b, c, rc, 8);
+    const int sl = strict_side(a, b, c, lpts.data(), lpts.size());
+    const bool pos = sr != -1 && sl != 1, neg = sr != 1 && sl != -1;
+    drop[ci] = uint8_t(4 | (pos ? 1 : 0) | (neg ? 2 : 0));
+    count[2 * size_t(k)] += pos;
+    count[2 * size_t(k) + 1] += neg;
+    any = true;
+  }
+  for (size_t ci = 0; ci < cand.size(); ++ci) {
+    if (!drop[ci]) continue;
+    const int32_t k = slot[size_t(cs->surface(cand[ci]))];
+    const int orient = cs->orientation(cs->surface(cand[ci]));
+    const uint8_t need = orient != 0 ? (orient > 0 ? 1 : 2) : (count[2 * size_t(k)] <= count[2 * size_t(k) + 1] ? 1 : 2);
+    drop[ci] = (drop[ci] & need) ? 0 : 1;
+  }
+  for (int32_t s : used) slot[size_t(s)] = -1;
+  if (!any) drop.clear();
 }
 
 // A coplanar convex patch (triangle_tree.h; its triangles tris, the first of them with

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <mutex>
 
 #include "lib/geom/float_mode.h"
@@ -24,6 +25,7 @@ void Totals::merge(const Totals& o) {
   irradiance += o.irradiance;
   trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
   fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
+  closed_dropped += o.closed_dropped;
   exact_triangles += o.exact_triangles;
   far_triangles += o.far_triangles;
   band_triangles += o.band_triangles;
@@ -199,6 +201,18 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   double tree_s = seconds_since(tt);
   memory.change(int64_t(tree.memory_bytes()));
   SolveContext ctx{&scene, &result, irradiance, coherence, choice, &tree, opt.seed, &memory};
+  // Closed surfaces (closed_surfaces.h), found once per solve (counted as selection).
+  std::optional<ClosedSurfaces> closed;
+  MemoryCharge closed_charge;  // counted against the budget like the trees (declared after it)
+  if (opt.get_bool("closed", true)) {
+    tt = Clock::now();
+    closed.emplace(scene.mesh);
+    tree_s += seconds_since(tt);
+    memory.change(int64_t(closed->memory_bytes()));
+    closed_charge.bind(&budget, "closed surfaces");
+    closed_charge.set(closed->memory_bytes());
+    if (closed->count() > 0) ctx.closed = &*closed;
+  }
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
   for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
@@ -264,6 +278,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("plane_point_triangles", double(totals.plane_point_triangles));
   st.set("patches", double(totals.patches));
   st.set("patch_triangles", double(totals.patch_triangles));
+  st.set("closed_dropped", double(totals.closed_dropped));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
@@ -289,7 +304,9 @@ std::vector<OptionSpec> PluckerSolver::options() const {
   return {{"coherence", "on: queries reuse the tree; off: reset between queries (paper 002 section 5.1)", {"on", "off"}},
           {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}},
           {"choice", "relevant: develop with an occluder the query sees (bsp.h); random: the paper's random occluder",
-           {"relevant", "random"}}};
+           {"relevant", "random"}},
+          {"closed", "on: occluder selection keeps of a closed surface only what one crossing side needs "
+                     "(closed_surfaces.h); off: every candidate", {"on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

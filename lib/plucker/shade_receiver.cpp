@@ -473,7 +473,8 @@ void ReceiverShading::sample_bits() {
       }
     } else {
       // Off the light polygon (explicit samples): the segment r -> sample itself.
-      vis = !segment_blocked_by_scene(scene_, lf_.origin, to_local(rec_.p, lf_.origin), Vec3f(lf_.samples[k]));
+      vis = !gs_.ctx->tree->segment_blocked(scene_.mesh, lf_.origin, to_local(rec_.p, lf_.origin),
+                                              Vec3f(lf_.samples[k]));
       ++tot_.segment_relations;
     }
     rr.set_visible(off + size_t(j), vis);
@@ -527,7 +528,7 @@ void shade_fallback(const SolveContext& ctx, size_t li, const LocalLight& lf, si
   const Vec3f r = to_local(scene.receivers[i].p, lf.origin);
   int vis = 0;
   for (int j = 0; j < light.samples; ++j) {
-    bool blocked = segment_blocked_by_scene(scene, lf.origin, r, Vec3f(lf.samples[sample_index(light, j, i)]));
+    bool blocked = ctx.tree->segment_blocked(scene.mesh, lf.origin, r, Vec3f(lf.samples[sample_index(light, j, i)]));
     rr.set_visible(off + size_t(j), !blocked);
     vis += !blocked;
   }

@@ -7,6 +7,7 @@
 #include "lib/geom/predicates.h"
 #include "lib/mesh/prepare.h"
 #include "lib/plucker/exact_orient.h"
+#include "lib/plucker/lines.h"
 
 namespace visgate::plucker {
 
@@ -17,6 +18,26 @@ std::vector<AABB> triangle_boxes(const TriangleSoup& mesh) {
   for (size_t t = 0; t < mesh.size(); ++t)
     for (int k = 0; k < 3; ++k) box[t].extend(mesh.corner(t, k));
   return box;
+}
+
+// Whether the segment p0 -> p1 may meet the box [lo, hi]: false only when a separating
+// axis of the two (the box's three axes and the segment direction crossed with each)
+// separates them by more than 2^-40 of the squared scale. The inputs are floats, so the
+// double half-sums and products below carry errors of a few 2^-53 of scale (squared for
+// the cross axes): a false never drops a segment that meets the box.
+bool segment_meets_box(const Vec3f& p0, const Vec3f& p1, const Vec3f& lo, const Vec3f& hi) {
+  const Vec3d a = to_double(p0), b = to_double(p1), l = to_double(lo), u = to_double(hi);
+  const Vec3d c = (l + u) * 0.5, e = (u - l) * 0.5, h = (b - a) * 0.5, m = (a + b) * 0.5 - c;
+  const double scale = std::max({max_component(vabs(a)), max_component(vabs(b)), max_component(vabs(l)),
+                                 max_component(vabs(u)), 1e-30});
+  const double tol1 = 0x1p-40 * scale, tol2 = tol1 * scale;
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(m[k]) > e[k] + std::abs(h[k]) + tol1) return false;
+  for (int k = 0; k < 3; ++k) {
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    if (std::abs(m[i] * h[j] - m[j] * h[i]) > e[i] * std::abs(h[j]) + e[j] * std::abs(h[i]) + tol2) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -122,6 +143,22 @@ void TriangleTree::find_patches(const TriangleSoup& mesh) {
     patches_.push_back(pt);
   }
   if (!patches_.empty()) patch_of_ = std::move(patch_of);
+}
+
+bool TriangleTree::segment_blocked(const TriangleSoup& mesh, const Vec3f& origin, const Vec3f& r,
+                                   const Vec3f& s) const {
+  bool blocked = false;
+  // No early exit from the traversal: the leaves after a hit are skipped by `enter`.
+  bvh_.for_each_leaf(
+      [&](const AABB& b) { return !blocked && segment_meets_box(r, s, b.lo - origin, b.hi - origin); },
+      [&](const accel::Bvh<float>::Node& leaf) {
+        for (uint32_t t : bvh_.leaf_items(leaf)) {
+          if (blocked) return;
+          blocked = plucker::segment_blocked(r, s, mesh.corner(t, 0) - origin, mesh.corner(t, 1) - origin,
+                                             mesh.corner(t, 2) - origin);
+        }
+      });
+  return blocked;
 }
 
 void TriangleTree::candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const {

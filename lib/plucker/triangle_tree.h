@@ -37,6 +37,14 @@ class TriangleTree {
   // relative to `origin`. Callers still test each triangle.
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const;
 
+  // True when some triangle of `mesh` (the one the tree was built on) blocks the open
+  // segment r -> s by lines.h segment_blocked on its vertices translated to the local
+  // frame of `origin` (r and s are local): the same answer as testing every triangle
+  // (local_light.h segment_blocked_by_scene), since a triangle that segment_blocked
+  // accepts meets the segment, so its local box does (segment_meets_box is
+  // conservative), and that box lies in its leaf's box translated the same way.
+  bool segment_blocked(const TriangleSoup& mesh, const Vec3f& origin, const Vec3f& r, const Vec3f& s) const;
+
   size_t node_count() const { return bvh_.node_count(); }
   size_t memory_bytes() const {
     return bvh_.memory_bytes() + patch_of_.capacity() * sizeof(int32_t) + patches_.capacity() * sizeof(Patch) +

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # ctest MemoryBudget.SolveCli (tests/base/CMakeLists.txt): `visgate solve` under a 1 MB
-# memory budget on a 20k-triangle scan scene: every production method stops with exit 3,
-# one line on stderr naming the method, the budget and the scene file, and no result file.
+# memory budget on an 80k-triangle scan scene with 1024 receivers: every production
+# method stops with exit 3, one line on stderr naming the method, the budget and the
+# scene file, and no result file.
 # Usage: memory_budget_cli_test.sh VISGATE
 set -euo pipefail
 visgate="$1"
@@ -9,7 +10,7 @@ work="$(mktemp -d /tmp/visgate-memory-budget-XXXXXX)"
 trap 'rm -rf "$work"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-"$visgate" gen scan --seed 1 --triangles 20000 --receivers 64 --samples 4 -o "$work/scan.json" 2>/dev/null
+"$visgate" gen scan --seed 1 --triangles 80000 --receivers 1024 --samples 4 -o "$work/scan.json" 2>/dev/null
 for m in iss ssv plucker-bsp; do
   set +e
   "$visgate" solve "$work/scan.json" --method "$m" --threads 1 --memory-budget 1 -o "$work/$m.json" 2>"$work/$m.log"

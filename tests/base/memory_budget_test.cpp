@@ -48,8 +48,10 @@ TEST(MemoryBudget, DefaultIsHalfOfMemoryAtMost8GiB) {
 TEST(MemoryBudget, ProductionMethodsStopUnderATinyBudget) {
   FamilyParams p;
   p.seed = 1;
-  p.triangles = 20000;
-  p.receivers = 64;
+  // Large enough that plucker-bsp, which keeps one side of a closed surface, still
+  // needs well over 1 MB.
+  p.triangles = 80000;
+  p.receivers = 1024;
   p.samples = 4;
   auto scene = generate_family("scan", p);
   ASSERT_TRUE(scene.ok());

@@ -1,0 +1,60 @@
+// Closed surfaces of the scene; see closed_surfaces.h.
+#include "lib/plucker/closed_surfaces.h"
+
+#include <cmath>
+
+#include "lib/base/union_find.h"
+#include "lib/mesh/prepare.h"
+
+namespace visgate::plucker {
+
+ClosedSurfaces::ClosedSurfaces(const TriangleSoup& mesh) {
+  const mesh::PreparedMesh pm = mesh::prepare_mesh(mesh);
+  const size_t n = pm.triangles.size();
+  UnionFind uf(n);
+  for (uint32_t t = 0; t < n; ++t)
+    for (int32_t nb : pm.triangles[t].neighbors)
+      if (nb >= 0) uf.unite(t, uint32_t(nb));
+  // A component is closed when none of its triangles has an edge without a neighbour.
+  std::vector<uint8_t> open(n, 0);
+  for (uint32_t t = 0; t < n; ++t)
+    for (int32_t nb : pm.triangles[t].neighbors)
+      if (nb < 0) open[uf.find(t)] = 1;
+  std::vector<int32_t> id(n, -1);
+  std::vector<int32_t> of(mesh.size(), -1);
+  bool any = false;
+  for (uint32_t t = 0; t < n; ++t) {
+    const uint32_t root = uf.find(t);
+    if (open[root]) continue;
+    if (id[root] < 0) {
+      id[root] = int32_t(boxes_.size());
+      boxes_.emplace_back();
+      sizes_.push_back(0);
+    }
+    const int32_t s = id[root];
+    of[pm.triangles[t].source] = s;
+    for (int k = 0; k < 3; ++k) boxes_[size_t(s)].extend(pm.corner(t, k));
+    ++sizes_[size_t(s)];
+    any = true;
+  }
+  if (!any) return;
+  surface_of_ = std::move(of);
+  // Signed volumes about each box's centre, in double, with the sum of the terms'
+  // magnitudes as the scale below which the sign is not trusted.
+  std::vector<double> vol(boxes_.size(), 0.0), mag(boxes_.size(), 0.0);
+  for (uint32_t t = 0; t < mesh.size(); ++t) {
+    const int32_t s = surface_of_[t];
+    if (s < 0) continue;
+    const Vec3d o = (to_double(boxes_[size_t(s)].lo) + to_double(boxes_[size_t(s)].hi)) * 0.5;
+    const Vec3d a = to_double(mesh.corner(t, 0)) - o, b = to_double(mesh.corner(t, 1)) - o,
+                c = to_double(mesh.corner(t, 2)) - o;
+    const double v = dot(a, cross(b, c));
+    vol[size_t(s)] += v;
+    mag[size_t(s)] += std::abs(v);
+  }
+  orient_.resize(boxes_.size());
+  for (size_t s = 0; s < boxes_.size(); ++s)
+    orient_[s] = int8_t(vol[s] > 1e-9 * mag[s] ? 1 : (vol[s] < -1e-9 * mag[s] ? -1 : 0));
+}
+
+}  // namespace visgate::plucker

@@ -1,0 +1,146 @@
+// Closed surfaces (lib/plucker/closed_surfaces.h) and what occluder selection does with
+// them: the same answers as modelling every triangle (option closed=off, the previous code
+// path) and as the region oracle, on the scan family and on closed meshes with concave
+// parts; and the triangle tree's segment test against testing every triangle.
+#include "lib/plucker/closed_surfaces.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "lib/plucker/local_light.h"
+#include "lib/plucker/triangle_tree.h"
+#include "lib/scene/rng.h"
+#include "tests/support/plucker_scenes.h"
+
+namespace visgate {
+namespace {
+
+using test_support::family_scene;
+using test_support::light_scene;
+using test_support::run;
+
+TEST(PluckerClosedSurfaces, FindsClosedConsistentComponentsOnly) {
+  TriangleSoup m;
+  shapes::add_box(m, Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+  shapes::add_box(m, Vec3d(2, 0, 0), Vec3d(3, 1, 1));
+  {
+    plucker::ClosedSurfaces cs(m);
+    ASSERT_EQ(cs.count(), 2u);
+    for (uint32_t t = 0; t < 12; ++t) EXPECT_EQ(cs.surface(t), cs.surface(0));
+    EXPECT_NE(cs.surface(12), cs.surface(0));
+    EXPECT_EQ(cs.triangles(cs.surface(0)), 12u);
+    EXPECT_EQ(cs.box(cs.surface(12)).lo.x, 2.0f);
+  }
+  // An open box (one triangle removed) and a box with one triangle flipped are not
+  // closed; the other box still is.
+  TriangleSoup open = m;
+  open.triangles.erase(open.triangles.begin() + 3);
+  EXPECT_EQ(plucker::ClosedSurfaces(open).count(), 1u);
+  EXPECT_EQ(plucker::ClosedSurfaces(open).surface(0), -1);
+  TriangleSoup flipped = m;
+  std::swap(flipped.triangles[14][0], flipped.triangles[14][1]);
+  EXPECT_EQ(plucker::ClosedSurfaces(flipped).count(), 1u);
+  EXPECT_EQ(plucker::ClosedSurfaces(flipped).surface(14), -1);
+  EXPECT_GE(plucker::ClosedSurfaces(flipped).surface(0), 0);
+}
+
+// Fractions of two solves of the same scene: the visible regions are the same set, so
+// the fractions agree up to the rounding of differently cut fragments.
+void expect_same_answers(const Scene& s, const SolveResult& a, const SolveResult& b) {
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t li = 0; li < s.lights.size(); ++li) {
+      EXPECT_NEAR(a.receivers[i].visible_fraction[li], b.receivers[i].visible_fraction[li], 1e-6) << i << " " << li;
+      for (int j = 0; j < s.lights[li].samples; ++j) {
+        const size_t bit = s.light_offset(li) + size_t(j);
+        EXPECT_EQ(a.receivers[i].visible(bit), b.receivers[i].visible(bit)) << i << " " << li << " " << j;
+      }
+    }
+}
+
+void expect_region_oracle(const Scene& s, const SolveResult& r) {
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t li = 0; li < s.lights.size(); ++li) {
+      const oracle::RegionAnswer reg = oracle::visible_region(s, i, li);
+      if (reg.edge_on) continue;
+      EXPECT_NEAR(r.receivers[i].visible_fraction[li], reg.visible_fraction, 1e-4) << i << " " << li;
+    }
+}
+
+TEST(PluckerClosedSurfaces, ScanAnswersMatchEveryTriangleAndTheOracle) {
+  auto s = family_scene("scan", 3, 1500, 64, 16);
+  ASSERT_TRUE(s.ok());
+  const SolveResult on = run(*s), off = run(*s, {{"closed", "off"}});
+  EXPECT_GT(on.stats.get("closed_dropped"), 0.0);
+  EXPECT_EQ(off.stats.get("closed_dropped"), 0.0);
+  EXPECT_LT(on.stats.get("occluders") + on.stats.get("near_polygons"),
+            off.stats.get("occluders") + off.stats.get("near_polygons"));
+  expect_same_answers(*s, on, off);
+  expect_region_oracle(*s, on);
+}
+
+// Closed meshes with concave parts under the square light: a torus whose hole the light
+// shines through, a tilted torus, and two interpenetrating boxes (each closed; their union
+// is not convex). Receivers on a grid below, with the default groups.
+TEST(PluckerClosedSurfaces, ConcaveClosedMeshesMatchEveryTriangleAndTheOracle) {
+  std::vector<Vec3f> rec;
+  for (int a = 0; a < 8; ++a)
+    for (int b = 0; b < 8; ++b) rec.push_back(Vec3f(-1.4f + 0.4f * float(a), -1.4f + 0.4f * float(b), 0.0f));
+  for (int variant = 0; variant < 3; ++variant) {
+    Scene s = light_scene(rec, 32, Vec3d(0.1, -0.05, 2.5));
+    if (variant == 0) shapes::add_torus(s.mesh, Vec3d(0, 0, 1.2), 0.6, 0.2, 24, 12);
+    if (variant == 1) {
+      shapes::add_torus(s.mesh, Vec3d(0.2, 0, 1.2), 0.6, 0.25, 20, 10);
+      shapes::rotate(s.mesh, 0, Vec3d(0.2, 0, 1.2), Vec3d(1, 0.3, 0), 0.7);
+    }
+    if (variant == 2) {
+      shapes::add_box(s.mesh, Vec3d(-0.6, -0.2, 0.8), Vec3d(0.6, 0.2, 1.0));
+      shapes::add_box(s.mesh, Vec3d(-0.2, -0.6, 0.7), Vec3d(0.2, 0.6, 1.3));
+    }
+    ASSERT_TRUE(finish_scene(s).ok());
+    ASSERT_GT(plucker::ClosedSurfaces(s.mesh).count(), 0u) << variant;
+    const SolveResult on = run(s), off = run(s, {{"closed", "off"}});
+    EXPECT_GT(on.stats.get("closed_dropped"), 0.0) << variant;
+    expect_same_answers(s, on, off);
+    expect_region_oracle(s, on);
+  }
+}
+
+// A receiver inside a closed surface, or a light inside it, leaves the surface whole
+// (its box is not apart from theirs): the receiver inside sees nothing.
+TEST(PluckerClosedSurfaces, ReceiverInsideAClosedSurfaceSeesNothing) {
+  Scene s = light_scene({Vec3f(0, 0, 1), Vec3f(0.5f, 0.5f, 0.0f), Vec3f(3, 3, 0)});
+  shapes::add_box(s.mesh, Vec3d(-0.3, -0.3, 0.5), Vec3d(0.3, 0.3, 1.5));
+  ASSERT_TRUE(finish_scene(s).ok());
+  const SolveResult on = run(s), off = run(s, {{"closed", "off"}});
+  EXPECT_EQ(on.receivers[0].visible_fraction[0], 0.0f);
+  expect_same_answers(s, on, off);
+  expect_region_oracle(s, on);
+}
+
+// TriangleTree::segment_blocked against the scan over every triangle on random segments,
+// many of them through the soup.
+TEST(PluckerClosedSurfaces, TreeSegmentTestEqualsEveryTriangle) {
+  auto s = family_scene("random-soup", 5, 400, 16);
+  ASSERT_TRUE(s.ok());
+  const plucker::TriangleTree tree(s->mesh);
+  AABB box;
+  for (const Vec3f& v : s->mesh.vertices) box.extend(v);
+  Rng rng(11);
+  const Vec3f origin = s->mesh.vertices[0];
+  int blocked = 0;
+  for (int k = 0; k < 2000; ++k) {
+    Vec3f p[2];
+    for (Vec3f& q : p)
+      for (int a = 0; a < 3; ++a) q[a] = float(rng.uniform(double(box.lo[a]) - 0.2, double(box.hi[a]) + 0.2));
+    const Vec3f r = p[0] - origin, e = p[1] - origin;
+    const bool want = plucker::segment_blocked_by_scene(*s, origin, r, e);
+    EXPECT_EQ(tree.segment_blocked(s->mesh, origin, r, e), want) << k;
+    blocked += want;
+  }
+  EXPECT_GT(blocked, 100);
+  EXPECT_LT(blocked, 1900);
+}
+
+}  // namespace
+}  // namespace visgate
