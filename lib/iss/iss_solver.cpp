@@ -23,6 +23,8 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"leaf_samples", "maximum light samples in a light-tree leaf (default 256)", {}},
       {"ray_caster", "leaf relations by Embree rays or the custom shaft ray caster of section 4.10", {"embree", "custom"}},
       {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
+      {"auto_ray_relations", "relations a subdivided shaft must decide per shaft built below it before auto_rays lets its size subdivide (default 64)", {}},
+      {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
   };
 }
@@ -36,6 +38,8 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.custom_rays = opt.get("ray_caster", "embree") == "custom";
   p.postpone = opt.get_bool("postpone", true);
   p.auto_rays = opt.get_bool("auto_rays", true);
+  p.ray_queue = opt.get_bool("ray_queue", true);
+  p.auto_ray_relations = double(std::max(0L, opt.get_int("auto_ray_relations", long(p.auto_ray_relations))));
 
   auto tp0 = Clock::now();
   mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);
