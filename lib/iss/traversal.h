@@ -83,14 +83,14 @@ enum class SplitMode { Receiver, Light };
 constexpr uint32_t kFanWidth = 16;
 
 // Leaf sizes (section 4.3; the thesis sets them per scene, Table 5.1, SODA 16/16).
-// Defaults measured with `visgate bench iss` and CPU-time A/B runs
-// (docs/log/iss-performance.md): 16 receivers, because the shafts of the rooms family are
-// decided by walls only once the receiver nodes are a few grid cells wide; 256 samples,
-// i.e. a light of up to 256 samples is one light-tree leaf and never split: light splits
-// decided few relations on rooms and none on columns, and their leaf rays go 16 per
-// Embree packet anyway.
+// Defaults measured with `visgate bench iss` and A/B runs (docs/log/iss-performance.md):
+// receiver leaves of one point, so automatic rays (below), not a fixed leaf size, decide
+// where the receiver subdivision stops (rooms at 1024 receivers: 2.4% of the relations
+// ray-cast against 13.4% at 16, no slower on the other families); 256 samples, i.e. a
+// light of up to 256 samples is one light-tree leaf and never split: light splits
+// decided few relations on rooms and none that paid on columns.
 struct Params {
-  int leaf_receivers = 16;
+  int leaf_receivers = 1;
   int leaf_samples = 256;
   bool custom_rays = false;
   bool postpone = true;
