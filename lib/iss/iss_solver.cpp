@@ -19,10 +19,12 @@ bool validate_all() { return g_validate; }
 
 std::vector<OptionSpec> IssSolver::options() const {
   return {
-      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 16)", {}},
+      {"leaf_receivers", "maximum receiver points in a receiver-tree leaf (default 1, automatic rays deciding where to stop; 16 with ray_caster=custom)", {}},
       {"leaf_samples", "maximum light samples in a light-tree leaf (default 256)", {}},
       {"ray_caster", "leaf relations by Embree rays or the custom shaft ray caster of section 4.10", {"embree", "custom"}},
       {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
+      {"auto_ray_relations", "relations a subdivided shaft must decide per shaft built below it before auto_rays lets its size subdivide (default 64)", {}},
+      {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
   };
 }
@@ -31,11 +33,17 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   ThreadLimit limit(opt.threads);
   const IeeeFloatMode ieee;  // the caller may be a TBB worker with FTZ/DAZ on (lib/geom/float_mode.h)
   Params p;
+  p.custom_rays = opt.get("ray_caster", "embree") == "custom";
+  // Automatic rays, which stop the default one-point receiver leaves from being reached
+  // everywhere, are Embree's only: the custom caster keeps the leaves of 16 it was
+  // measured with.
+  if (p.custom_rays) p.leaf_receivers = 16;
   p.leaf_receivers = int(std::max(1L, opt.get_int("leaf_receivers", p.leaf_receivers)));
   p.leaf_samples = int(std::max(1L, opt.get_int("leaf_samples", p.leaf_samples)));
-  p.custom_rays = opt.get("ray_caster", "embree") == "custom";
   p.postpone = opt.get_bool("postpone", true);
   p.auto_rays = opt.get_bool("auto_rays", true);
+  p.ray_queue = opt.get_bool("ray_queue", true);
+  p.auto_ray_relations = double(std::max(0L, opt.get_int("auto_ray_relations", long(p.auto_ray_relations))));
 
   auto tp0 = Clock::now();
   mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);

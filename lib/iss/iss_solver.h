@@ -21,7 +21,7 @@
 // so float rounding only ever sends a relation down to a ray. The remaining relations
 // are answered by the leaf ray caster and carry its guarantee: Embree with
 // RTC_SCENE_FLAG_ROBUST (float32, endpoint behaviour as embree_scene.h; one 16-wide
-// packet per receiver and up to 16 samples of the light leaf), or the custom
+// packet per receiver and up to 16 samples of its queued light leaves), or the custom
 // caster (double-precision orientation tests and winding numbers, falling back to the
 // Embree ray where a removed surface's box meets the ray). Both can misjudge only
 // relations within float rounding of a degenerate configuration (oracle margin ~1e-7

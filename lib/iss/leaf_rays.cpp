@@ -15,14 +15,18 @@ void Traversal::cast_rays(int r, int l, const Shaft* sh, const std::vector<uint3
   ScopedTimer t(times_[kRays]);
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
+  if (!p_.custom_rays && p_.ray_queue && L.size() < kFanWidth) {
+    queue_rays(r, l);
+    return;
+  }
   const auto& ro = rtree_->order();
   const auto& lo = ltree_->order();
   size_t blocked = 0;
   for (uint32_t a = R.begin; a < R.end; ++a) {
     uint32_t i = ro[a];
-    ReceiverResult& rr = result_.receivers[i];
-    const Vec3f& rp = scene_.receivers[i].p;
     if (p_.custom_rays) {
+      ReceiverResult& rr = result_.receivers[i];
+      const Vec3f& rp = scene_.receivers[i].p;
       for (uint32_t b = L.begin; b < L.end; ++b) {
         int j = int(lo[b]);
         bool occ = custom_occluded(rp, sample_position(*light_, j, i), R, L, sh, tris);
@@ -31,24 +35,58 @@ void Traversal::cast_rays(int r, int l, const Shaft* sh, const std::vector<uint3
       }
       continue;
     }
-    // The standard caster: the receiver's segments to the leaf's samples form a
-    // coherent fan, traced 16 at a time as one Embree packet (occluded_fan).
-    const uint64_t prefix = relation_hash_prefix(i, light_->seed);
-    for (uint32_t b0 = L.begin; b0 < L.end; b0 += 16) {
-      int n = int(std::min<uint32_t>(16, L.end - b0));
-      Vec3f to[16];
-      bool occ[16];
-      for (int k = 0; k < n; ++k) to[k] = leaf_sample_at(*light_, int(lo[b0 + uint32_t(k)]), prefix);
-      embree_->occluded_fan(rp, to, n, occ);
-      for (int k = 0; k < n; ++k) {
-        // Bits start blocked (make_empty_result): only visible ones are written.
-        if (!occ[k]) rr.set_visible(light_offset_ + size_t(lo[b0 + uint32_t(k)]), true);
-        blocked += occ[k];
-      }
-    }
+    fan_rays(i, lo.data() + L.begin, L.size());
   }
   n_rays_ += double(R.size()) * double(L.size());
   n_rays_blocked_ += double(blocked);
+}
+
+// The standard caster: the receiver's segments to the samples form a coherent fan,
+// traced kFanWidth at a time as one Embree packet (occluded_fan).
+void Traversal::fan_rays(uint32_t i, const uint32_t* samples, size_t count) {
+  ReceiverResult& rr = result_.receivers[i];
+  const Vec3f& rp = scene_.receivers[i].p;
+  const uint64_t prefix = relation_hash_prefix(i, light_->seed);
+  size_t blocked = 0;
+  for (size_t b0 = 0; b0 < count; b0 += kFanWidth) {
+    int n = int(std::min<size_t>(kFanWidth, count - b0));
+    Vec3f to[kFanWidth];
+    bool occ[kFanWidth];
+    for (int k = 0; k < n; ++k) to[k] = leaf_sample_at(*light_, int(samples[b0 + size_t(k)]), prefix);
+    embree_->occluded_fan(rp, to, n, occ);
+    for (int k = 0; k < n; ++k) {
+      // Bits start blocked (make_empty_result): only visible ones are written.
+      if (!occ[k]) rr.set_visible(light_offset_ + size_t(samples[b0 + size_t(k)]), true);
+      blocked += occ[k];
+    }
+  }
+  n_rays_blocked_ += double(blocked);
+}
+
+void Traversal::queue_rays(int r, int l) {
+  const TreeNode& L = ln(l);
+  PendingRays& p = pending_[r];
+  p.ranges.emplace_back(L.begin, L.end);
+  p.samples += L.size();
+  n_rays_ += double(rn(r).size()) * double(L.size());
+  if (p.samples >= kFanWidth) flush_rays(r);
+}
+
+void Traversal::flush_rays(int r) {
+  auto it = pending_.find(r);
+  if (it == pending_.end()) return;
+  const auto& lo = ltree_->order();
+  pending_samples_.clear();
+  for (auto [b, e] : it->second.ranges) pending_samples_.insert(pending_samples_.end(), lo.begin() + b, lo.begin() + e);
+  pending_.erase(it);
+  const TreeNode& R = rn(r);
+  const auto& ro = rtree_->order();
+  for (uint32_t a = R.begin; a < R.end; ++a) fan_rays(ro[a], pending_samples_.data(), pending_samples_.size());
+}
+
+void Traversal::flush_all_rays() {
+  ScopedTimer t(times_[kRays]);
+  while (!pending_.empty()) flush_rays(pending_.begin()->first);
 }
 
 bool Traversal::custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,

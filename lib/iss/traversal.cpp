@@ -109,6 +109,7 @@ void Traversal::run_light(size_t li) {
     bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);
   }
   pre_traverse(r0, l0, tris, false);
+  flush_all_rays();
   light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
   ltree_.reset();
 }
@@ -257,7 +258,7 @@ void Traversal::shaft_traverse(Shaft& sh) {
   const int bucket = std::min(63, std::ilogb(std::max(1.0, double(R.size()) * double(L.size()))));
   AutoRayBucket& ab = auto_buckets_[size_t(bucket)];
   if (p_.auto_rays && !p_.custom_rays && ab.subdivided >= kAutoRayMinShafts &&
-      ab.decided_below < kAutoRayRelationsPerShaft * ab.shafts_below && ++ab.skipped % kAutoRayExplore != 0) {
+      ab.decided_below < p_.auto_ray_relations * ab.shafts_below && ++ab.skipped % kAutoRayExplore != 0) {
     n_auto_shafts_ += 1;
     n_auto_relations_ += double(R.size()) * double(L.size());
     cast_rays(sh.r, sh.l, &sh, nullptr);

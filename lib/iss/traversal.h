@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 #if defined(__x86_64__) || defined(__i386__)
 #include <x86intrin.h>
@@ -78,19 +79,24 @@ struct Shaft {
 
 enum class SplitMode { Receiver, Light };
 
+// Leaf rays per Embree packet (EmbreeScene::occluded_fan traces up to 16 as one packet).
+constexpr uint32_t kFanWidth = 16;
+
 // Leaf sizes (section 4.3; the thesis sets them per scene, Table 5.1, SODA 16/16).
-// Defaults measured with `visgate bench iss` and CPU-time A/B runs
-// (docs/log/iss-performance.md): 16 receivers, because the shafts of the rooms family are
-// decided by walls only once the receiver nodes are a few grid cells wide; 256 samples,
-// i.e. a light of up to 256 samples is one light-tree leaf and never split: light splits
-// decided few relations on rooms and none on columns, and their leaf rays go 16 per
-// Embree packet anyway.
+// Defaults measured with `visgate bench iss` and A/B runs (docs/log/iss-performance.md):
+// receiver leaves of one point, so automatic rays (below), not a fixed leaf size, decide
+// where the receiver subdivision stops (rooms at 1024 receivers: 2.4% of the relations
+// ray-cast against 13.4% at 16, no slower on the other families); 256 samples, i.e. a
+// light of up to 256 samples is one light-tree leaf and never split: light splits
+// decided few relations on rooms and none that paid on columns.
 struct Params {
-  int leaf_receivers = 16;
+  int leaf_receivers = 1;
   int leaf_samples = 256;
   bool custom_rays = false;
   bool postpone = true;
   bool auto_rays = true;
+  double auto_ray_relations = 64.0;  // kAutoRayRelationsPerShaft, see below
+  bool ray_queue = true;  // queue_rays: full packets at light leaves under kFanWidth
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
@@ -162,6 +168,15 @@ class Traversal {
 
   // ---- section 4.10: leaf rays (leaf_rays.cpp) -------------------------------------------
   void cast_rays(int r, int l, const Shaft* sh, const std::vector<uint32_t>* tris);
+  // Embree leaf rays of light leaves smaller than a packet are queued per receiver node
+  // and cast once a packet's worth of samples is pending, so the fans stay full at
+  // small light leaves (a 4-sample leaf filled a quarter of a 16-wide packet, and its
+  // rays cost 2.5 times as much each on columns). Each relation still gets the one
+  // query it got before; only the grouping into packets changes.
+  void queue_rays(int r, int l);
+  void flush_rays(int r);
+  void flush_all_rays();
+  void fan_rays(uint32_t receiver, const uint32_t* samples, size_t n);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
 
@@ -209,6 +224,12 @@ class Traversal {
   std::vector<uint32_t> wide_[3];
   std::vector<float> wide_extent_[3], cross_;
   bool wide_truncated_ = false;
+  struct PendingRays {
+    std::vector<std::pair<uint32_t, uint32_t>> ranges;  // light-tree order ranges
+    uint32_t samples = 0;
+  };
+  std::unordered_map<int, PendingRays> pending_;  // by receiver node, this light only
+  std::vector<uint32_t> pending_samples_;
   std::vector<uint32_t> probe_tris_;
   std::vector<Surface> probe_out_, temp_;
   std::vector<std::vector<Surface>> surface_lists_;
