@@ -21,6 +21,7 @@
 #include "lib/raycast/embree_scene.h"
 #include "lib/ssv/integrate.h"
 #include "lib/ssv/light_frame.h"
+#include "lib/ssv/occluders.h"
 #include "lib/ssv/wedge.h"
 #include "lib/ssv/wedge_bsp.h"
 
@@ -288,6 +289,7 @@ struct LightSetup {
   const std::vector<uint32_t>& cut_triangles;
   WedgeBsp& bsp;  // lazy: queries refine it (thread-safe, wedge_bsp.h)
   const SampleStrips& strips;
+  const std::vector<uint8_t>& occluded;  // per receiver: blocked by an occluder (occluders.h)
 };
 
 // Per-scene data: the blocker mesh, its edges and the ray caster.
@@ -433,6 +435,7 @@ void solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thr
     ThreadState& st = states.local();
     for (size_t i = range.begin(); i != range.end(); ++i) {
       ReceiverResult& rr = result.receivers[i];
+      if (ls.occluded[i]) continue;  // every sample blocked: the bits stay cleared
       if (ls.light_fallback || grazing_receiver(ls.frame, sc.scene.receivers[i].p)) {
         auto a = Clock::now();
         cast_all(sc, ls, i, rr);
@@ -477,6 +480,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   ThreadLimit limit(opt.threads);
   const IeeeFloatMode float_mode;
   const bool use_region = opt.get_bool("silhouette_regions", true);
+  const bool use_occluders = opt.get_bool("occluder_culling", true);
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
@@ -500,10 +504,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // ground floor). The minimum node size stays 1/200 of the scene's longest side.
   const AABB scene_box = scene.bounds();
   const float grow = float(1e-3 * scene_box.diagonal()) + std::numeric_limits<float>::min();
-  AABB root;
-  for (const Receiver& rc : scene.receivers) root.extend(rc.p);
-  root.lo -= Vec3f(grow, grow, grow);
-  root.hi += Vec3f(grow, grow, grow);
   const float min_node = max_component(scene_box.extent()) / 200.0f;
   // Tolerances. M bounds the magnitude of every coordinate. A float plane test n.x - d
   // with a unit normal errs by a few ulps of M (about 4e-7 M with the rounding of n and d
@@ -514,8 +514,36 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const double tol = 1e-9 * M;
   const SceneSetup sc{scene, embree, edges, eps};
 
+  // Umbra culling (occluders.h): the 1024 largest planar occluders, a receiver tree with
+  // leaves of 4. The margin, 1e-5 M, keeps every culled relation far from degeneracy.
+  auto tc0 = Clock::now();
+  std::vector<PlanarOccluder> occluders;
+  ReceiverTree receiver_tree;
+  if (use_occluders) {
+    double min_light = INFINITY;
+    for (const Light& lt : scene.lights) {
+      double a2 = 0.0;  // twice the polygon's vector area, fanned from its first vertex
+      Vec3d sum(0, 0, 0);
+      for (size_t k = 1; k + 1 < lt.polygon.size(); ++k)
+        sum = sum + cross(to_double(lt.polygon[k]) - to_double(lt.polygon[0]),
+                          to_double(lt.polygon[k + 1]) - to_double(lt.polygon[0]));
+      a2 = length(sum);
+      min_light = std::min(min_light, 0.5 * a2);
+    }
+    occluders = planar_occluders(pm, edges, tri_planes, 1024, std::isfinite(min_light) ? 0.01 * min_light : 0.0);
+    std::vector<Vec3d> points(scene.receivers.size());
+    for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
+    receiver_tree = ReceiverTree(points, 4);
+  }
+  const double occluder_bytes = double(occluders.capacity() * sizeof(PlanarOccluder) + receiver_tree.memory_bytes());
+  const double occluder_margin = 1e-5 * M;
+  double cull_seconds = seconds_between(tc0, Clock::now()), culled_relations = 0, hidden_lights = 0;
+
   double init_seconds = 0, peak_memory = 0, nodes = 0;
   MemoryBudget budget("ssv", opt.memory_budget_mb);
+  MemoryCharge occluder_charge;
+  occluder_charge.bind(&budget, "occluders");
+  occluder_charge.set(size_t(occluder_bytes));
   WedgeBuildCounts counts;
   Counts total;
 
@@ -527,11 +555,36 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     // the light polygon (explicit samples placed elsewhere, light_frame.h), break the
     // projection model: cast rays for that light.
     const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent || !frame.usable;
-    std::vector<Vec3d> frame_pos(pm.vertex_pos.size());
+    // Receivers hidden from the light by one occluder. The light points: L' at the
+    // largest jitter height on both sides of its plane, whose hull holds every sample.
+    std::vector<uint8_t> occluded(scene.receivers.size(), 0);
+    size_t n_occluded = 0;
+    if (use_occluders && !light_fallback) {
+      auto tc = Clock::now();
+      std::vector<Vec3d> lp;
+      const double jh = double(frame.max_jitter_h);
+      for (const Vec3d& p : frame.poly_world) {
+        lp.push_back(p + frame.N * jh);
+        if (jh > 0.0) lp.push_back(p - frame.N * jh);
+      }
+      n_occluded = cull_occluded_receivers(receiver_tree, occluders, lp, occluder_margin, occluded);
+      culled_relations += double(n_occluded) * double(light.samples);
+      cull_seconds += seconds_between(tc, Clock::now());
+    }
+    const bool all_hidden = !scene.receivers.empty() && n_occluded == scene.receivers.size();
+    hidden_lights += all_hidden ? 1.0 : 0.0;
+    // The BSP's root: the bounds of the receivers left (see "Root box" above).
+    AABB root;
+    for (size_t i = 0; i < scene.receivers.size(); ++i)
+      if (!occluded[i]) root.extend(scene.receivers[i].p);
+    if (root.empty() && !scene.receivers.empty()) root = scene_box;
+    root.lo -= Vec3f(grow, grow, grow);
+    root.hi += Vec3f(grow, grow, grow);
+    std::vector<Vec3d> frame_pos(all_hidden ? 0 : pm.vertex_pos.size());
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
     std::vector<Wedge> wedges;
     std::vector<uint32_t> cut_triangles;
-    if (!light_fallback) {
+    if (!light_fallback && !all_hidden) {
       wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
@@ -543,13 +596,13 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
-    const LightSetup ls{light, l, scene.light_offset(l), frame, light_fallback, wedges, cut_triangles, bsp, strips};
+    const LightSetup ls{light, l, scene.light_offset(l), frame, light_fallback, wedges, cut_triangles, bsp, strips, occluded};
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
     solve_light(sc, ls, states, result);
     for (const ThreadState& st : states) total += st.c;
     nodes += double(bsp.node_count());
     double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3d)) +
-                 double(edges.size() * sizeof(Edge));
+                 double(edges.size() * sizeof(Edge)) + occluder_bytes;
     peak_memory = std::max(peak_memory, mem);
   }
   auto t2 = Clock::now();
@@ -570,6 +623,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   s.set("slivers_dropped", double(slivers));
   s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
   s.set("silhouette_regions", use_region ? 1.0 : 0.0);
+  s.set("occluder_culling", use_occluders ? 1.0 : 0.0);
+  s.set("occluders", double(occluders.size()));
+  s.set("occluded_relations", culled_relations);
+  s.set("hidden_lights", hidden_lights);
+  s.set("occluder_seconds", cull_seconds);
   return result;
 }
 
