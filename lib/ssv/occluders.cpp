@@ -104,49 +104,74 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
 
 namespace {
 
+// Values per light point: its signed distance from the plane, then its inside value for
+// each edge (the affine functions of PlanarOccluder).
+constexpr size_t kLightValues = 5;
+
 // The light points' side of the occluder's plane: +1 when every one is at least `margin`
-// below it (the box must then be above), -1 when above, 0 otherwise; fl their values.
-int light_side(const PlanarOccluder& o, const std::vector<Vec3d>& light, double margin, double* fl) {
+// below it (the box must then be above), -1 when above, 0 otherwise; lv their values.
+int light_side(const PlanarOccluder& o, const std::vector<Vec3d>& light, double margin, double* lv) {
   double lmin = INFINITY, lmax = -INFINITY;
   for (size_t j = 0; j < light.size(); ++j) {
-    fl[j] = o.eval(light[j]);
-    lmin = std::min(lmin, fl[j]);
-    lmax = std::max(lmax, fl[j]);
+    double* v = lv + j * kLightValues;
+    v[0] = o.eval(light[j]);
+    for (int k = 0; k < o.n; ++k) v[1 + k] = dot(o.edge_n[size_t(k)], light[j]) - o.edge_d[size_t(k)];
+    lmin = std::min(lmin, v[0]);
+    lmax = std::max(lmax, v[0]);
   }
   if (lmax <= -margin) return 1;
   if (lmin >= margin) return -1;
   return 0;
 }
 
-// occluder_blocks_shaft with the light's side and values known. The segment between the
-// box's centre and the light's first point is tried before the corners: it fails for most
-// occluders that do not block.
-bool blocks(const PlanarOccluder& o, int side, const double* fl, const AABBd& box, const std::vector<Vec3d>& light,
-            double margin) {
+// occluder_blocks_shaft with the light's side and values known: +1 when the occluder
+// blocks the box's shaft, -1 when it cannot block the shaft of any box inside this one, 0
+// otherwise. -1 when the box lies on the light's side of the plane (so does every box
+// inside it), or when every crossing point lies less than margin inside one edge of the
+// occluder: the crossings of a box inside lie in the hull of these (the plane separates
+// it too), so none of them is at least margin inside that edge. The functions are affine,
+// so a crossing x = b + (l - b) t has the values g(b) + (g(l) - g(b)) t.
+int classify(const PlanarOccluder& o, int side, const double* lv, const AABBd& box, size_t nl, double margin) {
   double bmin = -o.offset, bmax = -o.offset;
   for (int k = 0; k < 3; ++k) {
     const double a = o.normal[k] * box.lo[k], b = o.normal[k] * box.hi[k];
     bmin += std::min(a, b);
     bmax += std::max(a, b);
   }
-  if (side > 0 ? !(bmin >= margin) : !(bmax <= -margin)) return false;
-  auto crosses_inside = [&](const Vec3d& b, double fb, size_t j) {
-    const Vec3d x = b + (light[j] - b) * (fb / (fb - fl[j]));
-    return o.inside(x) >= margin;
-  };
-  const Vec3d centre = (box.lo + box.hi) * 0.5;
-  if (!crosses_inside(centre, o.eval(centre), 0)) return false;
+  // The box's extreme values on the light's side of the plane (side * f < 0).
+  const double far = side > 0 ? bmin : -bmax, near = side > 0 ? bmax : -bmin;
+  if (!(near > -margin)) return -1;  // the whole box at least margin on the light's side
+  if (!(far >= margin)) return 0;    // straddles: a box inside may be separated
   // The distinct corners (a flat or point box has fewer).
   int axes = 0;
   for (int k = 0; k < 3; ++k) axes |= box.lo[k] < box.hi[k] ? 1 << k : 0;
+  // Per edge of the occluder, the smallest and the largest inside value of a crossing.
+  std::array<double, 4> lo{INFINITY, INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY, -INFINITY};
   for (int c = 0; c < 8; ++c) {
     if ((c & ~axes) != 0) continue;
     const Vec3d b(c & 1 ? box.hi.x : box.lo.x, c & 2 ? box.hi.y : box.lo.y, c & 4 ? box.hi.z : box.lo.z);
     const double fb = o.eval(b);
-    for (size_t j = 0; j < light.size(); ++j)
-      if (!crosses_inside(b, fb, j)) return false;
+    double gb[4];
+    for (int k = 0; k < o.n; ++k) gb[k] = dot(o.edge_n[size_t(k)], b) - o.edge_d[size_t(k)];
+    for (size_t j = 0; j < nl; ++j) {
+      const double* v = lv + j * kLightValues;
+      const double t = fb / (fb - v[0]);
+      for (int k = 0; k < o.n; ++k) {
+        const double g = gb[k] + (v[1 + k] - gb[k]) * t;
+        lo[size_t(k)] = std::min(lo[size_t(k)], g);
+        hi[size_t(k)] = std::max(hi[size_t(k)], g);
+      }
+    }
   }
-  return true;
+  bool inside = true, apart = false;
+  for (int k = 0; k < o.n; ++k) {
+    inside = inside && lo[size_t(k)] >= margin;
+    apart = apart || hi[size_t(k)] < margin;
+  }
+  if (inside) return 1;
+  // Every crossing less than margin inside one edge: so is every crossing of a box inside
+  // (their hull lies in this one's), and none of those boxes is blocked.
+  return apart ? -1 : 0;
 }
 
 }  // namespace
@@ -154,9 +179,9 @@ bool blocks(const PlanarOccluder& o, int side, const double* fl, const AABBd& bo
 bool occluder_blocks_shaft(const PlanarOccluder& o, const AABBd& box, const std::vector<Vec3d>& light,
                            double margin) {
   if (light.empty() || box.empty()) return false;
-  std::vector<double> fl(light.size());
-  const int side = light_side(o, light, margin, fl.data());
-  return side != 0 && blocks(o, side, fl.data(), box, light, margin);
+  std::vector<double> lv(light.size() * kLightValues);
+  const int side = light_side(o, light, margin, lv.data());
+  return side != 0 && classify(o, side, lv.data(), box, light.size(), margin) > 0;
 }
 
 ReceiverTree::ReceiverTree(const std::vector<Vec3d>& points, uint32_t leaf_size) {
@@ -194,19 +219,21 @@ struct CullWalk {
   const ReceiverTree& tree;
   const std::vector<PlanarOccluder>& occ;
   const std::vector<Vec3d>& light;
-  AABBd light_box;
   double margin;
   std::vector<uint8_t>& blocked;
   std::vector<int8_t> side;  // per occluder (light_side)
-  std::vector<double> fl;    // per occluder, its light points' values
+  std::vector<double> lv;    // per occluder, its light points' values (light_side)
   size_t count = 0;
 
   void walk(int32_t id, std::vector<uint32_t>& cand) {
     const ReceiverTree::Node& nd = tree.nodes()[size_t(id)];
     const size_t nl = light.size();
+    std::vector<uint32_t> sub;  // the candidates that may block a box inside this one
+    sub.reserve(cand.size());
     for (size_t k = 0; k < cand.size(); ++k) {
       const uint32_t c = cand[k];
-      if (blocks(occ[c], side[c], fl.data() + c * nl, nd.box, light, margin)) {
+      const int r = classify(occ[c], side[c], lv.data() + c * nl * kLightValues, nd.box, nl, margin);
+      if (r > 0) {
         // Later siblings try the blocker first.
         std::rotate(cand.begin(), cand.begin() + long(k), cand.begin() + long(k) + 1);
         const auto& ord = tree.order();
@@ -214,15 +241,9 @@ struct CullWalk {
         count += nd.end - nd.begin;
         return;
       }
+      if (r == 0) sub.push_back(c);
     }
-    if (nd.left < 0) return;
-    AABBd shaft = nd.box;
-    shaft.extend(light_box);
-    std::vector<uint32_t> sub;
-    sub.reserve(cand.size());
-    for (uint32_t c : cand)
-      if (occ[c].box.overlaps(shaft)) sub.push_back(c);
-    if (sub.empty()) return;
+    if (nd.left < 0 || sub.empty()) return;
     walk(nd.left, sub);
     walk(nd.right, sub);
   }
@@ -233,13 +254,12 @@ struct CullWalk {
 size_t cull_occluded_receivers(const ReceiverTree& tree, const std::vector<PlanarOccluder>& occluders,
                                const std::vector<Vec3d>& light, double margin, std::vector<uint8_t>& blocked) {
   if (tree.nodes().empty() || occluders.empty() || light.empty()) return 0;
-  CullWalk w{tree, occluders, light, AABBd(), margin, blocked, {}, {}, 0};
-  for (const Vec3d& l : light) w.light_box.extend(l);
+  CullWalk w{tree, occluders, light, margin, blocked, {}, {}, 0};
   w.side.assign(occluders.size(), 0);
-  w.fl.assign(occluders.size() * light.size(), 0.0);
+  w.lv.assign(occluders.size() * light.size() * kLightValues, 0.0);
   std::vector<uint32_t> cand;
   for (uint32_t k = 0; k < occluders.size(); ++k) {
-    w.side[k] = int8_t(light_side(occluders[k], light, margin, w.fl.data() + size_t(k) * light.size()));
+    w.side[k] = int8_t(light_side(occluders[k], light, margin, w.lv.data() + size_t(k) * light.size() * kLightValues));
     if (w.side[k] != 0) cand.push_back(k);
   }
   if (!cand.empty()) w.walk(0, cand);

@@ -89,8 +89,8 @@ class ReceiverTree {
 
 // Sets blocked[i] = 1 for every receiver i inside a tree node whose shaft to `light` some
 // occluder blocks; returns how many were set. Only occluders with every light point at
-// least `margin` on one side of their plane are tried; a node's children try those whose
-// box meets the node's shaft box (a blocking occluder meets every segment of the shaft).
+// least `margin` on one side of their plane are tried; a node's children try only those
+// that may still block a box inside the node's (occluders.cpp, classify).
 size_t cull_occluded_receivers(const ReceiverTree& tree, const std::vector<PlanarOccluder>& occluders,
                                const std::vector<Vec3d>& light, double margin, std::vector<uint8_t>& blocked);
 

@@ -15,6 +15,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "lib/accel/bvh.h"
 #include "lib/base/memory_budget.h"
 #include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
@@ -474,6 +475,81 @@ void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, doub
   for (const auto& [key, value] : values) s.set(key, value);
 }
 
+// The edges whose boxes meet the box of hull(leaf, L') for some leaf of the receiver tree
+// with a receiver not occluded, ascending (see "Shaft culling" in solve_scene). The boxes
+// are rounded outwards to float and grown by `grow`. One traversal of the edge BVH with
+// the list of shaft boxes meeting each node: a node inside some shaft box has every edge
+// below it marked without further tests.
+struct ShaftMarker {
+  const accel::Bvh<float>& bvh;
+  std::vector<AABB> shafts;
+  std::vector<uint8_t>& mark;
+
+  void mark_all(uint32_t i) {
+    const auto& nd = bvh.node(i);
+    if (bvh.is_leaf(nd)) {
+      for (uint32_t e : bvh.leaf_items(nd)) mark[e] = 1;
+      return;
+    }
+    mark_all(bvh.left(i));
+    mark_all(bvh.right(i));
+  }
+  void walk(uint32_t i, const std::vector<uint32_t>& cand) {
+    const auto& nd = bvh.node(i);
+    std::vector<uint32_t> sub;
+    for (uint32_t c : cand) {
+      const AABB& q = shafts[c];
+      if (!q.overlaps(nd.box)) continue;
+      if (q.contains(nd.box.lo) && q.contains(nd.box.hi)) {
+        mark_all(i);
+        return;
+      }
+      sub.push_back(c);
+    }
+    if (sub.empty()) return;
+    if (bvh.is_leaf(nd)) {
+      for (uint32_t k = nd.first; k < nd.first + nd.count; ++k)
+        for (uint32_t c : sub)
+          if (shafts[c].overlaps(bvh.item_box(k))) {
+            mark[bvh.item(k)] = 1;
+            break;
+          }
+      return;
+    }
+    walk(bvh.left(i), sub);
+    walk(bvh.right(i), sub);
+  }
+};
+
+void shaft_edges(const ReceiverTree& tree, const std::vector<uint8_t>& occluded, const accel::Bvh<float>& bvh,
+                 const std::vector<Vec3d>& light, float grow, std::vector<uint8_t>& mark, std::vector<uint32_t>& out) {
+  mark.assign(bvh.item_count(), 0);
+  AABBd lb;
+  for (const Vec3d& p : light) lb.extend(p);
+  ShaftMarker sm{bvh, {}, mark};
+  const auto& ord = tree.order();
+  for (const ReceiverTree::Node& nd : tree.nodes()) {
+    if (nd.left >= 0) continue;
+    bool open = false;
+    for (uint32_t p = nd.begin; p < nd.end && !open; ++p) open = !occluded[ord[p]];
+    if (!open) continue;
+    AABBd b = nd.box;
+    b.extend(lb);
+    AABB q;
+    for (int k = 0; k < 3; ++k) {
+      q.lo[k] = std::nextafter(float(b.lo[k]), -INFINITY) - grow;
+      q.hi[k] = std::nextafter(float(b.hi[k]), INFINITY) + grow;
+    }
+    sm.shafts.push_back(q);
+  }
+  std::vector<uint32_t> all(sm.shafts.size());
+  for (size_t k = 0; k < all.size(); ++k) all[k] = uint32_t(k);
+  if (!all.empty() && !bvh.empty()) sm.walk(0, all);
+  out.clear();
+  for (size_t e = 0; e < mark.size(); ++e)
+    if (mark[e]) out.push_back(uint32_t(e));
+}
+
 }  // namespace
 
 SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
@@ -481,6 +557,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const IeeeFloatMode float_mode;
   const bool use_region = opt.get_bool("silhouette_regions", true);
   const bool use_occluders = opt.get_bool("occluder_culling", true);
+  const bool use_shafts = opt.get_bool("shaft_culling", true);
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
@@ -519,6 +596,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   auto tc0 = Clock::now();
   std::vector<PlanarOccluder> occluders;
   ReceiverTree receiver_tree;
+  if (use_occluders || use_shafts) {
+    std::vector<Vec3d> points(scene.receivers.size());
+    for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
+    receiver_tree = ReceiverTree(points, 4);
+  }
   if (use_occluders) {
     double min_light = INFINITY;
     for (const Light& lt : scene.lights) {
@@ -530,16 +612,30 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       a2 = length(sum);
       min_light = std::min(min_light, 0.5 * a2);
     }
-    occluders = planar_occluders(pm, edges, tri_planes, 1024, std::isfinite(min_light) ? 0.01 * min_light : 0.0);
-    std::vector<Vec3d> points(scene.receivers.size());
-    for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
-    receiver_tree = ReceiverTree(points, 4);
+    occluders = planar_occluders(pm, edges, tri_planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
   }
-  const double occluder_bytes = double(occluders.capacity() * sizeof(PlanarOccluder) + receiver_tree.memory_bytes());
+  // Shaft culling: the edges' boxes in a BVH. Per light, an edge whose box misses the
+  // box of every shaft hull(leaf, L') of a receiver-tree leaf with a receiver left (not
+  // occluded) meets no segment from such a receiver to L': its projection from every one
+  // of them misses L', so it is given no wedge (integrate.h: such an edge adds nothing).
+  accel::Bvh<float> edge_bvh;
+  if (use_shafts) {
+    std::vector<AABB> boxes(edges.size());
+    for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
+    edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+  }
+  const double occluder_bytes =
+      double(occluders.capacity() * sizeof(PlanarOccluder) + receiver_tree.memory_bytes() + edge_bvh.memory_bytes());
   const double occluder_margin = 1e-5 * M;
   double cull_seconds = seconds_between(tc0, Clock::now()), culled_relations = 0, hidden_lights = 0;
 
   double init_seconds = 0, peak_memory = 0, nodes = 0;
+  // Per-light arrays, their capacity reused from light to light.
+  std::vector<Vec3d> frame_pos;
+  std::vector<Wedge> wedges;
+  std::vector<uint8_t> edge_mark;
+  std::vector<uint32_t> edge_subset;
+  double edges_outside = 0;
   MemoryBudget budget("ssv", opt.memory_budget_mb);
   MemoryCharge occluder_charge;
   occluder_charge.bind(&budget, "occluders");
@@ -580,12 +676,19 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     if (root.empty() && !scene.receivers.empty()) root = scene_box;
     root.lo -= Vec3f(grow, grow, grow);
     root.hi += Vec3f(grow, grow, grow);
-    std::vector<Vec3d> frame_pos(all_hidden ? 0 : pm.vertex_pos.size());
+    frame_pos.resize(all_hidden ? 0 : pm.vertex_pos.size());
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
-    std::vector<Wedge> wedges;
+    wedges.clear();
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback && !all_hidden) {
-      wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
+      const bool subset = use_shafts && !edge_bvh.empty();
+      if (subset) {
+        auto tc = Clock::now();
+        shaft_edges(receiver_tree, occluded, edge_bvh, frame.poly_world, float(eps), edge_mark, edge_subset);
+        edges_outside += double(edges.size() - edge_subset.size());
+        cull_seconds += seconds_between(tc, Clock::now());
+      }
+      build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
     MemoryCharge wedge_charge;
@@ -628,6 +731,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   s.set("occluded_relations", culled_relations);
   s.set("hidden_lights", hidden_lights);
   s.set("occluder_seconds", cull_seconds);
+  s.set("shaft_culling", use_shafts ? 1.0 : 0.0);
+  s.set("edges_outside_shafts", edges_outside);
   return result;
 }
 

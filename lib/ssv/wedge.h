@@ -122,5 +122,11 @@ struct WedgeBuildCounts {
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
                                 WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes = nullptr);
+// The same into `out` (cleared first; its capacity is reused from light to light), for
+// the edges whose indices `subset` lists (ascending), or for all edges without it.
+void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, const std::vector<Vec3d>& frame_pos,
+                  const LightFrame& frame, double tol, WedgeBuildCounts& counts,
+                  const std::vector<TrianglePlane>* planes, std::vector<Wedge>& out,
+                  const std::vector<uint32_t>* subset = nullptr);
 
 }  // namespace visgate::ssv

@@ -1,8 +1,9 @@
-// lib/ssv/occluders.h: umbra culling by planar convex occluders. The shaft test on
-// hand-worked cases and against sampled segments, the occluder list of a box, the
-// receiver tree, the culling against direct counting, and the solver with culling on
-// against culling off and against the exact oracle on adversarial scenes (occluder edges
-// on shadow boundaries, receivers on occluder planes, samples on the light's boundary).
+// lib/ssv/occluders.h: umbra culling by planar convex occluders, and the solver's shaft
+// culling of edges. The shaft test on hand-worked cases and against sampled segments, the
+// occluder list of a box, the receiver tree, the culling against direct counting, and the
+// solver with culling on against culling off and against the exact oracle on adversarial
+// scenes (occluder edges on shadow boundaries, receivers on occluder planes, samples on
+// the light's boundary).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,9 +42,11 @@ std::vector<Vec3d> square(double cx, double cy, double z, double half) {
 
 AABBd point_box(const Vec3d& p) { return AABBd(p, p); }
 
+// Culling on: occluders and shafts; off: neither (the previous code path).
 SolveResult run(const Scene& s, bool culling) {
   SolveOptions o;
   o.opts["occluder_culling"] = culling ? "on" : "off";
+  o.opts["shaft_culling"] = culling ? "on" : "off";
   return make_solver("ssv")->solve(s, o);
 }
 
@@ -232,8 +235,12 @@ TEST(OccluderCulling, SolverAnswersUnchangedOnFamilies) {
     Scene s = family(fam, 2, -1, 144, 16);
     const SolveResult on = run(s, true), off = run(s, false);
     expect_same_answers(on, off, fam);
-    if (std::string(fam) == "rooms") EXPECT_GT(on.stats.get("occluded_relations"), 0.5 * double(s.relation_count()));
+    if (std::string(fam) == "rooms") {
+      EXPECT_GT(on.stats.get("occluded_relations"), 0.5 * double(s.relation_count()));
+      EXPECT_GT(on.stats.get("edges_outside_shafts"), 0.0);
+    }
     EXPECT_EQ(off.stats.get("occluded_relations"), 0.0);
+    EXPECT_EQ(off.stats.get("edges_outside_shafts"), 0.0);
   }
   Scene s = family("rooms", 3, 3000, 64, 16);
   oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
