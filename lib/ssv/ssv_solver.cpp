@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -25,6 +26,7 @@
 #include "lib/ssv/occluders.h"
 #include "lib/ssv/wedge.h"
 #include "lib/ssv/wedge_bsp.h"
+#include "lib/ssv/wedge_scatter.h"
 
 namespace visgate::ssv {
 
@@ -288,7 +290,9 @@ struct LightSetup {
   bool light_fallback;  // the projection model does not hold: rays for every relation
   const std::vector<Wedge>& wedges;
   const std::vector<uint32_t>& cut_triangles;
-  WedgeBsp& bsp;  // lazy: queries refine it (thread-safe, wedge_bsp.h)
+  WedgeBsp* bsp;  // lazy: queries refine it (thread-safe, wedge_bsp.h); or null:
+  WedgeScatter* scatter;  // the candidates scattered through the receiver tree
+  const ReceiverTree& tree;
   const SampleStrips& strips;
   const std::vector<uint8_t>& occluded;  // per receiver: blocked by an occluder (occluders.h)
 };
@@ -333,11 +337,13 @@ void set_class_bits(ReceiverResult& rr, size_t offset, int samples, const std::v
 // Paper 001 section 2.1 for one receiver: BSP query, validation of the wedges found
 // (receiver inside the wedge, the edge a silhouette from it), projection and
 // integration into per-sample depth complexity (st.depth, st.unclear).
-void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i) {
+// `pos`: the receiver's tree-order position (its scattered candidates) when ls.scatter.
+void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, uint32_t pos) {
   const Vec3f& r = sc.scene.receivers[i].p;
   auto a = Clock::now();
   st.candidates.clear();
-  ls.bsp.query(r, st.candidates);
+  if (ls.bsp) ls.bsp->query(r, st.candidates);
+  else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
   // The jitter point of every sample (sample_position, DESIGN section 3): hash prefix
   // once per receiver, a power-of-two jitter count by mask.
@@ -428,28 +434,54 @@ void answer_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls
   }
 }
 
-// Every receiver of one light (paper 001 section 2.1), in parallel.
-void solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
-                 SolveResult& result) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
-    const IeeeFloatMode range_float_mode;
-    ThreadState& st = states.local();
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      ReceiverResult& rr = result.receivers[i];
-      if (ls.occluded[i]) continue;  // every sample blocked: the bits stay cleared
-      if (ls.light_fallback || grazing_receiver(ls.frame, sc.scene.receivers[i].p)) {
-        auto a = Clock::now();
-        cast_all(sc, ls, i, rr);
-        st.c.fallback += ls.light.samples;
-        st.c.t_ray += seconds_between(a, Clock::now());
-        continue;
-      }
-      integrate_receiver(st, sc, ls, i);
-      auto e = Clock::now();
-      answer_receiver(st, sc, ls, i, rr);
-      st.c.t_ray += seconds_between(e, Clock::now());
-    }
-  });
+// One receiver of one light.
+void solve_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, uint32_t pos,
+                    SolveResult& result) {
+  ReceiverResult& rr = result.receivers[i];
+  if (ls.occluded[i]) return;  // every sample blocked: the bits stay cleared
+  if (ls.light_fallback || grazing_receiver(ls.frame, sc.scene.receivers[i].p)) {
+    auto a = Clock::now();
+    cast_all(sc, ls, i, rr);
+    st.c.fallback += ls.light.samples;
+    st.c.t_ray += seconds_between(a, Clock::now());
+    return;
+  }
+  integrate_receiver(st, sc, ls, i, pos);
+  auto e = Clock::now();
+  answer_receiver(st, sc, ls, i, rr);
+  st.c.t_ray += seconds_between(e, Clock::now());
+}
+
+// Every receiver of one light (paper 001 section 2.1), in parallel. With the scattered
+// candidates, batch by batch of the receiver tree (the scatter of a batch is serial);
+// returns the scatter's seconds.
+double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
+                   SolveResult& result, const std::vector<int32_t>& batches, float eps, bool use_region,
+                   MemoryCharge& charge) {
+  if (ls.bsp) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        const IeeeFloatMode range_float_mode;
+                        ThreadState& st = states.local();
+                        for (size_t i = range.begin(); i != range.end(); ++i) solve_receiver(st, sc, ls, i, 0, result);
+                      });
+    return 0.0;
+  }
+  double scatter_seconds = 0.0;
+  const auto& ord = ls.tree.order();
+  for (int32_t b : batches) {
+    const auto& nd = ls.tree.nodes()[size_t(b)];
+    auto t0 = Clock::now();
+    ls.scatter->build(ls.tree, b, ls.wedges, eps, use_region, ls.occluded);
+    charge.set(ls.scatter->memory_bytes());
+    scatter_seconds += seconds_between(t0, Clock::now());
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(nd.begin, nd.end, 8), [&](const tbb::blocked_range<uint32_t>& range) {
+      const IeeeFloatMode range_float_mode;
+      ThreadState& st = states.local();
+      for (uint32_t p = range.begin(); p != range.end(); ++p) solve_receiver(st, sc, ls, ord[p], p, result);
+    });
+  }
+  return scatter_seconds;
 }
 
 // The stats of paper 001's Tables 2-4 and the fallback counters (docs/methods/ssv.md).
@@ -475,8 +507,8 @@ void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, doub
   for (const auto& [key, value] : values) s.set(key, value);
 }
 
-// The edges whose boxes meet the box of hull(leaf, L') for some leaf of the receiver tree
-// with a receiver not occluded, ascending (see "Shaft culling" in solve_scene). The boxes
+// The edges whose boxes meet the box of hull(node, L') for some shaft unit (a node of the
+// receiver tree, below) with a receiver not occluded, ascending (see "Shaft culling" in solve_scene). The boxes
 // are rounded outwards to float and grown by `grow`. One traversal of the edge BVH with
 // the list of shaft boxes meeting each node: a node inside some shaft box has every edge
 // below it marked without further tests.
@@ -527,9 +559,11 @@ void shaft_edges(const ReceiverTree& tree, const std::vector<uint8_t>& occluded,
   AABBd lb;
   for (const Vec3d& p : light) lb.extend(p);
   ShaftMarker sm{bvh, {}, mark};
+  // Shaft units: the highest tree nodes of at most 32 receivers (a leaf's shaft box is
+  // tighter, but one BVH walk per leaf cost more than the wedges it saved on columns).
   const auto& ord = tree.order();
-  for (const ReceiverTree::Node& nd : tree.nodes()) {
-    if (nd.left >= 0) continue;
+  for (int32_t id : WedgeScatter::batches(tree, 32)) {
+    const ReceiverTree::Node& nd = tree.nodes()[size_t(id)];
     bool open = false;
     for (uint32_t p = nd.begin; p < nd.end && !open; ++p) open = !occluded[ord[p]];
     if (!open) continue;
@@ -558,6 +592,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const bool use_region = opt.get_bool("silhouette_regions", true);
   const bool use_occluders = opt.get_bool("occluder_culling", true);
   const bool use_shafts = opt.get_bool("shaft_culling", true);
+  const bool use_scatter = opt.get("wedge_index", "receivers") != "bsp";
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
@@ -596,7 +631,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   auto tc0 = Clock::now();
   std::vector<PlanarOccluder> occluders;
   ReceiverTree receiver_tree;
-  if (use_occluders || use_shafts) {
+  if (use_occluders || use_shafts || use_scatter) {
     std::vector<Vec3d> points(scene.receivers.size());
     for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
     receiver_tree = ReceiverTree(points, 4);
@@ -615,8 +650,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     occluders = planar_occluders(pm, edges, tri_planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
   }
   // Shaft culling: the edges' boxes in a BVH. Per light, an edge whose box misses the
-  // box of every shaft hull(leaf, L') of a receiver-tree leaf with a receiver left (not
-  // occluded) meets no segment from such a receiver to L': its projection from every one
+  // box of every shaft hull(node, L') of a receiver-tree node with a receiver left (not
+  // occluded, shaft_edges) meets no segment from such a receiver to L': its projection from every one
   // of them misses L', so it is given no wedge (integrate.h: such an edge adds nothing).
   accel::Bvh<float> edge_bvh;
   if (use_shafts) {
@@ -637,6 +672,13 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   std::vector<uint32_t> edge_subset;
   double edges_outside = 0;
   MemoryBudget budget("ssv", opt.memory_budget_mb);
+  // The scattered candidates, batch by batch of at most 16384 receivers (memory: their
+  // entries, about the wedges reported per query times the batch).
+  WedgeScatter scatter;
+  const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 16384) : std::vector<int32_t>{};
+  MemoryCharge scatter_charge;
+  scatter_charge.bind(&budget, "scattered wedges");
+  double scatter_entries = 0;
   MemoryCharge occluder_charge;
   occluder_charge.bind(&budget, "occluders");
   occluder_charge.set(size_t(occluder_bytes));
@@ -694,17 +736,25 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     MemoryCharge wedge_charge;
     wedge_charge.bind(&budget, "wedges");
     wedge_charge.set(wedges.capacity() * sizeof(Wedge));
-    WedgeBsp bsp(wedges, root, min_node, eps, use_region);
-    bsp.set_memory_budget(&budget);
+    std::optional<WedgeBsp> bsp;
+    if (!use_scatter) {
+      bsp.emplace(wedges, root, min_node, eps, use_region);
+      bsp->set_memory_budget(&budget);
+    }
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
-    const LightSetup ls{light, l, scene.light_offset(l), frame, light_fallback, wedges, cut_triangles, bsp, strips, occluded};
+    const LightSetup ls{light,         l,      scene.light_offset(l),
+                        frame,         light_fallback, wedges,
+                        cut_triangles, bsp ? &*bsp : nullptr, &scatter,
+                        receiver_tree, strips, occluded};
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
-    solve_light(sc, ls, states, result);
+    total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;
-    nodes += double(bsp.node_count());
-    double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3d)) +
+    nodes += bsp ? double(bsp->node_count()) : 0.0;
+    scatter_entries += double(scatter.entries());
+    double mem = (bsp ? double(bsp->memory_bytes()) : double(scatter.memory_bytes() + wedges.size() * sizeof(Wedge))) +
+                 double(frame_pos.size() * sizeof(Vec3d)) +
                  double(edges.size() * sizeof(Edge)) + occluder_bytes;
     peak_memory = std::max(peak_memory, mem);
   }
@@ -732,6 +782,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   s.set("hidden_lights", hidden_lights);
   s.set("occluder_seconds", cull_seconds);
   s.set("shaft_culling", use_shafts ? 1.0 : 0.0);
+  s.set("wedge_index_bsp", use_scatter ? 0.0 : 1.0);
+  s.set("scattered_candidates", scatter_entries);
   s.set("edges_outside_shafts", edges_outside);
   return result;
 }
