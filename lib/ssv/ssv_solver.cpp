@@ -490,6 +490,7 @@ void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, doub
       {"edges", double(counts.edges)},
       {"edges_below_light", double(counts.below_light)},
       {"edges_never_silhouette", double(counts.not_silhouette)},
+      {"edges_outside_regions", double(counts.region_culled)},
       {"wedges", double(counts.wedges)},
       {"wedge_planes_dropped", double(counts.planes_dropped)},
       {"bsp_nodes", nodes},
@@ -679,6 +680,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   MemoryCharge scatter_charge;
   scatter_charge.bind(&budget, "scattered wedges");
   double scatter_entries = 0;
+  const std::vector<int32_t> units = WedgeScatter::batches(receiver_tree, 32);
   MemoryCharge occluder_charge;
   occluder_charge.bind(&budget, "occluders");
   occluder_charge.set(size_t(occluder_bytes));
@@ -730,7 +732,25 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
         edges_outside += double(edges.size() - edge_subset.size());
         cull_seconds += seconds_between(tc, Clock::now());
       }
-      build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr);
+      // Silhouette regions against the receivers left, by shaft units (with the scattered
+      // index only: it hands out exactly the wedges these boxes would not all exclude).
+      RegionBoxes regions;
+      const bool by_region = use_region && use_scatter;
+      if (by_region) {
+        regions.eps = eps;
+        const auto& ord = receiver_tree.order();
+        for (int32_t id : units) {
+          const ReceiverTree::Node& nd = receiver_tree.nodes()[size_t(id)];
+          AABB b;
+          for (uint32_t p = nd.begin; p < nd.end; ++p)
+            if (!occluded[ord[p]]) b.extend(scene.receivers[ord[p]].p);
+          if (b.empty()) continue;
+          regions.parts.push_back(b);
+          regions.all.extend(b);
+        }
+      }
+      build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr,
+                   by_region ? &regions : nullptr);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
     MemoryCharge wedge_charge;

@@ -111,6 +111,15 @@ void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
   hi = dot(p.n, pmax) - p.d;
 }
 
+// Both triangle planes have the box at least eps on their front side, or both on their
+// back side: the edge is a silhouette from no point of the box (classify_box's Outside).
+bool region_excludes(const Plane& t1, const Plane& t2, const AABB& box, float eps) {
+  float lo1, hi1, lo2, hi2;
+  box_range(t1, box, lo1, hi1);
+  box_range(t2, box, lo2, hi2);
+  return (lo1 >= eps && lo2 >= eps) || (hi1 <= -eps && hi2 <= -eps);
+}
+
 }  // namespace
 
 BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps, bool use_region) {
@@ -234,7 +243,7 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
 void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, const std::vector<Vec3d>& frame_pos,
                   const LightFrame& frame, double tol, WedgeBuildCounts& counts,
                   const std::vector<TrianglePlane>* planes, std::vector<Wedge>& wedges,
-                  const std::vector<uint32_t>* subset) {
+                  const std::vector<uint32_t>* subset, const RegionBoxes* regions) {
   std::vector<TrianglePlane> own;
   if (!planes) {
     own = triangle_planes(m);
@@ -304,6 +313,25 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
       const int s1 = c1 >> 1;  // arithmetic shift: -1, 0 or +1
       if (s1 != 0 && s1 == (c2 >> 1)) {
         ++counts.not_silhouette;
+        continue;
+      }
+    }
+    // Silhouette regions (section 4.2) against the receivers: a double edge whose two
+    // planes have every receiver box at least eps on the same side is a silhouette from
+    // none of them (classify_box would call each box Outside), and gets no wedge.
+    if (pair && regions) {
+      const Plane f1 = to_float(p1), f2 = to_float(p2);
+      bool seen = !region_excludes(f1, f2, regions->all, regions->eps);
+      if (seen) {
+        seen = false;
+        for (const AABB& b : regions->parts)
+          if (!region_excludes(f1, f2, b, regions->eps)) {
+            seen = true;
+            break;
+          }
+      }
+      if (!seen) {
+        ++counts.region_culled;
         continue;
       }
     }

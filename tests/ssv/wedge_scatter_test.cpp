@@ -85,3 +85,44 @@ TEST(SsvWedgeScatter, SolverAnswersEqualTheBsp) {
     EXPECT_GT(ra.stats.get("scattered_candidates"), 0.0) << fam;
   }
 }
+
+TEST(SsvWedgeScatter, RegionPrefilterDropsOnlyWedgesEveryBoxExcludes) {
+  // build_wedges with receiver boxes against without: every wedge dropped is a double
+  // edge whose silhouette region classify_box calls Outside for every box; the others
+  // are built identically.
+  Scene s = random_scene(21, 16, 400);
+  auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
+  std::vector<Vec3d> pts;
+  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
+  ReceiverTree tree(pts, 4);
+  RegionBoxes regions;
+  regions.eps = float(4e-6 * 4);
+  for (int32_t id : WedgeScatter::batches(tree, 32)) {
+    AABB b;
+    for (uint32_t p = tree.nodes()[size_t(id)].begin; p < tree.nodes()[size_t(id)].end; ++p)
+      b.extend(s.receivers[tree.order()[p]].p);
+    regions.parts.push_back(b);
+    regions.all.extend(b);
+  }
+  WedgeBuildCounts c2;
+  std::vector<Wedge> kept;
+  const double M = 4.0;
+  build_wedges(pm, edges, fp, frame, 1e-9 * M, c2, nullptr, kept, nullptr, &regions);
+  EXPECT_GT(c2.region_culled, 0u);
+  EXPECT_EQ(kept.size() + c2.region_culled, wedges.size());
+  size_t k = 0;
+  for (const Wedge& w : wedges) {
+    if (k < kept.size() && kept[k].edge == w.edge) {
+      EXPECT_EQ(kept[k].plane_count, w.plane_count);
+      ++k;
+      continue;
+    }
+    ASSERT_TRUE(w.has_region) << "edge " << w.edge;
+    for (const AABB& b : regions.parts) {
+      WedgeState st;
+      st.mask = uint16_t((1u << w.plane_count) - 1u);
+      EXPECT_EQ(classify_box(w, st, b, regions.eps, true), BoxClass::Outside) << "edge " << w.edge;
+    }
+  }
+  EXPECT_EQ(k, kept.size());
+}
