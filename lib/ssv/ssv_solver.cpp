@@ -673,10 +673,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   std::vector<uint32_t> edge_subset;
   double edges_outside = 0;
   MemoryBudget budget("ssv", opt.memory_budget_mb);
-  // The scattered candidates, batch by batch of at most 16384 receivers (memory: their
-  // entries, about the wedges reported per query times the batch).
+  // The scattered candidates, batch by batch of at most 256 receivers: their entries
+  // (about the wedges reported per query times the batch) stay in cache; batches of
+  // 16,384 made foliage's 5M entries three times slower than the BSP's queries.
   WedgeScatter scatter;
-  const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 16384) : std::vector<int32_t>{};
+  const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 256) : std::vector<int32_t>{};
   MemoryCharge scatter_charge;
   scatter_charge.bind(&budget, "scattered wedges");
   double scatter_entries = 0;
