@@ -680,7 +680,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 256) : std::vector<int32_t>{};
   MemoryCharge scatter_charge;
   scatter_charge.bind(&budget, "scattered wedges");
-  double scatter_entries = 0;
   const std::vector<int32_t> units = WedgeScatter::batches(receiver_tree, 32);
   MemoryCharge occluder_charge;
   occluder_charge.bind(&budget, "occluders");
@@ -773,7 +772,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;
     nodes += bsp ? double(bsp->node_count()) : 0.0;
-    scatter_entries += double(scatter.entries());
     double mem = (bsp ? double(bsp->memory_bytes()) : double(scatter.memory_bytes() + wedges.size() * sizeof(Wedge))) +
                  double(frame_pos.size() * sizeof(Vec3d)) +
                  double(edges.size() * sizeof(Edge)) + occluder_bytes;
@@ -804,7 +802,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   s.set("occluder_seconds", cull_seconds);
   s.set("shaft_culling", use_shafts ? 1.0 : 0.0);
   s.set("wedge_index_bsp", use_scatter ? 0.0 : 1.0);
-  s.set("scattered_candidates", scatter_entries);
+  s.set("scattered_candidates", double(scatter.total_entries()));
   s.set("edges_outside_shafts", edges_outside);
   return result;
 }

@@ -80,6 +80,7 @@ void WedgeScatter::build(const ReceiverTree& tree, int32_t batch, const std::vec
   for (const Pair& q : pairs_) ++start_[q.pos - first_ + 1];
   for (uint32_t k = 0; k < n; ++k) start_[k + 1] += start_[k];
   items_.resize(pairs_.size());
+  total_ += pairs_.size();
   std::vector<uint32_t> fill(start_.begin(), start_.end() - 1);
   for (const Pair& q : pairs_) items_[fill[q.pos - first_]++] = q.s;
 }

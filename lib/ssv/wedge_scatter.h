@@ -32,7 +32,8 @@ class WedgeScatter {
   // The candidates of the receiver at tree-order position p of the batch.
   const WedgeState* begin(uint32_t p) const { return items_.data() + start_[p - first_]; }
   const WedgeState* end(uint32_t p) const { return items_.data() + start_[p - first_ + 1]; }
-  size_t entries() const { return items_.size(); }
+  size_t entries() const { return items_.size(); }  // of the last build
+  size_t total_entries() const { return total_; }     // of every build so far
   size_t memory_bytes() const {
     return items_.capacity() * sizeof(WedgeState) + pairs_.capacity() * sizeof(Pair) + start_.capacity() * sizeof(uint32_t);
   }
@@ -50,6 +51,7 @@ class WedgeScatter {
   std::vector<WedgeState> items_;
   std::vector<uint32_t> start_;
   std::vector<AABB> boxes_;  // float boxes (outwards) of the tree's nodes
+  size_t total_ = 0;
 };
 
 }  // namespace visgate::ssv
