@@ -508,10 +508,12 @@ void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, doub
   for (const auto& [key, value] : values) s.set(key, value);
 }
 
-// The edges whose boxes meet the box of hull(node, L') for some shaft unit (a node of the
-// receiver tree, below) with a receiver not occluded, ascending (see "Shaft culling" in solve_scene). The boxes
-// are rounded outwards to float and grown by `grow`. One traversal of the edge BVH with
-// the list of shaft boxes meeting each node: a node inside some shaft box has every edge
+// Shaft culling. The edges whose boxes meet the box of hull(unit, L') for some shaft unit
+// (a receiver-tree node of at most 32 receivers) with a receiver not occluded, ascending.
+// Any other edge meets no segment from such a receiver to L': its projection from each of
+// them misses L', so it adds nothing (integrate.h) and is given no wedge. The boxes are
+// rounded outwards to float and grown by `grow`. One traversal of the edge BVH with the
+// list of shaft boxes meeting each node: a node inside some shaft box has every edge
 // below it marked without further tests.
 struct ShaftMarker {
   const accel::Bvh<float>& bvh;
@@ -560,8 +562,8 @@ void shaft_edges(const ReceiverTree& tree, const std::vector<uint8_t>& occluded,
   AABBd lb;
   for (const Vec3d& p : light) lb.extend(p);
   ShaftMarker sm{bvh, {}, mark};
-  // Shaft units: the highest tree nodes of at most 32 receivers (a leaf's shaft box is
-  // tighter, but one BVH walk per leaf cost more than the wedges it saved on columns).
+  // Shaft units of 32 receivers: a leaf's shaft box is tighter, but one BVH walk per leaf
+  // cost more than the wedges it saved on columns.
   const auto& ord = tree.order();
   for (int32_t id : WedgeScatter::batches(tree, 32)) {
     const ReceiverTree::Node& nd = tree.nodes()[size_t(id)];
@@ -585,8 +587,81 @@ void shaft_edges(const ReceiverTree& tree, const std::vector<uint8_t>& occluded,
     if (mark[e]) out.push_back(uint32_t(e));
 }
 
+// The culling structures of a solve (docs/methods/ssv.md, "Culling"): the receiver tree
+// (leaves of 4), the planar occluders (the 1024 largest, none below a quarter of the
+// smallest light), the edges' boxes in a BVH (shaft culling) and the shaft units (tree
+// nodes of at most 32 receivers).
+struct Culling {
+  ReceiverTree tree;
+  std::vector<PlanarOccluder> occluders;
+  accel::Bvh<float> edge_bvh;
+  std::vector<int32_t> units;
+  Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
+          const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on) {
+    if (tree_on) {
+      std::vector<Vec3d> points(scene.receivers.size());
+      for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
+      tree = ReceiverTree(points, 4);
+      units = WedgeScatter::batches(tree, 32);
+    }
+    if (occluders_on) {
+      double min_light = INFINITY;
+      for (const Light& lt : scene.lights) {
+        Vec3d sum(0, 0, 0);  // twice the polygon's vector area, fanned from its first vertex
+        for (size_t k = 1; k + 1 < lt.polygon.size(); ++k)
+          sum = sum + cross(to_double(lt.polygon[k]) - to_double(lt.polygon[0]),
+                            to_double(lt.polygon[k + 1]) - to_double(lt.polygon[0]));
+        min_light = std::min(min_light, 0.5 * length(sum));
+      }
+      occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
+    }
+    if (shafts_on) {
+      std::vector<AABB> boxes(edges.size());
+      for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
+      edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+    }
+  }
+  double memory_bytes() const {
+    return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes());
+  }
+};
+
+// The light points of the occluder test: L' at the largest jitter height on both sides of
+// its plane, whose hull holds every sample (light_frame.h).
+std::vector<Vec3d> light_points(const LightFrame& frame) {
+  std::vector<Vec3d> lp;
+  const double jh = double(frame.max_jitter_h);
+  for (const Vec3d& p : frame.poly_world) {
+    lp.push_back(p + frame.N * jh);
+    if (jh > 0.0) lp.push_back(p - frame.N * jh);
+  }
+  return lp;
+}
+
+// The bounds of the receivers left (not occluded) of each shaft unit, for build_wedges'
+// silhouette-region test. Used with the scattered index only: it hands out exactly the
+// wedges whose region these boxes do not all exclude.
+RegionBoxes region_boxes(const Scene& scene, const ReceiverTree& tree, const std::vector<int32_t>& units,
+                         const std::vector<uint8_t>& occluded, float eps) {
+  RegionBoxes regions;
+  regions.eps = eps;
+  const auto& ord = tree.order();
+  for (int32_t id : units) {
+    const ReceiverTree::Node& nd = tree.nodes()[size_t(id)];
+    AABB b;
+    for (uint32_t p = nd.begin; p < nd.end; ++p)
+      if (!occluded[ord[p]]) b.extend(scene.receivers[ord[p]].p);
+    if (b.empty()) continue;
+    regions.parts.push_back(b);
+    regions.all.extend(b);
+  }
+  return regions;
+}
+
 }  // namespace
 
+// Over 150 lines: the per-light loop shares the solve's tolerances, memory charges, reused
+// buffers and counters; the culling steps it calls are functions above.
 SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   const IeeeFloatMode float_mode;
@@ -627,41 +702,10 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const double tol = 1e-9 * M;
   const SceneSetup sc{scene, embree, edges, eps};
 
-  // Umbra culling (occluders.h): the 1024 largest planar occluders, a receiver tree with
-  // leaves of 4. The margin, 1e-5 M, keeps every culled relation far from degeneracy.
   auto tc0 = Clock::now();
-  std::vector<PlanarOccluder> occluders;
-  ReceiverTree receiver_tree;
-  if (use_occluders || use_shafts || use_scatter) {
-    std::vector<Vec3d> points(scene.receivers.size());
-    for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
-    receiver_tree = ReceiverTree(points, 4);
-  }
-  if (use_occluders) {
-    double min_light = INFINITY;
-    for (const Light& lt : scene.lights) {
-      double a2 = 0.0;  // twice the polygon's vector area, fanned from its first vertex
-      Vec3d sum(0, 0, 0);
-      for (size_t k = 1; k + 1 < lt.polygon.size(); ++k)
-        sum = sum + cross(to_double(lt.polygon[k]) - to_double(lt.polygon[0]),
-                          to_double(lt.polygon[k + 1]) - to_double(lt.polygon[0]));
-      a2 = length(sum);
-      min_light = std::min(min_light, 0.5 * a2);
-    }
-    occluders = planar_occluders(pm, edges, tri_planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
-  }
-  // Shaft culling: the edges' boxes in a BVH. Per light, an edge whose box misses the
-  // box of every shaft hull(node, L') of a receiver-tree node with a receiver left (not
-  // occluded, shaft_edges) meets no segment from such a receiver to L': its projection from every one
-  // of them misses L', so it is given no wedge (integrate.h: such an edge adds nothing).
-  accel::Bvh<float> edge_bvh;
-  if (use_shafts) {
-    std::vector<AABB> boxes(edges.size());
-    for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
-    edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
-  }
-  const double occluder_bytes =
-      double(occluders.capacity() * sizeof(PlanarOccluder) + receiver_tree.memory_bytes() + edge_bvh.memory_bytes());
+  const Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts, use_occluders || use_shafts || use_scatter);
+  const ReceiverTree& receiver_tree = cull.tree;
+  const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
   double cull_seconds = seconds_between(tc0, Clock::now()), culled_relations = 0, hidden_lights = 0;
 
@@ -680,7 +724,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 256) : std::vector<int32_t>{};
   MemoryCharge scatter_charge;
   scatter_charge.bind(&budget, "scattered wedges");
-  const std::vector<int32_t> units = WedgeScatter::batches(receiver_tree, 32);
   MemoryCharge occluder_charge;
   occluder_charge.bind(&budget, "occluders");
   occluder_charge.set(size_t(occluder_bytes));
@@ -701,13 +744,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     size_t n_occluded = 0;
     if (use_occluders && !light_fallback) {
       auto tc = Clock::now();
-      std::vector<Vec3d> lp;
-      const double jh = double(frame.max_jitter_h);
-      for (const Vec3d& p : frame.poly_world) {
-        lp.push_back(p + frame.N * jh);
-        if (jh > 0.0) lp.push_back(p - frame.N * jh);
-      }
-      n_occluded = cull_occluded_receivers(receiver_tree, occluders, lp, occluder_margin, occluded);
+      const std::vector<Vec3d> lp = light_points(frame);
+      n_occluded = cull_occluded_receivers(receiver_tree, cull.occluders, lp, occluder_margin, occluded);
       culled_relations += double(n_occluded) * double(light.samples);
       cull_seconds += seconds_between(tc, Clock::now());
     }
@@ -725,30 +763,17 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     wedges.clear();
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback && !all_hidden) {
-      const bool subset = use_shafts && !edge_bvh.empty();
+      const bool subset = use_shafts && !cull.edge_bvh.empty();
       if (subset) {
         auto tc = Clock::now();
-        shaft_edges(receiver_tree, occluded, edge_bvh, frame.poly_world, float(eps), edge_mark, edge_subset);
+        shaft_edges(receiver_tree, occluded, cull.edge_bvh, frame.poly_world, float(eps), edge_mark, edge_subset);
         edges_outside += double(edges.size() - edge_subset.size());
         cull_seconds += seconds_between(tc, Clock::now());
       }
       // Silhouette regions against the receivers left, by shaft units (with the scattered
       // index only: it hands out exactly the wedges these boxes would not all exclude).
-      RegionBoxes regions;
       const bool by_region = use_region && use_scatter;
-      if (by_region) {
-        regions.eps = eps;
-        const auto& ord = receiver_tree.order();
-        for (int32_t id : units) {
-          const ReceiverTree::Node& nd = receiver_tree.nodes()[size_t(id)];
-          AABB b;
-          for (uint32_t p = nd.begin; p < nd.end; ++p)
-            if (!occluded[ord[p]]) b.extend(scene.receivers[ord[p]].p);
-          if (b.empty()) continue;
-          regions.parts.push_back(b);
-          regions.all.extend(b);
-        }
-      }
+      const RegionBoxes regions = by_region ? region_boxes(scene, receiver_tree, cull.units, occluded, eps) : RegionBoxes{};
       build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr,
                    by_region ? &regions : nullptr);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
@@ -782,28 +807,22 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   result.seconds = seconds_between(t0, t2);
 
   Stats& s = result.stats;
-  s.set("prepare_seconds", seconds_between(tp0, t0));
-  s.set("embree_build_seconds", seconds_between(t0, t1));
-  s.set("init_seconds", init_seconds);
-  s.set("bsp_build_query_seconds", total.t_query);
-  s.set("validation_seconds", total.t_valid);
-  s.set("projection_integration_seconds", total.t_integrate);
-  s.set("reference_ray_seconds", total.t_ray);
-  s.set("relations", double(scene.relation_count()));
+  const std::pair<const char*, double> times[] = {
+      {"prepare_seconds", seconds_between(tp0, t0)}, {"embree_build_seconds", seconds_between(t0, t1)},
+      {"init_seconds", init_seconds},                {"bsp_build_query_seconds", total.t_query},
+      {"validation_seconds", total.t_valid},         {"projection_integration_seconds", total.t_integrate},
+      {"reference_ray_seconds", total.t_ray},        {"relations", double(scene.relation_count())},
+      {"ray_disputes", double(embree.disputes())},   {"slivers_dropped", double(slivers)},
+      {"memory_mb", peak_memory / (1024.0 * 1024.0)}};
+  for (const auto& [key, value] : times) s.set(key, value);
   write_stats(s, total, counts, nodes);
-  s.set("ray_disputes", double(embree.disputes()));
-  s.set("slivers_dropped", double(slivers));
-  s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
-  s.set("silhouette_regions", use_region ? 1.0 : 0.0);
-  s.set("occluder_culling", use_occluders ? 1.0 : 0.0);
-  s.set("occluders", double(occluders.size()));
-  s.set("occluded_relations", culled_relations);
-  s.set("hidden_lights", hidden_lights);
-  s.set("occluder_seconds", cull_seconds);
-  s.set("shaft_culling", use_shafts ? 1.0 : 0.0);
-  s.set("wedge_index_bsp", use_scatter ? 0.0 : 1.0);
-  s.set("scattered_candidates", double(scatter.total_entries()));
-  s.set("edges_outside_shafts", edges_outside);
+  const std::pair<const char*, double> culling_stats[] = {
+      {"silhouette_regions", use_region ? 1.0 : 0.0},   {"occluder_culling", use_occluders ? 1.0 : 0.0},
+      {"occluders", double(cull.occluders.size())},     {"occluded_relations", culled_relations},
+      {"hidden_lights", hidden_lights},                 {"occluder_seconds", cull_seconds},
+      {"shaft_culling", use_shafts ? 1.0 : 0.0},        {"wedge_index_bsp", use_scatter ? 0.0 : 1.0},
+      {"scattered_candidates", double(scatter.total_entries())}, {"edges_outside_shafts", edges_outside}};
+  for (const auto& [key, value] : culling_stats) s.set(key, value);
   return result;
 }
 
