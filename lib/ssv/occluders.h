@@ -7,8 +7,9 @@
 //
 // Occluders are the mesh's triangles and the convex quads formed by two exactly coplanar
 // triangles sharing a double edge (box faces, walls, slabs), the largest `max_count` of
-// them by area, none smaller than 1/100 of the smallest light (a smaller one blocks a
-// shaft only right next to its receiver: a speed choice, not a correctness one). A receiver tree (median splits, leaves of a few receivers) is walked per
+// them by area, none smaller than a quarter of the smallest light (a smaller one blocks
+// a shaft only close to its receiver, and trying the many small ones cost more on columns
+// than it culled: a speed choice, not a correctness one). A receiver tree (median splits, leaves of a few receivers) is walked per
 // light; a node is blocked when some occluder blocks its shaft (below), and its subtree
 // is then skipped.
 //
