@@ -162,22 +162,38 @@ void DepthCounter::clear_counters() {
   const size_t n = uv_.size();
   vu_.resize(n);
   vv_.resize(n);
-  su_.resize(n);
-  sv_.resize(n);
   for (size_t k = 0; k < n; ++k) {
     const Vec2f& a = uv_[size_t(S.vorder[k])];
     vu_[k] = a.u;
     vv_[k] = a.v;
+  }
+  dv_.assign(n, 0);
+  fv_.assign(n, 0);
+  diffv_.assign(n + 1, 0);
+  strip_order_ = false;
+}
+
+void DepthCounter::use_strip_order() {
+  // The strip-order arrays, filled on the first piece that uses the strips (pieces over
+  // a few hundred samples): a receiver whose pieces all go one by one never pays for them.
+  if (strip_order_) return;
+  const SampleStrips& S = *strips_;
+  const size_t n = uv_.size();
+  su_.resize(n);
+  sv_.resize(n);
+  for (size_t k = 0; k < n; ++k) {
     const Vec2f& b = uv_[size_t(S.sorder[k])];
     su_[k] = b.u;
     sv_[k] = b.v;
   }
-  dv_.assign(n, 0);
   ds_.assign(n, 0);
-  fv_.assign(n, 0);
   fs_.assign(n, 0);
-  diffv_.assign(n + 1, 0);
+  strip_order_ = true;
 }
+
+namespace {
+constexpr int kOneByOne = 512;
+}  // namespace
 
 void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   if (P.v == Q.v || w == 0) return;
@@ -234,6 +250,13 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   const int kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
   const int ke = S.vlo_lower_bound(hi.v);
   if (kb >= ke) return;
+  // Up to a few hundred samples in range, testing each one by one (four per SSE2 step)
+  // costs less than the strips' searches: the same test, so the same counts.
+  if (ke - kb <= kOneByOne) {
+    run(vu_.data(), vv_.data(), dv_.data(), fv_.data(), kb, ke, true);
+    return;
+  }
+  use_strip_order();
   const int strips = int(S.strip_start.size()) - 1;
   // The strip holding position kb: the last strip start <= kb.
   int t = branchless_lower_bound(S.strip_start.data(), strips + 1, kb + 1) - 1;
@@ -283,10 +306,18 @@ void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unc
     dv_[k] += run;
   }
   depth.resize(n);
-  for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
+  if (strip_order_) {
+    for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
+  } else {
+    for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])];
+  }
   if (unclear) {
     unclear->resize(n);
-    for (size_t j = 0; j < n; ++j) (*unclear)[j] = uint8_t((fv_[size_t(S.vrank[j])] | fs_[size_t(S.srank[j])]) != 0);
+    if (strip_order_) {
+      for (size_t j = 0; j < n; ++j) (*unclear)[j] = uint8_t((fv_[size_t(S.vrank[j])] | fs_[size_t(S.srank[j])]) != 0);
+    } else {
+      for (size_t j = 0; j < n; ++j) (*unclear)[j] = uint8_t(fv_[size_t(S.vrank[j])] != 0);
+    }
   }
 }
 

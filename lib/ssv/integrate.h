@@ -65,7 +65,10 @@
 // (boxes at or above the threshold) plus one-by-one tests of the boxes that straddle it.
 // Every bulk decision is one the one-by-one test would make, so the result does not
 // depend on the boxes; they only decide how much is tested one by one. Cost per piece
-// O(sqrt(N) log N + samples whose boxes are near the line), against O(N).
+// O(sqrt(N) log N + samples whose boxes are near the line), against O(N). A piece whose
+// v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step:
+// cheaper than the searches at that size, and the same test); the strip-order arrays are
+// filled only for a receiver with a piece over more.
 //
 // Active triangles. R_T is empty for a triangle with no vertex strictly above the light
 // plane (entirely below it, lying in it, or touching it from below): such a triangle
@@ -142,6 +145,7 @@ class DepthCounter {
 
  private:
   void clear_counters();
+  void use_strip_order();
 
   const SampleStrips* strips_ = nullptr;
   SampleStrips own_;  // for reset(uv, extent)
@@ -150,6 +154,7 @@ class DepthCounter {
   std::vector<float> vu_, vv_, su_, sv_;  // picked points in v_lo order and in strip u_hi order
   std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
   std::vector<int32_t> fv_, fs_;          // unclear flags (0 or -1) per position
+  bool strip_order_ = false;              // su_, sv_, ds_, fs_ in use since the last reset
   std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
 

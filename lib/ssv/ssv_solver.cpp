@@ -10,19 +10,23 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
+#include "lib/accel/bvh.h"
 #include "lib/base/memory_budget.h"
 #include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_scene.h"
 #include "lib/ssv/integrate.h"
 #include "lib/ssv/light_frame.h"
+#include "lib/ssv/occluders.h"
 #include "lib/ssv/wedge.h"
 #include "lib/ssv/wedge_bsp.h"
+#include "lib/ssv/wedge_scatter.h"
 
 namespace visgate::ssv {
 
@@ -286,8 +290,11 @@ struct LightSetup {
   bool light_fallback;  // the projection model does not hold: rays for every relation
   const std::vector<Wedge>& wedges;
   const std::vector<uint32_t>& cut_triangles;
-  WedgeBsp& bsp;  // lazy: queries refine it (thread-safe, wedge_bsp.h)
+  WedgeBsp* bsp;  // lazy: queries refine it (thread-safe, wedge_bsp.h); or null:
+  WedgeScatter* scatter;  // the candidates scattered through the receiver tree
+  const ReceiverTree& tree;
   const SampleStrips& strips;
+  const std::vector<uint8_t>& occluded;  // per receiver: blocked by an occluder (occluders.h)
 };
 
 // Per-scene data: the blocker mesh, its edges and the ray caster.
@@ -330,11 +337,13 @@ void set_class_bits(ReceiverResult& rr, size_t offset, int samples, const std::v
 // Paper 001 section 2.1 for one receiver: BSP query, validation of the wedges found
 // (receiver inside the wedge, the edge a silhouette from it), projection and
 // integration into per-sample depth complexity (st.depth, st.unclear).
-void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i) {
+// `pos`: the receiver's tree-order position (its scattered candidates) when ls.scatter.
+void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, uint32_t pos) {
   const Vec3f& r = sc.scene.receivers[i].p;
   auto a = Clock::now();
   st.candidates.clear();
-  ls.bsp.query(r, st.candidates);
+  if (ls.bsp) ls.bsp->query(r, st.candidates);
+  else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
   // The jitter point of every sample (sample_position, DESIGN section 3): hash prefix
   // once per receiver, a power-of-two jitter count by mask.
@@ -425,27 +434,54 @@ void answer_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls
   }
 }
 
-// Every receiver of one light (paper 001 section 2.1), in parallel.
-void solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
-                 SolveResult& result) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
-    const IeeeFloatMode range_float_mode;
-    ThreadState& st = states.local();
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      ReceiverResult& rr = result.receivers[i];
-      if (ls.light_fallback || grazing_receiver(ls.frame, sc.scene.receivers[i].p)) {
-        auto a = Clock::now();
-        cast_all(sc, ls, i, rr);
-        st.c.fallback += ls.light.samples;
-        st.c.t_ray += seconds_between(a, Clock::now());
-        continue;
-      }
-      integrate_receiver(st, sc, ls, i);
-      auto e = Clock::now();
-      answer_receiver(st, sc, ls, i, rr);
-      st.c.t_ray += seconds_between(e, Clock::now());
-    }
-  });
+// One receiver of one light.
+void solve_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, uint32_t pos,
+                    SolveResult& result) {
+  ReceiverResult& rr = result.receivers[i];
+  if (ls.occluded[i]) return;  // every sample blocked: the bits stay cleared
+  if (ls.light_fallback || grazing_receiver(ls.frame, sc.scene.receivers[i].p)) {
+    auto a = Clock::now();
+    cast_all(sc, ls, i, rr);
+    st.c.fallback += ls.light.samples;
+    st.c.t_ray += seconds_between(a, Clock::now());
+    return;
+  }
+  integrate_receiver(st, sc, ls, i, pos);
+  auto e = Clock::now();
+  answer_receiver(st, sc, ls, i, rr);
+  st.c.t_ray += seconds_between(e, Clock::now());
+}
+
+// Every receiver of one light (paper 001 section 2.1), in parallel. With the scattered
+// candidates, batch by batch of the receiver tree (the scatter of a batch is serial);
+// returns the scatter's seconds.
+double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
+                   SolveResult& result, const std::vector<int32_t>& batches, float eps, bool use_region,
+                   MemoryCharge& charge) {
+  if (ls.bsp) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        const IeeeFloatMode range_float_mode;
+                        ThreadState& st = states.local();
+                        for (size_t i = range.begin(); i != range.end(); ++i) solve_receiver(st, sc, ls, i, 0, result);
+                      });
+    return 0.0;
+  }
+  double scatter_seconds = 0.0;
+  const auto& ord = ls.tree.order();
+  for (int32_t b : batches) {
+    const auto& nd = ls.tree.nodes()[size_t(b)];
+    auto t0 = Clock::now();
+    ls.scatter->build(ls.tree, b, ls.wedges, eps, use_region, ls.occluded);
+    charge.set(ls.scatter->memory_bytes());
+    scatter_seconds += seconds_between(t0, Clock::now());
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(nd.begin, nd.end, 8), [&](const tbb::blocked_range<uint32_t>& range) {
+      const IeeeFloatMode range_float_mode;
+      ThreadState& st = states.local();
+      for (uint32_t p = range.begin(); p != range.end(); ++p) solve_receiver(st, sc, ls, ord[p], p, result);
+    });
+  }
+  return scatter_seconds;
 }
 
 // The stats of paper 001's Tables 2-4 and the fallback counters (docs/methods/ssv.md).
@@ -454,6 +490,7 @@ void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, doub
       {"edges", double(counts.edges)},
       {"edges_below_light", double(counts.below_light)},
       {"edges_never_silhouette", double(counts.not_silhouette)},
+      {"edges_outside_regions", double(counts.region_culled)},
       {"wedges", double(counts.wedges)},
       {"wedge_planes_dropped", double(counts.planes_dropped)},
       {"bsp_nodes", nodes},
@@ -471,12 +508,167 @@ void write_stats(Stats& s, const Counts& n, const WedgeBuildCounts& counts, doub
   for (const auto& [key, value] : values) s.set(key, value);
 }
 
+// Shaft culling. The edges whose boxes meet the box of hull(unit, L') for some shaft unit
+// (a receiver-tree node of at most 32 receivers) with a receiver not occluded, ascending.
+// Any other edge meets no segment from such a receiver to L': its projection from each of
+// them misses L', so it adds nothing (integrate.h) and is given no wedge. The boxes are
+// rounded outwards to float and grown by `grow`. One traversal of the edge BVH with the
+// list of shaft boxes meeting each node: a node inside some shaft box has every edge
+// below it marked without further tests.
+struct ShaftMarker {
+  const accel::Bvh<float>& bvh;
+  std::vector<AABB> shafts;
+  std::vector<uint8_t>& mark;
+
+  void mark_all(uint32_t i) {
+    const auto& nd = bvh.node(i);
+    if (bvh.is_leaf(nd)) {
+      for (uint32_t e : bvh.leaf_items(nd)) mark[e] = 1;
+      return;
+    }
+    mark_all(bvh.left(i));
+    mark_all(bvh.right(i));
+  }
+  void walk(uint32_t i, const std::vector<uint32_t>& cand) {
+    const auto& nd = bvh.node(i);
+    std::vector<uint32_t> sub;
+    for (uint32_t c : cand) {
+      const AABB& q = shafts[c];
+      if (!q.overlaps(nd.box)) continue;
+      if (q.contains(nd.box.lo) && q.contains(nd.box.hi)) {
+        mark_all(i);
+        return;
+      }
+      sub.push_back(c);
+    }
+    if (sub.empty()) return;
+    if (bvh.is_leaf(nd)) {
+      for (uint32_t k = nd.first; k < nd.first + nd.count; ++k)
+        for (uint32_t c : sub)
+          if (shafts[c].overlaps(bvh.item_box(k))) {
+            mark[bvh.item(k)] = 1;
+            break;
+          }
+      return;
+    }
+    walk(bvh.left(i), sub);
+    walk(bvh.right(i), sub);
+  }
+};
+
+void shaft_edges(const ReceiverTree& tree, const std::vector<uint8_t>& occluded, const accel::Bvh<float>& bvh,
+                 const std::vector<Vec3d>& light, float grow, std::vector<uint8_t>& mark, std::vector<uint32_t>& out) {
+  mark.assign(bvh.item_count(), 0);
+  AABBd lb;
+  for (const Vec3d& p : light) lb.extend(p);
+  ShaftMarker sm{bvh, {}, mark};
+  // Shaft units of 32 receivers: a leaf's shaft box is tighter, but one BVH walk per leaf
+  // cost more than the wedges it saved on columns.
+  const auto& ord = tree.order();
+  for (int32_t id : WedgeScatter::batches(tree, 32)) {
+    const ReceiverTree::Node& nd = tree.nodes()[size_t(id)];
+    bool open = false;
+    for (uint32_t p = nd.begin; p < nd.end && !open; ++p) open = !occluded[ord[p]];
+    if (!open) continue;
+    AABBd b = nd.box;
+    b.extend(lb);
+    AABB q;
+    for (int k = 0; k < 3; ++k) {
+      q.lo[k] = std::nextafter(float(b.lo[k]), -INFINITY) - grow;
+      q.hi[k] = std::nextafter(float(b.hi[k]), INFINITY) + grow;
+    }
+    sm.shafts.push_back(q);
+  }
+  std::vector<uint32_t> all(sm.shafts.size());
+  for (size_t k = 0; k < all.size(); ++k) all[k] = uint32_t(k);
+  if (!all.empty() && !bvh.empty()) sm.walk(0, all);
+  out.clear();
+  for (size_t e = 0; e < mark.size(); ++e)
+    if (mark[e]) out.push_back(uint32_t(e));
+}
+
+// The culling structures of a solve (docs/methods/ssv.md, "Culling"): the receiver tree
+// (leaves of 4), the planar occluders (the 1024 largest, none below a quarter of the
+// smallest light), the edges' boxes in a BVH (shaft culling) and the shaft units (tree
+// nodes of at most 32 receivers).
+struct Culling {
+  ReceiverTree tree;
+  std::vector<PlanarOccluder> occluders;
+  accel::Bvh<float> edge_bvh;
+  std::vector<int32_t> units;
+  Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
+          const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on) {
+    if (tree_on) {
+      std::vector<Vec3d> points(scene.receivers.size());
+      for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
+      tree = ReceiverTree(points, 4);
+      units = WedgeScatter::batches(tree, 32);
+    }
+    if (occluders_on) {
+      double min_light = INFINITY;
+      for (const Light& lt : scene.lights) {
+        Vec3d sum(0, 0, 0);  // twice the polygon's vector area, fanned from its first vertex
+        for (size_t k = 1; k + 1 < lt.polygon.size(); ++k)
+          sum = sum + cross(to_double(lt.polygon[k]) - to_double(lt.polygon[0]),
+                            to_double(lt.polygon[k + 1]) - to_double(lt.polygon[0]));
+        min_light = std::min(min_light, 0.5 * length(sum));
+      }
+      occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
+    }
+    if (shafts_on) {
+      std::vector<AABB> boxes(edges.size());
+      for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
+      edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+    }
+  }
+  double memory_bytes() const {
+    return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes());
+  }
+};
+
+// The light points of the occluder test: L' at the largest jitter height on both sides of
+// its plane, whose hull holds every sample (light_frame.h).
+std::vector<Vec3d> light_points(const LightFrame& frame) {
+  std::vector<Vec3d> lp;
+  const double jh = double(frame.max_jitter_h);
+  for (const Vec3d& p : frame.poly_world) {
+    lp.push_back(p + frame.N * jh);
+    if (jh > 0.0) lp.push_back(p - frame.N * jh);
+  }
+  return lp;
+}
+
+// The bounds of the receivers left (not occluded) of each shaft unit, for build_wedges'
+// silhouette-region test. Used with the scattered index only: it hands out exactly the
+// wedges whose region these boxes do not all exclude.
+RegionBoxes region_boxes(const Scene& scene, const ReceiverTree& tree, const std::vector<int32_t>& units,
+                         const std::vector<uint8_t>& occluded, float eps) {
+  RegionBoxes regions;
+  regions.eps = eps;
+  const auto& ord = tree.order();
+  for (int32_t id : units) {
+    const ReceiverTree::Node& nd = tree.nodes()[size_t(id)];
+    AABB b;
+    for (uint32_t p = nd.begin; p < nd.end; ++p)
+      if (!occluded[ord[p]]) b.extend(scene.receivers[ord[p]].p);
+    if (b.empty()) continue;
+    regions.parts.push_back(b);
+    regions.all.extend(b);
+  }
+  return regions;
+}
+
 }  // namespace
 
+// Over 150 lines: the per-light loop shares the solve's tolerances, memory charges, reused
+// buffers and counters; the culling steps it calls are functions above.
 SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
   ThreadLimit limit(opt.threads);
   const IeeeFloatMode float_mode;
   const bool use_region = opt.get_bool("silhouette_regions", true);
+  const bool use_occluders = opt.get_bool("occluder_culling", true);
+  const bool use_shafts = opt.get_bool("shaft_culling", true);
+  const bool use_scatter = opt.get("wedge_index", "receivers") != "bsp";
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
@@ -500,10 +692,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // ground floor). The minimum node size stays 1/200 of the scene's longest side.
   const AABB scene_box = scene.bounds();
   const float grow = float(1e-3 * scene_box.diagonal()) + std::numeric_limits<float>::min();
-  AABB root;
-  for (const Receiver& rc : scene.receivers) root.extend(rc.p);
-  root.lo -= Vec3f(grow, grow, grow);
-  root.hi += Vec3f(grow, grow, grow);
   const float min_node = max_component(scene_box.extent()) / 200.0f;
   // Tolerances. M bounds the magnitude of every coordinate. A float plane test n.x - d
   // with a unit normal errs by a few ulps of M (about 4e-7 M with the rounding of n and d
@@ -514,8 +702,31 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const double tol = 1e-9 * M;
   const SceneSetup sc{scene, embree, edges, eps};
 
+  auto tc0 = Clock::now();
+  const Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts, use_occluders || use_shafts || use_scatter);
+  const ReceiverTree& receiver_tree = cull.tree;
+  const double occluder_bytes = cull.memory_bytes();
+  const double occluder_margin = 1e-5 * M;
+  double cull_seconds = seconds_between(tc0, Clock::now()), culled_relations = 0, hidden_lights = 0;
+
   double init_seconds = 0, peak_memory = 0, nodes = 0;
+  // Per-light arrays, their capacity reused from light to light.
+  std::vector<Vec3d> frame_pos;
+  std::vector<Wedge> wedges;
+  std::vector<uint8_t> edge_mark;
+  std::vector<uint32_t> edge_subset;
+  double edges_outside = 0;
   MemoryBudget budget("ssv", opt.memory_budget_mb);
+  // The scattered candidates, batch by batch of at most 256 receivers: their entries
+  // (about the wedges reported per query times the batch) stay in cache; batches of
+  // 16,384 made foliage's 5M entries three times slower than the BSP's queries.
+  WedgeScatter scatter;
+  const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 256) : std::vector<int32_t>{};
+  MemoryCharge scatter_charge;
+  scatter_charge.bind(&budget, "scattered wedges");
+  MemoryCharge occluder_charge;
+  occluder_charge.bind(&budget, "occluders");
+  occluder_charge.set(size_t(occluder_bytes));
   WedgeBuildCounts counts;
   Counts total;
 
@@ -527,29 +738,68 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     // the light polygon (explicit samples placed elsewhere, light_frame.h), break the
     // projection model: cast rays for that light.
     const bool light_fallback = double(frame.max_jitter_h) > 1e-5 * frame.extent || !frame.usable;
-    std::vector<Vec3d> frame_pos(pm.vertex_pos.size());
+    // Receivers hidden from the light by one occluder. The light points: L' at the
+    // largest jitter height on both sides of its plane, whose hull holds every sample.
+    std::vector<uint8_t> occluded(scene.receivers.size(), 0);
+    size_t n_occluded = 0;
+    if (use_occluders && !light_fallback) {
+      auto tc = Clock::now();
+      const std::vector<Vec3d> lp = light_points(frame);
+      n_occluded = cull_occluded_receivers(receiver_tree, cull.occluders, lp, occluder_margin, occluded);
+      culled_relations += double(n_occluded) * double(light.samples);
+      cull_seconds += seconds_between(tc, Clock::now());
+    }
+    const bool all_hidden = !scene.receivers.empty() && n_occluded == scene.receivers.size();
+    hidden_lights += all_hidden ? 1.0 : 0.0;
+    // The BSP's root: the bounds of the receivers left (see "Root box" above).
+    AABB root;
+    for (size_t i = 0; i < scene.receivers.size(); ++i)
+      if (!occluded[i]) root.extend(scene.receivers[i].p);
+    if (root.empty() && !scene.receivers.empty()) root = scene_box;
+    root.lo -= Vec3f(grow, grow, grow);
+    root.hi += Vec3f(grow, grow, grow);
+    frame_pos.resize(all_hidden ? 0 : pm.vertex_pos.size());
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
-    std::vector<Wedge> wedges;
+    wedges.clear();
     std::vector<uint32_t> cut_triangles;
-    if (!light_fallback) {
-      wedges = build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes);
+    if (!light_fallback && !all_hidden) {
+      const bool subset = use_shafts && !cull.edge_bvh.empty();
+      if (subset) {
+        auto tc = Clock::now();
+        shaft_edges(receiver_tree, occluded, cull.edge_bvh, frame.poly_world, float(eps), edge_mark, edge_subset);
+        edges_outside += double(edges.size() - edge_subset.size());
+        cull_seconds += seconds_between(tc, Clock::now());
+      }
+      // Silhouette regions against the receivers left, by shaft units (with the scattered
+      // index only: it hands out exactly the wedges these boxes would not all exclude).
+      const bool by_region = use_region && use_scatter;
+      const RegionBoxes regions = by_region ? region_boxes(scene, receiver_tree, cull.units, occluded, eps) : RegionBoxes{};
+      build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr,
+                   by_region ? &regions : nullptr);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
     MemoryCharge wedge_charge;
     wedge_charge.bind(&budget, "wedges");
     wedge_charge.set(wedges.capacity() * sizeof(Wedge));
-    WedgeBsp bsp(wedges, root, min_node, eps, use_region);
-    bsp.set_memory_budget(&budget);
+    std::optional<WedgeBsp> bsp;
+    if (!use_scatter) {
+      bsp.emplace(wedges, root, min_node, eps, use_region);
+      bsp->set_memory_budget(&budget);
+    }
     const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
     init_seconds += seconds_between(ti0, Clock::now());
 
-    const LightSetup ls{light, l, scene.light_offset(l), frame, light_fallback, wedges, cut_triangles, bsp, strips};
+    const LightSetup ls{light,         l,      scene.light_offset(l),
+                        frame,         light_fallback, wedges,
+                        cut_triangles, bsp ? &*bsp : nullptr, &scatter,
+                        receiver_tree, strips, occluded};
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
-    solve_light(sc, ls, states, result);
+    total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;
-    nodes += double(bsp.node_count());
-    double mem = double(bsp.memory_bytes()) + double(frame_pos.size() * sizeof(Vec3d)) +
-                 double(edges.size() * sizeof(Edge));
+    nodes += bsp ? double(bsp->node_count()) : 0.0;
+    double mem = (bsp ? double(bsp->memory_bytes()) : double(scatter.memory_bytes() + wedges.size() * sizeof(Wedge))) +
+                 double(frame_pos.size() * sizeof(Vec3d)) +
+                 double(edges.size() * sizeof(Edge)) + occluder_bytes;
     peak_memory = std::max(peak_memory, mem);
   }
   auto t2 = Clock::now();
@@ -557,19 +807,22 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   result.seconds = seconds_between(t0, t2);
 
   Stats& s = result.stats;
-  s.set("prepare_seconds", seconds_between(tp0, t0));
-  s.set("embree_build_seconds", seconds_between(t0, t1));
-  s.set("init_seconds", init_seconds);
-  s.set("bsp_build_query_seconds", total.t_query);
-  s.set("validation_seconds", total.t_valid);
-  s.set("projection_integration_seconds", total.t_integrate);
-  s.set("reference_ray_seconds", total.t_ray);
-  s.set("relations", double(scene.relation_count()));
+  const std::pair<const char*, double> times[] = {
+      {"prepare_seconds", seconds_between(tp0, t0)}, {"embree_build_seconds", seconds_between(t0, t1)},
+      {"init_seconds", init_seconds},                {"bsp_build_query_seconds", total.t_query},
+      {"validation_seconds", total.t_valid},         {"projection_integration_seconds", total.t_integrate},
+      {"reference_ray_seconds", total.t_ray},        {"relations", double(scene.relation_count())},
+      {"ray_disputes", double(embree.disputes())},   {"slivers_dropped", double(slivers)},
+      {"memory_mb", peak_memory / (1024.0 * 1024.0)}};
+  for (const auto& [key, value] : times) s.set(key, value);
   write_stats(s, total, counts, nodes);
-  s.set("ray_disputes", double(embree.disputes()));
-  s.set("slivers_dropped", double(slivers));
-  s.set("memory_mb", peak_memory / (1024.0 * 1024.0));
-  s.set("silhouette_regions", use_region ? 1.0 : 0.0);
+  const std::pair<const char*, double> culling_stats[] = {
+      {"silhouette_regions", use_region ? 1.0 : 0.0},   {"occluder_culling", use_occluders ? 1.0 : 0.0},
+      {"occluders", double(cull.occluders.size())},     {"occluded_relations", culled_relations},
+      {"hidden_lights", hidden_lights},                 {"occluder_seconds", cull_seconds},
+      {"shaft_culling", use_shafts ? 1.0 : 0.0},        {"wedge_index_bsp", use_scatter ? 0.0 : 1.0},
+      {"scattered_candidates", double(scatter.total_entries())}, {"edges_outside_shafts", edges_outside}};
+  for (const auto& [key, value] : culling_stats) s.set(key, value);
   return result;
 }
 

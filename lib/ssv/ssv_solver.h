@@ -5,7 +5,13 @@
 // wedge validation, projection of the silhouette edges onto the light plane, integration
 // of relative depth complexity per sample (integrate.h) and one reference ray.
 //
-// Each light is processed in turn with its own wedges and BSP. Per receiver and light:
+// Culling (docs/methods/ssv.md, "Culling"), each conservative: receivers a planar
+// occluder hides from a light are answered blocked without integration (occluders.h);
+// only edges inside the remaining receivers' shafts to the light get wedges; candidate
+// wedges are scattered through the receiver tree (wedge_scatter.h) rather than found by
+// the lazy BSP (option wedge_index=bsp keeps it).
+//
+// Each light is processed in turn with its own wedges. Per receiver and light:
 // the samples of minimum relative depth complexity are visible iff one ray to a point
 // of that class is unblocked; all others are blocked. Every ray asks Embree's robust
 // scene with lib/raycast's hit verification: a hit stands only when the double-
@@ -65,8 +71,9 @@
 // fallback rays), reference_rays (reference and check rays, ranged), fallback_relations,
 // inconsistent_receivers and doubtful_receivers (answered by one ray per sample, see
 // above), unchecked_receivers (no clear sample above the minimum class to check),
-// unclear_relations, ray_disputes, slivers_dropped, plus prepare_seconds (mesh
-// preparation, excluded from `seconds`).
+// unclear_relations, ray_disputes, slivers_dropped, the culling's occluders,
+// occluded_relations, hidden_lights, edges_outside_shafts, scattered_candidates and
+// occluder_seconds, plus prepare_seconds (mesh preparation, excluded from `seconds`).
 #pragma once
 
 #include "lib/solver.h"
@@ -77,7 +84,10 @@ class SsvSolver : public Solver {
  public:
   std::string name() const override { return "ssv"; }
   std::vector<OptionSpec> options() const override {
-    return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}}};
+    return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}},
+            {"occluder_culling", "skip receivers a planar occluder hides from a light (occluders.h)", {"on", "off"}},
+            {"shaft_culling", "build wedges only for edges inside the receivers' shafts to a light", {"on", "off"}},
+            {"wedge_index", "find candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1)", {"receivers", "bsp"}}};
   }
  protected:
   SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;

@@ -111,6 +111,15 @@ void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
   hi = dot(p.n, pmax) - p.d;
 }
 
+// Both triangle planes have the box at least eps on their front side, or both on their
+// back side: the edge is a silhouette from no point of the box (classify_box's Outside).
+bool region_excludes(const Plane& t1, const Plane& t2, const AABB& box, float eps) {
+  float lo1, hi1, lo2, hi2;
+  box_range(t1, box, lo1, hi1);
+  box_range(t2, box, lo2, hi2);
+  return (lo1 >= eps && lo2 >= eps) || (hi1 <= -eps && hi2 <= -eps);
+}
+
 }  // namespace
 
 BoxClass classify_box(const Wedge& w, WedgeState& s, const AABB& box, float eps, bool use_region) {
@@ -226,6 +235,15 @@ bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
                                 WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes) {
+  std::vector<Wedge> wedges;
+  build_wedges(m, edges, frame_pos, frame, tol, counts, planes, wedges);
+  return wedges;
+}
+
+void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, const std::vector<Vec3d>& frame_pos,
+                  const LightFrame& frame, double tol, WedgeBuildCounts& counts,
+                  const std::vector<TrianglePlane>* planes, std::vector<Wedge>& wedges,
+                  const std::vector<uint32_t>* subset, const RegionBoxes* regions) {
   std::vector<TrianglePlane> own;
   if (!planes) {
     own = triangle_planes(m);
@@ -233,25 +251,52 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
   }
   // Unit plane of a triangle, front (normal) side positive.
   auto triangle_plane = [&](size_t t) { return PointNormalPlane{(*planes)[t].unit, (*planes)[t].a}; };
-  std::vector<Wedge> wedges;
+  wedges.clear();
   const auto& L = frame.poly_world;
   const size_t nl = L.size();
-  counts.edges += edges.size();
+  const size_t n_edges = subset ? subset->size() : edges.size();
+  counts.edges += n_edges;
   std::vector<PointNormalPlane> cand;
   // The rounding of a double plane test (unit normal, coordinates up to M, tol = 1e-9 M
   // in the solver): about 1e-15 M; rtol = 1e-13 M keeps a hundredfold margin.
   const double rtol = 1e-4 * tol;
-  for (size_t ei = 0; ei < edges.size(); ++ei) {
+  // Per triangle, once per light rather than once per incident edge, and only for the
+  // triangles of the edges asked for: active (some vertex strictly above the light
+  // plane, integrate.h) and its side of L' (+1: every vertex of L' more than tol in front
+  // of its plane, -1: more than tol behind, 0: neither), by the same expressions the
+  // per-edge tests used. `stamp` tells this call's entries from older ones.
+  thread_local std::vector<uint32_t> stamp;
+  thread_local std::vector<int8_t> tri_class;  // bit 0: active; value >> 1: the side
+  thread_local uint32_t call = 0;
+  const size_t T = m.triangles.size();
+  if (stamp.size() < T || ++call == 0) {
+    stamp.assign(std::max(stamp.size(), T), 0);
+    tri_class.resize(stamp.size());
+    call = 1;
+  }
+  auto classify_triangle = [&](size_t t) {
+    if (stamp[t] == call) return tri_class[t];
+    const auto& tv = m.triangles[t].v;
+    const bool act = frame_pos[tv[0]].z > 0.0 || frame_pos[tv[1]].z > 0.0 || frame_pos[tv[2]].z > 0.0;
+    const PointNormalPlane p = triangle_plane(t);
+    bool all_pos = true, all_neg = true;
+    for (const auto& l : L) {
+      const double f = p.eval(l);
+      all_pos &= f > tol;
+      all_neg &= f < -tol;
+    }
+    stamp[t] = call;
+    tri_class[t] = int8_t((all_pos ? 2 : all_neg ? -2 : 0) | (act ? 1 : 0));
+    return tri_class[t];
+  };
+  for (size_t k = 0; k < n_edges; ++k) {
+    const size_t ei = subset ? (*subset)[k] : k;
     const Edge& e = edges[ei];
+    const int8_t c1 = e.t1 >= 0 ? classify_triangle(size_t(e.t1)) : int8_t(0);
+    const int8_t c2 = e.t2 >= 0 ? classify_triangle(size_t(e.t2)) : int8_t(0);
     // Some incident triangle must reach above the light plane (be active, integrate.h),
     // and so must the edge.
-    auto active = [&](int32_t t) {
-      if (t < 0) return false;
-      for (uint32_t v : m.triangles[size_t(t)].v)
-        if (frame_pos[v].z > 0.0) return true;
-      return false;
-    };
-    const bool act1 = active(e.t1), act2 = active(e.t2);
+    const bool act1 = (c1 & 1) != 0, act2 = (c2 & 1) != 0;
     if (!(act1 || act2) || (frame_pos[e.a].z < 0.0 && frame_pos[e.b].z < 0.0)) {
       ++counts.below_light;
       continue;
@@ -265,14 +310,28 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
       // Potential silhouette w.r.t. L' (section 2.1): some light point sees exactly one
       // of the two triangles front-facing.
       p2 = triangle_plane(size_t(e.t2));
-      bool all_pos = true, all_neg = true;
-      for (const auto& l : L) {
-        double f1 = p1.eval(l), f2 = p2.eval(l);
-        all_pos &= f1 > tol && f2 > tol;
-        all_neg &= f1 < -tol && f2 < -tol;
-      }
-      if (all_pos || all_neg) {
+      const int s1 = c1 >> 1;  // arithmetic shift: -1, 0 or +1
+      if (s1 != 0 && s1 == (c2 >> 1)) {
         ++counts.not_silhouette;
+        continue;
+      }
+    }
+    // Silhouette regions (section 4.2) against the receivers: a double edge whose two
+    // planes have every receiver box at least eps on the same side is a silhouette from
+    // none of them (classify_box would call each box Outside), and gets no wedge.
+    if (pair && regions) {
+      const Plane f1 = to_float(p1), f2 = to_float(p2);
+      bool seen = !region_excludes(f1, f2, regions->all, regions->eps);
+      if (seen) {
+        seen = false;
+        for (const AABB& b : regions->parts)
+          if (!region_excludes(f1, f2, b, regions->eps)) {
+            seen = true;
+            break;
+          }
+      }
+      if (!seen) {
+        ++counts.region_culled;
         continue;
       }
     }
@@ -321,7 +380,6 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
     wedges.push_back(w);
   }
   counts.wedges += wedges.size();
-  return wedges;
 }
 
 }  // namespace visgate::ssv

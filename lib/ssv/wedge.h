@@ -107,7 +107,16 @@ bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps);
 bool point_in_wedge(const Wedge& w, uint32_t mask, const Vec3f& p, float eps);
 
 struct WedgeBuildCounts {
-  size_t edges = 0, below_light = 0, not_silhouette = 0, wedges = 0, planes_dropped = 0;
+  size_t edges = 0, below_light = 0, not_silhouette = 0, wedges = 0, planes_dropped = 0, region_culled = 0;
+};
+
+// Boxes covering every receiver that needs wedges (`parts`), and their union (`all`): a
+// double edge whose silhouette region excludes every part (within eps, as classify_box
+// decides) is a silhouette from none of those receivers and gets no wedge.
+struct RegionBoxes {
+  AABB all;
+  std::vector<AABB> parts;
+  float eps = 0.0f;
 };
 
 // Potential silhouette edges w.r.t. L' and their wedges. `frame_pos` holds the prepared
@@ -122,5 +131,12 @@ struct WedgeBuildCounts {
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
                                 WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes = nullptr);
+// The same into `out` (cleared first; its capacity is reused from light to light), for
+// the edges whose indices `subset` lists (ascending), or for all edges without it; with
+// `regions`, only for edges that may be a silhouette from some of its boxes.
+void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, const std::vector<Vec3d>& frame_pos,
+                  const LightFrame& frame, double tol, WedgeBuildCounts& counts,
+                  const std::vector<TrianglePlane>* planes, std::vector<Wedge>& out,
+                  const std::vector<uint32_t>* subset = nullptr, const RegionBoxes* regions = nullptr);
 
 }  // namespace visgate::ssv

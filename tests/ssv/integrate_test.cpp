@@ -21,7 +21,8 @@ TEST(SsvIntegration, StripCounterEqualsNaiveRule) {
   // The sub-linear counter against a plain loop over samples implementing rules 1 and 2.
   std::mt19937_64 g(7);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  for (int n : {1, 5, 16, 64, 256, 300}) {
+  // Above 512 samples in a piece's range the strips are used, below it the one-by-one test.
+  for (int n : {1, 5, 16, 64, 256, 300, 1500, 4096}) {
     std::vector<Vec2f> uv(static_cast<size_t>(n));
     for (auto& p : uv) p = {u(g), u(g)};
     DepthCounter dc;
@@ -59,7 +60,7 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
   for (int K : {1, 4, 16})
     for (float spread : {0.02f, 2.0f})
-      for (int n : {1, 7, 64, 256}) {
+      for (int n : {1, 7, 64, 256, 2048}) {
         const int side = std::max(1, int(std::sqrt(double(n))));
         std::vector<Vec2f> jitter(size_t(n) * size_t(K));
         for (int j = 0; j < n; ++j) {
