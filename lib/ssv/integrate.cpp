@@ -149,10 +149,21 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
                          double extent) {
   VG_CHECK(pick.size() == size_t(strips.n));
   strips_ = &strips;
-  uv_.resize(pick.size());
-  for (size_t j = 0; j < pick.size(); ++j) uv_[j] = jitter_uv[pick[j]];
+  // One pass fills the picked points in sample order and in v_lo order (what
+  // clear_counters would gather from uv_).
+  const size_t n = pick.size();
+  uv_.resize(n);
+  vu_.resize(n);
+  vv_.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t j = size_t(strips.vorder[k]);
+    const Vec2f a = jitter_uv[pick[j]];
+    uv_[j] = a;
+    vu_[k] = a.u;
+    vv_[k] = a.v;
+  }
   extent_ = extent;
-  clear_counters();
+  zero_counters();
 }
 
 void DepthCounter::clear_counters() {
@@ -167,10 +178,16 @@ void DepthCounter::clear_counters() {
     vu_[k] = a.u;
     vv_[k] = a.v;
   }
+  zero_counters();
+}
+
+void DepthCounter::zero_counters() {
+  const size_t n = uv_.size();
   dv_.assign(n, 0);
   fv_.assign(n, 0);
   diffv_.assign(n + 1, 0);
   strip_order_ = false;
+  steps_ = false;
 }
 
 void DepthCounter::use_strip_order() {
@@ -293,6 +310,7 @@ void DepthCounter::add_step(float vc, int w) {
   // the tallest box of vc may reach it: tested one by one.
   const int kb = S.vlo_lower_bound(vc);
   diffv_[size_t(kb)] += w;
+  steps_ = true;
   const int kr = S.vlo_lower_bound(double(vc) - S.max_height);
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
 }
@@ -300,11 +318,7 @@ void DepthCounter::add_step(float vc, int w) {
 void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear) {
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
-  int32_t run = 0;  // rule 2: prefix sums of the steps, folded into the v-order counts
-  for (size_t k = 0; k < n; ++k) {
-    run += diffv_[k];
-    dv_[k] += run;
-  }
+  fold_steps();
   depth.resize(n);
   if (strip_order_) {
     for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
@@ -319,6 +333,41 @@ void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unc
       for (size_t j = 0; j < n; ++j) (*unclear)[j] = uint8_t(fv_[size_t(S.vrank[j])] != 0);
     }
   }
+}
+
+void DepthCounter::fold_steps() {
+  if (!steps_) return;  // diffv_ all zero: the prefix sums add nothing
+  int32_t run = 0;  // rule 2: prefix sums of the steps, folded into the v-order counts
+  for (size_t k = 0; k < uv_.size(); ++k) {
+    run += diffv_[k];
+    dv_[k] += run;
+  }
+  steps_ = false;
+}
+
+DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, int32_t unclear_value) {
+  const SampleStrips& S = *strips_;
+  const size_t n = uv_.size();
+  fold_steps();
+  depth.resize(n);
+  Classes c{unclear_value, unclear_value, 0};
+  // A pass over the v_lo order scattering into sample order: without the strip order
+  // every sample's count and flag sit at the same position, read consecutively.
+  const int* vorder = S.vorder.data();
+  const int* srank = S.srank.data();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t j = size_t(vorder[k]);
+    const int32_t f = strip_order_ ? (fv_[k] | fs_[size_t(srank[j])]) : fv_[k];
+    const int32_t d = strip_order_ ? dv_[k] + ds_[size_t(srank[j])] : dv_[k];
+    const bool u = f != 0;
+    c.unclear += u;
+    const int32_t x = u ? unclear_value : d;
+    depth[j] = x;
+    // The running lowest and second-lowest distinct value: independent of the order.
+    c.second = x < c.dmin ? c.dmin : (x > c.dmin ? std::min(c.second, x) : c.second);
+    c.dmin = std::min(c.dmin, x);
+  }
+  return c;
 }
 
 void ReceiverIntegrator::begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv) {

@@ -140,11 +140,22 @@ class DepthCounter {
   // it lies within the margin of some piece's line in that piece's v-range (unclear: its
   // count may be off by that piece's weight).
   void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr);
+  // The same as finish(depth, &unclear) followed by replacing the depth of every unclear
+  // sample by `unclear_value`, in one pass, with the classes: the lowest and second-lowest
+  // value of `depth` (unclear_value when absent) and the number of unclear samples.
+  // Results identical to that sequence (min and count do not depend on the order).
+  struct Classes {
+    int32_t dmin, second;
+    size_t unclear;
+  };
+  Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value);
   size_t size() const { return uv_.size(); }
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
   void clear_counters();
+  void zero_counters();  // counters, flags and steps to zero (uv_, vu_, vv_ filled)
+  void fold_steps();     // rule 2's difference array into dv_
   void use_strip_order();
 
   const SampleStrips* strips_ = nullptr;
@@ -155,6 +166,7 @@ class DepthCounter {
   std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
   std::vector<int32_t> fv_, fs_;          // unclear flags (0 or -1) per position
   bool strip_order_ = false;              // su_, sv_, ds_, fs_ in use since the last reset
+  bool steps_ = false;                    // some add_step since the last reset (diffv_ not all 0)
   std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
 
@@ -199,6 +211,9 @@ class ReceiverIntegrator {
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
   void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr) { counter_.finish(depth, unclear); }
+  DepthCounter::Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value) {
+    return counter_.finish_classes(depth, unclear_value);
+  }
   // True when, since begin(), some piece inside the pyramid could not be projected (an
   // edge through, or within rounding of, the receiver) or some triangle was nearly
   // edge-on (facing). Its counters are unreliable and the receiver must be answered by
