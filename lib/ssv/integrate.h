@@ -143,7 +143,8 @@ class DepthCounter {
   // The same as finish(depth, &unclear) followed by replacing the depth of every unclear
   // sample by `unclear_value`, in one pass, with the classes: the lowest and second-lowest
   // value of `depth` (unclear_value when absent) and the number of unclear samples.
-  // Results identical to that sequence (min and count do not depend on the order).
+  // Results identical to that sequence (min and count do not depend on the order). Like
+  // finish, ends the receiver: the counters are only valid again after reset.
   struct Classes {
     int32_t dmin, second;
     size_t unclear;
