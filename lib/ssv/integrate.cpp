@@ -291,6 +291,47 @@ __attribute__((target("avx2"))) void count_run_avx2(const PieceTest& t, const fl
 }
 #endif
 
+#if defined(VG_SSV_AVX2)
+// a * b mod 2^64 per 64-bit lane from 32-bit products: lo(a) lo(b) + (hi(a) lo(b) +
+// lo(a) hi(b)) 2^32.
+__attribute__((target("avx2"))) inline __m256i mul64(__m256i a, __m256i b) {
+  const __m256i ll = _mm256_mul_epu32(a, b);
+  const __m256i hl = _mm256_mul_epu32(_mm256_srli_epi64(a, 32), b);
+  const __m256i lh = _mm256_mul_epu32(a, _mm256_srli_epi64(b, 32));
+  return _mm256_add_epi64(ll, _mm256_slli_epi64(_mm256_add_epi64(hl, lh), 32));
+}
+
+// jitter_picks for K a power of two, four samples per step: splitmix64 (lib/scene/rng.h)
+// of prefix ^ j * 0xD1B54A32D192ED03 (relation_hash_step) lane by lane.
+__attribute__((target("avx2"))) int jitter_picks_avx2(uint64_t prefix, int samples, uint32_t K, uint32_t* out) {
+  const __m256i pre = _mm256_set1_epi64x(int64_t(prefix));
+  const __m256i step = _mm256_set1_epi64x(int64_t(0xD1B54A32D192ED03ull * 4ull));
+  const __m256i golden = _mm256_set1_epi64x(int64_t(0x9E3779B97F4A7C15ull));
+  const __m256i c1 = _mm256_set1_epi64x(int64_t(0xBF58476D1CE4E5B9ull));
+  const __m256i c2 = _mm256_set1_epi64x(int64_t(0x94D049BB133111EBull));
+  const __m256i mask = _mm256_set1_epi64x(int64_t(K - 1));
+  const __m256i kstep = _mm256_set1_epi64x(int64_t(4ull * K));
+  __m256i jc = _mm256_set_epi64x(int64_t(0xD1B54A32D192ED03ull * 3ull), int64_t(0xD1B54A32D192ED03ull * 2ull),
+                                 int64_t(0xD1B54A32D192ED03ull), 0);
+  __m256i base = _mm256_set_epi64x(int64_t(3ull * K), int64_t(2ull * K), int64_t(K), 0);
+  // The low 32 bits of lanes 0, 2, 4, 6 (the four 64-bit results) into the low half.
+  const __m256i low32 = _mm256_set_epi32(0, 0, 0, 0, 6, 4, 2, 0);
+  int j = 0;
+  for (; j + 4 <= samples; j += 4) {
+    __m256i x = _mm256_add_epi64(_mm256_xor_si256(pre, jc), golden);
+    x = mul64(_mm256_xor_si256(x, _mm256_srli_epi64(x, 30)), c1);
+    x = mul64(_mm256_xor_si256(x, _mm256_srli_epi64(x, 27)), c2);
+    x = _mm256_xor_si256(x, _mm256_srli_epi64(x, 31));
+    const __m256i p = _mm256_add_epi64(base, _mm256_and_si256(x, mask));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + j),
+                     _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(p, low32)));
+    jc = _mm256_add_epi64(jc, step);
+    base = _mm256_add_epi64(base, kstep);
+  }
+  return j;
+}
+#endif
+
 void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
                bool v_range) {
 #if defined(VG_SSV_AVX2)
@@ -552,6 +593,21 @@ int ReceiverIntegrator::edge_weight(const Edge& e) const {
   int w = facing(size_t(e.t1));
   if (e.t2 >= 0) w -= facing(size_t(e.t2));
   return w;
+}
+
+void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t>& pick) {
+  pick.resize(size_t(std::max(samples, 0)));
+  const uint64_t K = uint64_t(jitter);
+  const bool pow2 = (K & (K - 1)) == 0;
+  int j = 0;
+#if defined(VG_SSV_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  if (avx2 && pow2 && K <= (uint64_t(1) << 24)) j = jitter_picks_avx2(prefix, samples, uint32_t(K), pick.data());
+#endif
+  for (; j < samples; ++j) {
+    const uint64_t h = relation_hash_step(prefix, uint64_t(j));
+    pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
+  }
 }
 
 Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {

@@ -122,6 +122,13 @@ struct SampleStrips {
 // Sample j's box is the box of jitter points j*K .. j*K+K-1 of `jitter_uv`.
 SampleStrips make_sample_strips(const std::vector<Vec2f>& jitter_uv, int samples, int jitter);
 
+// The picked jitter point of every sample of one receiver (DESIGN section 3,
+// sample_position): pick[j] = j K + relation_hash_step(prefix, j) mod K, with `prefix` =
+// relation_hash_prefix(receiver, light seed). For a power-of-two K four hashes at a time
+// with AVX2 where the processor has it (64-bit products from 32-bit ones: the same
+// integers); otherwise one by one.
+void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t>& pick);
+
 // Per-sample relative depth-complexity counters with the strip structure above.
 class DepthCounter {
  public:

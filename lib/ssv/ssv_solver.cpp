@@ -346,16 +346,8 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
   // The jitter point of every sample (sample_position, DESIGN section 3): hash prefix
-  // once per receiver, a power-of-two jitter count by mask.
-  st.pick.resize(size_t(ls.light.samples));
-  {
-    const uint64_t prefix = relation_hash_prefix(i, ls.light.seed), K = uint64_t(ls.light.jitter);
-    const bool pow2 = (K & (K - 1)) == 0;
-    for (int j = 0; j < ls.light.samples; ++j) {
-      const uint64_t h = relation_hash_step(prefix, uint64_t(j));
-      st.pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
-    }
-  }
+  // once per receiver (jitter_picks).
+  jitter_picks(relation_hash_prefix(i, ls.light.seed), ls.light.samples, ls.light.jitter, st.pick);
   st.integrator.begin(r, ls.strips, st.pick);
   auto c = Clock::now();
   // Validation. Only the planes still active in the node the wedge was found in are

@@ -122,6 +122,34 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
       }
 }
 
+TEST(SsvIntegration, JitterPicksEqualSamplePosition) {
+  // jitter_picks (four hashes at a time where AVX2 is there) against the definition,
+  // relation_hash_step mod K, for power-of-two and other K, sample counts with and
+  // without a tail, and prefixes with high bits set (the 64-bit products' carries).
+  std::mt19937_64 g(5);
+  std::vector<uint32_t> pick;
+  for (int K : {1, 2, 3, 4, 16, 1024})
+    for (int samples : {0, 1, 3, 4, 5, 64, 257})
+      for (int trial = 0; trial < 20; ++trial) {
+        const uint64_t prefix = trial == 0 ? ~uint64_t(0) : trial == 1 ? 0 : g();
+        jitter_picks(prefix, samples, K, pick);
+        ASSERT_EQ(pick.size(), size_t(samples));
+        for (int j = 0; j < samples; ++j)
+          ASSERT_EQ(pick[size_t(j)], uint32_t(uint64_t(j) * uint64_t(K) +
+                                              relation_hash_step(prefix, uint64_t(j)) % uint64_t(K)))
+              << "K " << K << " samples " << samples << " j " << j;
+      }
+  // Against sample_position itself for one light: receiver i's prefix.
+  Light light;
+  light.jitter = 4;
+  light.seed = 77;
+  for (size_t i : {size_t(0), size_t(5), size_t(1) << 40}) {
+    jitter_picks(relation_hash_prefix(i, light.seed), 64, light.jitter, pick);
+    for (int j = 0; j < 64; ++j)
+      EXPECT_EQ(pick[size_t(j)] % 4u, uint32_t(relation_hash(i, uint64_t(j), light.seed) % 4u));
+  }
+}
+
 TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
   // The fused finish (counts, unclear samples as one value, the two lowest classes) against
   // finish(depth, &unclear) and a plain scan: stratified and wide boxes, samples all
