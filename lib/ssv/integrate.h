@@ -66,7 +66,8 @@
 // Every bulk decision is one the one-by-one test would make, so the result does not
 // depend on the boxes; they only decide how much is tested one by one. Cost per piece
 // O(sqrt(N) log N + samples whose boxes are near the line), against O(N). A piece whose
-// v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step:
+// v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step,
+// eight with AVX2 where the processor has it:
 // cheaper than the searches at that size, and the same test); the strip-order arrays are
 // filled only for a receiver with a piece over more.
 //
