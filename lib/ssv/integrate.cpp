@@ -4,11 +4,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
 #endif
 
 #include "lib/base/check.h"
@@ -149,10 +153,21 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
                          double extent) {
   VG_CHECK(pick.size() == size_t(strips.n));
   strips_ = &strips;
-  uv_.resize(pick.size());
-  for (size_t j = 0; j < pick.size(); ++j) uv_[j] = jitter_uv[pick[j]];
+  // One pass fills the picked points in sample order and in v_lo order (what
+  // clear_counters would gather from uv_).
+  const size_t n = pick.size();
+  uv_.resize(n);
+  vu_.resize(n);
+  vv_.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t j = size_t(strips.vorder[k]);
+    const Vec2f a = jitter_uv[pick[j]];
+    uv_[j] = a;
+    vu_[k] = a.u;
+    vv_[k] = a.v;
+  }
   extent_ = extent;
-  clear_counters();
+  zero_counters();
 }
 
 void DepthCounter::clear_counters() {
@@ -167,10 +182,16 @@ void DepthCounter::clear_counters() {
     vu_[k] = a.u;
     vv_[k] = a.v;
   }
+  zero_counters();
+}
+
+void DepthCounter::zero_counters() {
+  const size_t n = uv_.size();
   dv_.assign(n, 0);
   fv_.assign(n, 0);
   diffv_.assign(n + 1, 0);
   strip_order_ = false;
+  steps_ = false;
 }
 
 void DepthCounter::use_strip_order() {
@@ -193,6 +214,133 @@ void DepthCounter::use_strip_order() {
 
 namespace {
 constexpr int kOneByOne = 512;
+
+// One piece's one-by-one test (DepthCounter::add_piece): the line from (lou, lov) with
+// direction (du, dv), its v-range [lov, hiv), the weight c of a sample strictly left and
+// the |cross| below which a sample is unclear.
+struct PieceTest {
+  float lou, lov, hiv, du, dv, near;
+  int32_t c;
+};
+
+// The test, cross2(hi - lo, s - lo) > 0 (strictly left of the line), over positions
+// [k0, k1) of one order; with the v-range test where the position's box may lie partly
+// outside it. Four positions at a time with SSE2: the same float operations in the same
+// order as the scalar tail (no contraction: -ffp-contract=off), so identical results.
+void count_run_sse2(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
+                    bool v_range) {
+  int k = k0;
+#if defined(__SSE2__)
+  const __m128 lou = _mm_set1_ps(t.lou), lov = _mm_set1_ps(t.lov), hiv = _mm_set1_ps(t.hiv);
+  const __m128 vdu = _mm_set1_ps(t.du), vdv = _mm_set1_ps(t.dv), zero = _mm_setzero_ps();
+  const __m128 near = _mm_set1_ps(t.near), sign = _mm_set1_ps(-0.0f);
+  const __m128i vc = _mm_set1_epi32(t.c);
+  const __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  for (; k + 4 <= k1; k += 4) {
+    const __m128 uu = _mm_loadu_ps(u + k), vv = _mm_loadu_ps(v + k);
+    const __m128 cr = _mm_sub_ps(_mm_mul_ps(vdu, _mm_sub_ps(vv, lov)), _mm_mul_ps(vdv, _mm_sub_ps(uu, lou)));
+    const __m128 in = v_range ? _mm_and_ps(_mm_cmpge_ps(vv, lov), _mm_cmplt_ps(vv, hiv)) : all;
+    const __m128 m = _mm_and_ps(_mm_cmpgt_ps(cr, zero), in);
+    const __m128 f = _mm_and_ps(_mm_cmple_ps(_mm_andnot_ps(sign, cr), near), in);
+    __m128i* o = reinterpret_cast<__m128i*>(out + k);
+    _mm_storeu_si128(o, _mm_add_epi32(_mm_loadu_si128(o), _mm_and_si128(_mm_castps_si128(m), vc)));
+    __m128i* g = reinterpret_cast<__m128i*>(flag + k);
+    _mm_storeu_si128(g, _mm_or_si128(_mm_loadu_si128(g), _mm_castps_si128(f)));
+  }
+#endif
+  for (; k < k1; ++k) {
+    const bool in = !v_range || ((v[k] >= t.lov) & (v[k] < t.hiv));
+    const float cr = t.du * (v[k] - t.lov) - t.dv * (u[k] - t.lou);
+    out[k] += (in & (cr > 0.0f)) ? t.c : 0;
+    flag[k] |= (in & (std::abs(cr) <= t.near)) ? -1 : 0;
+  }
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define VG_SSV_AVX2 1
+// The same test eight positions at a time (AVX2, chosen at run time): the same float
+// operations in the same order, and AVX2 alone has no fused multiply-add, so the
+// results are those of count_run_sse2.
+__attribute__((target("avx2"))) void count_run_avx2(const PieceTest& t, const float* u, const float* v,
+                                                     int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
+  int k = k0;
+  const __m256 lou = _mm256_set1_ps(t.lou), lov = _mm256_set1_ps(t.lov), hiv = _mm256_set1_ps(t.hiv);
+  const __m256 vdu = _mm256_set1_ps(t.du), vdv = _mm256_set1_ps(t.dv), zero = _mm256_setzero_ps();
+  const __m256 near = _mm256_set1_ps(t.near), sign = _mm256_set1_ps(-0.0f);
+  const __m256i vc = _mm256_set1_epi32(t.c);
+  const __m256 all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+  for (; k + 8 <= k1; k += 8) {
+    const __m256 uu = _mm256_loadu_ps(u + k), vv = _mm256_loadu_ps(v + k);
+    const __m256 cr =
+        _mm256_sub_ps(_mm256_mul_ps(vdu, _mm256_sub_ps(vv, lov)), _mm256_mul_ps(vdv, _mm256_sub_ps(uu, lou)));
+    const __m256 in =
+        v_range ? _mm256_and_ps(_mm256_cmp_ps(vv, lov, _CMP_GE_OQ), _mm256_cmp_ps(vv, hiv, _CMP_LT_OQ)) : all;
+    const __m256 m = _mm256_and_ps(_mm256_cmp_ps(cr, zero, _CMP_GT_OQ), in);
+    const __m256 f = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sign, cr), near, _CMP_LE_OQ), in);
+    __m256i* o = reinterpret_cast<__m256i*>(out + k);
+    _mm256_storeu_si256(o, _mm256_add_epi32(_mm256_loadu_si256(o), _mm256_and_si256(_mm256_castps_si256(m), vc)));
+    __m256i* g = reinterpret_cast<__m256i*>(flag + k);
+    _mm256_storeu_si256(g, _mm256_or_si256(_mm256_loadu_si256(g), _mm256_castps_si256(f)));
+  }
+  for (; k < k1; ++k) {
+    const bool in = !v_range || ((v[k] >= t.lov) & (v[k] < t.hiv));
+    const float cr = t.du * (v[k] - t.lov) - t.dv * (u[k] - t.lou);
+    out[k] += (in & (cr > 0.0f)) ? t.c : 0;
+    flag[k] |= (in & (std::abs(cr) <= t.near)) ? -1 : 0;
+  }
+}
+#endif
+
+#if defined(VG_SSV_AVX2)
+// a * b mod 2^64 per 64-bit lane from 32-bit products: lo(a) lo(b) + (hi(a) lo(b) +
+// lo(a) hi(b)) 2^32.
+__attribute__((target("avx2"))) inline __m256i mul64(__m256i a, __m256i b) {
+  const __m256i ll = _mm256_mul_epu32(a, b);
+  const __m256i hl = _mm256_mul_epu32(_mm256_srli_epi64(a, 32), b);
+  const __m256i lh = _mm256_mul_epu32(a, _mm256_srli_epi64(b, 32));
+  return _mm256_add_epi64(ll, _mm256_slli_epi64(_mm256_add_epi64(hl, lh), 32));
+}
+
+// jitter_picks for K a power of two, four samples per step: splitmix64 (lib/scene/rng.h)
+// of prefix ^ j * 0xD1B54A32D192ED03 (relation_hash_step) lane by lane.
+__attribute__((target("avx2"))) int jitter_picks_avx2(uint64_t prefix, int samples, uint32_t K, uint32_t* out) {
+  const __m256i pre = _mm256_set1_epi64x(int64_t(prefix));
+  const __m256i step = _mm256_set1_epi64x(int64_t(0xD1B54A32D192ED03ull * 4ull));
+  const __m256i golden = _mm256_set1_epi64x(int64_t(0x9E3779B97F4A7C15ull));
+  const __m256i c1 = _mm256_set1_epi64x(int64_t(0xBF58476D1CE4E5B9ull));
+  const __m256i c2 = _mm256_set1_epi64x(int64_t(0x94D049BB133111EBull));
+  const __m256i mask = _mm256_set1_epi64x(int64_t(K - 1));
+  const __m256i kstep = _mm256_set1_epi64x(int64_t(4ull * K));
+  __m256i jc = _mm256_set_epi64x(int64_t(0xD1B54A32D192ED03ull * 3ull), int64_t(0xD1B54A32D192ED03ull * 2ull),
+                                 int64_t(0xD1B54A32D192ED03ull), 0);
+  __m256i base = _mm256_set_epi64x(int64_t(3ull * K), int64_t(2ull * K), int64_t(K), 0);
+  // The low 32 bits of lanes 0, 2, 4, 6 (the four 64-bit results) into the low half.
+  const __m256i low32 = _mm256_set_epi32(0, 0, 0, 0, 6, 4, 2, 0);
+  int j = 0;
+  for (; j + 4 <= samples; j += 4) {
+    __m256i x = _mm256_add_epi64(_mm256_xor_si256(pre, jc), golden);
+    x = mul64(_mm256_xor_si256(x, _mm256_srli_epi64(x, 30)), c1);
+    x = mul64(_mm256_xor_si256(x, _mm256_srli_epi64(x, 27)), c2);
+    x = _mm256_xor_si256(x, _mm256_srli_epi64(x, 31));
+    const __m256i p = _mm256_add_epi64(base, _mm256_and_si256(x, mask));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + j),
+                     _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(p, low32)));
+    jc = _mm256_add_epi64(jc, step);
+    base = _mm256_add_epi64(base, kstep);
+  }
+  return j;
+}
+#endif
+
+void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
+               bool v_range) {
+#if defined(VG_SSV_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  if (avx2) return count_run_avx2(t, u, v, out, flag, k0, k1, v_range);
+#endif
+  count_run_sse2(t, u, v, out, flag, k0, k1, v_range);
+}
+
 }  // namespace
 
 void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
@@ -217,32 +365,9 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   // positions [k0, k1) of one order; with the v-range [lo.v, hi.v) where the position's
   // box may lie partly outside it. Four positions at a time with SSE2 (the same float
   // operations in the same order as the scalar tail: identical results).
-  auto run = [&](const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
-    int k = k0;
-#if defined(__SSE2__)
-    const __m128 lou = _mm_set1_ps(lo.u), lov = _mm_set1_ps(lo.v), hiv = _mm_set1_ps(hi.v);
-    const __m128 vdu = _mm_set1_ps(du), vdv = _mm_set1_ps(dv), zero = _mm_setzero_ps();
-    const __m128 near = _mm_set1_ps(near_cross), sign = _mm_set1_ps(-0.0f);
-    const __m128i vc = _mm_set1_epi32(c);
-    const __m128 all = _mm_castsi128_ps(_mm_set1_epi32(-1));
-    for (; k + 4 <= k1; k += 4) {
-      const __m128 uu = _mm_loadu_ps(u + k), vv = _mm_loadu_ps(v + k);
-      const __m128 cr = _mm_sub_ps(_mm_mul_ps(vdu, _mm_sub_ps(vv, lov)), _mm_mul_ps(vdv, _mm_sub_ps(uu, lou)));
-      const __m128 in = v_range ? _mm_and_ps(_mm_cmpge_ps(vv, lov), _mm_cmplt_ps(vv, hiv)) : all;
-      const __m128 m = _mm_and_ps(_mm_cmpgt_ps(cr, zero), in);
-      const __m128 f = _mm_and_ps(_mm_cmple_ps(_mm_andnot_ps(sign, cr), near), in);
-      __m128i* o = reinterpret_cast<__m128i*>(out + k);
-      _mm_storeu_si128(o, _mm_add_epi32(_mm_loadu_si128(o), _mm_and_si128(_mm_castps_si128(m), vc)));
-      __m128i* g = reinterpret_cast<__m128i*>(flag + k);
-      _mm_storeu_si128(g, _mm_or_si128(_mm_loadu_si128(g), _mm_castps_si128(f)));
-    }
-#endif
-    for (; k < k1; ++k) {
-      const bool in = !v_range || ((v[k] >= lo.v) & (v[k] < hi.v));
-      const float cr = du * (v[k] - lo.v) - dv * (u[k] - lo.u);
-      out[k] += (in & (cr > 0.0f)) ? c : 0;
-      flag[k] |= (in & (std::abs(cr) <= near_cross)) ? -1 : 0;
-    }
+  const PieceTest pt{lo.u, lo.v, hi.v, du, dv, near_cross, c};
+  auto run = [&pt](const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
+    count_run(pt, u, v, out, flag, k0, k1, v_range);
   };
   const double slope = double(du) / double(dv);
   // Only samples with v_lo in [lo.v - max_height, hi.v) can have v in [lo.v, hi.v): a
@@ -293,6 +418,7 @@ void DepthCounter::add_step(float vc, int w) {
   // the tallest box of vc may reach it: tested one by one.
   const int kb = S.vlo_lower_bound(vc);
   diffv_[size_t(kb)] += w;
+  steps_ = true;
   const int kr = S.vlo_lower_bound(double(vc) - S.max_height);
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
 }
@@ -300,11 +426,7 @@ void DepthCounter::add_step(float vc, int w) {
 void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear) {
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
-  int32_t run = 0;  // rule 2: prefix sums of the steps, folded into the v-order counts
-  for (size_t k = 0; k < n; ++k) {
-    run += diffv_[k];
-    dv_[k] += run;
-  }
+  fold_steps();
   depth.resize(n);
   if (strip_order_) {
     for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
@@ -319,6 +441,83 @@ void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unc
       for (size_t j = 0; j < n; ++j) (*unclear)[j] = uint8_t(fv_[size_t(S.vrank[j])] != 0);
     }
   }
+}
+
+void DepthCounter::fold_steps() {
+  if (!steps_) return;  // diffv_ all zero: the prefix sums add nothing
+  int32_t run = 0;  // rule 2: prefix sums of the steps, folded into the v-order counts
+  for (size_t k = 0; k < uv_.size(); ++k) {
+    run += diffv_[k];
+    dv_[k] += run;
+  }
+  steps_ = false;
+}
+
+DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, int32_t unclear_value) {
+  const SampleStrips& S = *strips_;
+  const size_t n = uv_.size();
+  fold_steps();
+  depth.resize(n);
+  Classes c{unclear_value, unclear_value, 0};
+  const int* vorder = S.vorder.data();
+  if (!strip_order_) {
+    // Every sample's count and flag sit at its v_lo position: the values, their two
+    // lowest and the unclear count from consecutive memory (four per SSE2 step, no
+    // loop-carried chain of selects), then one scatter into sample order. The flags
+    // are 0 or -1 (add_piece), so the count is minus their sum.
+    int32_t* x = dv_.data();
+    const int32_t* f = fv_.data();
+    size_t k = 0;
+    int32_t dmin = unclear_value;
+    int64_t flags = 0;
+#if defined(__SSE2__)
+    const __m128i vu = _mm_set1_epi32(unclear_value);
+    __m128i mn = vu, cnt = _mm_setzero_si128();
+    for (; k + 4 <= n; k += 4) {
+      const __m128i fk = _mm_loadu_si128(reinterpret_cast<const __m128i*>(f + k));
+      const __m128i dk = _mm_loadu_si128(reinterpret_cast<const __m128i*>(x + k));
+      const __m128i xk = _mm_or_si128(_mm_andnot_si128(fk, dk), _mm_and_si128(fk, vu));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(x + k), xk);
+      const __m128i gt = _mm_cmpgt_epi32(mn, xk);
+      mn = _mm_or_si128(_mm_and_si128(gt, xk), _mm_andnot_si128(gt, mn));
+      cnt = _mm_sub_epi32(cnt, fk);
+    }
+    alignas(16) int32_t lanes[4], counts[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(lanes), mn);
+    _mm_store_si128(reinterpret_cast<__m128i*>(counts), cnt);
+    for (int l = 0; l < 4; ++l) {
+      dmin = std::min(dmin, lanes[l]);
+      flags -= counts[l];
+    }
+#endif
+    for (; k < n; ++k) {
+      x[k] = f[k] != 0 ? unclear_value : x[k];
+      dmin = std::min(dmin, x[k]);
+      flags += f[k];
+    }
+    int32_t second = unclear_value;
+    for (size_t q = 0; q < n; ++q) second = std::min(second, x[q] > dmin ? x[q] : unclear_value);
+    int32_t* out = depth.data();
+    for (size_t q = 0; q < n; ++q) out[vorder[q]] = x[q];
+    c.dmin = dmin;
+    c.second = second;
+    c.unclear = size_t(-flags);
+    return c;
+  }
+  const int* srank = S.srank.data();
+  for (size_t k = 0; k < n; ++k) {
+    const size_t j = size_t(vorder[k]);
+    const int32_t f = strip_order_ ? (fv_[k] | fs_[size_t(srank[j])]) : fv_[k];
+    const int32_t d = strip_order_ ? dv_[k] + ds_[size_t(srank[j])] : dv_[k];
+    const bool u = f != 0;
+    c.unclear += u;
+    const int32_t x = u ? unclear_value : d;
+    depth[j] = x;
+    // The running lowest and second-lowest distinct value: independent of the order.
+    c.second = x < c.dmin ? c.dmin : (x > c.dmin ? std::min(c.second, x) : c.second);
+    c.dmin = std::min(c.dmin, x);
+  }
+  return c;
 }
 
 void ReceiverIntegrator::begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv) {
@@ -394,6 +593,21 @@ int ReceiverIntegrator::edge_weight(const Edge& e) const {
   int w = facing(size_t(e.t1));
   if (e.t2 >= 0) w -= facing(size_t(e.t2));
   return w;
+}
+
+void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t>& pick) {
+  pick.resize(size_t(std::max(samples, 0)));
+  const uint64_t K = uint64_t(jitter);
+  const bool pow2 = (K & (K - 1)) == 0;
+  int j = 0;
+#if defined(VG_SSV_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  if (avx2 && pow2 && K <= (uint64_t(1) << 24)) j = jitter_picks_avx2(prefix, samples, uint32_t(K), pick.data());
+#endif
+  for (; j < samples; ++j) {
+    const uint64_t h = relation_hash_step(prefix, uint64_t(j));
+    pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
+  }
 }
 
 Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {

@@ -66,7 +66,8 @@
 // Every bulk decision is one the one-by-one test would make, so the result does not
 // depend on the boxes; they only decide how much is tested one by one. Cost per piece
 // O(sqrt(N) log N + samples whose boxes are near the line), against O(N). A piece whose
-// v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step:
+// v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step,
+// eight with AVX2 where the processor has it:
 // cheaper than the searches at that size, and the same test); the strip-order arrays are
 // filled only for a receiver with a piece over more.
 //
@@ -122,6 +123,13 @@ struct SampleStrips {
 // Sample j's box is the box of jitter points j*K .. j*K+K-1 of `jitter_uv`.
 SampleStrips make_sample_strips(const std::vector<Vec2f>& jitter_uv, int samples, int jitter);
 
+// The picked jitter point of every sample of one receiver (DESIGN section 3,
+// sample_position): pick[j] = j K + relation_hash_step(prefix, j) mod K, with `prefix` =
+// relation_hash_prefix(receiver, light seed). For a power-of-two K four hashes at a time
+// with AVX2 where the processor has it (64-bit products from 32-bit ones: the same
+// integers); otherwise one by one.
+void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t>& pick);
+
 // Per-sample relative depth-complexity counters with the strip structure above.
 class DepthCounter {
  public:
@@ -140,11 +148,23 @@ class DepthCounter {
   // it lies within the margin of some piece's line in that piece's v-range (unclear: its
   // count may be off by that piece's weight).
   void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr);
+  // The same as finish(depth, &unclear) followed by replacing the depth of every unclear
+  // sample by `unclear_value`, in one pass, with the classes: the lowest and second-lowest
+  // value of `depth` (unclear_value when absent) and the number of unclear samples.
+  // Results identical to that sequence (min and count do not depend on the order). Like
+  // finish, ends the receiver: the counters are only valid again after reset.
+  struct Classes {
+    int32_t dmin, second;
+    size_t unclear;
+  };
+  Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value);
   size_t size() const { return uv_.size(); }
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
   void clear_counters();
+  void zero_counters();  // counters, flags and steps to zero (uv_, vu_, vv_ filled)
+  void fold_steps();     // rule 2's difference array into dv_
   void use_strip_order();
 
   const SampleStrips* strips_ = nullptr;
@@ -155,6 +175,7 @@ class DepthCounter {
   std::vector<int32_t> dv_, ds_;          // one-by-one counts per position of those orders
   std::vector<int32_t> fv_, fs_;          // unclear flags (0 or -1) per position
   bool strip_order_ = false;              // su_, sv_, ds_, fs_ in use since the last reset
+  bool steps_ = false;                    // some add_step since the last reset (diffv_ not all 0)
   std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
 };
 
@@ -199,6 +220,9 @@ class ReceiverIntegrator {
   // facing). Returns false when t does not cross the plane or misses L'.
   bool add_cut(size_t t);
   void finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unclear = nullptr) { counter_.finish(depth, unclear); }
+  DepthCounter::Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value) {
+    return counter_.finish_classes(depth, unclear_value);
+  }
   // True when, since begin(), some piece inside the pyramid could not be projected (an
   // edge through, or within rounding of, the receiver) or some triangle was nearly
   // edge-on (facing). Its counters are unreliable and the receiver must be answered by

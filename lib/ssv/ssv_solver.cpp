@@ -69,7 +69,7 @@ struct ThreadState {
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
-  std::vector<uint8_t> unclear;  // DepthCounter::finish
+  DepthCounter::Classes classes{};  // of `depth` (DepthCounter::finish_classes)
   Counts c;
   // The last reference answer of this thread: which ranged ray to cast first. It only
   // changes how many rays are cast (stat reference_rays), never an answer.
@@ -336,7 +336,7 @@ void set_class_bits(ReceiverResult& rr, size_t offset, int samples, const std::v
 
 // Paper 001 section 2.1 for one receiver: BSP query, validation of the wedges found
 // (receiver inside the wedge, the edge a silhouette from it), projection and
-// integration into per-sample depth complexity (st.depth, st.unclear).
+// integration into per-sample depth complexity (st.depth, st.classes).
 // `pos`: the receiver's tree-order position (its scattered candidates) when ls.scatter.
 void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, uint32_t pos) {
   const Vec3f& r = sc.scene.receivers[i].p;
@@ -346,16 +346,8 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
   // The jitter point of every sample (sample_position, DESIGN section 3): hash prefix
-  // once per receiver, a power-of-two jitter count by mask.
-  st.pick.resize(size_t(ls.light.samples));
-  {
-    const uint64_t prefix = relation_hash_prefix(i, ls.light.seed), K = uint64_t(ls.light.jitter);
-    const bool pow2 = (K & (K - 1)) == 0;
-    for (int j = 0; j < ls.light.samples; ++j) {
-      const uint64_t h = relation_hash_step(prefix, uint64_t(j));
-      st.pick[size_t(j)] = uint32_t(uint64_t(j) * K + (pow2 ? h & (K - 1) : h % K));
-    }
-  }
+  // once per receiver (jitter_picks).
+  jitter_picks(relation_hash_prefix(i, ls.light.seed), ls.light.samples, ls.light.jitter, st.pick);
   st.integrator.begin(r, ls.strips, st.pick);
   auto c = Clock::now();
   // Validation. Only the planes still active in the node the wedge was found in are
@@ -371,7 +363,7 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   auto d = Clock::now();
   for (const auto& [edge, weight] : st.valid) st.integrator.add_edge(sc.edges[edge], weight);
   for (uint32_t t : ls.cut_triangles) st.integrator.add_cut(t);
-  st.integrator.finish(st.depth, &st.unclear);
+  st.classes = st.integrator.finish_classes(st.depth, kUnclear);
   auto e = Clock::now();
   st.c.queries += 1;
   st.c.reported += double(st.candidates.size());
@@ -391,16 +383,10 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
 void answer_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResult& rr) {
   const Vec3f& r = sc.scene.receivers[i].p;
   const int samples = ls.light.samples;
-  int32_t dmin = kUnclear, second = kUnclear;  // lowest and second-lowest class
-  size_t unclear = 0;
-  for (size_t j = 0; j < st.depth.size(); ++j) {
-    const bool u = st.unclear[j] != 0;
-    unclear += u;
-    const int32_t x = u ? kUnclear : st.depth[j];
-    st.depth[j] = x;
-    second = x < dmin ? dmin : (x > dmin ? std::min(second, x) : second);
-    dmin = std::min(dmin, x);
-  }
+  // Lowest and second-lowest class; st.depth holds kUnclear for unclear samples
+  // (DepthCounter::finish_classes).
+  const int32_t dmin = st.classes.dmin, second = st.classes.second;
+  size_t unclear = st.classes.unclear;
   const bool one_class = second == kUnclear;
   RefAnswer ref = RefAnswer::Ambiguous, check = RefAnswer::Blocked;
   if (dmin == kUnclear && !st.integrator.doubtful()) {
@@ -428,7 +414,7 @@ void answer_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls
   }
   if (unclear > 0) {
     for (int j = 0; j < samples; ++j)
-      if (st.unclear[size_t(j)])
+      if (st.depth[size_t(j)] == kUnclear)
         rr.set_visible(ls.offset + size_t(j), !sc.embree.occluded(r, sample_position(ls.light, j, i)));
     st.c.unclear_rays += double(unclear);
   }

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
 #include <random>
 
 #include "lib/mesh/prepare.h"
@@ -118,6 +120,104 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
           EXPECT_EQ(unclear, naive_unclear) << "K = " << K << " spread " << spread << " n = " << n;
         }
       }
+}
+
+TEST(SsvIntegration, JitterPicksEqualSamplePosition) {
+  // jitter_picks (four hashes at a time where AVX2 is there) against the definition,
+  // relation_hash_step mod K, for power-of-two and other K, sample counts with and
+  // without a tail, and prefixes with high bits set (the 64-bit products' carries).
+  std::mt19937_64 g(5);
+  std::vector<uint32_t> pick;
+  for (int K : {1, 2, 3, 4, 16, 1024})
+    for (int samples : {0, 1, 3, 4, 5, 64, 257})
+      for (int trial = 0; trial < 20; ++trial) {
+        const uint64_t prefix = trial == 0 ? ~uint64_t(0) : trial == 1 ? 0 : g();
+        jitter_picks(prefix, samples, K, pick);
+        ASSERT_EQ(pick.size(), size_t(samples));
+        for (int j = 0; j < samples; ++j)
+          ASSERT_EQ(pick[size_t(j)], uint32_t(uint64_t(j) * uint64_t(K) +
+                                              relation_hash_step(prefix, uint64_t(j)) % uint64_t(K)))
+              << "K " << K << " samples " << samples << " j " << j;
+      }
+  // Against sample_position itself for one light: receiver i's prefix.
+  Light light;
+  light.jitter = 4;
+  light.seed = 77;
+  for (size_t i : {size_t(0), size_t(5), size_t(1) << 40}) {
+    jitter_picks(relation_hash_prefix(i, light.seed), 64, light.jitter, pick);
+    for (int j = 0; j < 64; ++j)
+      EXPECT_EQ(pick[size_t(j)] % 4u, uint32_t(relation_hash(i, uint64_t(j), light.seed) % 4u));
+  }
+}
+
+TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
+  // The fused finish (counts, unclear samples as one value, the two lowest classes) against
+  // finish(depth, &unclear) and a plain scan: stratified and wide boxes, samples all
+  // coincident or on a few points, pieces through samples exactly (unclear samples), with
+  // and without steps, and sizes below and above the one-by-one limit (strip order).
+  std::mt19937_64 g(23);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  const int32_t kU = std::numeric_limits<int32_t>::max();
+  for (int layout = 0; layout < 4; ++layout)
+    for (int K : {1, 4})
+      for (int n : {1, 5, 256, 2048})
+        for (bool steps : {false, true}) {
+          const int side = std::max(1, int(std::sqrt(double(n))));
+          std::vector<Vec2f> jitter(size_t(n) * size_t(K));
+          for (size_t q = 0; q < jitter.size(); ++q) {
+            const int j = int(q) / K;
+            const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
+            const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
+            if (layout == 0) jitter[q] = {cu + 0.02f * (u01(g) - 0.5f), cv + 0.02f * (u01(g) - 0.5f)};
+            if (layout == 1) jitter[q] = {u(g), u(g)};
+            if (layout == 2) jitter[q] = {0.25f, -0.5f};                        // all coincident
+            if (layout == 3) jitter[q] = {0.5f * float(q % 3), 0.25f * float(q % 2)};  // few points
+          }
+          const SampleStrips strips = make_sample_strips(jitter, n, K);
+          std::vector<uint32_t> pick(static_cast<size_t>(n));
+          std::vector<Vec2f> uv(static_cast<size_t>(n));
+          for (int j = 0; j < n; ++j) {
+            pick[size_t(j)] = uint32_t(j * K + int(g() % uint64_t(K)));
+            uv[size_t(j)] = jitter[pick[size_t(j)]];
+          }
+          DepthCounter a, b;
+          a.reset(strips, jitter, pick, 2.0);
+          b.reset(strips, jitter, pick, 2.0);
+          for (int k = 0; k < 40; ++k) {
+            Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
+            if (k % 2 == 0) {  // through samples exactly
+              P = uv[g() % uv.size()];
+              Q = uv[g() % uv.size()];
+              if (P.v == Q.v) Q.v += 0.5f;
+            }
+            const int w = int(g() % 5) - 2;
+            a.add_piece(P, Q, w);
+            b.add_piece(P, Q, w);
+            if (steps) {
+              const float vc = k % 2 ? 1.2f * u(g) : uv[g() % uv.size()].v;
+              a.add_step(vc, w);
+              b.add_step(vc, w);
+            }
+          }
+          std::vector<int32_t> depth, fused;
+          std::vector<uint8_t> unclear;
+          a.finish(depth, &unclear);
+          size_t n_unclear = 0;
+          int32_t dmin = kU, second = kU;
+          for (size_t j = 0; j < depth.size(); ++j) {
+            if (unclear[j]) depth[j] = kU, ++n_unclear;
+            dmin = std::min(dmin, depth[j]);
+          }
+          for (int32_t x : depth)
+            if (x > dmin) second = std::min(second, x);
+          const DepthCounter::Classes c = b.finish_classes(fused, kU);
+          const std::string where = "layout " + std::to_string(layout) + " K " + std::to_string(K) + " n " +
+                                    std::to_string(n) + (steps ? " steps" : "");
+          EXPECT_EQ(fused, depth) << where;
+          EXPECT_EQ(c.unclear, n_unclear) << where;
+          EXPECT_EQ(c.dmin, dmin) << where;
+          EXPECT_EQ(c.second, second) << where;
+        }
 }
 
 TEST(SsvIntegration, RelativeDepthEqualsDirectCounting) {
