@@ -83,9 +83,9 @@ void Traversal::run_light(size_t li) {
   split_buckets_ = {};
   trial_ = {};
   in_trial_ = false;
-  light_mode_ = p_.light_split_auto ? LightMode::Trial : LightMode::Whole;
-  split_now_ = false;
-  const int tree_leaf = p_.light_split_auto ? std::min(p_.leaf_samples, p_.split_samples) : p_.leaf_samples;
+  light_mode_ = p_.light_split_always ? LightMode::Split : p_.light_split_auto ? LightMode::Trial : LightMode::Whole;
+  split_now_ = light_mode_ == LightMode::Split;
+  const int tree_leaf = p_.light_split_auto || p_.light_split_always ? std::min(p_.leaf_samples, p_.split_samples) : p_.leaf_samples;
   {
     ScopedTimer t(times_[kTree]);
     std::vector<AABB> boxes(light_->jitter_boxes);

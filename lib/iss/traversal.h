@@ -96,6 +96,7 @@ struct Params {
   // split_samples, treated as leaves of leaf_samples (the whole light up to 256
   // samples) unless the light's trial shows that splitting lights pays.
   bool light_split_auto = true;
+  bool light_split_always = false;  // light_split=on: every light in Split mode (measuring, tests)
   int split_samples = 4;       // light leaf once a light splits (Table 5.1, COLUMNS)
   int split_receivers = 64;    // receiver leaf once a light splits (Table 5.1, COLUMNS)
   double split_auto_ray_relations = 16.0;
