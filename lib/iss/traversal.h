@@ -145,9 +145,10 @@ enum class LightMode { Trial, Whole, Split };
 constexpr int kSplitTrialShafts = 8;     // trial shafts per way and light
 constexpr int kSplitTrialEarly = 2;      // per way, before a clear winner may end the trial
 // The whole-light way goes first; light splits are tried only when its first
-// kSplitTrialEarly shafts cost at least this many rays per relation, i.e. when shafts
-// ending on the whole light were neither blocked nor empty (rooms: 0.2-0.6, columns 1.0).
-constexpr double kWholeDecides = 0.9;
+// kSplitTrialEarly shafts cost at least this many rays per relation: no less than
+// casting every relation, i.e. shafts ending on the whole light were neither blocked nor
+// empty (measured: rooms 0.2-0.9, scan 0.15-0.5, columns 1.02).
+constexpr double kWholeDecides = 1.0;
 constexpr double kShaftRayCost = 20.0;   // ~3 us per shaft against ~0.15 us per ray (columns)
 struct SplitTrial {
   int shafts[2] = {0, 0};
