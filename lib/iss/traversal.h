@@ -87,8 +87,8 @@ constexpr uint32_t kFanWidth = 16;
 // receiver leaves of one point, so automatic rays (below), not a fixed leaf size, decide
 // where the receiver subdivision stops (rooms at 1024 receivers: 2.4% of the relations
 // ray-cast against 13.4% at 16, no slower on the other families); 256 samples, i.e. a
-// light of up to 256 samples is one light-tree leaf and never split: light splits
-// decided few relations on rooms and none that paid on columns.
+// light of up to 256 samples is one light-tree leaf unless the per-light trial
+// (LightMode below) finds that light splits pay, as on columns and never on rooms.
 struct Params {
   int leaf_receivers = 1;
   int leaf_samples = 256;
