@@ -94,7 +94,7 @@ void Traversal::run_light(size_t li) {
     std::vector<uint32_t> cand;
     bvh_->query_box(PointTree::bounds_of(boxes), cand);
     ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), tree_leaf, mesh_, tri_boxes_,
-                                         &cand);
+                                         &cand, p_.leaf_samples);
   }
   // COMPUTE-SHADOWS (Figure 4.32), with the triangle array restricted to the
   // triangles whose box may meet the root shaft (triangle_bvh.h) instead of all. The
