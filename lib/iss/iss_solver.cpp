@@ -25,6 +25,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
       {"auto_ray_relations", "relations a subdivided shaft must decide per shaft built below it before auto_rays lets its size subdivide (default 64)", {}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
+      {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
   };
 }
@@ -43,6 +44,9 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.postpone = opt.get_bool("postpone", true);
   p.auto_rays = opt.get_bool("auto_rays", true);
   p.ray_queue = opt.get_bool("ray_queue", true);
+  // The trial compares costs in automatic-ray terms: Embree leaf rays only.
+  p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;
+  p.light_split_always = opt.get("light_split", "auto") == "on";
   p.auto_ray_relations = double(std::max(0L, opt.get_int("auto_ray_relations", long(p.auto_ray_relations))));
 
   auto tp0 = Clock::now();

@@ -80,6 +80,12 @@ void Traversal::run_light(size_t li) {
   light_ = &scene_.lights[li];
   light_offset_ = scene_.light_offset(li);
   auto_buckets_ = {};
+  split_buckets_ = {};
+  trial_ = {};
+  in_trial_ = false;
+  light_mode_ = p_.light_split_always ? LightMode::Split : p_.light_split_auto ? LightMode::Trial : LightMode::Whole;
+  split_now_ = light_mode_ == LightMode::Split;
+  const int tree_leaf = p_.light_split_auto || p_.light_split_always ? std::min(p_.leaf_samples, p_.split_samples) : p_.leaf_samples;
   {
     ScopedTimer t(times_[kTree]);
     std::vector<AABB> boxes(light_->jitter_boxes);
@@ -87,8 +93,8 @@ void Traversal::run_light(size_t li) {
     for (const AABB& b : boxes) centers.push_back(b.center());
     std::vector<uint32_t> cand;
     bvh_->query_box(PointTree::bounds_of(boxes), cand);
-    ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p_.leaf_samples, mesh_, tri_boxes_,
-                                         &cand);
+    ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), tree_leaf, mesh_, tri_boxes_,
+                                         &cand, p_.leaf_samples);
   }
   // COMPUTE-SHADOWS (Figure 4.32), with the triangle array restricted to the
   // triangles whose box may meet the root shaft (triangle_bvh.h) instead of all. The
@@ -110,6 +116,7 @@ void Traversal::run_light(size_t li) {
   }
   pre_traverse(r0, l0, tris, false);
   flush_all_rays();
+  if (light_mode_ == LightMode::Split) n_split_lights_ += 1;
   light_tree_bytes_peak_ = std::max(light_tree_bytes_peak_, ltree_->memory_bytes());
   ltree_.reset();
 }
@@ -140,6 +147,8 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("leaf_rays_empty_with_node_triangles", n_leaf_node_tris_);
   st.set("auto_ray_shafts", n_auto_shafts_);
   st.set("auto_ray_relations", n_auto_relations_);
+  st.set("lights_split", n_split_lights_);
+  st.set("light_split_trial_shafts", n_trial_shafts_);
   double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes());
   st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
   st.set("receiver_tree_nodes", double(rtree_->node_count()));
@@ -244,8 +253,47 @@ void Traversal::shaft_traverse(Shaft& sh) {
     record_visible(sh.r, sh.l);
     return;
   }
+  // LightSplit trial (traversal.h): this shaft's subtree one way or the other, its cost
+  // counted; once both ways have kSplitTrialShafts the light keeps the cheaper one.
+  if (light_mode_ == LightMode::Trial && !in_trial_ && !L.is_leaf && L.size() <= uint32_t(p_.leaf_samples) &&
+      R.size() <= uint32_t(p_.split_receivers)) {
+    const int way = trial_.shafts[0] >= kSplitTrialEarly && trial_.shafts[1] < trial_.shafts[0] ? 1 : 0;
+    const double shafts0 = n_shafts_, rays0 = n_rays_;
+    in_trial_ = true;
+    split_now_ = way == 1;
+    shaft_subdivide(sh);
+    in_trial_ = false;
+    split_now_ = false;
+    n_trial_shafts_ += 1;
+    trial_.shafts[way] += 1;
+    trial_.relations[way] += double(R.size()) * double(L.size());
+    trial_.cost[way] += (n_shafts_ - shafts0) * kShaftRayCost + (n_rays_ - rays0);
+    // Cost per relation of each way, cross-multiplied; decided early when one way costs
+    // less than half the other after kSplitTrialEarly shafts each (the trial's own cost
+    // was 8% of rooms' traversal instructions with all 2 x 8 shafts on every light).
+    const double c_split = trial_.cost[1] * trial_.relations[0], c_whole = trial_.cost[0] * trial_.relations[1];
+    const bool early = trial_.shafts[1] >= kSplitTrialEarly && (2 * c_split < c_whole || 2 * c_whole < c_split);
+    // Whole-light shafts that already decide (cost under kWholeDecides rays per relation)
+    // keep the light whole without trying light splits: then the trial costs nothing.
+    const bool whole_decides =
+        trial_.shafts[0] == kSplitTrialEarly && trial_.shafts[1] == 0 && trial_.cost[0] < kWholeDecides * trial_.relations[0];
+    if (whole_decides) {
+      light_mode_ = LightMode::Whole;
+    } else if (early || trial_.shafts[1] >= kSplitTrialShafts) {
+      const bool split = c_split < c_whole;
+      light_mode_ = split ? LightMode::Split : LightMode::Whole;
+      split_now_ = split;
+    }
+    return;
+  }
+  shaft_subdivide(sh);
+}
+
+void Traversal::shaft_subdivide(Shaft& sh) {
+  TreeNode& R = rn(sh.r);
+  TreeNode& L = ln(sh.l);
   // Lines 5-8.
-  if (R.is_leaf && L.is_leaf) {
+  if (receiver_leaf(R) && light_leaf(L)) {
     double n = double(R.size()) * double(L.size());
     if (!sh.surfaces.empty()) n_leaf_surfaces_ += n;
     else if (!sh.ghosts.empty()) n_leaf_ghosts_ += n;
@@ -256,9 +304,10 @@ void Traversal::shaft_traverse(Shaft& sh) {
   // Automatic ray casting (Params): this shaft's relations by leaf rays when
   // subdividing shafts of its size has not paid in this light.
   const int bucket = std::min(63, std::ilogb(std::max(1.0, double(R.size()) * double(L.size()))));
-  AutoRayBucket& ab = auto_buckets_[size_t(bucket)];
+  AutoRayBucket& ab = (split_now_ ? split_buckets_ : auto_buckets_)[size_t(bucket)];
+  const double threshold = split_now_ ? p_.split_auto_ray_relations : p_.auto_ray_relations;
   if (p_.auto_rays && !p_.custom_rays && ab.subdivided >= kAutoRayMinShafts &&
-      ab.decided_below < p_.auto_ray_relations * ab.shafts_below && ++ab.skipped % kAutoRayExplore != 0) {
+      ab.decided_below < threshold * ab.shafts_below && ++ab.skipped % kAutoRayExplore != 0) {
     n_auto_shafts_ += 1;
     n_auto_relations_ += double(R.size()) * double(L.size());
     cast_rays(sh.r, sh.l, &sh, nullptr);
@@ -267,20 +316,20 @@ void Traversal::shaft_traverse(Shaft& sh) {
   const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_;
   SplitMode mode;
   SplitGeometries cand;
-  if (R.is_leaf) mode = SplitMode::Light;
-  else if (L.is_leaf) mode = SplitMode::Receiver;
+  if (receiver_leaf(R)) mode = SplitMode::Light;
+  else if (light_leaf(L)) mode = SplitMode::Receiver;
   else mode = choose_split(sh, cand);
   if (mode == SplitMode::Receiver) {
     { ScopedTimer t(times_[kTree]); rtree_->split(sh.r); }
     if (!rn(sh.r).split_done()) {  // could not be split after all (identical points)
-      if (ln(sh.l).is_leaf) { cast_rays(sh.r, sh.l, &sh, nullptr); return; }
+      if (light_leaf(ln(sh.l))) { cast_rays(sh.r, sh.l, &sh, nullptr); return; }
       mode = SplitMode::Light;
     }
   }
   if (mode == SplitMode::Light) {
     { ScopedTimer t(times_[kTree]); ltree_->split(sh.l); }
     if (!ln(sh.l).split_done()) {
-      if (rn(sh.r).is_leaf || !(rtree_->split(sh.r), rn(sh.r).split_done())) {
+      if (receiver_leaf(rn(sh.r)) || !(rtree_->split(sh.r), rn(sh.r).split_done())) {
         cast_rays(sh.r, sh.l, &sh, nullptr);
         return;
       }
@@ -349,9 +398,10 @@ void Traversal::pre_traverse(int r, int l, const std::vector<uint32_t>& tris, bo
   // Split the node with the larger box (a light leaf: the receiver node), else the
   // light node, else the receiver node.
   double rd = R.box.diagonal(), ld = L.box.diagonal();
-  if (!R.is_leaf && (rd > ld || L.is_leaf) && pre_traverse_children(SplitMode::Receiver, r, l, new_tris)) return;
-  if (!ln(l).is_leaf && pre_traverse_children(SplitMode::Light, r, l, new_tris)) return;
-  if (!rn(r).is_leaf && pre_traverse_children(SplitMode::Receiver, r, l, new_tris)) return;
+  if (!receiver_leaf(R) && (rd > ld || light_leaf(L)) && pre_traverse_children(SplitMode::Receiver, r, l, new_tris))
+    return;
+  if (!light_leaf(ln(l)) && pre_traverse_children(SplitMode::Light, r, l, new_tris)) return;
+  if (!receiver_leaf(rn(r)) && pre_traverse_children(SplitMode::Receiver, r, l, new_tris)) return;
   // Both nodes are leaves: cannot continue (line 26).
   cast_rays(r, l, nullptr, &new_tris);
 }

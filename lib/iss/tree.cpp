@@ -68,9 +68,9 @@ bool TreeNode::contains_triangle(uint32_t t) const { return std::binary_search(i
 
 PointTree::PointTree(std::vector<AABB> boxes, std::vector<Vec3f> centers, int max_points_in_leaf,
                      const mesh::PreparedMesh& mesh, const std::vector<AABB>& triangle_boxes,
-                     const std::vector<uint32_t>* root_candidates)
+                     const std::vector<uint32_t>* root_candidates, int packet_order_max)
     : boxes_(std::move(boxes)), centers_(std::move(centers)), max_leaf_(std::max(1, max_points_in_leaf)),
-      mesh_(mesh), tri_boxes_(triangle_boxes) {
+      packet_max_(std::max(max_leaf_, packet_order_max)), mesh_(mesh), tri_boxes_(triangle_boxes) {
   order_.resize(boxes_.size());
   std::iota(order_.begin(), order_.end(), 0u);
   nodes_.emplace_back();
@@ -97,10 +97,8 @@ void PointTree::finish_node(TreeNode& n, const std::vector<uint32_t>& parent_tri
   // COMPUTE-BOUNDING-BOX over the point boxes (jitter boxes for light samples).
   n.box = AABB{};
   for (uint32_t k = n.begin; k < n.end; ++k) n.box.extend(boxes_[order_[k]]);
-  if (n.size() <= uint32_t(max_leaf_)) {
-    n.is_leaf = true;
-    order_for_packets(order_.data() + n.begin, n.size(), centers_);
-  }
+  if (n.size() <= uint32_t(max_leaf_)) n.is_leaf = true;
+  if (n.size() <= uint32_t(packet_max_)) order_for_packets(order_.data() + n.begin, n.size(), centers_);
   // Distribute the parent's triangles (lines 16-22).
   for (uint32_t t : parent_triangles) {
     bool hit = tri_boxes_[t].overlaps(n.box) &&

@@ -41,3 +41,53 @@ TEST(IssOracle, AutomaticRaysEngageOnColumnsAndMatchTheOracle) {
   EXPECT_EQ(bad_on, 0u);
   EXPECT_EQ(bad_off, 0u);
 }
+
+TEST(IssOracle, LightSplitChoiceAnswersLikeWholeLightLeavesAndTheOracle) {
+  // light_split (traversal.h, LightMode): the trial on columns at this density picks
+  // light splits for the light; the answers of auto, on (every light split) and off
+  // (whole-light leaves, the previous default) must all match the exact oracle and each
+  // other bit for bit away from degenerate relations, and every relation must be decided
+  // exactly once.
+  const double tau = 1e-5;
+  Scene s = family("columns", 3, 2500, 4096, 64);
+  ASSERT_FALSE(s.receivers.empty());
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+  SolveResult a = run_iss(s, {}), on = run_iss(s, {{"light_split", "on"}}), off = run_iss(s, {{"light_split", "off"}});
+  SolveResult on_full = run_iss(s, {{"light_split", "on"}, {"auto_rays", "off"}});
+  EXPECT_EQ(a.stats.get("lights_split"), 1.0);
+  EXPECT_GT(a.stats.get("light_split_trial_shafts"), 0.0);
+  EXPECT_EQ(off.stats.get("lights_split"), 0.0);
+  EXPECT_EQ(off.stats.get("light_split_trial_shafts"), 0.0);
+  // With every light split and no automatic rays the 4-sample light leaves are reached.
+  EXPECT_GT(on_full.stats.get("relations_blocked_by_shaft") + on_full.stats.get("relations_visible_by_empty_shaft"), 0.0);
+  for (const SolveResult* r : {&a, &on, &off, &on_full})
+    EXPECT_EQ(r->stats.get("relations_ray_cast") + r->stats.get("relations_blocked_by_shaft") +
+                  r->stats.get("relations_visible_by_empty_shaft"),
+              double(s.relation_count()));
+  size_t bad = 0, differ = 0, checked = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      char cls = ex.classes[i][k];
+      if (cls == 'd' || ex.margins[i][k] < tau) continue;
+      ++checked;
+      for (const SolveResult* r : {&a, &on, &off, &on_full}) bad += r->receivers[i].visible(k) != (cls == 'v');
+      differ += a.receivers[i].visible(k) != off.receivers[i].visible(k);
+    }
+  EXPECT_GT(checked, s.relation_count() / 2);
+  EXPECT_EQ(bad, 0u);
+  EXPECT_EQ(differ, 0u);
+}
+
+TEST(IssOracle, LightSplitTrialKeepsWholeLightsOnRooms) {
+  // Rooms' small lights behind walls: the trial keeps whole-light leaves (light splits
+  // decide nothing there that rays would not), and the answers match light_split=off.
+  Scene s = family("rooms", 3, -1, 256, 16);
+  ASSERT_FALSE(s.receivers.empty());
+  SolveResult a = run_iss(s, {}), off = run_iss(s, {{"light_split", "off"}});
+  EXPECT_EQ(a.stats.get("lights_split"), 0.0);
+  size_t differ = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < s.relation_count() / s.receivers.size(); ++k)
+      differ += a.receivers[i].visible(k) != off.receivers[i].visible(k);
+  EXPECT_EQ(differ, 0u);
+}
