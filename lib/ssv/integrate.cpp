@@ -282,12 +282,7 @@ __attribute__((target("avx2"))) void count_run_avx2(const PieceTest& t, const fl
     __m256i* g = reinterpret_cast<__m256i*>(flag + k);
     _mm256_storeu_si256(g, _mm256_or_si256(_mm256_loadu_si256(g), _mm256_castps_si256(f)));
   }
-  for (; k < k1; ++k) {
-    const bool in = !v_range || ((v[k] >= t.lov) & (v[k] < t.hiv));
-    const float cr = t.du * (v[k] - t.lov) - t.dv * (u[k] - t.lou);
-    out[k] += (in & (cr > 0.0f)) ? t.c : 0;
-    flag[k] |= (in & (std::abs(cr) <= t.near)) ? -1 : 0;
-  }
+  count_run_sse2(t, u, v, out, flag, k, k1, v_range);  // the tail, by the same test
 }
 #endif
 
