@@ -54,14 +54,6 @@ std::vector<double> exact_fractions(const Scene& s, int threads) {
   return out;
 }
 
-std::vector<double> method_fractions(const Scene& s, const SolveResult& r) {
-  std::vector<double> out;
-  out.reserve(s.receivers.size() * s.lights.size());
-  for (const auto& rr : r.receivers)
-    for (size_t l = 0; l < s.lights.size(); ++l) out.push_back(l < rr.visible_fraction.size() ? rr.visible_fraction[l] : 0.0);
-  return out;
-}
-
 double max_abs_error(const std::vector<double>& a, const std::vector<double>& b) {
   double m = 0;
   for (size_t i = 0; i < a.size() && i < b.size(); ++i) m = std::max(m, std::fabs(a[i] - b[i]));
@@ -196,7 +188,15 @@ Status set_light_count(Scene& s, int count, int samples) {
 
 }  // namespace
 
-// Declared in run_method.h (the paper-scale experiments use it too).
+// Declared in run_method.h (the paper-scale and target experiments use them too).
+std::vector<double> method_fractions(const Scene& s, const SolveResult& r) {
+  std::vector<double> out;
+  out.reserve(s.receivers.size() * s.lights.size());
+  for (const auto& rr : r.receivers)
+    for (size_t l = 0; l < s.lights.size(); ++l) out.push_back(l < rr.visible_fraction.size() ? rr.visible_fraction[l] : 0.0);
+  return out;
+}
+
 double penumbra_rms(const std::vector<double>& got, const std::vector<double>& exact, size_t* count) {
   double sum = 0.0;
   size_t n = 0;

@@ -57,24 +57,6 @@ struct Timing {
   SolveResult result;
 };
 
-// Relations a method answered by plain rays (segment tests) rather than by its own
-// structure, in percent, and the percent its structure decided.
-void shares(const std::string& method, const Stats& st, double relations, double& ray_pct, double& decided_pct) {
-  ray_pct = decided_pct = kNaN;
-  if (method == "iss") {
-    ray_pct = stat_or_nan(st, {"percent_ray_cast"});
-    decided_pct = stat_or_nan(st, {"percent_decided_by_shafts"});
-    return;
-  }
-  const double rays = method == "ssv" ? stat_or_nan(st, {"fallback_relations"})
-                      : method == "plucker-bsp" ? stat_or_nan(st, {"segment_relations"})
-                                                : relations;
-  if (relations > 0 && !std::isnan(rays)) {
-    ray_pct = 100.0 * rays / relations;
-    decided_pct = 100.0 - ray_pct;
-  }
-}
-
 double method_peak_mb(const Stats& st) {
   double kb = stat_or_nan(st, {"peak_memory_kb"});
   if (!std::isnan(kb)) return kb / 1024.0;
@@ -145,7 +127,7 @@ class PaperRunner {
     if (!t) return;
     const double rel = double(s.relation_count());
     double ray = kNaN, decided = kNaN;
-    shares(method, t->stats, rel, ray, decided);
+    ray_cast_shares(method, t->stats, rel, ray, decided);
     const double e = embree ? embree->min : kNaN;
     rows.add_row({ps.group, ps.config, method, s.mesh.size(), s.lights.size(), s.receivers.size(),
                   s.samples_per_receiver(), rel / 1e6, ray, decided, t->min, t->max,
@@ -352,8 +334,7 @@ Status run_plucker_paper(BenchContext& ctx) {
       ctx.note(r.name + std::string(": no exact plucker-bsp run, so no equal-quality embree row"));
       continue;
     }
-    std::vector<double> ref;
-    for (const auto& rr : exact->result.receivers) ref.insert(ref.end(), rr.visible_fraction.begin(), rr.visible_fraction.end());
+    const std::vector<double> ref = method_fractions(*s, exact->result);
     std::optional<Timing> emb;
     long eq_n = 0;
     double eq_rms = kNaN;
@@ -367,9 +348,7 @@ Status run_plucker_paper(BenchContext& ctx) {
       if (!sn) break;
       auto t = pr.measure("embree", pn, *sn);
       if (!t) break;
-      std::vector<double> got;
-      for (const auto& rr : t->result.receivers) got.insert(got.end(), rr.visible_fraction.begin(), rr.visible_fraction.end());
-      const double rms = penumbra_rms(got, ref, nullptr);
+      const double rms = penumbra_rms(method_fractions(*sn, t->result), ref, nullptr);
       pr.add(pn, *sn, "embree", t, t, n, rms);
       if (rms <= quality || std::isnan(rms)) {
         emb = std::move(t);
@@ -399,6 +378,24 @@ Status run_scan(BenchContext& ctx) {
 }
 
 }  // namespace
+
+// Declared in run_method.h.
+void ray_cast_shares(const std::string& method, const Stats& st, double relations, double& ray_pct,
+                     double& decided_pct) {
+  ray_pct = decided_pct = kNaN;
+  if (method == "iss") {
+    ray_pct = stat_or_nan(st, {"percent_ray_cast"});
+    decided_pct = stat_or_nan(st, {"percent_decided_by_shafts"});
+    return;
+  }
+  const double rays = method == "ssv" ? stat_or_nan(st, {"fallback_relations"})
+                      : method == "plucker-bsp" ? stat_or_nan(st, {"segment_relations"})
+                                                : relations;
+  if (relations > 0 && !std::isnan(rays)) {
+    ray_pct = 100.0 * rays / relations;
+    decided_pct = 100.0 - ray_pct;
+  }
+}
 
 void add_paper_experiments(std::vector<Experiment>& out) {
   out.push_back({"iss-paper", "paper 000 Tables 5.2/5.3 at the thesis's sizes: ISS against embree", run_iss_paper});

@@ -60,20 +60,6 @@ std::vector<Target> targets(bool quick) {
   return t;
 }
 
-double ray_cast_pct(const std::string& method, const Stats& st, double relations) {
-  if (method == "iss") return stat_or_nan(st, {"percent_ray_cast"});
-  const double rays = method == "ssv" ? stat_or_nan(st, {"fallback_relations"})
-                      : method == "plucker-bsp" ? stat_or_nan(st, {"segment_relations"})
-                                                : relations;
-  return relations > 0 ? 100.0 * rays / relations : kNaN;
-}
-
-std::vector<double> fractions(const SolveResult& r) {
-  std::vector<double> f;
-  for (const auto& rr : r.receivers) f.insert(f.end(), rr.visible_fraction.begin(), rr.visible_fraction.end());
-  return f;
-}
-
 class TargetRunner {
  public:
   explicit TargetRunner(BenchContext& ctx) : ctx_(ctx) {}
@@ -135,7 +121,7 @@ class TargetRunner {
     long emb_n = long(s.lights.front().samples);
     double emb_rms = kNaN;
     if (t.equal_quality) {
-      const std::vector<double> exact = fractions(first.result);
+      const std::vector<double> exact = method_fractions(s, first.result);
       for (long n = 16; n <= 4096 && !eq_scene; n *= 2) {
         FamilyParams pn = p;
         pn.samples = n;
@@ -143,7 +129,7 @@ class TargetRunner {
         if (!sn) return fail_row(t, &s, sn.error().message);
         ctx_.progress.step(t.name + ": embree N=" + std::to_string(n));
         Measured m = measure_solve(*emb, *sn, so, one);
-        const double rms = penumbra_rms(fractions(m.result), exact, nullptr);
+        const double rms = penumbra_rms(method_fractions(*sn, m.result), exact, nullptr);
         if (rms <= kEqualQuality || std::isnan(rms)) {
           eq_scene = std::move(*sn);
           emb_n = n;
@@ -167,7 +153,8 @@ class TargetRunner {
     const double sec = std::min(first.seconds_1t, *std::min_element(pt.a_seconds.begin(), pt.a_seconds.end()));
     const double esec = *std::min_element(pt.b_seconds.begin(), pt.b_seconds.end());
     const double rel = double(s.relation_count());
-    const double ray = t.equal_quality ? kNaN : ray_cast_pct(t.method, first.stats, rel);
+    double ray = kNaN, decided = kNaN;
+    if (!t.equal_quality) ray_cast_shares(t.method, first.stats, rel, ray, decided);
     const double max_peak = t.scan ? double(kScanMemoryMb) : kNaN;
     // The run's own growth of the process can miss memory a method reuses from earlier
     // runs' freed heap; the method's count of its structures (the memory budget's) cannot.

@@ -30,6 +30,17 @@ void add_stat_rows(Table& t, const std::vector<Json>& prefix, const Stats& stats
 // "NaN" safe ratio a / b (NaN when either is missing or b is 0).
 double ratio(double a, double b);
 
+// A result's visible fractions, receiver-major, one per (receiver, light) of `s` (0 where
+// the result has none).
+std::vector<double> method_fractions(const Scene& s, const SolveResult& r);
+
+// Relations `method` answered by plain rays (segment tests) rather than by its own
+// structure, in percent (`ray_pct`), and the percent its structure decided: iss leaf and
+// automatic rays, ssv fallback relations, plucker-bsp segment relations; every relation
+// for the ray casters (experiments_paper.cpp).
+void ray_cast_shares(const std::string& method, const Stats& st, double relations, double& ray_pct,
+                     double& decided_pct);
+
 // Root mean square error of the visible fraction over the penumbra pairs: (receiver,
 // light) pairs whose exact fraction is strictly between 0.001 and 0.999. `count`
 // receives their number. NaN when there is none (experiments_oracle.cpp).
