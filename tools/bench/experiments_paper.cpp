@@ -57,12 +57,6 @@ struct Timing {
   SolveResult result;
 };
 
-double method_peak_mb(const Stats& st) {
-  double kb = stat_or_nan(st, {"peak_memory_kb"});
-  if (!std::isnan(kb)) return kb / 1024.0;
-  return stat_or_nan(st, {"peak_memory_mb", "memory_mb"});
-}
-
 class PaperRunner {
  public:
   explicit PaperRunner(BenchContext& ctx) : ctx_(ctx), start_(now_s()) {
@@ -380,6 +374,12 @@ Status run_scan(BenchContext& ctx) {
 }  // namespace
 
 // Declared in run_method.h.
+double method_peak_mb(const Stats& st) {
+  double kb = stat_or_nan(st, {"peak_memory_kb"});
+  if (!std::isnan(kb)) return kb / 1024.0;
+  return stat_or_nan(st, {"peak_memory_mb", "memory_mb"});
+}
+
 void ray_cast_shares(const std::string& method, const Stats& st, double relations, double& ray_pct,
                      double& decided_pct) {
   ray_pct = decided_pct = kNaN;

@@ -158,8 +158,7 @@ class TargetRunner {
     const double max_peak = t.scan ? double(kScanMemoryMb) : kNaN;
     // The run's own growth of the process can miss memory a method reuses from earlier
     // runs' freed heap; the method's count of its structures (the memory budget's) cannot.
-    double own = stat_or_nan(first.stats, {"peak_memory_mb", "memory_mb"});
-    if (std::isnan(own)) own = stat_or_nan(first.stats, {"peak_memory_kb"}) / 1024.0;
+    const double own = method_peak_mb(first.stats);
     const double peak = std::isnan(own) ? first.peak_mb : std::max(first.peak_mb, own);
     std::string why;
     if (!(rr.of_minima >= t.min_ratio)) why += "ratio " + fmt(rr.of_minima) + " < " + fmt(t.min_ratio) + "; ";

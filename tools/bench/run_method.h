@@ -41,6 +41,10 @@ std::vector<double> method_fractions(const Scene& s, const SolveResult& r);
 void ray_cast_shares(const std::string& method, const Stats& st, double relations, double& ray_pct,
                      double& decided_pct);
 
+// The method's own count of its structures' peak in MB (stat peak_memory_kb, else
+// peak_memory_mb or memory_mb), NaN when it reports none.
+double method_peak_mb(const Stats& st);
+
 // Root mean square error of the visible fraction over the penumbra pairs: (receiver,
 // light) pairs whose exact fraction is strictly between 0.001 and 0.999. `count`
 // receives their number. NaN when there is none (experiments_oracle.cpp).
