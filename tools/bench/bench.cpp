@@ -128,6 +128,20 @@ double stat_or_nan(const Stats& s, const std::vector<std::string>& keys) {
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+std::optional<SolveOptions> checked_options(BenchContext& ctx, const Solver& solver, const std::string& method,
+                                            const std::map<std::string, std::string>& opts, const std::string& label) {
+  SolveOptions so;
+  so.seed = ctx.opt.seed;
+  so.opts = opts;
+  so.memory_budget_mb = ctx.opt.memory_budget_mb;
+  Status st = solver.check_options(so);
+  if (!st) {
+    ctx.note(method + " at " + label + ": " + st.error().message + ": skipped");
+    return std::nullopt;
+  }
+  return so;
+}
+
 std::optional<Measured> run_method(BenchContext& ctx, const std::string& method, const Scene& scene,
                                    const std::string& label, SweepGuard* guard, double size,
                                    const std::map<std::string, std::string>& opts, const MeasureConfig* config) {
@@ -141,19 +155,12 @@ std::optional<Measured> run_method(BenchContext& ctx, const std::string& method,
     ctx.note(method + " is not registered in this build: skipped");
     return std::nullopt;
   }
-  SolveOptions so;
-  so.seed = ctx.opt.seed;
-  so.opts = opts;
-  so.memory_budget_mb = ctx.opt.memory_budget_mb;
-  Status st = solver->check_options(so);
-  if (!st) {
-    ctx.note(method + " at " + label + ": " + st.error().message + ": skipped");
-    return std::nullopt;
-  }
+  auto so = checked_options(ctx, *solver, method, opts, label);
+  if (!so) return std::nullopt;
   ctx.progress.step(method + " " + label);
   Measured m;
   try {
-    m = measure_solve(*solver, scene, so, config ? *config : ctx.measure_config());
+    m = measure_solve(*solver, scene, *so, config ? *config : ctx.measure_config());
   } catch (const MemoryBudgetExceeded& e) {
     ctx.note(method + " at " + label + ": " + e.what() + ": skipped");
     return std::nullopt;

@@ -167,15 +167,9 @@ class PaperRunner {
                             int repeat, const std::string& label) {
     auto solver = make_solver(method);
     if (!solver) return std::nullopt;
-    SolveOptions so;
-    so.seed = ctx_.opt.seed;
-    so.opts = opts;
-    so.memory_budget_mb = ctx_.opt.memory_budget_mb;
-    Status st = solver->check_options(so);
-    if (!st) {
-      ctx_.note(method + " at " + label + ": " + st.error().message + ": skipped");
-      return std::nullopt;
-    }
+    auto checked = checked_options(ctx_, *solver, method, opts, label);
+    if (!checked) return std::nullopt;
+    const SolveOptions& so = *checked;
     Timing t;
     double spent = 0.0;
     try {

@@ -92,11 +92,12 @@ class TargetRunner {
     auto scene = ctx_.scene(t.family, p);
     if (!scene) return fail_row(t, nullptr, scene.error().message);
     const Scene& s = *scene;
-    SolveOptions so;
-    so.seed = ctx_.opt.seed;
-    so.memory_budget_mb = t.scan ? std::min<uint64_t>(ctx_.opt.memory_budget_mb ? ctx_.opt.memory_budget_mb : kScanMemoryMb,
-                                                      kScanMemoryMb)
-                                 : ctx_.opt.memory_budget_mb;
+    auto method = ctx_.solver(t.method), emb = ctx_.solver("embree");
+    auto checked = checked_options(ctx_, *method, t.method, {}, t.name);
+    if (!checked) return fail_row(t, &s, "the method refused its default options");
+    SolveOptions so = *checked;
+    if (t.scan)  // the target's ceiling, or a lower --memory-budget
+      so.memory_budget_mb = std::min<uint64_t>(so.memory_budget_mb ? so.memory_budget_mb : kScanMemoryMb, kScanMemoryMb);
     // A scan row at 300k is predicted from its 75k row (time linear in triangles, the
     // worst the target allows for), and not run past --budget.
     if (t.scan) {
@@ -106,7 +107,6 @@ class TargetRunner {
                                    " s per run from the smaller scan, over the budget of " + fmt(ctx_.opt.budget) +
                                    " s (--budget raises it)");
     }
-    auto method = ctx_.solver(t.method), emb = ctx_.solver("embree");
     const MeasureConfig one = single_run(ctx_.measure_config());
     ctx_.progress.step(t.name + ": " + t.method);
     Measured first;

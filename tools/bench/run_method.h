@@ -20,6 +20,11 @@ std::optional<Measured> run_method(BenchContext& ctx, const std::string& method,
                                    const std::map<std::string, std::string>& opts = {},
                                    const MeasureConfig* config = nullptr);
 
+// The options of a bench run of `solver`: --seed, `opts`, --memory-budget; nullopt, noted
+// "<method> at <label>: <why>: skipped", when the method refuses them.
+std::optional<SolveOptions> checked_options(BenchContext& ctx, const Solver& solver, const std::string& method,
+                                            const std::map<std::string, std::string>& opts, const std::string& label);
+
 // Share of blocked relations in a bit result (0..1).
 double blocked_share(const Scene& scene, const SolveResult& r);
 
