@@ -8,8 +8,7 @@
 
 namespace visgate::plucker {
 
-ClosedSurfaces::ClosedSurfaces(const TriangleSoup& mesh) {
-  const mesh::PreparedMesh pm = mesh::prepare_mesh(mesh);
+ClosedSurfaces::ClosedSurfaces(const TriangleSoup& mesh, const mesh::PreparedMesh& pm) {
   const size_t n = pm.triangles.size();
   UnionFind uf(n);
   for (uint32_t t = 0; t < n; ++t)

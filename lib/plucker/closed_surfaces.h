@@ -22,13 +22,16 @@
 #include <vector>
 
 #include "lib/geom/aabb.h"
+#include "lib/mesh/prepare.h"
 #include "lib/scene/scene.h"
 
 namespace visgate::plucker {
 
 class ClosedSurfaces {
  public:
-  explicit ClosedSurfaces(const TriangleSoup& mesh);
+  // `pm`: prepare_mesh(mesh), shared with the triangle tree's patches.
+  ClosedSurfaces(const TriangleSoup& mesh, const mesh::PreparedMesh& pm);
+  explicit ClosedSurfaces(const TriangleSoup& mesh) : ClosedSurfaces(mesh, mesh::prepare_mesh(mesh)) {}
 
   // The closed surface of input triangle t, or -1 (open, non-manifold, inconsistently
   // oriented, or degenerate after welding).

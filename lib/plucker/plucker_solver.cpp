@@ -197,7 +197,8 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   memory.budget = &budget;
   // The triangle hierarchy for occluder selection, built once (counted as selection).
   Clock::time_point tt = Clock::now();
-  TriangleTree tree(scene.mesh);
+  const mesh::PreparedMesh prepared = mesh::prepare_mesh(scene.mesh);  // the tree's patches and the closed surfaces
+  TriangleTree tree(scene.mesh, prepared);
   double tree_s = seconds_since(tt);
   memory.change(int64_t(tree.memory_bytes()));
   SolveContext ctx{&scene, &result, irradiance, coherence, choice, &tree, opt.seed, &memory};
@@ -206,7 +207,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   MemoryCharge closed_charge;  // counted against the budget like the trees (declared after it)
   if (opt.get_bool("closed", true)) {
     tt = Clock::now();
-    closed.emplace(scene.mesh);
+    closed.emplace(scene.mesh, prepared);
     tree_s += seconds_since(tt);
     memory.change(int64_t(closed->memory_bytes()));
     closed_charge.bind(&budget, "closed surfaces");

@@ -42,14 +42,15 @@ bool segment_meets_box(const Vec3f& p0, const Vec3f& p1, const Vec3f& lo, const 
 
 }  // namespace
 
-TriangleTree::TriangleTree(const TriangleSoup& mesh) : bvh_(triangle_boxes(mesh), kRule) { find_patches(mesh); }
+TriangleTree::TriangleTree(const TriangleSoup& mesh, const mesh::PreparedMesh& pm) : bvh_(triangle_boxes(mesh), kRule) {
+  find_patches(mesh, pm);
+}
 
-void TriangleTree::find_patches(const TriangleSoup& mesh) {
+void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMesh& pm) {
   // Welded vertices and neighbours across edges of exactly two triangles that traverse
   // them in opposite directions (lib/mesh/prepare.h, paper 000 section 4.2): so every
   // triangle of a patch has the winding of the one it was grown from, and the polygon
   // has the orientation of each of them. Degenerate triangles are not in `pm`.
-  const mesh::PreparedMesh pm = mesh::prepare_mesh(mesh);
   const size_t n = pm.triangles.size();
   const auto& pos = pm.vertex_pos;
   // The edge (k, k + 1) of prepared triangle t with ends {a, b}.

@@ -21,6 +21,7 @@
 
 #include "lib/accel/bvh.h"
 #include "lib/geom/aabb.h"
+#include "lib/mesh/prepare.h"
 #include "lib/plucker/shaft.h"
 #include "lib/scene/scene.h"
 
@@ -30,7 +31,9 @@ class TriangleTree {
  public:
   static constexpr accel::BuildRule kRule{accel::Split::MedianAxis, 4, false};
 
-  explicit TriangleTree(const TriangleSoup& mesh);
+  // `pm`: prepare_mesh(mesh) (its welded neighbours grow the coplanar patches).
+  TriangleTree(const TriangleSoup& mesh, const mesh::PreparedMesh& pm);
+  explicit TriangleTree(const TriangleSoup& mesh) : TriangleTree(mesh, mesh::prepare_mesh(mesh)) {}
 
   // Appends to `out` (cleared first), in increasing order, the index of every triangle
   // whose leaf box is not culled by the shaft; the shaft is in local coordinates
@@ -79,7 +82,7 @@ class TriangleTree {
   }
 
  private:
-  void find_patches(const TriangleSoup& mesh);
+  void find_patches(const TriangleSoup& mesh, const mesh::PreparedMesh& pm);
   accel::Bvh<float> bvh_;
   struct Patch {
     uint32_t tri_begin = 0, tri_count = 0, poly_begin = 0, poly_count = 0;
