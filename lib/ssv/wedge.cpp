@@ -3,6 +3,10 @@
 
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "lib/base/check.h"
 
 namespace visgate::ssv {
@@ -96,7 +100,29 @@ bool make_plane(const Vec3d& n, const Vec3d& p, double scale2, PointNormalPlane&
   return true;
 }
 
-void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
+// The range [lo, hi] of the plane's value n.x - d over the box: the corners that
+// minimise and maximise it, evaluated as dot(n, corner) - d. The SSE2 form computes the
+// same products and sums in the same order, so the same floats, without the three
+// data-dependent branches on the normal's signs (the scatter's hot loop).
+inline void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
+#if defined(__SSE2__)
+  static_assert(sizeof(Plane) == 4 * sizeof(float) && sizeof(AABB) == 6 * sizeof(float));
+  const __m128 n = _mm_loadu_ps(&p.n.x);                   // nx ny nz d
+  const __m128 blo = _mm_loadu_ps(&box.lo.x);               // lo.x lo.y lo.z hi.x
+  const __m128 t = _mm_loadu_ps(&box.lo.z);                 // lo.z hi.x hi.y hi.z (within the box)
+  const __m128 bhi = _mm_shuffle_ps(t, t, _MM_SHUFFLE(3, 3, 2, 1));  // hi.x hi.y hi.z hi.z
+  const __m128 m = _mm_cmpge_ps(n, _mm_setzero_ps());       // n[k] >= 0: lo is the minimising corner
+  const __m128 pmin = _mm_or_ps(_mm_and_ps(m, blo), _mm_andnot_ps(m, bhi));
+  const __m128 pmax = _mm_or_ps(_mm_and_ps(m, bhi), _mm_andnot_ps(m, blo));
+  const __m128 pl = _mm_mul_ps(n, pmin), ph = _mm_mul_ps(n, pmax);
+  const __m128 a = _mm_unpacklo_ps(pl, ph);                 // pl0 ph0 pl1 ph1
+  const __m128 b = _mm_unpackhi_ps(pl, ph);                 // pl2 ph2 . .
+  __m128 s = _mm_add_ps(a, _mm_movehl_ps(a, a));            // (x + y) for lo and hi
+  s = _mm_add_ps(s, b);                                     // + z
+  s = _mm_sub_ps(s, _mm_shuffle_ps(n, n, _MM_SHUFFLE(3, 3, 3, 3)));  // - d
+  lo = _mm_cvtss_f32(s);
+  hi = _mm_cvtss_f32(_mm_shuffle_ps(s, s, _MM_SHUFFLE(1, 1, 1, 1)));
+#else
   Vec3f pmin, pmax;
   for (int k = 0; k < 3; ++k) {
     if (p.n[k] >= 0.0f) {
@@ -109,6 +135,7 @@ void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
   }
   lo = dot(p.n, pmin) - p.d;
   hi = dot(p.n, pmax) - p.d;
+#endif
 }
 
 // Both triangle planes have the box at least eps on their front side, or both on their
