@@ -193,7 +193,12 @@ void DepthCounter::zero_counters() {
   const size_t n = uv_.size();
   dv_.assign(n + kRunPad, 0);
   fv_.assign(n + kRunPad, 0);
-  diffv_.assign(n + 1, 0);
+  if (diffv_.size() != n + 1) {
+    diffv_.assign(n + 1, 0);
+  } else {
+    for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;  // zero elsewhere
+  }
+  step_list_.clear();
   strip_order_ = false;
   steps_ = false;
 }
@@ -353,15 +358,30 @@ __attribute__((target("avx2"))) int jitter_picks_avx2(uint64_t prefix, int sampl
 // values does not matter for either), then one scatter into sample order. Integer
 // operations only: the same values, the same two lowest classes and the same unclear
 // count as the SSE2 and scalar form.
+// Rule 2's steps (at most kMaxLaneSteps) are added here per block, instead of by the
+// prefix sum of DepthCounter::fold_steps: +w at every position >= the step's.
+constexpr size_t kMaxLaneSteps = 4;
 __attribute__((target("avx2"))) DepthCounter::Classes classes_avx2(int32_t* x, const int32_t* f, size_t n,
                                                                    int32_t unclear_value, const int* vorder,
-                                                                   int32_t* out) {
+                                                                   int32_t* out,
+                                                                   const std::pair<int32_t, int32_t>* steps,
+                                                                   size_t n_steps) {
   const __m256i vu = _mm256_set1_epi32(unclear_value);
   __m256i m1 = vu, m2 = vu, cnt = _mm256_setzero_si256();
+  __m256i sk[kMaxLaneSteps], sw[kMaxLaneSteps];
+  for (size_t s = 0; s < n_steps; ++s) {
+    sk[s] = _mm256_set1_epi32(steps[s].first - 1);  // position > first - 1
+    sw[s] = _mm256_set1_epi32(steps[s].second);
+  }
+  __m256i pos = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i eight = _mm256_set1_epi32(8);
   size_t k = 0;
   for (; k + 8 <= n; k += 8) {
     const __m256i fk = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(f + k));
-    const __m256i dk = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + k));
+    __m256i dk = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + k));
+    for (size_t s = 0; s < n_steps; ++s)
+      dk = _mm256_add_epi32(dk, _mm256_and_si256(_mm256_cmpgt_epi32(pos, sk[s]), sw[s]));
+    pos = _mm256_add_epi32(pos, eight);
     const __m256i xk = _mm256_blendv_epi8(dk, vu, fk);  // flags are 0 or -1
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(x + k), xk);
     // m2: m1 when xk < m1, min(m2, xk) when xk > m1, else unchanged.
@@ -379,6 +399,7 @@ __attribute__((target("avx2"))) DepthCounter::Classes classes_avx2(int32_t* x, c
   int64_t unclear = 0;
   for (int l = 0; l < 8; ++l) unclear += counts[l];
   for (; k < n; ++k) {
+    for (size_t s = 0; s < n_steps; ++s) x[k] += int(k) >= steps[s].first ? steps[s].second : 0;
     x[k] = f[k] != 0 ? unclear_value : x[k];
     unclear -= f[k];
     // The tail as one more lane.
@@ -494,6 +515,7 @@ void DepthCounter::add_step(float vc, int w) {
   // the tallest box of vc may reach it: tested one by one.
   const int kb = S.vlo_lower_bound(vc);
   diffv_[size_t(kb)] += w;
+  step_list_.emplace_back(kb, w);
   steps_ = true;
   const int kr = S.vlo_lower_bound(double(vc) - S.max_height);
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
@@ -526,19 +548,30 @@ void DepthCounter::fold_steps() {
     run += diffv_[k];
     dv_[k] += run;
   }
+  for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;
+  step_list_.clear();
   steps_ = false;
 }
 
 DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, int32_t unclear_value) {
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
-  fold_steps();
   depth.resize(n);
-  Classes c{unclear_value, unclear_value, 0};
   const int* vorder = S.vorder.data();
 #if defined(VG_SSV_AVX2)
-  if (!strip_order_ && use_avx2()) return classes_avx2(dv_.data(), fv_.data(), n, unclear_value, vorder, depth.data());
+  if (!strip_order_ && use_avx2()) {
+    if (step_list_.size() > kMaxLaneSteps) fold_steps();
+    const size_t n_steps = steps_ ? step_list_.size() : 0;
+    const Classes lanes =
+        classes_avx2(dv_.data(), fv_.data(), n, unclear_value, vorder, depth.data(), step_list_.data(), n_steps);
+    for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;
+    step_list_.clear();
+    steps_ = false;
+    return lanes;
+  }
 #endif
+  fold_steps();
+  Classes c{unclear_value, unclear_value, 0};
   if (!strip_order_) {
     // Every sample's count and flag sit at its v_lo position: the values, their two
     // lowest and the unclear count from consecutive memory (four per SSE2 step, no

@@ -177,6 +177,9 @@ class DepthCounter {
   bool strip_order_ = false;              // su_, sv_, ds_, fs_ in use since the last reset
   bool steps_ = false;                    // some add_step since the last reset (diffv_ not all 0)
   std::vector<int32_t> diffv_;            // rule 2 steps: a difference array over v_lo positions
+  // The steps' (position, weight) since the last reset: diffv_ is zero elsewhere, so
+  // clearing these entries clears it, and the AVX2 class scan adds them per block.
+  std::vector<std::pair<int32_t, int32_t>> step_list_;
 };
 
 // The point where the edge between vertices i and j (frame coordinates `fp`) crosses
