@@ -108,18 +108,6 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
 
 }  // namespace
 
-int SampleStrips::vlo_lower_bound(double x) const {
-  if (n == 0 || !(x > double(vlo_sorted.front()))) return 0;
-  if (x > double(vlo_sorted.back())) return n;
-  // The bucket of x, from a rounded product: count over it and its two neighbours, which
-  // holds the answer even if the rounding picked the neighbour of the right bucket.
-  const int buckets = int(bucket_first.size()) - 1;
-  const int b = std::clamp(int((x - double(vlo_sorted.front())) * bucket_scale), 0, buckets - 1);
-  const int k0 = bucket_first[size_t(std::max(b - 1, 0))], k1 = bucket_first[size_t(std::min(b + 2, buckets))];
-  int k = k0;
-  for (int i = k0; i < k1; ++i) k += double(vlo_sorted[size_t(i)]) < x;
-  return k;
-}
 
 namespace {
 
