@@ -21,6 +21,10 @@ namespace visgate::ssv {
 
 namespace {
 
+// Slack positions at the end of the one-by-one arrays (picked points, counts, flags):
+// the AVX2 test reads and writes its last step of eight whole, masked (count_run_avx2).
+constexpr size_t kRunPad = 8;
+
 // Index of the first element of a[0, n) (ascending) that is not less than x, like
 // std::lower_bound, written so that the compiler emits conditional moves: the searches
 // of add_piece and add_step on sample coordinates are data-dependent and would
@@ -104,18 +108,6 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
 
 }  // namespace
 
-int SampleStrips::vlo_lower_bound(double x) const {
-  if (n == 0 || !(x > double(vlo_sorted.front()))) return 0;
-  if (x > double(vlo_sorted.back())) return n;
-  // The bucket of x, from a rounded product: count over it and its two neighbours, which
-  // holds the answer even if the rounding picked the neighbour of the right bucket.
-  const int buckets = int(bucket_first.size()) - 1;
-  const int b = std::clamp(int((x - double(vlo_sorted.front())) * bucket_scale), 0, buckets - 1);
-  const int k0 = bucket_first[size_t(std::max(b - 1, 0))], k1 = bucket_first[size_t(std::min(b + 2, buckets))];
-  int k = k0;
-  for (int i = k0; i < k1; ++i) k += double(vlo_sorted[size_t(i)]) < x;
-  return k;
-}
 
 namespace {
 
@@ -157,8 +149,8 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
   // clear_counters would gather from uv_).
   const size_t n = pick.size();
   uv_.resize(n);
-  vu_.resize(n);
-  vv_.resize(n);
+  vu_.resize(n + kRunPad);
+  vv_.resize(n + kRunPad);
   for (size_t k = 0; k < n; ++k) {
     const size_t j = size_t(strips.vorder[k]);
     const Vec2f a = jitter_uv[pick[j]];
@@ -175,8 +167,8 @@ void DepthCounter::clear_counters() {
   // loops below then read consecutive memory and the compiler vectorises them.
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
-  vu_.resize(n);
-  vv_.resize(n);
+  vu_.resize(n + kRunPad);
+  vv_.resize(n + kRunPad);
   for (size_t k = 0; k < n; ++k) {
     const Vec2f& a = uv_[size_t(S.vorder[k])];
     vu_[k] = a.u;
@@ -187,9 +179,14 @@ void DepthCounter::clear_counters() {
 
 void DepthCounter::zero_counters() {
   const size_t n = uv_.size();
-  dv_.assign(n, 0);
-  fv_.assign(n, 0);
-  diffv_.assign(n + 1, 0);
+  dv_.assign(n + kRunPad, 0);
+  fv_.assign(n + kRunPad, 0);
+  if (diffv_.size() != n + 1) {
+    diffv_.assign(n + 1, 0);
+  } else {
+    for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;  // zero elsewhere
+  }
+  step_list_.clear();
   strip_order_ = false;
   steps_ = false;
 }
@@ -200,15 +197,15 @@ void DepthCounter::use_strip_order() {
   if (strip_order_) return;
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
-  su_.resize(n);
-  sv_.resize(n);
+  su_.resize(n + kRunPad);
+  sv_.resize(n + kRunPad);
   for (size_t k = 0; k < n; ++k) {
     const Vec2f& b = uv_[size_t(S.sorder[k])];
     su_[k] = b.u;
     sv_[k] = b.v;
   }
-  ds_.assign(n, 0);
-  fs_.assign(n, 0);
+  ds_.assign(n + kRunPad, 0);
+  fs_.assign(n + kRunPad, 0);
   strip_order_ = true;
 }
 
@@ -282,7 +279,23 @@ __attribute__((target("avx2"))) void count_run_avx2(const PieceTest& t, const fl
     __m256i* g = reinterpret_cast<__m256i*>(flag + k);
     _mm256_storeu_si256(g, _mm256_or_si256(_mm256_loadu_si256(g), _mm256_castps_si256(f)));
   }
-  count_run_sse2(t, u, v, out, flag, k, k1, v_range);  // the tail, by the same test
+  if (k < k1) {
+    // The tail: one more step with the lanes at or beyond k1 masked out (they add 0 and
+    // keep their values; the arrays have kRunPad positions of slack). The same test.
+    const __m256i live = _mm256_cmpgt_epi32(_mm256_set1_epi32(k1 - k), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m256 uu = _mm256_loadu_ps(u + k), vv = _mm256_loadu_ps(v + k);
+    const __m256 cr =
+        _mm256_sub_ps(_mm256_mul_ps(vdu, _mm256_sub_ps(vv, lov)), _mm256_mul_ps(vdv, _mm256_sub_ps(uu, lou)));
+    const __m256 in = _mm256_and_ps(
+        _mm256_castsi256_ps(live),
+        v_range ? _mm256_and_ps(_mm256_cmp_ps(vv, lov, _CMP_GE_OQ), _mm256_cmp_ps(vv, hiv, _CMP_LT_OQ)) : all);
+    const __m256 m = _mm256_and_ps(_mm256_cmp_ps(cr, zero, _CMP_GT_OQ), in);
+    const __m256 f = _mm256_and_ps(_mm256_cmp_ps(_mm256_andnot_ps(sign, cr), near, _CMP_LE_OQ), in);
+    __m256i* o = reinterpret_cast<__m256i*>(out + k);
+    _mm256_storeu_si256(o, _mm256_add_epi32(_mm256_loadu_si256(o), _mm256_and_si256(_mm256_castps_si256(m), vc)));
+    __m256i* g = reinterpret_cast<__m256i*>(flag + k);
+    _mm256_storeu_si256(g, _mm256_or_si256(_mm256_loadu_si256(g), _mm256_castps_si256(f)));
+  }
 }
 #endif
 
@@ -326,6 +339,83 @@ __attribute__((target("avx2"))) int jitter_picks_avx2(uint64_t prefix, int sampl
   return j;
 }
 #endif
+
+#if defined(VG_SSV_AVX2)
+// DepthCounter::finish_classes without the strip order, eight positions per step: each
+// lane keeps the lowest value it saw and the lowest value above that (the order of the
+// values does not matter for either), then one scatter into sample order. Integer
+// operations only: the same values, the same two lowest classes and the same unclear
+// count as the SSE2 and scalar form.
+// Rule 2's steps (at most kMaxLaneSteps) are added here per block, instead of by the
+// prefix sum of DepthCounter::fold_steps: +w at every position >= the step's.
+constexpr size_t kMaxLaneSteps = 4;
+__attribute__((target("avx2"))) DepthCounter::Classes classes_avx2(int32_t* x, const int32_t* f, size_t n,
+                                                                   int32_t unclear_value, const int* vorder,
+                                                                   int32_t* out,
+                                                                   const std::pair<int32_t, int32_t>* steps,
+                                                                   size_t n_steps) {
+  const __m256i vu = _mm256_set1_epi32(unclear_value);
+  __m256i m1 = vu, m2 = vu, cnt = _mm256_setzero_si256();
+  __m256i sk[kMaxLaneSteps], sw[kMaxLaneSteps];
+  for (size_t s = 0; s < n_steps; ++s) {
+    sk[s] = _mm256_set1_epi32(steps[s].first - 1);  // position > first - 1
+    sw[s] = _mm256_set1_epi32(steps[s].second);
+  }
+  __m256i pos = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i eight = _mm256_set1_epi32(8);
+  size_t k = 0;
+  for (; k + 8 <= n; k += 8) {
+    const __m256i fk = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(f + k));
+    __m256i dk = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x + k));
+    for (size_t s = 0; s < n_steps; ++s)
+      dk = _mm256_add_epi32(dk, _mm256_and_si256(_mm256_cmpgt_epi32(pos, sk[s]), sw[s]));
+    pos = _mm256_add_epi32(pos, eight);
+    const __m256i xk = _mm256_blendv_epi8(dk, vu, fk);  // flags are 0 or -1
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(x + k), xk);
+    // m2: m1 when xk < m1, min(m2, xk) when xk > m1, else unchanged.
+    const __m256i below = _mm256_cmpgt_epi32(m1, xk), above = _mm256_cmpgt_epi32(xk, m1);
+    m2 = _mm256_blendv_epi8(m2, _mm256_min_epi32(m2, xk), above);
+    m2 = _mm256_blendv_epi8(m2, m1, below);
+    m1 = _mm256_min_epi32(m1, xk);
+    cnt = _mm256_sub_epi32(cnt, fk);
+  }
+  alignas(32) int32_t l1[8], l2[8], counts[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(l1), m1);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(l2), m2);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(counts), cnt);
+  DepthCounter::Classes c{unclear_value, unclear_value, 0};
+  int64_t unclear = 0;
+  for (int l = 0; l < 8; ++l) unclear += counts[l];
+  for (; k < n; ++k) {
+    for (size_t s = 0; s < n_steps; ++s) x[k] += int(k) >= steps[s].first ? steps[s].second : 0;
+    x[k] = f[k] != 0 ? unclear_value : x[k];
+    unclear -= f[k];
+    // The tail as one more lane.
+    c.second = x[k] < c.dmin ? c.dmin : (x[k] > c.dmin ? std::min(c.second, x[k]) : c.second);
+    c.dmin = std::min(c.dmin, x[k]);
+  }
+  // Merge the lanes: the lowest of all, then the lowest value above it (a lane whose
+  // lowest equals it offers its second).
+  int32_t dmin = c.dmin;
+  for (int l = 0; l < 8; ++l) dmin = std::min(dmin, l1[l]);
+  int32_t second = c.dmin > dmin ? c.dmin : c.second;
+  for (int l = 0; l < 8; ++l) second = std::min(second, l1[l] > dmin ? l1[l] : l2[l]);
+  for (size_t q = 0; q < n; ++q) out[vorder[q]] = x[q];
+  c.dmin = dmin;
+  c.second = second;
+  c.unclear = size_t(unclear);
+  return c;
+}
+#endif
+
+bool use_avx2() {
+#if defined(VG_SSV_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  return avx2;
+#else
+  return false;
+#endif
+}
 
 void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
                bool v_range) {
@@ -413,6 +503,7 @@ void DepthCounter::add_step(float vc, int w) {
   // the tallest box of vc may reach it: tested one by one.
   const int kb = S.vlo_lower_bound(vc);
   diffv_[size_t(kb)] += w;
+  step_list_.emplace_back(kb, w);
   steps_ = true;
   const int kr = S.vlo_lower_bound(double(vc) - S.max_height);
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
@@ -445,16 +536,30 @@ void DepthCounter::fold_steps() {
     run += diffv_[k];
     dv_[k] += run;
   }
+  for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;
+  step_list_.clear();
   steps_ = false;
 }
 
 DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, int32_t unclear_value) {
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
-  fold_steps();
   depth.resize(n);
-  Classes c{unclear_value, unclear_value, 0};
   const int* vorder = S.vorder.data();
+#if defined(VG_SSV_AVX2)
+  if (!strip_order_ && use_avx2()) {
+    if (step_list_.size() > kMaxLaneSteps) fold_steps();
+    const size_t n_steps = steps_ ? step_list_.size() : 0;
+    const Classes lanes =
+        classes_avx2(dv_.data(), fv_.data(), n, unclear_value, vorder, depth.data(), step_list_.data(), n_steps);
+    for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;
+    step_list_.clear();
+    steps_ = false;
+    return lanes;
+  }
+#endif
+  fold_steps();
+  Classes c{unclear_value, unclear_value, 0};
   if (!strip_order_) {
     // Every sample's count and flag sit at its v_lo position: the values, their two
     // lowest and the unclear count from consecutive memory (four per SSE2 step, no

@@ -3,6 +3,10 @@
 
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "lib/base/check.h"
 
 namespace visgate::ssv {
@@ -96,7 +100,29 @@ bool make_plane(const Vec3d& n, const Vec3d& p, double scale2, PointNormalPlane&
   return true;
 }
 
-void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
+// The range [lo, hi] of the plane's value n.x - d over the box: the corners that
+// minimise and maximise it, evaluated as dot(n, corner) - d. The SSE2 form computes the
+// same products and sums in the same order, so the same floats, without the three
+// data-dependent branches on the normal's signs (the scatter's hot loop).
+inline void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
+#if defined(__SSE2__)
+  static_assert(sizeof(Plane) == 4 * sizeof(float) && sizeof(AABB) == 6 * sizeof(float));
+  const __m128 n = _mm_loadu_ps(&p.n.x);                   // nx ny nz d
+  const __m128 blo = _mm_loadu_ps(&box.lo.x);               // lo.x lo.y lo.z hi.x
+  const __m128 t = _mm_loadu_ps(&box.lo.z);                 // lo.z hi.x hi.y hi.z (within the box)
+  const __m128 bhi = _mm_shuffle_ps(t, t, _MM_SHUFFLE(3, 3, 2, 1));  // hi.x hi.y hi.z hi.z
+  const __m128 m = _mm_cmpge_ps(n, _mm_setzero_ps());       // n[k] >= 0: lo is the minimising corner
+  const __m128 pmin = _mm_or_ps(_mm_and_ps(m, blo), _mm_andnot_ps(m, bhi));
+  const __m128 pmax = _mm_or_ps(_mm_and_ps(m, bhi), _mm_andnot_ps(m, blo));
+  const __m128 pl = _mm_mul_ps(n, pmin), ph = _mm_mul_ps(n, pmax);
+  const __m128 a = _mm_unpacklo_ps(pl, ph);                 // pl0 ph0 pl1 ph1
+  const __m128 b = _mm_unpackhi_ps(pl, ph);                 // pl2 ph2 . .
+  __m128 s = _mm_add_ps(a, _mm_movehl_ps(a, a));            // (x + y) for lo and hi
+  s = _mm_add_ps(s, b);                                     // + z
+  s = _mm_sub_ps(s, _mm_shuffle_ps(n, n, _MM_SHUFFLE(3, 3, 3, 3)));  // - d
+  lo = _mm_cvtss_f32(s);
+  hi = _mm_cvtss_f32(_mm_shuffle_ps(s, s, _MM_SHUFFLE(1, 1, 1, 1)));
+#else
   Vec3f pmin, pmax;
   for (int k = 0; k < 3; ++k) {
     if (p.n[k] >= 0.0f) {
@@ -109,6 +135,7 @@ void box_range(const Plane& p, const AABB& box, float& lo, float& hi) {
   }
   lo = dot(p.n, pmin) - p.d;
   hi = dot(p.n, pmax) - p.d;
+#endif
 }
 
 // Both triangle planes have the box at least eps on their front side, or both on their
@@ -257,6 +284,13 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
   const size_t n_edges = subset ? subset->size() : edges.size();
   counts.edges += n_edges;
   std::vector<PointNormalPlane> cand;
+  // The light's edges and their lengths, once per call (the same values per edge).
+  std::vector<Vec3d> light_edge(nl);
+  std::vector<double> light_edge_len(nl);
+  for (size_t i = 0; i < nl; ++i) {
+    light_edge[i] = L[(i + 1) % nl] - L[i];
+    light_edge_len[i] = length(light_edge[i]);
+  }
   // The rounding of a double plane test (unit normal, coordinates up to M, tol = 1e-9 M
   // in the solver): about 1e-15 M; rtol = 1e-13 M keeps a hundredfold margin.
   const double rtol = 1e-4 * tol;
@@ -305,17 +339,18 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     // active one (its facing is 0, integrate.h): no silhouette region, no culling by the
     // pair's planes.
     const bool pair = act1 && act2;
-    PointNormalPlane p1 = triangle_plane(size_t(act1 ? e.t1 : e.t2)), p2{};
     if (pair) {
       // Potential silhouette w.r.t. L' (section 2.1): some light point sees exactly one
       // of the two triangles front-facing.
-      p2 = triangle_plane(size_t(e.t2));
       const int s1 = c1 >> 1;  // arithmetic shift: -1, 0 or +1
       if (s1 != 0 && s1 == (c2 >> 1)) {
         ++counts.not_silhouette;
         continue;
       }
     }
+    // The planes only for the edges kept (most edges of a dense mesh stop above).
+    const PointNormalPlane p1 = triangle_plane(size_t(act1 ? e.t1 : e.t2));
+    const PointNormalPlane p2 = pair ? triangle_plane(size_t(e.t2)) : PointNormalPlane{};
     // Silhouette regions (section 4.2) against the receivers: a double edge whose two
     // planes have every receiver box at least eps on the same side is a silhouette from
     // none of them (classify_box would call each box Outside), and gets no wedge.
@@ -344,10 +379,11 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     // Separating planes of the edge and L'.
     cand.clear();
     cand.push_back({frame.N, frame.origin});  // the light plane: h >= 0
-    Vec3d AB = B - A;
+    const Vec3d AB = B - A;
+    const double ab = length(AB);
     for (size_t i = 0; i < nl; ++i) {  // through the edge and a light vertex
       PointNormalPlane pl;
-      if (!make_plane(cross(AB, L[i] - A), A, length(AB) * length(L[i] - A), pl)) continue;
+      if (!make_plane(cross(AB, L[i] - A), A, ab * length(L[i] - A), pl)) continue;
       if (orient_against_light(pl, L, tol, rtol)) cand.push_back(pl);
     }
     for (int end = 0; end < 2; ++end) {  // through an edge endpoint and a light edge
@@ -355,9 +391,8 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
       const Vec3d& Q = end == 0 ? B : A;
       for (size_t i = 0; i < nl; ++i) {
         const Vec3d& l0 = L[i];
-        const Vec3d& l1 = L[(i + 1) % nl];
         PointNormalPlane pl;
-        if (!make_plane(cross(l1 - l0, P - l0), l0, length(l1 - l0) * length(P - l0), pl)) continue;
+        if (!make_plane(cross(light_edge[i], P - l0), l0, light_edge_len[i] * length(P - l0), pl)) continue;
         if (!orient_against_light(pl, L, tol, rtol)) continue;
         if (pl.eval(Q) < -rtol) continue;  // the edge must lie on the inner side (rtol: as above)
         cand.push_back(pl);

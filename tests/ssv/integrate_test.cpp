@@ -154,14 +154,15 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
   // The fused finish (counts, unclear samples as one value, the two lowest classes) against
   // finish(depth, &unclear) and a plain scan: stratified and wide boxes, samples all
   // coincident or on a few points, pieces through samples exactly (unclear samples), with
-  // and without steps, and sizes below and above the one-by-one limit (strip order).
+  // no steps, as many as the AVX2 scan adds per block (up to 4) and more (folded), and
+  // sizes below and above the one-by-one limit (strip order).
   std::mt19937_64 g(23);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
   const int32_t kU = std::numeric_limits<int32_t>::max();
   for (int layout = 0; layout < 4; ++layout)
     for (int K : {1, 4})
       for (int n : {1, 5, 256, 2048})
-        for (bool steps : {false, true}) {
+        for (int n_steps : {0, 1, 3, 4, 5, 40}) {
           const int side = std::max(1, int(std::sqrt(double(n))));
           std::vector<Vec2f> jitter(size_t(n) * size_t(K));
           for (size_t q = 0; q < jitter.size(); ++q) {
@@ -182,6 +183,10 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
           }
           DepthCounter a, b;
           a.reset(strips, jitter, pick, 2.0);
+          // b once abandoned with steps and no finish: its next reset must clear them.
+          b.reset(strips, jitter, pick, 2.0);
+          b.add_step(uv[0].v, 3);
+          b.add_step(-2.0f, -1);
           b.reset(strips, jitter, pick, 2.0);
           for (int k = 0; k < 40; ++k) {
             Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
@@ -193,7 +198,7 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
             const int w = int(g() % 5) - 2;
             a.add_piece(P, Q, w);
             b.add_piece(P, Q, w);
-            if (steps) {
+            if (k < n_steps) {
               const float vc = k % 2 ? 1.2f * u(g) : uv[g() % uv.size()].v;
               a.add_step(vc, w);
               b.add_step(vc, w);
@@ -212,7 +217,7 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
             if (x > dmin) second = std::min(second, x);
           const DepthCounter::Classes c = b.finish_classes(fused, kU);
           const std::string where = "layout " + std::to_string(layout) + " K " + std::to_string(K) + " n " +
-                                    std::to_string(n) + (steps ? " steps" : "");
+                                    std::to_string(n) + " steps " + std::to_string(n_steps);
           EXPECT_EQ(fused, depth) << where;
           EXPECT_EQ(c.unclear, n_unclear) << where;
           EXPECT_EQ(c.dmin, dmin) << where;

@@ -162,3 +162,87 @@ TEST(SsvDegenerate, EdgeInTheLightPlaneKeepsItsWedge) {
   }
   EXPECT_TRUE(found);
 }
+
+TEST(SsvWedge, ClassifyBoxEqualsTheCornerEvaluation) {
+  // classify_box's box ranges (SSE2 where available) against a plain corner-by-corner
+  // evaluation in the same float expression: the same classes and the same masks for
+  // random planes (with zero, negative-zero and tiny normal components) and boxes,
+  // degenerate boxes included.
+  std::mt19937 rng(39);
+  std::uniform_real_distribution<float> U(-3.0f, 3.0f);
+  auto comp = [&]() {
+    const int pick = int(rng() % 8);
+    return pick == 0 ? 0.0f : pick == 1 ? -0.0f : pick == 2 ? 1e-30f * U(rng) : U(rng);
+  };
+  auto ref_range = [](const Plane& p, const AABB& box, float& lo, float& hi) {
+    lo = INFINITY;
+    hi = -INFINITY;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3f x((c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y, (c & 4) ? box.hi.z : box.lo.z);
+      const float f = dot(p.n, x) - p.d;
+      lo = std::min(lo, f);
+      hi = std::max(hi, f);
+    }
+  };
+  size_t outside = 0, contains = 0, partial = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    Wedge w;
+    w.plane_count = uint8_t(1 + rng() % kMaxWedgePlanes);
+    for (int i = 0; i < w.plane_count; ++i) w.planes[size_t(i)] = Plane(Vec3f(comp(), comp(), comp()), 0.5f * U(rng));
+    w.has_region = rng() % 2 == 0;
+    for (auto& t : w.tri) t = Plane(Vec3f(comp(), comp(), comp()), U(rng));
+    const Vec3f a(U(rng), U(rng), U(rng));
+    const float size = (rng() % 4 == 0) ? 0.0f : 0.3f;
+    const AABB box(a, a + Vec3f(size * std::abs(U(rng)), size * std::abs(U(rng)), size * std::abs(U(rng))));
+    const float eps = (rng() % 2) ? 1e-3f : 0.0f;
+    const bool use_region = rng() % 2 == 0;
+    WedgeState s;
+    s.mask = uint16_t((1u << w.plane_count) - 1u);
+    s.region = uint8_t(rng() % 4 == 0 ? kPos1 : 0);
+    WedgeState expect = s;
+    // The reference: classify_box's rules with the corner evaluation.
+    BoxClass want = BoxClass::Partial;
+    bool region_contains = true, done = false;
+    if (use_region && w.has_region) {
+      for (int k = 0; k < 2; ++k) {
+        const uint8_t pos = k == 0 ? kPos1 : kPos2, neg = k == 0 ? kNeg1 : kNeg2;
+        if (expect.region & (pos | neg)) continue;
+        float lo, hi;
+        ref_range(w.tri[size_t(k)], box, lo, hi);
+        if (lo >= eps) expect.region |= pos;
+        else if (hi <= -eps) expect.region |= neg;
+      }
+      const uint8_t r = expect.region;
+      if (((r & kPos1) && (r & kPos2)) || ((r & kNeg1) && (r & kNeg2))) {
+        want = BoxClass::Outside;
+        done = true;
+      }
+      region_contains = ((r & kPos1) && (r & kNeg2)) || ((r & kNeg1) && (r & kPos2));
+    }
+    for (int i = 0; i < w.plane_count && !done; ++i) {
+      if (!(expect.mask & (1u << i))) continue;
+      float lo, hi;
+      ref_range(w.planes[size_t(i)], box, lo, hi);
+      if (hi < -eps) {
+        want = BoxClass::Outside;
+        done = true;
+      } else if (lo >= -eps) {
+        expect.mask = uint16_t(expect.mask & ~(1u << i));
+      }
+    }
+    if (!done) want = (expect.mask == 0 && region_contains) ? BoxClass::Contains : BoxClass::Partial;
+    const BoxClass got = classify_box(w, s, box, eps, use_region);
+    ASSERT_EQ(int(got), int(want)) << "trial " << trial;
+    ASSERT_EQ(s.region, expect.region) << "trial " << trial;
+    if (want != BoxClass::Outside) {
+      ASSERT_EQ(s.mask, expect.mask) << "trial " << trial;
+    }
+    outside += want == BoxClass::Outside;
+    contains += want == BoxClass::Contains;
+    partial += want == BoxClass::Partial;
+  }
+  // Every class occurs.
+  EXPECT_GT(outside, 100u);
+  EXPECT_GT(contains, 100u);
+  EXPECT_GT(partial, 100u);
+}
