@@ -84,6 +84,9 @@ class TargetRunner {
     if (!ctx_.has_method(t.method, "the target " + t.name) || !ctx_.has_method("embree", "the targets")) return;
     const auto& only = ctx_.opt.families;
     if (!only.empty() && std::find(only.begin(), only.end(), t.family) == only.end()) return;
+    // --methods picks the rows' methods; embree runs beside each row whatever it says.
+    const auto& picked = ctx_.opt.methods;
+    if (!picked.empty() && std::find(picked.begin(), picked.end(), t.method) == picked.end()) return;
     FamilyParams p;
     p.seed = ctx_.opt.seed;
     p.triangles = t.triangles;
