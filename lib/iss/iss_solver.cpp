@@ -27,6 +27,9 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
+      {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
+      {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
+      {"split_auto_ray_relations", "auto_ray_relations for the shafts of split lights (default 16)", {}},
   };
 }
 
@@ -48,6 +51,10 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;
   p.light_split_always = opt.get("light_split", "auto") == "on";
   p.auto_ray_relations = double(std::max(0L, opt.get_int("auto_ray_relations", long(p.auto_ray_relations))));
+  p.split_samples = int(std::max(1L, opt.get_int("split_samples", p.split_samples)));
+  p.split_receivers = int(std::max(1L, opt.get_int("split_receivers", p.split_receivers)));
+  p.split_auto_ray_relations =
+      double(std::max(0L, opt.get_int("split_auto_ray_relations", long(p.split_auto_ray_relations))));
 
   auto tp0 = Clock::now();
   mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);

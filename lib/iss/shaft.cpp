@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lib/geom/haines_shaft.h"
 #include "lib/geom/predicates.h"
 
 namespace visgate::iss {
@@ -65,50 +64,59 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
   // normals (n_i, n_j, 0) and (n_i', 0, n_k') (say) with every listed component a
   // non-zero difference of floats, so their cross product has no zero component
   // (products of such differences neither underflow nor overflow in double).
-  int first_of_projection = count_;
-  for_each_shaft_corner_line(r_, l_, [&](const ShaftCornerLine& line) {
-    const int i = line.i, j = line.j;
-    if (line.corner == 0) first_of_projection = count_;
-    // Each rectangle's smaller and larger coordinate on both axes (for dmax below).
-    const double rx0 = std::min(r_.lo[i], r_.hi[i]), rx1 = std::max(r_.lo[i], r_.hi[i]);
-    const double ry0 = std::min(r_.lo[j], r_.hi[j]), ry1 = std::max(r_.lo[j], r_.hi[j]);
-    const double lx0 = std::min(l_.lo[i], l_.hi[i]), lx1 = std::max(l_.lo[i], l_.hi[i]);
-    const double ly0 = std::min(l_.lo[j], l_.hi[j]), ly1 = std::max(l_.lo[j], l_.hi[j]);
-    const double px = line.ai, py = line.aj, qx = line.bi, qy = line.bj;
-    const double dx = qx - px, dy = qy - py;
-    if (dx == 0.0 || dy == 0.0) return;  // axis-aligned: covered by the box
-    // Line normal (dy, -dx); pick the sign that puts every corner on the <= side.
-    for (double sg : {1.0, -1.0}) {
-      double nx = sg * dy, ny = -sg * dx;
-      // Support test with a rounding margin: the line passes through both corners
-      // exactly, but n.q rounds differently for the second corner, and a strict test
-      // rejected the true hull edge about half of the time (leaving a much larger
-      // shaft). d is then raised to the largest computed n.c over the eight corners, so
-      // every corner is on the <= side as evaluated, and the plane tolerance of eval()
-      // covers the rounding of n.c (file comment of shaft.h); the plane stays
-      // conservative. The margin 2^-40 |n|_1 S is the same bound.
-      // The largest computed n.c over a rectangle's four corners is the one at the
-      // corner the signs of n pick (nx, ny != 0 here): fl(fl(nx x) + fl(ny y)) is
-      // monotone in x and in y, rounding being monotone, so no other corner gives a
-      // larger double. Bit for bit the maximum of all eight evaluations (test
-      // IssShaft.ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue).
-      double d = nx * px + ny * py;
-      const bool ux = nx > 0, uy = ny > 0;
-      double dmax = std::max({d, nx * (ux ? rx1 : rx0) + ny * (uy ? ry1 : ry0),
-                              nx * (ux ? lx1 : lx0) + ny * (uy ? ly1 : ly0)});
-      if (dmax - d > kTolFactor * (std::abs(nx) + std::abs(ny)) * scale_) continue;
-      d = dmax;
-      Vec3d n(0, 0, 0);
-      n[i] = nx;
-      n[j] = ny;
-      bool dup = false;
-      for (int k = first_of_projection; k < count_; ++k) {
-        const ConservativePlane& o = planes_[size_t(k)].p;
-        if (cross(o.n, n) == Vec3d(0, 0, 0) && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
+  // The loops are those of for_each_shaft_corner_line (projections (0,1), (0,2), (1,2),
+  // corners 0..3), written out so that each projection's rectangle bounds are read once
+  // rather than per corner line and candidate (the constructor runs for every shaft and
+  // CHOOSE-SPLIT candidate). Same planes, same order, same bits.
+  for (int i = 0; i < 3; ++i)
+    for (int j = i + 1; j < 3; ++j) {
+      const int first_of_projection = count_;
+      // Each rectangle's smaller and larger coordinate on both axes (for dmax below).
+      const double rx0 = std::min(r_.lo[i], r_.hi[i]), rx1 = std::max(r_.lo[i], r_.hi[i]);
+      const double ry0 = std::min(r_.lo[j], r_.hi[j]), ry1 = std::max(r_.lo[j], r_.hi[j]);
+      const double lx0 = std::min(l_.lo[i], l_.hi[i]), lx1 = std::max(l_.lo[i], l_.hi[i]);
+      const double ly0 = std::min(l_.lo[j], l_.hi[j]), ly1 = std::max(l_.lo[j], l_.hi[j]);
+      for (int corner = 0; corner < 4; ++corner) {
+        const double px = corner & 1 ? r_.hi[i] : r_.lo[i], py = corner & 2 ? r_.hi[j] : r_.lo[j];
+        const double qx = corner & 1 ? l_.hi[i] : l_.lo[i], qy = corner & 2 ? l_.hi[j] : l_.lo[j];
+        const double dx = qx - px, dy = qy - py;
+        if (dx == 0.0 || dy == 0.0) continue;  // axis-aligned: covered by the box
+        // Line normal (dy, -dx); pick the sign that puts every corner on the <= side.
+        for (double sg : {1.0, -1.0}) {
+          double nx = sg * dy, ny = -sg * dx;
+          // Support test with a rounding margin: the line passes through both corners
+          // exactly, but n.q rounds differently for the second corner, and a strict test
+          // rejected the true hull edge about half of the time (leaving a much larger
+          // shaft). d is then raised to the largest computed n.c over the eight corners,
+          // so every corner is on the <= side as evaluated, and the plane tolerance of
+          // eval() covers the rounding of n.c (file comment of shaft.h); the plane stays
+          // conservative. The margin 2^-40 |n|_1 S is the same bound.
+          // The largest computed n.c over a rectangle's four corners is the one at the
+          // corner the signs of n pick (nx, ny != 0 here): fl(fl(nx x) + fl(ny y)) is
+          // monotone in x and in y, rounding being monotone, so no other corner gives a
+          // larger double. Bit for bit the maximum of all eight evaluations (test
+          // IssShaft.ObliquePlaneOffsetIsTheLargestEvaluatedCornerValue).
+          double d = nx * px + ny * py;
+          const bool ux = nx > 0, uy = ny > 0;
+          double dmax = std::max({d, nx * (ux ? rx1 : rx0) + ny * (uy ? ry1 : ry0),
+                                  nx * (ux ? lx1 : lx0) + ny * (uy ? ly1 : ly0)});
+          if (dmax - d > kTolFactor * (std::abs(nx) + std::abs(ny)) * scale_) continue;
+          d = dmax;
+          Vec3d n(0, 0, 0);
+          n[i] = nx;
+          n[j] = ny;
+          // Parallel and same direction: both normals lie in the (i, j) plane, so the
+          // cross product's only component that can be non-zero is the one on the third
+          // axis (the other two are differences of products with exact zeros).
+          bool dup = false;
+          for (int k = first_of_projection; k < count_; ++k) {
+            const ConservativePlane& o = planes_[size_t(k)].p;
+            if (o.n[i] * ny - o.n[j] * nx == 0.0 && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
+          }
+          if (!dup && count_ < int(planes_.size())) add_plane(n, d);
+        }
       }
-      if (!dup && count_ < int(planes_.size())) add_plane(n, d);
     }
-  });
   if (axis_.axis >= 0) {
     int a = axis_.axis;
     if (axis_.dir > 0) {

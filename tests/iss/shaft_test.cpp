@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <random>
 
+#include "lib/geom/haines_shaft.h"
 #include "lib/iss/shaft.h"
 #include "tests/support/iss_fixtures.h"
 
@@ -35,6 +36,78 @@ TEST(IssShaft, HullContainsEveryBoxToBoxSegment) {
       EXPECT_FALSE(g.may_contain_point(far));
     }
   }
+}
+
+// The oblique planes as the constructor built them through for_each_shaft_corner_line
+// (lib/geom/haines_shaft.h), with the full cross-product duplicate test: the reference
+// for the constructor's written-out loops.
+static std::vector<iss::ConservativePlane> reference_oblique_planes(const AABB& rf, const AABB& lf, double scale) {
+  const AABBd r = iss::to_double(rf), l = iss::to_double(lf);
+  std::vector<iss::ConservativePlane> out;
+  size_t first = 0;
+  auto l1 = [](const Vec3d& n) { return std::abs(n.x) + std::abs(n.y) + std::abs(n.z); };
+  for_each_shaft_corner_line(r, l, [&](const ShaftCornerLine& line) {
+    const int i = line.i, j = line.j;
+    if (line.corner == 0) first = out.size();
+    const double rx0 = std::min(r.lo[i], r.hi[i]), rx1 = std::max(r.lo[i], r.hi[i]);
+    const double ry0 = std::min(r.lo[j], r.hi[j]), ry1 = std::max(r.lo[j], r.hi[j]);
+    const double lx0 = std::min(l.lo[i], l.hi[i]), lx1 = std::max(l.lo[i], l.hi[i]);
+    const double ly0 = std::min(l.lo[j], l.hi[j]), ly1 = std::max(l.lo[j], l.hi[j]);
+    const double px = line.ai, py = line.aj, dx = line.bi - px, dy = line.bj - py;
+    if (dx == 0.0 || dy == 0.0) return;
+    for (double sg : {1.0, -1.0}) {
+      double nx = sg * dy, ny = -sg * dx;
+      double d = nx * px + ny * py;
+      const bool ux = nx > 0, uy = ny > 0;
+      double dmax = std::max({d, nx * (ux ? rx1 : rx0) + ny * (uy ? ry1 : ry0), nx * (ux ? lx1 : lx0) + ny * (uy ? ly1 : ly0)});
+      if (dmax - d > 0x1p-40 * (std::abs(nx) + std::abs(ny)) * scale) continue;
+      d = dmax;
+      Vec3d n(0, 0, 0);
+      n[i] = nx;
+      n[j] = ny;
+      bool dup = false;
+      for (size_t k = first; k < out.size(); ++k)
+        if (cross(out[k].n, n) == Vec3d(0, 0, 0) && dot(out[k].n, n) > 0 && out[k].d * l1(n) == d * l1(out[k].n))
+          dup = true;
+      if (!dup && out.size() < 12) {
+        iss::ConservativePlane p;
+        p.n = n;
+        p.d = d;
+        p.tol = 0x1p-40 * l1(n) * scale;
+        out.push_back(p);
+      }
+    }
+  });
+  return out;
+}
+
+TEST(IssShaft, ObliquePlanesEqualTheCornerLineReferenceBitForBit) {
+  // Random boxes, also sharing coordinates (equal corners give axis-aligned lines and
+  // duplicate candidates), near and far from the origin: the constructor's planes after
+  // the six box planes are the reference's, in order, bit for bit.
+  std::mt19937 rng(11);
+  size_t oblique = 0;
+  for (double offset : {0.0, 1e5}) {
+    for (int it = 0; it < 2000; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      AABB r = random_box(rng, o), l = random_box(rng, o);
+      if (it % 3 == 1) l.lo.x = r.lo.x;
+      if (it % 5 == 2) { l.lo.y = r.lo.y; l.hi.y = r.hi.y; }
+      if (it % 7 == 3) l = r;
+      const double scale = 2e5;
+      iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), scale);
+      std::vector<iss::ConservativePlane> ref = reference_oblique_planes(r, l, scale);
+      ASSERT_EQ(g.plane_count(), 6 + int(ref.size()));
+      oblique += ref.size();
+      for (size_t k = 0; k < ref.size(); ++k) {
+        const iss::ConservativePlane& p = g.plane(6 + int(k));
+        ASSERT_EQ(p.n, ref[k].n);
+        ASSERT_EQ(p.d, ref[k].d);
+        ASSERT_EQ(p.tol, ref[k].tol);
+      }
+    }
+  }
+  EXPECT_GT(oblique, 4000u);  // most pairs have oblique planes: the comparison is not empty
 }
 
 TEST(IssShaft, ObliquePlanesCutTheCommonBox) {

@@ -91,3 +91,36 @@ TEST(IssOracle, LightSplitTrialKeepsWholeLightsOnRooms) {
       differ += a.receivers[i].visible(k) != off.receivers[i].visible(k);
   EXPECT_EQ(differ, 0u);
 }
+
+TEST(IssOracle, SplitLeafOptionsChangeTheTraversalNotTheAnswers) {
+  // split_samples, split_receivers and split_auto_ray_relations (iss_solver.cpp) set the
+  // leaves and the automatic-ray threshold of split lights, for measuring CHOOSE-SPLIT's
+  // balance (docs/log/iss-shafts.md). They must reach the traversal (other shaft and
+  // ray counts) and leave every answer as the default's and the exact oracle's.
+  const double tau = 1e-5;
+  Scene s = family("columns", 3, 2500, 4096, 64);
+  ASSERT_FALSE(s.receivers.empty());
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+  SolveResult base = run_iss(s, {{"light_split", "on"}});
+  SolveResult varied = run_iss(s, {{"light_split", "on"},
+                                   {"split_samples", "8"},
+                                   {"split_receivers", "16"},
+                                   {"split_auto_ray_relations", "0"}});
+  EXPECT_NE(base.stats.get("shafts_built"), varied.stats.get("shafts_built"));
+  EXPECT_EQ(varied.stats.get("auto_ray_shafts"), 0.0);  // threshold 0: no shaft is skipped
+  EXPECT_EQ(varied.stats.get("relations_ray_cast") + varied.stats.get("relations_blocked_by_shaft") +
+                varied.stats.get("relations_visible_by_empty_shaft"),
+            double(s.relation_count()));
+  size_t bad = 0, differ = 0, checked = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      char cls = ex.classes[i][k];
+      if (cls == 'd' || ex.margins[i][k] < tau) continue;
+      ++checked;
+      bad += varied.receivers[i].visible(k) != (cls == 'v');
+      differ += varied.receivers[i].visible(k) != base.receivers[i].visible(k);
+    }
+  EXPECT_GT(checked, s.relation_count() / 2);
+  EXPECT_EQ(bad, 0u);
+  EXPECT_EQ(differ, 0u);
+}
