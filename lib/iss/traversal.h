@@ -25,8 +25,8 @@
 #include "lib/base/memory_budget.h"
 #include "lib/iss/blockers.h"
 #include "lib/iss/shaft.h"
-#include "lib/iss/tree.h"
 #include "lib/iss/surface_clusters.h"
+#include "lib/iss/tree.h"
 #include "lib/iss/triangle_bvh.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_scene.h"
@@ -171,13 +171,8 @@ class Traversal {
   void run_light(size_t li);
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
-  // Counts the live shafts and the clusters.
-  void set_memory_budget(MemoryBudget* b) {
-    budget_ = b;
-    clusters_charge_.bind(b, "surface clusters");
-    clusters_charge_.set(clusters_ ? clusters_->memory_bytes() : 0);
-  }
-
+  // Counts the live shafts and the clusters (charged when built, after this call).
+  void set_memory_budget(MemoryBudget* b) { budget_ = b; }
   // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
   // Bits start blocked (make_empty_result), so a relation no rule reached would read as
   // blocked without a word: solve checks that these add up to every relation.
@@ -255,7 +250,7 @@ class Traversal {
   double scale_ = 1.0;
   std::vector<AABB> tri_boxes_;
   std::unique_ptr<TriangleBvh> bvh_;
-  std::unique_ptr<SurfaceClusters> clusters_;  // built on first need (kClusterMinTriangles)
+  std::unique_ptr<SurfaceClusters> clusters_;  // built on first need (Params::clusters)
   MemoryCharge clusters_charge_;
   std::unique_ptr<PointTree> rtree_, ltree_;
   const Light* light_ = nullptr;
