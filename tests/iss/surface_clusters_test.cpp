@@ -173,8 +173,9 @@ TEST(IssClusters, FacingProofsAgreeWithExactOrientation) {
 
 TEST(IssClusters, ClusteredSolveEqualsPerTriangleSolveAndOracle) {
   // The clustered initial shafts (clusters=on, at every size) against the per-triangle
-  // construction (clusters=off): the same bits for every relation, under every option
-  // set; and both equal the exact oracle away from degeneracy. Families with closed,
+  // construction (clusters=off): the same bits for every relation that touches no
+  // triangle, under every option set; and equal to the exact oracle away from
+  // degeneracy. Families with closed,
   // open and non-manifold meshes, several components and receivers on the surface.
   const double tau = 1e-5;
   std::vector<Scene> scenes;
@@ -192,9 +193,10 @@ TEST(IssClusters, ClusteredSolveEqualsPerTriangleSolveAndOracle) {
       size_t bad = 0, differ = 0;
       for (size_t i = 0; i < s.receivers.size(); ++i)
         for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-          differ += on.receivers[i].visible(k) != off.receivers[i].visible(k);
           char cls = ex.classes[i][k];
-          if (cls == 'd' || ex.margins[i][k] < tau) continue;
+          if (cls == 'd') continue;  // touching: either answer is exact (DESIGN)
+          differ += on.receivers[i].visible(k) != off.receivers[i].visible(k);
+          if (ex.margins[i][k] < tau) continue;
           bad += on.receivers[i].visible(k) != (cls == 'v');
         }
       EXPECT_EQ(differ, 0u) << s.name << " " << describe(o);
