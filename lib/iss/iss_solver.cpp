@@ -26,6 +26,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"auto_ray_relations", "relations a subdivided shaft must decide per shaft built below it before auto_rays lets its size subdivide (default 64)", {}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
+      {"clusters", "initial shafts' surfaces from pre-merged consistent triangle clusters (surface_clusters.h): auto once an initial shaft holds 8192 triangles and an eighth of the mesh, on always, off never", {"auto", "on", "off"}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
@@ -47,6 +48,8 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.postpone = opt.get_bool("postpone", true);
   p.auto_rays = opt.get_bool("auto_rays", true);
   p.ray_queue = opt.get_bool("ray_queue", true);
+  p.clusters = opt.get("clusters", "auto") != "off";
+  if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
   // The trial compares costs in automatic-ray terms: Embree leaf rays only.
   p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;
   p.light_split_always = opt.get("light_split", "auto") == "on";

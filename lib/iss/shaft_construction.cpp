@@ -216,10 +216,19 @@ bool Traversal::probe_blocked(int r, int l, MainAxis ax, size_t n_tris) {
 Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris) {
   Shaft sh{r, l, geometry(r, l, ax), {}, {}, 0};  // in place, as in construct_sub_shaft
   init_shaft(sh);
+  if (p_.clusters && !clusters_ && tris.size() >= p_.cluster_min_triangles && 8 * tris.size() >= mesh_.triangles.size()) {
+    ScopedTimer t(times_[kTree]);
+    clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_);
+    clusters_charge_.bind(budget_, "surface clusters");
+    clusters_charge_.set(clusters_->memory_bytes());
+  }
   Surface s;
   {
     ScopedTimer t(times_[kTriangleSurface]);
-    s = construct_triangle_surface(ctx_, tris, sh.g, rn(r), ln(l), ws_);
+    // Once built (Params::clusters), every initial shaft uses the clusters: the walk
+    // prunes the hierarchy by the shaft itself, so `tris` is not read.
+    s = clusters_ ? construct_clustered_surface(ctx_, *clusters_, sh.g, rn(r), ln(l), ws_, &n_cluster_patches_)
+                  : construct_triangle_surface(ctx_, tris, sh.g, rn(r), ln(l), ws_);
   }
   check(s, "construct_triangle_surface");
   std::vector<Surface> temp;

@@ -109,8 +109,11 @@ void Traversal::run_light(size_t li) {
       return;
     }
   }
+  // Once the clusters are built an initial shaft at the roots walks the hierarchy
+  // itself (construct_clustered_surface) and the array is not read: it is needed only
+  // when the root boxes overlap (PRE-TRAVERSE narrows it down to the initial shafts).
   std::vector<uint32_t> tris;
-  {
+  if (!clusters_ || rn(r0).box.overlaps(ln(l0).box) || choose_main_axis(rn(r0).box, ln(l0).box).axis < 0) {
     ScopedTimer t(times_[kTriangleSurface]);
     bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);
   }
@@ -148,8 +151,10 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("auto_ray_shafts", n_auto_shafts_);
   st.set("auto_ray_relations", n_auto_relations_);
   st.set("lights_split", n_split_lights_);
+  st.set("cluster_patches", n_cluster_patches_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
-  double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes());
+  double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
+                       (clusters_ ? clusters_->memory_bytes() : 0));
   st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
   st.set("receiver_tree_nodes", double(rtree_->node_count()));
   double secs = std::chrono::duration<double>(Clock::now() - clock0_).count();

@@ -25,6 +25,7 @@
 #include "lib/base/memory_budget.h"
 #include "lib/iss/blockers.h"
 #include "lib/iss/shaft.h"
+#include "lib/iss/surface_clusters.h"
 #include "lib/iss/tree.h"
 #include "lib/iss/triangle_bvh.h"
 #include "lib/mesh/prepare.h"
@@ -105,6 +106,13 @@ struct Params {
   bool auto_rays = true;
   double auto_ray_relations = 64.0;  // kAutoRayRelationsPerShaft, see below
   bool ray_queue = true;  // queue_rays: full packets at light leaves under kFanWidth
+  // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
+  // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
+  // builds them (once per solve); from then on every initial shaft uses them. On scenes
+  // whose initial shafts are small (rooms) building them cost more than they saved.
+  // Option clusters: auto (this), on (cluster_min_triangles 0), off.
+  bool clusters = true;
+  size_t cluster_min_triangles = 8192;
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
@@ -163,7 +171,8 @@ class Traversal {
   void run_light(size_t li);
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
-  void set_memory_budget(MemoryBudget* b) { budget_ = b; }  // counts the live shafts
+  // Counts the live shafts and the clusters (charged when built, after this call).
+  void set_memory_budget(MemoryBudget* b) { budget_ = b; }
   // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
   // Bits start blocked (make_empty_result), so a relation no rule reached would read as
   // blocked without a word: solve checks that these add up to every relation.
@@ -241,6 +250,8 @@ class Traversal {
   double scale_ = 1.0;
   std::vector<AABB> tri_boxes_;
   std::unique_ptr<TriangleBvh> bvh_;
+  std::unique_ptr<SurfaceClusters> clusters_;  // built on first need (Params::clusters)
+  MemoryCharge clusters_charge_;
   std::unique_ptr<PointTree> rtree_, ltree_;
   const Light* light_ = nullptr;
   size_t light_offset_ = 0;
@@ -261,6 +272,7 @@ class Traversal {
   bool split_now_ = false, in_trial_ = false;
   SplitTrial trial_;
   double n_split_lights_ = 0, n_trial_shafts_ = 0;
+  double n_cluster_patches_ = 0;  // cluster nodes taken whole (surface_clusters.h)
   bool light_leaf(const TreeNode& L) const {
     return L.is_leaf || (!split_now_ && L.size() <= uint32_t(p_.leaf_samples));
   }

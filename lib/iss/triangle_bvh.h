@@ -39,6 +39,7 @@ class TriangleBvh {
   void query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out) const;
 
   size_t node_count() const { return bvh_.node_count(); }
+  const accel::Bvh<float>& tree() const { return bvh_; }
   size_t memory_bytes() const { return bvh_.memory_bytes(); }
 
  private:

@@ -1,12 +1,15 @@
 // CONSTRUCT-TRIANGLE-SURFACE (paper 000 section 4.7.1, Figure 4.20): one clipped patch
-// per valid blocker triangle, clipped to the slab between the clip planes (section 4.5).
+// per valid blocker triangle, clipped to the slab between the clip planes (section 4.5);
+// and its clustered form for initial shafts (surface_clusters.h).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
 #include "lib/base/check.h"
 #include "lib/iss/blocker_helpers.h"
 #include "lib/iss/blockers.h"
+#include "lib/iss/surface_clusters.h"
 
 namespace visgate::iss {
 
@@ -39,89 +42,166 @@ void clip_poly(const std::vector<PolyVertex>& in, std::vector<PolyVertex>& out, 
   }
 }
 
+// One raw edge v0 -> v1 of patch pi (lines 13-21 of Figure 4.20): the raw edge of the
+// neighbour across the same mesh edge when it is there, traversed the other way.
+void add_edge(Surface& s, Workspace& ws, int32_t pi, const Vec3d& v0, const Vec3d& v1, int32_t label) {
+  if (label >= 0 && ws.label_stamp[size_t(label)] == ws.stamp) {
+    int32_t ri = ws.label_slot[size_t(label)];
+    RawEdge& re = s.raw[size_t(ri)];
+    if (re.v[0] == v1 && re.v[1] == v0 && re.nb[0] == kNoPatch) {
+      re.nb[0] = pi;
+      s.edges.push_back({uint32_t(ri), 1});
+      return;
+    }
+  }
+  RawEdge re;
+  re.v[0] = v0;
+  re.v[1] = v1;
+  re.nb[1] = pi;
+  re.mesh_edge = label;
+  re.inside = 1;
+  if (label >= 0) {
+    ws.label_stamp[size_t(label)] = ws.stamp;
+    ws.label_slot[size_t(label)] = int32_t(s.raw.size());
+  }
+  s.edges.push_back({uint32_t(s.raw.size()), 0});
+  s.raw.push_back(re);
+}
+
+// Ends patch p begun at edge p.first: kept with three edges or more, else undone (zero
+// area after clipping).
+void end_patch(Surface& s, Patch& p) {
+  p.count = uint32_t(s.edges.size()) - p.first;
+  if (p.count < 3) {
+    for (uint32_t k = p.first; k < s.edges.size(); ++k) {
+      Edge e = s.edges[k];
+      s.raw[e.raw].nb[e.flipped ? 0 : 1] = kNoPatch;
+    }
+    s.edges.resize(p.first);
+    return;
+  }
+  s.patches.push_back(p);
+}
+
+// Lines 6-21 for triangle t: its clipped patch, when it is a valid blocker.
+void add_triangle(const mesh::PreparedMesh& m, uint32_t t, const ShaftGeometry& g, const TreeNode& rnode,
+                  const TreeNode& lnode, Workspace& ws, Surface& s) {
+  std::vector<PolyVertex>& poly = ws.poly;
+  std::vector<PolyVertex>& tmp = ws.poly_tmp;
+  const int ax = g.main_axis();
+  // Lines 6-8: a valid blocker intersects the shaft and neither node (cheapest test
+  // first: the shaft planes reject most triangles).
+  Vec3d a = corner_d(m, t, 0), b = corner_d(m, t, 1), c = corner_d(m, t, 2);
+  if (g.separated_by_shaft_plane(a, b, c)) return;
+  if (rnode.contains_triangle(t) || lnode.contains_triangle(t)) return;
+  if (g.separated_by_triangle_plane(a, b, c)) return;
+  // CONSTRUCT-CLIPPED-PATCH: clip to the slab between the clip planes.
+  const auto& tri = m.triangles[t];
+  poly.clear();
+  poly.push_back({a, int32_t(tri.edge_labels[0])});
+  poly.push_back({b, int32_t(tri.edge_labels[1])});
+  poly.push_back({c, int32_t(tri.edge_labels[2])});
+  double mn = std::min({a[ax], b[ax], c[ax]}), mx = std::max({a[ax], b[ax], c[ax]});
+  if (mn < g.clip_lo()) {
+    clip_poly(poly, tmp, ax, g.clip_lo(), 1.0);
+    poly.swap(tmp);
+  }
+  if (mx > g.clip_hi() && poly.size() >= 3) {
+    clip_poly(poly, tmp, ax, g.clip_hi(), -1.0);
+    poly.swap(tmp);
+  }
+  if (poly.size() < 3) return;
+  Patch p;
+  p.first = uint32_t(s.edges.size());
+  p.facing = Facing::Inconsistent;  // line 10: determined later from the triangle
+  p.tri = int32_t(t);
+  const int32_t pi = int32_t(s.patches.size());
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3d& v0 = poly[i].p;
+    const Vec3d& v1 = poly[(i + 1) % n].p;
+    if (v0 == v1) continue;
+    add_edge(s, ws, pi, v0, v1, poly[i].label);
+  }
+  end_patch(s, p);
+}
+
+// Compaction, then the hull: the clipped triangles' edges (before any merge) joined
+// with `whole`, the boxes of the clusters taken whole.
+void finish_surface(Surface& s, Workspace& ws, const AABBd& whole) {
+  compact_raw(s, ws);
+  for (const RawEdge& re : s.raw) {
+    s.hull.extend(re.v[0]);
+    s.hull.extend(re.v[1]);
+  }
+  if (!whole.empty()) s.hull.extend(whole);
+}
+
 }  // namespace
 
 Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws) {
   Surface s = ws.take_surface();
+  ws.reset_labels(ctx.mesh->edge_count());
+  for (uint32_t t : tris) add_triangle(*ctx.mesh, t, g, rnode, lnode, ws, s);
+  finish_surface(s, ws, empty_box());
+  return s;
+}
+
+Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClusters& clusters, const ShaftGeometry& g,
+                                    const TreeNode& rnode, const TreeNode& lnode, Workspace& ws,
+                                    double* whole_nodes) {
+  Surface s = ws.take_surface();
   const mesh::PreparedMesh& m = *ctx.mesh;
   ws.reset_labels(m.edge_count());
-  std::vector<PolyVertex>& poly = ws.poly;
-  std::vector<PolyVertex>& tmp = ws.poly_tmp;
-  int ax = g.main_axis();
-  for (uint32_t t : tris) {
-    // Lines 6-8: a valid blocker intersects the shaft and neither node (cheapest test
-    // first: the shaft planes reject most triangles).
-    Vec3d a = corner_d(m, t, 0), b = corner_d(m, t, 1), c = corner_d(m, t, 2);
-    if (g.separated_by_shaft_plane(a, b, c)) continue;
-    if (rnode.contains_triangle(t) || lnode.contains_triangle(t)) continue;
-    if (g.separated_by_triangle_plane(a, b, c)) continue;
-    // CONSTRUCT-CLIPPED-PATCH: clip to the slab between the clip planes.
-    const auto& tri = m.triangles[t];
-    poly.clear();
-    poly.push_back({a, int32_t(tri.edge_labels[0])});
-    poly.push_back({b, int32_t(tri.edge_labels[1])});
-    poly.push_back({c, int32_t(tri.edge_labels[2])});
-    double mn = std::min({a[ax], b[ax], c[ax]}), mx = std::max({a[ax], b[ax], c[ax]});
-    if (mn < g.clip_lo()) {
-      clip_poly(poly, tmp, ax, g.clip_lo(), 1.0);
-      poly.swap(tmp);
-    }
-    if (mx > g.clip_hi() && poly.size() >= 3) {
-      clip_poly(poly, tmp, ax, g.clip_hi(), -1.0);
-      poly.swap(tmp);
-    }
-    if (poly.size() < 3) continue;
-    int32_t pi = int32_t(s.patches.size());
-    Patch p;
-    p.first = uint32_t(s.edges.size());
-    p.facing = Facing::Inconsistent;  // line 10: determined later from the triangle
-    p.tri = int32_t(t);
-    size_t n = poly.size();
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3d& v0 = poly[i].p;
-      const Vec3d& v1 = poly[(i + 1) % n].p;
-      if (v0 == v1) continue;
-      int32_t label = poly[i].label;
-      // Lines 13-21: reuse the raw edge of the neighbour across this mesh edge.
-      if (label >= 0 && ws.label_stamp[size_t(label)] == ws.stamp) {
-        int32_t ri = ws.label_slot[size_t(label)];
-        RawEdge& re = s.raw[size_t(ri)];
-        if (re.v[0] == v1 && re.v[1] == v0 && re.nb[0] == kNoPatch) {
-          re.nb[0] = pi;
-          s.edges.push_back({uint32_t(ri), 1});
-          continue;
+  const accel::Bvh<float>& bvh = clusters.tree();
+  const int ax = g.main_axis();
+  AABBd whole = empty_box();
+  std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
+  size_t top = 0;
+  if (!bvh.empty()) stack[top++] = 0;
+  while (top > 0) {
+    const uint32_t i = stack[--top];
+    const auto& nd = bvh.node(i);
+    const AABBd box = to_double(nd.box);
+    if (!g.may_intersect_box(box)) continue;  // every triangle below misses the shaft
+    // Taken whole: no triangle below can be in a node's inside list (those meet the
+    // node's box, tree.cpp), none needs clipping (add_triangle's test), and the cone
+    // proves one facing for all (surface_clusters.h).
+    if (clusters.eligible(i) && !nd.box.overlaps(rnode.box) && !nd.box.overlaps(lnode.box) &&
+        !(box.lo[ax] < g.clip_lo()) && !(box.hi[ax] > g.clip_hi())) {
+      const Facing f = clusters.facing_of(i, g.receiver(), g.light());
+      const uint32_t ne = clusters.boundary_count(i);
+      // A closed consistent piece meets no segment between the boxes (each would cross
+      // it as often in as out, and all cross it the same way): MERGE-PATCHES drops it.
+      if (f != Facing::Inconsistent && ne == 0) continue;
+      if (f != Facing::Inconsistent && ne >= 3) {
+        Patch p;
+        p.first = uint32_t(s.edges.size());
+        p.facing = f;
+        p.tri = -1;
+        const int32_t pi = int32_t(s.patches.size());
+        const SurfaceClusters::BoundaryEdge* be = clusters.boundary(i);
+        for (uint32_t k = 0; k < ne; ++k) {
+          const uint32_t t = be[k] >> 2;
+          const int e = int(be[k] & 3);
+          add_edge(s, ws, pi, corner_d(m, t, e), corner_d(m, t, (e + 1) % 3),
+                   int32_t(m.triangles[t].edge_labels[size_t(e)]));
         }
+        end_patch(s, p);
+        whole.extend(box);
+        if (whole_nodes) *whole_nodes += 1;
+        continue;
       }
-      RawEdge re;
-      re.v[0] = v0;
-      re.v[1] = v1;
-      re.nb[1] = pi;
-      re.mesh_edge = label;
-      re.inside = 1;
-      if (label >= 0) {
-        ws.label_stamp[size_t(label)] = ws.stamp;
-        ws.label_slot[size_t(label)] = int32_t(s.raw.size());
-      }
-      s.edges.push_back({uint32_t(s.raw.size()), 0});
-      s.raw.push_back(re);
     }
-    p.count = uint32_t(s.edges.size()) - p.first;
-    if (p.count < 3) {  // zero-area after clipping: undo
-      for (uint32_t k = p.first; k < s.edges.size(); ++k) {
-        Edge e = s.edges[k];
-        s.raw[e.raw].nb[e.flipped ? 0 : 1] = kNoPatch;
-      }
-      s.edges.resize(p.first);
+    if (bvh.is_leaf(nd)) {
+      for (uint32_t t : bvh.leaf_items(nd)) add_triangle(m, t, g, rnode, lnode, ws, s);
       continue;
     }
-    s.patches.push_back(p);
+    stack[top++] = bvh.right(i);
+    stack[top++] = bvh.left(i);
   }
-  compact_raw(s, ws);
-  for (const RawEdge& re : s.raw) {  // the clipped triangles, before any merge
-    s.hull.extend(re.v[0]);
-    s.hull.extend(re.v[1]);
-  }
+  finish_surface(s, ws, whole);
   return s;
 }
 
