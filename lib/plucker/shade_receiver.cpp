@@ -63,6 +63,8 @@ class ReceiverShading {
     for (const UVBox& b : gs_.boxes) all_.extend(b);
   }
   bool exact_once(uint32_t t);
+  void cover_planes();
+  bool covered(const NearPoly& np) const;
   bool exact_near(const NearPoly& np);
   // Inlined into shade_float's loop over the near polygons (a call per polygon and
   // receiver costs measurably on columns).
@@ -162,6 +164,44 @@ void ReceiverShading::pyramid_planes() {
   }
 }
 
+// The planes through r and the edges of the group's interior occluders
+// (interior_occluders.h; in the tree, one-sided with r strictly on their negative side):
+// none when r's translation to the local frame was rounded.
+void ReceiverShading::cover_planes() {
+  gs_.cover_n.clear();
+  gs_.cover_err.clear();
+  if (gs_.interior.empty() || !translates_exactly(rec_.p, lf_.origin)) return;
+  for (const Occluder& o : gs_.interior)
+    for (int m = 0; m < o.n; ++m) {
+      Vec3d err;
+      gs_.cover_n.push_back(edge_plane_normal_err(r_, o.v[m], o.v[(m + 1) % o.n], err));
+      gs_.cover_err.push_back(err);
+    }
+}
+
+// True when every line from r through the near polygon's triangle (local, exact) is
+// strictly positive against every edge of one interior occluder: each such line stabs
+// it, from r's side, so the segment from r to the light passes through it (it lies
+// strictly between the group's receivers and the light) and the tree hides what the
+// triangle would. Signs det[x - r, a - r, b - r] decided against dot_err (lines.h).
+bool ReceiverShading::covered(const NearPoly& np) const {
+  size_t e = 0;
+  for (const Occluder& o : gs_.interior) {
+    bool all = !gs_.cover_n.empty();
+    for (int m = 0; m < o.n && all; ++m) {
+      const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
+      const Vec3d& err = gs_.cover_err[e + size_t(m)];
+      for (int k = 0; k < 3 && all; ++k) {
+        const Vec3d d = np.t[k] - nearest_base(r_, o.v[m], o.v[(m + 1) % o.n], np.t[k]);
+        all = dot(d, nrm) > dot_err(d, nrm, err);
+      }
+    }
+    if (all) return true;
+    e += size_t(o.n);
+  }
+  return false;
+}
+
 // A near polygon's whole triangle, exactly, once for this receiver; true when it was
 // subtracted (false: already done, or r lies in its plane).
 bool ReceiverShading::exact_once(uint32_t t) {
@@ -232,6 +272,10 @@ void ReceiverShading::subtract_near(const NearPoly& np) {
     exact_near(np);
     return;
   }
+  // A closed surface's triangle crossed from r only on the dropped side (keep_side), or
+  // whose every line from r stabs an interior occluder of the tree: nothing for r.
+  if (np.keep_side != 0 && side_r != np.keep_side) return;
+  if (np.exact_local && covered(np)) return;
   // Vertices within the rounding of r's level count as on it: just above it, a vertex
   // next to one below makes a clip point within rounding of itself, and the plane
   // through r and that edge of ulps takes any direction about the line from r (test
@@ -338,6 +382,7 @@ void ReceiverShading::shade_float() {
     plo_ = plo_ - Vec3d(grow_p, grow_p, grow_p);
     phi_ = phi_ + Vec3d(grow_p, grow_p, grow_p);
   }
+  cover_planes();
   for (const NearPoly& np : gs_.near) {
     if (gs_.frags.size() == 0) break;
     subtract_near(np);
