@@ -56,6 +56,7 @@ struct Totals {
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
   uint64_t plane_point_triangles = 0, patches = 0, patch_triangles = 0;
   uint64_t closed_dropped = 0;  // candidates of closed surfaces left out (closed_surfaces.h)
+  uint64_t near_splits = 0;     // splits of the per-receiver subtractions (in bsp.splits too)
   uint64_t interior = 0;        // interior occluders added to trees (interior_occluders.h)
   uint64_t interior_covered = 0;  // candidates left out: every line through them stabs one
   uint64_t bsp_nodes_max = 0;

@@ -411,9 +411,13 @@ void Selection::closed_surface_culling() {
 // is strictly apart from the receivers' (so w = 0 at every receiver: a segment through a
 // polygon crosses the surface) and from the light, put first among the tree occluders
 // when they need no clipping: every corner translated exactly, strictly beyond gcut and
-// before the light plane beyond its rounding (the tests of select_patch), and the
-// receivers strictly on one side of the plane (one-sided, bsp.h). Else left out: they
-// block nothing the surface does not.
+// before the light plane beyond its rounding (the tests of select_patch). Else left out:
+// they block nothing the surface does not. One-sided, facing the light, even when the
+// receivers' box straddles the plane: the tree hides the lines that stab an occluder
+// positively (bsp.h), and every such line from a receiver crosses it between the
+// receiver and the light (it lies in the slab), so what it hides is hidden; receivers on
+// the light's side merely get nothing from it (bsp.h's one-sided condition makes real
+// occluders hide all they block; an interior one need not).
 void Selection::interior_occluders() {
   const InteriorOccluders* io = gs_.ctx->interior;
   if (!io) return;
@@ -440,9 +444,9 @@ void Selection::interior_occluders() {
            dot(gd, o.v[k] - refd) - gs_.gcut > 0.0;
     }
     if (!ok) continue;
-    const int bside = box_side(wq.data(), gs_.wcorners);
-    if (bside == 0) continue;
-    if (bside > 0) std::reverse(o.v, o.v + o.n);
+    // Facing the light (its centroid on the positive side of the plane): lines that
+    // stab it positively cross it from the receivers' side towards the light.
+    if (dot(cross(o.v[1] - o.v[0], o.v[2] - o.v[0]), lf_.bounds.centroid - o.v[0]) < 0.0) std::reverse(o.v, o.v + o.n);
     gs_.occluders.insert(gs_.occluders.begin() + std::ptrdiff_t(added++), o);
     gs_.interior.push_back(o);
     Cover& cv = covers_.emplace_back();

@@ -27,6 +27,7 @@ void Totals::merge(const Totals& o) {
   fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
   closed_dropped += o.closed_dropped;
   interior += o.interior;
+  near_splits += o.near_splits;
   interior_covered += o.interior_covered;
   exact_triangles += o.exact_triangles;
   far_triangles += o.far_triangles;
@@ -119,6 +120,7 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   tot.bsp.merged += c.merged;
   tot.bsp.visits += c.visits;
   tot.bsp.splits += c.splits + near_counters.splits;
+  tot.near_splits += near_counters.splits;
   tot.bsp.on_line += c.on_line + near_counters.on_line;
   tot.bsp.zero_area += c.zero_area + near_counters.zero_area;
 }
@@ -300,6 +302,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("patch_triangles", double(totals.patch_triangles));
   st.set("closed_dropped", double(totals.closed_dropped));
   st.set("interior_occluders", double(totals.interior));
+  st.set("near_splits", double(totals.near_splits));
   st.set("interior_covered", double(totals.interior_covered));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));

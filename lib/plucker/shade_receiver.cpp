@@ -383,19 +383,29 @@ void ReceiverShading::shade_float() {
     phi_ = phi_ + Vec3d(grow_p, grow_p, grow_p);
   }
   cover_planes();
+  auto tree_query = [&]() {
+    const auto tb = std::chrono::steady_clock::now();
+    if (gs_.frags.size() > 0) {
+      bsp_.query(r_, gs_.frags, gs_.tmp);
+      std::swap(gs_.frags, gs_.tmp);
+      gs_.boxes.clear();
+      for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
+      bound_all();
+    }
+    const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+    tot_.bsp_query_s += tbs;
+    tot_.tree_s += tbs;
+  };
+  // With interior occluders the tree hides most of a closed surface's shadow at once, so
+  // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
+  const bool tree_first = !gs_.interior.empty();
+  if (tree_first) tree_query();
   for (const NearPoly& np : gs_.near) {
     if (gs_.frags.size() == 0) break;
     subtract_near(np);
   }
   // Algorithm 1 on the pieces the near polygons left visible.
-  const auto tb = std::chrono::steady_clock::now();
-  if (gs_.frags.size() > 0) {
-    bsp_.query(r_, gs_.frags, gs_.tmp);
-    std::swap(gs_.frags, gs_.tmp);
-  }
-  const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
-  tot_.bsp_query_s += tbs;
-  tot_.tree_s += tbs;
+  if (!tree_first) tree_query();
 }
 
 // Fragments reported in world coordinates: one float rounding per vertex
