@@ -665,6 +665,10 @@ void Selection::sort_near() {
     double q = dot(d, d) / std::max(dot(m, m), std::numeric_limits<double>::min());
     if (!(q >= 0.0)) q = 0.0;  // inf / inf: any place, but a strict weak order
     key[k] = {-q, uint32_t(k)};
+    // With interior occluders (closed surfaces: the near polygons are the silhouette's
+    // band) the farthest from the receivers first: measured on scan 20k, 16% fewer
+    // instructions per solve than the order above (near splits 277k -> 222k).
+    if (!gs_.interior.empty()) key[k] = {-dot(m, m), uint32_t(k)};
   }
   std::sort(key.begin(), key.end());
   std::vector<NearPoly>& sorted = gs_.near_sorted;
