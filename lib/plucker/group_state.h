@@ -137,6 +137,16 @@ struct GroupState {
   std::vector<Vec3d> cover_n, cover_err;  // per receiver: planes through r and the interior occluders' edges
   std::vector<NearPoly> near_sorted;
   std::vector<std::pair<double, uint32_t>> near_key;
+  // The near polygons in blocks of nearby ones (occluder_selection.cpp sort_near): the
+  // union of their boxes, their largest coordinate, and their indices in `near` (in
+  // near_spatial[begin, begin + count)). Empty for short lists.
+  struct NearBlock {
+    Vec3d lo, hi;
+    double pmax;
+    uint32_t begin, count;
+  };
+  std::vector<NearBlock> near_blocks;
+  std::vector<uint32_t> near_spatial, near_pick;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
   std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;

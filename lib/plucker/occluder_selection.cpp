@@ -97,6 +97,7 @@ class Selection {
     gs_.near_verts.insert(gs_.near_verts.end(), part.begin(), part.end());
   }
   void sort_near();
+  void blocks();
 
   GroupState& gs_;
   Totals& tot_;
@@ -675,6 +676,54 @@ void Selection::sort_near() {
   sorted.resize(near.size());
   for (size_t k = 0; k < near.size(); ++k) sorted[k] = near[key[k].second];
   near.swap(sorted);
+  blocks();
+}
+
+// Blocks of kNearBlock near polygons close together (in the Morton order of their box
+// centres in the group's box of them), for the per-receiver culling of whole blocks
+// (shade_receiver.cpp): a receiver's pyramid meets few of a long list's polygons.
+void Selection::blocks() {
+  constexpr size_t kNearBlock = 16;
+  const std::vector<NearPoly>& near = gs_.near;
+  gs_.near_blocks.clear();
+  gs_.near_spatial.clear();
+  if (near.size() < 4 * kNearBlock) return;
+  Vec3d lo = near[0].lo, hi = near[0].hi;
+  for (const NearPoly& np : near) lo = vmin(lo, np.lo), hi = vmax(hi, np.hi);
+  const Vec3d ext = hi - lo;
+  std::vector<std::pair<uint64_t, uint32_t>> keys(near.size());
+  auto spread = [](uint64_t v) {  // 10 bits to every third of 30
+    v &= 0x3FF;
+    v = (v | (v << 16)) & 0x030000FF;
+    v = (v | (v << 8)) & 0x0300F00F;
+    v = (v | (v << 4)) & 0x030C30C3;
+    v = (v | (v << 2)) & 0x09249249;
+    return v;
+  };
+  for (size_t k = 0; k < near.size(); ++k) {
+    const Vec3d c = (near[k].lo + near[k].hi) * 0.5 - lo;
+    uint64_t code = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double f = ext[a] > 0.0 ? c[a] / ext[a] * 1023.0 : 0.0;
+      code |= spread(uint64_t(std::min(1023.0, std::max(0.0, f)))) << a;
+    }
+    keys[k] = {code, uint32_t(k)};
+  }
+  std::sort(keys.begin(), keys.end());
+  for (const auto& kv : keys) gs_.near_spatial.push_back(kv.second);
+  for (size_t b = 0; b < near.size(); b += kNearBlock) {
+    GroupState::NearBlock blk;
+    blk.begin = uint32_t(b);
+    blk.count = uint32_t(std::min(kNearBlock, near.size() - b));
+    blk.lo = near[gs_.near_spatial[b]].lo;
+    blk.hi = near[gs_.near_spatial[b]].hi;
+    for (uint32_t k = blk.begin; k < blk.begin + blk.count; ++k) {
+      blk.lo = vmin(blk.lo, near[gs_.near_spatial[k]].lo);
+      blk.hi = vmax(blk.hi, near[gs_.near_spatial[k]].hi);
+    }
+    blk.pmax = max_component(vmax(vabs(blk.lo), vabs(blk.hi)));
+    gs_.near_blocks.push_back(blk);
+  }
 }
 
 }  // namespace

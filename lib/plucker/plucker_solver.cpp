@@ -55,6 +55,9 @@ void GroupState::clear() {
   near.clear();
   near_sorted.clear();
   near_key.clear();
+  near_blocks.clear();
+  near_spatial.clear();
+  near_pick.clear();
   occluders.clear();
   interior.clear();
   closed_keep.clear();

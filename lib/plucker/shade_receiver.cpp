@@ -64,6 +64,7 @@ class ReceiverShading {
   }
   bool exact_once(uint32_t t);
   void cover_planes();
+  bool block_outside(const GroupState::NearBlock& b) const;
   bool covered(const NearPoly& np) const;
   bool exact_near(const NearPoly& np);
   // Inlined into shade_float's loop over the near polygons (a call per polygon and
@@ -219,6 +220,33 @@ bool ReceiverShading::exact_near(const NearPoly& np) {
   bool done = false;
   for (uint32_t pt : gs_.ctx->tree->patch_triangles(np.patch)) done = exact_once(pt) || done;
   return done;
+}
+
+// True when every polygon of the block would be rejected by subtract_near's box or
+// pyramid test: the block's box misses the pyramid's box, or all of its 8 corners are
+// outside one side plane by the margin subtract_near asks of each vertex (16 times the
+// evaluation bound plus the shift for the local frame's rounding, taken at the block's
+// largest coordinate). The plane value is linear, so a vertex inside the box is
+// further outside than the box's largest corner value, whose exact value is below
+// -shift.
+bool ReceiverShading::block_outside(const GroupState::NearBlock& b) const {
+  if (b.hi.x < plo_.x || b.lo.x > phi_.x || b.hi.y < plo_.y || b.lo.y > phi_.y || b.hi.z < plo_.z || b.lo.z > phi_.z)
+    return true;
+  const size_t m = lf_.poly.size();
+  for (size_t j = 0; j < m; ++j) {
+    const Vec3d& pn = gs_.pyramid[j];
+    const double shift =
+        4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) * (b.pmax + double(lf_.extent) + rmax_);
+    const Vec3d& lj = lf_.poly[j];
+    bool outside = true;
+    for (int c = 0; c < 8 && outside; ++c) {
+      const Vec3d x((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+      const Vec3d d = x - lj;
+      outside = dot(pn, d) < -16.0 * dot_err(d, pn, gs_.pyramid_err[j]) - shift;
+    }
+    if (outside) return true;
+  }
+  return false;
 }
 
 // One near polygon against this receiver: rejected by the receiver's slab and pyramid,
@@ -400,9 +428,23 @@ void ReceiverShading::shade_float() {
   // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
   const bool tree_first = !gs_.interior.empty();
   if (tree_first) tree_query();
-  for (const NearPoly& np : gs_.near) {
-    if (gs_.frags.size() == 0) break;
-    subtract_near(np);
+  if (gs_.near_blocks.empty()) {
+    for (const NearPoly& np : gs_.near) {
+      if (gs_.frags.size() == 0) break;
+      subtract_near(np);
+    }
+  } else {
+    // The polygons of the blocks this receiver's pyramid may meet, in the list's order:
+    // those of the other blocks would each be rejected by subtract_near's first tests.
+    std::vector<uint32_t>& pick = gs_.near_pick;
+    pick.clear();
+    for (const GroupState::NearBlock& b : gs_.near_blocks)
+      if (!block_outside(b)) pick.insert(pick.end(), gs_.near_spatial.begin() + b.begin, gs_.near_spatial.begin() + b.begin + b.count);
+    std::sort(pick.begin(), pick.end());
+    for (uint32_t k : pick) {
+      if (gs_.frags.size() == 0) break;
+      subtract_near(gs_.near[k]);
+    }
   }
   // Algorithm 1 on the pieces the near polygons left visible.
   if (!tree_first) tree_query();
