@@ -88,6 +88,7 @@ class Builder {
   const TriangleSoup& mesh_;
   const std::vector<uint32_t>& tris_;
   const AABB& box_;
+  std::vector<int8_t> side_;  // per vertex of the mesh: its side of Q's plane (verify)
 };
 
 bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Vec3f>& out) {
@@ -181,6 +182,7 @@ bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Ve
 }
 
 bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
+  side_.assign(mesh_.vertices.size(), 2);  // 2: not yet decided
   AABB qb;
   for (const Vec3f& x : q) qb.extend(x);
   for (uint32_t t : tris_) {
@@ -190,9 +192,14 @@ bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
     if (tb.hi.x < qb.lo.x || qb.hi.x < tb.lo.x || tb.hi.y < qb.lo.y || qb.hi.y < tb.lo.y || tb.hi.z < qb.lo.z ||
         qb.hi.z < tb.lo.z)
       continue;
-    // Strictly on one side of Q's plane (exact): apart.
-    const int sa = o3(q[0], q[1], q[2], a);
-    if (sa != 0 && sa == o3(q[0], q[1], q[2], b) && sa == o3(q[0], q[1], q[2], c)) continue;
+    // Strictly on one side of Q's plane (exact, once per vertex): apart.
+    auto side = [&](int k) {
+      int8_t& sd = side_[mesh_.triangles[t][size_t(k)]];
+      if (sd == 2) sd = int8_t(o3(q[0], q[1], q[2], mesh_.corner(t, k)));
+      return int(sd);
+    };
+    const int sa = side(0);
+    if (sa != 0 && sa == side(1) && sa == side(2)) continue;
     if (polygon_meets_triangle(q, a, b, c)) return false;
   }
   return inside(inner, q);
