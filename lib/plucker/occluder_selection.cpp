@@ -687,7 +687,7 @@ void Selection::blocks() {
   const std::vector<NearPoly>& near = gs_.near;
   gs_.near_blocks.clear();
   gs_.near_spatial.clear();
-  if (near.size() < 4 * kNearBlock) return;
+  if (near.size() < 16 * kNearBlock) return;  // short lists (columns: ~64 per group) gain nothing
   Vec3d lo = near[0].lo, hi = near[0].hi;
   for (const NearPoly& np : near) lo = vmin(lo, np.lo), hi = vmax(hi, np.hi);
   const Vec3d ext = hi - lo;
