@@ -95,7 +95,9 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   LazyBsp& bsp = init_group_tree(gs, work, tree_seed, tot);
   tot.init_s += seconds_since(t0);
   auto live_bytes = [&]() {
-    return int64_t(bsp.memory_bytes() + gs.near_verts.capacity() * sizeof(Vec3d) + gs.near.capacity() * sizeof(NearPoly));
+    return int64_t(bsp.memory_bytes() + gs.near_verts.capacity() * sizeof(Vec3d) + gs.near.capacity() * sizeof(NearPoly) +
+                   gs.near_blocks.capacity() * sizeof(GroupState::NearBlock) +
+                   (gs.near_spatial.capacity() + gs.near_pick.capacity()) * sizeof(uint32_t));
   };
   int64_t reported = live_bytes();
   ctx.memory->change(reported);
