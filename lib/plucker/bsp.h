@@ -88,6 +88,15 @@ struct FragmentList {
     polys.emplace_back(uint32_t(verts.size()), uint32_t(n));
     verts.insert(verts.end(), p, p + n);
   }
+  // Appends fragments [a, b) of `in` (its vertices are back to back, as add() writes
+  // them), in order: one copy of their vertices instead of b - a calls of add().
+  void append(const FragmentList& in, size_t a, size_t b) {
+    if (a >= b) return;
+    const uint32_t vb = in.polys[a].first, ve = in.polys[b - 1].first + in.polys[b - 1].second;
+    const uint32_t base = uint32_t(verts.size());
+    verts.insert(verts.end(), in.verts.begin() + vb, in.verts.begin() + ve);
+    for (size_t k = a; k < b; ++k) polys.emplace_back(base + (in.polys[k].first - vb), in.polys[k].second);
+  }
   // Drops the fragments from the n-th on (n <= size()).
   void truncate(size_t n) {
     if (n >= polys.size()) return;

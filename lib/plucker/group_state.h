@@ -17,6 +17,7 @@
 
 #include "lib/plucker/bsp.h"
 #include "lib/plucker/closed_surfaces.h"
+#include "lib/plucker/interior_occluders.h"
 #include "lib/plucker/local_light.h"
 #include "lib/plucker/triangle_tree.h"
 #include "lib/solver.h"
@@ -33,6 +34,14 @@ struct NearPoly {
   Vec3d lo, hi;
   Vec3d t[3], n, err;
   double e1 = 0, e2 = 0, tmax = 0;
+  // Of a closed surface's kept triangle (occluder_selection.cpp closed_surface_culling):
+  // the side (+1, -1) of its plane a receiver must be on for a segment from it to cross
+  // the triangle on the crossing side kept; a receiver strictly on the other side skips
+  // it (closed_surfaces.h: each receiver needs only the crossings from that side). 0: no
+  // such condition.
+  int8_t keep_side = 0;
+  // Its triangle's corners translate exactly to the local frame (local_light.h).
+  bool exact_local = false;
   // A part of a coplanar convex patch (occluder_selection.cpp; `triangle` is its first):
   // the patch, all of whose triangles the exact paths subtract. Else -1.
   int32_t patch = -1;
@@ -47,6 +56,9 @@ struct Totals {
   uint64_t far_triangles = 0, band_triangles = 0, rounded_triangles = 0, close_triangles = 0, level_triangles = 0;
   uint64_t plane_point_triangles = 0, patches = 0, patch_triangles = 0;
   uint64_t closed_dropped = 0;  // candidates of closed surfaces left out (closed_surfaces.h)
+  uint64_t near_splits = 0;     // splits of the per-receiver subtractions (in bsp.splits too)
+  uint64_t interior = 0;        // interior occluders added to trees (interior_occluders.h)
+  uint64_t interior_covered = 0;  // candidates left out: every line through them stabs one
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o);
@@ -76,6 +88,7 @@ struct SolveContext {
   uint64_t seed;
   MemoryMeter* memory;
   const ClosedSurfaces* closed = nullptr;  // null: every candidate is modelled
+  const InteriorOccluders* interior = nullptr;  // null: none added (interior_occluders.h)
 };
 
 // One group and one light: the inputs, what occluder selection finds, and the working
@@ -105,6 +118,8 @@ struct GroupState {
   double light_width = 0;        // the light's longest side, or area over it when smaller
   double work_scale = 0;         // the extent the float path's roundings are relative to
   std::vector<Occluder> occluders;  // the tree's (bsp.h)
+  std::vector<Occluder> interior;   // the interior occluders among them (interior_occluders.h)
+  bool rloc_exact = false;          // every receiver of the group translates exactly
   std::vector<NearPoly> near;       // per receiver, largest over distance first
   std::vector<Vec3d> near_verts;    // their vertices (NearPoly::begin, count)
   std::vector<uint32_t> exact_tris;  // subtracted exactly per receiver
@@ -112,14 +127,26 @@ struct GroupState {
   // Per candidate: 0 kept, else left out as a closed surface's (occluder_selection.cpp);
   // per closed surface met: its slot in closed_count (-1 none), reset after each group.
   std::vector<uint8_t> closed_drop;
+  std::vector<int8_t> closed_keep;   // per candidate kept: NearPoly::keep_side
   std::vector<int32_t> closed_slot;
   std::vector<uint32_t> closed_count;  // per slot: candidates crossable with r positive, negative
   std::vector<int32_t> closed_used;    // the surfaces with a slot
 
   // Scratch of the phases.
   std::vector<Vec3d> poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;
+  std::vector<Vec3d> cover_n, cover_err;  // per receiver: planes through r and the interior occluders' edges
   std::vector<NearPoly> near_sorted;
   std::vector<std::pair<double, uint32_t>> near_key;
+  // The near polygons in blocks of nearby ones (occluder_selection.cpp sort_near): the
+  // union of their boxes, their largest coordinate, and their indices in `near` (in
+  // near_spatial[begin, begin + count)). Empty for short lists.
+  struct NearBlock {
+    Vec3d lo, hi;
+    double pmax;
+    uint32_t begin, count;
+  };
+  std::vector<NearBlock> near_blocks;
+  std::vector<uint32_t> near_spatial, near_pick;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
   std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;

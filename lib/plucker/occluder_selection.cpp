@@ -76,6 +76,7 @@ class Selection {
     receivers_and_slab();
     working_scale();
     shaft_.emplace(rbox_, lf_.box);
+    interior_occluders();
     candidates();
     sort_near();
   }
@@ -85,6 +86,8 @@ class Selection {
   void working_scale();
   void candidates();
   void closed_surface_culling();
+  void interior_occluders();
+  bool covered_by_interior(const Vec3d tri[3]) const;
   bool select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]);
   void select_triangle(uint32_t t, const Vec3d tri[3]);
   [[gnu::always_inline]] inline NearPoly make_near(uint32_t t, const Vec3d tri[3], double tmax,
@@ -94,6 +97,7 @@ class Selection {
     gs_.near_verts.insert(gs_.near_verts.end(), part.begin(), part.end());
   }
   void sort_near();
+  void blocks();
 
   GroupState& gs_;
   Totals& tot_;
@@ -102,6 +106,14 @@ class Selection {
   const float sigma_;
   AABB rbox_;  // the receivers' float box for the shaft (its margin covers the rounding)
   std::optional<Shaft> shaft_;  // made once the receivers' box is known
+  // Per interior occluder added (interior_occluders): its edges' fans against the light
+  // and the receivers' box corners (lines.h EdgeFan), for covered_by_interior.
+  struct Cover {
+    int n = 0;
+    EdgeFan light[kMaxOccluderVertices], region[kMaxOccluderVertices];
+  };
+  std::vector<Cover> covers_;
+  int8_t keep_side_ = 0;  // NearPoly::keep_side of the triangle being selected
 };
 
 // Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
@@ -122,8 +134,10 @@ void Selection::receivers_and_slab() {
   Vec3d dlo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
             std::numeric_limits<double>::infinity());
   Vec3d dhi = -dlo;
+  gs_.rloc_exact = true;
   for (size_t k = 0; k < group.size(); ++k) {
     rloc[k] = to_local_d(scene_.receivers[group[k]].p, lf_.origin);
+    gs_.rloc_exact = gs_.rloc_exact && translates_exactly(scene_.receivers[group[k]].p, lf_.origin);
     rbox_.extend(Vec3f(rloc[k]));
     dlo = vmin(dlo, rloc[k]);
     dhi = vmax(dhi, rloc[k]);
@@ -226,6 +240,10 @@ NearPoly Selection::make_near(uint32_t t, const Vec3d tri[3], double tmax, const
   np.e1 = std::abs(e1.x) + std::abs(e1.y) + std::abs(e1.z);
   np.e2 = std::abs(e2.x) + std::abs(e2.y) + std::abs(e2.z);
   np.tmax = tmax;
+  np.keep_side = keep_side_;
+  np.exact_local = translates_exactly(scene_.mesh.corner(t, 0), lf_.origin) &&
+                   translates_exactly(scene_.mesh.corner(t, 1), lf_.origin) &&
+                   translates_exactly(scene_.mesh.corner(t, 2), lf_.origin);
   return np;
 }
 
@@ -249,6 +267,12 @@ void Selection::candidates() {
     Vec3d tri[3] = {to_local_d(scene_.mesh.corner(t, 0), lf_.origin), to_local_d(scene_.mesh.corner(t, 1), lf_.origin),
                     to_local_d(scene_.mesh.corner(t, 2), lf_.origin)};
     if (shaft_->culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
+    if (!covers_.empty() && translates_exactly(scene_.mesh.corner(t, 0), lf_.origin) &&
+        translates_exactly(scene_.mesh.corner(t, 1), lf_.origin) &&
+        translates_exactly(scene_.mesh.corner(t, 2), lf_.origin) && covered_by_interior(tri)) {
+      ++tot_.interior_covered;
+      continue;
+    }
     if (const int32_t pid = tree.patch(t); pid >= 0 && tree.patch_triangles(pid)[0] == t) {
       const std::span<const uint32_t> tris = tree.patch_triangles(pid);
       std::vector<uint32_t>& at = gs_.patch_at;  // positions of tris[1..] in cand
@@ -263,6 +287,7 @@ void Selection::candidates() {
         continue;
       }
     }
+    keep_side_ = gs_.closed_keep.empty() ? 0 : gs_.closed_keep[ci];
     select_triangle(t, tri);
   }
 }
@@ -368,15 +393,89 @@ void Selection::closed_surface_culling() {
     count[2 * size_t(k) + 1] += neg;
     any = true;
   }
+  std::vector<int8_t>& keep = gs_.closed_keep;
+  keep.assign(cand.size(), 0);
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     if (!drop[ci]) continue;
     const int32_t k = slot[size_t(cs->surface(cand[ci]))];
     const int orient = cs->orientation(cs->surface(cand[ci]));
     const uint8_t need = orient != 0 ? (orient > 0 ? 1 : 2) : (count[2 * size_t(k)] <= count[2 * size_t(k) + 1] ? 1 : 2);
-    drop[ci] = (drop[ci] & need) ? 0 : 1;
+    const bool kept = drop[ci] & need;
+    drop[ci] = kept ? 0 : 1;
+    if (kept) keep[ci] = need == 1 ? 1 : -1;
   }
   for (int32_t s : used) slot[size_t(s)] = -1;
-  if (!any) drop.clear();
+  if (!any) drop.clear(), keep.clear();
+}
+
+// The interior polygons of this light (interior_occluders.h) of closed surfaces whose box
+// is strictly apart from the receivers' (so w = 0 at every receiver: a segment through a
+// polygon crosses the surface) and from the light, put first among the tree occluders
+// when they need no clipping: every corner translated exactly, strictly beyond gcut and
+// before the light plane beyond its rounding (the tests of select_patch). Else left out:
+// they block nothing the surface does not. One-sided, facing the light, even when the
+// receivers' box straddles the plane: the tree hides the lines that stab an occluder
+// positively (bsp.h), and every such line from a receiver crosses it between the
+// receiver and the light (it lies in the slab), so what it hides is hidden; receivers on
+// the light's side merely get nothing from it (bsp.h's one-sided condition makes real
+// occluders hide all they block; an interior one need not).
+void Selection::interior_occluders() {
+  const InteriorOccluders* io = gs_.ctx->interior;
+  if (!io) return;
+  const ClosedSurfaces& cs = *gs_.ctx->closed;
+  AABB lbox, rbox;
+  for (const Vec3f& v : scene_.lights[gs_.li].polygon) lbox.extend(v);
+  for (uint32_t i : *gs_.group) rbox.extend(scene_.receivers[i].p);
+  auto apart = [](const AABB& a, const AABB& b) {
+    return a.hi.x < b.lo.x || b.hi.x < a.lo.x || a.hi.y < b.lo.y || b.hi.y < a.lo.y || a.hi.z < b.lo.z ||
+           b.hi.z < a.lo.z;
+  };
+  const Vec3d nd = lf_.nd, gd = gs_.g, refd = gs_.ref;
+  size_t added = 0;
+  for (const InteriorOccluders::Entry& e : io->of_light(gs_.li)) {
+    if (!apart(cs.box(e.surface), rbox) || !apart(cs.box(e.surface), lbox)) continue;
+    const std::span<const Vec3f> wq = io->polygon(e);
+    Occluder o;
+    o.n = int(wq.size());
+    bool ok = o.n <= kMaxOccluderVertices;
+    for (int k = 0; k < o.n && ok; ++k) {
+      ok = translates_exactly(wq[size_t(k)], lf_.origin);
+      o.v[k] = to_local_d(wq[size_t(k)], lf_.origin);
+      ok = ok && double(sigma_) * (dot(nd, o.v[k]) - lf_.h0) > double(lf_.plane_tol) &&
+           dot(gd, o.v[k] - refd) - gs_.gcut > 0.0;
+    }
+    if (!ok) continue;
+    // Facing the light (its centroid on the positive side of the plane): lines that
+    // stab it positively cross it from the receivers' side towards the light.
+    if (dot(cross(o.v[1] - o.v[0], o.v[2] - o.v[0]), lf_.bounds.centroid - o.v[0]) < 0.0) std::reverse(o.v, o.v + o.n);
+    gs_.occluders.insert(gs_.occluders.begin() + std::ptrdiff_t(added++), o);
+    gs_.interior.push_back(o);
+    Cover& cv = covers_.emplace_back();
+    cv.n = o.n;
+    for (int m = 0; m < o.n; ++m) {
+      cv.light[m].set(o.v[m], o.v[(m + 1) % o.n], lf_.poly.data(), int(lf_.poly.size()));
+      cv.region[m].set(o.v[m], o.v[(m + 1) % o.n], gs_.corners, 8);
+    }
+  }
+  tot_.interior += added;
+}
+
+// True when every line from the receivers' box through the triangle (local, translated
+// exactly) to the light stabs one interior occluder of this group: per edge of it, the
+// lines through the triangle and the light (Theorem 1 on their vvset), or those from the
+// box through the triangle, are strictly positive (bsp.h orientation, either bound). Such
+// a segment r -> l passes through the occluder, which lies strictly between every
+// receiver and the light (interior_occluders), so it is blocked there: the triangle
+// blocks nothing the tree does not, for any receiver of the group.
+bool Selection::covered_by_interior(const Vec3d tri[3]) const {
+  for (const Cover& cv : covers_) {
+    bool all = true;
+    for (int m = 0; m < cv.n && all; ++m)
+      all = cv.light[m].orientation(tri, 3, true) == Orientation::Positive ||
+            (gs_.rloc_exact && cv.region[m].orientation(tri, 3, false) == Orientation::Positive);
+    if (all) return true;
+  }
+  return false;
 }
 
 // A coplanar convex patch (triangle_tree.h; its triangles tris, the first of them with
@@ -425,6 +524,8 @@ bool Selection::select_patch(int32_t pid, std::span<const uint32_t> tris, const 
   auto add_patch_near = [&](const std::vector<Vec3d>& part) {
     NearPoly np = make_near(tris[0], tri0, tmax, part);
     np.patch = pid;
+    np.keep_side = 0;
+    np.exact_local = false;
     add_near(np, part);
   };
   std::vector<Vec3d>&lower = gs_.lower, &upper = gs_.upper;
@@ -565,12 +666,64 @@ void Selection::sort_near() {
     double q = dot(d, d) / std::max(dot(m, m), std::numeric_limits<double>::min());
     if (!(q >= 0.0)) q = 0.0;  // inf / inf: any place, but a strict weak order
     key[k] = {-q, uint32_t(k)};
+    // With interior occluders (closed surfaces: the near polygons are the silhouette's
+    // band) the farthest from the receivers first: measured on scan 20k, 16% fewer
+    // instructions per solve than the order above (near splits 277k -> 222k).
+    if (!gs_.interior.empty()) key[k] = {-dot(m, m), uint32_t(k)};
   }
   std::sort(key.begin(), key.end());
   std::vector<NearPoly>& sorted = gs_.near_sorted;
   sorted.resize(near.size());
   for (size_t k = 0; k < near.size(); ++k) sorted[k] = near[key[k].second];
   near.swap(sorted);
+  blocks();
+}
+
+// Blocks of kNearBlock near polygons close together (in the Morton order of their box
+// centres in the group's box of them), for the per-receiver culling of whole blocks
+// (shade_receiver.cpp): a receiver's pyramid meets few of a long list's polygons.
+void Selection::blocks() {
+  constexpr size_t kNearBlock = 16;
+  const std::vector<NearPoly>& near = gs_.near;
+  gs_.near_blocks.clear();
+  gs_.near_spatial.clear();
+  if (near.size() < 16 * kNearBlock) return;  // short lists (columns: ~64 per group) gain nothing
+  Vec3d lo = near[0].lo, hi = near[0].hi;
+  for (const NearPoly& np : near) lo = vmin(lo, np.lo), hi = vmax(hi, np.hi);
+  const Vec3d ext = hi - lo;
+  std::vector<std::pair<uint64_t, uint32_t>> keys(near.size());
+  auto spread = [](uint64_t v) {  // 10 bits to every third of 30
+    v &= 0x3FF;
+    v = (v | (v << 16)) & 0x030000FF;
+    v = (v | (v << 8)) & 0x0300F00F;
+    v = (v | (v << 4)) & 0x030C30C3;
+    v = (v | (v << 2)) & 0x09249249;
+    return v;
+  };
+  for (size_t k = 0; k < near.size(); ++k) {
+    const Vec3d c = (near[k].lo + near[k].hi) * 0.5 - lo;
+    uint64_t code = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double f = ext[a] > 0.0 ? c[a] / ext[a] * 1023.0 : 0.0;
+      code |= spread(uint64_t(std::min(1023.0, std::max(0.0, f)))) << a;
+    }
+    keys[k] = {code, uint32_t(k)};
+  }
+  std::sort(keys.begin(), keys.end());
+  for (const auto& kv : keys) gs_.near_spatial.push_back(kv.second);
+  for (size_t b = 0; b < near.size(); b += kNearBlock) {
+    GroupState::NearBlock blk;
+    blk.begin = uint32_t(b);
+    blk.count = uint32_t(std::min(kNearBlock, near.size() - b));
+    blk.lo = near[gs_.near_spatial[b]].lo;
+    blk.hi = near[gs_.near_spatial[b]].hi;
+    for (uint32_t k = blk.begin; k < blk.begin + blk.count; ++k) {
+      blk.lo = vmin(blk.lo, near[gs_.near_spatial[k]].lo);
+      blk.hi = vmax(blk.hi, near[gs_.near_spatial[k]].hi);
+    }
+    blk.pmax = max_component(vmax(vabs(blk.lo), vabs(blk.hi)));
+    gs_.near_blocks.push_back(blk);
+  }
 }
 
 }  // namespace

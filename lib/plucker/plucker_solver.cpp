@@ -26,6 +26,9 @@ void Totals::merge(const Totals& o) {
   trees += o.trees; queries += o.queries; occluders += o.occluders; near += o.near;
   fragments += o.fragments; fallback += o.fallback; segment_relations += o.segment_relations;
   closed_dropped += o.closed_dropped;
+  interior += o.interior;
+  near_splits += o.near_splits;
+  interior_covered += o.interior_covered;
   exact_triangles += o.exact_triangles;
   far_triangles += o.far_triangles;
   band_triangles += o.band_triangles;
@@ -52,7 +55,15 @@ void GroupState::clear() {
   near.clear();
   near_sorted.clear();
   near_key.clear();
+  near_blocks.clear();
+  near_spatial.clear();
+  near_pick.clear();
   occluders.clear();
+  interior.clear();
+  closed_keep.clear();
+  cover_n.clear();
+  cover_err.clear();
+  rloc_exact = false;
   for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
   vals.clear();
   for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
@@ -84,7 +95,9 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   LazyBsp& bsp = init_group_tree(gs, work, tree_seed, tot);
   tot.init_s += seconds_since(t0);
   auto live_bytes = [&]() {
-    return int64_t(bsp.memory_bytes() + gs.near_verts.capacity() * sizeof(Vec3d) + gs.near.capacity() * sizeof(NearPoly));
+    return int64_t(bsp.memory_bytes() + gs.near_verts.capacity() * sizeof(Vec3d) + gs.near.capacity() * sizeof(NearPoly) +
+                   gs.near_blocks.capacity() * sizeof(GroupState::NearBlock) +
+                   (gs.near_spatial.capacity() + gs.near_pick.capacity()) * sizeof(uint32_t));
   };
   int64_t reported = live_bytes();
   ctx.memory->change(reported);
@@ -112,6 +125,7 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   tot.bsp.merged += c.merged;
   tot.bsp.visits += c.visits;
   tot.bsp.splits += c.splits + near_counters.splits;
+  tot.near_splits += near_counters.splits;
   tot.bsp.on_line += c.on_line + near_counters.on_line;
   tot.bsp.zero_area += c.zero_area + near_counters.zero_area;
 }
@@ -214,6 +228,18 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     closed_charge.set(closed->memory_bytes());
     if (closed->count() > 0) ctx.closed = &*closed;
   }
+  // Interior occluders of the closed surfaces (interior_occluders.h), once per solve.
+  std::optional<InteriorOccluders> interior;
+  MemoryCharge interior_charge;
+  if (ctx.closed && opt.get_bool("interior", true)) {
+    tt = Clock::now();
+    interior.emplace(scene, *closed);
+    tree_s += seconds_since(tt);
+    memory.change(int64_t(interior->memory_bytes()));
+    interior_charge.bind(&budget, "interior occluders");
+    interior_charge.set(interior->memory_bytes());
+    if (!interior->entries().empty()) ctx.interior = &*interior;
+  }
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
   for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
@@ -280,6 +306,9 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("patches", double(totals.patches));
   st.set("patch_triangles", double(totals.patch_triangles));
   st.set("closed_dropped", double(totals.closed_dropped));
+  st.set("interior_occluders", double(totals.interior));
+  st.set("near_splits", double(totals.near_splits));
+  st.set("interior_covered", double(totals.interior_covered));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
@@ -307,7 +336,9 @@ std::vector<OptionSpec> PluckerSolver::options() const {
           {"choice", "relevant: develop with an occluder the query sees (bsp.h); random: the paper's random occluder",
            {"relevant", "random"}},
           {"closed", "on: occluder selection keeps of a closed surface only what one crossing side needs "
-                     "(closed_surfaces.h); off: every candidate", {"on", "off"}}};
+                     "(closed_surfaces.h); off: every candidate", {"on", "off"}},
+          {"interior", "on: convex polygons inside closed surfaces join the trees as occluders that block nothing "
+                       "new (interior_occluders.h); off: none", {"on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

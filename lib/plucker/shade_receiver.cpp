@@ -63,6 +63,9 @@ class ReceiverShading {
     for (const UVBox& b : gs_.boxes) all_.extend(b);
   }
   bool exact_once(uint32_t t);
+  void cover_planes();
+  bool block_outside(const GroupState::NearBlock& b) const;
+  bool covered(const NearPoly& np) const;
   bool exact_near(const NearPoly& np);
   // Inlined into shade_float's loop over the near polygons (a call per polygon and
   // receiver costs measurably on columns).
@@ -162,6 +165,44 @@ void ReceiverShading::pyramid_planes() {
   }
 }
 
+// The planes through r and the edges of the group's interior occluders
+// (interior_occluders.h; in the tree, one-sided with r strictly on their negative side):
+// none when r's translation to the local frame was rounded.
+void ReceiverShading::cover_planes() {
+  gs_.cover_n.clear();
+  gs_.cover_err.clear();
+  if (gs_.interior.empty() || !translates_exactly(rec_.p, lf_.origin)) return;
+  for (const Occluder& o : gs_.interior)
+    for (int m = 0; m < o.n; ++m) {
+      Vec3d err;
+      gs_.cover_n.push_back(edge_plane_normal_err(r_, o.v[m], o.v[(m + 1) % o.n], err));
+      gs_.cover_err.push_back(err);
+    }
+}
+
+// True when every line from r through the near polygon's triangle (local, exact) is
+// strictly positive against every edge of one interior occluder: each such line stabs
+// it, from r's side, so the segment from r to the light passes through it (it lies
+// strictly between the group's receivers and the light) and the tree hides what the
+// triangle would. Signs det[x - r, a - r, b - r] decided against dot_err (lines.h).
+bool ReceiverShading::covered(const NearPoly& np) const {
+  size_t e = 0;
+  for (const Occluder& o : gs_.interior) {
+    bool all = !gs_.cover_n.empty();
+    for (int m = 0; m < o.n && all; ++m) {
+      const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
+      const Vec3d& err = gs_.cover_err[e + size_t(m)];
+      for (int k = 0; k < 3 && all; ++k) {
+        const Vec3d d = np.t[k] - nearest_base(r_, o.v[m], o.v[(m + 1) % o.n], np.t[k]);
+        all = dot(d, nrm) > dot_err(d, nrm, err);
+      }
+    }
+    if (all) return true;
+    e += size_t(o.n);
+  }
+  return false;
+}
+
 // A near polygon's whole triangle, exactly, once for this receiver; true when it was
 // subtracted (false: already done, or r lies in its plane).
 bool ReceiverShading::exact_once(uint32_t t) {
@@ -179,6 +220,33 @@ bool ReceiverShading::exact_near(const NearPoly& np) {
   bool done = false;
   for (uint32_t pt : gs_.ctx->tree->patch_triangles(np.patch)) done = exact_once(pt) || done;
   return done;
+}
+
+// True when every polygon of the block would be rejected by subtract_near's box or
+// pyramid test: the block's box misses the pyramid's box, or all of its 8 corners are
+// outside one side plane by the margin subtract_near asks of each vertex (16 times the
+// evaluation bound plus the shift for the local frame's rounding, taken at the block's
+// largest coordinate). The plane value is linear, so a vertex inside the box is
+// further outside than the box's largest corner value, whose exact value is below
+// -shift.
+bool ReceiverShading::block_outside(const GroupState::NearBlock& b) const {
+  if (b.hi.x < plo_.x || b.lo.x > phi_.x || b.hi.y < plo_.y || b.lo.y > phi_.y || b.hi.z < plo_.z || b.lo.z > phi_.z)
+    return true;
+  const size_t m = lf_.poly.size();
+  for (size_t j = 0; j < m; ++j) {
+    const Vec3d& pn = gs_.pyramid[j];
+    const double shift =
+        4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) * (b.pmax + double(lf_.extent) + rmax_);
+    const Vec3d& lj = lf_.poly[j];
+    bool outside = true;
+    for (int c = 0; c < 8 && outside; ++c) {
+      const Vec3d x((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+      const Vec3d d = x - lj;
+      outside = dot(pn, d) < -16.0 * dot_err(d, pn, gs_.pyramid_err[j]) - shift;
+    }
+    if (outside) return true;
+  }
+  return false;
 }
 
 // One near polygon against this receiver: rejected by the receiver's slab and pyramid,
@@ -232,6 +300,10 @@ void ReceiverShading::subtract_near(const NearPoly& np) {
     exact_near(np);
     return;
   }
+  // A closed surface's triangle crossed from r only on the dropped side (keep_side), or
+  // whose every line from r stabs an interior occluder of the tree: nothing for r.
+  if (np.keep_side != 0 && side_r != np.keep_side) return;
+  if (np.exact_local && covered(np)) return;
   // Vertices within the rounding of r's level count as on it: just above it, a vertex
   // next to one below makes a clip point within rounding of itself, and the plane
   // through r and that edge of ulps takes any direction about the line from r (test
@@ -338,19 +410,44 @@ void ReceiverShading::shade_float() {
     plo_ = plo_ - Vec3d(grow_p, grow_p, grow_p);
     phi_ = phi_ + Vec3d(grow_p, grow_p, grow_p);
   }
-  for (const NearPoly& np : gs_.near) {
-    if (gs_.frags.size() == 0) break;
-    subtract_near(np);
+  cover_planes();
+  auto tree_query = [&]() {
+    const auto tb = std::chrono::steady_clock::now();
+    if (gs_.frags.size() > 0) {
+      bsp_.query(r_, gs_.frags, gs_.tmp);
+      std::swap(gs_.frags, gs_.tmp);
+      gs_.boxes.clear();
+      for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
+      bound_all();
+    }
+    const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+    tot_.bsp_query_s += tbs;
+    tot_.tree_s += tbs;
+  };
+  // With interior occluders the tree hides most of a closed surface's shadow at once, so
+  // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
+  const bool tree_first = !gs_.interior.empty();
+  if (tree_first) tree_query();
+  if (gs_.near_blocks.empty()) {
+    for (const NearPoly& np : gs_.near) {
+      if (gs_.frags.size() == 0) break;
+      subtract_near(np);
+    }
+  } else {
+    // The polygons of the blocks this receiver's pyramid may meet, in the list's order:
+    // those of the other blocks would each be rejected by subtract_near's first tests.
+    std::vector<uint32_t>& pick = gs_.near_pick;
+    pick.clear();
+    for (const GroupState::NearBlock& b : gs_.near_blocks)
+      if (!block_outside(b)) pick.insert(pick.end(), gs_.near_spatial.begin() + b.begin, gs_.near_spatial.begin() + b.begin + b.count);
+    std::sort(pick.begin(), pick.end());
+    for (uint32_t k : pick) {
+      if (gs_.frags.size() == 0) break;
+      subtract_near(gs_.near[k]);
+    }
   }
   // Algorithm 1 on the pieces the near polygons left visible.
-  const auto tb = std::chrono::steady_clock::now();
-  if (gs_.frags.size() > 0) {
-    bsp_.query(r_, gs_.frags, gs_.tmp);
-    std::swap(gs_.frags, gs_.tmp);
-  }
-  const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
-  tot_.bsp_query_s += tbs;
-  tot_.tree_s += tbs;
+  if (!tree_first) tree_query();
 }
 
 // Fragments reported in world coordinates: one float rounding per vertex

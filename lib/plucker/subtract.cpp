@@ -73,12 +73,18 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   if (first == in.size()) return false;
   out.clear();
   out_boxes.clear();
-  for (size_t f = 0; f < first; ++f) keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
+  // Fragments q misses are copied whole, each run of them at once (run_begin: the first
+  // of the run not yet copied), in their order.
+  size_t run_begin = 0;
+  auto flush = [&](size_t end) {
+    if (end <= run_begin) return;
+    out.append(in, run_begin, end);
+    out_boxes.insert(out_boxes.end(), boxes.begin() + std::ptrdiff_t(run_begin), boxes.begin() + std::ptrdiff_t(end));
+  };
   for (size_t f = first; f < in.size(); ++f) {
-    if (f > first && misses(f)) {
-      keep_whole(in, f, boxes[f], out.size(), out, out_boxes);
-      continue;
-    }
+    if (f > first && misses(f)) continue;
+    flush(f);
+    run_begin = f + 1;
     // The piece still walked: the input fragment itself until the first split, then
     // `cur`. The pieces are written into pos and neg (room for 2n each, fragment.h); the
     // buffers only grow.
@@ -115,6 +121,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     }
     // A piece positive against every edge stabs q: blocked, dropped.
   }
+  flush(in.size());
   return true;
 }
 
