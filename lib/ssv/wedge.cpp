@@ -323,6 +323,7 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     tri_class[t] = int8_t((all_pos ? 2 : all_neg ? -2 : 0) | (act ? 1 : 0));
     return tri_class[t];
   };
+  size_t last_part = 0;  // the region part that saw the last edge (regions only)
   for (size_t k = 0; k < n_edges; ++k) {
     const size_t ei = subset ? (*subset)[k] : k;
     const Edge& e = edges[ei];
@@ -358,12 +359,17 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
       const Plane f1 = to_float(p1), f2 = to_float(p2);
       bool seen = !region_excludes(f1, f2, regions->all, regions->eps);
       if (seen) {
+        // The part that saw the last edge first: edges in label order are neighbours,
+        // and whether some part sees the edge does not depend on the order tried.
+        const size_t np = regions->parts.size();
         seen = false;
-        for (const AABB& b : regions->parts)
-          if (!region_excludes(f1, f2, b, regions->eps)) {
+        for (size_t j = 0; j < np && !seen; ++j) {
+          const size_t q = j == 0 ? last_part : (j <= last_part ? j - 1 : j);
+          if (!region_excludes(f1, f2, regions->parts[q], regions->eps)) {
             seen = true;
-            break;
+            last_part = q;
           }
+        }
       }
       if (!seen) {
         ++counts.region_culled;
