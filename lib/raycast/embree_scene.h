@@ -142,6 +142,7 @@ class EmbreeScene {
 
   const TriangleSoup* soup_;
   bool verify_;
+  uint64_t id_;  // distinct per scene: key of the verification's per-thread terms cache
   void* scene_ = nullptr;       // nullptr when the mesh is outside Embree's domain
   bool mesh_in_bound_ = true;
   mutable std::atomic<size_t> fallback_rays_{0}, rejected_hits_{0}, unverified_hits_{0};
