@@ -372,8 +372,9 @@ struct alignas(64) FanPacket {
     }
   }
   // Sets lanes [0, n) to the segments from `from` to to[0..n); lanes whose end point is
-  // outside Embree's domain stay inactive (valid[k] == 0), as do lanes n..W-1.
-  void set(const Vec3f& from, const Vec3f* to, int n, unsigned base) {
+  // outside Embree's domain stay inactive (valid[k] == 0), as do lanes n..W-1. Returns
+  // the active lanes as bits.
+  uint32_t set(const Vec3f& from, const Vec3f* to, int n, unsigned base) {
     for (int k = 0; k < W; ++k) {
       ray.org_x[k] = from.x;
       ray.org_y[k] = from.y;
@@ -382,27 +383,43 @@ struct alignas(64) FanPacket {
       ray.id[k] = base + unsigned(k);
       valid[k] = 0;
     }
+    uint32_t active = 0;
     for (int k = 0; k < n; ++k) {
       if (!within_embree_bound(to[k])) continue;
       valid[k] = -1;
+      active |= 1u << k;
       const Vec3f d = to[k] - from;
       ray.dir_x[k] = d.x;
       ray.dir_y[k] = d.y;
       ray.dir_z[k] = d.z;
     }
+    return active;
+  }
+  // Lanes [0, n) that came back blocked (tfar set to -inf; inactive lanes keep 1), as bits.
+  uint32_t blocked(int n) const {
+    constexpr float kHit = -std::numeric_limits<float>::infinity();
+    uint32_t bits = 0;
+    for (int k = 0; k < n; ++k) bits |= uint32_t(ray.tfar[k] == kHit) << k;
+    return bits;
   }
 };
 
 }  // namespace
 
-void EmbreeScene::recheck_unverified(const Vec3f& from, const Vec3f* to, int n, unsigned base, uint32_t accepted,
-                                     bool* out) const {
+void EmbreeScene::finish_lanes(const Vec3f& from, const Vec3f* to, int n, uint32_t active, uint32_t blocked,
+                               uint32_t accepted, bool* out) const {
+  for (int k = 0; k < n; ++k) out[k] = (blocked >> k) & 1u;
+  // Lanes outside Embree's domain: the fallback, one by one (rare).
+  for (uint32_t rest = ((1u << n) - 1u) & ~active; rest; rest &= rest - 1) {
+    const int k = __builtin_ctz(rest);
+    out[k] = occluded(from, to[k]);
+  }
   if (!verify_) return;
-  for (int k = 0; k < n; ++k)
-    if (out[k] && !((accepted >> ((base + unsigned(k)) & 31u)) & 1u) && within_embree_bound(to[k])) {
-      unverified_hits_.fetch_add(1, std::memory_order_relaxed);
-      out[k] = fallback_occluded(*soup_, from, to[k]);
-    }
+  for (uint32_t rest = blocked & ~accepted; rest; rest &= rest - 1) {
+    const int k = __builtin_ctz(rest);
+    unverified_hits_.fetch_add(1, std::memory_order_relaxed);
+    out[k] = fallback_occluded(*soup_, from, to[k]);
+  }
 }
 
 void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* out) const {
@@ -423,21 +440,18 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
   vc.fan_to = to;
   vc.soup = soup_;
   vc.cache = bound_terms_cache(id_, from);
-  constexpr float kHit = -std::numeric_limits<float>::infinity();
   if (native_packet_width() == 16) {
     thread_local FanPacket<16, RTCRay16> pk;
-    pk.set(from, to, n, 0);
+    const uint32_t active = pk.set(from, to, n, 0);
     rtcOccluded16(pk.valid, static_cast<RTCScene>(scene_), &vc.base, &pk.ray);
-    for (int k = 0; k < n; ++k) out[k] = pk.valid[k] ? pk.ray.tfar[k] == kHit : occluded(from, to[k]);
-    recheck_unverified(from, to, n, 0, vc.accepted, out);
+    finish_lanes(from, to, n, active, pk.blocked(n) & active, vc.accepted, out);
   } else {
     thread_local FanPacket<8, RTCRay8> pk;
     for (int b = 0; b < n; b += 8) {
       const int m = std::min(8, n - b);
-      pk.set(from, to + b, m, unsigned(b));
+      const uint32_t active = pk.set(from, to + b, m, unsigned(b));
       rtcOccluded8(pk.valid, static_cast<RTCScene>(scene_), &vc.base, &pk.ray);
-      for (int k = 0; k < m; ++k) out[b + k] = pk.valid[k] ? pk.ray.tfar[k] == kHit : occluded(from, to[b + k]);
-      recheck_unverified(from, to + b, m, unsigned(b), vc.accepted, out + b);
+      finish_lanes(from, to + b, m, active, pk.blocked(m) & active, vc.accepted >> b, out + b);
     }
   }
   if (vc.rejected) rejected_hits_.fetch_add(vc.rejected, std::memory_order_relaxed);

@@ -419,3 +419,33 @@ TEST(Raycast, CachedCrossingTermsOfAnotherSceneCannotConfirmAFalseHit) {
   }
   EXPECT_EQ(sliver_es.rejected_hits(), 3u);
 }
+
+TEST(Raycast, FanLanesBeyondEmbreesDomainUseTheFallbackOneByOne) {
+  // A fan whose odd lanes end beyond Embree's domain (a light point pushed 2^41 along its
+  // direction from the origin): those lanes go to the fallback, the even ones to the
+  // packet; every lane equals the double-precision test without Embree, in 8- and
+  // 16-lane fans and one of 13 (a partial packet).
+  TriangleSoup soup;
+  soup.vertices = {Vec3f(-1, -1, 1), Vec3f(1, -1, 1), Vec3f(0, 1, 1)};
+  soup.triangles = {{0u, 1u, 2u}};
+  raycast::EmbreeScene es(soup, true);
+  const Vec3f from(0.1f, 0.0f, 0.0f);
+  size_t far_lanes = 0, blocked = 0;
+  for (int n : {8, 13, 16}) {
+    Vec3f to[16];
+    bool out[16];
+    for (int k = 0; k < n; ++k) {
+      const Vec3f near(-2.0f + 0.3f * float(k), 0.5f - 0.1f * float(k), 2.0f);
+      to[k] = k % 2 ? from + (near - from) * std::ldexp(1.0f, 41) : near;
+      far_lanes += k % 2;
+    }
+    es.occluded_fan(from, to, n, out);
+    for (int k = 0; k < n; ++k) {
+      EXPECT_EQ(out[k], raycast::fallback_occluded(soup, from, to[k])) << n << " lane " << k;
+      blocked += out[k];
+    }
+  }
+  EXPECT_EQ(es.fallback_rays(), far_lanes);
+  EXPECT_GT(blocked, 0u);
+  EXPECT_EQ(es.unverified_hits(), 0u);
+}
