@@ -215,7 +215,9 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
   auto* vc = reinterpret_cast<VerifyContext*>(args->context);
   const IeeeFloatMode ieee(vc->csr);
   const Vec3d p = to_double(vc->from);
-  // Lanes with a candidate hit, as bits (packets of 8 or 16 mostly carry one or two).
+  // Lanes with a candidate hit, as bits (packets of 8 or 16 mostly carry one or two);
+  // queries are single rays or packets of at most 16.
+  VG_CHECK(args->N <= 32);
   uint32_t lanes = 0;
   for (unsigned i = 0; i < args->N; ++i) lanes |= uint32_t(args->valid[i] == -1) << (i & 31u);
   for (; lanes; lanes &= lanes - 1) {
