@@ -135,13 +135,16 @@ class EmbreeScene {
   // ranged: the filter confirms with the ranged test, else with segment_hits_triangle.
   bool occluded_embree(const Vec3f& from, const Vec3f& to, float tnear, float tfar, bool ranged,
                        size_t* rejected = nullptr) const;
-  // Fan lanes [0, n) (ray ids base..base+n-1) answered blocked without an accepted hit
-  // (bit id of `accepted`): answered again by fallback_occluded.
-  void recheck_unverified(const Vec3f& from, const Vec3f* to, int n, unsigned base, uint32_t accepted,
-                          bool* out) const;
+  // Results of fan lanes [0, n) from their bits (active: traced by Embree, blocked: came
+  // back blocked, accepted: the filter let a hit of theirs stand): lanes outside
+  // Embree's domain go to occluded(), and blocked lanes without an accepted hit are
+  // answered again by fallback_occluded (unverified_hits).
+  void finish_lanes(const Vec3f& from, const Vec3f* to, int n, uint32_t active, uint32_t blocked, uint32_t accepted,
+                    bool* out) const;
 
   const TriangleSoup* soup_;
   bool verify_;
+  uint64_t id_;  // distinct per scene: key of the verification's per-thread terms cache
   void* scene_ = nullptr;       // nullptr when the mesh is outside Embree's domain
   bool mesh_in_bound_ = true;
   mutable std::atomic<size_t> fallback_rays_{0}, rejected_hits_{0}, unverified_hits_{0};

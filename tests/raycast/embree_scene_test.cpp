@@ -358,3 +358,94 @@ TEST(Raycast, PacketFanAgreesWithSingleRays) {
     for (int a = 0; a < 4; ++a) EXPECT_EQ(out[b * 4 + a], a >= 2 && b >= 2) << a << "," << b;
   EXPECT_EQ(es.fallback_rays(), 16u);
 }
+
+TEST(Raycast, CachedCrossingTermsNeverCrossScenesOrOrigins) {
+  // The verification keeps crossing terms per thread, keyed by scene, origin and
+  // primitive id. Two scenes whose triangle 0 differs (one blocks the fans, the other is
+  // moved aside) are queried alternately from the same origin, in many fans per origin
+  // (cache hits) and from several origins: every lane must equal the double-precision
+  // test over the lane's own scene, computed without Embree.
+  TriangleSoup near_soup, aside_soup;
+  near_soup.vertices = {Vec3f(-1, -1, 1), Vec3f(1, -1, 1), Vec3f(0, 1, 1)};
+  near_soup.triangles = {{0u, 1u, 2u}};
+  aside_soup.vertices = {Vec3f(1.5f, -1, 1), Vec3f(3.5f, -1, 1), Vec3f(2.5f, 1, 1)};
+  aside_soup.triangles = {{0u, 1u, 2u}};
+  raycast::EmbreeScene near_es(near_soup, true), aside_es(aside_soup, true);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-3.0f, 7.0f);
+  size_t blocked_near = 0, blocked_aside = 0;
+  for (int o = 0; o < 6; ++o) {
+    const Vec3f from(u(rng) * 0.1f, u(rng) * 0.1f, 0.0f);
+    for (int fan = 0; fan < 8; ++fan) {
+      Vec3f to[16];
+      bool out[16];
+      for (auto& t : to) t = Vec3f(u(rng), u(rng) * 0.5f, 2.0f);
+      for (const raycast::EmbreeScene* es : {&near_es, &aside_es}) {
+        const TriangleSoup& soup = es == &near_es ? near_soup : aside_soup;
+        es->occluded_fan(from, to, 16, out);
+        for (int k = 0; k < 16; ++k) {
+          EXPECT_EQ(out[k], raycast::fallback_occluded(soup, from, to[k])) << o << " " << fan << " " << k;
+          EXPECT_EQ(out[k], es->occluded(from, to[k]));
+          (es == &near_es ? blocked_near : blocked_aside) += out[k];
+        }
+      }
+    }
+  }
+  EXPECT_GT(blocked_near, 0u);
+  EXPECT_GT(blocked_aside, 0u);
+  EXPECT_EQ(near_es.unverified_hits() + aside_es.unverified_hits(), 0u);
+}
+
+TEST(Raycast, CachedCrossingTermsOfAnotherSceneCannotConfirmAFalseHit) {
+  // The coplanar false hit of VerifiedScenesRejectRobustModesCoplanarFalseHit, queried
+  // right after a scene whose triangle 0 the same segment certainly crosses: terms
+  // cached for that scene's triangle 0 from the same origin would prove the sliver's
+  // false candidate; the per-scene key must keep them apart.
+  TriangleSoup sliver;
+  sliver.vertices = {Vec3f(-0.0f, -0.5f, 1.5f), Vec3f(-0.5f, -1, 1), Vec3f(0, -1, 1)};
+  sliver.triangles = {{0, 1, 2}};
+  const Vec3f from(-2, -0.50000006f, 1.5f), to(-0.0f, 0, 2);
+  const Vec3f mid = (from + to) * 0.5f;
+  TriangleSoup wall;  // the plane x = mid.x, around the segment's midpoint
+  wall.vertices = {mid + Vec3f(0, -4, -4), mid + Vec3f(0, 4, -4), mid + Vec3f(0, 0, 4)};
+  wall.triangles = {{0, 1, 2}};
+  raycast::EmbreeScene wall_es(wall, true), sliver_es(sliver, true);
+  for (int round = 0; round < 3; ++round) {
+    bool out = false;
+    wall_es.occluded_fan(from, &to, 1, &out);
+    EXPECT_TRUE(out);
+    sliver_es.occluded_fan(from, &to, 1, &out);
+    EXPECT_FALSE(out);
+  }
+  EXPECT_EQ(sliver_es.rejected_hits(), 3u);
+}
+
+TEST(Raycast, FanLanesBeyondEmbreesDomainUseTheFallbackOneByOne) {
+  // A fan whose odd lanes end beyond Embree's domain (a light point pushed 2^41 along its
+  // direction from the origin): those lanes go to the fallback, the even ones to the
+  // packet; every lane equals the double-precision test without Embree, in 8- and
+  // 16-lane fans and one of 13 (a partial packet).
+  TriangleSoup soup;
+  soup.vertices = {Vec3f(-1, -1, 1), Vec3f(1, -1, 1), Vec3f(0, 1, 1)};
+  soup.triangles = {{0u, 1u, 2u}};
+  raycast::EmbreeScene es(soup, true);
+  const Vec3f from(0.1f, 0.0f, 0.0f);
+  size_t far_lanes = 0, blocked = 0;
+  for (int n : {8, 13, 16}) {
+    Vec3f to[16];
+    bool out[16];
+    for (int k = 0; k < n; ++k) {
+      const Vec3f near(-2.0f + 0.3f * float(k), 0.5f - 0.1f * float(k), 2.0f);
+      to[k] = k % 2 ? from + (near - from) * std::ldexp(1.0f, 41) : near;
+      far_lanes += k % 2;
+    }
+    es.occluded_fan(from, to, n, out);
+    for (int k = 0; k < n; ++k) {
+      EXPECT_EQ(out[k], raycast::fallback_occluded(soup, from, to[k])) << n << " lane " << k;
+      blocked += out[k];
+    }
+  }
+  EXPECT_EQ(es.fallback_rays(), far_lanes);
+  EXPECT_GT(blocked, 0u);
+  EXPECT_EQ(es.unverified_hits(), 0u);
+}
