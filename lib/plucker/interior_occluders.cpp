@@ -189,9 +189,7 @@ bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
     const Vec3f &a = mesh_.corner(t, 0), &b = mesh_.corner(t, 1), &c = mesh_.corner(t, 2);
     AABB tb;
     tb.extend(a), tb.extend(b), tb.extend(c);
-    if (tb.hi.x < qb.lo.x || qb.hi.x < tb.lo.x || tb.hi.y < qb.lo.y || qb.hi.y < tb.lo.y || tb.hi.z < qb.lo.z ||
-        qb.hi.z < tb.lo.z)
-      continue;
+    if (!tb.overlaps(qb)) continue;
     // Strictly on one side of Q's plane (exact, once per vertex): apart.
     auto side = [&](int k) {
       int8_t& sd = side_[mesh_.triangles[t][size_t(k)]];
@@ -225,9 +223,7 @@ bool Builder::inside(const Vec3f& x, std::span<const Vec3f> /*q*/) {
       const Vec3f &a = mesh_.corner(t, 0), &b = mesh_.corner(t, 1), &c = mesh_.corner(t, 2);
       AABB tb;
       tb.extend(a), tb.extend(b), tb.extend(c);
-      if (tb.hi.x < sb.lo.x || sb.hi.x < tb.lo.x || tb.hi.y < sb.lo.y || sb.hi.y < tb.lo.y || tb.hi.z < sb.lo.z ||
-          sb.hi.z < tb.lo.z)
-        continue;
+      if (!tb.overlaps(sb)) continue;
       const int sx = o3(a, b, c, x), sf = o3(a, b, c, f);
       if (sx * sf >= 0) {
         // Not strictly across the plane: no proper crossing. x on the plane but off the

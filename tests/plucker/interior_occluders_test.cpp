@@ -19,6 +19,8 @@ namespace {
 
 using test_support::family_scene;
 using test_support::light_scene;
+using test_support::expect_region_oracle;
+using test_support::expect_same_answers;
 using test_support::run;
 
 TEST(PluckerInteriorOccluders, PolygonMeetsTriangleHandWorked) {
@@ -98,26 +100,6 @@ TEST(PluckerInteriorOccluders, ScanPolygonsArePlanarConvexAndInside) {
       EXPECT_FALSE(plucker::polygon_meets_triangle(q, s->mesh.corner(t, 0), s->mesh.corner(t, 1), s->mesh.corner(t, 2)));
     }
   }
-}
-
-void expect_same_answers(const Scene& s, const SolveResult& a, const SolveResult& b) {
-  for (size_t i = 0; i < s.receivers.size(); ++i)
-    for (size_t li = 0; li < s.lights.size(); ++li) {
-      EXPECT_NEAR(a.receivers[i].visible_fraction[li], b.receivers[i].visible_fraction[li], 1e-6) << i << " " << li;
-      for (int j = 0; j < s.lights[li].samples; ++j) {
-        const size_t bit = s.light_offset(li) + size_t(j);
-        EXPECT_EQ(a.receivers[i].visible(bit), b.receivers[i].visible(bit)) << i << " " << li << " " << j;
-      }
-    }
-}
-
-void expect_region_oracle(const Scene& s, const SolveResult& r) {
-  for (size_t i = 0; i < s.receivers.size(); ++i)
-    for (size_t li = 0; li < s.lights.size(); ++li) {
-      const oracle::RegionAnswer reg = oracle::visible_region(s, i, li);
-      if (reg.edge_on) continue;
-      EXPECT_NEAR(r.receivers[i].visible_fraction[li], reg.visible_fraction, 1e-4) << i << " " << li;
-    }
 }
 
 TEST(PluckerInteriorOccluders, ScanAnswersMatchThePreviousPathAndTheOracle) {
