@@ -1,6 +1,8 @@
 // lib/iss/traversal.cpp: automatic ray casting of shafts whose subdivision does not pay.
 #include <gtest/gtest.h>
 
+#include <initializer_list>
+
 #include "lib/solver.h"
 #include "oracle/relation_oracle.h"
 #include "tests/support/family_scene.h"
@@ -10,6 +12,38 @@ using namespace visgate;
 using namespace visgate::test_support;
 
 // ---- the exact oracle on the scene families ------------------------------------------------
+
+namespace {
+
+// Against the exact relation oracle: the relations it decides with margin at least tau
+// (`checked`), how many answers of `rs` are wrong there (`wrong`), and how many of those
+// relations the first two of `rs` answer differently (`differ`).
+struct OracleTally {
+  size_t checked = 0, wrong = 0, differ = 0;
+};
+OracleTally tally_against_oracle(const Scene& s, const oracle::RelationOracleResult& ex, double tau,
+                                 std::initializer_list<const SolveResult*> rs) {
+  OracleTally t;
+  const SolveResult* first = *rs.begin();
+  const SolveResult* second = rs.size() > 1 ? *(rs.begin() + 1) : first;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      const char cls = ex.classes[i][k];
+      if (cls == 'd' || ex.margins[i][k] < tau) continue;
+      ++t.checked;
+      for (const SolveResult* r : rs) t.wrong += r->receivers[i].visible(k) != (cls == 'v');
+      t.differ += first->receivers[i].visible(k) != second->receivers[i].visible(k);
+    }
+  return t;
+}
+
+// Every relation is answered exactly once: by a ray, a blocked shaft or an empty shaft.
+double relations_answered(const SolveResult& r) {
+  return r.stats.get("relations_ray_cast") + r.stats.get("relations_blocked_by_shaft") +
+         r.stats.get("relations_visible_by_empty_shaft");
+}
+
+}  // namespace
 
 TEST(IssOracle, AutomaticRaysEngageOnColumnsAndMatchTheOracle) {
   // Columns at 1024 receivers: every receiver node sees some column edge-on against the
@@ -25,21 +59,10 @@ TEST(IssOracle, AutomaticRaysEngageOnColumnsAndMatchTheOracle) {
   EXPECT_GT(on.stats.get("auto_ray_shafts"), 0.0);
   EXPECT_LT(on.stats.get("shafts_built"), off.stats.get("shafts_built"));
   EXPECT_EQ(off.stats.get("auto_ray_shafts"), 0.0);
-  EXPECT_EQ(on.stats.get("relations_ray_cast") + on.stats.get("relations_blocked_by_shaft") +
-                on.stats.get("relations_visible_by_empty_shaft"),
-            double(s.relation_count()));
-  size_t bad_on = 0, bad_off = 0, checked = 0;
-  for (size_t i = 0; i < s.receivers.size(); ++i)
-    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-      char cls = ex.classes[i][k];
-      if (cls == 'd' || ex.margins[i][k] < tau) continue;
-      ++checked;
-      bad_on += on.receivers[i].visible(k) != (cls == 'v');
-      bad_off += off.receivers[i].visible(k) != (cls == 'v');
-    }
-  EXPECT_GT(checked, s.relation_count() / 2);
-  EXPECT_EQ(bad_on, 0u);
-  EXPECT_EQ(bad_off, 0u);
+  EXPECT_EQ(relations_answered(on), double(s.relation_count()));
+  const OracleTally t = tally_against_oracle(s, ex, tau, {&on, &off});
+  EXPECT_GT(t.checked, s.relation_count() / 2);
+  EXPECT_EQ(t.wrong, 0u);
 }
 
 TEST(IssOracle, LightSplitChoiceAnswersLikeWholeLightLeavesAndTheOracle) {
@@ -60,22 +83,11 @@ TEST(IssOracle, LightSplitChoiceAnswersLikeWholeLightLeavesAndTheOracle) {
   EXPECT_EQ(off.stats.get("light_split_trial_shafts"), 0.0);
   // With every light split and no automatic rays the 4-sample light leaves are reached.
   EXPECT_GT(on_full.stats.get("relations_blocked_by_shaft") + on_full.stats.get("relations_visible_by_empty_shaft"), 0.0);
-  for (const SolveResult* r : {&a, &on, &off, &on_full})
-    EXPECT_EQ(r->stats.get("relations_ray_cast") + r->stats.get("relations_blocked_by_shaft") +
-                  r->stats.get("relations_visible_by_empty_shaft"),
-              double(s.relation_count()));
-  size_t bad = 0, differ = 0, checked = 0;
-  for (size_t i = 0; i < s.receivers.size(); ++i)
-    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-      char cls = ex.classes[i][k];
-      if (cls == 'd' || ex.margins[i][k] < tau) continue;
-      ++checked;
-      for (const SolveResult* r : {&a, &on, &off, &on_full}) bad += r->receivers[i].visible(k) != (cls == 'v');
-      differ += a.receivers[i].visible(k) != off.receivers[i].visible(k);
-    }
-  EXPECT_GT(checked, s.relation_count() / 2);
-  EXPECT_EQ(bad, 0u);
-  EXPECT_EQ(differ, 0u);
+  for (const SolveResult* r : {&a, &on, &off, &on_full}) EXPECT_EQ(relations_answered(*r), double(s.relation_count()));
+  const OracleTally t = tally_against_oracle(s, ex, tau, {&a, &off, &on, &on_full});
+  EXPECT_GT(t.checked, s.relation_count() / 2);
+  EXPECT_EQ(t.wrong, 0u);
+  EXPECT_EQ(t.differ, 0u);
 }
 
 TEST(IssOracle, LightSplitTrialKeepsWholeLightsOnRooms) {
@@ -108,19 +120,9 @@ TEST(IssOracle, SplitLeafOptionsChangeTheTraversalNotTheAnswers) {
                                    {"split_auto_ray_relations", "0"}});
   EXPECT_NE(base.stats.get("shafts_built"), varied.stats.get("shafts_built"));
   EXPECT_EQ(varied.stats.get("auto_ray_shafts"), 0.0);  // threshold 0: no shaft is skipped
-  EXPECT_EQ(varied.stats.get("relations_ray_cast") + varied.stats.get("relations_blocked_by_shaft") +
-                varied.stats.get("relations_visible_by_empty_shaft"),
-            double(s.relation_count()));
-  size_t bad = 0, differ = 0, checked = 0;
-  for (size_t i = 0; i < s.receivers.size(); ++i)
-    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-      char cls = ex.classes[i][k];
-      if (cls == 'd' || ex.margins[i][k] < tau) continue;
-      ++checked;
-      bad += varied.receivers[i].visible(k) != (cls == 'v');
-      differ += varied.receivers[i].visible(k) != base.receivers[i].visible(k);
-    }
-  EXPECT_GT(checked, s.relation_count() / 2);
-  EXPECT_EQ(bad, 0u);
-  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(relations_answered(varied), double(s.relation_count()));
+  const OracleTally t = tally_against_oracle(s, ex, tau, {&varied, &base});
+  EXPECT_GT(t.checked, s.relation_count() / 2);
+  EXPECT_EQ(t.wrong, 0u);
+  EXPECT_EQ(t.differ, 0u);
 }
