@@ -29,6 +29,7 @@ void Totals::merge(const Totals& o) {
   interior += o.interior;
   near_splits += o.near_splits;
   interior_covered += o.interior_covered;
+  interior_skipped += o.interior_skipped;
   exact_triangles += o.exact_triangles;
   far_triangles += o.far_triangles;
   band_triangles += o.band_triangles;
@@ -61,12 +62,13 @@ void GroupState::clear() {
   occluders.clear();
   interior.clear();
   closed_keep.clear();
+  cand_skipped.clear();
   cover_n.clear();
   cover_err.clear();
   rloc_exact = false;
   for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
   vals.clear();
-  for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
+  for (auto* v : {&exact_tris, &cand, &cand_all, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
   frags.clear();
   tmp.clear();
   boxes.clear();
@@ -240,6 +242,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     interior_charge.set(interior->memory_bytes());
     if (!interior->entries().empty()) ctx.interior = &*interior;
   }
+  ctx.cover_nodes = opt.get_bool("cover_nodes", true);
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
   for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
@@ -309,6 +312,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("interior_occluders", double(totals.interior));
   st.set("near_splits", double(totals.near_splits));
   st.set("interior_covered", double(totals.interior_covered));
+  st.set("interior_skipped", double(totals.interior_skipped));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
@@ -338,7 +342,9 @@ std::vector<OptionSpec> PluckerSolver::options() const {
           {"closed", "on: occluder selection keeps of a closed surface only what one crossing side needs "
                      "(closed_surfaces.h); off: every candidate", {"on", "off"}},
           {"interior", "on: convex polygons inside closed surfaces join the trees as occluders that block nothing "
-                       "new (interior_occluders.h); off: none", {"on", "off"}}};
+                       "new (interior_occluders.h); off: none", {"on", "off"}},
+          {"cover_nodes", "on: occluder selection leaves out whole triangle-tree nodes covered by an interior "
+                          "occluder; off: the covered test per candidate only", {"on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

@@ -128,7 +128,14 @@ void ReceiverShading::shade_exact() {
   gs_.frags.clear();
   gs_.frags.add(lf_.poly.data(), lf_.poly.size());
   gs_.boxes.assign(1, UVBox::of(lf_.axes, lf_.poly.data(), int(lf_.poly.size())));
-  for (uint32_t t : gs_.cand) {
+  const std::vector<uint32_t>* cand = &gs_.cand;
+  if (!gs_.cand_skipped.empty()) {  // with the subtrees selection left out, in index order
+    gs_.cand_all = gs_.cand;
+    for (const TriangleTree::Range& r : gs_.cand_skipped) gs_.ctx->tree->append_items(r, gs_.cand_all);
+    std::sort(gs_.cand_all.begin(), gs_.cand_all.end());
+    cand = &gs_.cand_all;
+  }
+  for (uint32_t t : *cand) {
     if (gs_.frags.size() == 0) break;
     subtract_exact(t);
   }

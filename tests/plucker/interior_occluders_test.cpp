@@ -115,6 +115,13 @@ TEST(PluckerInteriorOccluders, ScanAnswersMatchThePreviousPathAndTheOracle) {
   expect_same_answers(*s, on, off);
   expect_same_answers(*s, on, every);
   expect_region_oracle(*s, on);
+  // Whole tree nodes left out as covered (cover_nodes) against the test per candidate.
+  const SolveResult per_triangle = run(*s, {{"cover_nodes", "off"}});
+  EXPECT_GT(on.stats.get("interior_skipped"), 0.0);
+  EXPECT_EQ(per_triangle.stats.get("interior_skipped"), 0.0);
+  EXPECT_LT(on.stats.get("closed_dropped") + on.stats.get("interior_covered"),
+            per_triangle.stats.get("closed_dropped") + per_triangle.stats.get("interior_covered"));
+  expect_same_answers(*s, on, per_triangle);
 }
 
 // Under the square light, receivers on a grid below (some right under the surfaces,
@@ -144,6 +151,7 @@ TEST(PluckerInteriorOccluders, ConcaveInterpenetratingAndOpenMeshesMatchThePrevi
       EXPECT_EQ(on.stats.get("interior_occluders"), 0.0) << variant;
     }
     expect_same_answers(s, on, off);
+    expect_same_answers(s, on, run(s, {{"cover_nodes", "off"}}));
     expect_region_oracle(s, on);
   }
 }
