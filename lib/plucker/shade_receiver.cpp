@@ -65,7 +65,7 @@ class ReceiverShading {
   bool exact_once(uint32_t t);
   void cover_planes();
   bool block_outside(const GroupState::NearBlock& b) const;
-  bool covered(const NearPoly& np) const;
+  bool covered(const NearPoly& np);
   bool exact_near(const NearPoly& np);
   // Inlined into shade_float's loop over the near polygons (a call per polygon and
   // receiver costs measurably on columns).
@@ -85,6 +85,7 @@ class ReceiverShading {
   const double rmax_;
   UVBox all_;        // the union of the fragments' boxes (bound_all)
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
+  int cover_hint_ = 0;   // covered(): the interior occluder edge that failed last
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -192,17 +193,21 @@ void ReceiverShading::cover_planes() {
 // it, from r's side, so the segment from r to the light passes through it (it lies
 // strictly between the group's receivers and the light) and the tree hides what the
 // triangle would. Signs det[x - r, a - r, b - r] decided against dot_err (lines.h).
-bool ReceiverShading::covered(const NearPoly& np) const {
+// The edges are tried from the one that failed last (cover_hint_): the polygons come
+// in spatial order, and near the silhouette most of them pass every edge but one.
+bool ReceiverShading::covered(const NearPoly& np) {
   size_t e = 0;
   for (const Occluder& o : gs_.interior) {
     bool all = !gs_.cover_n.empty();
-    for (int m = 0; m < o.n && all; ++m) {
+    for (int mi = 0; mi < o.n && all; ++mi) {
+      const int m = (cover_hint_ + mi) % o.n;
       const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
       const Vec3d& err = gs_.cover_err[e + size_t(m)];
       for (int k = 0; k < 3 && all; ++k) {
         const Vec3d d = np.t[k] - nearest_base(r_, o.v[m], o.v[(m + 1) % o.n], np.t[k]);
         all = dot(d, nrm) > dot_err(d, nrm, err);
       }
+      if (!all) cover_hint_ = m;
     }
     if (all) return true;
     e += size_t(o.n);
