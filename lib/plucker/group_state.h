@@ -60,7 +60,7 @@ struct Totals {
   uint64_t interior = 0;        // interior occluders added to trees (interior_occluders.h)
   uint64_t interior_covered = 0;  // candidates left out: every line through them stabs one
   uint64_t interior_skipped = 0;  // triangles of whole tree nodes left out that way (cover_nodes)
-  uint64_t near_merged = 0;  // per receiver: pairs of near triangles subtracted as one quad (shade_receiver.cpp)
+  uint64_t near_merged = 0;  // per receiver: near triangles subtracted within another's polygon (shade_receiver.cpp)
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o);
@@ -92,7 +92,7 @@ struct SolveContext {
   const ClosedSurfaces* closed = nullptr;  // null: every candidate is modelled
   const InteriorOccluders* interior = nullptr;  // null: none added (interior_occluders.h)
   bool cover_nodes = true;  // the covered test on whole tree nodes (occluder_selection.cpp)
-  bool near_pairs = true;   // glued near triangles subtracted as one quad (shade_receiver.cpp)
+  bool near_merge = true;   // glued near triangles subtracted as one convex polygon (shade_receiver.cpp)
 };
 
 // One group and one light: the inputs, what occluder selection finds, and the working
@@ -158,7 +158,7 @@ struct GroupState {
   std::vector<uint32_t> near_spatial, near_pick;
   // Closed surfaces only: per input triangle its near polygon's index when that polygon
   // is the whole triangle's only part (-1 none, -2 several parts), reset at clear();
-  // per near polygon the last receiver (near_serial) that subtracted it in a pair.
+  // per near polygon the last receiver (near_serial) that subtracted it merged.
   std::vector<int32_t> near_of_tri;
   std::vector<uint32_t> near_done;
   uint32_t near_serial = 0;

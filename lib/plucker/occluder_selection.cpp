@@ -733,8 +733,8 @@ void Selection::sort_near() {
   sorted.resize(near.size());
   for (size_t k = 0; k < near.size(); ++k) sorted[k] = near[key[k].second];
   near.swap(sorted);
-  // Closed surfaces' near triangles by triangle, for the pairs of shade_receiver.cpp.
-  if (gs_.ctx->closed && gs_.ctx->near_pairs && !gs_.interior.empty()) {
+  // Closed surfaces' near triangles by triangle, for the merged polygons of shade_receiver.cpp.
+  if (gs_.ctx->closed && gs_.ctx->near_merge && !gs_.interior.empty()) {
     if (gs_.near_of_tri.size() != scene_.mesh.size()) gs_.near_of_tri.assign(scene_.mesh.size(), -1);
     for (size_t k = 0; k < near.size(); ++k) {
       if (near[k].patch >= 0) continue;

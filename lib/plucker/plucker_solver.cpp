@@ -247,7 +247,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     if (!interior->entries().empty()) ctx.interior = &*interior;
   }
   ctx.cover_nodes = opt.get_bool("cover_nodes", true);
-  ctx.near_pairs = opt.get_bool("near_pairs", true);
+  ctx.near_merge = opt.get_bool("near_merge", true);
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
   for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
@@ -351,8 +351,8 @@ std::vector<OptionSpec> PluckerSolver::options() const {
                        "new (interior_occluders.h); off: none", {"on", "off"}},
           {"cover_nodes", "on: occluder selection leaves out whole triangle-tree nodes covered by an interior "
                           "occluder; off: the covered test per candidate only", {"on", "off"}},
-          {"near_pairs", "on: two glued near triangles of a closed surface that a receiver sees as a convex quad "
-                         "are subtracted as one polygon; off: one by one", {"on", "off"}}};
+          {"near_merge", "on: glued near triangles of a closed surface that a receiver sees as one convex polygon "
+                         "are subtracted as that polygon; off: one by one", {"on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

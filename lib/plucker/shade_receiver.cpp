@@ -69,8 +69,8 @@ class ReceiverShading {
   bool exact_near(const NearPoly& np);
   // Inlined into shade_float's loop over the near polygons (a call per polygon and
   // receiver costs measurably on columns).
-  [[gnu::always_inline]] inline void subtract_near(const NearPoly& np, uint32_t k);
-  bool subtract_pair(const NearPoly& np, uint32_t k, int side_r);
+  [[gnu::always_inline]] inline void subtract_near(const NearPoly& np, uint32_t idx);
+  bool subtract_merged(const NearPoly& np, uint32_t k, int side_r);
   void report_fragments(double& area, double& irr);
   void sample_bits();
 
@@ -87,7 +87,7 @@ class ReceiverShading {
   UVBox all_;        // the union of the fragments' boxes (bound_all)
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
   int cover_hint_ = 0;   // covered(): the interior occluder edge that failed last
-  uint32_t serial_ = 0;  // this receiver's mark in GroupState::near_done (0: no pairs)
+  uint32_t serial_ = 0;  // this receiver's mark in GroupState::near_done (0: no merging)
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -266,8 +266,8 @@ bool ReceiverShading::block_outside(const GroupState::NearBlock& b) const {
 // One near polygon against this receiver: rejected by the receiver's slab and pyramid,
 // sent to the exact path where rounding cannot place it, else clipped to the slab and
 // its shadow subtracted from the fragments (subtract_polygon).
-void ReceiverShading::subtract_near(const NearPoly& np, uint32_t k) {
-  if (serial_ != 0 && gs_.near_done[k] == serial_) return;  // subtracted in a pair already
+void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
+  if (serial_ != 0 && gs_.near_done[idx] == serial_) return;  // subtracted in a merged polygon already
   if (np.hi.x < plo_.x || np.lo.x > phi_.x || np.hi.y < plo_.y || np.lo.y > phi_.y || np.hi.z < plo_.z ||
       np.lo.z > phi_.z)
     return;
@@ -380,7 +380,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t k) {
     if (exact_near(np)) ++tot_.close_triangles;
     return;
   }
-  if (serial_ != 0 && subtract_pair(np, k, side_r)) return;
+  if (serial_ != 0 && subtract_merged(np, idx, side_r)) return;
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
   UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return;
@@ -392,90 +392,98 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t k) {
   bound_all();
 }
 
-// Two near triangles of a closed surface glued along an edge (A = np = (a, b, c), B =
-// (b, a, d), ClosedSurfaces::neighbors) subtracted as the one quad (a, d, b, c) when r
-// sees it convex: the union of their shadows from r is then the light points whose
-// line from r is inside every plane through r and a quad edge, with no cut along the
-// plane through r and the shared edge (which the two subtractions make across the
-// visible fragments beyond the pair). Conditions (else false, nothing done; np is then
-// subtracted alone): both near polygons are their whole triangles (exact local
-// coordinates, like r), every vertex above r's level beyond near_tol (so both lie
-// strictly between r and the light: no clip), no vertex within 2^-24 of r's scale of r,
-// and the four turns seen from r, sign det[p - r, q - r, w - r] at each corner, decided
-// strictly against dot_err (covered's test) and all of one sign: a quadrilateral whose
-// four turns have one sign is convex, split by its diagonal a -> b into A's and B's
-// projections, so the cone from r over it is their union. Each of A's edges and B's has
-// its own triangle's orientation in the quad, the one subtract_polygon needs.
-// Only B later in the list (near_done marks it for r); A is np, with side side_r.
-bool ReceiverShading::subtract_pair(const NearPoly& np, uint32_t k, int side_r) {
+// Near triangles of a closed surface glued along edges (ClosedSurfaces::neighbors)
+// subtracted as one convex polygon when r sees their union convex: the union of their
+// shadows from r is then the light points whose line from r is inside every plane
+// through r and a polygon edge, without the cuts along the planes through r and the
+// inner edges (which separate subtractions make across the visible fragments beyond
+// them). Grown from np = A one triangle at a time: B glued to the polygon along its
+// edge p_i -> p_i+1 (B traverses it the other way), with third vertex d, is added when
+// the turns seen from r (sign det[p - r, q - r, w - r], decided strictly against
+// dot_err as covered's test) at p_i, d and p_i+1 in the new polygon have the sign of
+// the others. A convex polygon stays convex so: d lies outside edge i (B's turn) and
+// the exterior angles, each strictly between 0 and pi, keep their sum (B's angles sum
+// to pi), so the turning number stays one; and the polygon is the union of its
+// triangles' projections. Conditions on each triangle (else it is left out; with none
+// added, false and nothing done): its near polygon is the whole triangle (exact local
+// coordinates, like r), every vertex above r's level beyond near_tol (between r and the
+// light: no clip), none within 2^-24 of r's scale of r; B comes later in the list than
+// np and is not in a polygon yet (near_done marks it for r). Each edge keeps its own
+// triangle's orientation, the one subtract_polygon needs (np's side side_r).
+bool ReceiverShading::subtract_merged(const NearPoly& np, uint32_t k, int side_r) {
   auto whole = [&](const NearPoly& p) {
     if (p.count != 3 || !p.exact_local || p.patch >= 0) return false;
     const Vec3d* v = gs_.near_verts.data() + p.begin;
     return v[0] == p.t[0] && v[1] == p.t[1] && v[2] == p.t[2];
   };
-  if (!whole(np)) return false;
-  const auto& nbs = gs_.ctx->closed->neighbors(np.triangle);
-  for (int e = 0; e < 3; ++e) {
-    if (nbs[size_t(e)] < 0) continue;
-    const int32_t k2 = gs_.near_of_tri[size_t(nbs[size_t(e)])];
-    if (k2 <= int32_t(k) || gs_.near_done[size_t(k2)] == serial_) continue;
-    const NearPoly& b2 = gs_.near[size_t(k2)];
-    if (!whole(b2)) continue;
-    // The shared edge: A's (t_i, t_i+1) is B's (t_j+1, t_j), positions equal exactly.
-    int ia = -1, jb = -1;
-    for (int i = 0; i < 3 && ia < 0; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (np.t[i] == b2.t[(j + 1) % 3] && np.t[(i + 1) % 3] == b2.t[j]) {
-          ia = i;
-          jb = j;
-          break;
-        }
-    if (ia < 0) continue;
-    const Vec3d quad[4] = {np.t[ia], b2.t[(jb + 2) % 3], np.t[(ia + 1) % 3], np.t[(ia + 2) % 3]};  // a, d, b, c
-    if (quad[1] == quad[3]) continue;
-    // Above r's level (near_tol, as subtract_near), not too close to r.
-    const Vec3d& gd = gs_.g;
-    const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
-    double pmax = 0.0;
-    for (const Vec3d& v : quad) pmax = std::max(pmax, max_component(vabs(v)));
-    const double near_tol = 0x1p-24 * gn1 * (pmax + rmax_);
-    bool ok = true;
-    for (int i = 0; i < 4 && ok; ++i) {
-      const double scale = std::max(max_component(vabs(quad[i])), rmax_);
-      ok = dot(gd, quad[i] - r_) > near_tol && max_component(vabs(quad[i] - r_)) > 0x1p-24 * scale;
+  const Vec3d& gd = gs_.g;
+  const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
+  auto vertex_ok = [&](const Vec3d& v) {  // above r's level, not too close to r
+    const double pm = max_component(vabs(v)), scale = std::max(pm, rmax_);
+    return dot(gd, v - r_) > 0x1p-24 * gn1 * (pm + rmax_) && max_component(vabs(v - r_)) > 0x1p-24 * scale;
+  };
+  auto turn = [&](const Vec3d& p, const Vec3d& q, const Vec3d& w) {
+    Vec3d err;
+    const Vec3d nrm = edge_plane_normal_err(r_, p, q, err);
+    const Vec3d dd = w - nearest_base(r_, p, q, w);
+    const double sv = dot(dd, nrm), bound = dot_err(dd, nrm, err);
+    return sv > bound ? 1 : (sv < -bound ? -1 : 0);
+  };
+  if (!whole(np) || !vertex_ok(np.t[0]) || !vertex_ok(np.t[1]) || !vertex_ok(np.t[2])) return false;
+  const int sign = turn(np.t[0], np.t[1], np.t[2]);
+  if (sign == 0) return false;
+  constexpr int kMax = 8;  // polygon corners (at most kMaxOccluderVertices)
+  static_assert(kMax <= kMaxOccluderVertices, "subtract_polygon's planes");
+  Vec3d poly[kMax];
+  uint32_t owner[kMax];  // per edge i (poly[i] -> poly[i + 1]): the near triangle it belongs to
+  int n = 3;
+  for (int i = 0; i < 3; ++i) poly[i] = np.t[i], owner[i] = k;
+  int nm = 0;  // triangles added
+  bool grown = true;
+  while (grown && n < kMax) {
+    grown = false;
+    for (int i = 0; i < n && !grown; ++i) {
+      const Vec3d &a = poly[i], &b = poly[(i + 1) % n];
+      for (const int32_t nb : gs_.ctx->closed->neighbors(gs_.near[owner[i]].triangle)) {
+        if (nb < 0) continue;
+        const int32_t k2 = gs_.near_of_tri[size_t(nb)];
+        if (k2 <= int32_t(k) || gs_.near_done[size_t(k2)] == serial_) continue;
+        const NearPoly& b2 = gs_.near[size_t(k2)];
+        if (!whole(b2)) continue;
+        int jb = -1;  // B's edge b -> a
+        for (int j = 0; j < 3; ++j)
+          if (b2.t[j] == b && b2.t[(j + 1) % 3] == a) jb = j;
+        if (jb < 0) continue;
+        const Vec3d& d = b2.t[(jb + 2) % 3];
+        if (!vertex_ok(d)) continue;
+        const Vec3d &prev = poly[(i + n - 1) % n], &next = poly[(i + 2) % n];
+        if (turn(prev, a, d) != sign || turn(a, d, b) != sign || turn(d, b, next) != sign) continue;
+        for (int m = n; m > i + 1; --m) poly[m] = poly[m - 1], owner[m] = owner[m - 1];
+        poly[i + 1] = d;
+        owner[i] = owner[i + 1] = uint32_t(k2);  // a -> d and d -> b are B's edges
+        ++n;
+        ++nm;
+        gs_.near_done[size_t(k2)] = serial_;
+        grown = true;
+        break;
+      }
     }
-    if (!ok) continue;
-    // The turns at a, d, b, c (each corner with its two neighbours on the quad).
-    int sign = 0;
-    for (int i = 0; i < 4 && ok; ++i) {
-      const Vec3d &p = quad[(i + 3) % 4], &q = quad[i], &w = quad[(i + 1) % 4];
-      Vec3d err;
-      const Vec3d nrm = edge_plane_normal_err(r_, p, q, err);
-      const Vec3d dd = w - nearest_base(r_, p, q, w);
-      const double s = dot(dd, nrm), bound = dot_err(dd, nrm, err);
-      const int t = s > bound ? 1 : (s < -bound ? -1 : 0);
-      ok = t != 0 && (i == 0 || t == sign);
-      sign = t;
-    }
-    if (!ok) continue;
-    // Oriented as np alone would be (r on the negative side: reversed when side_r > 0).
-    std::vector<Vec3d>& q = gs_.q;
-    q.assign(quad, quad + 4);
-    if (side_r > 0) std::reverse(q.begin(), q.end());
-    gs_.near_done[size_t(k2)] = serial_;
-    ++tot_.near_merged;
-    gs_.skip.assign(4, 0);
-    const UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
-    if (!qbox.overlaps(all_)) return true;
-    if (!subtract_polygon(r_, q.data(), 4, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.tmp,
-                          gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
-      return true;
-    std::swap(gs_.frags, gs_.tmp);
-    std::swap(gs_.boxes, gs_.tmp_boxes);
-    bound_all();
-    return true;
   }
-  return false;
+  if (nm == 0) return false;
+  tot_.near_merged += uint64_t(nm);
+  std::vector<Vec3d>& q = gs_.q;
+  q.assign(poly, poly + n);
+  if (side_r > 0) std::reverse(q.begin(), q.end());  // as np alone: r on the negative side
+  gs_.skip.assign(size_t(n), 0);
+  const UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
+  if (!qbox.overlaps(all_)) return true;
+  if (!subtract_polygon(r_, q.data(), n, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.tmp,
+                        gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+    return true;
+  std::swap(gs_.frags, gs_.tmp);
+  std::swap(gs_.boxes, gs_.tmp_boxes);
+  bound_all();
+  return true;
 }
 
 // The float path: a light the tree hides as a whole from r needs nothing else

@@ -122,8 +122,8 @@ TEST(PluckerInteriorOccluders, ScanAnswersMatchThePreviousPathAndTheOracle) {
   EXPECT_LT(on.stats.get("closed_dropped") + on.stats.get("interior_covered"),
             per_triangle.stats.get("closed_dropped") + per_triangle.stats.get("interior_covered"));
   expect_same_answers(*s, on, per_triangle);
-  // Glued near triangles subtracted as one quad (near_pairs) against one by one.
-  const SolveResult single = run(*s, {{"near_pairs", "off"}});
+  // Glued near triangles subtracted as one convex polygon (near_merge) against one by one.
+  const SolveResult single = run(*s, {{"near_merge", "off"}});
   EXPECT_GT(on.stats.get("near_merged"), 0.0);
   EXPECT_EQ(single.stats.get("near_merged"), 0.0);
   EXPECT_LT(on.stats.get("near_splits"), single.stats.get("near_splits"));
@@ -158,7 +158,7 @@ TEST(PluckerInteriorOccluders, ConcaveInterpenetratingAndOpenMeshesMatchThePrevi
     }
     expect_same_answers(s, on, off);
     expect_same_answers(s, on, run(s, {{"cover_nodes", "off"}}));
-    expect_same_answers(s, on, run(s, {{"near_pairs", "off"}}));
+    expect_same_answers(s, on, run(s, {{"near_merge", "off"}}));
     expect_region_oracle(s, on);
   }
 }
