@@ -21,6 +21,7 @@
 #include "lib/geom/float_mode.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_scene.h"
+#include "lib/ssv/edge_tree.h"
 #include "lib/ssv/integrate.h"
 #include "lib/ssv/light_frame.h"
 #include "lib/ssv/occluders.h"
@@ -66,6 +67,7 @@ struct ThreadState {
       : integrator(m, planes, fp, f) {}
   ReceiverIntegrator integrator;
   std::vector<WedgeState> candidates;
+  std::vector<uint32_t> edge_candidates;  // wedge_index=edges
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
@@ -295,6 +297,7 @@ struct LightSetup {
   const ReceiverTree& tree;
   const SampleStrips& strips;
   const std::vector<uint8_t>& occluded;  // per receiver: blocked by an occluder (occluders.h)
+  const EdgeTree* edge_tree = nullptr;   // wedge_index=edges: candidates per receiver, no wedges
 };
 
 // Per-scene data: the blocker mesh, its edges and the ray caster.
@@ -303,7 +306,30 @@ struct SceneSetup {
   const Caster& embree;
   const std::vector<Edge>& edges;
   float eps;
+  const mesh::PreparedMesh& pm;
+  const std::vector<TrianglePlane>& planes;
+  const std::vector<Vec3d>& frame_pos;  // of the current light
+  double tol;                           // build_wedges' tolerance
 };
+
+// wedge_index=edges: the edges build_wedges would give a wedge, among the receiver's
+// candidates (edge_tree.h), by the same tests: some incident triangle active and some
+// endpoint not below the light plane, and for a pair of active triangles, not a
+// silhouette from no point of L' (wedge.h light_side). What the wedges' boxes would
+// exclude beyond that has weight 0 or misses the frustum (edge_tree.h).
+bool wedge_edge(const SceneSetup& sc, const LightFrame& frame, const Edge& e) {
+  const auto& fp = sc.frame_pos;
+  auto active = [&](int32_t t) {
+    if (t < 0) return false;
+    const auto& v = sc.pm.triangles[size_t(t)].v;
+    return fp[v[0]].z > 0.0 || fp[v[1]].z > 0.0 || fp[v[2]].z > 0.0;
+  };
+  const bool act1 = active(e.t1), act2 = active(e.t2);
+  if (!(act1 || act2) || (fp[e.a].z < 0.0 && fp[e.b].z < 0.0)) return false;
+  if (!(act1 && act2)) return true;
+  const int s1 = light_side(sc.planes[size_t(e.t1)], frame.poly_world, sc.tol);
+  return s1 == 0 || s1 != light_side(sc.planes[size_t(e.t2)], frame.poly_world, sc.tol);
+}
 
 // One ray per sample of the light (the fallback of every receiver-level doubt).
 void cast_all(const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResult& rr) {
@@ -342,7 +368,8 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   const Vec3f& r = sc.scene.receivers[i].p;
   auto a = Clock::now();
   st.candidates.clear();
-  if (ls.bsp) ls.bsp->query(r, st.candidates);
+  if (ls.edge_tree) ls.edge_tree->query(EdgeFrustum(ls.frame, r), ls.frame, sc.eps, st.edge_candidates);
+  else if (ls.bsp) ls.bsp->query(r, st.candidates);
   else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
   // The jitter point of every sample (sample_position, DESIGN section 3): hash prefix
@@ -354,6 +381,14 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   // tested: the others contain the node's box, hence r. Accepting a wedge that excludes
   // r is harmless anyway: its edge's projection misses L' and is clipped away.
   st.valid.clear();
+  if (ls.edge_tree) {
+    for (uint32_t ei : st.edge_candidates) {
+      const Edge& edge = sc.edges[ei];
+      if (!wedge_edge(sc, ls.frame, edge)) continue;
+      int weight = st.integrator.edge_weight(edge);
+      if (weight != 0) st.valid.emplace_back(ei, weight);
+    }
+  }
   for (const WedgeState& ws : st.candidates) {
     const Wedge& w = ls.wedges[ws.wedge];
     if (!point_in_wedge(w, ws.mask, r, sc.eps)) continue;
@@ -366,7 +401,7 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   st.classes = st.integrator.finish_classes(st.depth, kUnclear);
   auto e = Clock::now();
   st.c.queries += 1;
-  st.c.reported += double(st.candidates.size());
+  st.c.reported += double(ls.edge_tree ? st.edge_candidates.size() : st.candidates.size());
   st.c.validated += double(st.valid.size());
   st.c.t_query += seconds_between(a, b);
   st.c.t_integrate += seconds_between(b, c) + seconds_between(d, e);
@@ -444,7 +479,7 @@ void solve_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls,
 double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
                    SolveResult& result, const std::vector<int32_t>& batches, float eps, bool use_region,
                    MemoryCharge& charge) {
-  if (ls.bsp) {
+  if (ls.bsp || ls.edge_tree) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8),
                       [&](const tbb::blocked_range<size_t>& range) {
                         const IeeeFloatMode range_float_mode;
@@ -581,9 +616,11 @@ struct Culling {
   ReceiverTree tree;
   std::vector<PlanarOccluder> occluders;
   accel::Bvh<float> edge_bvh;
+  EdgeTree edge_tree;  // wedge_index=edges, over edge_bvh
   std::vector<int32_t> units;
   Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
-          const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on) {
+          const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
+          double M) {
     if (tree_on) {
       std::vector<Vec3d> points(scene.receivers.size());
       for (size_t i = 0; i < points.size(); ++i) points[i] = to_double(scene.receivers[i].p);
@@ -601,14 +638,17 @@ struct Culling {
       }
       occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
     }
-    if (shafts_on) {
+    if (shafts_on || edges_on) {
       std::vector<AABB> boxes(edges.size());
       for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
       edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
     }
+    if (edges_on) edge_tree = EdgeTree(edge_bvh, edges, pm, planes, M);
   }
+  Culling(const Culling&) = delete;  // edge_tree points into edge_bvh
   double memory_bytes() const {
-    return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes());
+    return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes() +
+                  edge_tree.memory_bytes());
   }
 };
 
@@ -654,7 +694,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const bool use_region = opt.get_bool("silhouette_regions", true);
   const bool use_occluders = opt.get_bool("occluder_culling", true);
   const bool use_shafts = opt.get_bool("shaft_culling", true);
-  const bool use_scatter = opt.get("wedge_index", "receivers") != "bsp";
+  const std::string index = opt.get("wedge_index", "edges");
+  const bool use_edges = index == "edges";
+  const bool use_scatter = index == "receivers";
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
@@ -686,10 +728,12 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const double M = std::max(max_component(vabs(scene_box.lo)), max_component(vabs(scene_box.hi))) + double(grow);
   const float eps = float(4e-6 * M);
   const double tol = 1e-9 * M;
-  const SceneSetup sc{scene, embree, edges, eps};
+  std::vector<Vec3d> frame_pos;  // per light, its capacity reused
+  const SceneSetup sc{scene, embree, edges, eps, pm, tri_planes, frame_pos, tol};
 
   auto tc0 = Clock::now();
-  const Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts, use_occluders || use_shafts || use_scatter);
+  const Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts && !use_edges,
+                     use_occluders || use_shafts || use_scatter, use_edges, M);
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
@@ -697,7 +741,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
 
   double init_seconds = 0, peak_memory = 0, nodes = 0;
   // Per-light arrays, their capacity reused from light to light.
-  std::vector<Vec3d> frame_pos;
   std::vector<Wedge> wedges;
   std::vector<uint8_t> edge_mark;
   std::vector<uint32_t> edge_subset;
@@ -748,7 +791,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
     wedges.clear();
     std::vector<uint32_t> cut_triangles;
-    if (!light_fallback && !all_hidden) {
+    if (!light_fallback && !all_hidden && use_edges) {
+      cut_triangles = light_plane_cuts(pm, frame_pos, frame);
+    } else if (!light_fallback && !all_hidden) {
       const bool subset = use_shafts && !cull.edge_bvh.empty();
       if (subset) {
         auto tc = Clock::now();
@@ -778,7 +823,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     const LightSetup ls{light,         l,      scene.light_offset(l),
                         frame,         light_fallback, wedges,
                         cut_triangles, bsp ? &*bsp : nullptr, &scatter,
-                        receiver_tree, strips, occluded};
+                        receiver_tree, strips, occluded, use_edges ? &cull.edge_tree : nullptr};
     tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
     total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;

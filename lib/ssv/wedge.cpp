@@ -312,15 +312,8 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     if (stamp[t] == call) return tri_class[t];
     const auto& tv = m.triangles[t].v;
     const bool act = frame_pos[tv[0]].z > 0.0 || frame_pos[tv[1]].z > 0.0 || frame_pos[tv[2]].z > 0.0;
-    const PointNormalPlane p = triangle_plane(t);
-    bool all_pos = true, all_neg = true;
-    for (const auto& l : L) {
-      const double f = p.eval(l);
-      all_pos &= f > tol;
-      all_neg &= f < -tol;
-    }
     stamp[t] = call;
-    tri_class[t] = int8_t((all_pos ? 2 : all_neg ? -2 : 0) | (act ? 1 : 0));
+    tri_class[t] = int8_t(light_side((*planes)[t], L, tol) * 2 | (act ? 1 : 0));
     return tri_class[t];
   };
   size_t last_part = 0;  // the region part that saw the last edge (regions only)

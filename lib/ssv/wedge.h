@@ -51,6 +51,20 @@ struct TrianglePlane {
 };
 std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m);
 
+// The side of L' (vertices `light`) w.r.t. the triangle's plane: +1 when every vertex lies
+// more than `tol` in front of it, -1 when every one lies more than tol behind, else 0
+// (build_wedges' potential-silhouette test: a double edge whose two triangles give the
+// same nonzero side is a silhouette from no light point).
+inline int light_side(const TrianglePlane& p, const std::vector<Vec3d>& light, double tol) {
+  bool all_pos = true, all_neg = true;
+  for (const auto& l : light) {
+    const double f = dot(p.unit, l - p.a);
+    all_pos &= f > tol;
+    all_neg &= f < -tol;
+  }
+  return all_pos ? 1 : all_neg ? -1 : 0;
+}
+
 // One edge per label of the prepared mesh, in label order.
 std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m);
 
