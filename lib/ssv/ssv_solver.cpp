@@ -68,6 +68,7 @@ struct ThreadState {
   ReceiverIntegrator integrator;
   std::vector<WedgeState> candidates;
   std::vector<uint32_t> edge_candidates;  // wedge_index=edges
+  std::vector<uint32_t> edge_starts;      // the edge tree's frontier of the current batch
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
@@ -368,7 +369,7 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   const Vec3f& r = sc.scene.receivers[i].p;
   auto a = Clock::now();
   st.candidates.clear();
-  if (ls.edge_tree) ls.edge_tree->query(EdgeFrustum(ls.frame, r), ls.frame, sc.eps, st.edge_candidates);
+  if (ls.edge_tree) ls.edge_tree->query(EdgeFrustum(ls.frame, r), ls.frame, sc.eps, st.edge_starts, st.edge_candidates);
   else if (ls.bsp) ls.bsp->query(r, st.candidates);
   else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
@@ -473,13 +474,39 @@ void solve_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls,
   st.c.t_ray += seconds_between(e, Clock::now());
 }
 
+// The edge tree's frontier per batch of at most kEdgeBatch receivers: nodes of at most
+// kFrontierEdges edges (measured on scan 75k: batches of 8 beat 4 and 32, frontiers of
+// 64 edges beat 16 and 128, by callgrind instructions).
+constexpr uint32_t kFrontierEdges = 64, kEdgeBatch = 8;
+
 // Every receiver of one light (paper 001 section 2.1), in parallel. With the scattered
 // candidates, batch by batch of the receiver tree (the scatter of a batch is serial);
 // returns the scatter's seconds.
 double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
                    SolveResult& result, const std::vector<int32_t>& batches, float eps, bool use_region,
                    MemoryCharge& charge) {
-  if (ls.bsp || ls.edge_tree) {
+  if (ls.edge_tree) {
+    // Batch by batch of the receiver tree: the walk down to the frontier of the batch's
+    // receivers is shared by their queries (edge_tree.h).
+    const auto& ord = ls.tree.order();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, batches.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
+      const IeeeFloatMode range_float_mode;
+      ThreadState& st = states.local();
+      for (size_t k = range.begin(); k != range.end(); ++k) {
+        const auto& nd = ls.tree.nodes()[size_t(batches[k])];
+        AABBd box;
+        for (uint32_t p = nd.begin; p < nd.end; ++p)
+          if (!ls.occluded[ord[p]]) box.extend(to_double(sc.scene.receivers[ord[p]].p));
+        if (box.empty()) continue;  // every receiver occluded: nothing to answer
+        auto a = Clock::now();
+        ls.edge_tree->frontier(EdgeFrustum(ls.frame, box), ls.frame, sc.eps, kFrontierEdges, st.edge_starts);
+        st.c.t_query += seconds_between(a, Clock::now());
+        for (uint32_t p = nd.begin; p < nd.end; ++p) solve_receiver(st, sc, ls, ord[p], p, result);
+      }
+    });
+    return 0.0;
+  }
+  if (ls.bsp) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8),
                       [&](const tbb::blocked_range<size_t>& range) {
                         const IeeeFloatMode range_float_mode;
@@ -616,7 +643,7 @@ struct Culling {
   ReceiverTree tree;
   std::vector<PlanarOccluder> occluders;
   accel::Bvh<float> edge_bvh;
-  EdgeTree edge_tree;  // wedge_index=edges, over edge_bvh
+  EdgeTree edge_tree;  // wedge_index=edges
   std::vector<int32_t> units;
   Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
           const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
@@ -638,14 +665,13 @@ struct Culling {
       }
       occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
     }
-    if (shafts_on || edges_on) {
+    if (shafts_on) {
       std::vector<AABB> boxes(edges.size());
       for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
       edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
     }
-    if (edges_on) edge_tree = EdgeTree(edge_bvh, edges, pm, planes, M);
+    if (edges_on) edge_tree = EdgeTree(edges, pm, planes, M);
   }
-  Culling(const Culling&) = delete;  // edge_tree points into edge_bvh
   double memory_bytes() const {
     return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes() +
                   edge_tree.memory_bytes());
@@ -733,7 +759,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
 
   auto tc0 = Clock::now();
   const Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts && !use_edges,
-                     use_occluders || use_shafts || use_scatter, use_edges, M);
+                     use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
@@ -750,7 +776,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // (about the wedges reported per query times the batch) stay in cache; batches of
   // 16,384 made foliage's 5M entries three times slower than the BSP's queries.
   WedgeScatter scatter;
-  const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 256) : std::vector<int32_t>{};
+  const std::vector<int32_t> batches = use_scatter ? WedgeScatter::batches(receiver_tree, 256)
+                                       : use_edges  ? WedgeScatter::batches(receiver_tree, kEdgeBatch)
+                                                    : std::vector<int32_t>{};
   MemoryCharge scatter_charge;
   scatter_charge.bind(&budget, "scattered wedges");
   MemoryCharge occluder_charge;
