@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -245,7 +244,7 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
 // Scene ids for TermsCache: distinct for every scene of the process, never 0.
 std::atomic<uint64_t> next_scene_id{1};
 
-EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits)
+EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits, BuildQuality quality)
     : soup_(&soup), verify_(verify_hits), id_(next_scene_id.fetch_add(1, std::memory_order_relaxed)) {
   for (const Vec3f& v : soup.vertices)
     if (!within_embree_bound(v)) {
@@ -255,6 +254,10 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits
   RTCDevice device = shared_device();
   RTCScene scene = rtcNewScene(device);
   rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  const RTCBuildQuality q = quality == BuildQuality::low    ? RTC_BUILD_QUALITY_LOW
+                            : quality == BuildQuality::high ? RTC_BUILD_QUALITY_HIGH
+                                                            : RTC_BUILD_QUALITY_MEDIUM;
+  rtcSetSceneBuildQuality(scene, q);
   if (soup.size() > 0) {
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree-allocated buffers have the tail padding its SIMD loads need.
@@ -264,6 +267,7 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits
     auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                               3 * sizeof(uint32_t), soup.triangles.size()));
     std::memcpy(ib, soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
+    rtcSetGeometryBuildQuality(geom, q);
     if (verify_) rtcSetGeometryOccludedFilterFunction(geom, verify_hit_filter);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(scene, geom);

@@ -85,9 +85,17 @@ bool certainly_crosses_interior(const Vec3d& p, const Vec3d& q, const Vec3f& a, 
 // Embree and the double-precision test; misses are Embree's alone (the filter sees
 // only candidates). The filter runs on hits only, which occlusion rays stop at; a
 // segment query's hit that certainly_crosses_interior proves needs no further test.
+// Embree's BVH build quality (RTC_BUILD_QUALITY_*). `medium`, Embree's default, is what
+// the baselines use. `low` (Morton-code build) builds several times faster and traces
+// somewhat slower: it pays for a method that casts few rays into a large mesh (SSV's
+// reference rays, ISS's leaf rays where shafts decide most relations). Answers do not
+// depend on it: the same triangles, the same intersection kernel.
+enum class BuildQuality { low, medium, high };
+
 class EmbreeScene {
  public:
-  EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits = true);
+  EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits = true,
+              BuildQuality quality = BuildQuality::medium);
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
