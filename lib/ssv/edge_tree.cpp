@@ -131,6 +131,22 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       nd.hi[c] = nd.thi[c] = nd.nhi[c] = -INFINITY;
     }
   };
+  // Per triangle once (each is incident to about three edges): its box and unit normal.
+  struct TriBounds {
+    float lo[3], hi[3], n[3];
+    bool no_plane;
+  };
+  std::vector<TriBounds> tri(m.triangles.size());
+  for (size_t t = 0; t < tri.size(); ++t) {
+    TriBounds& tb = tri[t];
+    const Vec3f &p0 = m.corner(t, 0), &p1 = m.corner(t, 1), &p2 = m.corner(t, 2);
+    for (int c = 0; c < 3; ++c) {
+      tb.lo[c] = std::min(p0[c], std::min(p1[c], p2[c]));
+      tb.hi[c] = std::max(p0[c], std::max(p1[c], p2[c]));
+      tb.n[c] = float(planes[t].unit[c]);
+    }
+    tb.no_plane = !(planes[t].nn > 0.0);  // never proven weight 0
+  }
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     clear(nd);
@@ -147,19 +163,13 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       if (ed.t2 < 0) nd.single = 1;
       for (int32_t t : {ed.t1, ed.t2}) {
         if (t < 0) continue;
-        const TrianglePlane& p = planes[size_t(t)];
-        if (!(p.nn > 0.0)) nd.single = 1;  // no plane: never proven weight 0
-        for (int v = 0; v < 3; ++v) {
-          const Vec3f& x = m.corner(size_t(t), v);
-          for (int c = 0; c < 3; ++c) {
-            nd.tlo[c] = std::min(nd.tlo[c], x[c]);
-            nd.thi[c] = std::max(nd.thi[c], x[c]);
-          }
-        }
+        const TriBounds& tb = tri[size_t(t)];
+        nd.single |= uint8_t(tb.no_plane);
         for (int c = 0; c < 3; ++c) {
-          const float u = float(p.unit[c]);
-          nd.nlo[c] = std::min(nd.nlo[c], u);
-          nd.nhi[c] = std::max(nd.nhi[c], u);
+          nd.tlo[c] = std::min(nd.tlo[c], tb.lo[c]);
+          nd.thi[c] = std::max(nd.thi[c], tb.hi[c]);
+          nd.nlo[c] = std::min(nd.nlo[c], tb.n[c]);
+          nd.nhi[c] = std::max(nd.nhi[c], tb.n[c]);
         }
       }
     }
@@ -369,6 +379,38 @@ void EdgeTree::frontier(const EdgeFrustum& f, const LightFrame& frame, float eps
   out.clear();
   const uint32_t root = uint32_t(nodes_.size() - 1);
   if (!empty()) walk(f, frame, eps, &root, 1, max_edges, nullptr, &out);
+}
+
+void EdgeTree::crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame,
+                                  std::vector<uint32_t>& out) const {
+  out.clear();
+  if (empty()) return;
+  const float N[3] = {float(frame.N.x), float(frame.N.y), float(frame.N.z)};
+  const float h0 = float(dot(frame.N, frame.origin));
+  const float margin = float(2e-6 * M_);
+  uint32_t stack[64];
+  size_t top = 0;
+  stack[top++] = uint32_t(nodes_.size() - 1);
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    float hmin = -h0, hmax = -h0;
+    for (int c = 0; c < 3; ++c) {
+      hmin += N[c] * (N[c] >= 0.0f ? nd.tlo[c] : nd.thi[c]);
+      hmax += N[c] * (N[c] >= 0.0f ? nd.thi[c] : nd.tlo[c]);
+    }
+    if (hmin > margin || hmax < -margin) continue;  // every triangle below on one side
+    if (nd.leaf) {
+      for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+        const Edge& e = edges[order_[k]];
+        out.push_back(uint32_t(e.t1));
+        if (e.t2 >= 0) out.push_back(uint32_t(e.t2));
+      }
+      continue;
+    }
+    for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 }  // namespace visgate::ssv

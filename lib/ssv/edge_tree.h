@@ -81,6 +81,11 @@ class EdgeTree {
   // has weight 0 from each (the facing bound over the box holds for each of its points).
   void frontier(const EdgeFrustum& f, const LightFrame& frame, float eps, uint32_t max_edges,
                 std::vector<uint32_t>& out) const;
+  // Every triangle that may have vertices on both sides of the light plane of `frame`
+  // (a superset: those of the leaves whose triangles' box is not more than 2e-6 M on one
+  // side), ascending: the candidates of light_plane_cuts. Every triangle is incident to
+  // some edge of `edges` (the edges the tree was built over).
+  void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
   size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) + boxes_.capacity() * sizeof(AABB);
   }

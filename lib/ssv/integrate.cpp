@@ -725,6 +725,13 @@ Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {
 Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const { return light_plane_point(fp_, i, j); }
 
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f) {
+  std::vector<uint32_t> all(m.triangles.size());
+  for (size_t t = 0; t < all.size(); ++t) all[t] = uint32_t(t);
+  return light_plane_cuts(m, fp, f, all);
+}
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates) {
   // L' in double, with its bounding box.
   const size_t nl = f.poly.size();
   double ulo = INFINITY, uhi = -INFINITY, vlo = INFINITY, vhi = -INFINITY;
@@ -745,7 +752,7 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
   // one clipped-away piece per receiver; dropping one that meets it would be wrong.
   const double tol = 1e-6 * f.extent;
   std::vector<uint32_t> out;
-  for (size_t t = 0; t < m.triangles.size(); ++t) {
+  for (const uint32_t t : candidates) {
     const auto& v = m.triangles[t].v;
     bool pos = false, neg = false;
     for (uint32_t i : v) {

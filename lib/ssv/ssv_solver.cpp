@@ -120,7 +120,9 @@ TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
 // (corpus/embree-robust/).
 class Caster {
  public:
-  explicit Caster(const TriangleSoup& soup) : robust_(soup, true) {}
+  // Embree's low-quality (Morton) build: SSV casts about one reference ray per receiver
+  // and light, so the build dominates the caster's cost (answers do not depend on it).
+  explicit Caster(const TriangleSoup& soup) : robust_(soup, true, true, raycast::BuildQuality::low) {}
   bool occluded(const Vec3f& from, const Vec3f& to) const { return robust_.occluded(from, to); }
   bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
     return robust_.occluded(from, to, tnear, tfar);
@@ -770,6 +772,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   std::vector<Wedge> wedges;
   std::vector<uint8_t> edge_mark;
   std::vector<uint32_t> edge_subset;
+  std::vector<uint32_t> crossing;  // wedge_index=edges: candidates of light_plane_cuts
   double edges_outside = 0;
   MemoryBudget budget("ssv", opt.memory_budget_mb);
   // The scattered candidates, batch by batch of at most 256 receivers: their entries
@@ -820,7 +823,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     wedges.clear();
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback && !all_hidden && use_edges) {
-      cut_triangles = light_plane_cuts(pm, frame_pos, frame);
+      cull.edge_tree.crossing_triangles(edges, frame, crossing);
+      cut_triangles = light_plane_cuts(pm, frame_pos, frame, crossing);
     } else if (!light_fallback && !all_hidden) {
       const bool subset = use_shafts && !cull.edge_bvh.empty();
       if (subset) {
