@@ -46,7 +46,9 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
   for (int k = 0; k < 8; ++k)
     corner[k] = Vec3d(k & 1 ? rhi.x : rlo.x, k & 2 ? rhi.y : rlo.y, k & 4 ? rhi.z : rlo.z);
   // Per edge of L', the plane through it and the corner that has every other corner on
-  // its inner side (the hull's face at that edge); none found (rounding): no plane.
+  // its inner side (the hull's face at that edge), up to 1e-9 of the distances (the
+  // corner itself evaluates to rounding noise; far below the tests' eps); none found:
+  // no plane.
   for (size_t i = 0; i < L.size() && count < kMaxPlanes; ++i) {
     const Vec3d& a = L[i];
     const Vec3d ab = L[(i + 1) % L.size()] - a;
@@ -56,8 +58,9 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
       if (!(len > 1e-12 * length(ab) * length(c - a))) continue;
       nrm = nrm / len;
       if (dot(nrm, frame.origin - a) < 0.0) nrm = -nrm;
+      const double slack = 1e-9 * (length(ab) + length(c - a));
       bool supports = true;
-      for (const Vec3d& o : corner) supports &= dot(nrm, o - a) >= 0.0;
+      for (const Vec3d& o : corner) supports &= dot(nrm, o - a) >= -slack;
       if (!supports) continue;
       n[count] = nrm;
       d[count] = dot(nrm, a);
