@@ -142,11 +142,12 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
   std::vector<TriBounds> tri(m.triangles.size());
   for (size_t t = 0; t < tri.size(); ++t) {
     TriBounds& tb = tri[t];
+    const Vec3d unit = planes[t].unit();
     const Vec3f &p0 = m.corner(t, 0), &p1 = m.corner(t, 1), &p2 = m.corner(t, 2);
     for (int c = 0; c < 3; ++c) {
       tb.lo[c] = std::min(p0[c], std::min(p1[c], p2[c]));
       tb.hi[c] = std::max(p0[c], std::max(p1[c], p2[c]));
-      tb.n[c] = float(planes[t].unit[c]);
+      tb.n[c] = float(unit[c]);
     }
     tb.no_plane = !(planes[t].nn > 0.0);  // never proven weight 0
   }

@@ -95,7 +95,7 @@ class EdgeTree {
   // Leaves hold up to kLeaf consecutive edges of the Morton order; inner nodes two (or
   // one) consecutive nodes of the level below. Box of the edges first: what every visit
   // reads.
-  static constexpr uint32_t kLeaf = 4;
+  static constexpr uint32_t kLeaf = 8;
   struct Node {
     float lo[3], hi[3];    // box of the edges below
     float tlo[3], thi[3];  // box of their incident triangles' vertices

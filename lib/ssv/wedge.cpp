@@ -19,10 +19,7 @@ std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m) {
     p.n = cross(b - a, c - a);
     p.a = a;
     p.nn = dot(p.n, p.n);
-    const double len = std::sqrt(p.nn);
-    p.unit = len > 0.0 ? p.n / len : Vec3d(0, 0, 0);
-    p.c = (a + b + c) / 3.0;
-    p.rad2 = std::max(dot(a - p.c, a - p.c), std::max(dot(b - p.c, b - p.c), dot(c - p.c, c - p.c)));
+    p.reach2 = std::max(dot(b - a, b - a), dot(c - a, c - a));
   }
   return out;
 }
@@ -277,7 +274,7 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     planes = &own;
   }
   // Unit plane of a triangle, front (normal) side positive.
-  auto triangle_plane = [&](size_t t) { return PointNormalPlane{(*planes)[t].unit, (*planes)[t].a}; };
+  auto triangle_plane = [&](size_t t) { return PointNormalPlane{(*planes)[t].unit(), (*planes)[t].a}; };
   wedges.clear();
   const auto& L = frame.poly_world;
   const size_t nl = L.size();

@@ -77,7 +77,7 @@ bool may_count(const TreeSetup& st, const Edge& e, const Vec3d& r) {
     const auto& v = st.pm.triangles[size_t(t)].v;
     if (!(st.fp[v[0]].z > 0.0 || st.fp[v[1]].z > 0.0 || st.fp[v[2]].z > 0.0)) continue;
     const TrianglePlane& p = st.planes[size_t(t)];
-    const double f = dot(p.unit, r - p.a);
+    const double f = dot(p.unit(), r - p.a);
     double reach = 0.0;
     for (int c = 0; c < 3; ++c) reach = std::max(reach, length(r - to_double(st.pm.corner(size_t(t), c))));
     near |= std::abs(f) <= 0x1p-19 * reach;
