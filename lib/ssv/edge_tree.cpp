@@ -115,11 +115,9 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
     a.swap(b);
   }
   order_ = std::move(a);
-  boxes_.resize(E);
-  for (size_t k = 0; k < E; ++k) {
-    const Edge& ed = edges[order_[k]];
-    boxes_[k] = AABB(m.vertex_pos[ed.a], m.vertex_pos[ed.b]);
-  }
+  vertices_ = &m.vertex_pos;
+  ends_.resize(E);
+  for (size_t k = 0; k < E; ++k) ends_[k] = {edges[order_[k]].a, edges[order_[k]].b};
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
   size_t total = 0;
@@ -134,23 +132,10 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       nd.hi[c] = nd.thi[c] = nd.nhi[c] = -INFINITY;
     }
   };
-  // Per triangle once (each is incident to about three edges): its box and unit normal.
-  struct TriBounds {
-    float lo[3], hi[3], n[3];
-    bool no_plane;
-  };
-  std::vector<TriBounds> tri(m.triangles.size());
-  for (size_t t = 0; t < tri.size(); ++t) {
-    TriBounds& tb = tri[t];
-    const Vec3d unit = planes[t].unit();
-    const Vec3f &p0 = m.corner(t, 0), &p1 = m.corner(t, 1), &p2 = m.corner(t, 2);
-    for (int c = 0; c < 3; ++c) {
-      tb.lo[c] = std::min(p0[c], std::min(p1[c], p2[c]));
-      tb.hi[c] = std::max(p0[c], std::max(p1[c], p2[c]));
-      tb.n[c] = float(unit[c]);
-    }
-    tb.no_plane = !(planes[t].nn > 0.0);  // never proven weight 0
-  }
+  // Per triangle once (each is incident to about three edges): its unit normal in
+  // float (NaN-free: 0 for no plane, which marks the node single).
+  std::vector<Vec3f> tri_n(m.triangles.size());
+  for (size_t t = 0; t < tri_n.size(); ++t) tri_n[t] = Vec3f(planes[t].unit());
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     clear(nd);
@@ -160,20 +145,26 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
     nd.edges = nd.n;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
+      const Vec3f &va = m.vertex_pos[ed.a], &vb = m.vertex_pos[ed.b];
       for (int c = 0; c < 3; ++c) {
-        nd.lo[c] = std::min(nd.lo[c], boxes_[k].lo[c]);
-        nd.hi[c] = std::max(nd.hi[c], boxes_[k].hi[c]);
+        nd.lo[c] = std::min(nd.lo[c], std::min(va[c], vb[c]));
+        nd.hi[c] = std::max(nd.hi[c], std::max(va[c], vb[c]));
       }
       if (ed.t2 < 0) nd.single = 1;
       for (int32_t t : {ed.t1, ed.t2}) {
         if (t < 0) continue;
-        const TriBounds& tb = tri[size_t(t)];
-        nd.single |= uint8_t(tb.no_plane);
+        nd.single |= uint8_t(!(planes[size_t(t)].nn > 0.0));  // no plane: never proven weight 0
+        const Vec3f& n = tri_n[size_t(t)];
+        for (int v = 0; v < 3; ++v) {
+          const Vec3f& x = m.corner(size_t(t), v);
+          for (int c = 0; c < 3; ++c) {
+            nd.tlo[c] = std::min(nd.tlo[c], x[c]);
+            nd.thi[c] = std::max(nd.thi[c], x[c]);
+          }
+        }
         for (int c = 0; c < 3; ++c) {
-          nd.tlo[c] = std::min(nd.tlo[c], tb.lo[c]);
-          nd.thi[c] = std::max(nd.thi[c], tb.hi[c]);
-          nd.nlo[c] = std::min(nd.nlo[c], tb.n[c]);
-          nd.nhi[c] = std::max(nd.nhi[c], tb.n[c]);
+          nd.nlo[c] = std::min(nd.nlo[c], n[c]);
+          nd.nhi[c] = std::max(nd.nhi[c], n[c]);
         }
       }
     }
@@ -363,7 +354,12 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
       }
       if (nd.leaf) {
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k)
-          if (!ff.outside(&boxes_[k].lo.x, &boxes_[k].hi.x, eps)) edges->push_back(order_[k]);
+        {
+          const Vec3f &va = (*vertices_)[ends_[k][0]], &vb = (*vertices_)[ends_[k][1]];
+          const float lo[3] = {std::min(va.x, vb.x), std::min(va.y, vb.y), std::min(va.z, vb.z)};
+          const float hi[3] = {std::max(va.x, vb.x), std::max(va.y, vb.y), std::max(va.z, vb.z)};
+          if (!ff.outside(lo, hi, eps)) edges->push_back(order_[k]);
+        }
         continue;
       }
       for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;

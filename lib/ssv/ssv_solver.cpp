@@ -845,7 +845,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     wedge_charge.bind(&budget, "wedges");
     wedge_charge.set(wedges.capacity() * sizeof(Wedge));
     std::optional<WedgeBsp> bsp;
-    if (!use_scatter) {
+    if (!use_scatter && !use_edges) {
       bsp.emplace(wedges, root, min_node, eps, use_region);
       bsp->set_memory_budget(&budget);
     }
