@@ -207,6 +207,8 @@ TEST(SsvEdgeTree, SolverAnswersEqualTheWedgeIndexes) {
       EXPECT_EQ(ra.receivers[i].visible_bits, rc.receivers[i].visible_bits) << what << " receiver " << i;
     }
     EXPECT_EQ(ra.stats.get("wedges"), 0.0) << what;
+    EXPECT_EQ(ra.stats.get("edge_index"), 1.0) << what;
+    EXPECT_EQ(rb.stats.get("edge_index"), 0.0) << what;
     EXPECT_GT(ra.stats.get("wedges_validated"), 0.0) << what;
   };
   for (const char* fam : {"columns", "torus", "random-soup", "foliage", "sliver-soup", "grid-snapped", "scan",
@@ -215,4 +217,11 @@ TEST(SsvEdgeTree, SolverAnswersEqualTheWedgeIndexes) {
   same(family("rooms", 4, 7000, 144, 16), "rooms");
   same(random_scene(12, 16, 200), "random 12");
   same(random_scene(77, 16, 200), "random 77");
+}
+
+TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseMeshes) {
+  // scan: far more edges than receivers; columns: fewer.
+  const SolveOptions o;
+  EXPECT_EQ(make_solver("ssv")->solve(family("scan", 4, 8000, 64, 8), o).stats.get("edge_index"), 1.0);
+  EXPECT_EQ(make_solver("ssv")->solve(family("columns", 4, -1, 1024, 8), o).stats.get("edge_index"), 0.0);
 }
