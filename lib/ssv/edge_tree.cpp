@@ -281,6 +281,38 @@ struct FloatFrustum {
 #endif
     return false;
   }
+  // The segment a b lies more than eps outside the frustum's box or one of its planes
+  // (both ends outside the same plane: tighter than the segment's box for a diagonal
+  // edge).
+  bool outside(const Vec3f& a, const Vec3f& b, float eps) const {
+    for (int c = 0; c < 3; ++c)
+      if (std::max(a[c], b[c]) < blo[c] || std::min(a[c], b[c]) > bhi[c]) return true;
+#if defined(__SSE2__)
+    (void)eps;
+    const __m128 ax = _mm_set1_ps(a.x), ay = _mm_set1_ps(a.y), az = _mm_set1_ps(a.z);
+    const __m128 bx = _mm_set1_ps(b.x), by = _mm_set1_ps(b.y), bz = _mm_set1_ps(b.z);
+    for (int g = 0; g < groups; ++g) {
+      __m128 sa = _mm_sub_ps(_mm_setzero_ps(), d[g]), sb = sa;
+      sa = _mm_add_ps(sa, _mm_mul_ps(nx[g], ax));
+      sa = _mm_add_ps(sa, _mm_mul_ps(ny[g], ay));
+      sa = _mm_add_ps(sa, _mm_mul_ps(nz[g], az));
+      sb = _mm_add_ps(sb, _mm_mul_ps(nx[g], bx));
+      sb = _mm_add_ps(sb, _mm_mul_ps(ny[g], by));
+      sb = _mm_add_ps(sb, _mm_mul_ps(nz[g], bz));
+      if (_mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(sa, neps_), _mm_cmplt_ps(sb, neps_)))) return true;
+    }
+#else
+    for (int i = 0; i < count; ++i) {
+      float sa = -dd[i], sb = -dd[i];
+      for (int c = 0; c < 3; ++c) {
+        sa += n[i][c] * a[c];
+        sb += n[i][c] * b[c];
+      }
+      if (sa < -eps && sb < -eps) return true;
+    }
+#endif
+    return false;
+  }
 };
 
 // Every triangle below `nd` active and every receiver of `ff` on one side of all their
@@ -354,12 +386,7 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
       }
       if (nd.leaf) {
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k)
-        {
-          const Vec3f &va = (*vertices_)[ends_[k][0]], &vb = (*vertices_)[ends_[k][1]];
-          const float lo[3] = {std::min(va.x, vb.x), std::min(va.y, vb.y), std::min(va.z, vb.z)};
-          const float hi[3] = {std::max(va.x, vb.x), std::max(va.y, vb.y), std::max(va.z, vb.z)};
-          if (!ff.outside(lo, hi, eps)) edges->push_back(order_[k]);
-        }
+          if (!ff.outside((*vertices_)[ends_[k][0]], (*vertices_)[ends_[k][1]], eps)) edges->push_back(order_[k]);
         continue;
       }
       for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
