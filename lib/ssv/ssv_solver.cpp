@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <array>
 #include <optional>
 
 #if defined(__SSE2__)
@@ -91,21 +92,31 @@ struct ThreadState {
 // rounding, in Embree's robust intersector and in the double-precision test of
 // lib/raycast alike. Leaving it out of both keeps the counters and the rays about the
 // same scene. Zero-area triangles, which never block, go the same way.
-TriangleSoup without_slivers(const TriangleSoup& soup, size_t& dropped) {
+bool is_sliver(const TriangleSoup& soup, const std::array<uint32_t, 3>& t) {
+  const Vec3d a = to_double(soup.vertices[t[0]]), b = to_double(soup.vertices[t[1]]), c = to_double(soup.vertices[t[2]]);
+  const Vec3d ab = b - a, bc = c - b, ca = a - c;
+  const double l2 = std::max(dot(ab, ab), std::max(dot(bc, bc), dot(ca, ca)));
+  const double area2 = length(cross(ab, c - a));  // twice the area
+  // width = area2 / L <= 2^-20 L  <=>  area2 <= 2^-20 L^2
+  return area2 <= 0x1p-20 * l2;
+}
+
+// The soup without its slivers; nullopt when it has none (the caller keeps using the
+// scene's soup: no copy of a dense mesh).
+std::optional<TriangleSoup> without_slivers(const TriangleSoup& soup, size_t& dropped) {
+  size_t first = 0;
+  while (first < soup.triangles.size() && !is_sliver(soup, soup.triangles[first])) ++first;
+  if (first == soup.triangles.size()) return std::nullopt;
   TriangleSoup out;
   out.vertices = soup.vertices;
   out.triangles.reserve(soup.triangles.size());
-  for (const auto& t : soup.triangles) {
-    const Vec3d a = to_double(soup.vertices[t[0]]), b = to_double(soup.vertices[t[1]]), c = to_double(soup.vertices[t[2]]);
-    const Vec3d ab = b - a, bc = c - b, ca = a - c;
-    const double l2 = std::max(dot(ab, ab), std::max(dot(bc, bc), dot(ca, ca)));
-    const double area2 = length(cross(ab, c - a));  // twice the area
-    // width = area2 / L <= 2^-20 L  <=>  area2 <= 2^-20 L^2
-    if (area2 <= 0x1p-20 * l2) {
+  out.triangles.assign(soup.triangles.begin(), soup.triangles.begin() + long(first));
+  for (size_t k = first; k < soup.triangles.size(); ++k) {
+    if (is_sliver(soup, soup.triangles[k])) {
       ++dropped;
       continue;
     }
-    out.triangles.push_back(t);
+    out.triangles.push_back(soup.triangles[k]);
   }
   return out;
 }
@@ -729,7 +740,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
-  const TriangleSoup blockers = without_slivers(scene.mesh, slivers);
+  const std::optional<TriangleSoup> kept = without_slivers(scene.mesh, slivers);
+  const TriangleSoup& blockers = kept ? *kept : scene.mesh;
   const mesh::PreparedMesh pm = mesh::prepare_mesh(blockers);
   auto t0 = Clock::now();
 
