@@ -8,7 +8,8 @@
 // Culling (docs/methods/ssv.md, "Culling"), each conservative: receivers a planar
 // occluder hides from a light are answered blocked without integration (occluders.h).
 // With wedge_index=edges (chosen by the default, auto, for meshes of at least 16 edges per
-// receiver) no wedge is built: each receiver's candidate edges come from a walk of the
+// receiver whose first light's probe finds at most 256 candidates per receiver) no wedge
+// is built: each receiver's candidate edges come from a walk of the
 // edge hierarchy (edge_tree.h) that leaves subtrees outside its frustum to L' or proven
 // weight 0 from it, and build_wedges' edge tests and the weight validate them. With
 // wedge_index=receivers (auto's choice otherwise), only edges inside the remaining
@@ -91,7 +92,7 @@ class SsvSolver : public Solver {
     return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}},
             {"occluder_culling", "skip receivers a planar occluder hides from a light (occluders.h)", {"on", "off"}},
             {"shaft_culling", "build wedges only for edges inside the receivers' shafts to a light", {"on", "off"}},
-            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver", {"auto", "edges", "receivers", "bsp"}}};
+            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver and at most 256 candidates per receiver in a probe", {"auto", "edges", "receivers", "bsp"}}};
   }
  protected:
   SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;

@@ -219,9 +219,25 @@ TEST(SsvEdgeTree, SolverAnswersEqualTheWedgeIndexes) {
   same(random_scene(77, 16, 200), "random 77");
 }
 
-TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseMeshes) {
-  // scan: far more edges than receivers; columns: fewer.
+TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseSmoothMeshes) {
+  // scan: far more edges than receivers; columns: fewer. A scan whose vertices are
+  // jittered by about an edge length (silhouettes everywhere, like a noisy scanned
+  // surface) gives every receiver hundreds of candidates: auto takes the wedges, with
+  // the same answers as the edges.
   const SolveOptions o;
   EXPECT_EQ(make_solver("ssv")->solve(family("scan", 4, 8000, 64, 8), o).stats.get("edge_index"), 1.0);
   EXPECT_EQ(make_solver("ssv")->solve(family("columns", 4, -1, 1024, 8), o).stats.get("edge_index"), 0.0);
+  Scene noisy = family("scan", 4, 30000, 64, 8, 3.0);  // lights 3x larger: wider frusta
+  std::mt19937_64 g(9);
+  std::uniform_real_distribution<float> u(-0.02f, 0.02f);
+  for (Vec3f& v : noisy.mesh.vertices)
+    if (v.z > 0.05f) v = v + Vec3f(u(g), u(g), u(g));  // the object, not the ground slab
+  const SolveResult a = make_solver("ssv")->solve(noisy, o);
+  SolveOptions e;
+  e.opts["wedge_index"] = "edges";
+  const SolveResult b = make_solver("ssv")->solve(noisy, e);
+  EXPECT_EQ(a.stats.get("edge_index"), 0.0);
+  EXPECT_GT(b.stats.get("wedges_reported"), 256.0);
+  for (size_t i = 0; i < a.receivers.size(); ++i)
+    EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << "receiver " << i;
 }
