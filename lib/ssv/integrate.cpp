@@ -675,11 +675,12 @@ int ReceiverIntegrator::facing(size_t t) const {
   // samples on that line no longer agree between them. The sign itself is right (double error about 1e-16 of the same scale), but
   // the receiver is answered by rays. f = 0 exactly is harmless: T then adds no piece
   // at all, and no open segment from r crosses it properly. The test is f^2 <= 2^-40
-  // |n|^2 max |r - v|^2; max |r - v|^2 <= 2 (|r - c|^2 + rad^2) rules most out cheaply.
+  // |n|^2 max |r - v|^2; max |r - v|^2 <= 2 (|r - a|^2 + max |v - a|^2) rules most out
+  // cheaply.
   if (f != 0.0) {
-    const Vec3d rc = r_world_ - p.c;
+    const Vec3d ra0 = r_world_ - p.a;
     const double f2 = f * f, lim = 0x1p-40 * p.nn;
-    if (f2 <= lim * 2.0 * (dot(rc, rc) + p.rad2)) {
+    if (f2 <= lim * 2.0 * (dot(ra0, ra0) + p.reach2)) {
       const Vec3d a = to_double(m_.corner(t, 0)), b = to_double(m_.corner(t, 1)), c = to_double(m_.corner(t, 2));
       const Vec3d ra = r_world_ - a, rb = r_world_ - b, rcc = r_world_ - c;
       const double reach2 = std::max(dot(ra, ra), std::max(dot(rb, rb), dot(rcc, rcc)));
@@ -725,6 +726,13 @@ Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {
 Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const { return light_plane_point(fp_, i, j); }
 
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f) {
+  std::vector<uint32_t> all(m.triangles.size());
+  for (size_t t = 0; t < all.size(); ++t) all[t] = uint32_t(t);
+  return light_plane_cuts(m, fp, f, all);
+}
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates) {
   // L' in double, with its bounding box.
   const size_t nl = f.poly.size();
   double ulo = INFINITY, uhi = -INFINITY, vlo = INFINITY, vhi = -INFINITY;
@@ -745,7 +753,7 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
   // one clipped-away piece per receiver; dropping one that meets it would be wrong.
   const double tol = 1e-6 * f.extent;
   std::vector<uint32_t> out;
-  for (size_t t = 0; t < m.triangles.size(); ++t) {
+  for (const uint32_t t : candidates) {
     const auto& v = m.triangles[t].v;
     bool pos = false, neg = false;
     for (uint32_t i : v) {

@@ -207,6 +207,10 @@ Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
 // receiver (rooms: the walls of every room of a storey cross the plane of each of its
 // ceiling lights, far from it).
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f);
+// The same among `candidates` (ascending; a superset of the triangles with vertices
+// strictly on both sides of the light plane, EdgeTree::crossing_triangles): the same list.
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates);
 
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {

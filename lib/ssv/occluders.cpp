@@ -63,12 +63,17 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
       if (w != e.a && w != e.b) return w;
     return e.a;
   };
+  // Squared prefilters with a relative slack of 1e-6 (far above the rounding of the
+  // square roots): what they drop is surely below min_area, the rest is decided by the
+  // exact expressions (a dense mesh's triangles are mostly far below a light's area).
+  const double nn_tri = 4.0 * min_area * min_area * (1.0 - 1e-6), nn_pair = 0.25 * nn_tri;
   std::vector<std::pair<double, size_t>> cand;
   for (size_t t = 0; t < T; ++t)
-    if (planes[t].nn > 0.0 && tri_area(t) >= min_area) cand.emplace_back(tri_area(t), t);
+    if (planes[t].nn > 0.0 && planes[t].nn >= nn_tri && tri_area(t) >= min_area) cand.emplace_back(tri_area(t), t);
   for (size_t i = 0; i < edges.size(); ++i) {
     const Edge& e = edges[i];
     if (e.t2 < 0 || !(planes[size_t(e.t1)].nn > 0.0)) continue;
+    if (std::max(planes[size_t(e.t1)].nn, planes[size_t(e.t2)].nn) < nn_pair) continue;  // both below min_area / 2
     const double area = tri_area(size_t(e.t1)) + tri_area(size_t(e.t2));
     if (!(area >= min_area)) continue;
     const uint32_t c = third(e.t1, e), d = third(e.t2, e);
@@ -90,14 +95,14 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
     if (id < T) {
       const auto& tv = m.triangles[id].v;
       const Vec3d v[3] = {pos(tv[0]), pos(tv[1]), pos(tv[2])};
-      if (make_occluder(v, 3, planes[id].unit, o)) out.push_back(o);
+      if (make_occluder(v, 3, planes[id].unit(), o)) out.push_back(o);
       continue;
     }
     // t1 winds a -> b -> c, its neighbour t2 winds b -> a -> d: the union is the polygon
     // a, d, b, c in t1's orientation (a non-convex one is rejected by make_occluder).
     const Edge& e = edges[id - T];
     const Vec3d v[4] = {pos(e.a), pos(third(e.t2, e)), pos(e.b), pos(third(e.t1, e))};
-    if (make_occluder(v, 4, planes[size_t(e.t1)].unit, o)) out.push_back(o);
+    if (make_occluder(v, 4, planes[size_t(e.t1)].unit(), o)) out.push_back(o);
   }
   return out;
 }

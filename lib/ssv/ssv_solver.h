@@ -6,10 +6,15 @@
 // of relative depth complexity per sample (integrate.h) and one reference ray.
 //
 // Culling (docs/methods/ssv.md, "Culling"), each conservative: receivers a planar
-// occluder hides from a light are answered blocked without integration (occluders.h);
-// only edges inside the remaining receivers' shafts to the light get wedges; candidate
-// wedges are scattered through the receiver tree (wedge_scatter.h) rather than found by
-// the lazy BSP (option wedge_index=bsp keeps it).
+// occluder hides from a light are answered blocked without integration (occluders.h).
+// With wedge_index=edges (chosen by the default, auto, for meshes of at least 16 edges per
+// receiver whose first light's probe finds at most 256 candidates per receiver) no wedge
+// is built: each receiver's candidate edges come from a walk of the
+// edge hierarchy (edge_tree.h) that leaves subtrees outside its frustum to L' or proven
+// weight 0 from it, and build_wedges' edge tests and the weight validate them. With
+// wedge_index=receivers (auto's choice otherwise), only edges inside the remaining
+// receivers' shafts to the light get wedges and the wedges are scattered through the
+// receiver tree (wedge_scatter.h); wedge_index=bsp keeps the lazy BSP of section 4.1.
 //
 // Each light is processed in turn with its own wedges. Per receiver and light:
 // the samples of minimum relative depth complexity are visible iff one ray to a point
@@ -64,7 +69,7 @@
 // in stats as fallback_relations).
 //
 // Stats (paper 001 Tables 2-4): queries, wedges_reported and wedges_validated (per query
-// averages), acceptance_ratio, wedges, bsp_nodes, memory_mb (peak BSP plus wedges and
+// averages; with the edge index: candidate edges and edges of nonzero weight), acceptance_ratio, wedges, bsp_nodes, memory_mb (peak BSP plus wedges and
 // per-light arrays), init_seconds (edges, wedges), embree_build_seconds, and the per-phase
 // times bsp_build_query_seconds, validation_seconds, projection_integration_seconds,
 // reference_ray_seconds summed over threads (thread-seconds; the ray time includes the
@@ -72,8 +77,8 @@
 // inconsistent_receivers and doubtful_receivers (answered by one ray per sample, see
 // above), unchecked_receivers (no clear sample above the minimum class to check),
 // unclear_relations, ray_disputes, slivers_dropped, the culling's occluders,
-// occluded_relations, hidden_lights, edges_outside_shafts, scattered_candidates and
-// occluder_seconds, plus prepare_seconds (mesh preparation, excluded from `seconds`).
+// occluded_relations, hidden_lights, edges_outside_shafts, scattered_candidates,
+// edge_index (1 when the edge hierarchy answered) and occluder_seconds, plus prepare_seconds (mesh preparation, excluded from `seconds`).
 #pragma once
 
 #include "lib/solver.h"
@@ -87,7 +92,7 @@ class SsvSolver : public Solver {
     return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}},
             {"occluder_culling", "skip receivers a planar occluder hides from a light (occluders.h)", {"on", "off"}},
             {"shaft_culling", "build wedges only for edges inside the receivers' shafts to a light", {"on", "off"}},
-            {"wedge_index", "find candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1)", {"receivers", "bsp"}}};
+            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver and at most 256 candidates per receiver in a probe", {"auto", "edges", "receivers", "bsp"}}};
   }
  protected:
   SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;

@@ -19,10 +19,7 @@ std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m) {
     p.n = cross(b - a, c - a);
     p.a = a;
     p.nn = dot(p.n, p.n);
-    const double len = std::sqrt(p.nn);
-    p.unit = len > 0.0 ? p.n / len : Vec3d(0, 0, 0);
-    p.c = (a + b + c) / 3.0;
-    p.rad2 = std::max(dot(a - p.c, a - p.c), std::max(dot(b - p.c, b - p.c), dot(c - p.c, c - p.c)));
+    p.reach2 = std::max(dot(b - a, b - a), dot(c - a, c - a));
   }
   return out;
 }
@@ -277,7 +274,7 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     planes = &own;
   }
   // Unit plane of a triangle, front (normal) side positive.
-  auto triangle_plane = [&](size_t t) { return PointNormalPlane{(*planes)[t].unit, (*planes)[t].a}; };
+  auto triangle_plane = [&](size_t t) { return PointNormalPlane{(*planes)[t].unit(), (*planes)[t].a}; };
   wedges.clear();
   const auto& L = frame.poly_world;
   const size_t nl = L.size();
@@ -312,15 +309,8 @@ void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, c
     if (stamp[t] == call) return tri_class[t];
     const auto& tv = m.triangles[t].v;
     const bool act = frame_pos[tv[0]].z > 0.0 || frame_pos[tv[1]].z > 0.0 || frame_pos[tv[2]].z > 0.0;
-    const PointNormalPlane p = triangle_plane(t);
-    bool all_pos = true, all_neg = true;
-    for (const auto& l : L) {
-      const double f = p.eval(l);
-      all_pos &= f > tol;
-      all_neg &= f < -tol;
-    }
     stamp[t] = call;
-    tri_class[t] = int8_t((all_pos ? 2 : all_neg ? -2 : 0) | (act ? 1 : 0));
+    tri_class[t] = int8_t(light_side((*planes)[t], L, tol) * 2 | (act ? 1 : 0));
     return tri_class[t];
   };
   size_t last_part = 0;  // the region part that saw the last edge (regions only)

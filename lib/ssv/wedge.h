@@ -25,6 +25,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -42,14 +43,35 @@ struct Edge {
 };
 
 // Per triangle, computed once per solve (light-independent): the unnormalised normal
-// cross(b - a, c - a) and corner a in double, the unit normal (0 for zero area), the
-// vertex average c and the squared distance from it to the farthest corner. Used by
-// ReceiverIntegrator::facing and build_wedges.
+// cross(b - a, c - a) and corner a in double, |n|^2, and the squared distance from a to
+// the farthest other corner. Used by ReceiverIntegrator::facing and build_wedges. 64
+// bytes: a dense mesh's planes are written once per solve, and each fresh page costs a
+// fault (the unit normal is derived on demand, the same double every time).
 struct TrianglePlane {
-  Vec3d n, a, unit, c;
-  double nn = 0.0, rad2 = 0.0;
+  Vec3d n, a;
+  double nn = 0.0, reach2 = 0.0;
+  // The unit normal (0 for zero area).
+  Vec3d unit() const {
+    const double len = std::sqrt(nn);
+    return len > 0.0 ? n / len : Vec3d(0, 0, 0);
+  }
 };
 std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m);
+
+// The side of L' (vertices `light`) w.r.t. the triangle's plane: +1 when every vertex lies
+// more than `tol` in front of it, -1 when every one lies more than tol behind, else 0
+// (build_wedges' potential-silhouette test: a double edge whose two triangles give the
+// same nonzero side is a silhouette from no light point).
+inline int light_side(const TrianglePlane& p, const std::vector<Vec3d>& light, double tol) {
+  bool all_pos = true, all_neg = true;
+  const Vec3d unit = p.unit();
+  for (const auto& l : light) {
+    const double f = dot(unit, l - p.a);
+    all_pos &= f > tol;
+    all_neg &= f < -tol;
+  }
+  return all_pos ? 1 : all_neg ? -1 : 0;
+}
 
 // One edge per label of the prepared mesh, in label order.
 std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m);

@@ -43,10 +43,13 @@ std::vector<Vec3d> square(double cx, double cy, double z, double half) {
 AABBd point_box(const Vec3d& p) { return AABBd(p, p); }
 
 // Culling on: occluders and shafts; off: neither (the previous code path).
-SolveResult run(const Scene& s, bool culling) {
+// Shaft culling applies to the wedge indexes: these runs use the scattered wedges (the
+// edge index, the default, is compared with `edges`).
+SolveResult run(const Scene& s, bool culling, const char* index = "receivers") {
   SolveOptions o;
   o.opts["occluder_culling"] = culling ? "on" : "off";
   o.opts["shaft_culling"] = culling ? "on" : "off";
+  o.opts["wedge_index"] = index;
   return make_solver("ssv")->solve(s, o);
 }
 
@@ -235,6 +238,7 @@ TEST(OccluderCulling, SolverAnswersUnchangedOnFamilies) {
     Scene s = family(fam, 2, -1, 144, 16);
     const SolveResult on = run(s, true), off = run(s, false);
     expect_same_answers(on, off, fam);
+    expect_same_answers(run(s, true, "edges"), off, std::string(fam) + " edge index");
     if (std::string(fam) == "rooms") {
       EXPECT_GT(on.stats.get("occluded_relations"), 0.5 * double(s.relation_count()));
       EXPECT_GT(on.stats.get("edges_outside_shafts"), 0.0);
@@ -269,6 +273,7 @@ TEST(OccluderCulling, SolverAnswersUnchangedOnShadowBoundariesAndOccluderPlanes)
     ASSERT_TRUE(finish_scene(s).ok());
     const SolveResult on = run(s, true), off = run(s, false);
     expect_same_answers(on, off, "occluder boundary");
+    expect_same_answers(run(s, true, "edges"), off, "occluder boundary, edge index");
     EXPECT_GT(on.stats.get("occluded_relations"), 0.0);
     oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
     expect_matches_oracle(s, ex, on, "occluder boundary culled");

@@ -1,0 +1,443 @@
+// Candidate silhouette edges from the edge hierarchy (see edge_tree.h).
+#include "lib/ssv/edge_tree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace visgate::ssv {
+
+EdgeFrustum::EdgeFrustum(const LightFrame& frame, const Vec3f& receiver)
+    : rlo(to_double(receiver)), rhi(to_double(receiver)) {
+  const Vec3d r = rlo;
+  const auto& L = frame.poly_world;
+  n[count] = frame.N;  // the light plane, h >= 0
+  d[count] = dot(frame.N, frame.origin);
+  ++count;
+  box.extend(r);
+  for (const Vec3d& p : L) box.extend(p);
+  // The side planes, oriented with the frame origin (L's vertex average, inside L') on
+  // the positive side.
+  for (size_t i = 0; i < L.size() && count < kMaxPlanes; ++i) {
+    const Vec3d a = L[i] - r, b = L[(i + 1) % L.size()] - r;
+    Vec3d nrm = cross(a, b);
+    const double len = length(nrm);
+    if (!(len > 1e-12 * length(a) * length(b))) continue;
+    nrm = nrm / len;
+    if (dot(nrm, frame.origin - r) < 0.0) nrm = -nrm;
+    n[count] = nrm;
+    d[count] = dot(nrm, r);
+    ++count;
+  }
+}
+
+EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(receivers.lo), rhi(receivers.hi) {
+  const auto& L = frame.poly_world;
+  n[count] = frame.N;  // the light plane, h >= 0
+  d[count] = dot(frame.N, frame.origin);
+  ++count;
+  box = receivers;
+  for (const Vec3d& p : L) box.extend(p);
+  Vec3d corner[8];
+  for (int k = 0; k < 8; ++k)
+    corner[k] = Vec3d(k & 1 ? rhi.x : rlo.x, k & 2 ? rhi.y : rlo.y, k & 4 ? rhi.z : rlo.z);
+  // Per edge of L', the plane through it and the corner that has every other corner on
+  // its inner side (the hull's face at that edge), up to 1e-9 of the distances (the
+  // corner itself evaluates to rounding noise; far below the tests' eps); none found:
+  // no plane.
+  for (size_t i = 0; i < L.size() && count < kMaxPlanes; ++i) {
+    const Vec3d& a = L[i];
+    const Vec3d ab = L[(i + 1) % L.size()] - a;
+    for (const Vec3d& c : corner) {
+      Vec3d nrm = cross(ab, c - a);
+      const double len = length(nrm);
+      if (!(len > 1e-12 * length(ab) * length(c - a))) continue;
+      nrm = nrm / len;
+      if (dot(nrm, frame.origin - a) < 0.0) nrm = -nrm;
+      const double slack = 1e-9 * (length(ab) + length(c - a));
+      bool supports = true;
+      for (const Vec3d& o : corner) supports &= dot(nrm, o - a) >= -slack;
+      if (!supports) continue;
+      n[count] = nrm;
+      d[count] = dot(nrm, a);
+      ++count;
+      break;
+    }
+  }
+}
+
+namespace {
+
+// Morton code of 10 bits per axis.
+uint32_t spread10(uint32_t x) {
+  x &= 0x3ffu;
+  x = (x | (x << 16)) & 0x30000ffu;
+  x = (x | (x << 8)) & 0x300f00fu;
+  x = (x | (x << 4)) & 0x30c30c3u;
+  x = (x | (x << 2)) & 0x9249249u;
+  return x;
+}
+
+}  // namespace
+
+EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
+                   const std::vector<TrianglePlane>& planes, double M)
+    : M_(M) {
+  const size_t E = edges.size();
+  if (E == 0) return;
+  // Morton order of the edges' midpoints (the sums of their float endpoints), by a
+  // stable LSD radix sort of three 10-bit digits: ties stay in index order.
+  AABB bounds;
+  for (const Vec3f& v : m.vertex_pos) bounds.extend(v);
+  const Vec3f ext = bounds.extent();
+  float scale[3];
+  for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
+  std::vector<uint32_t> code(E), a(E), b(E);
+  for (size_t e = 0; e < E; ++e) {
+    const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
+    uint32_t q[3];
+    for (int c = 0; c < 3; ++c)
+      q[c] = uint32_t(std::clamp((s[c] - 2.0f * bounds.lo[c]) * scale[c], 0.0f, 1023.0f));
+    code[e] = spread10(q[0]) | (spread10(q[1]) << 1) | (spread10(q[2]) << 2);
+    a[e] = uint32_t(e);
+  }
+  std::vector<uint32_t> count(1025);
+  for (int pass = 0; pass < 3; ++pass) {
+    std::fill(count.begin(), count.end(), 0u);
+    const int shift = 10 * pass;
+    for (uint32_t e : a) ++count[((code[e] >> shift) & 1023u) + 1];
+    for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
+    for (uint32_t e : a) b[count[(code[e] >> shift) & 1023u]++] = e;
+    a.swap(b);
+  }
+  order_ = std::move(a);
+  vertices_ = &m.vertex_pos;
+  ends_.resize(E);
+  for (size_t k = 0; k < E; ++k) ends_[k] = {edges[order_[k]].a, edges[order_[k]].b};
+  // Leaves, then each level above, bottom-up.
+  const size_t leaves = (E + kLeaf - 1) / kLeaf;
+  size_t total = 0;
+  for (size_t n = leaves;; n = (n + 1) / 2) {
+    total += n;
+    if (n == 1) break;
+  }
+  nodes_.resize(total);
+  auto clear = [](Node& nd) {
+    for (int c = 0; c < 3; ++c) {
+      nd.lo[c] = nd.tlo[c] = nd.nlo[c] = INFINITY;
+      nd.hi[c] = nd.thi[c] = nd.nhi[c] = -INFINITY;
+    }
+  };
+  // Per triangle once (each is incident to about three edges): its unit normal in
+  // float (NaN-free: 0 for no plane, which marks the node single).
+  std::vector<Vec3f> tri_n(m.triangles.size());
+  for (size_t t = 0; t < tri_n.size(); ++t) tri_n[t] = Vec3f(planes[t].unit());
+  for (size_t j = 0; j < leaves; ++j) {
+    Node& nd = nodes_[j];
+    clear(nd);
+    nd.leaf = 1;
+    nd.child = uint32_t(j * kLeaf);
+    nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
+    nd.edges = nd.n;
+    for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+      const Edge& ed = edges[order_[k]];
+      const Vec3f &va = m.vertex_pos[ed.a], &vb = m.vertex_pos[ed.b];
+      for (int c = 0; c < 3; ++c) {
+        nd.lo[c] = std::min(nd.lo[c], std::min(va[c], vb[c]));
+        nd.hi[c] = std::max(nd.hi[c], std::max(va[c], vb[c]));
+      }
+      if (ed.t2 < 0) nd.single = 1;
+      for (int32_t t : {ed.t1, ed.t2}) {
+        if (t < 0) continue;
+        nd.single |= uint8_t(!(planes[size_t(t)].nn > 0.0));  // no plane: never proven weight 0
+        const Vec3f& n = tri_n[size_t(t)];
+        for (int v = 0; v < 3; ++v) {
+          const Vec3f& x = m.corner(size_t(t), v);
+          for (int c = 0; c < 3; ++c) {
+            nd.tlo[c] = std::min(nd.tlo[c], x[c]);
+            nd.thi[c] = std::max(nd.thi[c], x[c]);
+          }
+        }
+        for (int c = 0; c < 3; ++c) {
+          nd.nlo[c] = std::min(nd.nlo[c], n[c]);
+          nd.nhi[c] = std::max(nd.nhi[c], n[c]);
+        }
+      }
+    }
+  }
+  for (size_t first = 0, n = leaves; n > 1; first += n, n = (n + 1) / 2) {
+    const size_t up = first + n;
+    for (size_t j = 0; j < (n + 1) / 2; ++j) {
+      Node& nd = nodes_[up + j];
+      clear(nd);
+      nd.child = uint32_t(first + 2 * j);
+      nd.n = uint8_t(2 * j + 1 < n ? 2 : 1);
+      for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+        const Node& o = nodes_[k];
+        for (int c = 0; c < 3; ++c) {
+          nd.lo[c] = std::min(nd.lo[c], o.lo[c]);
+          nd.hi[c] = std::max(nd.hi[c], o.hi[c]);
+          nd.tlo[c] = std::min(nd.tlo[c], o.tlo[c]);
+          nd.thi[c] = std::max(nd.thi[c], o.thi[c]);
+          nd.nlo[c] = std::min(nd.nlo[c], o.nlo[c]);
+          nd.nhi[c] = std::max(nd.nhi[c], o.nhi[c]);
+        }
+        nd.single |= o.single;
+        nd.edges += o.edges;
+      }
+    }
+  }
+}
+
+namespace {
+
+// The frustum in float for the node tests: its box grown by eps, and its planes four at a
+// time (SSE2; the same float products and sums per plane as the scalar form).
+struct FloatFrustum {
+  static constexpr int kGroups = (EdgeFrustum::kMaxPlanes + 3) / 4;
+  float blo[3], bhi[3];
+  float rlo[3], rhi[3];
+  float rlo4[4], rhi4[4];  // the same with a fourth lane (0) for the SSE2 loads
+  int groups = 0;
+#if defined(__SSE2__)
+  __m128 nx[kGroups], ny[kGroups], nz[kGroups], d[kGroups], px[kGroups], py[kGroups], pz[kGroups];
+#else
+  float n[EdgeFrustum::kMaxPlanes][3], dd[EdgeFrustum::kMaxPlanes];
+  int count = 0;
+#endif
+#if defined(__SSE2__)
+  __m128 neps_;
+#endif
+  FloatFrustum(const EdgeFrustum& f, float eps) {
+    for (int c = 0; c < 3; ++c) {
+      blo[c] = float(f.box.lo[c]) - eps;
+      bhi[c] = float(f.box.hi[c]) + eps;
+      rlo[c] = float(f.rlo[c]);  // receivers are float points: exact
+      rhi[c] = float(f.rhi[c]);
+      rlo4[c] = rlo[c];
+      rhi4[c] = rhi[c];
+    }
+    rlo4[3] = rhi4[3] = 0.0f;
+#if defined(__SSE2__)
+    groups = (f.count + 3) / 4;
+    alignas(16) float v[7][4];
+    for (int g = 0; g < groups; ++g) {
+      for (int l = 0; l < 4; ++l) {
+        const int i = 4 * g + l;
+        // Padding lanes: n = 0, d = -inf, never outside.
+        const bool real = i < f.count;
+        for (int c = 0; c < 3; ++c) {
+          v[c][l] = real ? float(f.n[i][c]) : 0.0f;
+          v[4 + c][l] = (v[c][l] >= 0.0f) ? 1.0f : 0.0f;
+        }
+        v[3][l] = real ? float(f.d[i]) : -INFINITY;
+      }
+      nx[g] = _mm_load_ps(v[0]);
+      ny[g] = _mm_load_ps(v[1]);
+      nz[g] = _mm_load_ps(v[2]);
+      d[g] = _mm_load_ps(v[3]);
+      const __m128 one = _mm_set1_ps(1.0f);
+      px[g] = _mm_cmpeq_ps(_mm_load_ps(v[4]), one);  // take hi where n >= 0
+      py[g] = _mm_cmpeq_ps(_mm_load_ps(v[5]), one);
+      pz[g] = _mm_cmpeq_ps(_mm_load_ps(v[6]), one);
+    }
+    neps_ = _mm_set1_ps(-eps);
+#else
+    count = f.count;
+    for (int i = 0; i < count; ++i) {
+      for (int c = 0; c < 3; ++c) n[i][c] = float(f.n[i][c]);
+      dd[i] = float(f.d[i]);
+    }
+#endif
+  }
+  // The box lies more than eps outside the frustum's box or one of its planes.
+  bool outside(const float* lo, const float* hi, float eps) const {
+    for (int c = 0; c < 3; ++c)
+      if (hi[c] < blo[c] || lo[c] > bhi[c]) return true;
+#if defined(__SSE2__)
+    (void)eps;
+    const __m128 lx = _mm_set1_ps(lo[0]), ly = _mm_set1_ps(lo[1]), lz = _mm_set1_ps(lo[2]);
+    const __m128 hx = _mm_set1_ps(hi[0]), hy = _mm_set1_ps(hi[1]), hz = _mm_set1_ps(hi[2]);
+    for (int g = 0; g < groups; ++g) {
+      const __m128 x = _mm_or_ps(_mm_and_ps(px[g], hx), _mm_andnot_ps(px[g], lx));
+      const __m128 y = _mm_or_ps(_mm_and_ps(py[g], hy), _mm_andnot_ps(py[g], ly));
+      const __m128 z = _mm_or_ps(_mm_and_ps(pz[g], hz), _mm_andnot_ps(pz[g], lz));
+      __m128 s = _mm_sub_ps(_mm_setzero_ps(), d[g]);
+      s = _mm_add_ps(s, _mm_mul_ps(nx[g], x));
+      s = _mm_add_ps(s, _mm_mul_ps(ny[g], y));
+      s = _mm_add_ps(s, _mm_mul_ps(nz[g], z));
+      if (_mm_movemask_ps(_mm_cmplt_ps(s, neps_))) return true;
+    }
+#else
+    for (int i = 0; i < count; ++i) {
+      float s = -dd[i];
+      for (int c = 0; c < 3; ++c) s += n[i][c] * (n[i][c] >= 0.0f ? hi[c] : lo[c]);
+      if (s < -eps) return true;
+    }
+#endif
+    return false;
+  }
+  // The segment a b lies more than eps outside the frustum's box or one of its planes
+  // (both ends outside the same plane: tighter than the segment's box for a diagonal
+  // edge).
+  bool outside(const Vec3f& a, const Vec3f& b, float eps) const {
+    for (int c = 0; c < 3; ++c)
+      if (std::max(a[c], b[c]) < blo[c] || std::min(a[c], b[c]) > bhi[c]) return true;
+#if defined(__SSE2__)
+    (void)eps;
+    const __m128 ax = _mm_set1_ps(a.x), ay = _mm_set1_ps(a.y), az = _mm_set1_ps(a.z);
+    const __m128 bx = _mm_set1_ps(b.x), by = _mm_set1_ps(b.y), bz = _mm_set1_ps(b.z);
+    for (int g = 0; g < groups; ++g) {
+      __m128 sa = _mm_sub_ps(_mm_setzero_ps(), d[g]), sb = sa;
+      sa = _mm_add_ps(sa, _mm_mul_ps(nx[g], ax));
+      sa = _mm_add_ps(sa, _mm_mul_ps(ny[g], ay));
+      sa = _mm_add_ps(sa, _mm_mul_ps(nz[g], az));
+      sb = _mm_add_ps(sb, _mm_mul_ps(nx[g], bx));
+      sb = _mm_add_ps(sb, _mm_mul_ps(ny[g], by));
+      sb = _mm_add_ps(sb, _mm_mul_ps(nz[g], bz));
+      if (_mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(sa, neps_), _mm_cmplt_ps(sb, neps_)))) return true;
+    }
+#else
+    for (int i = 0; i < count; ++i) {
+      float sa = -dd[i], sb = -dd[i];
+      for (int c = 0; c < 3; ++c) {
+        sa += n[i][c] * a[c];
+        sb += n[i][c] * b[c];
+      }
+      if (sa < -eps && sb < -eps) return true;
+    }
+#endif
+    return false;
+  }
+};
+
+// Every triangle below `nd` active and every receiver of `ff` on one side of all their
+// planes, beyond the margin (edge_tree.h): the node's edges all have weight 0.
+template <class Node>
+inline bool facing_prunes(const FloatFrustum& ff, const Node& nd, const float* N, float h0, float active_margin,
+                          float abs_margin) {
+  float hmin = -h0;
+  for (int c = 0; c < 3; ++c) hmin += N[c] * (N[c] >= 0.0f ? nd.tlo[c] : nd.thi[c]);
+  if (!(hmin > active_margin)) return false;
+#if defined(__SSE2__)
+  // Lanes x, y, z (the fourth is masked to 0): the same products, sums in another order
+  // (the bound's slack covers any order, edge_tree.h).
+  static_assert(offsetof(Node, thi) == offsetof(Node, tlo) + 3 * sizeof(float) &&
+                offsetof(Node, nlo) == offsetof(Node, thi) + 3 * sizeof(float) &&
+                offsetof(Node, nhi) == offsetof(Node, nlo) + 3 * sizeof(float) &&
+                offsetof(Node, child) == offsetof(Node, nhi) + 3 * sizeof(float));
+  const __m128 keep = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+  const __m128 tlo = _mm_loadu_ps(nd.tlo), thi = _mm_loadu_ps(nd.thi);
+  const __m128 nlo = _mm_loadu_ps(nd.nlo), nhi = _mm_loadu_ps(nd.nhi);
+  const __m128 dlo = _mm_sub_ps(_mm_loadu_ps(ff.rlo4), thi), dhi = _mm_sub_ps(_mm_loadu_ps(ff.rhi4), tlo);
+  const __m128 p0 = _mm_mul_ps(nlo, dlo), p1 = _mm_mul_ps(nlo, dhi), p2 = _mm_mul_ps(nhi, dlo), p3 = _mm_mul_ps(nhi, dhi);
+  __m128 lo = _mm_and_ps(keep, _mm_min_ps(_mm_min_ps(p0, p1), _mm_min_ps(p2, p3)));
+  __m128 hi = _mm_and_ps(keep, _mm_max_ps(_mm_max_ps(p0, p1), _mm_max_ps(p2, p3)));
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  __m128 far = _mm_and_ps(keep, _mm_max_ps(_mm_andnot_ps(sign, dlo), _mm_andnot_ps(sign, dhi)));
+  // Horizontal sums of lo, hi and far.
+  auto hsum = [](__m128 v) {
+    const __m128 t = _mm_add_ps(v, _mm_movehl_ps(v, v));
+    return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
+  };
+  const float flo = hsum(lo), fhi = hsum(hi), fr = hsum(far);
+#else
+  float flo = 0.0f, fhi = 0.0f, fr = 0.0f;
+  for (int c = 0; c < 3; ++c) {
+    // n_c (r_c - a_c) with n_c in [nlo, nhi], r_c - a_c in [dlo, dhi].
+    const float dlo = ff.rlo[c] - nd.thi[c], dhi = ff.rhi[c] - nd.tlo[c];
+    const float p0 = nd.nlo[c] * dlo, p1 = nd.nlo[c] * dhi, p2 = nd.nhi[c] * dlo, p3 = nd.nhi[c] * dhi;
+    flo += std::min(std::min(p0, p1), std::min(p2, p3));
+    fhi += std::max(std::max(p0, p1), std::max(p2, p3));
+    fr += std::max(std::abs(dlo), std::abs(dhi));
+  }
+#endif
+  const float margin = 0x1p-18f * fr + abs_margin;
+  return flo > margin || fhi < -margin;
+}
+
+}  // namespace
+
+void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts,
+                    size_t n_starts, uint32_t max_edges, std::vector<uint32_t>* edges,
+                    std::vector<uint32_t>* nodes) const {
+  const FloatFrustum ff(f, eps);
+  // Light plane in float: min height over a box > 2e-6 M means every vertex's frame
+  // height (to_local in double) is positive.
+  const float N[3] = {float(frame.N.x), float(frame.N.y), float(frame.N.z)};
+  const float h0 = float(dot(frame.N, frame.origin));
+  const float active_margin = float(2e-6 * M_), abs_margin = float(1e-9 * M_);
+  // Depth first; the tree's height is below 40 for any uint32 edge count.
+  uint32_t stack[64];
+  for (size_t s = 0; s < n_starts; ++s) {
+    size_t top = 0;
+    stack[top++] = starts[s];
+    while (top > 0) {
+      const Node& nd = nodes_[stack[--top]];
+      if (ff.outside(nd.lo, nd.hi, eps)) continue;
+      if (!nd.single && facing_prunes(ff, nd, N, h0, active_margin, abs_margin)) continue;
+      if (nodes && (nd.edges <= max_edges || nd.leaf)) {
+        nodes->push_back(uint32_t(&nd - nodes_.data()));
+        continue;
+      }
+      if (nd.leaf) {
+        for (uint32_t k = nd.child; k < nd.child + nd.n; ++k)
+          if (!ff.outside((*vertices_)[ends_[k][0]], (*vertices_)[ends_[k][1]], eps)) edges->push_back(order_[k]);
+        continue;
+      }
+      for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
+    }
+  }
+}
+
+void EdgeTree::query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
+                     std::vector<uint32_t>& out) const {
+  out.clear();
+  if (!empty()) walk(f, frame, eps, starts.data(), starts.size(), 0, &out, nullptr);
+  std::sort(out.begin(), out.end());
+}
+
+void EdgeTree::frontier(const EdgeFrustum& f, const LightFrame& frame, float eps, uint32_t max_edges,
+                        std::vector<uint32_t>& out) const {
+  out.clear();
+  const uint32_t root = uint32_t(nodes_.size() - 1);
+  if (!empty()) walk(f, frame, eps, &root, 1, max_edges, nullptr, &out);
+}
+
+void EdgeTree::crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame,
+                                  std::vector<uint32_t>& out) const {
+  out.clear();
+  if (empty()) return;
+  const float N[3] = {float(frame.N.x), float(frame.N.y), float(frame.N.z)};
+  const float h0 = float(dot(frame.N, frame.origin));
+  const float margin = float(2e-6 * M_);
+  uint32_t stack[64];
+  size_t top = 0;
+  stack[top++] = uint32_t(nodes_.size() - 1);
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    float hmin = -h0, hmax = -h0;
+    for (int c = 0; c < 3; ++c) {
+      hmin += N[c] * (N[c] >= 0.0f ? nd.tlo[c] : nd.thi[c]);
+      hmax += N[c] * (N[c] >= 0.0f ? nd.thi[c] : nd.tlo[c]);
+    }
+    if (hmin > margin || hmax < -margin) continue;  // every triangle below on one side
+    if (nd.leaf) {
+      for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+        const Edge& e = edges[order_[k]];
+        out.push_back(uint32_t(e.t1));
+        if (e.t2 >= 0) out.push_back(uint32_t(e.t2));
+      }
+      continue;
+    }
+    for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+}  // namespace visgate::ssv

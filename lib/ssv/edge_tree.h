@@ -1,0 +1,124 @@
+// Candidate silhouette edges per receiver from a hierarchy over the mesh's edges
+// (wedge_index=edges): the third way, beside the lazy wedge BSP of paper 001 section 4.1
+// and the wedges scattered through the receiver tree (wedge_scatter.h), to give each
+// receiver the edges that may be silhouettes from it and project into L'. No wedge is
+// built: per light the work follows the queries, not the light's potential silhouette
+// edges (a constant fraction of a dense smooth mesh's edges, docs/log/ssv-performance.md
+// "Scan: why it grows linearly").
+//
+// The hierarchy, built once per solve in linear time: the edges in the Morton order of
+// their midpoints (one radix sort), leaves of four consecutive edges, each level above
+// pairing consecutive nodes. Per node: the box of its edges, the box of every triangle
+// incident to them, the per-component range of those triangles' unit normals, and
+// whether some edge below is single (one triangle: its weight is never 0 for an active
+// triangle). A query walks
+// the tree for one receiver r and one light and leaves a node when
+//  - its edges' box lies more than eps outside a plane of the frustum hull(r, L') n {h >= 0}
+//    (the pyramid add_edge clips to, integrate.h) or of its bounding box: no edge below
+//    meets it, each would add nothing; or
+//  - every incident triangle is active (its box more than 2e-6 M above the light plane)
+//    and r lies on the same side of every one of their planes, farther than 2^-18 of its
+//    largest L1 distance to their box (plus 1e-9 M): every edge below has weight 0 from
+//    r (integrate.h, "Side of a projected edge"), and no triangle below is nearly edge-on
+//    (ReceiverIntegrator::facing's doubt needs 2^-20 of the Euclidean distance), so
+//    validating them would neither add a piece nor mark the receiver doubtful.
+// The bound on n.(r - a) is interval arithmetic over the normal ranges and the box.
+// Tests run in float: with coordinates below M the plane and box tests err by less than
+// 1e-6 M (eps is 4e-6 M), and the facing bound by less than 2^-21 of the L1 distance
+// (float products and sums, normals rounded to nearest), inside the margin's slack of
+// 2^-19.
+//
+// Guarantee: every edge of the mesh that meets the frustum (up to eps) and is not proven
+// weight 0 from r as above is returned, ascending. The solver then applies build_wedges'
+// edge filters (below the light plane, never a silhouette w.r.t. L') and the weight, so a
+// receiver integrates exactly the pieces the wedge indexes give it (the wedges contain
+// the frustum's edges conservatively too); only which near-degenerate weight tests run
+// (facing's doubt, answered by rays) may differ.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "lib/ssv/light_frame.h"
+#include "lib/ssv/wedge.h"
+
+namespace visgate::ssv {
+
+// The frustum of one receiver and light: the light plane (h >= 0) and the planes through
+// r and each edge of L', unit normals, inside positive; and its bounding box. Or the
+// same for a box of receivers (hull(box, L'), the planes through each edge of L'
+// supporting the box's corners): it holds the frustum of every receiver in the box.
+struct EdgeFrustum {
+  static constexpr int kMaxPlanes = 17;
+  Vec3d n[kMaxPlanes];
+  double d[kMaxPlanes];  // inside: dot(n, x) - d >= -eps
+  int count = 0;
+  Vec3d rlo{}, rhi{};  // the receiver (rlo = rhi) or the receivers' box
+  AABBd box;
+  // Planes whose normal cannot be formed in double (a receiver so far that two light
+  // vertices are in the same direction) are left out: the frustum only grows.
+  EdgeFrustum(const LightFrame& frame, const Vec3f& receiver);
+  EdgeFrustum(const LightFrame& frame, const AABBd& receivers);
+};
+
+class EdgeTree {
+ public:
+  EdgeTree() = default;
+  // Over every edge of `edges` (index = edge index); `M` bounds every coordinate (the
+  // solver's tolerance scale). `m` must outlive the tree (its vertices are read by the
+  // queries).
+  EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes,
+           double M);
+  bool empty() const { return nodes_.empty(); }
+  // The candidate edges of the receiver of `f` for the light of `frame` (see above),
+  // ascending, into `out` (cleared first), from the nodes `starts` (frontier()).
+  // `eps`: the frustum tolerance (a distance, at least 4e-6 M: the float tests below
+  // err by less than 1e-6 M).
+  void query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
+             std::vector<uint32_t>& out) const;
+  // The nodes a walk from the root with the receivers' frustum `f` reaches and does not
+  // leave, stopping at nodes of at most `max_edges` edges (or leaves): starts for the
+  // queries of the receivers in f's box. A node it leaves meets no receiver's frustum, or
+  // has weight 0 from each (the facing bound over the box holds for each of its points).
+  void frontier(const EdgeFrustum& f, const LightFrame& frame, float eps, uint32_t max_edges,
+                std::vector<uint32_t>& out) const;
+  // Every triangle that may have vertices on both sides of the light plane of `frame`
+  // (a superset: those of the leaves whose triangles' box is not more than 2e-6 M on one
+  // side), ascending: the candidates of light_plane_cuts. Every triangle is incident to
+  // some edge of `edges` (the edges the tree was built over).
+  void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
+  size_t memory_bytes() const {
+    return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) +
+           ends_.capacity() * sizeof(std::array<uint32_t, 2>);
+  }
+  size_t node_count() const { return nodes_.size(); }
+
+ private:
+  // Leaves hold up to kLeaf consecutive edges of the Morton order; inner nodes two (or
+  // one) consecutive nodes of the level below. Box of the edges first: what every visit
+  // reads.
+  static constexpr uint32_t kLeaf = 8;
+  struct Node {
+    float lo[3], hi[3];    // box of the edges below
+    float tlo[3], thi[3];  // box of their incident triangles' vertices
+    float nlo[3], nhi[3];  // ranges of those triangles' unit normals (rounded to nearest)
+    uint32_t child = 0;    // inner: first child; leaf: first position in order_
+    uint32_t edges = 0;    // edges below
+    uint8_t n = 0;         // children (inner) or edges (leaf)
+    uint8_t leaf = 0;
+    uint8_t single = 0;    // some edge below has one triangle, or a triangle has no plane
+  };
+  void walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts, size_t n_starts,
+            uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes) const;
+  std::vector<Node> nodes_;      // leaves first, level by level, the root last
+  std::vector<uint32_t> order_;  // edges in leaf order
+  // Their endpoints (vertex indices), in leaf order: the leaves' item boxes come from
+  // the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box: fewer fresh
+  // pages per solve).
+  std::vector<std::array<uint32_t, 2>> ends_;
+  const std::vector<Vec3f>* vertices_ = nullptr;
+  double M_ = 0.0;
+};
+
+}  // namespace visgate::ssv

@@ -1,0 +1,243 @@
+// lib/ssv/edge_tree.h: candidate edges per receiver against a brute-force scan of every
+// edge (exact frustum clipping in double, weights and near-edge-on triangles), the
+// receivers' box frustum against points of each receiver's frustum, the light-plane
+// crossing candidates against a scan of every triangle, and the solver with the edge
+// index against the wedge indexes.
+#include "lib/ssv/edge_tree.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "lib/solver.h"
+#include "lib/ssv/integrate.h"
+#include "tests/support/family_scene.h"
+#include "tests/support/ssv_fixtures.h"
+
+using namespace visgate;
+using namespace visgate::ssv;
+using namespace visgate::test_support;
+
+namespace {
+
+// The segment a b (frame coordinates) meets the frustum of r_local over L' (h >= 0 and
+// inside every plane through r and an edge of L'), touching counted: Liang-Barsky in
+// double, independent of lib/ssv's clipping.
+bool meets_frustum(const Vec3d& a, const Vec3d& b, const Vec3d& r, const LightFrame& frame) {
+  double t0 = 0.0, t1 = 1.0;
+  auto clip = [&](double fa, double fb) {  // keep f >= 0
+    if (fa < 0.0 && fb < 0.0) return false;
+    if (fa >= 0.0 && fb >= 0.0) return true;
+    const double t = fa / (fa - fb);
+    if (fa < 0.0) t0 = std::max(t0, t);
+    else t1 = std::min(t1, t);
+    return t0 <= t1;
+  };
+  if (!clip(a.z, b.z)) return false;
+  const size_t n = frame.poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3d p(frame.poly[i].u, frame.poly[i].v, 0.0), q(frame.poly[(i + 1) % n].u, frame.poly[(i + 1) % n].v, 0.0);
+    Vec3d nrm = cross(p - r, q - r);
+    if (dot(nrm, Vec3d(0, 0, 0) - r) < 0.0) nrm = -nrm;
+    if (!clip(dot(nrm, a - r), dot(nrm, b - r))) return false;
+  }
+  return t0 <= t1;
+}
+
+struct TreeSetup {
+  mesh::PreparedMesh pm;
+  LightFrame frame;
+  std::vector<Vec3d> fp;
+  std::vector<Edge> edges;
+  std::vector<TrianglePlane> planes;
+  double M = 0.0;
+  EdgeTree tree;
+  TreeSetup(const Scene& s, size_t light) {
+    pm = mesh::prepare_mesh(s.mesh);
+    frame = make_light_frame(s.lights[light]);
+    fp = frame_positions(pm, frame);
+    edges = mesh_edges(pm);
+    planes = triangle_planes(pm);
+    const AABB b = s.bounds();
+    M = std::max(max_component(vabs(b.lo)), max_component(vabs(b.hi)));
+    tree = EdgeTree(edges, pm, planes, M);
+  }
+};
+
+// Whether edge e can add a piece or a doubt for receiver r: some incident triangle
+// active with r on its front side and another not (weight != 0), or r within twice the
+// doubt threshold of an active incident triangle's plane (ReceiverIntegrator::facing).
+bool may_count(const TreeSetup& st, const Edge& e, const Vec3d& r) {
+  int w = 0;
+  bool near = false;
+  for (int k = 0; k < 2; ++k) {
+    const int32_t t = k == 0 ? e.t1 : e.t2;
+    if (t < 0) continue;
+    const auto& v = st.pm.triangles[size_t(t)].v;
+    if (!(st.fp[v[0]].z > 0.0 || st.fp[v[1]].z > 0.0 || st.fp[v[2]].z > 0.0)) continue;
+    const TrianglePlane& p = st.planes[size_t(t)];
+    const double f = dot(p.unit(), r - p.a);
+    double reach = 0.0;
+    for (int c = 0; c < 3; ++c) reach = std::max(reach, length(r - to_double(st.pm.corner(size_t(t), c))));
+    near |= std::abs(f) <= 0x1p-19 * reach;
+    const int s = (f > 0.0) - (f < 0.0);
+    w += k == 0 ? s : -s;
+  }
+  return w != 0 || near || e.t2 < 0;
+}
+
+// `culls`: also expect the tree to leave most (edge, receiver) pairs (dense meshes away
+// from the receivers; not loose triangles over them, nor far-origin's loose eps).
+void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool culls) {
+  size_t must = 0, candidates = 0, pairs = 0;
+  for (size_t l = 0; l < s.lights.size() && l < 3; ++l) {
+    const TreeSetup st(s, l);
+    const float eps = float(4e-6 * st.M);
+    // Batches of 8 receivers in index order: the frontier of their box, then each query.
+    for (size_t b0 = 0; b0 < s.receivers.size(); b0 += 8) {
+      AABBd box;
+      std::vector<size_t> batch;
+      for (size_t i = b0; i < std::min(b0 + 8, s.receivers.size()); ++i) {
+        if (!(st.frame.to_local(s.receivers[i].p).z > 1e-6)) continue;  // the solver casts rays
+        box.extend(to_double(s.receivers[i].p));
+        batch.push_back(i);
+      }
+      if (batch.empty()) continue;
+      std::vector<uint32_t> starts, got;
+      st.tree.frontier(EdgeFrustum(st.frame, box), st.frame, eps, 64, starts);
+      for (size_t i : batch) {
+        st.tree.query(EdgeFrustum(st.frame, s.receivers[i].p), st.frame, eps, starts, got);
+        EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
+        EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "an edge returned twice";
+        const Vec3d r = to_double(s.receivers[i].p), rl = st.frame.to_local(s.receivers[i].p);
+        for (size_t e = 0; e < st.edges.size(); ++e) {
+          const Edge& ed = st.edges[e];
+          if (!meets_frustum(st.fp[ed.a], st.fp[ed.b], rl, st.frame) || !may_count(st, ed, r)) continue;
+          ++must;
+          EXPECT_TRUE(std::binary_search(got.begin(), got.end(), uint32_t(e)))
+              << what << ": light " << l << " receiver " << i << " edge " << e;
+        }
+        candidates += got.size();
+        pairs += st.edges.size();
+      }
+    }
+  }
+  EXPECT_GT(must, 20u) << what;
+  if (culls) {
+    EXPECT_LT(candidates * 4, pairs) << what << ": the tree culls nothing";
+  }
+}
+
+}  // namespace
+
+TEST(SsvEdgeTree, EveryEdgeThatCanCountIsACandidate) {
+  // Loose triangles crossing the light plane, closed meshes, single edges of an
+  // inconsistently oriented pair and a non-manifold fan.
+  expect_candidates_hold_brute_force(random_scene(12, 16, 200), "random", false);
+  expect_candidates_hold_brute_force(random_scene(31, 16, 200), "random 31", false);
+  for (const char* fam : {"scan", "columns", "torus", "foliage"})
+    expect_candidates_hold_brute_force(family(fam, 4, -1, 64, 16), fam, true);
+  for (const char* fam : {"grid-snapped", "far-origin", "on-surface", "sliver-soup"})
+    expect_candidates_hold_brute_force(family(fam, 4, -1, 64, 16), fam, false);
+}
+
+TEST(SsvEdgeTree, BoxFrustumHoldsEachReceiversFrustum) {
+  // Points r + t (l - r), l in L', t in [0, 1], of every receiver in the box lie inside
+  // every plane and the box of the box's frustum.
+  Scene s = random_scene(5, 16, 64);
+  const LightFrame frame = make_light_frame(s.lights[0]);
+  std::mt19937_64 g(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  AABBd box;
+  for (const Receiver& rc : s.receivers) box.extend(to_double(rc.p));
+  const EdgeFrustum f(frame, box);
+  EXPECT_EQ(f.count, 1 + int(frame.poly_world.size()));
+  for (const Receiver& rc : s.receivers) {
+    const Vec3d r = to_double(rc.p);
+    for (int k = 0; k < 50; ++k) {
+      // A point of L': a convex combination of two edges' points.
+      const size_t n = frame.poly_world.size(), i = size_t(u(g) * double(n)) % n;
+      const Vec3d l = frame.poly_world[i] + (frame.origin - frame.poly_world[i]) * u(g);
+      const Vec3d x = r + (l - r) * u(g);
+      for (int p = 0; p < f.count; ++p) EXPECT_GE(dot(f.n[p], x) - f.d[p], -1e-8);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_GE(x[c], f.box.lo[c] - 1e-12);
+        EXPECT_LE(x[c], f.box.hi[c] + 1e-12);
+      }
+    }
+  }
+}
+
+TEST(SsvEdgeTree, CrossingTrianglesHoldEveryLightPlaneCut) {
+  for (uint64_t seed : {12u, 31u, 40u}) {
+    Scene s = random_scene(seed, 16, 16);
+    const TreeSetup st(s, 0);
+    std::vector<uint32_t> crossing;
+    st.tree.crossing_triangles(st.edges, st.frame, crossing);
+    EXPECT_TRUE(std::is_sorted(crossing.begin(), crossing.end()));
+    size_t straddling = 0;
+    for (size_t t = 0; t < st.pm.triangles.size(); ++t) {
+      bool pos = false, neg = false;
+      for (uint32_t v : st.pm.triangles[t].v) {
+        pos |= st.fp[v].z > 0.0;
+        neg |= st.fp[v].z < 0.0;
+      }
+      if (!(pos && neg)) continue;
+      ++straddling;
+      EXPECT_TRUE(std::binary_search(crossing.begin(), crossing.end(), uint32_t(t))) << "triangle " << t;
+    }
+    EXPECT_GT(straddling, 0u) << "seed " << seed;
+    EXPECT_LT(crossing.size(), st.pm.triangles.size()) << "seed " << seed;
+    EXPECT_EQ(light_plane_cuts(st.pm, st.fp, st.frame, crossing), light_plane_cuts(st.pm, st.fp, st.frame));
+  }
+}
+
+TEST(SsvEdgeTree, SolverAnswersEqualTheWedgeIndexes) {
+  auto same = [](const Scene& s, const std::string& what) {
+    SolveOptions a, b, c;
+    a.opts["wedge_index"] = "edges";
+    b.opts["wedge_index"] = "receivers";
+    c.opts["wedge_index"] = "bsp";
+    const SolveResult ra = make_solver("ssv")->solve(s, a), rb = make_solver("ssv")->solve(s, b),
+                      rc = make_solver("ssv")->solve(s, c);
+    ASSERT_EQ(ra.receivers.size(), rb.receivers.size());
+    for (size_t i = 0; i < ra.receivers.size(); ++i) {
+      EXPECT_EQ(ra.receivers[i].visible_bits, rb.receivers[i].visible_bits) << what << " receiver " << i;
+      EXPECT_EQ(ra.receivers[i].visible_bits, rc.receivers[i].visible_bits) << what << " receiver " << i;
+    }
+    EXPECT_EQ(ra.stats.get("wedges"), 0.0) << what;
+    EXPECT_EQ(ra.stats.get("edge_index"), 1.0) << what;
+    EXPECT_EQ(rb.stats.get("edge_index"), 0.0) << what;
+    EXPECT_GT(ra.stats.get("wedges_validated"), 0.0) << what;
+  };
+  for (const char* fam : {"columns", "torus", "random-soup", "foliage", "sliver-soup", "grid-snapped", "scan",
+                          "far-origin", "on-surface", "pouch", "double-surface", "shared-edge-fan"})
+    same(family(fam, 4, -1, 144, 16), fam);
+  same(family("rooms", 4, 7000, 144, 16), "rooms");
+  same(random_scene(12, 16, 200), "random 12");
+  same(random_scene(77, 16, 200), "random 77");
+}
+
+TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseSmoothMeshes) {
+  // scan: far more edges than receivers; columns: fewer. A scan whose vertices are
+  // jittered by about an edge length (silhouettes everywhere, like a noisy scanned
+  // surface) gives every receiver hundreds of candidates: auto takes the wedges, with
+  // the same answers as the edges.
+  const SolveOptions o;
+  EXPECT_EQ(make_solver("ssv")->solve(family("scan", 4, 8000, 64, 8), o).stats.get("edge_index"), 1.0);
+  EXPECT_EQ(make_solver("ssv")->solve(family("columns", 4, -1, 1024, 8), o).stats.get("edge_index"), 0.0);
+  Scene noisy = family("scan", 4, 30000, 64, 8, 3.0);  // lights 3x larger: wider frusta
+  std::mt19937_64 g(9);
+  std::uniform_real_distribution<float> u(-0.02f, 0.02f);
+  for (Vec3f& v : noisy.mesh.vertices)
+    if (v.z > 0.05f) v = v + Vec3f(u(g), u(g), u(g));  // the object, not the ground slab
+  const SolveResult a = make_solver("ssv")->solve(noisy, o);
+  SolveOptions e;
+  e.opts["wedge_index"] = "edges";
+  const SolveResult b = make_solver("ssv")->solve(noisy, e);
+  EXPECT_EQ(a.stats.get("edge_index"), 0.0);
+  EXPECT_GT(b.stats.get("wedges_reported"), 256.0);
+  for (size_t i = 0; i < a.receivers.size(); ++i)
+    EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << "receiver " << i;
+}
