@@ -162,6 +162,40 @@ void direct_classify(const double* t, size_t count, size_t kp, const double* d, 
   direct_classify_default(t, count, kp, d, out);
 }
 
+// Box-against-plane culling of candidate boxes (SoA: lo x, y, z, hi x, y, z of kp each),
+// four boxes per vector: keep[k] stays -1 while box k is not beyond the plane, by the
+// test and the arithmetic of ShaftGeometry::may_intersect_box (the box corner nearest
+// to the plane's inside, eval = dot(n, q) - d against the plane's tolerance).
+__attribute__((always_inline)) inline void direct_cull_body(const double* box, size_t kp, const double* plane,
+                                                            int64_t* keep) {
+  const double nx = plane[0], ny = plane[1], nz = plane[2], d = plane[3], tol = plane[4];
+  const double* X = box + (nx > 0 ? 0 : 3) * kp;
+  const double* Y = box + (ny > 0 ? 1 : 4) * kp;
+  const double* Z = box + (nz > 0 ? 2 : 5) * kp;
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 e = (nx * load4(X + k) + ny * load4(Y + k) + nz * load4(Z + k)) - d;
+    M4 m;
+    std::memcpy(&m, keep + k, sizeof m);
+    m &= ~(e > tol);
+    std::memcpy(keep + k, &m, sizeof m);
+  }
+}
+void direct_cull_default(const double* box, size_t kp, const double* plane, int64_t* keep) {
+  direct_cull_body(box, kp, plane, keep);
+}
+#if defined(__GNUC__) && defined(__x86_64__)
+__attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t kp, const double* plane,
+                                                      int64_t* keep) {
+  direct_cull_body(box, kp, plane, keep);
+}
+#endif
+void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return direct_cull_avx2(box, kp, plane, keep);
+#endif
+  direct_cull_default(box, kp, plane, keep);
+}
+
 }  // namespace
 
 // Candidates of a leaf shaft: the triangles whose box may meet it (a segment between the
@@ -171,15 +205,49 @@ void direct_classify(const double* t, size_t count, size_t kp, const double* d, 
 // shaft_subdivide) are made on first need, the highest one looked at, kCandUp levels
 // up, by a query of the whole triangle hierarchy. Every list is complete for its shaft.
 void Traversal::direct_candidates(const ShaftGeometry& g) {
-  auto filter = [&](const std::vector<uint32_t>& from, const ShaftGeometry& sg, std::vector<uint32_t>& to) {
+  // The triangles of `from` (boxes `from_box`, SoA of kp(from) each) that may meet
+  // `sg`, with their boxes when `to_box` is given.
+  auto padded = [](size_t n) { return std::max<size_t>(4, (n + 3) & ~size_t(3)); };
+  auto filter = [&](const std::vector<uint32_t>& from, const std::vector<double>& from_box, const ShaftGeometry& sg,
+                    std::vector<uint32_t>& to, std::vector<double>* to_box) {
+    const size_t n = from.size(), kp = padded(n);
+    direct_keep_.assign(kp, -1);
+    for (int i = 0; i < sg.plane_count(); ++i) {
+      const ConservativePlane& pl = sg.plane(i);
+      const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
+      direct_cull(from_box.data(), kp, plane, direct_keep_.data());
+    }
     to.clear();
-    for (uint32_t t : from)
-      if (sg.may_intersect_box(to_double(tri_boxes_[t]))) to.push_back(t);
+    for (size_t k = 0; k < n; ++k)
+      if (direct_keep_[k]) to.push_back(from[k]);
+    if (!to_box) return;
+    const size_t tp = padded(to.size());
+    to_box->resize(6 * tp);
+    for (size_t k = 0, o = 0; k < n; ++k) {
+      if (!direct_keep_[k]) continue;
+      for (int c = 0; c < 6; ++c) (*to_box)[size_t(c) * tp + o] = from_box[size_t(c) * kp + k];
+      ++o;
+    }
+    for (size_t o = to.size(); o < tp; ++o)  // padding: copies of a kept box, or empty
+      for (int c = 0; c < 6; ++c) (*to_box)[size_t(c) * tp + o] = to.empty() ? 0.0 : (*to_box)[size_t(c) * tp];
+  };
+  // The boxes of the hierarchy's answer, SoA.
+  auto query = [&](const ShaftGeometry& sg) {
+    bvh_->query_shaft(sg, direct_query_);
+    const size_t n = direct_query_.size(), kp = padded(n);
+    direct_query_box_.assign(6 * kp, 0.0);
+    for (size_t k = 0; k < n; ++k) {
+      const AABB& b = tri_boxes_[direct_query_[k]];
+      for (int c = 0; c < 3; ++c) {
+        direct_query_box_[size_t(c) * kp + k] = double(b.lo[c]);
+        direct_query_box_[size_t(3 + c) * kp + k] = double(b.hi[c]);
+      }
+    }
   };
   const size_t top = cand_depth_;
   if (top == 0) {
-    bvh_->query_shaft(g, direct_query_);
-    filter(direct_query_, g, direct_cand_);
+    query(g);
+    filter(direct_query_, direct_query_box_, g, direct_cand_, nullptr);
     return;
   }
   size_t src = top;  // nearest ready list at or above the leaf's parent
@@ -192,15 +260,16 @@ void Traversal::direct_candidates(const ShaftGeometry& g) {
   if (src == top) {
     src = lowest;
     CandLevel& c = cand_stack_[src];
-    bvh_->query_shaft(*c.g, direct_query_);
-    filter(direct_query_, *c.g, c.tris);
+    query(*c.g);
+    filter(direct_query_, direct_query_box_, *c.g, c.tris, &c.box);
     c.ready = true;
   }
   for (size_t k = src + 1; k < top; ++k) {
-    filter(cand_stack_[k - 1].tris, *cand_stack_[k].g, cand_stack_[k].tris);
+    filter(cand_stack_[k - 1].tris, cand_stack_[k - 1].box, *cand_stack_[k].g, cand_stack_[k].tris,
+           &cand_stack_[k].box);
     cand_stack_[k].ready = true;
   }
-  filter(cand_stack_[top - 1].tris, g, direct_cand_);
+  filter(cand_stack_[top - 1].tris, cand_stack_[top - 1].box, g, direct_cand_, nullptr);
 }
 
 bool Traversal::direct_rays(int r, int l, const Shaft& sh) {

@@ -278,7 +278,8 @@ class Traversal {
   double n_direct_ = 0, n_direct_uncertain_ = 0;  // relations given to direct_rays / left to Embree by it
   bool direct_ok_ = false;  // every coordinate within raycast::kEmbreeCoordinateBound
   std::vector<uint32_t> direct_query_, direct_cand_;
-  std::vector<double> direct_corners_, direct_terms_;
+  std::vector<double> direct_corners_, direct_terms_, direct_query_box_;
+  std::vector<int64_t> direct_keep_;
   struct DirectRay {
     const Vec3f *p, *q;  // receiver point, light point
     uint32_t receiver, sample;
@@ -290,6 +291,7 @@ class Traversal {
     const ShaftGeometry* g = nullptr;
     bool ready = false;
     std::vector<uint32_t> tris;
+    std::vector<double> box;  // the triangles' boxes, SoA (direct_candidates)
   };
   static constexpr size_t kCandUp = 4;
   std::vector<CandLevel> cand_stack_;
