@@ -204,7 +204,7 @@ void direct_cull(const double* box, size_t kp, const double* plane, int64_t* kee
 // parent's: the lists of the shafts above the leaf (cand_stack_, pushed by
 // shaft_subdivide) are made on first need, the highest one looked at, kCandUp levels
 // up, by a query of the whole triangle hierarchy. Every list is complete for its shaft.
-void Traversal::direct_candidates(const ShaftGeometry& g) {
+bool Traversal::direct_candidates(const ShaftGeometry& g) {
   // The triangles of `from` (boxes `from_box`, SoA of kp(from) each) that may meet
   // `sg`, with their boxes when `to_box` is given.
   auto padded = [](size_t n) { return std::max<size_t>(4, (n + 3) & ~size_t(3)); };
@@ -231,9 +231,20 @@ void Traversal::direct_candidates(const ShaftGeometry& g) {
     for (size_t o = to.size(); o < tp; ++o)  // padding: copies of a kept box, or empty
       for (int c = 0; c < 6; ++c) (*to_box)[size_t(c) * tp + o] = to.empty() ? 0.0 : (*to_box)[size_t(c) * tp];
   };
-  // The boxes of the hierarchy's answer, SoA.
+  // The hierarchy's answer and its boxes, SoA; false when it exceeds kCandQueryMax (a
+  // closed dense surface in the shaft: its leaves would exceed the test's candidates
+  // too, so the traversal stops early rather than gather thousands of triangles).
   auto query = [&](const ShaftGeometry& sg) {
-    bvh_->query_shaft(sg, direct_query_);
+    direct_query_.clear();
+    bool over = false;
+    const accel::Bvh<float>& tree = bvh_->tree();
+    tree.for_each_leaf([&](const AABB& b) { return !over && sg.may_intersect_box(to_double(b)); },
+                       [&](const accel::Bvh<float>::Node& leaf) {
+                         for (uint32_t t : tree.leaf_items(leaf)) direct_query_.push_back(t);
+                         over = direct_query_.size() > kCandQueryMax;
+                       });
+    if (over) return false;
+    std::sort(direct_query_.begin(), direct_query_.end());
     const size_t n = direct_query_.size(), kp = padded(n);
     direct_query_box_.assign(6 * kp, 0.0);
     for (size_t k = 0; k < n; ++k) {
@@ -243,12 +254,13 @@ void Traversal::direct_candidates(const ShaftGeometry& g) {
         direct_query_box_[size_t(3 + c) * kp + k] = double(b.hi[c]);
       }
     }
+    return true;
   };
   const size_t top = cand_depth_;
   if (top == 0) {
-    query(g);
+    if (!query(g)) return false;
     filter(direct_query_, direct_query_box_, g, direct_cand_, nullptr);
-    return;
+    return true;
   }
   size_t src = top;  // nearest ready list at or above the leaf's parent
   const size_t lowest = top > kCandUp ? top - kCandUp : 0;
@@ -260,20 +272,23 @@ void Traversal::direct_candidates(const ShaftGeometry& g) {
   if (src == top) {
     src = lowest;
     CandLevel& c = cand_stack_[src];
-    query(*c.g);
-    filter(direct_query_, direct_query_box_, *c.g, c.tris, &c.box);
     c.ready = true;
+    c.too_many = !query(*c.g);
+    if (!c.too_many) filter(direct_query_, direct_query_box_, *c.g, c.tris, &c.box);
   }
+  if (cand_stack_[src].too_many) return false;  // and so for every shaft below it
   for (size_t k = src + 1; k < top; ++k) {
     filter(cand_stack_[k - 1].tris, cand_stack_[k - 1].box, *cand_stack_[k].g, cand_stack_[k].tris,
            &cand_stack_[k].box);
     cand_stack_[k].ready = true;
+    cand_stack_[k].too_many = false;
   }
   filter(cand_stack_[top - 1].tris, cand_stack_[top - 1].box, g, direct_cand_, nullptr);
+  return true;
 }
 
 bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
-  direct_candidates(sh.g);
+  if (!direct_candidates(sh.g)) return false;
   const size_t k_count = direct_cand_.size();
   if (k_count > size_t(p_.direct_max_candidates)) return false;
   const size_t kp = std::max<size_t>(4, (k_count + 3) & ~size_t(3));

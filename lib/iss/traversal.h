@@ -228,7 +228,8 @@ class Traversal {
   // relations it cannot certify; false (nothing cast) when there are more than
   // Params::direct_max_candidates candidates.
   bool direct_rays(int r, int l, const Shaft& sh);
-  void direct_candidates(const ShaftGeometry& g);  // into direct_cand_
+  // Into direct_cand_; false when an ancestor's list was too long to gather.
+  bool direct_candidates(const ShaftGeometry& g);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
 
@@ -290,10 +291,11 @@ class Traversal {
   struct CandLevel {
     const ShaftGeometry* g = nullptr;
     bool ready = false;
+    bool too_many = false;  // the hierarchy's answer exceeded kCandQueryMax
     std::vector<uint32_t> tris;
     std::vector<double> box;  // the triangles' boxes, SoA (direct_candidates)
   };
-  static constexpr size_t kCandUp = 4;
+  static constexpr size_t kCandUp = 4, kCandQueryMax = 1024;
   std::vector<CandLevel> cand_stack_;
   size_t cand_depth_ = 0;
   std::array<AutoRayBucket, 64> auto_buckets_{}, split_buckets_{};
