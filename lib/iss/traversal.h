@@ -295,7 +295,7 @@ class Traversal {
     std::vector<uint32_t> tris;
     std::vector<double> box;  // the triangles' boxes, SoA (direct_candidates)
   };
-  static constexpr size_t kCandUp = 4, kCandQueryMax = 1024;
+  static constexpr size_t kCandUp = 4, kCandQueryMax = 1024, kDirectChunk = 16384;
   std::vector<CandLevel> cand_stack_;
   size_t cand_depth_ = 0;
   std::array<AutoRayBucket, 64> auto_buckets_{}, split_buckets_{};

@@ -94,6 +94,9 @@ TEST(IssLeafRays, DirectTestAnswersLikeEmbreeRaysAndTheOracle) {
       {"columns", 2500, 4096, 64, {}},
       // Whole-light leaves of 8 receivers x 64 samples: tests grouped by receiver.
       {"columns", 1000, 1024, 64, {{"light_split", "off"}, {"leaf_receivers", "8"}, {"auto_rays", "off"}}},
+      // Leaves of up to 1024 receivers x 64 samples: more relations than one chunk of
+      // the test's scratch arrays (Traversal::kDirectChunk).
+      {"columns", 200, 4096, 64, {{"light_split", "off"}, {"leaf_receivers", "1024"}, {"auto_rays", "off"}}},
       {"random-soup", -1, 256, 16, {{"leaf_receivers", "8"}, {"auto_rays", "off"}}},
       {"torus", -1, 256, 16, {{"leaf_receivers", "8"}, {"auto_rays", "off"}}},
       {"on-surface", -1, 256, 16, {{"leaf_receivers", "8"}, {"auto_rays", "off"}}},
