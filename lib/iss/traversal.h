@@ -288,6 +288,9 @@ class Traversal {
   std::vector<DirectRay> direct_tmp_, direct_rays_;
   std::vector<uint32_t> direct_group_start_, direct_keys_, direct_fill_;
   // Candidate lists of the shafts being subdivided, outermost first (direct_candidates).
+  // The direct test's scratch is bounded (kDirectChunk relations of about 50 bytes,
+  // lists of at most kCandQueryMax triangles per level of the recursion): a few MB, not
+  // charged to the memory budget, like the other per-traversal scratch vectors.
   struct CandLevel {
     const ShaftGeometry* g = nullptr;
     bool ready = false;
