@@ -3,6 +3,7 @@
 // lib/raycast/embree_scene.h, 16 per packet, or the custom ray caster over the shaft's
 // blockers.
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 
 #include "lib/iss/iss_solver.h"
@@ -140,8 +141,10 @@ __attribute__((target("avx2"))) void direct_classify_avx2(const double* t, size_
                                                           int64_t* out) {
   direct_classify_body(t, count, kp, d, out);
 }
+// VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
+// check it against the AVX2 one on a machine that has both).
 bool have_avx2() {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_ISS_NO_AVX2") == nullptr;
   return avx2;
 }
 #endif
