@@ -24,6 +24,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"ray_caster", "leaf relations by Embree rays or the custom shaft ray caster of section 4.10", {"embree", "custom"}},
       {"postpone", "postpone surface refinement by the vertex-centre heuristic of section 4.7.9", {"on", "off"}},
       {"auto_ray_relations", "relations a subdivided shaft must decide per shaft built below it before auto_rays lets its size subdivide (default 64)", {}},
+      {"direct_rays", "leaf relations of shafts with few candidate triangles by a certified segment test against those (Embree rays where it cannot certify)", {"on", "off"}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"clusters", "initial shafts' surfaces from pre-merged consistent triangle clusters (surface_clusters.h): auto once an initial shaft holds 8192 triangles and an eighth of the mesh, on always, off never", {"auto", "on", "off"}},
@@ -48,6 +49,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.postpone = opt.get_bool("postpone", true);
   p.auto_rays = opt.get_bool("auto_rays", true);
   p.ray_queue = opt.get_bool("ray_queue", true);
+  p.direct_rays = opt.get_bool("direct_rays", true);
   p.clusters = opt.get("clusters", "auto") != "off";
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
   // The trial compares costs in automatic-ray terms: Embree leaf rays only.

@@ -1,12 +1,393 @@
-// Leaf relations (paper 000 section 4.10, CAST-SHADOW-RAYS): Embree leaf rays through
-// the verified scene of lib/raycast/embree_scene.h, 16 per packet, or the custom ray
-// caster over the shaft's blockers.
+// Leaf relations (paper 000 section 4.10, CAST-SHADOW-RAYS): the direct test against
+// the few triangles a leaf shaft holds, Embree leaf rays through the verified scene of
+// lib/raycast/embree_scene.h, 16 per packet, or the custom ray caster over the shaft's
+// blockers.
 #include <algorithm>
+#include <cstdlib>
+#include <cstring>
 
 #include "lib/iss/iss_solver.h"
 #include "lib/iss/traversal.h"
 
+// The 32-byte vectors of the direct test stay inside this file's always-inline helpers
+// and never cross a function boundary by value (see direct_classify), so GCC's note that
+// passing them would change the ABI without AVX is moot (it is given at the file's end).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 namespace visgate::iss {
+
+namespace {
+
+// ---- the direct test ------------------------------------------------------------------
+// Section 4.10's custom caster restricted to the triangles that may meet one shaft: a
+// columns leaf shaft (64 receivers x 4 samples) meets 5 to 40 column faces, and testing
+// each segment against those costs less than a traversal of the whole scene's BVH.
+//
+// Certification, per segment p q (receiver p, light sample q, float points in double)
+// and triangle a b c, with A = a - p, B = b - p, C = c - p, d = q - p, the triple
+// products w_a = d.(B x C), w_b = d.(C x A), w_c = d.(A x B) and det = A.(B x C), each a
+// 3x3 orientation determinant of differences from p (raycast::certainly_crosses_interior
+// states the bounds: with m the largest |coordinate| of A, B, C and n that of d, each w
+// is within e = 48 eps n m^2 of its exact value and det within edet = 48 eps m^3):
+//  - hit: the w share one strict sign beyond e, det the same sign beyond edet, and
+//    |det| + edet < |w_a| + |w_b| + |w_c| - 3e - 4 eps (|w_a| + |w_b| + |w_c|): the segment
+//    crosses the open triangle at a parameter strictly inside (0, 1), which blocks under
+//    every endpoint and edge convention (certainly_crosses_interior's test);
+//  - miss: two w of strictly opposite signs beyond e (the line misses the closed
+//    triangle: a point x = alpha a + beta b + gamma c of it on the line gives w_a : w_b : w_c
+//    = alpha : beta : gamma, all of one sign), or p and q strictly on one side of the
+//    triangle's plane: det beyond edet and det_q = det - (w_a + w_b + w_c) beyond
+//    edet + 3e + 4 eps (|w_a| + |w_b| + |w_c| + |det|) with det's sign (the sum's two
+//    roundings and the subtraction's stay below that last term).
+// A segment is blocked when some candidate certainly blocks it and visible when every
+// candidate certainly misses it; any other segment is left to the verified Embree ray of
+// the other path. A certified answer is the exact one, so it can differ from the Embree
+// ray's only where that ray is wrong (a crossing within Embree's float rounding of an
+// edge); everything else stays as it was.
+constexpr double kEps = 0x1p-53;
+
+typedef double V4 __attribute__((vector_size(32)));
+typedef int64_t M4 __attribute__((vector_size(32)));
+// Unaligned loads and stores of four doubles.
+typedef double V4u __attribute__((vector_size(32), aligned(8)));
+
+// Term arrays per candidate, each kp doubles (kp a multiple of 4).
+enum DirectTerm { kBcx, kBcy, kBcz, kCax, kCay, kCaz, kAbx, kAby, kAbz, kDet, kEm, kEdet, kTermCount };
+
+__attribute__((always_inline)) inline V4 load4(const double* x) { return *reinterpret_cast<const V4u*>(x); }
+__attribute__((always_inline)) inline void store4(double* x, V4 v) { *reinterpret_cast<V4u*>(x) = v; }
+__attribute__((always_inline)) inline V4 abs4(V4 v) { return v < 0.0 ? -v : v; }
+__attribute__((always_inline)) inline V4 max4(V4 a, V4 b) { return a > b ? a : b; }
+__attribute__((always_inline)) inline V4 min4(V4 a, V4 b) { return a < b ? a : b; }
+
+// The origin-dependent terms of every candidate (corners: 9 arrays ax..cz of kp each).
+__attribute__((always_inline)) inline void direct_terms_body(const double* c, size_t kp, const double* p, double* t) {
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 Ax = load4(c + 0 * kp + k) - p[0], Ay = load4(c + 1 * kp + k) - p[1], Az = load4(c + 2 * kp + k) - p[2];
+    const V4 Bx = load4(c + 3 * kp + k) - p[0], By = load4(c + 4 * kp + k) - p[1], Bz = load4(c + 5 * kp + k) - p[2];
+    const V4 Cx = load4(c + 6 * kp + k) - p[0], Cy = load4(c + 7 * kp + k) - p[1], Cz = load4(c + 8 * kp + k) - p[2];
+    const V4 bcx = By * Cz - Bz * Cy, bcy = Bz * Cx - Bx * Cz, bcz = Bx * Cy - By * Cx;
+    store4(t + kBcx * kp + k, bcx);
+    store4(t + kBcy * kp + k, bcy);
+    store4(t + kBcz * kp + k, bcz);
+    store4(t + kCax * kp + k, Cy * Az - Cz * Ay);
+    store4(t + kCay * kp + k, Cz * Ax - Cx * Az);
+    store4(t + kCaz * kp + k, Cx * Ay - Cy * Ax);
+    store4(t + kAbx * kp + k, Ay * Bz - Az * By);
+    store4(t + kAby * kp + k, Az * Bx - Ax * Bz);
+    store4(t + kAbz * kp + k, Ax * By - Ay * Bx);
+    store4(t + kDet * kp + k, Ax * bcx + Ay * bcy + Az * bcz);
+    const V4 m = max4(max4(max4(abs4(Ax), abs4(Ay)), max4(abs4(Az), abs4(Bx))),
+                      max4(max4(abs4(By), abs4(Bz)), max4(max4(abs4(Cx), abs4(Cy)), abs4(Cz))));
+    const V4 em = (48.0 * kEps) * m * m;
+    store4(t + kEm * kp + k, em);
+    store4(t + kEdet * kp + k, em * m);
+  }
+}
+
+// Four segments from one origin (lane k: d = dx[k], dy[k], dz[k], n[k] = max |d_i|)
+// against the first `count` candidates: lanes certainly blocked (`hit`) and lanes that
+// every candidate certainly misses (`clear`), as lane masks. The candidate's terms are
+// scalars here, so det's sign (which side of the plane p lies) picks the tests once per
+// candidate instead of once per lane.
+__attribute__((always_inline)) inline void direct_classify_body(const double* t, size_t count, size_t kp,
+                                                                const double* d, int64_t* out) {
+  const V4 dx = load4(d), dy = load4(d + 4), dz = load4(d + 8), n = load4(d + 12);
+  M4 hit = {0, 0, 0, 0}, clear = {-1, -1, -1, -1};
+  for (size_t k = 0; k < count; ++k) {
+    const V4 wa = dx * t[kBcx * kp + k] + dy * t[kBcy * kp + k] + dz * t[kBcz * kp + k];
+    const V4 wb = dx * t[kCax * kp + k] + dy * t[kCay * kp + k] + dz * t[kCaz * kp + k];
+    const V4 wc = dx * t[kAbx * kp + k] + dy * t[kAby * kp + k] + dz * t[kAbz * kp + k];
+    const double det = t[kDet * kp + k], edet = t[kEdet * kp + k];
+    const V4 e = n * t[kEm * kp + k];
+    const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
+    M4 miss = (wmax > e) & (wmin < -e);
+    // Lines passing beside the triangle (the common case) need nothing else.
+    if (miss[0] & miss[1] & miss[2] & miss[3]) continue;
+    if (det > edet) {
+      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+      hit |= (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs);
+      const V4 dq = det - (wa + wb + wc);
+      miss |= dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det);
+    } else if (det < -edet) {
+      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+      hit |= (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs);
+      const V4 dq = det - (wa + wb + wc);
+      miss |= dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det));
+    }
+    clear &= miss;
+    // Every lane blocked: the rest cannot change the answer.
+    if ((k & 3) == 3 && (hit[0] & hit[1] & hit[2] & hit[3])) break;
+  }
+  for (int k = 0; k < 4; ++k) {
+    out[k] = hit[k];
+    out[4 + k] = clear[k];
+  }
+}
+
+void direct_terms_default(const double* c, size_t kp, const double* p, double* t) { direct_terms_body(c, kp, p, t); }
+void direct_classify_default(const double* t, size_t count, size_t kp, const double* d, int64_t* out) {
+  direct_classify_body(t, count, kp, d, out);
+}
+#if defined(__GNUC__) && defined(__x86_64__)
+// The same operations four candidates per instruction; AVX2 alone has no fused
+// multiply-add (and the build has -ffp-contract=off), so the results are the default's.
+__attribute__((target("avx2"))) void direct_terms_avx2(const double* c, size_t kp, const double* p, double* t) {
+  direct_terms_body(c, kp, p, t);
+}
+__attribute__((target("avx2"))) void direct_classify_avx2(const double* t, size_t count, size_t kp, const double* d,
+                                                          int64_t* out) {
+  direct_classify_body(t, count, kp, d, out);
+}
+// VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
+// check it against the AVX2 one on a machine that has both).
+bool have_avx2() {
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_ISS_NO_AVX2") == nullptr;
+  return avx2;
+}
+#endif
+
+void direct_terms(const double* c, size_t kp, const double* p, double* t) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return direct_terms_avx2(c, kp, p, t);
+#endif
+  direct_terms_default(c, kp, p, t);
+}
+// d: the four lanes' dx, dy, dz and n, four doubles each; out: the hit mask, then the
+// clear mask. Arrays, not vector arguments: a 32-byte vector passed by value between
+// the AVX2 and the default function would not travel in the same registers.
+void direct_classify(const double* t, size_t count, size_t kp, const double* d, int64_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return direct_classify_avx2(t, count, kp, d, out);
+#endif
+  direct_classify_default(t, count, kp, d, out);
+}
+
+// Box-against-plane culling of candidate boxes (SoA: lo x, y, z, hi x, y, z of kp each),
+// four boxes per vector: keep[k] stays -1 while box k is not beyond the plane, by the
+// test and the arithmetic of ShaftGeometry::may_intersect_box (the box corner nearest
+// to the plane's inside, eval = dot(n, q) - d against the plane's tolerance).
+__attribute__((always_inline)) inline void direct_cull_body(const double* box, size_t kp, const double* plane,
+                                                            int64_t* keep) {
+  const double nx = plane[0], ny = plane[1], nz = plane[2], d = plane[3], tol = plane[4];
+  const double* X = box + (nx > 0 ? 0 : 3) * kp;
+  const double* Y = box + (ny > 0 ? 1 : 4) * kp;
+  const double* Z = box + (nz > 0 ? 2 : 5) * kp;
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 e = (nx * load4(X + k) + ny * load4(Y + k) + nz * load4(Z + k)) - d;
+    M4 m;
+    std::memcpy(&m, keep + k, sizeof m);
+    m &= ~(e > tol);
+    std::memcpy(keep + k, &m, sizeof m);
+  }
+}
+void direct_cull_default(const double* box, size_t kp, const double* plane, int64_t* keep) {
+  direct_cull_body(box, kp, plane, keep);
+}
+#if defined(__GNUC__) && defined(__x86_64__)
+__attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t kp, const double* plane,
+                                                      int64_t* keep) {
+  direct_cull_body(box, kp, plane, keep);
+}
+#endif
+void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return direct_cull_avx2(box, kp, plane, keep);
+#endif
+  direct_cull_default(box, kp, plane, keep);
+}
+
+}  // namespace
+
+// Candidates of a leaf shaft: the triangles whose box may meet it (a segment between the
+// node boxes lies in their hull, so a triangle it meets has a box that meets the hull).
+// A sub-shaft's hull lies in its parent's, so each shaft's list is filtered from its
+// parent's: the lists of the shafts above the leaf (cand_stack_, pushed by
+// shaft_subdivide) are made on first need, the highest one looked at, kCandUp levels
+// up, by a query of the whole triangle hierarchy. Every list is complete for its shaft.
+bool Traversal::direct_candidates(const ShaftGeometry& g) {
+  // The triangles of `from` (boxes `from_box`, SoA of kp(from) each) that may meet
+  // `sg`, with their boxes when `to_box` is given.
+  auto padded = [](size_t n) { return std::max<size_t>(4, (n + 3) & ~size_t(3)); };
+  auto filter = [&](const std::vector<uint32_t>& from, const std::vector<double>& from_box, const ShaftGeometry& sg,
+                    std::vector<uint32_t>& to, std::vector<double>* to_box) {
+    const size_t n = from.size(), kp = padded(n);
+    direct_keep_.assign(kp, -1);
+    for (int i = 0; i < sg.plane_count(); ++i) {
+      const ConservativePlane& pl = sg.plane(i);
+      const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
+      direct_cull(from_box.data(), kp, plane, direct_keep_.data());
+    }
+    to.clear();
+    for (size_t k = 0; k < n; ++k)
+      if (direct_keep_[k]) to.push_back(from[k]);
+    if (!to_box) return;
+    const size_t tp = padded(to.size());
+    to_box->resize(6 * tp);
+    for (size_t k = 0, o = 0; k < n; ++k) {
+      if (!direct_keep_[k]) continue;
+      for (int c = 0; c < 6; ++c) (*to_box)[size_t(c) * tp + o] = from_box[size_t(c) * kp + k];
+      ++o;
+    }
+    for (size_t o = to.size(); o < tp; ++o)  // padding: copies of a kept box, or empty
+      for (int c = 0; c < 6; ++c) (*to_box)[size_t(c) * tp + o] = to.empty() ? 0.0 : (*to_box)[size_t(c) * tp];
+  };
+  // The hierarchy's answer and its boxes, SoA; false when it exceeds kCandQueryMax (a
+  // closed dense surface in the shaft: its leaves would exceed the test's candidates
+  // too, so the traversal stops early rather than gather thousands of triangles).
+  auto query = [&](const ShaftGeometry& sg) {
+    direct_query_.clear();
+    bool over = false;
+    const accel::Bvh<float>& tree = bvh_->tree();
+    tree.for_each_leaf([&](const AABB& b) { return !over && sg.may_intersect_box(to_double(b)); },
+                       [&](const accel::Bvh<float>::Node& leaf) {
+                         for (uint32_t t : tree.leaf_items(leaf)) direct_query_.push_back(t);
+                         over = direct_query_.size() > kCandQueryMax;
+                       });
+    if (over) return false;
+    std::sort(direct_query_.begin(), direct_query_.end());
+    const size_t n = direct_query_.size(), kp = padded(n);
+    direct_query_box_.assign(6 * kp, 0.0);
+    for (size_t k = 0; k < n; ++k) {
+      const AABB& b = tri_boxes_[direct_query_[k]];
+      for (int c = 0; c < 3; ++c) {
+        direct_query_box_[size_t(c) * kp + k] = double(b.lo[c]);
+        direct_query_box_[size_t(3 + c) * kp + k] = double(b.hi[c]);
+      }
+    }
+    return true;
+  };
+  const size_t top = cand_depth_;
+  if (top == 0) {
+    if (!query(g)) return false;
+    filter(direct_query_, direct_query_box_, g, direct_cand_, nullptr);
+    return true;
+  }
+  size_t src = top;  // nearest ready list at or above the leaf's parent
+  const size_t lowest = top > kCandUp ? top - kCandUp : 0;
+  for (size_t k = top; k-- > lowest;)
+    if (cand_stack_[k].ready) {
+      src = k;
+      break;
+    }
+  if (src == top) {
+    src = lowest;
+    CandLevel& c = cand_stack_[src];
+    c.ready = true;
+    c.too_many = !query(*c.g);
+    if (!c.too_many) filter(direct_query_, direct_query_box_, *c.g, c.tris, &c.box);
+  }
+  // Every leaf that looks up to this list gives up too (a deeper leaf, whose look-up
+  // ends below it, may query again).
+  if (cand_stack_[src].too_many) return false;
+  for (size_t k = src + 1; k < top; ++k) {
+    filter(cand_stack_[k - 1].tris, cand_stack_[k - 1].box, *cand_stack_[k].g, cand_stack_[k].tris,
+           &cand_stack_[k].box);
+    cand_stack_[k].ready = true;
+    cand_stack_[k].too_many = false;
+  }
+  filter(cand_stack_[top - 1].tris, cand_stack_[top - 1].box, g, direct_cand_, nullptr);
+  return true;
+}
+
+bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
+  if (!direct_candidates(sh.g)) return false;
+  const size_t k_count = direct_cand_.size();
+  if (k_count > size_t(p_.direct_max_candidates)) return false;
+  const size_t kp = std::max<size_t>(4, (k_count + 3) & ~size_t(3));
+  direct_corners_.resize(9 * kp);
+  direct_terms_.resize(kTermCount * kp);
+  // Lanes past the candidates repeat the last one: a repeated triangle changes no answer.
+  for (size_t k = 0; k < kp && k_count > 0; ++k) {
+    const uint32_t t = direct_cand_[std::min(k, k_count - 1)];
+    for (int v = 0; v < 3; ++v) {
+      const Vec3f& x = mesh_.corner(t, v);
+      for (int a = 0; a < 3; ++a) direct_corners_[size_t(3 * v + a) * kp + k] = double(x[a]);
+    }
+  }
+  const TreeNode& R = rn(r);
+  const TreeNode& L = ln(l);
+  const auto& ro = rtree_->order();
+  const auto& lo = ltree_->order();
+  // The leaf's relations as (receiver, sample, light point), grouped by a shared origin
+  // of the test (its terms are computed once per group): each receiver, or each light
+  // point (a sample's jitter point: at most jitter per sample, whatever the receivers)
+  // when there are fewer of those. The test is symmetric in the segment's ends.
+  // Receivers in chunks of about kDirectChunk relations bound the scratch arrays
+  // (an automatic-ray shaft may hold millions of relations).
+  const uint32_t nl = L.size(), jit = uint32_t(std::max(1, light_->jitter));
+  size_t blocked = 0, uncertain = 0;
+  for (uint32_t c0 = R.begin, c1 = 0; c0 < R.end; c0 = c1) {
+    c1 = std::min<uint32_t>(R.end, c0 + std::max<uint32_t>(1, uint32_t(kDirectChunk / nl)));
+    const uint32_t nr = c1 - c0;
+    const bool by_light = size_t(nl) * jit < nr;
+    const size_t n_rel = size_t(nr) * nl, n_groups = by_light ? size_t(nl) * jit : nr;
+    direct_tmp_.resize(n_rel);
+    direct_rays_.resize(n_rel);
+    direct_group_start_.assign(n_groups + 1, 0);
+    direct_keys_.resize(n_rel);
+    size_t x = 0;
+    for (uint32_t a = c0; a < c1; ++a) {
+      const uint32_t i = ro[a];
+      const Vec3f* rp = &scene_.receivers[i].p;
+      const uint64_t prefix = relation_hash_prefix(i, light_->seed);
+      for (uint32_t b = L.begin; b < L.end; ++b, ++x) {
+        const uint32_t j = lo[b];
+        const Vec3f* q = &leaf_sample_at(*light_, int(j), prefix);
+        // The jitter point's index from its address (leaf_sample_at returns a reference
+        // into Light::jitter_points, sample-major).
+        const uint32_t jp = uint32_t(q - light_->jitter_points.data()) - j * jit;
+        direct_keys_[x] = by_light ? (b - L.begin) * jit + jp : a - c0;
+        ++direct_group_start_[direct_keys_[x] + 1];
+        direct_tmp_[x] = {rp, q, i, j};
+      }
+    }
+    for (size_t g = 0; g < n_groups; ++g) direct_group_start_[g + 1] += direct_group_start_[g];
+    direct_fill_.assign(direct_group_start_.begin(), direct_group_start_.end() - 1);
+    for (x = 0; x < n_rel; ++x) direct_rays_[direct_fill_[direct_keys_[x]]++] = direct_tmp_[x];
+    for (size_t g = 0; g < n_groups; ++g) {
+      const uint32_t g0 = direct_group_start_[g], g1 = direct_group_start_[g + 1];
+      if (g0 == g1) continue;
+      const Vec3f& o = by_light ? *direct_rays_[g0].q : *direct_rays_[g0].p;  // the group's origin
+      const double od[3] = {double(o.x), double(o.y), double(o.z)};
+      if (k_count > 0) direct_terms(direct_corners_.data(), kp, od, direct_terms_.data());
+      for (uint32_t k0 = g0; k0 < g1; k0 += 4) {
+        const uint32_t m = std::min<uint32_t>(4, g1 - k0);
+        double d[16];  // dx, dy, dz, n of the four lanes (a short group repeats its first)
+        for (uint32_t k = 0; k < 4; ++k) {
+          const DirectRay& dr = direct_rays_[k0 + (k < m ? k : 0)];
+          const Vec3f& e = by_light ? *dr.p : *dr.q;
+          d[k] = double(e.x) - od[0];
+          d[4 + k] = double(e.y) - od[1];
+          d[8 + k] = double(e.z) - od[2];
+          d[12 + k] = std::max({std::abs(d[k]), std::abs(d[4 + k]), std::abs(d[8 + k])});
+        }
+        // No candidate: no triangle meets a segment (every lane clear).
+        int64_t out[8] = {0, 0, 0, 0, -1, -1, -1, -1};
+        if (k_count > 0) direct_classify(direct_terms_.data(), k_count, kp, d, out);
+        for (uint32_t k = 0; k < m; ++k) {
+          const DirectRay& dr = direct_rays_[k0 + k];
+          bool occ = out[k] != 0;
+          if (!occ && !out[4 + k]) {
+            // Not certified: the verified Embree ray of the other path, from the receiver.
+            embree_->occluded_fan(*dr.p, dr.q, 1, &occ);
+            ++uncertain;
+          }
+          if (occ) ++blocked;  // bits start blocked: only visible ones are written
+          else result_.receivers[dr.receiver].set_visible(light_offset_ + size_t(dr.sample), true);
+        }
+      }
+    }
+  }
+  const double rel = double(R.size()) * double(L.size());
+  n_rays_ += rel;
+  n_rays_blocked_ += double(blocked);
+  n_direct_ += rel;
+  n_direct_uncertain_ += double(uncertain);
+  return true;
+}
 
 // CAST-SHADOW-RAYS. With the custom caster (section 4.10) the shaft's blockers, the
 // leaf nodes' inside triangles (Figure 4.35) and, in pre-traversal, the pruned
@@ -15,6 +396,7 @@ void Traversal::cast_rays(int r, int l, const Shaft* sh, const std::vector<uint3
   ScopedTimer t(times_[kRays]);
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
+  if (!p_.custom_rays && p_.direct_rays && direct_ok_ && sh && direct_rays(r, l, *sh)) return;
   if (!p_.custom_rays && p_.ray_queue && L.size() < kFanWidth) {
     queue_rays(r, l);
     return;

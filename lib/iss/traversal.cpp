@@ -30,6 +30,8 @@ Traversal::Traversal(const Scene& scene, const mesh::PreparedMesh& m, const Para
   double s = 0;
   for (int k = 0; k < 3; ++k) s = std::max({s, std::abs(double(b.lo[k])), std::abs(double(b.hi[k]))});
   scale_ = std::max(s, 1e-30);
+  // Scenes beyond Embree's domain keep the caster whose fallback covers them.
+  direct_ok_ = scale_ <= double(raycast::kEmbreeCoordinateBound);
   ctx_.mesh = &mesh_;
   ctx_.scale = scale_;
   ScopedTimer t(times_[kTree]);
@@ -150,6 +152,8 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("leaf_rays_empty_with_node_triangles", n_leaf_node_tris_);
   st.set("auto_ray_shafts", n_auto_shafts_);
   st.set("auto_ray_relations", n_auto_relations_);
+  st.set("direct_ray_relations", n_direct_);
+  st.set("direct_rays_uncertified", n_direct_uncertain_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
@@ -341,6 +345,11 @@ void Traversal::shaft_subdivide(Shaft& sh) {
       mode = SplitMode::Receiver;
     }
   }
+  // The direct test's candidate lists (leaf_rays.cpp) below this shaft filter from its.
+  if (cand_depth_ == cand_stack_.size()) cand_stack_.emplace_back();
+  cand_stack_[cand_depth_].g = &sh.g;
+  cand_stack_[cand_depth_].ready = false;
+  ++cand_depth_;
   for (int side = 0; side < 2; ++side) {
     int r = sh.r, l = sh.l, split;
     if (mode == SplitMode::Receiver) split = r = side == 0 ? rn(sh.r).left : rn(sh.r).right;
@@ -351,6 +360,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
     shaft_traverse(sub);
     release(sub);
   }
+  --cand_depth_;
   ab.subdivided += 1;  // auto_buckets_ is a fixed array: `ab` outlives the recursion
   ab.shafts_below += n_shafts_ - shafts0;
   ab.decided_below += n_blocked_shaft_ + n_empty_ - decided0;

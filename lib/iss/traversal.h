@@ -106,6 +106,10 @@ struct Params {
   bool auto_rays = true;
   double auto_ray_relations = 64.0;  // kAutoRayRelationsPerShaft, see below
   bool ray_queue = true;  // queue_rays: full packets at light leaves under kFanWidth
+  // Leaf relations by the direct test against the shaft's candidate triangles
+  // (direct_rays, leaf_rays.cpp) when a shaft has at most direct_max_candidates of them.
+  bool direct_rays = true;
+  int direct_max_candidates = 48;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -219,6 +223,13 @@ class Traversal {
   void flush_rays(int r);
   void flush_all_rays();
   void fan_rays(uint32_t receiver, const uint32_t* samples, size_t n);
+  // The leaf relations of shaft `sh` by the certified segment-triangle test of
+  // leaf_rays.cpp against the triangles that may meet the shaft, Embree rays for the
+  // relations it cannot certify; false (nothing cast) when there are more than
+  // Params::direct_max_candidates candidates.
+  bool direct_rays(int r, int l, const Shaft& sh);
+  // Into direct_cand_; false when an ancestor's list was too long to gather.
+  bool direct_candidates(const ShaftGeometry& g);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
 
@@ -265,6 +276,31 @@ class Traversal {
   double n_kept_beyond_ = 0;
   double n_leaf_surfaces_ = 0, n_leaf_ghosts_ = 0, n_leaf_node_tris_ = 0, n_probe_blocked_ = 0;
   double n_auto_shafts_ = 0, n_auto_relations_ = 0;
+  double n_direct_ = 0, n_direct_uncertain_ = 0;  // relations given to direct_rays / left to Embree by it
+  bool direct_ok_ = false;  // every coordinate within raycast::kEmbreeCoordinateBound
+  std::vector<uint32_t> direct_query_, direct_cand_;
+  std::vector<double> direct_corners_, direct_terms_, direct_query_box_;
+  std::vector<int64_t> direct_keep_;
+  struct DirectRay {
+    const Vec3f *p, *q;  // receiver point, light point
+    uint32_t receiver, sample;
+  };
+  std::vector<DirectRay> direct_tmp_, direct_rays_;
+  std::vector<uint32_t> direct_group_start_, direct_keys_, direct_fill_;
+  // Candidate lists of the shafts being subdivided, outermost first (direct_candidates).
+  // The direct test's scratch is bounded (kDirectChunk relations of about 50 bytes,
+  // lists of at most kCandQueryMax triangles per level of the recursion): a few MB, not
+  // charged to the memory budget, like the other per-traversal scratch vectors.
+  struct CandLevel {
+    const ShaftGeometry* g = nullptr;
+    bool ready = false;
+    bool too_many = false;  // the hierarchy's answer exceeded kCandQueryMax
+    std::vector<uint32_t> tris;
+    std::vector<double> box;  // the triangles' boxes, SoA (direct_candidates)
+  };
+  static constexpr size_t kCandUp = 4, kCandQueryMax = 1024, kDirectChunk = 16384;
+  std::vector<CandLevel> cand_stack_;
+  size_t cand_depth_ = 0;
   std::array<AutoRayBucket, 64> auto_buckets_{}, split_buckets_{};
   // LightSplit state of the current light; split_now_: the subtree being traversed
   // uses light splits (Split mode or the split way of a trial shaft).
