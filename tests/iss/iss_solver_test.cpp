@@ -215,3 +215,38 @@ TEST(IssOracle, FamiliesHaveNoMismatchAboveTau) {
     }
   }
 }
+
+// ---- the leaf rays' Embree build quality (option embree_quality) ---------------------------
+
+TEST(Iss, EmbreeBuildQualityChangesNoAnswer) {
+  // Every quality builds a BVH over the same triangles traced by the same kernel and
+  // verified the same way, so the answers are the same bits; auto takes the low build
+  // exactly when the scene has at most 7 relations per triangle.
+  FamilyParams fp;
+  fp.seed = 3;
+  fp.receivers = 256;
+  fp.samples = 16;
+  fp.triangles = 3000;
+  auto gen = generate_family("rooms", fp);
+  ASSERT_TRUE(gen.ok());
+  const Scene& s = gen.value();
+  ASSERT_GT(double(s.relation_count()), 7.0 * double(s.mesh.size())) << "auto is medium here";
+  std::map<std::string, std::string> base = {{"auto_rays", "off"}};
+  SolveResult ref = run_iss(s, base);
+  EXPECT_EQ(ref.stats.get("embree_build_low"), 0.0);
+  for (const char* q : {"low", "medium", "high"}) {
+    auto o = base;
+    o["embree_quality"] = q;
+    SolveResult r = run_iss(s, o);
+    EXPECT_EQ(r.stats.get("embree_build_low"), std::string(q) == "low" ? 1.0 : 0.0);
+    EXPECT_GT(r.stats.get("relations_ray_cast"), 0.0);
+    for (size_t i = 0; i < s.receivers.size(); ++i)
+      ASSERT_EQ(r.receivers[i].visible_bits, ref.receivers[i].visible_bits) << q << " receiver " << i;
+  }
+  // Few relations per triangle: auto builds low.
+  fp.receivers = 4;
+  auto few = generate_family("rooms", fp);
+  ASSERT_TRUE(few.ok());
+  ASSERT_LE(double(few.value().relation_count()), 7.0 * double(few.value().mesh.size()));
+  EXPECT_EQ(run_iss(few.value(), {}).stats.get("embree_build_low"), 1.0);
+}
