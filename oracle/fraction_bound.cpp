@@ -136,6 +136,87 @@ Span edge_span(const P2d& a, const P2d& b, const CPoly& q) {
   return s;
 }
 
+// Polygons whose box meets a segment's box: every other polygon is strictly separated
+// from the segment, so no point just left or right of it lies in that polygon and it
+// adds no cut, no membership change and no span error to the segment (exactly; with it
+// the rounded spans of such a polygon could only widen the bound). A uniform grid over
+// the light's box, polygons beyond it clamped into the border cells (clamping is
+// monotone, so overlapping boxes always share a cell). Dense meshes put thousands of
+// small shadows on the light: the all-pairs loop was quadratic in them.
+class ShadowGrid {
+ public:
+  explicit ShadowGrid(const std::vector<CPoly>& polys) : box_(polys.size()), stamp_(polys.size(), 0) {
+    for (size_t p = 0; p < polys.size(); ++p) {
+      Box& b = box_[p];
+      for (const P2d& v : polys[p].v) {
+        b.x0 = std::min(b.x0, v.x()), b.x1 = std::max(b.x1, v.x());
+        b.y0 = std::min(b.y0, v.y()), b.y1 = std::max(b.y1, v.y());
+      }
+      if (!(std::isfinite(b.x0) && std::isfinite(b.x1) && std::isfinite(b.y0) && std::isfinite(b.y1))) all_ = true;
+    }
+    if (all_ || polys.size() < 64) {
+      all_ = true;
+      return;
+    }
+    n_ = std::min<size_t>(64, size_t(std::sqrt(double(polys.size()))));
+    const Box& l = box_[0];
+    ox_ = l.x0, oy_ = l.y0;
+    sx_ = double(n_) / std::max(l.x1 - l.x0, 1e-300), sy_ = double(n_) / std::max(l.y1 - l.y0, 1e-300);
+    if (!std::isfinite(sx_) || !std::isfinite(sy_)) {
+      all_ = true;
+      return;
+    }
+    cells_.assign(n_ * n_, {});
+    for (size_t p = 1; p < polys.size(); ++p) {
+      const Box& b = box_[p];
+      for (size_t j = cy(b.y0); j <= cy(b.y1); ++j)
+        for (size_t i = cx(b.x0); i <= cx(b.x1); ++i) cells_[j * n_ + i].push_back(uint32_t(p));
+    }
+  }
+
+  // The polygons q >= 1, q != skip, whose box meets the box of segment (a, b), in
+  // increasing order (every such q when the grid is off).
+  void candidates(const P2d& a, const P2d& b, size_t skip, std::vector<uint32_t>& out) {
+    out.clear();
+    if (all_) {
+      for (size_t q = 1; q < box_.size(); ++q)
+        if (q != skip) out.push_back(uint32_t(q));
+      return;
+    }
+    const double x0 = std::min(a.x(), b.x()), x1 = std::max(a.x(), b.x());
+    const double y0 = std::min(a.y(), b.y()), y1 = std::max(a.y(), b.y());
+    ++tick_;
+    for (size_t j = cy(y0); j <= cy(y1); ++j)
+      for (size_t i = cx(x0); i <= cx(x1); ++i)
+        for (uint32_t q : cells_[j * n_ + i]) {
+          if (stamp_[q] == tick_ || q == skip) continue;
+          stamp_[q] = tick_;
+          const Box& c = box_[q];
+          if (c.x0 <= x1 && x0 <= c.x1 && c.y0 <= y1 && y0 <= c.y1) out.push_back(q);
+        }
+    std::sort(out.begin(), out.end());
+  }
+
+ private:
+  struct Box {
+    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+  };
+  size_t cell(double v, double o, double s) const {
+    const double c = std::floor((v - o) * s);
+    return c <= 0 ? 0 : c >= double(n_ - 1) ? n_ - 1 : size_t(c);
+  }
+  size_t cx(double x) const { return cell(x, ox_, sx_); }
+  size_t cy(double y) const { return cell(y, oy_, sy_); }
+
+  std::vector<Box> box_;
+  std::vector<uint32_t> stamp_;
+  uint32_t tick_ = 0;
+  bool all_ = false;
+  size_t n_ = 1;
+  double ox_ = 0, oy_ = 0, sx_ = 1, sy_ = 1;
+  std::vector<std::vector<uint32_t>> cells_;
+};
+
 // Area of L \ (S_1 u ... u S_m) for the convex polygons polys[0] = L, polys[1..m] = S_j,
 // by the boundary integral: a point x of an edge of polygon p is on the region's
 // boundary, region on the left (right), when the point just left (right) of x is in
@@ -143,11 +224,14 @@ Span edge_span(const P2d& a, const P2d& b, const CPoly& q) {
 // several polygons is counted on the one of lowest index. Every side decision is exact
 // (CGAL's exact orientation on the doubles); only the cut parameters are rounded, and
 // moving a cut by e moves the measure of the counted set by at most 2e. The result
-// encloses the exact area of the region of these double polygons.
+// encloses the exact area of the region of these double polygons. Polygons strictly
+// apart from an edge are left out of its loop (ShadowGrid).
 I region_area(const std::vector<CPoly>& polys, const P2d& o) {
   I area(0);
   std::vector<Span> spans(polys.size());
   std::vector<double> cuts;
+  std::vector<uint32_t> near;  // the shadows whose box meets the edge's, increasing
+  ShadowGrid grid(polys);
   for (size_t p = 0; p < polys.size(); ++p) {
     const CPoly& P = polys[p];
     for (size_t k = 0; k < P.v.size(); ++k) {
@@ -165,16 +249,18 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
         if (sl.r_out) continue;  // exactly outside L (or on L's edge with L on the left)
         window = std::max(0.0, std::min(1.0, sl.hi_r + sl.err) - std::max(0.0, sl.lo_r - sl.err));
       }
+      grid.candidates(a, b, p, near);
       double err = 0;
       cuts.assign({0.0, 1.0});
-      for (size_t q = 0; q < polys.size(); ++q) {
-        if (q == p) continue;
+      auto add_cuts = [&](size_t q) {
         if (q != 0 || p == 0) spans[q] = edge_span(a, b, polys[q]);
         const Span& s = spans[q];
         for (double x : {s.lo_l, s.hi_l, s.lo_r, s.hi_r})
           if (x > 0 && x < 1) cuts.push_back(x);
         err += std::min(2.0 * s.err, window);
-      }
+      };
+      if (p != 0) add_cuts(0);
+      for (uint32_t q : near) add_cuts(q);
       std::sort(cuts.begin(), cuts.end());
       double m = 0;  // signed measure of the counted part of [0, 1]
       for (size_t c = 0; c + 1 < cuts.size(); ++c) {
@@ -186,16 +272,17 @@ I region_area(const std::vector<CPoly>& polys, const P2d& o) {
         // region's membership: L's edges have the region (if anywhere) on their left,
         // shadow edges on their right (their left is in the shadow).
         bool in_l = p == 0, in_r = false, tie = false;  // in L, in no shadow
-        for (size_t q = 0; q < polys.size(); ++q) {
-          if (q == p) continue;
+        if (p != 0) {
+          const Span& s = spans[0];
+          const bool ql = s.lo_l < t && t < s.hi_l, qr = s.lo_r < t && t < s.hi_r;
+          in_r = qr;  // shadow edge: the right point must be in L
+          if (ql != qr) tie = true;  // the piece lies on an edge of L too
+        }
+        for (uint32_t q : near) {
           const Span& s = spans[q];
-          bool ql = s.lo_l < t && t < s.hi_l, qr = s.lo_r < t && t < s.hi_r;
-          if (q == 0) {
-            in_r = qr;  // shadow edge: the right point must be in L
-          } else {
-            if (ql) in_l = false;
-            if (qr) in_r = false;
-          }
+          const bool ql = s.lo_l < t && t < s.hi_l, qr = s.lo_r < t && t < s.hi_r;
+          if (ql) in_l = false;
+          if (qr) in_r = false;
           if (q < p && ql != qr) tie = true;  // the piece lies on an edge of q too
         }
         if (tie) continue;

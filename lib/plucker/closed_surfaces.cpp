@@ -38,6 +38,13 @@ ClosedSurfaces::ClosedSurfaces(const TriangleSoup& mesh, const mesh::PreparedMes
   }
   if (!any) return;
   surface_of_ = std::move(of);
+  nb_.assign(mesh.size(), {-1, -1, -1});
+  for (uint32_t t = 0; t < n; ++t) {
+    const uint32_t src = pm.triangles[t].source;
+    if (surface_of_[src] < 0) continue;
+    for (int k = 0; k < 3; ++k)
+      nb_[src][size_t(k)] = int32_t(pm.triangles[size_t(pm.triangles[t].neighbors[size_t(k)])].source);
+  }
   // Signed volumes about each box's centre, in double, with the sum of the terms'
   // magnitudes as the scale below which the sign is not trusted.
   std::vector<double> vol(boxes_.size(), 0.0), mag(boxes_.size(), 0.0);

@@ -18,6 +18,7 @@
 // position are dense in every triangle's shadow.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -45,14 +46,19 @@ class ClosedSurfaces {
   // when the double sum cannot tell. A choice of which crossing side to keep, never a
   // condition of correctness (occluder_selection.cpp).
   int orientation(int32_t s) const { return orient_[size_t(s)]; }
+  // The input triangles glued to t across its edges (welded neighbours, each edge
+  // traversed in opposite directions; -1 none), for a triangle of a closed surface.
+  const std::array<int32_t, 3>& neighbors(uint32_t t) const { return nb_[t]; }
   size_t memory_bytes() const {
-    return surface_of_.capacity() * sizeof(int32_t) + boxes_.capacity() * sizeof(AABB) +
+    return surface_of_.capacity() * sizeof(int32_t) + nb_.capacity() * sizeof(std::array<int32_t, 3>) +
+           boxes_.capacity() * sizeof(AABB) +
            sizes_.capacity() * sizeof(uint32_t) +
            orient_.capacity();
   }
 
  private:
   std::vector<int32_t> surface_of_;  // empty when the scene has no closed surface
+  std::vector<std::array<int32_t, 3>> nb_;  // by input triangle; empty with surface_of_
   std::vector<AABB> boxes_;
   std::vector<uint32_t> sizes_;
   std::vector<int8_t> orient_;

@@ -59,6 +59,8 @@ struct Totals {
   uint64_t near_splits = 0;     // splits of the per-receiver subtractions (in bsp.splits too)
   uint64_t interior = 0;        // interior occluders added to trees (interior_occluders.h)
   uint64_t interior_covered = 0;  // candidates left out: every line through them stabs one
+  uint64_t interior_skipped = 0;  // triangles of whole tree nodes left out that way (cover_nodes)
+  uint64_t near_merged = 0;  // per receiver: near triangles subtracted within another's polygon (shade_receiver.cpp)
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   void merge(const Totals& o);
@@ -89,6 +91,8 @@ struct SolveContext {
   MemoryMeter* memory;
   const ClosedSurfaces* closed = nullptr;  // null: every candidate is modelled
   const InteriorOccluders* interior = nullptr;  // null: none added (interior_occluders.h)
+  bool cover_nodes = true;  // the covered test on whole tree nodes (occluder_selection.cpp)
+  bool near_merge = true;   // glued near triangles subtracted as one convex polygon (shade_receiver.cpp)
 };
 
 // One group and one light: the inputs, what occluder selection finds, and the working
@@ -124,6 +128,11 @@ struct GroupState {
   std::vector<Vec3d> near_verts;    // their vertices (NearPoly::begin, count)
   std::vector<uint32_t> exact_tris;  // subtracted exactly per receiver
   std::vector<uint32_t> cand;        // the shaft's candidate triangles (sorted)
+  // Subtrees of candidates left out whole as covered by an interior occluder: the exact
+  // path of extreme receivers, which uses no tree, still subtracts them (cand_all; a
+  // superset of the shaft's candidates: any scene triangle's exact shadow is blocked).
+  std::vector<TriangleTree::Range> cand_skipped;
+  std::vector<uint32_t> cand_all;
   // Per candidate: 0 kept, else left out as a closed surface's (occluder_selection.cpp);
   // per closed surface met: its slot in closed_count (-1 none), reset after each group.
   std::vector<uint8_t> closed_drop;
@@ -147,6 +156,12 @@ struct GroupState {
   };
   std::vector<NearBlock> near_blocks;
   std::vector<uint32_t> near_spatial, near_pick;
+  // Closed surfaces only: per input triangle its near polygon's index when that polygon
+  // is the whole triangle's only part (-1 none, -2 several parts), reset at clear();
+  // per near polygon the last receiver (near_serial) that subtracted it merged.
+  std::vector<int32_t> near_of_tri;
+  std::vector<uint32_t> near_done;
+  uint32_t near_serial = 0;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
   std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;

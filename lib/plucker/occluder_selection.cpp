@@ -87,7 +87,8 @@ class Selection {
   void candidates();
   void closed_surface_culling();
   void interior_occluders();
-  bool covered_by_interior(const Vec3d tri[3]) const;
+  bool covered_by_interior(const Vec3d* pts, int n) const;
+  bool covered_box(const Vec3d& lo, const Vec3d& hi) const;
   bool select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]);
   void select_triangle(uint32_t t, const Vec3d tri[3]);
   [[gnu::always_inline]] inline NearPoly make_near(uint32_t t, const Vec3d tri[3], double tmax,
@@ -114,6 +115,7 @@ class Selection {
   };
   std::vector<Cover> covers_;
   int8_t keep_side_ = 0;  // NearPoly::keep_side of the triangle being selected
+  mutable int hint_ = 0;  // the cover edge that failed last (covered_by_interior, covered_box)
 };
 
 // Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
@@ -253,7 +255,17 @@ NearPoly Selection::make_near(uint32_t t, const Vec3d tri[3], double tmax, const
 void Selection::candidates() {
   std::vector<uint32_t>& cand = gs_.cand;
   const TriangleTree& tree = *gs_.ctx->tree;
-  tree.candidates(*shaft_, lf_.origin, cand);
+  if (covers_.empty() || !gs_.ctx->cover_nodes) {
+    tree.candidates(*shaft_, lf_.origin, cand);
+  } else {
+    // Whole subtrees whose box is covered (covered_by_interior on its 8 corners: the
+    // orientation of lines through a convex set follows from its corners, lines.h) are
+    // left out before the closed-surface sides and the per-triangle tests, which cost
+    // more per triangle than the box test per node (scan: most of the shaft is covered).
+    tree.candidates(*shaft_, lf_.origin, cand, gs_.cand_skipped,
+                    [&](const Vec3d& lo, const Vec3d& hi) { return covered_box(lo, hi); });
+    for (const TriangleTree::Range& r : gs_.cand_skipped) tot_.interior_skipped += r.count;
+  }
   closed_surface_culling();
   std::vector<uint8_t>& merged = gs_.merged;  // per candidate: shaded as part of a patch
   merged.assign(cand.size(), 0);
@@ -269,7 +281,7 @@ void Selection::candidates() {
     if (shaft_->culls(Vec3f(tri[0]), Vec3f(tri[1]), Vec3f(tri[2]))) continue;
     if (!covers_.empty() && translates_exactly(scene_.mesh.corner(t, 0), lf_.origin) &&
         translates_exactly(scene_.mesh.corner(t, 1), lf_.origin) &&
-        translates_exactly(scene_.mesh.corner(t, 2), lf_.origin) && covered_by_interior(tri)) {
+        translates_exactly(scene_.mesh.corner(t, 2), lf_.origin) && covered_by_interior(tri, 3)) {
       ++tot_.interior_covered;
       continue;
     }
@@ -293,12 +305,23 @@ void Selection::candidates() {
 }
 
 // Strict side of every point of pts against the plane of the triangle a, b, c (world
-// floats): +1 / -1 when orient3d(a, b, c, p) has that sign for every p (filtered, exact
-// where the filter cannot tell), else 0.
+// floats): +1 / -1 when orient3d(a, b, c, p) has that sign for every p, else 0. First a
+// filter sharing the triangle's normal N = (b - a) x (c - a) over the points, in double:
+// the differences are exact or rounded once, N's components carry at most 2 u_d
+// |b - a|_1 |c - a|_1, and (p - a) . N, with p - a = (hi - a) + lo rounded by u_d of
+// |hi - a|_1 + |lo|_1 =: D, errs by less than 16 u_d D |b - a|_1 |c - a|_1; a value beyond
+// 2^-40 of that product (2^9 times the error) has the exact sign. Else orient3d_filtered,
+// then exact (a product that small may have lost digits to underflow: also those).
 int strict_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint* pts, size_t n) {
+  const Vec3d ad = to_double(a), e1 = to_double(b) - ad, e2 = to_double(c) - ad, nrm = cross(e1, e2);
+  const double s12 = norm1(e1) * norm1(e2);
   int side = 0;
   for (size_t k = 0; k < n; ++k) {
-    Sign sg = orient3d_filtered(a, b, c, pts[k]);
+    const Vec3d h = to_double(pts[k].hi) - ad;
+    const double v = dot(h + pts[k].lo, nrm), bound = 0x1p-40 * (norm1(h) + norm1(pts[k].lo)) * s12;
+    Sign sg = Sign::Uncertain;
+    if (bound > 0x1p-900) sg = v > bound ? Sign::Positive : (v < -bound ? Sign::Negative : Sign::Uncertain);
+    if (sg == Sign::Uncertain) sg = orient3d_filtered(a, b, c, pts[k]);
     if (sg == Sign::Uncertain) sg = sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), pts[k]).sign);
     const int sd = sg == Sign::Positive ? 1 : (sg == Sign::Negative ? -1 : 0);
     if (sd == 0 || (k > 0 && sd != side)) return 0;
@@ -386,12 +409,19 @@ void Selection::closed_surface_culling() {
     if (k < 0) continue;
     const Vec3f &a = scene_.mesh.corner(t, 0), &b = scene_.mesh.corner(t, 1), &c = scene_.mesh.corner(t, 2);
     const int sr = strict_side(a, b, c, rc, 8);
+    any = true;
+    // A surface of known orientation needs one bit only (below): when the receivers' side
+    // already decides it (r all on the side that bit excludes) the light's is not computed.
+    const int orient = cs->orientation(s);
+    if ((orient > 0 && sr == -1) || (orient < 0 && sr == 1)) {
+      drop[ci] = 4;  // the needed bit false; the other one unused (counts serve orient == 0)
+      continue;
+    }
     const int sl = strict_side(a, b, c, lpts.data(), lpts.size());
     const bool pos = sr != -1 && sl != 1, neg = sr != 1 && sl != -1;
     drop[ci] = uint8_t(4 | (pos ? 1 : 0) | (neg ? 2 : 0));
     count[2 * size_t(k)] += pos;
     count[2 * size_t(k) + 1] += neg;
-    any = true;
   }
   std::vector<int8_t>& keep = gs_.closed_keep;
   keep.assign(cand.size(), 0);
@@ -460,19 +490,57 @@ void Selection::interior_occluders() {
   tot_.interior += added;
 }
 
-// True when every line from the receivers' box through the triangle (local, translated
-// exactly) to the light stabs one interior occluder of this group: per edge of it, the
-// lines through the triangle and the light (Theorem 1 on their vvset), or those from the
-// box through the triangle, are strictly positive (bsp.h orientation, either bound). Such
-// a segment r -> l passes through the occluder, which lies strictly between every
-// receiver and the light (interior_occluders), so it is blocked there: the triangle
-// blocks nothing the tree does not, for any receiver of the group.
-bool Selection::covered_by_interior(const Vec3d tri[3]) const {
+// True when every line from the receivers' box through the convex hull of pts (local,
+// exact: a triangle translated exactly, or a tree node's widened box) to the light stabs
+// one interior occluder of this group: per edge of it, the lines through the hull and
+// the light (Theorem 1 on their vvset), or those from the box through the hull, are
+// strictly positive (bsp.h orientation, either bound; the sign of a line's side is
+// bilinear in its two points, so the corners decide it for the hulls). Such a segment
+// r -> l passes through the occluder, which lies strictly between every receiver and
+// the light (interior_occluders), so it is blocked there: what lies in the hull blocks
+// nothing the tree does not, for any receiver of the group.
+bool Selection::covered_by_interior(const Vec3d* pts, int n) const {
   for (const Cover& cv : covers_) {
     bool all = true;
-    for (int m = 0; m < cv.n && all; ++m)
-      all = cv.light[m].orientation(tri, 3, true) == Orientation::Positive ||
-            (gs_.rloc_exact && cv.region[m].orientation(tri, 3, false) == Orientation::Positive);
+    for (int mi = 0; mi < cv.n && all; ++mi) {
+      const int m = (hint_ + mi) % cv.n;  // from the edge that failed last: same answer, sooner
+      all = cv.light[m].orientation(pts, n, true) == Orientation::Positive ||
+            (gs_.rloc_exact && cv.region[m].orientation(pts, n, false) == Orientation::Positive);
+      if (!all) hint_ = m;
+    }
+    if (all) return true;
+  }
+  return false;
+}
+
+// covered_by_interior for the box [lo, hi] with one corner per plane instead of eight:
+// for a fixed far point p_k an EdgeFan value det[x - a, p_k - a, b - a] = (x - a) . W_k
+// is linear in x, so over the box its exact minimum is at some corner c*. With W_k
+// rounded (its error within the fan's bound), the computed (c - a) . W_k is smallest
+// at the corner nv chosen by W_k's signs, and the value at c* exceeds it less the
+// rounding of W_k over |c* - a|_1 <= D (the box's largest 1-norm distance from a): so
+// a value at nv above the fan's bound taken at D (scale_k D, the bound EdgeFan gives a
+// point at distance D) proves every point of the box strictly positive. Same answer as
+// the 8 corners or a weaker one (undecided counts as not covered).
+bool Selection::covered_box(const Vec3d& lo, const Vec3d& hi) const {
+  auto positive = [&](const EdgeFan& fan, double sign) {
+    const Vec3d dl = lo - fan.a, dh = hi - fan.a;
+    const double dmax = std::max(std::abs(dl.x), std::abs(dh.x)) + std::max(std::abs(dl.y), std::abs(dh.y)) +
+                        std::max(std::abs(dl.z), std::abs(dh.z));
+    for (size_t k = 0; k < fan.w.size(); ++k) {
+      const Vec3d w = fan.w[k] * sign;  // exact: negation
+      const Vec3d d(w.x >= 0.0 ? dl.x : dh.x, w.y >= 0.0 ? dl.y : dh.y, w.z >= 0.0 ? dl.z : dh.z);
+      if (!(dot(d, w) > fan.scale[k] * dmax)) return false;
+    }
+    return true;
+  };
+  for (const Cover& cv : covers_) {
+    bool all = true;
+    for (int mi = 0; mi < cv.n && all; ++mi) {
+      const int m = (hint_ + mi) % cv.n;
+      all = positive(cv.light[m], 1.0) || (gs_.rloc_exact && positive(cv.region[m], -1.0));
+      if (!all) hint_ = m;
+    }
     if (all) return true;
   }
   return false;
@@ -676,6 +744,16 @@ void Selection::sort_near() {
   sorted.resize(near.size());
   for (size_t k = 0; k < near.size(); ++k) sorted[k] = near[key[k].second];
   near.swap(sorted);
+  // Closed surfaces' near triangles by triangle, for the merged polygons of shade_receiver.cpp.
+  if (gs_.ctx->closed && gs_.ctx->near_merge && !gs_.interior.empty()) {
+    if (gs_.near_of_tri.size() != scene_.mesh.size()) gs_.near_of_tri.assign(scene_.mesh.size(), -1);
+    for (size_t k = 0; k < near.size(); ++k) {
+      if (near[k].patch >= 0) continue;
+      int32_t& slot = gs_.near_of_tri[near[k].triangle];
+      slot = slot == -1 ? int32_t(k) : -2;
+    }
+    gs_.near_done.assign(near.size(), 0);
+  }
   blocks();
 }
 

@@ -29,6 +29,8 @@ void Totals::merge(const Totals& o) {
   interior += o.interior;
   near_splits += o.near_splits;
   interior_covered += o.interior_covered;
+  interior_skipped += o.interior_skipped;
+  near_merged += o.near_merged;
   exact_triangles += o.exact_triangles;
   far_triangles += o.far_triangles;
   band_triangles += o.band_triangles;
@@ -52,6 +54,8 @@ void GroupState::clear() {
   for (auto* v : {&rloc, &near_verts, &poly0, &lower, &upper, &region, &pyramid, &pyramid_err, &cur, &pos, &neg, &q,
                   &patch})
     v->clear();
+  for (const NearPoly& np : near)
+    if (np.triangle < near_of_tri.size()) near_of_tri[np.triangle] = -1;
   near.clear();
   near_sorted.clear();
   near_key.clear();
@@ -61,12 +65,13 @@ void GroupState::clear() {
   occluders.clear();
   interior.clear();
   closed_keep.clear();
+  cand_skipped.clear();
   cover_n.clear();
   cover_err.clear();
   rloc_exact = false;
   for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
   vals.clear();
-  for (auto* v : {&exact_tris, &cand, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
+  for (auto* v : {&exact_tris, &cand, &cand_all, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
   frags.clear();
   tmp.clear();
   boxes.clear();
@@ -97,7 +102,8 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   auto live_bytes = [&]() {
     return int64_t(bsp.memory_bytes() + gs.near_verts.capacity() * sizeof(Vec3d) + gs.near.capacity() * sizeof(NearPoly) +
                    gs.near_blocks.capacity() * sizeof(GroupState::NearBlock) +
-                   (gs.near_spatial.capacity() + gs.near_pick.capacity()) * sizeof(uint32_t));
+                   (gs.near_spatial.capacity() + gs.near_pick.capacity() + gs.near_done.capacity()) * sizeof(uint32_t) +
+                   gs.near_of_tri.capacity() * sizeof(int32_t));
   };
   int64_t reported = live_bytes();
   ctx.memory->change(reported);
@@ -240,6 +246,8 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     interior_charge.set(interior->memory_bytes());
     if (!interior->entries().empty()) ctx.interior = &*interior;
   }
+  ctx.cover_nodes = opt.get_bool("cover_nodes", true);
+  ctx.near_merge = opt.get_bool("near_merge", true);
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
   for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
@@ -309,6 +317,8 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("interior_occluders", double(totals.interior));
   st.set("near_splits", double(totals.near_splits));
   st.set("interior_covered", double(totals.interior_covered));
+  st.set("interior_skipped", double(totals.interior_skipped));
+  st.set("near_merged", double(totals.near_merged));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
@@ -338,7 +348,11 @@ std::vector<OptionSpec> PluckerSolver::options() const {
           {"closed", "on: occluder selection keeps of a closed surface only what one crossing side needs "
                      "(closed_surfaces.h); off: every candidate", {"on", "off"}},
           {"interior", "on: convex polygons inside closed surfaces join the trees as occluders that block nothing "
-                       "new (interior_occluders.h); off: none", {"on", "off"}}};
+                       "new (interior_occluders.h); off: none", {"on", "off"}},
+          {"cover_nodes", "on: occluder selection leaves out whole triangle-tree nodes covered by an interior "
+                          "occluder; off: the covered test per candidate only", {"on", "off"}},
+          {"near_merge", "on: glued near triangles of a closed surface that a receiver sees as one convex polygon "
+                         "are subtracted as that polygon; off: one by one", {"on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

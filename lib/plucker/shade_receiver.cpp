@@ -65,11 +65,12 @@ class ReceiverShading {
   bool exact_once(uint32_t t);
   void cover_planes();
   bool block_outside(const GroupState::NearBlock& b) const;
-  bool covered(const NearPoly& np) const;
+  bool covered(const NearPoly& np);
   bool exact_near(const NearPoly& np);
   // Inlined into shade_float's loop over the near polygons (a call per polygon and
   // receiver costs measurably on columns).
-  [[gnu::always_inline]] inline void subtract_near(const NearPoly& np);
+  [[gnu::always_inline]] inline void subtract_near(const NearPoly& np, uint32_t idx);
+  bool subtract_merged(const NearPoly& np, uint32_t k, int side_r);
   void report_fragments(double& area, double& irr);
   void sample_bits();
 
@@ -85,6 +86,8 @@ class ReceiverShading {
   const double rmax_;
   UVBox all_;        // the union of the fragments' boxes (bound_all)
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
+  int cover_hint_ = 0;   // covered(): the interior occluder edge that failed last
+  uint32_t serial_ = 0;  // this receiver's mark in GroupState::near_done (0: no merging)
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -128,7 +131,14 @@ void ReceiverShading::shade_exact() {
   gs_.frags.clear();
   gs_.frags.add(lf_.poly.data(), lf_.poly.size());
   gs_.boxes.assign(1, UVBox::of(lf_.axes, lf_.poly.data(), int(lf_.poly.size())));
-  for (uint32_t t : gs_.cand) {
+  const std::vector<uint32_t>* cand = &gs_.cand;
+  if (!gs_.cand_skipped.empty()) {  // with the subtrees selection left out, in index order
+    gs_.cand_all = gs_.cand;
+    for (const TriangleTree::Range& r : gs_.cand_skipped) gs_.ctx->tree->append_items(r, gs_.cand_all);
+    std::sort(gs_.cand_all.begin(), gs_.cand_all.end());
+    cand = &gs_.cand_all;
+  }
+  for (uint32_t t : *cand) {
     if (gs_.frags.size() == 0) break;
     subtract_exact(t);
   }
@@ -185,17 +195,21 @@ void ReceiverShading::cover_planes() {
 // it, from r's side, so the segment from r to the light passes through it (it lies
 // strictly between the group's receivers and the light) and the tree hides what the
 // triangle would. Signs det[x - r, a - r, b - r] decided against dot_err (lines.h).
-bool ReceiverShading::covered(const NearPoly& np) const {
+// The edges are tried from the one that failed last (cover_hint_): the polygons come
+// in spatial order, and near the silhouette most of them pass every edge but one.
+bool ReceiverShading::covered(const NearPoly& np) {
   size_t e = 0;
   for (const Occluder& o : gs_.interior) {
     bool all = !gs_.cover_n.empty();
-    for (int m = 0; m < o.n && all; ++m) {
+    for (int mi = 0; mi < o.n && all; ++mi) {
+      const int m = (cover_hint_ + mi) % o.n;
       const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
       const Vec3d& err = gs_.cover_err[e + size_t(m)];
       for (int k = 0; k < 3 && all; ++k) {
         const Vec3d d = np.t[k] - nearest_base(r_, o.v[m], o.v[(m + 1) % o.n], np.t[k]);
         all = dot(d, nrm) > dot_err(d, nrm, err);
       }
+      if (!all) cover_hint_ = m;
     }
     if (all) return true;
     e += size_t(o.n);
@@ -252,7 +266,8 @@ bool ReceiverShading::block_outside(const GroupState::NearBlock& b) const {
 // One near polygon against this receiver: rejected by the receiver's slab and pyramid,
 // sent to the exact path where rounding cannot place it, else clipped to the slab and
 // its shadow subtracted from the fragments (subtract_polygon).
-void ReceiverShading::subtract_near(const NearPoly& np) {
+void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
+  if (serial_ != 0 && gs_.near_done[idx] == serial_) return;  // subtracted in a merged polygon already
   if (np.hi.x < plo_.x || np.lo.x > phi_.x || np.hi.y < plo_.y || np.lo.y > phi_.y || np.hi.z < plo_.z ||
       np.lo.z > phi_.z)
     return;
@@ -365,6 +380,7 @@ void ReceiverShading::subtract_near(const NearPoly& np) {
     if (exact_near(np)) ++tot_.close_triangles;
     return;
   }
+  if (serial_ != 0 && subtract_merged(np, idx, side_r)) return;
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
   UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return;
@@ -374,6 +390,100 @@ void ReceiverShading::subtract_near(const NearPoly& np) {
   std::swap(gs_.frags, gs_.tmp);
   std::swap(gs_.boxes, gs_.tmp_boxes);
   bound_all();
+}
+
+// Near triangles of a closed surface glued along edges (ClosedSurfaces::neighbors)
+// subtracted as one convex polygon when r sees their union convex: the union of their
+// shadows from r is then the light points whose line from r is inside every plane
+// through r and a polygon edge, without the cuts along the planes through r and the
+// inner edges (which separate subtractions make across the visible fragments beyond
+// them). Grown from np = A one triangle at a time: B glued to the polygon along its
+// edge p_i -> p_i+1 (B traverses it the other way), with third vertex d, is added when
+// the turns seen from r (sign det[p - r, q - r, w - r], decided strictly against
+// dot_err as covered's test) at p_i, d and p_i+1 in the new polygon have the sign of
+// the others. A convex polygon stays convex so: d lies outside edge i (B's turn) and
+// the exterior angles, each strictly between 0 and pi, keep their sum (B's angles sum
+// to pi), so the turning number stays one; and the polygon is the union of its
+// triangles' projections. Conditions on each triangle (else it is left out; with none
+// added, false and nothing done): its near polygon is the whole triangle (exact local
+// coordinates, like r), every vertex above r's level beyond near_tol (between r and the
+// light: no clip), none within 2^-24 of r's scale of r; B comes later in the list than
+// np and is not in a polygon yet (near_done marks it for r). Each edge keeps its own
+// triangle's orientation, the one subtract_polygon needs (np's side side_r).
+bool ReceiverShading::subtract_merged(const NearPoly& np, uint32_t k, int side_r) {
+  auto whole = [&](const NearPoly& p) {
+    if (p.count != 3 || !p.exact_local || p.patch >= 0) return false;
+    const Vec3d* v = gs_.near_verts.data() + p.begin;
+    return v[0] == p.t[0] && v[1] == p.t[1] && v[2] == p.t[2];
+  };
+  const Vec3d& gd = gs_.g;
+  const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
+  auto vertex_ok = [&](const Vec3d& v) {  // above r's level, not too close to r
+    const double pm = max_component(vabs(v)), scale = std::max(pm, rmax_);
+    return dot(gd, v - r_) > 0x1p-24 * gn1 * (pm + rmax_) && max_component(vabs(v - r_)) > 0x1p-24 * scale;
+  };
+  auto turn = [&](const Vec3d& p, const Vec3d& q, const Vec3d& w) {
+    Vec3d err;
+    const Vec3d nrm = edge_plane_normal_err(r_, p, q, err);
+    const Vec3d dd = w - nearest_base(r_, p, q, w);
+    const double sv = dot(dd, nrm), bound = dot_err(dd, nrm, err);
+    return sv > bound ? 1 : (sv < -bound ? -1 : 0);
+  };
+  if (!whole(np) || !vertex_ok(np.t[0]) || !vertex_ok(np.t[1]) || !vertex_ok(np.t[2])) return false;
+  const int sign = turn(np.t[0], np.t[1], np.t[2]);
+  if (sign == 0) return false;
+  constexpr int kMax = 8;  // polygon corners (10, kMaxOccluderVertices, measured no better)
+  static_assert(kMax <= kMaxOccluderVertices, "subtract_polygon's planes");
+  Vec3d poly[kMax];
+  uint32_t owner[kMax];  // per edge i (poly[i] -> poly[i + 1]): the near triangle it belongs to
+  int n = 3;
+  for (int i = 0; i < 3; ++i) poly[i] = np.t[i], owner[i] = k;
+  int nm = 0;  // triangles added
+  bool grown = true;
+  while (grown && n < kMax) {
+    grown = false;
+    for (int i = 0; i < n && !grown; ++i) {
+      const Vec3d &a = poly[i], &b = poly[(i + 1) % n];
+      for (const int32_t nb : gs_.ctx->closed->neighbors(gs_.near[owner[i]].triangle)) {
+        if (nb < 0) continue;
+        const int32_t k2 = gs_.near_of_tri[size_t(nb)];
+        if (k2 <= int32_t(k) || gs_.near_done[size_t(k2)] == serial_) continue;
+        const NearPoly& b2 = gs_.near[size_t(k2)];
+        if (!whole(b2)) continue;
+        int jb = -1;  // B's edge b -> a
+        for (int j = 0; j < 3; ++j)
+          if (b2.t[j] == b && b2.t[(j + 1) % 3] == a) jb = j;
+        if (jb < 0) continue;
+        const Vec3d& d = b2.t[(jb + 2) % 3];
+        if (!vertex_ok(d)) continue;
+        const Vec3d &prev = poly[(i + n - 1) % n], &next = poly[(i + 2) % n];
+        if (turn(prev, a, d) != sign || turn(a, d, b) != sign || turn(d, b, next) != sign) continue;
+        for (int m = n; m > i + 1; --m) poly[m] = poly[m - 1], owner[m] = owner[m - 1];
+        poly[i + 1] = d;
+        owner[i] = owner[i + 1] = uint32_t(k2);  // a -> d and d -> b are B's edges
+        ++n;
+        ++nm;
+        gs_.near_done[size_t(k2)] = serial_;
+        grown = true;
+        break;
+      }
+    }
+  }
+  if (nm == 0) return false;
+  tot_.near_merged += uint64_t(nm);
+  std::vector<Vec3d>& q = gs_.q;
+  q.assign(poly, poly + n);
+  if (side_r > 0) std::reverse(q.begin(), q.end());  // as np alone: r on the negative side
+  gs_.skip.assign(size_t(n), 0);
+  const UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
+  if (!qbox.overlaps(all_)) return true;
+  if (!subtract_polygon(r_, q.data(), n, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.tmp,
+                        gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+    return true;
+  std::swap(gs_.frags, gs_.tmp);
+  std::swap(gs_.boxes, gs_.tmp_boxes);
+  bound_all();
+  return true;
 }
 
 // The float path: a light the tree hides as a whole from r needs nothing else
@@ -411,6 +521,14 @@ void ReceiverShading::shade_float() {
     phi_ = phi_ + Vec3d(grow_p, grow_p, grow_p);
   }
   cover_planes();
+  serial_ = 0;
+  if (!gs_.near_done.empty() && translates_exactly(rec_.p, lf_.origin)) {
+    if (++gs_.near_serial == 0) {  // wrapped: the old marks could match again
+      std::fill(gs_.near_done.begin(), gs_.near_done.end(), 0u);
+      gs_.near_serial = 1;
+    }
+    serial_ = gs_.near_serial;
+  }
   auto tree_query = [&]() {
     const auto tb = std::chrono::steady_clock::now();
     if (gs_.frags.size() > 0) {
@@ -429,9 +547,9 @@ void ReceiverShading::shade_float() {
   const bool tree_first = !gs_.interior.empty();
   if (tree_first) tree_query();
   if (gs_.near_blocks.empty()) {
-    for (const NearPoly& np : gs_.near) {
+    for (uint32_t k = 0; k < gs_.near.size(); ++k) {
       if (gs_.frags.size() == 0) break;
-      subtract_near(np);
+      subtract_near(gs_.near[k], k);
     }
   } else {
     // The polygons of the blocks this receiver's pyramid may meet, in the list's order:
@@ -443,7 +561,7 @@ void ReceiverShading::shade_float() {
     std::sort(pick.begin(), pick.end());
     for (uint32_t k : pick) {
       if (gs_.frags.size() == 0) break;
-      subtract_near(gs_.near[k]);
+      subtract_near(gs_.near[k], k);
     }
   }
   // Algorithm 1 on the pieces the near polygons left visible.

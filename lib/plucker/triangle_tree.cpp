@@ -84,6 +84,20 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
     };
     const int s = turn(c[0], c[1], c[2]);
     if (s == 0) continue;
+    // The first growth crosses an edge of t to an untaken neighbour with its third vertex
+    // in t's plane: without one (smooth surfaces: every triangle) t stays alone, and the
+    // sorted edge loop below is skipped (same patches; a quarter of a scan solve's
+    // hierarchy time went there).
+    bool coplanar_neighbour = false;
+    for (int k = 0; k < 3 && !coplanar_neighbour; ++k) {
+      const int32_t nb = pm.triangles[t].neighbors[size_t(k)];
+      if (nb < 0 || taken[size_t(nb)]) continue;
+      for (uint32_t x : pm.triangles[size_t(nb)].v)
+        coplanar_neighbour |= std::find(c.begin(), c.end(), x) == c.end() &&
+                              !is_certain(orient3d_filtered(a, b, cc, SumPoint(pos[x]))) &&
+                              to_int(orient3d_exact(a, b, cc, pos[x])) == 0;
+    }
+    if (!coplanar_neighbour) continue;
     poly.assign(c.begin(), c.end());
     owner.assign(3, t);
     members.assign(1, t);

@@ -15,7 +15,11 @@
 // the solver's results do not depend on the tree).
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -39,6 +43,29 @@ class TriangleTree {
   // whose leaf box is not culled by the shaft; the shaft is in local coordinates
   // relative to `origin`. Callers still test each triangle.
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const;
+
+  // A run of triangles of one subtree: positions [begin, begin + count) of the leaf order
+  // (a subtree's triangles are contiguous there, lib/accel/bvh.h).
+  struct Range {
+    uint32_t begin = 0, count = 0;
+  };
+  // As candidates, but a subtree the shaft does not cull whose box `skip(lo, hi)`
+  // accepts is left out of `out` whole, its triangles recorded as one Range in `skipped`
+  // (cleared first; append_items gives them back; a skipped subtree may also hold
+  // triangles the shaft culls further down, so kept and skipped together are a superset
+  // of the plain candidates, each triangle once). lo, hi: the node's float box
+  // translated to the local frame of `origin` in double and widened by two ulps or more
+  // per side (a translation is rounded by at most half an ulp), so it holds the exact
+  // translation of every point of the float box and thus of every triangle below:
+  // a predicate true for every triangle inside that box may skip them all.
+  template <class Skip>
+  void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out, std::vector<Range>& skipped,
+                  Skip&& skip) const;
+  // Appends the triangles of r to `out` (in leaf order, not sorted).
+  void append_items(const Range& r, std::vector<uint32_t>& out) const {
+    const auto order = bvh_.order();
+    out.insert(out.end(), order.begin() + r.begin, order.begin() + r.begin + r.count);
+  }
 
   // True when some triangle of `mesh` (the one the tree was built on) blocks the open
   // segment r -> s by lines.h segment_blocked on its vertices translated to the local
@@ -92,5 +119,43 @@ class TriangleTree {
   std::vector<uint32_t> patch_tris_;
   std::vector<Vec3f> patch_poly_;
 };
+
+template <class Skip>
+void TriangleTree::candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out,
+                              std::vector<Range>& skipped, Skip&& skip) const {
+  out.clear();
+  skipped.clear();
+  if (bvh_.empty()) return;
+  const Vec3d od = to_double(origin);
+  // Outward by 2^-50 of the value (at least two ulps, and the subtraction rounds by at
+  // most half of one): cheaper than nextafter, as safe. A zero or subnormal difference of
+  // two doubles is exact.
+  auto down = [](double x) { return x - std::abs(x) * 0x1p-50; };
+  auto up = [](double x) { return x + std::abs(x) * 0x1p-50; };
+  std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
+  size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const uint32_t i = stack[--top];
+    const auto& nd = bvh_.node(i);
+    if (shaft.culls_box(nd.box.lo - origin, nd.box.hi - origin)) continue;
+    const Vec3d lo(down(double(nd.box.lo.x) - od.x), down(double(nd.box.lo.y) - od.y), down(double(nd.box.lo.z) - od.z));
+    const Vec3d hi(up(double(nd.box.hi.x) - od.x), up(double(nd.box.hi.y) - od.y), up(double(nd.box.hi.z) - od.z));
+    if (skip(lo, hi)) {
+      uint32_t first = i;  // the leftmost leaf holds the subtree's first position
+      while (!bvh_.is_leaf(bvh_.node(first))) first = bvh_.left(first);
+      skipped.push_back(Range{bvh_.node(first).first, nd.count});
+      continue;
+    }
+    if (bvh_.is_leaf(nd)) {
+      const auto items = bvh_.leaf_items(nd);
+      out.insert(out.end(), items.begin(), items.end());
+      continue;
+    }
+    stack[top++] = bvh_.left(i);
+    stack[top++] = bvh_.right(i);
+  }
+  std::sort(out.begin(), out.end());
+}
 
 }  // namespace visgate::plucker

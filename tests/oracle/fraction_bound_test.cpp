@@ -102,3 +102,45 @@ TEST(RegionOracle, CoincidentShadowCornersAndEdgesKeepTheBoundNarrow) {
 
 }  // namespace
 }  // namespace visgate::oracle
+
+namespace visgate::oracle {
+namespace {
+
+TEST(RegionOracle, BoundOnManyShadowsEnclosesTheExactFraction) {
+  // With 64 shadows or more the boundary integral loops only over the shadows whose box
+  // meets each edge's box (a grid over the light); the enclosure must still hold against
+  // the exact region on dense closed surfaces and foliage, where a receiver's light
+  // holds hundreds of shadows.
+  size_t many = 0, certified = 0, pairs = 0;
+  size_t most = 0;
+  for (const char* f : {"scan", "foliage"}) {
+    FamilyParams p;
+    p.seed = 3;
+    p.triangles = 3000;
+    p.receivers = 16;
+    p.samples = 4;
+    auto s = generate_family(f, p);
+    ASSERT_TRUE(s.ok()) << f;
+    for (size_t i = 0; i < s->receivers.size(); ++i)
+      for (size_t l = 0; l < s->lights.size(); l += 3) {
+        FractionBound b = visible_fraction_bound(*s, i, l);
+        RegionAnswer a = visible_region(*s, i, l);
+        ++pairs;
+        ASSERT_EQ(a.edge_on, b.edge_on) << f << " " << i << " " << l;
+        if (a.edge_on || !b.certified) continue;
+        ++certified;
+        many += b.shadows >= 64;
+        most = std::max(most, b.shadows);
+        EXPECT_LE(b.lo, a.visible_fraction) << f << " receiver " << i << " light " << l;
+        EXPECT_GE(b.hi, a.visible_fraction) << f << " receiver " << i << " light " << l;
+        EXPECT_LT(b.hi - b.lo, 1e-5) << f << " receiver " << i << " light " << l;  // narrower than tau
+      }
+  }
+  std::printf("many shadows: %zu of %zu certified pairs (of %zu) with >= 64 shadows, most %zu\n", many, certified,
+              pairs, most);
+  EXPECT_GT(many, 8u);
+  EXPECT_GT(certified, pairs / 2);
+}
+
+}  // namespace
+}  // namespace visgate::oracle

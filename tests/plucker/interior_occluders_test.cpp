@@ -115,6 +115,19 @@ TEST(PluckerInteriorOccluders, ScanAnswersMatchThePreviousPathAndTheOracle) {
   expect_same_answers(*s, on, off);
   expect_same_answers(*s, on, every);
   expect_region_oracle(*s, on);
+  // Whole tree nodes left out as covered (cover_nodes) against the test per candidate.
+  const SolveResult per_triangle = run(*s, {{"cover_nodes", "off"}});
+  EXPECT_GT(on.stats.get("interior_skipped"), 0.0);
+  EXPECT_EQ(per_triangle.stats.get("interior_skipped"), 0.0);
+  EXPECT_LT(on.stats.get("closed_dropped") + on.stats.get("interior_covered"),
+            per_triangle.stats.get("closed_dropped") + per_triangle.stats.get("interior_covered"));
+  expect_same_answers(*s, on, per_triangle);
+  // Glued near triangles subtracted as one convex polygon (near_merge) against one by one.
+  const SolveResult single = run(*s, {{"near_merge", "off"}});
+  EXPECT_GT(on.stats.get("near_merged"), 0.0);
+  EXPECT_EQ(single.stats.get("near_merged"), 0.0);
+  EXPECT_LT(on.stats.get("near_splits"), single.stats.get("near_splits"));
+  expect_same_answers(*s, on, single);
 }
 
 // Under the square light, receivers on a grid below (some right under the surfaces,
@@ -144,6 +157,8 @@ TEST(PluckerInteriorOccluders, ConcaveInterpenetratingAndOpenMeshesMatchThePrevi
       EXPECT_EQ(on.stats.get("interior_occluders"), 0.0) << variant;
     }
     expect_same_answers(s, on, off);
+    expect_same_answers(s, on, run(s, {{"cover_nodes", "off"}}));
+    expect_same_answers(s, on, run(s, {{"near_merge", "off"}}));
     expect_region_oracle(s, on);
   }
 }

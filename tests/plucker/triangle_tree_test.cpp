@@ -99,6 +99,65 @@ TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
   }
 }
 
+TEST(PluckerSelection, TriangleTreeSkippedSubtreesHoldTheirTrianglesAndMissNone) {
+  // The candidates variant that leaves out whole subtrees (triangle_tree.h): its kept
+  // triangles are plain candidates, they and those of the skipped ranges hold every plain
+  // candidate, each once (a skipped subtree may hold triangles the shaft culls deeper
+  // down), and every skipped triangle's vertices lie in the local box the predicate
+  // accepted for it, compared exactly (long double holds v - origin here: 64-bit
+  // mantissas and exponents a few apart).
+  auto scene = family_scene("random-soup", 5, 800, -1);
+  ASSERT_TRUE(scene.ok());
+  Scene s = *scene;
+  for (Vec3f& v : s.mesh.vertices) v = Vec3f(to_double(v) + Vec3d(1e5, -3e5, 2e5));
+  TriangleTree tree(s.mesh);
+  Rng rng(8);
+  std::vector<uint32_t> plain, cand, back;
+  std::vector<TriangleTree::Range> skipped;
+  size_t total_skipped = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const Vec3f origin = s.mesh.vertices[size_t(rng.below(s.mesh.vertices.size()))];
+    const AABB sb = s.mesh.bounds();
+    auto pick = [&]() {
+      Vec3d lo = to_double(sb.lo), hi = to_double(sb.hi);
+      Vec3d c(rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y), rng.uniform(lo.z, hi.z));
+      Vec3d e(rng.uniform(0.5, 2), rng.uniform(0.5, 2), rng.uniform(0.5, 2));
+      return AABB(Vec3f(c - e) - origin, Vec3f(c + e) - origin);
+    };
+    const Shaft shaft(pick(), pick());
+    tree.candidates(shaft, origin, plain);
+    // Accept the boxes lying on one side of a random plane x = cut (local).
+    const double cut = rng.uniform(-2.0, 2.0);
+    std::vector<std::pair<Vec3d, Vec3d>> boxes;
+    tree.candidates(shaft, origin, cand, skipped, [&](const Vec3d& lo, const Vec3d& hi) {
+      if (!(lo.x > cut)) return false;
+      boxes.emplace_back(lo, hi);
+      return true;
+    });
+    ASSERT_EQ(boxes.size(), skipped.size());
+    EXPECT_TRUE(std::is_sorted(cand.begin(), cand.end()));
+    back = cand;
+    for (size_t i = 0; i < skipped.size(); ++i) {
+      const size_t before = back.size();
+      tree.append_items(skipped[i], back);
+      EXPECT_EQ(back.size() - before, skipped[i].count);
+      for (size_t j = before; j < back.size(); ++j)
+        for (int k = 0; k < 3; ++k)
+          for (int a = 0; a < 3; ++a) {
+            const long double x = (long double)s.mesh.corner(back[j], k)[a] - (long double)origin[a];
+            EXPECT_LE((long double)boxes[i].first[a], x);
+            EXPECT_GE((long double)boxes[i].second[a], x);
+          }
+      total_skipped += skipped[i].count;
+    }
+    std::sort(back.begin(), back.end());
+    EXPECT_TRUE(std::adjacent_find(back.begin(), back.end()) == back.end());  // each once
+    for (uint32_t t : plain) EXPECT_TRUE(std::binary_search(back.begin(), back.end(), t)) << t;
+    for (uint32_t t : cand) EXPECT_TRUE(std::binary_search(plain.begin(), plain.end(), t)) << t;
+  }
+  EXPECT_GT(total_skipped, 0u);
+}
+
 TEST(PluckerSelection, CoplanarConvexPatches) {
   // triangle_tree.h patches: a cylinder of 16 segments makes each of its 16 side
   // rectangles (two triangles) a patch, and each cap's fan of 14 triangles a few convex
