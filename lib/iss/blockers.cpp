@@ -35,17 +35,19 @@ void Workspace::reset_labels(size_t n) {
   ++stamp;
 }
 
-Surface Workspace::take_surface() {
+Surface Workspace::take_surface(size_t expect_raw) {
+  if (expect_raw > kMaxSpareEdges && big.raw.capacity() > kMaxSpareEdges) {
+    big_charge.set(0);
+    return std::move(big);  // leaves `big` empty (moved-from vectors are empty)
+  }
   if (spare.empty()) return Surface{};
   Surface s = std::move(spare.back());
   spare.pop_back();
   return s;
 }
 
-void Workspace::recycle(Surface&& s) {
-  if (spare.size() >= kMaxSpare) return;
-  if (s.raw.capacity() == 0 && s.edges.capacity() == 0) return;  // a moved-from husk
-  if (s.raw.capacity() > kMaxSpareEdges || s.edges.capacity() > 2 * kMaxSpareEdges) return;  // let it go
+namespace {
+void clear_surface(Surface& s) {
   s.raw.clear();
   s.edges.clear();
   s.patches.clear();
@@ -56,6 +58,20 @@ void Workspace::recycle(Surface&& s) {
   s.vcount = 0;
   s.refined = true;
   s.unchanged = false;
+}
+}  // namespace
+
+void Workspace::recycle(Surface&& s) {
+  if (s.raw.capacity() == 0 && s.edges.capacity() == 0) return;  // a moved-from husk
+  if (s.raw.capacity() > kMaxSpareEdges || s.edges.capacity() > 2 * kMaxSpareEdges) {
+    if (s.raw.capacity() <= big.raw.capacity()) return;  // let it go
+    clear_surface(s);
+    big = std::move(s);
+    big_charge.set(big.bytes());
+    return;
+  }
+  if (spare.size() >= kMaxSpare) return;
+  clear_surface(s);
   spare.push_back(std::move(s));
 }
 

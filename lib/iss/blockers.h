@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "lib/base/memory_budget.h"
 #include "lib/iss/shaft.h"
 #include "lib/iss/tree.h"
 #include "lib/mesh/prepare.h"
@@ -138,11 +139,23 @@ struct Workspace {
   std::vector<std::pair<int32_t, Edge>> extra;     // combine: edges appended to a patch
   std::vector<std::pair<uint32_t, Edge>> replace;  // combine: raw edge -> edge instead
   std::vector<Surface> spare;                      // the surface pool
+  // The one large surface kept (arrays above kMaxSpareEdges): the largest recycled so
+  // far, taken by the next construction that expects that many edges. An initial
+  // shaft's triangle surface holds a raw edge per clipped triangle edge of most of the
+  // mesh; building it into fresh arrays each light cost a page fault per 4 kB touched
+  // (about 900 per solve on rooms at 26k triangles, microseconds each on a virtual
+  // machine) and the copies of vector growth. Counted against the memory budget
+  // (bind_budget) while kept.
+  Surface big;
+  MemoryCharge big_charge;
+  void bind_budget(MemoryBudget* b) { big_charge.bind(b, "surface pool"); }
   void reset_labels(size_t n);
-  // An empty surface, from the pool when it holds one.
-  Surface take_surface();
-  // Returns a surface to the pool (cleared; arrays above kMaxSpareEdges are freed, and
-  // the pool keeps at most kMaxSpare surfaces).
+  // An empty surface: the large one when `expect_raw` (raw edges the caller expects)
+  // is above kMaxSpareEdges and it is kept, else from the pool when it holds one.
+  Surface take_surface(size_t expect_raw = 0);
+  // Returns a surface to the pool (cleared; a surface with arrays above kMaxSpareEdges
+  // replaces the kept large one when it is larger, else it is freed; the pool keeps at
+  // most kMaxSpare surfaces).
   void recycle(Surface&& s);
   static constexpr size_t kMaxSpare = 1024, kMaxSpareEdges = 4096;
 };

@@ -3,7 +3,11 @@
 #include "lib/iss/iss_solver.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
+
+#include <sys/resource.h>
 
 #include "lib/base/check.h"
 #include "lib/geom/float_mode.h"
@@ -13,6 +17,206 @@
 #include "lib/raycast/embree_scene.h"
 
 namespace visgate::iss {
+
+namespace {
+// Minor page faults of the process so far: the solve reports its own as a statistic
+// (first touches of fresh memory cost microseconds each on a virtual machine).
+double minor_faults() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_minflt);
+}
+// The leaf rays' BVH quality (option embree_quality). Measured on rooms (26k triangles,
+// callgrind): Embree's low (Morton) build takes about 1,850 fewer instructions per
+// triangle than medium, and each leaf ray traced in it about 260 more (+34%). A solve
+// casts at most one ray per relation, so with at most kLowBuildRelationsPerTriangle
+// relations per triangle the low build cannot cost more (the custom caster's fallback
+// rays count too: 1.6M of 4.2M relations on columns). Answers do not depend on the
+// quality (embree_scene.h).
+constexpr double kLowBuildRelationsPerTriangle = 7.0;
+raycast::BuildQuality leaf_ray_build_quality(const std::string& opt, const Scene& scene, const TriangleSoup& leaf_mesh) {
+  if (opt == "low") return raycast::BuildQuality::low;
+  if (opt == "medium") return raycast::BuildQuality::medium;
+  if (opt == "high") return raycast::BuildQuality::high;
+  const bool few_rays = double(scene.relation_count()) <= kLowBuildRelationsPerTriangle * double(leaf_mesh.size());
+  return few_rays ? raycast::BuildQuality::low : raycast::BuildQuality::medium;
+}
+
+// Lights decided at the roots, before the leaf caster's scene is built: the blocker
+// probe of Traversal::probe_blocked (shaft_construction.cpp) on the root shaft, and the
+// triangles the other lights' leaf rays can meet. A leaf ray runs from a receiver to a
+// point of its light's jitter boxes, so it lies in the convex hull of the two root boxes,
+// inside the root shaft (conservative planes, shaft.h); a triangle it meets has a point
+// there, so its box meets the shaft and may_intersect_box keeps it. The caster's scene
+// over those triangles answers every leaf ray as the whole mesh does (a hit is one
+// triangle's test, verified in double; embree_scene.h). On rooms the upper storeys'
+// lights are blocked by the floor slab at the root, so the scene holds the ground
+// storey: a third of the triangles, and a third of the BVH build.
+//
+// The probe here is the traversal's with a coarser exclusion: a candidate is left out
+// when its box meets a root box (a superset of the nodes' inside lists, tree.h), so
+// its surface is built from a subset of the valid blockers, which BLOCKS-SHAFT allows
+// (blockers.h). A light it decides is recorded blocked here and not traversed; its
+// relations are blocked by the guarantee of BLOCKS-SHAFT.
+struct RootPlan {
+  std::vector<uint8_t> blocked;  // per light: the root shaft is blocked
+  double blocked_relations = 0;
+  std::vector<uint8_t> keep;     // per soup triangle: a leaf ray may meet it
+  size_t kept = 0;
+};
+
+// The probe's candidates per main axis (as the Traversal constructor orders them): the
+// triangles by their smaller box extent across the axis, largest first, ties by index;
+// only the first cap + 1 are kept, cap = max(64, triangles / 16), the most a probe takes.
+struct ProbeOrder {
+  std::vector<uint32_t> tris[3];
+  std::vector<float> extent[3];
+  bool done[3] = {false, false, false};
+  bool truncated = false;
+};
+
+// Fills po's order for `axis` (computed on first use: root shafts usually share one main
+// axis).
+void probe_order(const std::vector<AABB>& boxes, int axis, ProbeOrder& po) {
+  if (po.done[axis]) return;
+  po.done[axis] = true;
+  const size_t n = boxes.size(), keep = std::min(n, std::max<size_t>(64, n / 16) + 1);
+  po.truncated = keep < n;
+  std::vector<float> cross(n);
+  std::vector<uint32_t>& w = po.tris[axis];
+  w.resize(n);
+  for (uint32_t t = 0; t < n; ++t) {
+    w[t] = t;
+    const Vec3f e = boxes[t].extent();
+    cross[t] = std::min(e[(axis + 1) % 3], e[(axis + 2) % 3]);
+  }
+  auto wider = [&](uint32_t x, uint32_t y) { return cross[x] != cross[y] ? cross[x] > cross[y] : x < y; };
+  if (keep > 0) std::nth_element(w.begin(), w.begin() + long(keep) - 1, w.end(), wider);
+  w.resize(keep);
+  std::sort(w.begin(), w.end(), wider);
+  for (uint32_t t : w) po.extent[axis].push_back(cross[t]);
+}
+
+bool root_probe_blocked(const mesh::PreparedMesh& m, const std::vector<AABB>& boxes, ProbeOrder& po,
+                        const AABB& rbox, const AABB& lbox, MainAxis ax, double scale, Workspace& ws,
+                        std::vector<Surface>& out) {
+  const int a = ax.axis, b = (a + 1) % 3, c = (a + 2) % 3;
+  const Vec3f re = rbox.extent(), le = lbox.extent();
+  const float thr = std::min(std::min(re[b], le[b]), std::min(re[c], le[c]));
+  probe_order(boxes, a, po);
+  const std::vector<float>& ext = po.extent[a];
+  const size_t n =
+      size_t(std::lower_bound(ext.begin(), ext.end(), thr, [](float x, float v) { return x >= v; }) - ext.begin());
+  const size_t cap = std::max<size_t>(64, m.triangles.size() / 16);
+  // Not few: the traversal builds the shaft (a full prefix means more than the cap).
+  if (n == 0 || n > cap || (po.truncated && n == ext.size())) return false;
+  std::vector<uint32_t> cand(po.tris[a].begin(), po.tris[a].begin() + long(n));
+  std::sort(cand.begin(), cand.end());
+  TreeNode rn, ln;
+  for (uint32_t t : cand) {
+    if (boxes[t].overlaps(rbox)) rn.inside.push_back(t);
+    if (boxes[t].overlaps(lbox)) ln.inside.push_back(t);
+  }
+  BlockerContext ctx{&m, scale};
+  ShaftGeometry g(rbox, lbox, ax, scale);
+  Surface s = construct_triangle_surface(ctx, cand, g, rn, ln, ws);
+  if (s.patches.empty()) {
+    ws.recycle(std::move(s));
+    return false;
+  }
+  // Lines 14-18 of Figure 4.19 for a new surface, as Traversal::refine.
+  classify_edges(s, g);
+  update_patch_facings(ctx, s, g);
+  merge_patches(s, ws);
+  simplify_patches(s, g, ws);
+  out.clear();
+  split_surface(std::move(s), out, ws);
+  bool blocked = false;
+  for (Surface& ps : out) {
+    compute_bounds(ps, g);
+    blocked = blocked || blocks_shaft(ps, g);
+    ws.recycle(std::move(ps));
+  }
+  out.clear();
+  return blocked;
+}
+
+// The lights decided by plan_roots, in the traversal's statistics (finish_stats): their
+// relations are blocked by a shaft.
+void add_root_plan_stats(const RootPlan& plan, Stats& st) {
+  if (plan.blocked_relations == 0) return;
+  const double rel = st.get("relations");
+  const double by_shaft = st.get("relations_blocked_by_shaft") + plan.blocked_relations;
+  st.set("relations_blocked_by_shaft", by_shaft);
+  double lights = 0;
+  for (uint8_t b : plan.blocked) lights += b;
+  st.set("initial_shafts_blocked_by_probe", st.get("initial_shafts_blocked_by_probe") + lights);
+  if (rel <= 0) return;
+  st.set("percent_blocked", 100.0 * (by_shaft + st.get("rays_blocked")) / rel);
+  st.set("percent_decided_by_shafts", 100.0 * (by_shaft + st.get("relations_visible_by_empty_shaft")) / rel);
+}
+
+// The traversal's clock starts at its construction, before plan_roots and the Embree
+// build (which need its triangle hierarchy); finish_stats' time_traversal and
+// miscellaneous then hold that setup, reported apart (time_root_plan,
+// time_embree_build): it is taken out again.
+void exclude_setup_time(Stats& st, double setup) {
+  const double secs = std::max(0.0, st.get("time_traversal") - setup);
+  st.set("time_traversal", secs);
+  st.set("time_miscellaneous", std::max(0.0, st.get("time_miscellaneous") - setup));
+  const double rays = st.get("time_ray_casting");
+  st.set("percent_time_ray_casting", secs > 0 ? 100.0 * rays / secs : 0.0);
+  st.set("percent_time_shaft_operations", secs > 0 ? 100.0 * (secs - rays) / secs : 0.0);
+}
+
+RootPlan plan_roots(const Scene& scene, const mesh::PreparedMesh& m, const TriangleBvh& bvh, double scale) {
+  RootPlan plan;
+  plan.blocked.assign(scene.lights.size(), 0);
+  plan.keep.assign(scene.mesh.size(), 0);
+  if (scene.receivers.empty()) return plan;
+  std::vector<AABB> boxes(m.triangles.size());
+  for (size_t t = 0; t < boxes.size(); ++t)
+    for (int k = 0; k < 3; ++k) boxes[t].extend(m.corner(t, k));
+  ProbeOrder po;
+  AABB rbox;
+  for (const Receiver& r : scene.receivers) rbox.extend(r.p);
+  Workspace ws;
+  std::vector<Surface> out;
+  std::vector<ShaftGeometry> open;
+  for (size_t li = 0; li < scene.lights.size(); ++li) {
+    const Light& light = scene.lights[li];
+    AABB lbox;
+    for (const AABB& jb : light.jitter_boxes) lbox.extend(jb);
+    if (!rbox.overlaps(lbox)) {
+      const MainAxis ax = choose_main_axis(rbox, lbox);
+      if (ax.axis >= 0 && root_probe_blocked(m, boxes, po, rbox, lbox, ax, scale, ws, out)) {
+        plan.blocked[li] = 1;
+        plan.blocked_relations += double(scene.receivers.size()) * double(light.samples);
+        continue;
+      }
+    }
+    open.emplace_back(rbox, lbox, MainAxis{}, scale);
+  }
+  // The prepared mesh's triangles by their soup index (mesh::PreparedTriangle::source);
+  // a soup triangle that preparation dropped (degenerate) is kept as it is.
+  std::vector<uint8_t> prepared(scene.mesh.size(), 0);
+  for (const auto& pt : m.triangles) prepared[pt.source] = 1;
+  // The union is walked when it may leave much out: some light was decided here (its
+  // shaft's triangles may be seen by no other light), or a single light sees the
+  // scene. Lights all open on a compact object (scan: 10 lights, 74,896 of 74,904
+  // triangles kept) cost the walk (2% of the solve) and save nothing.
+  const bool walk = open.size() < scene.lights.size() || scene.lights.size() == 1;
+  std::vector<uint32_t> hit;
+  if (walk && !open.empty()) bvh.query_shafts(open, hit);
+  for (uint32_t t : hit) plan.keep[m.triangles[t].source] = 1;
+  for (size_t t = 0; t < scene.mesh.size(); ++t) {
+    plan.keep[t] |= uint8_t(!walk || !prepared[t]);
+    plan.kept += plan.keep[t];
+  }
+  return plan;
+}
+
+}  // namespace
 
 void set_validate_all(bool on) { g_validate = on; }
 bool validate_all() { return g_validate; }
@@ -31,6 +235,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
+      {"embree_quality", "build quality of the leaf rays' Embree BVH (raycast::BuildQuality): auto takes low when the scene has at most 7 relations per triangle, else medium", {"auto", "low", "medium", "high"}},
       {"split_auto_ray_relations", "auto_ray_relations for the shafts of split lights (default 16)", {}},
   };
 }
@@ -65,26 +270,59 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);
   size_t paired = pair_nonmanifold_edges(m);  // radial_pairing.h: part of preparation
   auto t0 = Clock::now();
+  const double faults0 = minor_faults();
   SolveResult result = make_empty_result(scene);
   // The Embree scene (robust flags) is needed for leaf rays, and by the custom caster
-  // only as a fallback next to removed surfaces.
+  // only as a fallback next to removed surfaces; it holds the triangles those rays may
+  // meet (plan_roots).
   double embree_build = 0;
-  auto tb = Clock::now();
-  raycast::EmbreeScene es(scene.mesh, true);
-  embree_build = std::chrono::duration<double>(Clock::now() - tb).count();
+  // The scale of Traversal (the largest coordinate magnitude), for the same shaft bits.
+  double scale = 0;
+  {
+    const AABB b = scene.bounds();
+    for (int k = 0; k < 3; ++k) scale = std::max({scale, std::abs(double(b.lo[k])), std::abs(double(b.hi[k]))});
+    scale = std::max(scale, 1e-30);
+  }
   MemoryBudget budget("iss", opt.memory_budget_mb);  // outlives the traversal
   Traversal tr(scene, m, p, result);
-  tr.set_embree(&es);
   tr.set_memory_budget(&budget);
-  for (size_t l = 0; l < scene.lights.size(); ++l) tr.run_light(l);
+  auto tb = Clock::now();
+  const RootPlan plan = plan_roots(scene, m, tr.triangle_bvh(), scale);
+  const double root_plan_seconds = std::chrono::duration<double>(Clock::now() - tb).count();
+  // The leaf caster's mesh: the triangles a leaf ray may meet, when that leaves some out.
+  TriangleSoup ray_mesh;
+  const bool subset = plan.kept < scene.mesh.size();
+  if (subset) {
+    ray_mesh.vertices = scene.mesh.vertices;
+    ray_mesh.triangles.reserve(plan.kept);
+    for (size_t t = 0; t < scene.mesh.size(); ++t)
+      if (plan.keep[t]) ray_mesh.triangles.push_back(scene.mesh.triangles[t]);
+  }
+  const TriangleSoup& leaf_mesh = subset ? ray_mesh : scene.mesh;
+  const raycast::BuildQuality quality = leaf_ray_build_quality(opt.get("embree_quality", "auto"), scene, leaf_mesh);
+  raycast::EmbreeScene es(leaf_mesh, true, true, quality);
+  embree_build = std::chrono::duration<double>(Clock::now() - tb).count() - root_plan_seconds;
+  const double faults_build = minor_faults();
+  const auto t_setup = Clock::now();
+  tr.set_embree(&es);
+  for (size_t l = 0; l < scene.lights.size(); ++l)
+    if (!plan.blocked[l]) tr.run_light(l);
   auto t1 = Clock::now();
+  const double faults1 = minor_faults();
   // Exact: integer counts far below 2^53.
-  VG_CHECK(tr.decided_relations() == double(scene.relation_count()));
+  VG_CHECK(tr.decided_relations() + plan.blocked_relations == double(scene.relation_count()));
   tr.finish_stats(result.stats);  // before the fractions: the breakdown covers the traversal
+  exclude_setup_time(result.stats, std::chrono::duration<double>(t_setup - tb).count());
+  add_root_plan_stats(plan, result.stats);
+  result.stats.set("leaf_ray_triangles", double(leaf_mesh.size()));
   fractions_from_bits(scene, result);
   result.seconds = std::chrono::duration<double>(t1 - t0).count();
   result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
   result.stats.set("time_embree_build", embree_build);
+  result.stats.set("time_root_plan", root_plan_seconds);
+  result.stats.set("page_faults_setup", faults_build - faults0);
+  result.stats.set("page_faults_traversal", faults1 - faults_build);
+  result.stats.set("embree_build_low", quality == raycast::BuildQuality::low ? 1.0 : 0.0);
   result.stats.set("embree_rejected_hits", double(es.rejected_hits()));
   result.stats.set("embree_unverified_hits", double(es.unverified_hits()));
   result.stats.set("nonmanifold_edges_paired", double(paired));

@@ -175,8 +175,9 @@ class Traversal {
   void run_light(size_t li);
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
+  const TriangleBvh& triangle_bvh() const { return *bvh_; }  // over the prepared mesh
   // Counts the live shafts and the clusters (charged when built, after this call).
-  void set_memory_budget(MemoryBudget* b) { budget_ = b; }
+  void set_memory_budget(MemoryBudget* b) { budget_ = b; ws_.bind_budget(b); }
   // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
   // Bits start blocked (make_empty_result), so a relation no rule reached would read as
   // blocked without a word: solve checks that these add up to every relation.

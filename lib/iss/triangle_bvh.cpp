@@ -27,4 +27,21 @@ void TriangleBvh::query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out
   collect([&](const AABB& b) { return g.may_intersect_box(to_double(b)); }, false, out);
 }
 
+void TriangleBvh::query_shafts(const std::vector<ShaftGeometry>& gs, std::vector<uint32_t>& out) const {
+  size_t last = 0;  // the shaft that admitted the previous node first: neighbours agree
+  collect(
+      [&](const AABB& b) {
+        const AABBd bd = to_double(b);
+        for (size_t i = 0; i < gs.size(); ++i) {
+          const size_t k = (last + i) % gs.size();
+          if (gs[k].may_intersect_box(bd)) {
+            last = k;
+            return true;
+          }
+        }
+        return false;
+      },
+      true, out);
+}
+
 }  // namespace visgate::iss

@@ -3,7 +3,9 @@
 // scan the whole mesh once per light (paper 000 sections 4.3 and 4.8): the triangles
 // whose box meets a light tree's root box (the root's inside list, Figure 4.2) and the
 // triangles whose box may meet the root shaft (the triangle array that COMPUTE-SHADOWS,
-// Figure 4.32, starts PRE-TRAVERSE with, which the thesis fills with every triangle).
+// Figure 4.32, starts PRE-TRAVERSE with, which the thesis fills with every triangle);
+// and the triangles the leaf rays of several lights may meet (the union over their root
+// shafts, iss_solver.cpp).
 //
 // The shared hierarchy (lib/accel/bvh.h) with its Morton rule: Morton order of the box
 // centres (radix sort), then balanced halving of that order down to leaves of 8; linear
@@ -37,6 +39,11 @@ class TriangleBvh {
   void query_box(const AABB& box, std::vector<uint32_t>& out) const;
   // Triangles whose box may intersect the shaft `g` (and others of the same leaves).
   void query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out) const;
+  // Triangles whose box may intersect one of the shafts: one walk for all, a node
+  // entered and a triangle taken when some shaft may meet its box. Each triangle is
+  // tested: a leaf's other triangles may be large (a floor slab), and every one in the
+  // leaf caster's scene costs its rays.
+  void query_shafts(const std::vector<ShaftGeometry>& gs, std::vector<uint32_t>& out) const;
 
   size_t node_count() const { return bvh_.node_count(); }
   const accel::Bvh<float>& tree() const { return bvh_; }

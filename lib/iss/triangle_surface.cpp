@@ -141,7 +141,14 @@ void finish_surface(Surface& s, Workspace& ws, const AABBd& whole) {
 
 Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<uint32_t>& tris,
                                    const ShaftGeometry& g, const TreeNode& rnode, const TreeNode& lnode, Workspace& ws) {
-  Surface s = ws.take_surface();
+  // Room for three raw edges per candidate (more only where clipping adds edges): the
+  // arrays do not grow by copying, and reserve() touches no page that is not written.
+  Surface s = ws.take_surface(3 * tris.size());
+  if (tris.size() > Workspace::kMaxSpareEdges) {
+    s.raw.reserve(3 * tris.size());
+    s.edges.reserve(3 * tris.size());
+    s.patches.reserve(tris.size());
+  }
   ws.reset_labels(ctx.mesh->edge_count());
   for (uint32_t t : tris) add_triangle(*ctx.mesh, t, g, rnode, lnode, ws, s);
   finish_surface(s, ws, empty_box());

@@ -215,3 +215,78 @@ TEST(IssOracle, FamiliesHaveNoMismatchAboveTau) {
     }
   }
 }
+
+// ---- the leaf rays' Embree build quality (option embree_quality) ---------------------------
+
+TEST(Iss, EmbreeBuildQualityChangesNoAnswer) {
+  // Every quality builds a BVH over the same triangles traced by the same kernel and
+  // verified the same way, so the answers are the same bits; auto takes the low build
+  // exactly when the scene has at most 7 relations per triangle.
+  FamilyParams fp;
+  fp.seed = 3;
+  fp.receivers = 256;
+  fp.samples = 16;
+  fp.triangles = 3000;
+  auto gen = generate_family("rooms", fp);
+  ASSERT_TRUE(gen.ok());
+  const Scene& s = gen.value();
+  ASSERT_GT(double(s.relation_count()), 7.0 * double(s.mesh.size())) << "auto is medium here";
+  std::map<std::string, std::string> base = {{"auto_rays", "off"}};
+  SolveResult ref = run_iss(s, base);
+  EXPECT_EQ(ref.stats.get("embree_build_low"), 0.0);
+  for (const char* q : {"low", "medium", "high"}) {
+    auto o = base;
+    o["embree_quality"] = q;
+    SolveResult r = run_iss(s, o);
+    EXPECT_EQ(r.stats.get("embree_build_low"), std::string(q) == "low" ? 1.0 : 0.0);
+    EXPECT_GT(r.stats.get("relations_ray_cast"), 0.0);
+    for (size_t i = 0; i < s.receivers.size(); ++i)
+      ASSERT_EQ(r.receivers[i].visible_bits, ref.receivers[i].visible_bits) << q << " receiver " << i;
+  }
+  // Few relations per triangle: auto builds low.
+  fp.receivers = 4;
+  auto few = generate_family("rooms", fp);
+  ASSERT_TRUE(few.ok());
+  ASSERT_LE(double(few.value().relation_count()), 7.0 * double(few.value().mesh.size()));
+  EXPECT_EQ(run_iss(few.value(), {}).stats.get("embree_build_low"), 1.0);
+}
+
+// ---- lights decided at the roots and the leaf rays' mesh (iss_solver.cpp plan_roots) -------
+
+TEST(Iss, LeafRayMeshLeavesOutWhatOnlyRootBlockedLightsSee) {
+  // Two storeys: receivers on the ground, a slab at z 2.8-3, light A above the slab with
+  // clutter between slab and light, light B under the slab with clutter between it and
+  // the receivers. A's root shaft is blocked by the slab (every relation of A blocked,
+  // hand-worked), so A is decided before the traversal and the leaf rays' mesh holds
+  // B's root shaft only: not the upper clutter. B's relations need rays through the
+  // lower clutter, checked against the double reference.
+  Scene s;
+  s.lights.push_back(square_light(0, 0, 4.5, 0.3, 16, 5));
+  s.lights.push_back(square_light(0.4, -0.2, 2.5, 0.3, 16, 9));
+  add_receiver_grid(s, -2, 2, -2, 2, 0.01, 12);
+  ASSERT_TRUE(finish_scene(s).ok());
+  shapes::add_box(s.mesh, Vec3d(-3, -3, 2.8), Vec3d(3, 3, 3.0));
+  const size_t upper_first = s.mesh.size();
+  for (int k = 0; k < 16; ++k) {
+    double x = -1.5 + 0.8 * (k % 4), y = -1.5 + 0.8 * (k / 4);
+    shapes::add_box(s.mesh, Vec3d(x, y, 3.6), Vec3d(x + 0.2, y + 0.2, 3.8));
+  }
+  const size_t upper = s.mesh.size() - upper_first;
+  for (int k = 0; k < 16; ++k) {
+    double x = -1.6 + 0.8 * (k % 4), y = -1.4 + 0.8 * (k / 4);
+    shapes::add_box(s.mesh, Vec3d(x, y, 1.0), Vec3d(x + 0.3, y + 0.3, 1.2));
+  }
+  for (const auto& o : kOptionSets) {
+    SolveResult r = run_iss(s, o);
+    EXPECT_LE(r.stats.get("leaf_ray_triangles"), double(s.mesh.size() - upper)) << describe(o);
+    EXPECT_GE(r.stats.get("initial_shafts_blocked_by_probe"), 1.0) << describe(o);
+    EXPECT_GT(r.stats.get("relations_ray_cast"), 0.0) << describe(o);
+    for (size_t i = 0; i < s.receivers.size(); ++i)
+      for (size_t k = 0; k < 16; ++k) ASSERT_FALSE(r.receivers[i].visible(k)) << "light A, receiver " << i;
+    Compare c = compare_to_reference(s, r);
+    EXPECT_EQ(c.mismatches, 0u) << describe(o);
+    EXPECT_GT(c.checked, s.relation_count() * 9 / 10) << describe(o);
+    const double blocked = r.stats.get("relations_blocked_by_shaft") + r.stats.get("rays_blocked");
+    EXPECT_DOUBLE_EQ(r.stats.get("percent_blocked"), 100.0 * blocked / double(s.relation_count())) << describe(o);
+  }
+}
