@@ -1,6 +1,8 @@
 // Build of the shared hierarchy; see bvh.h.
 #include "lib/accel/bvh.h"
 
+#include "lib/geom/morton.h"
+
 #include <algorithm>
 #include <map>
 
@@ -15,16 +17,6 @@ namespace {
 // halves of a node run in parallel. The tree does not depend on the thread count.
 constexpr uint32_t kParallelGrain = 1u << 14;
 constexpr uint32_t kParallelSubtree = 1u << 15;
-
-// 10 bits of x spread to every third bit.
-uint32_t spread_bits(uint32_t x) {
-  x &= 0x3ffu;
-  x = (x | (x << 16)) & 0x030000ffu;
-  x = (x | (x << 8)) & 0x0300f00fu;
-  x = (x | (x << 4)) & 0x030c30c3u;
-  x = (x | (x << 2)) & 0x09249249u;
-  return x;
-}
 
 // Nodes of the subtree over m items (halving: floor(m / 2) on the left).
 uint32_t subtree_nodes(uint32_t m, uint32_t leaf, std::map<uint32_t, uint32_t>& memo) {
@@ -71,7 +63,7 @@ Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(r
         const float f = ext[a] > 0 ? (keys[i].c[a] - cb.lo[a]) / ext[a] : 0.0f;
         q[a] = uint32_t(std::min(1023.0f, std::max(0.0f, f * 1024.0f)));
       }
-      code[i] = (spread_bits(q[0]) << 2) | (spread_bits(q[1]) << 1) | spread_bits(q[2]);
+      code[i] = (morton_spread10(q[0]) << 2) | (morton_spread10(q[1]) << 1) | morton_spread10(q[2]);
     }
     std::vector<Key> tmp(n);
     std::vector<uint32_t> count(1u << 10);

@@ -12,6 +12,7 @@
 #include <span>
 
 #include "lib/base/check.h"
+#include "lib/geom/morton.h"
 #include "lib/plucker/group_state.h"
 #include "lib/plucker/shaft.h"
 
@@ -770,20 +771,12 @@ void Selection::blocks() {
   for (const NearPoly& np : near) lo = vmin(lo, np.lo), hi = vmax(hi, np.hi);
   const Vec3d ext = hi - lo;
   std::vector<std::pair<uint64_t, uint32_t>> keys(near.size());
-  auto spread = [](uint64_t v) {  // 10 bits to every third of 30
-    v &= 0x3FF;
-    v = (v | (v << 16)) & 0x030000FF;
-    v = (v | (v << 8)) & 0x0300F00F;
-    v = (v | (v << 4)) & 0x030C30C3;
-    v = (v | (v << 2)) & 0x09249249;
-    return v;
-  };
   for (size_t k = 0; k < near.size(); ++k) {
     const Vec3d c = (near[k].lo + near[k].hi) * 0.5 - lo;
     uint64_t code = 0;
     for (int a = 0; a < 3; ++a) {
       const double f = ext[a] > 0.0 ? c[a] / ext[a] * 1023.0 : 0.0;
-      code |= spread(uint64_t(std::min(1023.0, std::max(0.0, f)))) << a;
+      code |= uint64_t(morton_spread10(uint32_t(std::min(1023.0, std::max(0.0, f))))) << a;
     }
     keys[k] = {code, uint32_t(k)};
   }

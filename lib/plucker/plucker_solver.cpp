@@ -15,6 +15,7 @@
 #include <mutex>
 
 #include "lib/geom/float_mode.h"
+#include "lib/geom/morton.h"
 #include "lib/plucker/group_state.h"
 #include "lib/scene/rng.h"
 
@@ -155,15 +156,6 @@ int light_side(const LocalLight& lf, const Vec3f& p) {
   return sd;
 }
 
-uint64_t morton_spread(uint32_t x) {
-  uint64_t v = x & 0x3FF;
-  v = (v | (v << 16)) & 0x030000FF;
-  v = (v | (v << 8)) & 0x0300F00F;
-  v = (v | (v << 4)) & 0x030C30C3;
-  v = (v | (v << 2)) & 0x09249249;
-  return v;
-}
-
 }  // namespace
 
 std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile) {
@@ -191,7 +183,8 @@ std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile)
     Vec3d p = to_double(scene.receivers[i].p) - lo;
     uint32_t c[3];
     for (int a = 0; a < 3; ++a) c[a] = ext[a] > 0 ? uint32_t(std::min(1023.0, std::max(0.0, p[a] / ext[a] * 1023.0))) : 0u;
-    keys[i] = {morton_spread(c[0]) | (morton_spread(c[1]) << 1) | (morton_spread(c[2]) << 2), uint32_t(i)};
+    const uint32_t code = morton_spread10(c[0]) | (morton_spread10(c[1]) << 1) | (morton_spread10(c[2]) << 2);
+    keys[i] = {uint64_t(code), uint32_t(i)};
   }
   std::sort(keys.begin(), keys.end());
   size_t run = size_t(tile) * size_t(tile);

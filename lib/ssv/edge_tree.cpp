@@ -1,6 +1,8 @@
 // Candidate silhouette edges from the edge hierarchy (see edge_tree.h).
 #include "lib/ssv/edge_tree.h"
 
+#include "lib/geom/morton.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -72,16 +74,6 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
 
 namespace {
 
-// Morton code of 10 bits per axis.
-uint32_t spread10(uint32_t x) {
-  x &= 0x3ffu;
-  x = (x | (x << 16)) & 0x30000ffu;
-  x = (x | (x << 8)) & 0x300f00fu;
-  x = (x | (x << 4)) & 0x30c30c3u;
-  x = (x | (x << 2)) & 0x9249249u;
-  return x;
-}
-
 }  // namespace
 
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
@@ -102,7 +94,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
     uint32_t q[3];
     for (int c = 0; c < 3; ++c)
       q[c] = uint32_t(std::clamp((s[c] - 2.0f * bounds.lo[c]) * scale[c], 0.0f, 1023.0f));
-    code[e] = spread10(q[0]) | (spread10(q[1]) << 1) | (spread10(q[2]) << 2);
+    code[e] = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
     a[e] = uint32_t(e);
   }
   std::vector<uint32_t> count(1025);
