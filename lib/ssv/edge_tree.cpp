@@ -92,8 +92,10 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
   for (size_t e = 0; e < E; ++e) {
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
     uint32_t q[3];
-    for (int c = 0; c < 3; ++c)
-      q[c] = uint32_t(std::clamp((s[c] - 2.0f * bounds.lo[c]) * scale[c], 0.0f, 1023.0f));
+    for (int c = 0; c < 3; ++c) {  // NaN (an extent or sum overflowed to infinity) goes to 0
+      const float t = (s[c] - 2.0f * bounds.lo[c]) * scale[c];
+      q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
+    }
     code[e] = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
     a[e] = uint32_t(e);
   }
