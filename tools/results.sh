@@ -13,6 +13,11 @@ set -euo pipefail
 FULL="targets"
 EXPERIMENTS="stability oracle complexity speed-accuracy iss ssv plucker repair"
 SETTINGS="--quick --quiet"
+# Real meshes at full size: the scan rows on CGAL's scanned and modelled meshes (fetched
+# by tools/fetch-cgal-data.sh, never committed; about 5 minutes); skipped with a message
+# when the fetch fails.
+REAL="bunny00.off armadillo.off refined_elephant.off"
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 case "${1:-}" in
   run)
@@ -23,6 +28,14 @@ case "${1:-}" in
       echo "results: $e (full size)" >&2
       "$bin" bench "$e" --quiet -o "$dir/$e"
     done
+    if meshes="$("$ROOT/tools/fetch-cgal-data.sh" | tail -n 1 | sed 's/: [0-9]* OFF meshes$//')" && [ -d "$meshes" ]; then
+      families=""
+      for m in $REAL; do families="$families${families:+,}file:$meshes/$m"; done
+      echo "results: scan on real meshes (full size)" >&2
+      "$bin" bench scan --families "$families" --quiet -o "$dir/scan"
+    else
+      echo "results: scan on real meshes skipped: tools/fetch-cgal-data.sh found no meshes" >&2
+    fi
     for e in $EXPERIMENTS; do
       echo "results: $e" >&2
       "$bin" bench "$e" $SETTINGS -o "$dir/$e"
@@ -30,7 +43,7 @@ case "${1:-}" in
     ;;
   format)
     [ $# -eq 2 ] || { echo "usage: $0 format WORKDIR" >&2; exit 2; }
-    python3 - "$2" "$FULL" "$EXPERIMENTS" "$SETTINGS" <<'PY'
+    python3 - "$2" "$FULL scan" "$EXPERIMENTS" "$SETTINGS" <<'PY'
 import json, math, os, sys
 root, full, quick, settings = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
 experiments = full + quick
@@ -57,12 +70,16 @@ out = ["# Results", "",
        "tools/results.sh run build/tools/visgate /tmp/results",
        "tools/results.sh format /tmp/results > docs/results.md", "```", "",
        "Experiments: %s at full size (`visgate bench NAME --quiet`); %s, each run as" % (
-           ", ".join(d["experiment"] for d in docs if d["experiment"] in full),
+           ", ".join(d["experiment"] for d in docs if d["experiment"] in full and d["experiment"] != "scan"),
            ", ".join(d["experiment"] for d in docs if d["experiment"] in quick)),
        "`visgate bench NAME %s` (quick sizes: a snapshot of the current code, not the full-size" % settings,
        "runs of [log/bench-runs.md](log/bench-runs.md)).",
        "The columns are explained in [bench.md](bench.md). Timings are of the one machine and",
-       "moment below: compare methods within a table (they ran side by side), not across pages.", "",
+       "moment below: compare methods within a table (they ran side by side), not across pages."]
+if any(d["experiment"] == "scan" for d in docs):
+    out += ["`scan` ran on real meshes at full size, CGAL's example meshes that",
+            "`tools/fetch-cgal-data.sh` fetches: `visgate bench scan --families file:PATH,... --quiet`."]
+out += ["",
        "Machine: %s, %d hardware threads, %.1f GB; commit `%s`; compiler %s." % (
            m.get("cpu_model", "?"), m.get("cores", 0), m.get("memory_gb", 0.0), docs[0].get("commit", "?"),
            m.get("compiler", "?")), ""]
