@@ -88,7 +88,12 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
   const Vec3f ext = bounds.extent();
   float scale[3];
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
-  std::vector<uint32_t> code(E), a(E), b(E);
+  // Fresh memory is what this build costs (populated.h): the codes and the sort's second
+  // buffer share one block, which then holds the leaves' endpoints.
+  PopulatedVector<uint32_t> scratch(2 * E), a(E);
+  uint32_t* code = scratch.data();
+  uint32_t* b = scratch.data() + E;
+  uint32_t* src = a.data();
   for (size_t e = 0; e < E; ++e) {
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
     uint32_t q[3];
@@ -97,21 +102,26 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
     }
     code[e] = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
-    a[e] = uint32_t(e);
+    src[e] = uint32_t(e);
   }
-  std::vector<uint32_t> count(1025);
+  uint32_t count[1025];
+  uint32_t* dst = b;
   for (int pass = 0; pass < 3; ++pass) {
-    std::fill(count.begin(), count.end(), 0u);
+    std::fill(count, count + 1025, 0u);
     const int shift = 10 * pass;
-    for (uint32_t e : a) ++count[((code[e] >> shift) & 1023u) + 1];
-    for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
-    for (uint32_t e : a) b[count[(code[e] >> shift) & 1023u]++] = e;
-    a.swap(b);
+    for (size_t k = 0; k < E; ++k) ++count[((code[src[k]] >> shift) & 1023u) + 1];
+    for (size_t k = 1; k < 1025; ++k) count[k] += count[k - 1];
+    for (size_t k = 0; k < E; ++k) dst[count[(code[src[k]] >> shift) & 1023u]++] = src[k];
+    std::swap(src, dst);
   }
+  if (src != a.data()) std::copy(src, src + E, a.data());
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
-  ends_.resize(E);
-  for (size_t k = 0; k < E; ++k) ends_[k] = {edges[order_[k]].a, edges[order_[k]].b};
+  ends_ = std::move(scratch);  // the codes and b are dead
+  for (size_t k = 0; k < E; ++k) {
+    ends_[2 * k] = edges[order_[k]].a;
+    ends_[2 * k + 1] = edges[order_[k]].b;
+  }
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
   size_t total = 0;
@@ -126,10 +136,6 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       nd.hi[c] = nd.thi[c] = nd.nhi[c] = -INFINITY;
     }
   };
-  // Per triangle once (each is incident to about three edges): its unit normal in
-  // float (NaN-free: 0 for no plane, which marks the node single).
-  std::vector<Vec3f> tri_n(m.triangles.size());
-  for (size_t t = 0; t < tri_n.size(); ++t) tri_n[t] = Vec3f(planes[t].unit());
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     clear(nd);
@@ -148,7 +154,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       for (int32_t t : {ed.t1, ed.t2}) {
         if (t < 0) continue;
         nd.single |= uint8_t(!(planes[size_t(t)].nn > 0.0));  // no plane: never proven weight 0
-        const Vec3f& n = tri_n[size_t(t)];
+        const Vec3f n(planes[size_t(t)].unit());  // each triangle about three times: no fresh array
         for (int v = 0; v < 3; ++v) {
           const Vec3f& x = m.corner(size_t(t), v);
           for (int c = 0; c < 3; ++c) {
@@ -380,7 +386,7 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
       }
       if (nd.leaf) {
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k)
-          if (!ff.outside((*vertices_)[ends_[k][0]], (*vertices_)[ends_[k][1]], eps)) edges->push_back(order_[k]);
+          if (!ff.outside((*vertices_)[ends_[2 * k]], (*vertices_)[ends_[2 * k + 1]], eps)) edges->push_back(order_[k]);
         continue;
       }
       for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;

@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "lib/ssv/light_frame.h"
+#include "lib/ssv/populated.h"
 #include "lib/ssv/wedge.h"
 
 namespace visgate::ssv {
@@ -90,7 +91,7 @@ class EdgeTree {
   void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
   size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) +
-           ends_.capacity() * sizeof(std::array<uint32_t, 2>);
+           ends_.capacity() * sizeof(uint32_t);
   }
   size_t node_count() const { return nodes_.size(); }
 
@@ -111,12 +112,12 @@ class EdgeTree {
   };
   void walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts, size_t n_starts,
             uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes) const;
-  std::vector<Node> nodes_;      // leaves first, level by level, the root last
-  std::vector<uint32_t> order_;  // edges in leaf order
-  // Their endpoints (vertex indices), in leaf order: the leaves' item boxes come from
-  // the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box: fewer fresh
-  // pages per solve).
-  std::vector<std::array<uint32_t, 2>> ends_;
+  PopulatedVector<Node> nodes_;      // leaves first, level by level, the root last
+  PopulatedVector<uint32_t> order_;  // edges in leaf order
+  // Their endpoints (vertex indices), two per edge in leaf order: the leaves' item boxes
+  // come from the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box:
+  // fewer fresh pages per solve). The arrays are on populated mappings (populated.h).
+  PopulatedVector<uint32_t> ends_;
   const std::vector<Vec3f>* vertices_ = nullptr;
   double M_ = 0.0;
 };

@@ -241,3 +241,32 @@ TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseSmoothMeshes) {
   for (size_t i = 0; i < a.receivers.size(); ++i)
     EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << "receiver " << i;
 }
+
+// lib/ssv/populated.h: vectors on populated mappings (large) and operator new (small)
+// hold, grow, move and swap exactly as std::vector does, with value-initialised (zero)
+// contents, across the size where the allocation switches.
+TEST(SsvPopulated, VectorsBehaveAsStdVector) {
+  std::mt19937 rng(5);
+  for (size_t n : {size_t(0), size_t(1), size_t(1000), kPopulateBytes / sizeof(uint32_t) - 1,
+                   kPopulateBytes / sizeof(uint32_t), size_t(300000)}) {
+    PopulatedVector<uint32_t> p(n);
+    std::vector<uint32_t> s(n);
+    EXPECT_TRUE(std::all_of(p.begin(), p.end(), [](uint32_t v) { return v == 0; }));
+    for (size_t k = 0; k < n; ++k) p[k] = s[k] = uint32_t(rng());
+    for (int k = 0; k < 70000; ++k) {  // growth through the switch and past it
+      const uint32_t v = uint32_t(rng());
+      p.push_back(v);
+      s.push_back(v);
+    }
+    PopulatedVector<uint32_t> moved = std::move(p);
+    ASSERT_EQ(moved.size(), s.size());
+    EXPECT_TRUE(std::equal(moved.begin(), moved.end(), s.begin()));
+    PopulatedVector<uint32_t> other(3, 7u);
+    other.swap(moved);
+    EXPECT_EQ(moved, PopulatedVector<uint32_t>(3, 7u));
+    EXPECT_TRUE(std::equal(other.begin(), other.end(), s.begin(), s.end()));
+    other.clear();
+    other.shrink_to_fit();
+    EXPECT_TRUE(other.empty());
+  }
+}
