@@ -77,7 +77,7 @@ namespace {
 }  // namespace
 
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
-                   const std::vector<TrianglePlane>& planes, double M)
+                   const TrianglePlanes& planes, double M)
     : M_(M) {
   const size_t E = edges.size();
   if (E == 0) return;

@@ -63,7 +63,7 @@ struct Counts {
 };
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes, const std::vector<Vec3d>& fp,
+  ThreadState(const mesh::PreparedMesh& m, const TrianglePlanes& planes, const std::vector<Vec3d>& fp,
               const LightFrame& f)
       : integrator(m, planes, fp, f) {}
   ReceiverIntegrator integrator;
@@ -321,7 +321,7 @@ struct SceneSetup {
   const std::vector<Edge>& edges;
   float eps;
   const mesh::PreparedMesh& pm;
-  const std::vector<TrianglePlane>& planes;
+  const TrianglePlanes& planes;
   const std::vector<Vec3d>& frame_pos;  // of the current light
   double tol;                           // build_wedges' tolerance
 };
@@ -663,7 +663,7 @@ struct Culling {
   EdgeTree edge_tree;  // wedge_index=edges
   std::vector<int32_t> units;
   Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
-          const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
+          const TrianglePlanes& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
           double M) {
     if (tree_on) {
       std::vector<Vec3d> points(scene.receivers.size());
@@ -796,7 +796,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   if (auto_index) index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
   bool use_edges = index == "edges";
   bool use_scatter = index == "receivers";
-  const std::vector<TrianglePlane> tri_planes = triangle_planes(pm);
+  const TrianglePlanes tri_planes = triangle_planes(pm);
 
   // Root box. Paper 001 (section 4.1) roots the BSP at the scene bounds, assuming every
   // query lies inside. Here every query point is known in advance: the receivers. The

@@ -50,7 +50,7 @@ struct TreeSetup {
   LightFrame frame;
   std::vector<Vec3d> fp;
   std::vector<Edge> edges;
-  std::vector<TrianglePlane> planes;
+  TrianglePlanes planes;
   double M = 0.0;
   EdgeTree tree;
   TreeSetup(const Scene& s, size_t light) {
