@@ -78,6 +78,13 @@ class EdgeTree {
   // err by less than 1e-6 M).
   void query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
              std::vector<uint32_t>& out) const;
+  // The candidates of several receivers at once: outs[k] gets exactly what
+  // query(fs[k], ...) gives (the same node and edge tests, float for float), from one
+  // walk that tests up to eight receivers per node (AVX2 lanes; where the processor lacks
+  // AVX2, or VISGATE_SSV_NO_AVX2 is set, one query per receiver). Neighbouring receivers
+  // visit mostly the same nodes: one visit loads a node once for all of them.
+  void query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps,
+                   const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs) const;
   // The nodes a walk from the root with the receivers' frustum `f` reaches and does not
   // leave, stopping at nodes of at most `max_edges` edges (or leaves): starts for the
   // queries of the receivers in f's box. A node it leaves meets no receiver's frustum, or
@@ -112,6 +119,8 @@ class EdgeTree {
   };
   void walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts, size_t n_starts,
             uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes) const;
+  void walk8(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
+             std::vector<uint32_t>* outs) const;
   PopulatedVector<Node> nodes_;      // leaves first, level by level, the root last
   PopulatedVector<uint32_t> order_;  // edges in leaf order
   // Their endpoints (vertex indices), two per edge in leaf order: the leaves' item boxes
