@@ -7,8 +7,14 @@
 #include <cmath>
 #include <cstddef>
 
+#include <cstdlib>
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define VISGATE_EDGE_TREE_AVX2 1
 #endif
 
 namespace visgate::ssv {
@@ -77,7 +83,7 @@ namespace {
 }  // namespace
 
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
-                   const std::vector<TrianglePlane>& planes, double M)
+                   const TrianglePlanes& planes, double M)
     : M_(M) {
   const size_t E = edges.size();
   if (E == 0) return;
@@ -88,7 +94,12 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
   const Vec3f ext = bounds.extent();
   float scale[3];
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
-  std::vector<uint32_t> code(E), a(E), b(E);
+  // Fresh memory is what this build costs (populated.h): the codes and the sort's second
+  // buffer share one block, which then holds the leaves' endpoints.
+  PopulatedVector<uint32_t> scratch(2 * E), a(E);
+  uint32_t* code = scratch.data();
+  uint32_t* b = scratch.data() + E;
+  uint32_t* src = a.data();
   for (size_t e = 0; e < E; ++e) {
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
     uint32_t q[3];
@@ -97,21 +108,26 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
     }
     code[e] = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
-    a[e] = uint32_t(e);
+    src[e] = uint32_t(e);
   }
-  std::vector<uint32_t> count(1025);
+  uint32_t count[1025];
+  uint32_t* dst = b;
   for (int pass = 0; pass < 3; ++pass) {
-    std::fill(count.begin(), count.end(), 0u);
+    std::fill(count, count + 1025, 0u);
     const int shift = 10 * pass;
-    for (uint32_t e : a) ++count[((code[e] >> shift) & 1023u) + 1];
-    for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
-    for (uint32_t e : a) b[count[(code[e] >> shift) & 1023u]++] = e;
-    a.swap(b);
+    for (size_t k = 0; k < E; ++k) ++count[((code[src[k]] >> shift) & 1023u) + 1];
+    for (size_t k = 1; k < 1025; ++k) count[k] += count[k - 1];
+    for (size_t k = 0; k < E; ++k) dst[count[(code[src[k]] >> shift) & 1023u]++] = src[k];
+    std::swap(src, dst);
   }
+  if (src != a.data()) std::copy(src, src + E, a.data());
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
-  ends_.resize(E);
-  for (size_t k = 0; k < E; ++k) ends_[k] = {edges[order_[k]].a, edges[order_[k]].b};
+  ends_ = std::move(scratch);  // the codes and b are dead
+  for (size_t k = 0; k < E; ++k) {
+    ends_[2 * k] = edges[order_[k]].a;
+    ends_[2 * k + 1] = edges[order_[k]].b;
+  }
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
   size_t total = 0;
@@ -126,10 +142,6 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       nd.hi[c] = nd.thi[c] = nd.nhi[c] = -INFINITY;
     }
   };
-  // Per triangle once (each is incident to about three edges): its unit normal in
-  // float (NaN-free: 0 for no plane, which marks the node single).
-  std::vector<Vec3f> tri_n(m.triangles.size());
-  for (size_t t = 0; t < tri_n.size(); ++t) tri_n[t] = Vec3f(planes[t].unit());
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     clear(nd);
@@ -148,7 +160,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       for (int32_t t : {ed.t1, ed.t2}) {
         if (t < 0) continue;
         nd.single |= uint8_t(!(planes[size_t(t)].nn > 0.0));  // no plane: never proven weight 0
-        const Vec3f& n = tri_n[size_t(t)];
+        const Vec3f n(planes[size_t(t)].unit());  // each triangle about three times: no fresh array
         for (int v = 0; v < 3; ++v) {
           const Vec3f& x = m.corner(size_t(t), v);
           for (int c = 0; c < 3; ++c) {
@@ -380,12 +392,189 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
       }
       if (nd.leaf) {
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k)
-          if (!ff.outside((*vertices_)[ends_[k][0]], (*vertices_)[ends_[k][1]], eps)) edges->push_back(order_[k]);
+          if (!ff.outside((*vertices_)[ends_[2 * k]], (*vertices_)[ends_[2 * k + 1]], eps)) edges->push_back(order_[k]);
         continue;
       }
       for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
     }
   }
+}
+
+#if defined(VISGATE_EDGE_TREE_AVX2) && defined(__SSE2__)
+namespace {
+
+// Up to eight receivers' FloatFrustum in lanes (lane k = receiver k): the same float
+// values, padding planes as there (n = 0, d = -inf: never outside).
+struct LaneFrusta {
+  static constexpr int P = EdgeFrustum::kMaxPlanes;
+  int planes = 0;
+  float nx[P][8], ny[P][8], nz[P][8], d[P][8];
+  int32_t px[P][8], py[P][8], pz[P][8];  // -1 where n >= 0: take the box's hi
+  float blo[3][8], bhi[3][8], r[3][8];
+  LaneFrusta(const EdgeFrustum* fs, size_t n, float eps) {
+    for (size_t k = 0; k < n; ++k) planes = std::max(planes, fs[k].count);
+    for (int k = 0; k < 8; ++k) {
+      const EdgeFrustum& f = fs[size_t(k) < n ? size_t(k) : 0];  // unused lanes: a copy of lane 0, masked off
+      for (int c = 0; c < 3; ++c) {
+        blo[c][k] = float(f.box.lo[c]) - eps;
+        bhi[c][k] = float(f.box.hi[c]) + eps;
+        r[c][k] = float(f.rlo[c]);
+      }
+      for (int i = 0; i < planes; ++i) {
+        const bool real = i < f.count;
+        const float v[3] = {real ? float(f.n[i][0]) : 0.0f, real ? float(f.n[i][1]) : 0.0f,
+                            real ? float(f.n[i][2]) : 0.0f};
+        nx[i][k] = v[0];
+        ny[i][k] = v[1];
+        nz[i][k] = v[2];
+        d[i][k] = real ? float(f.d[i]) : -INFINITY;
+        px[i][k] = v[0] >= 0.0f ? -1 : 0;
+        py[i][k] = v[1] >= 0.0f ? -1 : 0;
+        pz[i][k] = v[2] >= 0.0f ? -1 : 0;
+      }
+    }
+  }
+};
+
+// Lanes whose receiver has the box (lo, hi) more than eps outside its frustum's box or
+// a plane: FloatFrustum::outside(lo, hi) per lane, the same products and sums in the
+// same order (no fused multiply-add: target avx2 only).
+__attribute__((target("avx2"))) inline int box_outside8(const LaneFrusta& L, const float* lo, const float* hi,
+                                                        __m256 neps) {
+  __m256 out = _mm256_setzero_ps();
+  __m256 l[3], h[3];
+  for (int c = 0; c < 3; ++c) {
+    l[c] = _mm256_set1_ps(lo[c]);
+    h[c] = _mm256_set1_ps(hi[c]);
+    out = _mm256_or_ps(out, _mm256_cmp_ps(h[c], _mm256_loadu_ps(L.blo[c]), _CMP_LT_OQ));
+    out = _mm256_or_ps(out, _mm256_cmp_ps(l[c], _mm256_loadu_ps(L.bhi[c]), _CMP_GT_OQ));
+  }
+  for (int i = 0; i < L.planes; ++i) {
+    const __m256 x = _mm256_blendv_ps(l[0], h[0], _mm256_loadu_ps(reinterpret_cast<const float*>(L.px[i])));
+    const __m256 y = _mm256_blendv_ps(l[1], h[1], _mm256_loadu_ps(reinterpret_cast<const float*>(L.py[i])));
+    const __m256 z = _mm256_blendv_ps(l[2], h[2], _mm256_loadu_ps(reinterpret_cast<const float*>(L.pz[i])));
+    __m256 sum = _mm256_sub_ps(_mm256_setzero_ps(), _mm256_loadu_ps(L.d[i]));
+    sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_loadu_ps(L.nx[i]), x));
+    sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_loadu_ps(L.ny[i]), y));
+    sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_loadu_ps(L.nz[i]), z));
+    out = _mm256_or_ps(out, _mm256_cmp_ps(sum, neps, _CMP_LT_OQ));
+  }
+  return _mm256_movemask_ps(out);
+}
+
+// Lanes whose receiver has the segment a b more than eps outside (FloatFrustum::outside
+// for a segment, per lane).
+__attribute__((target("avx2"))) inline int segment_outside8(const LaneFrusta& L, const Vec3f& a, const Vec3f& b,
+                                                            __m256 neps) {
+  __m256 out = _mm256_setzero_ps();
+  for (int c = 0; c < 3; ++c) {
+    out = _mm256_or_ps(out, _mm256_cmp_ps(_mm256_set1_ps(std::max(a[c], b[c])), _mm256_loadu_ps(L.blo[c]), _CMP_LT_OQ));
+    out = _mm256_or_ps(out, _mm256_cmp_ps(_mm256_set1_ps(std::min(a[c], b[c])), _mm256_loadu_ps(L.bhi[c]), _CMP_GT_OQ));
+  }
+  const __m256 ax = _mm256_set1_ps(a.x), ay = _mm256_set1_ps(a.y), az = _mm256_set1_ps(a.z);
+  const __m256 bx = _mm256_set1_ps(b.x), by = _mm256_set1_ps(b.y), bz = _mm256_set1_ps(b.z);
+  for (int i = 0; i < L.planes; ++i) {
+    const __m256 nx = _mm256_loadu_ps(L.nx[i]), ny = _mm256_loadu_ps(L.ny[i]), nz = _mm256_loadu_ps(L.nz[i]);
+    __m256 sa = _mm256_sub_ps(_mm256_setzero_ps(), _mm256_loadu_ps(L.d[i])), sb = sa;
+    sa = _mm256_add_ps(sa, _mm256_mul_ps(nx, ax));
+    sa = _mm256_add_ps(sa, _mm256_mul_ps(ny, ay));
+    sa = _mm256_add_ps(sa, _mm256_mul_ps(nz, az));
+    sb = _mm256_add_ps(sb, _mm256_mul_ps(nx, bx));
+    sb = _mm256_add_ps(sb, _mm256_mul_ps(ny, by));
+    sb = _mm256_add_ps(sb, _mm256_mul_ps(nz, bz));
+    out = _mm256_or_ps(out, _mm256_and_ps(_mm256_cmp_ps(sa, neps, _CMP_LT_OQ), _mm256_cmp_ps(sb, neps, _CMP_LT_OQ)));
+  }
+  return _mm256_movemask_ps(out);
+}
+
+// Lanes facing_prunes would prune (its receiver-independent light-plane test is done by
+// the caller): the same per-lane products, minima, maxima and sums in the order of the
+// SSE2 form ((x + z) + y).
+template <class Node>
+__attribute__((target("avx2"))) inline int facing_prunes8(const LaneFrusta& L, const Node& nd, float abs_margin) {
+  __m256 lo[3], hi[3], far[3];
+  const __m256 sign = _mm256_set1_ps(-0.0f);
+  for (int c = 0; c < 3; ++c) {
+    const __m256 r = _mm256_loadu_ps(L.r[c]);
+    const __m256 dlo = _mm256_sub_ps(r, _mm256_set1_ps(nd.thi[c])), dhi = _mm256_sub_ps(r, _mm256_set1_ps(nd.tlo[c]));
+    const __m256 nlo = _mm256_set1_ps(nd.nlo[c]), nhi = _mm256_set1_ps(nd.nhi[c]);
+    const __m256 p0 = _mm256_mul_ps(nlo, dlo), p1 = _mm256_mul_ps(nlo, dhi), p2 = _mm256_mul_ps(nhi, dlo),
+                 p3 = _mm256_mul_ps(nhi, dhi);
+    lo[c] = _mm256_min_ps(_mm256_min_ps(p0, p1), _mm256_min_ps(p2, p3));
+    hi[c] = _mm256_max_ps(_mm256_max_ps(p0, p1), _mm256_max_ps(p2, p3));
+    far[c] = _mm256_max_ps(_mm256_andnot_ps(sign, dlo), _mm256_andnot_ps(sign, dhi));
+  }
+  const __m256 flo = _mm256_add_ps(_mm256_add_ps(lo[0], lo[2]), lo[1]);
+  const __m256 fhi = _mm256_add_ps(_mm256_add_ps(hi[0], hi[2]), hi[1]);
+  const __m256 fr = _mm256_add_ps(_mm256_add_ps(far[0], far[2]), far[1]);
+  const __m256 margin = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(0x1p-18f), fr), _mm256_set1_ps(abs_margin));
+  const __m256 nmargin = _mm256_sub_ps(_mm256_setzero_ps(), margin);
+  return _mm256_movemask_ps(
+      _mm256_or_ps(_mm256_cmp_ps(flo, margin, _CMP_GT_OQ), _mm256_cmp_ps(fhi, nmargin, _CMP_LT_OQ)));
+}
+
+}  // namespace
+
+// walk() for up to eight receivers at once: a node goes on with the lanes that did not
+// leave it, so each lane visits exactly the nodes its own walk visits.
+__attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size_t n, const LightFrame& frame,
+                                                     float eps, const std::vector<uint32_t>& starts,
+                                                     std::vector<uint32_t>* outs) const {
+  const LaneFrusta L(fs, n, eps);
+  const __m256 neps = _mm256_set1_ps(-eps);
+  const float N[3] = {float(frame.N.x), float(frame.N.y), float(frame.N.z)};
+  const float h0 = float(dot(frame.N, frame.origin));
+  const float active_margin = float(2e-6 * M_), abs_margin = float(1e-9 * M_);
+  const int all = int((1u << n) - 1u);
+  struct Item {
+    uint32_t node;
+    int mask;
+  };
+  Item stack[64];
+  for (uint32_t start : starts) {
+    size_t top = 0;
+    stack[top++] = {start, all};
+    while (top > 0) {
+      const Item it = stack[--top];
+      const Node& nd = nodes_[it.node];
+      int m = it.mask & ~box_outside8(L, nd.lo, nd.hi, neps);
+      if (m == 0) continue;
+      if (!nd.single) {
+        float hmin = -h0;  // facing_prunes' light-plane test: the same for every lane
+        for (int c = 0; c < 3; ++c) hmin += N[c] * (N[c] >= 0.0f ? nd.tlo[c] : nd.thi[c]);
+        if (hmin > active_margin) m &= ~facing_prunes8(L, nd, abs_margin);
+        if (m == 0) continue;
+      }
+      if (nd.leaf) {
+        for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+          int keep = m & ~segment_outside8(L, (*vertices_)[ends_[2 * k]], (*vertices_)[ends_[2 * k + 1]], neps);
+          while (keep) {
+            const int lane = __builtin_ctz(unsigned(keep));
+            keep &= keep - 1;
+            outs[lane].push_back(order_[k]);
+          }
+        }
+        continue;
+      }
+      for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = {k, m};
+    }
+  }
+}
+#endif
+
+void EdgeTree::query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps,
+                           const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs) const {
+#if defined(VISGATE_EDGE_TREE_AVX2) && defined(__SSE2__)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  if (avx2) {
+    for (size_t k = 0; k < n; ++k) outs[k].clear();
+    if (empty()) return;
+    for (size_t first = 0; first < n; first += 8) walk8(fs + first, std::min<size_t>(8, n - first), frame, eps, starts, outs + first);
+    for (size_t k = 0; k < n; ++k) std::sort(outs[k].begin(), outs[k].end());
+    return;
+  }
+#endif
+  for (size_t k = 0; k < n; ++k) query(fs[k], frame, eps, starts, outs[k]);
 }
 
 void EdgeTree::query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,

@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "lib/ssv/light_frame.h"
+#include "lib/ssv/populated.h"
 #include "lib/ssv/wedge.h"
 
 namespace visgate::ssv {
@@ -68,7 +69,7 @@ class EdgeTree {
   // Over every edge of `edges` (index = edge index); `M` bounds every coordinate (the
   // solver's tolerance scale). `m` must outlive the tree (its vertices are read by the
   // queries).
-  EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes,
+  EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const TrianglePlanes& planes,
            double M);
   bool empty() const { return nodes_.empty(); }
   // The candidate edges of the receiver of `f` for the light of `frame` (see above),
@@ -77,6 +78,13 @@ class EdgeTree {
   // err by less than 1e-6 M).
   void query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
              std::vector<uint32_t>& out) const;
+  // The candidates of several receivers at once: outs[k] gets exactly what
+  // query(fs[k], ...) gives (the same node and edge tests, float for float), from one
+  // walk that tests up to eight receivers per node (AVX2 lanes; where the processor lacks
+  // AVX2, or VISGATE_SSV_NO_AVX2 is set, one query per receiver). Neighbouring receivers
+  // visit mostly the same nodes: one visit loads a node once for all of them.
+  void query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps,
+                   const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs) const;
   // The nodes a walk from the root with the receivers' frustum `f` reaches and does not
   // leave, stopping at nodes of at most `max_edges` edges (or leaves): starts for the
   // queries of the receivers in f's box. A node it leaves meets no receiver's frustum, or
@@ -90,7 +98,7 @@ class EdgeTree {
   void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
   size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) +
-           ends_.capacity() * sizeof(std::array<uint32_t, 2>);
+           ends_.capacity() * sizeof(uint32_t);
   }
   size_t node_count() const { return nodes_.size(); }
 
@@ -111,12 +119,14 @@ class EdgeTree {
   };
   void walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts, size_t n_starts,
             uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes) const;
-  std::vector<Node> nodes_;      // leaves first, level by level, the root last
-  std::vector<uint32_t> order_;  // edges in leaf order
-  // Their endpoints (vertex indices), in leaf order: the leaves' item boxes come from
-  // the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box: fewer fresh
-  // pages per solve).
-  std::vector<std::array<uint32_t, 2>> ends_;
+  void walk8(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
+             std::vector<uint32_t>* outs) const;
+  PopulatedVector<Node> nodes_;      // leaves first, level by level, the root last
+  PopulatedVector<uint32_t> order_;  // edges in leaf order
+  // Their endpoints (vertex indices), two per edge in leaf order: the leaves' item boxes
+  // come from the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box:
+  // fewer fresh pages per solve). The arrays are on populated mappings (populated.h).
+  PopulatedVector<uint32_t> ends_;
   const std::vector<Vec3f>* vertices_ = nullptr;
   double M_ = 0.0;
 };

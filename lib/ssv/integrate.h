@@ -219,7 +219,7 @@ class ReceiverIntegrator {
   ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
       : m_(m), own_planes_(triangle_planes(m)), planes_(own_planes_), fp_(frame_pos), frame_(frame) {}
   // The same with the triangle planes computed once by the caller.
-  ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes,
+  ReceiverIntegrator(const mesh::PreparedMesh& m, const TrianglePlanes& planes,
                      const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
       : m_(m), planes_(planes), fp_(frame_pos), frame_(frame) {}
 
@@ -274,8 +274,8 @@ class ReceiverIntegrator {
   void set_receiver(const Vec3f& receiver);
 
   const mesh::PreparedMesh& m_;
-  std::vector<TrianglePlane> own_planes_;
-  const std::vector<TrianglePlane>& planes_;
+  TrianglePlanes own_planes_;
+  const TrianglePlanes& planes_;
   const std::vector<Vec3d>& fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};

@@ -49,7 +49,7 @@ bool make_occluder(const Vec3d* v, int n, const Vec3d& unit, PlanarOccluder& o) 
 }  // namespace
 
 std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                             const std::vector<TrianglePlane>& planes, size_t max_count,
+                                             const TrianglePlanes& planes, size_t max_count,
                                              double min_area) {
   std::vector<PlanarOccluder> out;
   if (max_count == 0) return out;

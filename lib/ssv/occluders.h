@@ -60,7 +60,7 @@ struct PlanarOccluder {
 // least min_area, largest first, at most max_count. `edges` and `planes` as built by
 // mesh_edges and triangle_planes.
 std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                             const std::vector<TrianglePlane>& planes, size_t max_count,
+                                             const TrianglePlanes& planes, size_t max_count,
                                              double min_area = 0.0);
 
 // True when every segment from a point of `box` to a point of the hull of `light` meets

@@ -63,13 +63,19 @@ struct Counts {
 };
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const std::vector<TrianglePlane>& planes, const std::vector<Vec3d>& fp,
+  ThreadState(const mesh::PreparedMesh& m, const TrianglePlanes& planes, const std::vector<Vec3d>& fp,
               const LightFrame& f)
       : integrator(m, planes, fp, f) {}
   ReceiverIntegrator integrator;
   std::vector<WedgeState> candidates;
   std::vector<uint32_t> edge_candidates;  // wedge_index=edges
   std::vector<uint32_t> edge_starts;      // the edge tree's frontier of the current batch
+  // wedge_index=edges: the batch's receivers' frusta and candidates (EdgeTree::query_batch);
+  // `batched` points at the current receiver's list while it is integrated.
+  std::vector<EdgeFrustum> batch_frusta;
+  std::vector<size_t> batch_receivers;
+  std::vector<std::vector<uint32_t>> batch_lists;
+  std::vector<uint32_t>* batched = nullptr;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
@@ -321,7 +327,7 @@ struct SceneSetup {
   const std::vector<Edge>& edges;
   float eps;
   const mesh::PreparedMesh& pm;
-  const std::vector<TrianglePlane>& planes;
+  const TrianglePlanes& planes;
   const std::vector<Vec3d>& frame_pos;  // of the current light
   double tol;                           // build_wedges' tolerance
 };
@@ -382,7 +388,8 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   const Vec3f& r = sc.scene.receivers[i].p;
   auto a = Clock::now();
   st.candidates.clear();
-  if (ls.edge_tree) ls.edge_tree->query(EdgeFrustum(ls.frame, r), ls.frame, sc.eps, st.edge_starts, st.edge_candidates);
+  if (ls.edge_tree && st.batched) st.edge_candidates.swap(*st.batched);
+  else if (ls.edge_tree) ls.edge_tree->query(EdgeFrustum(ls.frame, r), ls.frame, sc.eps, st.edge_starts, st.edge_candidates);
   else if (ls.bsp) ls.bsp->query(r, st.candidates);
   else st.candidates.insert(st.candidates.end(), ls.scatter->begin(pos), ls.scatter->end(pos));
   auto b = Clock::now();
@@ -517,8 +524,28 @@ double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_t
         if (box.empty()) continue;  // every receiver occluded: nothing to answer
         auto a = Clock::now();
         ls.edge_tree->frontier(EdgeFrustum(ls.frame, box), ls.frame, sc.eps, kFrontierEdges, st.edge_starts);
+        // The candidates of every receiver solve_receiver will integrate, in one walk
+        // (the same lists as one query each).
+        st.batch_frusta.clear();
+        st.batch_receivers.clear();
+        for (uint32_t p = nd.begin; p < nd.end; ++p) {
+          const size_t i = ord[p];
+          const Vec3f& r = sc.scene.receivers[i].p;
+          if (ls.occluded[i] || ls.light_fallback || grazing_receiver(ls.frame, r)) continue;
+          st.batch_frusta.emplace_back(ls.frame, r);
+          st.batch_receivers.push_back(i);
+        }
+        if (st.batch_lists.size() < st.batch_frusta.size()) st.batch_lists.resize(st.batch_frusta.size());
+        ls.edge_tree->query_batch(st.batch_frusta.data(), st.batch_frusta.size(), ls.frame, sc.eps, st.edge_starts,
+                                  st.batch_lists.data());
         st.c.t_query += seconds_between(a, Clock::now());
-        for (uint32_t p = nd.begin; p < nd.end; ++p) solve_receiver(st, sc, ls, ord[p], p, result);
+        size_t next = 0;
+        for (uint32_t p = nd.begin; p < nd.end; ++p) {
+          const bool listed = next < st.batch_receivers.size() && st.batch_receivers[next] == ord[p];
+          st.batched = listed ? &st.batch_lists[next++] : nullptr;
+          solve_receiver(st, sc, ls, ord[p], p, result);
+        }
+        st.batched = nullptr;
       }
     });
     return 0.0;
@@ -663,7 +690,7 @@ struct Culling {
   EdgeTree edge_tree;  // wedge_index=edges
   std::vector<int32_t> units;
   Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
-          const std::vector<TrianglePlane>& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
+          const TrianglePlanes& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
           double M) {
     if (tree_on) {
       std::vector<Vec3d> points(scene.receivers.size());
@@ -796,7 +823,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   if (auto_index) index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
   bool use_edges = index == "edges";
   bool use_scatter = index == "receivers";
-  const std::vector<TrianglePlane> tri_planes = triangle_planes(pm);
+  const TrianglePlanes tri_planes = triangle_planes(pm);
 
   // Root box. Paper 001 (section 4.1) roots the BSP at the scene bounds, assuming every
   // query lies inside. Here every query point is known in advance: the receivers. The

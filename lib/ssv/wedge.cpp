@@ -11,8 +11,8 @@
 
 namespace visgate::ssv {
 
-std::vector<TrianglePlane> triangle_planes(const mesh::PreparedMesh& m) {
-  std::vector<TrianglePlane> out(m.triangles.size());
+TrianglePlanes triangle_planes(const mesh::PreparedMesh& m) {
+  TrianglePlanes out(m.triangles.size());
   for (size_t t = 0; t < m.triangles.size(); ++t) {
     TrianglePlane& p = out[t];
     const Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
@@ -258,7 +258,7 @@ bool point_in_wedge(const Wedge& w, const Vec3f& p, float eps) {
 
 std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                 const std::vector<Vec3d>& frame_pos, const LightFrame& frame, double tol,
-                                WedgeBuildCounts& counts, const std::vector<TrianglePlane>* planes) {
+                                WedgeBuildCounts& counts, const TrianglePlanes* planes) {
   std::vector<Wedge> wedges;
   build_wedges(m, edges, frame_pos, frame, tol, counts, planes, wedges);
   return wedges;
@@ -266,9 +266,9 @@ std::vector<Wedge> build_wedges(const mesh::PreparedMesh& m, const std::vector<E
 
 void build_wedges(const mesh::PreparedMesh& m, const std::vector<Edge>& edges, const std::vector<Vec3d>& frame_pos,
                   const LightFrame& frame, double tol, WedgeBuildCounts& counts,
-                  const std::vector<TrianglePlane>* planes, std::vector<Wedge>& wedges,
+                  const TrianglePlanes* planes, std::vector<Wedge>& wedges,
                   const std::vector<uint32_t>* subset, const RegionBoxes* regions) {
-  std::vector<TrianglePlane> own;
+  TrianglePlanes own;
   if (!planes) {
     own = triangle_planes(m);
     planes = &own;

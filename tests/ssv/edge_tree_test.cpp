@@ -50,7 +50,7 @@ struct TreeSetup {
   LightFrame frame;
   std::vector<Vec3d> fp;
   std::vector<Edge> edges;
-  std::vector<TrianglePlane> planes;
+  TrianglePlanes planes;
   double M = 0.0;
   EdgeTree tree;
   TreeSetup(const Scene& s, size_t light) {
@@ -106,8 +106,15 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
       if (batch.empty()) continue;
       std::vector<uint32_t> starts, got;
       st.tree.frontier(EdgeFrustum(st.frame, box), st.frame, eps, 64, starts);
-      for (size_t i : batch) {
+      // The batched walk gives each receiver exactly its own query's list.
+      std::vector<EdgeFrustum> fs;
+      for (size_t i : batch) fs.emplace_back(st.frame, s.receivers[i].p);
+      std::vector<std::vector<uint32_t>> lists(fs.size(), std::vector<uint32_t>{7u});
+      st.tree.query_batch(fs.data(), fs.size(), st.frame, eps, starts, lists.data());
+      for (size_t k = 0; k < batch.size(); ++k) {
+        const size_t i = batch[k];
         st.tree.query(EdgeFrustum(st.frame, s.receivers[i].p), st.frame, eps, starts, got);
+        EXPECT_EQ(lists[k], got) << what << ": light " << l << " receiver " << i << " batched";
         EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
         EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "an edge returned twice";
         const Vec3d r = to_double(s.receivers[i].p), rl = st.frame.to_local(s.receivers[i].p);
@@ -124,6 +131,22 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
     }
   }
   EXPECT_GT(must, 20u) << what;
+  // Batches of more than eight receivers (walked eight at a time) from the root.
+  for (size_t l = 0; l < s.lights.size() && l < 2; ++l) {
+    const TreeSetup st(s, l);
+    const float eps = float(4e-6 * st.M);
+    std::vector<EdgeFrustum> fs;
+    for (size_t i = 0; i < s.receivers.size() && fs.size() < 21; ++i)
+      if (st.frame.to_local(s.receivers[i].p).z > 1e-6) fs.emplace_back(st.frame, s.receivers[i].p);
+    const std::vector<uint32_t> root{uint32_t(st.tree.node_count() - 1)};
+    std::vector<std::vector<uint32_t>> lists(fs.size());
+    std::vector<uint32_t> got;
+    st.tree.query_batch(fs.data(), fs.size(), st.frame, eps, root, lists.data());
+    for (size_t k = 0; k < fs.size(); ++k) {
+      st.tree.query(fs[k], st.frame, eps, root, got);
+      EXPECT_EQ(lists[k], got) << what << ": light " << l << " receiver " << k << " of a batch of " << fs.size();
+    }
+  }
   if (culls) {
     EXPECT_LT(candidates * 4, pairs) << what << ": the tree culls nothing";
   }
@@ -240,4 +263,33 @@ TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseSmoothMeshes) {
   EXPECT_GT(b.stats.get("wedges_reported"), 256.0);
   for (size_t i = 0; i < a.receivers.size(); ++i)
     EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << "receiver " << i;
+}
+
+// lib/ssv/populated.h: vectors on populated mappings (large) and operator new (small)
+// hold, grow, move and swap exactly as std::vector does, with value-initialised (zero)
+// contents, across the size where the allocation switches.
+TEST(SsvPopulated, VectorsBehaveAsStdVector) {
+  std::mt19937 rng(5);
+  for (size_t n : {size_t(0), size_t(1), size_t(1000), kPopulateBytes / sizeof(uint32_t) - 1,
+                   kPopulateBytes / sizeof(uint32_t), size_t(300000)}) {
+    PopulatedVector<uint32_t> p(n);
+    std::vector<uint32_t> s(n);
+    EXPECT_TRUE(std::all_of(p.begin(), p.end(), [](uint32_t v) { return v == 0; }));
+    for (size_t k = 0; k < n; ++k) p[k] = s[k] = uint32_t(rng());
+    for (int k = 0; k < 70000; ++k) {  // growth through the switch and past it
+      const uint32_t v = uint32_t(rng());
+      p.push_back(v);
+      s.push_back(v);
+    }
+    PopulatedVector<uint32_t> moved = std::move(p);
+    ASSERT_EQ(moved.size(), s.size());
+    EXPECT_TRUE(std::equal(moved.begin(), moved.end(), s.begin()));
+    PopulatedVector<uint32_t> other(3, 7u);
+    other.swap(moved);
+    EXPECT_EQ(moved, PopulatedVector<uint32_t>(3, 7u));
+    EXPECT_TRUE(std::equal(other.begin(), other.end(), s.begin(), s.end()));
+    other.clear();
+    other.shrink_to_fit();
+    EXPECT_TRUE(other.empty());
+  }
 }
