@@ -106,6 +106,10 @@ struct UVAxes {
   static UVAxes from_normal(const Vec3f& n);
 };
 
+// Coordinate i (0, 1, 2) of a Vec3d as a member pointer: one load at a fixed offset,
+// where Vec3d::operator[] branches on i (the hot loops over fragment vertices).
+inline double Vec3d::*axis_member(int i) { return i == 0 ? &Vec3d::x : (i == 1 ? &Vec3d::y : &Vec3d::z); }
+
 // A box in the (u, v) coordinates of UVAxes (of the 3D points). Used only to skip work
 // that cannot change a result: two fragments whose boxes are disjoint are disjoint.
 struct UVBox {
