@@ -294,6 +294,10 @@ class LazyBsp {
   std::vector<uint32_t> plane_stamp_;   // per occluder edge: stamp_ when plane_cache_ is valid
   std::vector<NodePlane> plane_cache_;
   LightBounds light_bounds_;  // every query fragment is a piece of the light (node_plane)
+  // light_bounds_.dist1 of every occluder vertex (slot id * kMaxOccluderVertices + k) and
+  // of the query point: node_plane's base choice, computed once per tree and query.
+  std::vector<double> vertex_dist_;
+  double shadow_dist_ = 0.0;
   MemoryCharge budget_charge_;
 };
 

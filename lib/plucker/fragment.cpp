@@ -90,15 +90,31 @@ LightBounds LightBounds::of(const Vec3d* poly, int n) {
 }
 
 NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light) {
+  return node_plane(r, a, b, light, light.dist1(r), light.dist1(a), light.dist1(b));
+}
+
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light, double dr, double da,
+                     double db) {
   NodePlane p;
-  Vec3d err;
-  p.n = edge_plane_normal_err(r, a, b, err);
-  p.on_line = on_line(p.n, err);
+  // lines.h edge_plane_normal_err: N from the two shortest of a - r, b - r, b - a, and r
+  // on the line when every component of N is within its error bound 8 u_d (|u_j v_k| +
+  // |u_k v_j|); the bounds are computed component by component and only until one
+  // component exceeds its own (the same values and the same answer).
+  const Vec3d pa = a - r, pb = b - r, ab = b - a;
+  const double na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
+  const Vec3d* u = &pa;
+  const Vec3d* v = &pb;
+  if (!(nab >= na && nab >= nb)) {
+    if (nb >= na) v = &ab;
+    else u = &pb, v = &ab;
+  }
+  p.n = cross(*u, *v);
+  constexpr double ke = 8.0 * kUnitRoundoffD;
+  p.on_line = std::abs(p.n.x) <= (std::abs(u->y * v->z) + std::abs(u->z * v->y)) * ke &&
+              std::abs(p.n.y) <= (std::abs(u->z * v->x) + std::abs(u->x * v->z)) * ke &&
+              std::abs(p.n.z) <= (std::abs(u->x * v->y) + std::abs(u->y * v->x)) * ke;
   // nearest_base (lines.h) against the centroid, keeping the chosen 1-norm |centroid -
-  // base|_1 for the bound (the same sums, computed once).
-  const Vec3d& x = light.centroid;
-  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
-  const double dr = n1(x - r), da = n1(x - a), db = n1(x - b);
+  // base|_1 for the bound.
   double dn = 0.0;
   if (dr <= da && dr <= db) p.base = r, dn = dr;
   else if (da <= db) p.base = a, dn = da;
