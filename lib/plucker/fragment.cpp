@@ -344,10 +344,13 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, i
   // E = 1/2 sum_k theta_k (nr . gamma_k), gamma_k the unit normal of (q_k, q_k+1) seen
   // from r; the sign makes a polygon counter-clockwise about its emitting normal (facing
   // r) positive, and the absolute value makes the result independent of the winding.
+  // Each vertex's offset from r, its height over r's plane and its squared length are
+  // computed once and carried to the next edge (the same values as computing them per
+  // edge end).
   const Vec3d nd = to_double(nr);
   double sum = 0.0;
-  auto term = [&](const Vec3d& a, const Vec3d& b) {
-    if (dot(a, a) == 0.0 || dot(b, b) == 0.0) return;  // length() == 0 exactly then, without the roots
+  auto term = [&](const Vec3d& a, double aa, const Vec3d& b, double bb) {
+    if (aa == 0.0 || bb == 0.0) return;  // length() == 0 exactly then, without the roots
     Vec3d c = cross(a, b);
     double lc = length(c);
     if (lc == 0.0) return;
@@ -356,20 +359,31 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, i
   };
   int qn = 0;
   Vec3d first, prev;
+  double first_sq = 0.0, prev_sq = 0.0;
   auto emit = [&](const Vec3d& v) {
-    if (qn == 0) first = v;
-    else term(prev, v);
+    const double vv = dot(v, v);
+    if (qn == 0) first = v, first_sq = vv;
+    else term(prev, prev_sq, v, vv);
     prev = v;
+    prev_sq = vv;
     ++qn;
   };
+  if (n <= 0) return 0.0;
+  const Vec3d p_first = poly[0] - rd;
+  const double s_first = dot(nd, p_first);
+  Vec3d p0 = p_first;
+  double s0 = s_first;
   for (int k = 0; k < n; ++k) {
-    Vec3d p0 = poly[k] - rd, p1 = poly[(k + 1) % n] - rd;
-    double s0 = dot(nd, p0), s1 = dot(nd, p1);
+    const bool last = k + 1 == n;
+    const Vec3d p1 = last ? p_first : poly[k + 1] - rd;
+    const double s1 = last ? s_first : dot(nd, p1);
     if (s0 >= 0.0) emit(p0);
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) emit(p0 + (p1 - p0) * (s0 / (s0 - s1)));
+    p0 = p1;
+    s0 = s1;
   }
   if (qn < 3) return 0.0;
-  term(prev, first);
+  term(prev, prev_sq, first, first_sq);
   return 0.5 * std::abs(sum);
 }
 
