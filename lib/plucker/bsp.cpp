@@ -185,17 +185,13 @@ void LazyBsp::begin_query(const Vec3d& r) {
   }
 }
 
-const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
-  size_t slot = size_t(id) * size_t(kMaxOccluderVertices) + size_t(edge);
-  if (plane_stamp_[slot] != stamp_) {
-    const Occluder& o = occ_[id];
-    const int e1 = edge + 1 == o.n ? 0 : edge + 1;
-    const size_t vs = size_t(id) * size_t(kMaxOccluderVertices);
-    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[e1], light_bounds_, shadow_dist_,
-                                    vertex_dist_[vs + size_t(edge)], vertex_dist_[vs + size_t(e1)]);
-    plane_stamp_[slot] = stamp_;
-  }
-  return plane_cache_[slot];
+void LazyBsp::compute_edge_plane(uint32_t id, int edge, size_t slot) {
+  const Occluder& o = occ_[id];
+  const int e1 = edge + 1 == o.n ? 0 : edge + 1;
+  const size_t vs = size_t(id) * size_t(kMaxOccluderVertices);
+  plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[e1], light_bounds_, shadow_dist_,
+                                  vertex_dist_[vs + size_t(edge)], vertex_dist_[vs + size_t(e1)]);
+  plane_stamp_[slot] = stamp_;
 }
 
 LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox) {

@@ -68,7 +68,9 @@ class ReceiverShading {
         i_(size_t((*gs.group)[gk])),
         rec_(scene_.receivers[i_]),
         r_(gs.rloc[gk]),
-        rmax_(max_component(vabs(r_))) {}
+        rmax_(max_component(vabs(r_))),
+        pw_(pyramid_weights()),
+        near_hint_(near_hint()) {}
 
   void run();
 
@@ -108,6 +110,8 @@ class ReceiverShading {
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
   int cover_hint_ = 0;   // covered(): the interior occluder edge that failed last
   uint32_t serial_ = 0;  // this receiver's mark in GroupState::near_done (0: no merging)
+  PyramidWeights& pw_;           // this thread's (pyramid_weights)
+  std::vector<uint8_t>& near_hint_;  // this thread's (near_hint)
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -178,7 +182,7 @@ void ReceiverShading::pyramid_planes() {
   const size_t m = lf_.poly.size();
   gs_.pyramid.resize(m);
   gs_.pyramid_err.resize(m);
-  PyramidWeights& pw = pyramid_weights();
+  PyramidWeights& pw = pw_;
   pw.w.resize(m);
   pw.c.resize(m);
   for (size_t j = 0; j < m; ++j) {
@@ -310,8 +314,8 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   for (uint32_t k = 0; k < np.count; ++k) pmax = std::max(pmax, max_component(vabs(pv[k])));
   {
     const size_t m = lf_.poly.size();
-    const PyramidWeights& pw = pyramid_weights();
-    uint8_t& hint = near_hint()[idx];
+    const PyramidWeights& pw = pw_;
+    uint8_t& hint = near_hint_[idx];
     const size_t first = hint < m ? hint : 0;
     for (size_t ji = 0; ji < m; ++ji) {
       const size_t j = first + ji < m ? first + ji : first + ji - m;
@@ -543,7 +547,7 @@ void ReceiverShading::shade_float() {
   tot_.tree_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - th).count();
   if (!hidden) frags.add(lf_.poly.data(), lf_.poly.size());
   pyramid_planes();
-  if (near_hint().size() < gs_.near.size()) near_hint().resize(gs_.near.size(), 0);
+  if (near_hint_.size() < gs_.near.size()) near_hint_.resize(gs_.near.size(), 0);
   gs_.boxes.clear();
   for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
   bound_all();
@@ -573,14 +577,20 @@ void ReceiverShading::shade_float() {
     }
     serial_ = gs_.near_serial;
   }
+  const bool tree_first = !gs_.interior.empty();
   auto tree_query = [&]() {
     const auto tb = std::chrono::steady_clock::now();
     if (gs_.frags.size() > 0) {
       bsp_.query(r_, gs_.frags, gs_.tmp);
       std::swap(gs_.frags, gs_.tmp);
-      gs_.boxes.clear();
-      for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
-      bound_all();
+      // The boxes only for the near polygons that follow; run() makes them anew after
+      // the last step.
+      if (tree_first) {
+        gs_.boxes.clear();
+        for (size_t f = 0; f < frags.size(); ++f)
+          gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
+        bound_all();
+      }
     }
     const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
     tot_.bsp_query_s += tbs;
@@ -588,7 +598,6 @@ void ReceiverShading::shade_float() {
   };
   // With interior occluders the tree hides most of a closed surface's shadow at once, so
   // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
-  const bool tree_first = !gs_.interior.empty();
   if (tree_first) tree_query();
   if (gs_.near_blocks.empty()) {
     for (uint32_t k = 0; k < gs_.near.size(); ++k) {
