@@ -34,6 +34,10 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   miss_edge_.clear();
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
   light_bounds_ = LightBounds::of(light_.data(), m);
+  vertex_dist_.resize(occ_.size() * size_t(kMaxOccluderVertices));
+  for (size_t id = 0; id < occ_.size(); ++id)
+    for (int k = 0; k < occ_[id].n; ++k)
+      vertex_dist_[id * size_t(kMaxOccluderVertices) + size_t(k)] = light_bounds_.dist1(occ_[id].v[k]);
   reset();
   counters_.nodes_created = 1;
 }
@@ -64,7 +68,7 @@ size_t LazyBsp::memory_bytes() const {
          work_.capacity() * sizeof(Vec3d) +
          stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + shadow_stamp_.capacity() * sizeof(uint32_t) +
          shadow_box_.capacity() * sizeof(UVBox) + miss_edge_.capacity() + plane_stamp_.capacity() * sizeof(uint32_t) +
-         plane_cache_.capacity() * sizeof(NodePlane);
+         plane_cache_.capacity() * sizeof(NodePlane) + vertex_dist_.capacity() * sizeof(double);
 }
 
 void LazyBsp::develop(int32_t leaf, int64_t forced) {
@@ -164,6 +168,7 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
 void LazyBsp::begin_query(const Vec3d& r) {
   if (stamp_ != 0 && r.x == shadow_r_.x && r.y == shadow_r_.y && r.z == shadow_r_.z) return;
   shadow_r_ = r;
+  shadow_dist_ = light_bounds_.dist1(r);
   if (++stamp_ == 0) {  // wrapped: invalidate every entry
     std::fill(shadow_stamp_.begin(), shadow_stamp_.end(), 0u);
     std::fill(plane_stamp_.begin(), plane_stamp_.end(), 0u);
@@ -180,14 +185,13 @@ void LazyBsp::begin_query(const Vec3d& r) {
   }
 }
 
-const NodePlane& LazyBsp::edge_plane(uint32_t id, int edge) {
-  size_t slot = size_t(id) * size_t(kMaxOccluderVertices) + size_t(edge);
-  if (plane_stamp_[slot] != stamp_) {
-    const Occluder& o = occ_[id];
-    plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[(edge + 1) % o.n], light_bounds_);
-    plane_stamp_[slot] = stamp_;
-  }
-  return plane_cache_[slot];
+void LazyBsp::compute_edge_plane(uint32_t id, int edge, size_t slot) {
+  const Occluder& o = occ_[id];
+  const int e1 = edge + 1 == o.n ? 0 : edge + 1;
+  const size_t vs = size_t(id) * size_t(kMaxOccluderVertices);
+  plane_cache_[slot] = node_plane(shadow_r_, o.v[edge], o.v[e1], light_bounds_, shadow_dist_,
+                                  vertex_dist_[vs + size_t(edge)], vertex_dist_[vs + size_t(e1)]);
+  plane_stamp_[slot] = stamp_;
 }
 
 LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox) {

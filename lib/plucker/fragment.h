@@ -11,6 +11,7 @@
 // bound lies "on" the plane and goes to both pieces).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -45,6 +46,11 @@ struct LightBounds {
   // Of the polygon (n vertices), both maxima rounded up by 2^-50 relative (an
   // interpolated vertex exceeds its edge's ends by rounding only).
   static LightBounds of(const Vec3d* poly, int n);
+  // |centroid - p|_1, summed as node_plane sums it (its base choice and bound).
+  double dist1(const Vec3d& p) const {
+    const Vec3d d = centroid - p;
+    return std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  }
 };
 
 struct NodePlane {
@@ -54,6 +60,11 @@ struct NodePlane {
 };
 
 NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light);
+// The same plane, bit for bit, with dr, da, db = light.dist1(r), dist1(a), dist1(b) given:
+// callers that meet the same points in many planes (the tree's occluder vertices, a
+// query's r) compute them once.
+NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light, double dr, double da,
+                     double db);
 
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or
@@ -105,6 +116,10 @@ struct UVAxes {
   bool flip = false;
   static UVAxes from_normal(const Vec3f& n);
 };
+
+// Coordinate i (0, 1, 2) of a Vec3d as a member pointer: one load at a fixed offset,
+// where Vec3d::operator[] branches on i (the hot loops over fragment vertices).
+inline double Vec3d::*axis_member(int i) { return i == 0 ? &Vec3d::x : (i == 1 ? &Vec3d::y : &Vec3d::z); }
 
 // A box in the (u, v) coordinates of UVAxes (of the 3D points). Used only to skip work
 // that cannot change a result: two fragments whose boxes are disjoint are disjoint.

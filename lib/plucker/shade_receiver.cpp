@@ -36,6 +36,26 @@ int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
 // more than 29, else rounded at u_d: 4 u_d of the coordinates is far above it.
 constexpr double kUd = kUnitRoundoffD;
 
+// Per receiver, the parts of the near polygons' pyramid test that depend only on the
+// pyramid's side plane j (pyramid_planes): w[j] the weights of dot_err(d, pyramid[j],
+// pyramid_err[j]) = sum |d_i| w[j]_i and c[j] = 4 u_d |pyramid[j]|_1 of the shift.
+// Per thread, like the group's other scratch (one receiver at a time).
+struct PyramidWeights {
+  std::vector<Vec3d> w;
+  std::vector<double> c;
+};
+PyramidWeights& pyramid_weights() {
+  thread_local PyramidWeights pw;
+  return pw;
+}
+// Per near polygon of the group, the pyramid plane that last rejected it (a start for
+// the next receiver's test; any value is correct: the test's answer does not depend on
+// the order of the planes). Per thread; sized by shade_float.
+std::vector<uint8_t>& near_hint() {
+  thread_local std::vector<uint8_t> h;
+  return h;
+}
+
 class ReceiverShading {
  public:
   ReceiverShading(GroupState& gs, LazyBsp& bsp, size_t gk, BspCounters& near_counters, Totals& tot)
@@ -48,7 +68,9 @@ class ReceiverShading {
         i_(size_t((*gs.group)[gk])),
         rec_(scene_.receivers[i_]),
         r_(gs.rloc[gk]),
-        rmax_(max_component(vabs(r_))) {}
+        rmax_(max_component(vabs(r_))),
+        pw_(pyramid_weights()),
+        near_hint_(near_hint()) {}
 
   void run();
 
@@ -88,6 +110,8 @@ class ReceiverShading {
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
   int cover_hint_ = 0;   // covered(): the interior occluder edge that failed last
   uint32_t serial_ = 0;  // this receiver's mark in GroupState::near_done (0: no merging)
+  PyramidWeights& pw_;           // this thread's (pyramid_weights)
+  std::vector<uint8_t>& near_hint_;  // this thread's (near_hint)
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -158,6 +182,9 @@ void ReceiverShading::pyramid_planes() {
   const size_t m = lf_.poly.size();
   gs_.pyramid.resize(m);
   gs_.pyramid_err.resize(m);
+  PyramidWeights& pw = pw_;
+  pw.w.resize(m);
+  pw.c.resize(m);
   for (size_t j = 0; j < m; ++j) {
     Vec3d err;
     Vec3d nrm = edge_plane_normal_err(r_, lf_.poly[j], lf_.poly[(j + 1) % m], err);
@@ -172,6 +199,9 @@ void ReceiverShading::pyramid_planes() {
     }
     gs_.pyramid[j] = nrm;
     gs_.pyramid_err[j] = err;
+    constexpr double k8 = 8.0 * kUnitRoundoffD;  // lines.h dot_err's factor
+    pw.w[j] = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
+    pw.c[j] = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
   }
 }
 
@@ -273,34 +303,51 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
     return;
   const Vec3d* pv = gs_.near_verts.data() + np.begin;
   // Cheap rejections first, conservative also against the rounding of the local
-  // frame (a point moves by u |x| when translated; see the exact path below):
-  // this receiver's slab (g . p > g . r somewhere, else the polygon is at or behind
-  // its g-plane), then the side planes of its pyramid.
+  // frame (a point moves by u |x| when translated; see the exact path below): the side
+  // planes of this receiver's pyramid, then its slab (g . p > g . r somewhere, else the
+  // polygon is at or behind its g-plane). Either rejection alone returns, so their order
+  // and the order of the planes do not change what is rejected: the pyramid goes first
+  // (it rejects about three in four near polygons on columns, the slab almost none), from
+  // the plane that rejected this polygon for the group's previous receiver (neighbouring
+  // receivers are mostly rejected by the same plane).
+  double pmax = 0.0;
+  for (uint32_t k = 0; k < np.count; ++k) pmax = std::max(pmax, max_component(vabs(pv[k])));
+  {
+    const size_t m = lf_.poly.size();
+    const PyramidWeights& pw = pw_;
+    uint8_t& hint = near_hint_[idx];
+    const size_t first = hint < m ? hint : 0;
+    for (size_t ji = 0; ji < m; ++ji) {
+      const size_t j = first + ji < m ? first + ji : first + ji - m;
+      const Vec3d& pn = gs_.pyramid[j];
+      const Vec3d& w = pw.w[j];
+      // The margin and bound of block_outside's test, their per-receiver parts
+      // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
+      // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
+      const double shift = pw.c[j] * (pmax + double(lf_.extent) + rmax_);
+      const Vec3d& lj = lf_.poly[j];
+      bool outside = true;
+      for (uint32_t k = 0; k < np.count && outside; ++k) {
+        const Vec3d d = pv[k] - lj;
+        const double e = std::abs(d.x) * w.x + std::abs(d.y) * w.y + std::abs(d.z) * w.z;
+        outside = dot(pn, d) < -16.0 * e - shift;
+      }
+      if (outside) {
+        hint = uint8_t(j);
+        return;
+      }
+    }
+  }
   std::vector<double>& vals = gs_.vals;
   const Vec3d& gd = gs_.g;
   vals.resize(np.count);
-  double maxv = -1.0, pmax = 0.0;
+  double maxv = -1.0;
   for (uint32_t k = 0; k < np.count; ++k) {
     vals[k] = dot(gd, pv[k] - r_);
     maxv = std::max(maxv, vals[k]);
-    pmax = std::max(pmax, max_component(vabs(pv[k])));
   }
   const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
   if (maxv < -4.0 * kUd * gn1 * (pmax + rmax_)) return;
-  bool outside = false;
-  const size_t m = lf_.poly.size();
-  for (size_t j = 0; j < m && !outside; ++j) {
-    outside = true;
-    const Vec3d& pn = gs_.pyramid[j];
-    const double shift =
-        4.0 * kUd * (std::abs(pn.x) + std::abs(pn.y) + std::abs(pn.z)) * (pmax + double(lf_.extent) + rmax_);
-    const Vec3d& lj = lf_.poly[j];
-    for (uint32_t k = 0; k < np.count && outside; ++k) {
-      Vec3d d = pv[k] - lj;
-      outside = dot(pn, d) < -16.0 * dot_err(d, pn, gs_.pyramid_err[j]) - shift;
-    }
-  }
-  if (outside) return;
   // The side of r against the triangle's plane (near_side: decided on the local double
   // coordinates with a bound that covers their rounding, so it is the side in the
   // inputs as given). A receiver within rounding of the plane (but not on it) sees the
@@ -500,6 +547,7 @@ void ReceiverShading::shade_float() {
   tot_.tree_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - th).count();
   if (!hidden) frags.add(lf_.poly.data(), lf_.poly.size());
   pyramid_planes();
+  if (near_hint_.size() < gs_.near.size()) near_hint_.resize(gs_.near.size(), 0);
   gs_.boxes.clear();
   for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
   bound_all();
@@ -529,14 +577,20 @@ void ReceiverShading::shade_float() {
     }
     serial_ = gs_.near_serial;
   }
+  const bool tree_first = !gs_.interior.empty();
   auto tree_query = [&]() {
     const auto tb = std::chrono::steady_clock::now();
     if (gs_.frags.size() > 0) {
       bsp_.query(r_, gs_.frags, gs_.tmp);
       std::swap(gs_.frags, gs_.tmp);
-      gs_.boxes.clear();
-      for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
-      bound_all();
+      // The boxes only for the near polygons that follow; run() makes them anew after
+      // the last step.
+      if (tree_first) {
+        gs_.boxes.clear();
+        for (size_t f = 0; f < frags.size(); ++f)
+          gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));
+        bound_all();
+      }
     }
     const double tbs = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
     tot_.bsp_query_s += tbs;
@@ -544,7 +598,6 @@ void ReceiverShading::shade_float() {
   };
   // With interior occluders the tree hides most of a closed surface's shadow at once, so
   // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
-  const bool tree_first = !gs_.interior.empty();
   if (tree_first) tree_query();
   if (gs_.near_blocks.empty()) {
     for (uint32_t k = 0; k < gs_.near.size(); ++k) {

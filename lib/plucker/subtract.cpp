@@ -32,16 +32,20 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
                       const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
-  // each written before it is read. Per thread rather than per call: constructing them
-  // per call costs measurably on columns.
+  // each computed when first needed (a polygon whose shadow misses every fragment mostly
+  // needs one: the edge that separates them all). Per thread rather than per call:
+  // constructing them per call costs measurably on columns.
   static thread_local NodePlane planes[2 * kMaxOccluderVertices + 2];
   VG_CHECK(nq <= int(std::size(planes)));
-  bool have_planes = false;
+  uint32_t have = 0;  // bit k: planes[k] computed for this call
+  double dr = 0.0;    // light.dist1(r), with the first plane
+  static_assert(std::size(planes) <= 32);
   auto plane = [&](int m) -> const NodePlane& {
-    if (!have_planes) {
-      for (int k = 0; k < nq; ++k)
-        if (!skip[k]) planes[k] = node_plane(r, q[k], q[(k + 1) % nq], light);
-      have_planes = true;
+    if (!(have >> m & 1u)) {
+      if (have == 0) dr = light.dist1(r);
+      const int m1 = m + 1 == nq ? 0 : m + 1;
+      planes[m] = node_plane(r, q[m], q[m1], light, dr, light.dist1(q[m]), light.dist1(q[m1]));
+      have |= 1u << m;
     }
     return planes[m];
   };

@@ -237,3 +237,98 @@ TEST(PluckerFragment, SplitIntoBuffersStaysWithinTwiceTheVertexCount) {
     for (int k = 0; k < nn; ++k) EXPECT_EQ(neg[size_t(k)].y, vn[size_t(k)].y);
   }
 }
+
+TEST(PluckerFragment, NodePlaneNormalAndOnLineAreLinesEdgePlaneNormalErr) {
+  // node_plane computes N and the on-line test itself (the error bounds component by
+  // component, stopping at the first exceeded): the same N as lines.h
+  // edge_plane_normal_err and the same answer as on_line with its bounds, also for r on
+  // the line (exactly and within rounding); and the form with the centroid distances
+  // given is the same plane bit for bit.
+  Rng rng(73);
+  int on = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const double off = trial % 2 ? rng.uniform(-1e4, 1e4) : 0.0;
+    std::vector<Vec3d> light = {Vec3d(off, off, 2), Vec3d(off, off + 1, 2), Vec3d(off + 1.5, off + 1, 2.25)};
+    const LightBounds lb = LightBounds::of(light.data(), 3);
+    auto pt = [&] { return Vec3d(off + rng.uniform(-3, 3), off + rng.uniform(-3, 3), rng.uniform(-2, 4)); };
+    const Vec3d a = pt(), b = trial % 13 == 0 ? a : pt();
+    Vec3d r = pt();
+    if (trial % 5 == 0) r = a + (b - a) * double(trial % 3);  // on the line (exactly or nearly)
+    if (trial % 5 == 1) r = a + (b - a) * rng.uniform();      // on the segment, up to rounding
+    const NodePlane pl = node_plane(r, a, b, lb);
+    Vec3d err;
+    const Vec3d n = edge_plane_normal_err(r, a, b, err);
+    EXPECT_EQ(pl.n.x, n.x);
+    EXPECT_EQ(pl.n.y, n.y);
+    EXPECT_EQ(pl.n.z, n.z);
+    EXPECT_EQ(pl.on_line, on_line(n, err));
+    on += pl.on_line;
+    const NodePlane q = node_plane(r, a, b, lb, lb.dist1(r), lb.dist1(a), lb.dist1(b));
+    EXPECT_EQ(q.n.x, pl.n.x);
+    EXPECT_EQ(q.n.y, pl.n.y);
+    EXPECT_EQ(q.n.z, pl.n.z);
+    EXPECT_EQ(q.base.x, pl.base.x);
+    EXPECT_EQ(q.base.y, pl.base.y);
+    EXPECT_EQ(q.base.z, pl.base.z);
+    EXPECT_EQ(q.bound, pl.bound);
+    EXPECT_EQ(q.on_line, pl.on_line);
+  }
+  EXPECT_GT(on, 100);  // the on-line answers were exercised
+}
+
+TEST(PluckerFragment, LambertIrradianceIsThePerEdgeSum) {
+  // lambert_irradiance carries each vertex's offset, height and squared length to the
+  // next edge: the result is the same double as the textbook form that computes them at
+  // both ends of every edge (clip to r's upper half-space, then 1/2 |sum theta_k nr .
+  // gamma_k|), on random convex polygons above, below and across r's plane.
+  auto reference = [](const Vec3d& rd, const Vec3f& nr, const std::vector<Vec3d>& poly) {
+    const Vec3d nd = to_double(nr);
+    std::vector<Vec3d> q;
+    const size_t n = poly.size();
+    for (size_t k = 0; k < n; ++k) {
+      Vec3d p0 = poly[k] - rd, p1 = poly[(k + 1) % n] - rd;
+      double s0 = dot(nd, p0), s1 = dot(nd, p1);
+      if (s0 >= 0.0) q.push_back(p0);
+      if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) q.push_back(p0 + (p1 - p0) * (s0 / (s0 - s1)));
+    }
+    if (q.size() < 3) return 0.0;
+    double sum = 0.0;
+    for (size_t k = 0; k < q.size(); ++k) {
+      const Vec3d& a = q[k];
+      const Vec3d& b = q[(k + 1) % q.size()];
+      if (dot(a, a) == 0.0 || dot(b, b) == 0.0) continue;
+      Vec3d c = cross(a, b);
+      double lc = length(c);
+      if (lc == 0.0) continue;
+      sum += std::atan2(lc, dot(a, b)) * dot(nd, c) / lc;
+    }
+    return 0.5 * std::abs(sum);
+  };
+  Rng rng(74);
+  int nonzero = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int n = 3 + int(rng.below(6));
+    const double cx = rng.uniform(-2, 2), cy = rng.uniform(-2, 2), h = rng.uniform(-1, 2), rad = rng.uniform(0.1, 3);
+    const double tilt = rng.uniform(-1, 1);
+    std::vector<Vec3d> poly;
+    for (int k = 0; k < n; ++k) {
+      const double t = 2.0 * M_PI * k / n;
+      const double x = cx + rad * std::cos(t), y = cy + rad * std::sin(t);
+      poly.emplace_back(x, y, h + tilt * x);
+    }
+    // Receivers at a vertex, on an edge and at random points.
+    Vec3d r(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-1, 1));
+    if (trial % 17 == 0) r = poly[0];
+    if (trial % 19 == 0) r = (poly[0] + poly[1]) * 0.5;
+    const Vec3f nr = trial % 3 == 0 ? Vec3f(0, 0, 1) : Vec3f(float(rng.uniform(-0.5, 0.5)), 0.0f, 1.0f);
+    const double got = lambert_irradiance(r, nr, poly.data(), n);
+    EXPECT_EQ(got, reference(r, nr, poly)) << trial;
+    nonzero += got > 0.0;
+  }
+  EXPECT_GT(nonzero, 1000);
+}
+
+TEST(PluckerFragment, AxisMemberIsTheIndexedCoordinate) {
+  const Vec3d p(1.5, -2.25, 7.0);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(p.*axis_member(i), p[i]);
+}
