@@ -43,7 +43,12 @@ class InteriorOccluders {
   static constexpr uint32_t kMinTriangles = 256;
   static constexpr int kMaxVertices = 10;  // bsp.h kMaxOccluderVertices
 
-  InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs);
+  // `extra`: at most this many further polygons per surface and light, inscribed from
+  // other centres and in planes offset along the light's direction where the
+  // cross-sections leave the first polygon's projection (a non-convex solid: ears,
+  // limbs, folds); 0: one polygon as before.
+  static constexpr size_t kDefaultExtra = 24;
+  InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra = kDefaultExtra);
 
   struct Entry {
     int32_t surface;
