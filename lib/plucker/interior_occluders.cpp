@@ -73,6 +73,17 @@ std::vector<std::array<int64_t, 2>> hull(std::vector<std::array<int64_t, 2>> p) 
 // two more offset towards the receivers (-0.08, -0.16) and the rays turned by half a
 // step on each covered 3% more candidates and took longer to build than they saved.
 constexpr std::pair<double, double> kPlanes[] = {{0.0, 0.5}};
+// The further polygons' planes (offsets as kPlanes) and the side of the grid of their
+// centres (build_many).
+// Measured on CGAL's bunny, armadillo and elephant (interior_extra 24): five planes with
+// an 8 x 8 grid took the elephant from 12.5 to 7.0 user seconds (256 receivers), three
+// planes to 9.9, 16 x 16 grids no better than 8 x 8.
+constexpr double kExtraPlanes[] = {0.0, -0.15, 0.15, -0.3, 0.3};
+constexpr int kGrid = 8;
+// A further polygon's new cover (its area times the share of its probe points outside
+// the polygons taken) at least this share of the largest candidate's area.
+constexpr double kMinShare = 0.1;
+constexpr double kCovered = 0.8;
 
 // Every pass over a surface's triangles walks a hierarchy over their boxes (item i is
 // tris[i]) and visits only the triangles in leaves whose box may matter: the set each
@@ -89,8 +100,28 @@ class Builder {
   // its centre along dir, its corners on rays turned by `turn` of the angle between two
   // rays; or false.
   bool build(const Vec3d& dir, double offset, double turn, std::vector<Vec3f>& out);
+  // Several polygons in the plane `offset` box extents from the centre along dir, each
+  // inscribed along rays from its own centre (a grid over the box's cross-section, the
+  // centres inside the approximate cross-section, largest first), for solids whose
+  // cross-section is not star-shaped from one point (ears, limbs): a centre inside a
+  // polygon already in `shadow` (the polygons' projections along dir, in the plane's u, v
+  // coefficients) is skipped. Appends the verified polygons to out; true when the
+  // plane's cross-section was covered already (nothing built).
+  // Appends q's projection to shadow (build_many).
+  void shadow_of(const Vec3d& dir, double offset, const std::vector<Vec3f>& q,
+                 std::vector<std::vector<std::array<double, 2>>>& shadow);
+  bool build_many(const Vec3d& dir, double offset, int grid, size_t max_polys,
+                  std::vector<std::vector<std::array<double, 2>>>& shadow, std::vector<std::vector<Vec3f>>& out);
 
  private:
+  struct Plane;
+  bool plane_basis(const Vec3d& dir, double offset, Plane& pl) const;
+  bool plane(const Vec3d& dir, double offset, Plane& pl);
+  bool rays(const Plane& pl, double ci, double cj, double turn, std::array<double, InteriorOccluders::kMaxVertices>& hit,
+            int* crossings) const;
+  int ray_parity(const Plane& pl, double ci, double cj) const;
+  bool polygon(const Plane& pl, int64_t ci, int64_t cj, double turn,
+               const std::array<double, InteriorOccluders::kMaxVertices>& hit, std::vector<Vec3f>& out);
   bool verify(const std::vector<Vec3f>& q, const Vec3f& inner);
   bool inside(const Vec3f& x, std::span<const Vec3f> q);
   // f(t) for every triangle t of the surface in a leaf whose box, and every ancestor's,
@@ -108,7 +139,14 @@ class Builder {
   std::vector<int8_t> side_;  // per vertex of the mesh: its side of Q's plane (verify)
 };
 
-bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Vec3f>& out) {
+// The plane's lattice and approximate cross-section (Builder::plane).
+struct Builder::Plane {
+  double h = 0;
+  Vec3d p{}, u{}, v{}, nrm{}, du{}, dv{};
+  std::vector<Seg2> segs;  // in (alpha, beta) coefficients of x - p in u, v
+};
+
+bool Builder::plane_basis(const Vec3d& dir, double offset, Plane& pl) const {
   const Vec3d lo = to_double(box_.lo), hi = to_double(box_.hi);
   const double ext = max_component(hi - lo);
   if (!(ext > 0.0) || !(length(dir) > 0.0)) return false;
@@ -116,6 +154,7 @@ bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Ve
   // p + i u + j v with |i|, |j| <= 2^10 are multiples of h below 2^24 h (checked: each is
   // a float) when the box is within 2^2 of its extent from the origin.
   const double h = std::ldexp(1.0, std::ilogb(ext) - 20);
+  pl.h = h;
   auto grid = [&](const Vec3d& x) { return Vec3d(std::round(x.x / h) * h, std::round(x.y / h) * h, std::round(x.z / h) * h); };
   const Vec3d n = normalize(dir);
   const Vec3d p = grid((lo + hi) * 0.5 + n * (offset * ext));
@@ -128,8 +167,17 @@ bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Ve
   if (!(length(nrm) > 0.0)) return false;
   // Coefficients (alpha, beta) of x - p in the basis u, v (its plane part): dual vectors.
   const Vec3d du = cross(v, nrm) / dot(u, cross(v, nrm)), dv = cross(nrm, u) / dot(v, cross(nrm, u));
+  pl.p = p, pl.u = u, pl.v = v, pl.nrm = nrm, pl.du = du, pl.dv = dv;
+  return true;
+}
+
+bool Builder::plane(const Vec3d& dir, double offset, Plane& pl) {
+  if (!plane_basis(dir, offset, pl)) return false;
+  const Vec3d lo = to_double(box_.lo), hi = to_double(box_.hi);
+  const double ext = max_component(hi - lo);
+  const Vec3d p = pl.p, nrm = pl.nrm, du = pl.du, dv = pl.dv;
   // The cross-section, approximately (the checks below are exact).
-  std::vector<Seg2> segs;
+  pl.segs.clear();
   // Boxes the plane may cross: the range of (x - p) . nrm over the box (its corners by
   // nrm's signs) reaches 0 within a margin far above the rounding of a vertex's value.
   const double margin = 0x1p-30 * (max_component(vabs(lo - p)) + max_component(vabs(hi - p)) + ext) *
@@ -155,26 +203,60 @@ bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Ve
         pts[np++] = x[k] + (x[k1] - x[k]) * t01;
       }
     }
-    if (np == 2) segs.push_back({dot(pts[0], du), dot(pts[0], dv), dot(pts[1], du), dot(pts[1], dv)});
+    if (np == 2) pl.segs.push_back({dot(pts[0], du), dot(pts[0], dv), dot(pts[1], du), dot(pts[1], dv)});
   });
-  // Rays from the centre: the nearest crossing of the cross-section in each direction.
-  std::array<double, InteriorOccluders::kMaxVertices> hit{};
+  return true;
+}
+
+// Nearest crossing of the approximate cross-section along kMaxVertices rays from the
+// lattice point (ci, cj) (coefficients of the plane's p, u, v), turned by `turn` of a
+// step; false when a ray meets nothing. `crossings` (optional): how many segments the
+// first ray crosses, odd when the point is inside (approximately; only a choice).
+bool Builder::rays(const Plane& pl, double ci, double cj, double turn, std::array<double, InteriorOccluders::kMaxVertices>& hit,
+                   int* crossings) const {
   const int kRays = InteriorOccluders::kMaxVertices;
   for (int k = 0; k < kRays; ++k) {
     const double ang = 2.0 * std::numbers::pi * (double(k) + turn) / kRays;
     const double cx = std::cos(ang), cy = std::sin(ang);
     double best = std::numeric_limits<double>::infinity();
-    for (const Seg2& sg : segs) {
-      // p + t (cx, cy) = a + s (b - a), t > 0, s in [0, 1].
+    int cross_count = 0;
+    for (const Seg2& sg : pl.segs) {
+      // c + t (cx, cy) = a + s (b - a), t > 0, s in [0, 1].
+      const double ax = sg.ax - ci, ay = sg.ay - cj;
       const double ex = sg.bx - sg.ax, ey = sg.by - sg.ay;
       const double den = cx * ey - cy * ex;
       if (den == 0.0) continue;
-      const double t = (sg.ax * ey - sg.ay * ex) / den, s = (sg.ax * cy - sg.ay * cx) / den;
-      if (t > 0.0 && s >= 0.0 && s <= 1.0) best = std::min(best, t);
+      const double t = (ax * ey - ay * ex) / den, s = (ax * cy - ay * cx) / den;
+      if (t > 0.0 && s >= 0.0 && s <= 1.0) best = std::min(best, t), ++cross_count;
     }
     if (!std::isfinite(best)) return false;
     hit[size_t(k)] = best;
+    if (k == 0 && crossings) *crossings = cross_count;
   }
+  return true;
+}
+
+// How many segments of the approximate cross-section the first ray of rays() from the
+// lattice point (ci, cj) crosses (odd: inside, approximately; only a choice).
+int Builder::ray_parity(const Plane& pl, double ci, double cj) const {
+  int count = 0;
+  for (const Seg2& sg : pl.segs) {
+    const double ax = sg.ax - ci, ay = sg.ay - cj, ex = sg.bx - sg.ax, ey = sg.by - sg.ay;
+    const double den = ey;  // the ray's direction is (1, 0)
+    if (den == 0.0) continue;
+    const double t = (ax * ey - ay * ex) / den, s = -ay / den;
+    if (t > 0.0 && s >= 0.0 && s <= 1.0) ++count;
+  }
+  return count;
+}
+
+// The convex polygon through the points at `shrink` of the hits, in lattice coordinates
+// from the centre (ci, cj) (integers), when the centre is strictly inside it, every
+// corner is a float, and verify() passes.
+bool Builder::polygon(const Plane& pl, int64_t ci, int64_t cj, double turn,
+                      const std::array<double, InteriorOccluders::kMaxVertices>& hit, std::vector<Vec3f>& out) {
+  const int kRays = InteriorOccluders::kMaxVertices;
+  const Vec3d centre = pl.p + pl.u * double(ci) + pl.v * double(cj);
   for (double shrink : {0.97, 0.85, 0.7}) {
     std::vector<std::array<int64_t, 2>> pts;
     for (int k = 0; k < kRays; ++k) {
@@ -194,18 +276,130 @@ bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Ve
     std::vector<Vec3f> q;
     bool exact = true;
     for (const auto& ij : hl) {
-      const Vec3d x = p + u * double(ij[0]) + v * double(ij[1]);
+      const Vec3d x = centre + pl.u * double(ij[0]) + pl.v * double(ij[1]);
       const Vec3f xf(x);
       exact &= to_double(xf).x == x.x && to_double(xf).y == x.y && to_double(xf).z == x.z;
       q.push_back(xf);
     }
-    const Vec3f pf(p);
-    exact &= to_double(pf).x == p.x && to_double(pf).y == p.y && to_double(pf).z == p.z;
+    const Vec3f pf(centre);
+    exact &= to_double(pf).x == centre.x && to_double(pf).y == centre.y && to_double(pf).z == centre.z;
     if (!exact) return false;
     if (verify(q, pf)) {
       out = std::move(q);
       return true;
     }
+  }
+  return false;
+}
+
+bool Builder::build(const Vec3d& dir, double offset, double turn, std::vector<Vec3f>& out) {
+  Plane pl;
+  if (!plane(dir, offset, pl)) return false;
+  std::array<double, InteriorOccluders::kMaxVertices> hit{};
+  if (!rays(pl, 0.0, 0.0, turn, hit, nullptr)) return false;
+  return polygon(pl, 0, 0, turn, hit, out);
+}
+
+namespace {
+// Point strictly inside a convex polygon (counter-clockwise or clockwise), doubles.
+bool inside_convex(const std::vector<std::array<double, 2>>& poly, double x, double y) {
+  int pos = 0, neg = 0;
+  for (size_t k = 0; k < poly.size(); ++k) {
+    const auto &a = poly[k], &b = poly[(k + 1) % poly.size()];
+    const double c = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+    pos += c > 0.0, neg += c < 0.0;
+  }
+  return pos == int(poly.size()) || neg == int(poly.size());
+}
+}  // namespace
+
+void Builder::shadow_of(const Vec3d& dir, double offset, const std::vector<Vec3f>& q,
+                        std::vector<std::vector<std::array<double, 2>>>& shadow) {
+  Plane pl;
+  if (!plane_basis(dir, offset, pl)) return;
+  std::vector<std::array<double, 2>>& sh = shadow.emplace_back();
+  for (const Vec3f& x : q) sh.push_back({dot(to_double(x), pl.du), dot(to_double(x), pl.dv)});
+}
+
+bool Builder::build_many(const Vec3d& dir, double offset, int grid, size_t max_polys,
+                         std::vector<std::vector<std::array<double, 2>>>& shadow, std::vector<std::vector<Vec3f>>& out) {
+  Plane pl;
+  if (!plane(dir, offset, pl) || pl.segs.empty()) return false;
+  // The lattice coordinates of the box's corners bound the grid of centres.
+  const Vec3d lo = to_double(box_.lo), hi = to_double(box_.hi);
+  double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3d x = Vec3d(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z) - pl.p;
+    const double a = dot(x, pl.du), b = dot(x, pl.dv);
+    amin = std::min(amin, a), amax = std::max(amax, a), bmin = std::min(bmin, b), bmax = std::max(bmax, b);
+  }
+  struct Cand {
+    double area;
+    int64_t ci, cj;
+    std::array<double, InteriorOccluders::kMaxVertices> hit;
+  };
+  std::vector<Cand> cands;
+  const int kRays = InteriorOccluders::kMaxVertices;
+  // Shadow coordinates: (alpha, beta) of x itself (u, v and the duals are the same in
+  // every plane of one direction, so the projections along dir compare across planes).
+  const double pa = dot(pl.p, pl.du), pb = dot(pl.p, pl.dv);
+  auto centre = [&](int gi, int gj) {
+    return std::pair<int64_t, int64_t>(int64_t(std::round(amin + (amax - amin) * (gi + 0.5) / grid)),
+                                       int64_t(std::round(bmin + (bmax - bmin) * (gj + 0.5) / grid)));
+  };
+  // A cross-section the polygons taken already cover (at least kCovered of the grid
+  // points inside it, by the parity of one ray): further polygons there would be slivers
+  // at its boundary (scan's ellipsoid: 86-100% in every plane; the bunny, armadillo and
+  // elephant: 0-79%). One ray per point before the ten of a candidate.
+  {
+    size_t inside = 0, in_shadow = 0;
+    for (int gi = 0; gi < grid; ++gi)
+      for (int gj = 0; gj < grid; ++gj) {
+        const auto [ci, cj] = centre(gi, gj);
+        if (ray_parity(pl, double(ci), double(cj)) % 2 == 0) continue;
+        ++inside;
+        bool seen = false;
+        for (const auto& sh : shadow) seen = seen || inside_convex(sh, pa + double(ci), pb + double(cj));
+        in_shadow += seen;
+      }
+    if (double(in_shadow) >= kCovered * double(inside)) return true;
+  }
+  for (int gi = 0; gi < grid; ++gi)
+    for (int gj = 0; gj < grid; ++gj) {
+      const auto [ci, cj] = centre(gi, gj);
+      Cand c{0.0, ci, cj, {}};
+      int crossings = 0;
+      if (!rays(pl, double(ci), double(cj), 0.0, c.hit, &crossings) || crossings % 2 == 0) continue;
+      for (int k = 0; k < kRays; ++k)
+        c.area += 0.5 * std::min(c.hit[size_t(k)], 1000.0) * std::min(c.hit[size_t((k + 1) % kRays)], 1000.0) *
+                  std::sin(2.0 * std::numbers::pi / kRays);
+      cands.push_back(c);
+    }
+  std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) { return a.area > b.area; });
+  std::vector<Vec3f> q;
+  for (const Cand& c : cands) {
+    if (out.size() >= max_polys) break;
+    // New cover: at least half of points spread over the candidate (its centre, and
+    // each ray at 0.3 and 0.8 of its hit) outside every polygon taken.
+    int fresh = 0, all = 0;
+    auto probe = [&](double x, double y) {
+      bool seen = false;
+      for (const auto& sh : shadow) seen = seen || inside_convex(sh, pa + x, pb + y);
+      fresh += !seen, ++all;
+    };
+    probe(double(c.ci), double(c.cj));
+    for (int k = 0; k < kRays; ++k) {
+      const double ang = 2.0 * std::numbers::pi * double(k) / kRays, r = std::min(c.hit[size_t(k)], 1000.0);
+      for (double f : {0.3, 0.8}) probe(double(c.ci) + f * r * std::cos(ang), double(c.cj) + f * r * std::sin(ang));
+    }
+    // ... and its fresh part (area times that share) at least kMinShare of the largest
+    // candidate's area: slivers between a polygon and a convex cross-section's boundary
+    // cost a tree occluder and a covered test per candidate and cover little.
+    if (2 * fresh < all || c.area * double(fresh) < kMinShare * cands[0].area * double(all)) continue;
+    if (!polygon(pl, c.ci, c.cj, 0.0, c.hit, q)) continue;
+    std::vector<std::array<double, 2>>& sh = shadow.emplace_back();
+    for (const Vec3f& x : q) sh.push_back({dot(to_double(x), pl.du), dot(to_double(x), pl.dv)});
+    out.push_back(q);
   }
   return false;
 }
@@ -292,7 +486,7 @@ bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3
   return false;
 }
 
-InteriorOccluders::InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs) {
+InteriorOccluders::InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra) {
   std::vector<std::vector<uint32_t>> tris(cs.count());
   for (uint32_t t = 0; t < scene.mesh.size(); ++t)
     if (const int32_t s = cs.surface(t); s >= 0) tris[size_t(s)].push_back(t);
@@ -315,10 +509,25 @@ InteriorOccluders::InteriorOccluders(const Scene& scene, const ClosedSurfaces& c
       if (tris[s].size() < kMinTriangles) continue;
       const AABB& box = cs.box(int32_t(s));
       Builder b(scene.mesh, tris[s], bvhs[s], box);
+      const Vec3d dir = lc - (to_double(box.lo) + to_double(box.hi)) * 0.5;
+      std::vector<std::vector<std::array<double, 2>>> shadow;
+      std::vector<std::vector<Vec3f>> more;
       for (const auto& [offset, turn] : kPlanes) {
-        if (!b.build(lc - (to_double(box.lo) + to_double(box.hi)) * 0.5, offset, turn, q)) continue;
+        if (!b.build(dir, offset, turn, q)) continue;
         entries_.push_back({int32_t(s), li, uint32_t(poly_.size()), uint32_t(q.size())});
         poly_.insert(poly_.end(), q.begin(), q.end());
+        if (extra > 0) b.shadow_of(dir, offset, q, shadow);
+      }
+      // Further polygons where the cross-sections leave the first one's projection
+      // (kExtraPlanes; build_many): non-convex solids.
+      // A central plane already covered (scan's ellipsoid): no further plane either.
+      for (double offset : kExtraPlanes) {
+        if (more.size() >= extra) break;
+        if (b.build_many(dir, offset, kGrid, extra, shadow, more) && offset == kExtraPlanes[0]) break;
+      }
+      for (const std::vector<Vec3f>& m : more) {
+        entries_.push_back({int32_t(s), li, uint32_t(poly_.size()), uint32_t(m.size())});
+        poly_.insert(poly_.end(), m.begin(), m.end());
       }
     }
     light_begin_.push_back(entries_.size());

@@ -14,7 +14,9 @@
 //
 // Per closed surface (of at least kMinTriangles triangles) and light: the cross-section
 // of the solid by the plane through the surface box's centre facing the light, and in it
-// a convex polygon of up to kMaxVertices corners inscribed along rays from the centre.
+// a convex polygon of up to kMaxVertices corners inscribed along rays from the centre;
+// then, for non-convex solids, further polygons from other centres and planes where the
+// cross-sections leave the polygons taken (the constructor's `extra`).
 // Exactness does not depend on how the polygon is found, only on its checks:
 //  - exactly planar: its corners are points p + i u + j v of a lattice (p, u, v on a
 //    dyadic grid fine enough that every corner is a float, computed exactly in double),
@@ -43,7 +45,12 @@ class InteriorOccluders {
   static constexpr uint32_t kMinTriangles = 256;
   static constexpr int kMaxVertices = 10;  // bsp.h kMaxOccluderVertices
 
-  InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs);
+  // `extra`: at most this many further polygons per surface and light, inscribed from
+  // other centres and in planes offset along the light's direction where the
+  // cross-sections leave the first polygon's projection (a non-convex solid: ears,
+  // limbs, folds); 0: one polygon as before.
+  static constexpr size_t kDefaultExtra = 24;
+  InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra = kDefaultExtra);
 
   struct Entry {
     int32_t surface;

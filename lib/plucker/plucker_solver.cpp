@@ -232,7 +232,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   MemoryCharge interior_charge;
   if (ctx.closed && opt.get_bool("interior", true)) {
     tt = Clock::now();
-    interior.emplace(scene, *closed);
+    interior.emplace(scene, *closed, size_t(std::max(0L, opt.get_int("interior_extra", long(InteriorOccluders::kDefaultExtra)))));
     tree_s += seconds_since(tt);
     memory.change(int64_t(interior->memory_bytes()));
     interior_charge.bind(&budget, "interior occluders");
@@ -342,6 +342,9 @@ std::vector<OptionSpec> PluckerSolver::options() const {
                      "(closed_surfaces.h); off: every candidate", {"on", "off"}},
           {"interior", "on: convex polygons inside closed surfaces join the trees as occluders that block nothing "
                        "new (interior_occluders.h); off: none", {"on", "off"}},
+          {"interior_extra", "further interior polygons per closed surface and light where the first one's "
+                             "projection leaves the cross-sections (non-convex solids; interior_occluders.h); 0: one",
+           {}},
           {"cover_nodes", "on: occluder selection leaves out whole triangle-tree nodes covered by an interior "
                           "occluder; off: the covered test per candidate only", {"on", "off"}},
           {"near_merge", "on: glued near triangles of a closed surface that a receiver sees as one convex polygon "
