@@ -20,7 +20,7 @@ const char* const kTimerNames[kTimerCount] = {
     "time_tree_construction", "time_shaft_geometry", "time_triangle_surface", "time_copying_surfaces",
     "time_classifying_edges", "time_updating_facings", "time_merging_patches", "time_simplifying_patches",
     "time_splitting_surfaces", "time_combining_surfaces", "time_computing_loose_edges",
-    "time_computing_surface_aabbs", "time_blocking_tests", "time_ray_casting", "time_probe"};
+    "time_computing_surface_aabbs", "time_blocking_tests", "time_ray_casting", "time_probe", "time_lazy_band"};
 
 }  // namespace
 
@@ -156,6 +156,10 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("direct_rays_uncertified", n_direct_uncertain_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
+  st.set("band_triangles_extracted", n_band_extracted_);
+  st.set("band_triangles_built", n_band_built_);
+  st.set("band_triangles_dropped", n_band_dropped_);
+  st.set("band_triangles_kept", n_band_kept_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
   double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
                        (clusters_ ? clusters_->memory_bytes() : 0));
@@ -257,7 +261,8 @@ void Traversal::shaft_traverse(Shaft& sh) {
   // surfaces only err towards "inside", so the rule stays conservative.
   // Not for a shaft too thin to clip into (shaft_too_thin, blockers.h): clipping the
   // blockers to such a slab can lose them all.
-  if (sh.surfaces.empty() && !L.had_triangles && !shaft_too_thin(sh.g) &&
+  // A band triangle left in the shaft (Shaft::band) may meet it: never empty then.
+  if (sh.surfaces.empty() && sh.band.empty() && !L.had_triangles && !shaft_too_thin(sh.g) &&
       (!R.had_triangles || node_triangles_face_away(sh.r, L.box))) {
     record_visible(sh.r, sh.l);
     return;
@@ -304,7 +309,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   // Lines 5-8.
   if (receiver_leaf(R) && light_leaf(L)) {
     double n = double(R.size()) * double(L.size());
-    if (!sh.surfaces.empty()) n_leaf_surfaces_ += n;
+    if (!sh.surfaces.empty() || !sh.band.empty()) n_leaf_surfaces_ += n;
     else if (!sh.ghosts.empty()) n_leaf_ghosts_ += n;
     else n_leaf_node_tris_ += n;
     cast_rays(sh.r, sh.l, &sh, nullptr);
