@@ -233,6 +233,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"clusters", "initial shafts' surfaces from pre-merged consistent triangle clusters (surface_clusters.h): auto once an initial shaft holds 8192 triangles and an eighth of the mesh, on always, off never", {"auto", "on", "off"}},
       {"lazy_band", "keep the triangles a shaft finds inconsistent (Table 4.1) out of its surfaces as a list that sub-shafts filter by box and build in once consistent: auto once the clusters are built (dense meshes), on always, off never (Embree caster only)", {"auto", "on", "off"}},
+      {"band_build", "with the lazy band, build a band triangle into a sub-shaft's surfaces once it is consistent there (default off: it stays in the band, never blocking)", {"on", "off"}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
@@ -260,6 +261,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
   p.lazy_band_on = opt.get("lazy_band", "auto") == "on";
   p.lazy_band_auto = opt.get("lazy_band", "auto") == "auto";
+  p.band_build = opt.get_bool("band_build", false);
   // The trial compares costs in automatic-ray terms: Embree leaf rays only.
   p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;
   p.light_split_always = opt.get("light_split", "auto") == "on";

@@ -299,18 +299,27 @@ void Traversal::filter_band(const Shaft& parent, Shaft& sub, const std::vector<u
       n_band_dropped_ += double(c1 - c0);
       continue;
     }
+    // A chunk strictly between the clip planes: no box of it is beyond or touching one,
+    // and clamping leaves each as it is.
+    const int a = g.main_axis();
+    const bool in_slab = a >= 0 && cb.lo[a] > g.clip_lo() && cb.hi[a] < g.clip_hi();
+    if (in_slab && ns == 0 && !p_.band_build) {  // every box of the chunk passes
+      sub.band.insert(sub.band.end(), band.begin() + long(c0), band.begin() + long(c1));
+      n_band_kept_ += double(c1 - c0);
+      continue;
+    }
     for (size_t k = c0; k < c1; ++k) {
       const uint32_t t = band[k];
       const AABBd b = to_double(tri_boxes_[t]);
-      bool miss = beyond_clip_planes(b, g);
-      const AABBd cbt = clamped_box(b, g);
+      bool miss = !in_slab && beyond_clip_planes(b, g);
+      const AABBd cbt = in_slab ? b : clamped_box(b, g);
       for (int j = 0; j < ns && !miss; ++j) {
         const ConservativePlane& p = g.plane(straddle[size_t(j)]);
         miss = p.eval(corner(cbt, p, false)) > p.tol;
       }
       if (miss) {
         ++n_band_dropped_;
-      } else if (band_facing(t, g, light_same) == Facing::Inconsistent) {
+      } else if (!p_.band_build || band_facing(t, g, light_same) == Facing::Inconsistent) {
         sub.band.push_back(t);
         ++n_band_kept_;
       } else {

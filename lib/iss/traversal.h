@@ -127,6 +127,10 @@ struct Params {
   // Lazy band (Shaft::band): on, off, or auto (on once the clusters are built, i.e.
   // on dense meshes). Never with the custom caster, which tests the surfaces' triangles.
   bool lazy_band_on = false, lazy_band_auto = true;
+  // Build a band triangle into a sub-shaft's surfaces once it is consistent there. Off
+  // by default: on scan and the real meshes the rebuilding cost more than the relations
+  // it let shafts decide (docs/log/iss-scan.md, the lazy band).
+  bool band_build = false;
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;

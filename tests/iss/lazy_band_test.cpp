@@ -1,7 +1,8 @@
 // The lazy band (lib/iss/traversal.h, Shaft::band; extract_inconsistent in blockers.h):
 // the extraction against a brute-force account of the chain it leaves, and solves with
-// the band kept lazily (lazy_band=on, with and without the clusters) against the eager
-// surfaces (lazy_band=off) and the exact oracle.
+// the band kept lazily (lazy_band=on, with and without the clusters, with and without
+// building triangles that turn consistent) against the eager surfaces (lazy_band=off)
+// and the exact oracle.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -124,7 +125,8 @@ TEST(IssLazyBand, ExtractionKeepsTheConsistentChainAndListsTheBand) {
 
 TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
   // lazy_band=on (with the clusters, whose construction puts the band straight into the
-  // list, and without, where it is taken out of the built surfaces) against lazy_band=off
+  // list, and without, where it is taken out of the built surfaces; and band_build=on,
+  // where sub-shafts build the triangles that turn consistent) against lazy_band=off
   // and the exact oracle, under the Embree option sets (the custom caster never keeps a
   // band). A relation may move between the shafts and the rays, never change answer away
   // from degeneracy.
@@ -141,10 +143,13 @@ TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
       o["lazy_band"] = "off";
       SolveResult eager = run_iss(s, o);
       EXPECT_EQ(eager.stats.get("band_triangles_extracted"), 0.0);
-      for (const char* clusters : {"on", "off"}) {
-        o["clusters"] = clusters;
+      for (const char* variant : {"clusters=on", "clusters=off", "band_build=on"}) {
+        const bool build = std::string(variant) == "band_build=on";
+        o["clusters"] = std::string(variant) == "clusters=off" ? "off" : "on";
+        o["band_build"] = build ? "on" : "off";
         o["lazy_band"] = "on";
         SolveResult lazy = run_iss(s, o);
+        const char* clusters = variant;
         size_t bad = 0, differ = 0;
         for (size_t i = 0; i < s.receivers.size(); ++i)
           for (size_t k = 0; k < ex.classes[i].size(); ++k) {
@@ -157,9 +162,14 @@ TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
         EXPECT_EQ(bad, 0u) << s.name << " clusters=" << clusters << " " << describe(o);
         if (s.name.rfind("scan", 0) == 0) {
           EXPECT_GT(lazy.stats.get("band_triangles_extracted"), 0.0) << s.name;
+          EXPECT_GT(lazy.stats.get("band_triangles_dropped"), 0.0) << s.name;
+        }
+        if (!build) {
+          EXPECT_EQ(lazy.stats.get("band_triangles_built"), 0.0);
         }
       }
       o.erase("clusters");
+      o.erase("band_build");
     }
   }
 }
