@@ -221,10 +221,13 @@ void Traversal::prepare_band() {
   tri_pos_.resize(n);
   const std::span<const uint32_t> order = bvh_->tree().order();
   for (uint32_t pos = 0; pos < order.size(); ++pos) tri_pos_[order[pos]] = pos;
-  tri_planes_.resize(n);
-  tri_plane_ok_.assign(n, 0);
-  band_charge_.bind(budget_, "band planes");
-  band_charge_.set(n * (sizeof(uint32_t) + sizeof(ConservativePlane) + 1));
+  if (p_.band_build) {  // the facing test of filter_band
+    tri_planes_.resize(n);
+    tri_plane_ok_.assign(n, 0);
+  }
+  band_charge_.bind(budget_, "band order and planes");
+  band_charge_.set(tri_pos_.capacity() * sizeof(uint32_t) + tri_planes_.capacity() * sizeof(ConservativePlane) +
+                   tri_plane_ok_.capacity());
 }
 
 const ConservativePlane& Traversal::tri_plane(uint32_t t) {

@@ -162,7 +162,8 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("band_triangles_kept", n_band_kept_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
   double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
-                       (clusters_ ? clusters_->memory_bytes() : 0));
+                       (clusters_ ? clusters_->memory_bytes() : 0) + tri_pos_.capacity() * sizeof(uint32_t) +
+                       tri_planes_.capacity() * sizeof(ConservativePlane) + tri_plane_ok_.capacity());
   st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
   st.set("receiver_tree_nodes", double(rtree_->node_count()));
   double secs = std::chrono::duration<double>(Clock::now() - clock0_).count();

@@ -332,10 +332,11 @@ class Traversal {
   double n_band_extracted_ = 0, n_band_built_ = 0, n_band_dropped_ = 0, n_band_kept_ = 0;
   std::vector<uint32_t> band_build_;
   // Per mesh triangle, built on the first use of the band (counted against the memory
-  // budget as "band planes"): its position in the triangle hierarchy's leaf order (a
-  // band is kept in that order, so consecutive entries are near each other and are
-  // tested by chunks, filter_band) and its plane with plane_through's tolerance at the
-  // solve's scale, which the facing test asks once per sub-shaft.
+  // budget as "band order and planes"): its position in the triangle hierarchy's leaf
+  // order (a band is kept in that order, so consecutive entries are near each other and
+  // are tested by chunks, filter_band) and, with Params::band_build, its plane with
+  // plane_through's tolerance at the solve's scale, which the facing test asks once per
+  // sub-shaft.
   std::vector<uint32_t> tri_pos_;
   std::vector<ConservativePlane> tri_planes_;
   std::vector<uint8_t> tri_plane_ok_;
