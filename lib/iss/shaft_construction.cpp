@@ -143,6 +143,7 @@ Shaft Traversal::construct_sub_shaft(int r, int l, const TreeNode& split_node, S
     if (sub.g.may_intersect_box(gb)) sub.ghosts.push_back(gb);
   std::vector<Surface>& temp = temp_;  // not re-entrant: no traversal in between
   temp.clear();
+  double work = double(parent.band.size()) + 3.0 * double(split_node.gone.size());
   for (Surface& ps : parent.surfaces) {
     // Early exit (section 4.13): a surface whose box, clamped to the sub-shaft's clip
     // planes, misses the sub-shaft has every edge outside it, cannot block it (the
@@ -170,6 +171,7 @@ Shaft Traversal::construct_sub_shaft(int r, int l, const TreeNode& split_node, S
       continue;
     }
     if (beyond_clip_planes(ps.box, sub.g)) ++n_kept_beyond_;
+    work += double(ps.raw.size());
     Surface s;
     {
       ScopedTimer t(times_[kCopy]);
@@ -211,6 +213,8 @@ Shaft Traversal::construct_sub_shaft(int r, int l, const TreeNode& split_node, S
   else ws_.recycle(std::move(nt));
   finish_surfaces(sub, temp);
   temp.clear();
+  light_work_ += work;
+  n_shaft_work_ += work;
   account(sub);
   return sub;
 }
@@ -403,6 +407,8 @@ Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::v
   }
   check(s, "construct_triangle_surface");
   n_band_extracted_ += double(sh.band.size());
+  light_work_ += double(s.raw.size() + sh.band.size());
+  n_shaft_work_ += double(s.raw.size() + sh.band.size());
   std::vector<Surface> temp;
   if (!s.patches.empty()) refine(std::move(s), sh.g, temp, false);
   finish_surfaces(sh, temp);

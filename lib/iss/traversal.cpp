@@ -83,6 +83,7 @@ void Traversal::run_light(size_t li) {
   light_offset_ = scene_.light_offset(li);
   auto_buckets_ = {};
   split_buckets_ = {};
+  light_work_ = 0;
   trial_ = {};
   in_trial_ = false;
   light_mode_ = p_.light_split_always ? LightMode::Split : p_.light_split_auto ? LightMode::Trial : LightMode::Whole;
@@ -160,6 +161,8 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("band_triangles_built", n_band_built_);
   st.set("band_triangles_dropped", n_band_dropped_);
   st.set("band_triangles_kept", n_band_kept_);
+  st.set("shaft_work", n_shaft_work_);
+  st.set("cost_ray_shafts", n_cost_ray_shafts_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
   double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
                        (clusters_ ? clusters_->memory_bytes() : 0) + tri_pos_.capacity() * sizeof(uint32_t) +
@@ -321,14 +324,24 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   const int bucket = std::min(63, std::ilogb(std::max(1.0, double(R.size()) * double(L.size()))));
   AutoRayBucket& ab = (split_now_ ? split_buckets_ : auto_buckets_)[size_t(bucket)];
   const double threshold = split_now_ ? p_.split_auto_ray_relations : p_.auto_ray_relations;
-  if (p_.auto_rays && !p_.custom_rays && ab.subdivided >= kAutoRayMinShafts &&
-      ab.decided_below < threshold * ab.shafts_below && ++ab.skipped % kAutoRayExplore != 0) {
+  // And by cost (Params::cost_rays): the shafts built below subdivided shafts of this
+  // size went through more blocker elements than cost_factor * work_per_ray per relation
+  // they decided, so subdividing costs more than casting saves. That happens where a dense
+  // mesh leaves most receivers in penumbra (the real meshes' scenes, where a shaft holds
+  // thousands of band entries); it is judged after one subdivided shaft of the size, so
+  // that the largest shafts, of which a light has one or two, are judged too. Counts,
+  // not times: the same choice on every run.
+  const bool not_paying = ab.subdivided >= kAutoRayMinShafts && ab.decided_below < threshold * ab.shafts_below;
+  const bool too_costly =
+      cost_rays() && ab.subdivided >= 1 && ab.work_below > p_.cost_factor * p_.work_per_ray * ab.decided_below;
+  if (p_.auto_rays && !p_.custom_rays && (not_paying || too_costly) && ++ab.skipped % kAutoRayExplore != 0) {
+    n_cost_ray_shafts_ += !not_paying;
     n_auto_shafts_ += 1;
     n_auto_relations_ += double(R.size()) * double(L.size());
     cast_rays(sh.r, sh.l, &sh, nullptr);
     return;
   }
-  const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_;
+  const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_, work0 = light_work_;
   SplitMode mode;
   SplitGeometries cand;
   if (receiver_leaf(R)) mode = SplitMode::Light;
@@ -370,6 +383,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   ab.subdivided += 1;  // auto_buckets_ is a fixed array: `ab` outlives the recursion
   ab.shafts_below += n_shafts_ - shafts0;
   ab.decided_below += n_blocked_shaft_ + n_empty_ - decided0;
+  ab.work_below += light_work_ - work0;
 }
 
 // Lines 20-25 of Figure 4.32: splits the receiver or light node and pre-traverses the

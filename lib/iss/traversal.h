@@ -131,6 +131,16 @@ struct Params {
   // by default: on scan and the real meshes the rebuilding cost more than the relations
   // it let shafts decide (docs/log/iss-scan.md, the lazy band).
   bool band_build = false;
+  // Automatic rays by cost (traversal.cpp, shaft_subdivide): shafts of a size whose
+  // subdivisions went through more than cost_factor * work_per_ray blocker elements per
+  // relation they decided cast their relations. work_per_ray: a verified leaf ray cost
+  // about 1,100-1,300 instructions on scan and the bunny, a blocker element about
+  // 300-500 in the shaft constructions (callgrind, docs/log/iss-scan.md).
+  // auto: with the lazy band (dense meshes), where shafts hold thousands of elements;
+  // rooms and columns keep the rule they were tuned with (cost_rays=on there moved
+  // rooms at 1024 x 64 from 17.9% to 19.8% ray-cast).
+  bool cost_rays_on = false, cost_rays_auto = true;
+  double work_per_ray = 3.0, cost_factor = 2.0;
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
@@ -154,6 +164,7 @@ constexpr double kAutoRayRelationsPerShaft = 64.0;
 struct AutoRayBucket {
   int subdivided = 0, skipped = 0;
   double shafts_below = 0, decided_below = 0;
+  double work_below = 0;  // blocker elements the shafts below went through (cost_rays)
 };
 
 // Per-light choice between whole-light leaves and light splits (option light_split,
@@ -250,6 +261,7 @@ class Traversal {
 
   // ---- sections 4.7, 4.8: shaft construction (shaft_construction.cpp) --------------------
   void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out, bool settled);
+  bool cost_rays() const { return p_.cost_rays_on || (p_.cost_rays_auto && lazy_band()); }
   bool lazy_band() const { return !p_.custom_rays && (p_.lazy_band_on || (p_.lazy_band_auto && clusters_)); }
   // Table 4.1 for mesh triangle t in shaft g (update_patch_facings' rule).
   Facing triangle_facing(uint32_t t, const ShaftGeometry& g);
@@ -330,6 +342,9 @@ class Traversal {
   double n_split_lights_ = 0, n_trial_shafts_ = 0;
   double n_cluster_patches_ = 0;  // cluster nodes taken whole (surface_clusters.h)
   double n_band_extracted_ = 0, n_band_built_ = 0, n_band_dropped_ = 0, n_band_kept_ = 0;
+  // Shaft work (Params::cost_rays): blocker elements the shaft constructions went
+  // through (the parent's raw edges and band entries, the new triangles' edges).
+  double light_work_ = 0, n_shaft_work_ = 0, n_cost_ray_shafts_ = 0;
   std::vector<uint32_t> band_build_;
   // Per mesh triangle, built on the first use of the band (counted against the memory
   // budget as "band order and planes"): its position in the triangle hierarchy's leaf

@@ -126,7 +126,8 @@ TEST(IssLazyBand, ExtractionKeepsTheConsistentChainAndListsTheBand) {
 TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
   // lazy_band=on (with the clusters, whose construction puts the band straight into the
   // list, and without, where it is taken out of the built surfaces; and band_build=on,
-  // where sub-shafts build the triangles that turn consistent) against lazy_band=off
+  // where sub-shafts build the triangles that turn consistent; and cost_rays=on, which
+  // sends more shafts to the rays) against lazy_band=off
   // and the exact oracle, under the Embree option sets (the custom caster never keeps a
   // band). A relation may move between the shafts and the rays, never change answer away
   // from degeneracy.
@@ -143,13 +144,13 @@ TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
       o["lazy_band"] = "off";
       SolveResult eager = run_iss(s, o);
       EXPECT_EQ(eager.stats.get("band_triangles_extracted"), 0.0);
-      for (const char* variant : {"clusters=on", "clusters=off", "band_build=on"}) {
+      for (const char* variant : {"clusters=on", "clusters=off", "band_build=on", "cost_rays=on"}) {
         const bool build = std::string(variant) == "band_build=on";
         o["clusters"] = std::string(variant) == "clusters=off" ? "off" : "on";
         o["band_build"] = build ? "on" : "off";
+        o["cost_rays"] = std::string(variant) == "cost_rays=on" ? "on" : "off";
         o["lazy_band"] = "on";
         SolveResult lazy = run_iss(s, o);
-        const char* clusters = variant;
         size_t bad = 0, differ = 0;
         for (size_t i = 0; i < s.receivers.size(); ++i)
           for (size_t k = 0; k < ex.classes[i].size(); ++k) {
@@ -158,8 +159,8 @@ TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
             differ += lazy.receivers[i].visible(k) != eager.receivers[i].visible(k);
             bad += lazy.receivers[i].visible(k) != (cls == 'v');
           }
-        EXPECT_EQ(differ, 0u) << s.name << " clusters=" << clusters << " " << describe(o);
-        EXPECT_EQ(bad, 0u) << s.name << " clusters=" << clusters << " " << describe(o);
+        EXPECT_EQ(differ, 0u) << s.name << " " << variant << " " << describe(o);
+        EXPECT_EQ(bad, 0u) << s.name << " " << variant << " " << describe(o);
         if (s.name.rfind("scan", 0) == 0) {
           EXPECT_GT(lazy.stats.get("band_triangles_extracted"), 0.0) << s.name;
           EXPECT_GT(lazy.stats.get("band_triangles_dropped"), 0.0) << s.name;
@@ -170,6 +171,7 @@ TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
       }
       o.erase("clusters");
       o.erase("band_build");
+      o.erase("cost_rays");
     }
   }
 }
