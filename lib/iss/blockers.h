@@ -170,9 +170,21 @@ size_t classify_edges(Surface& s, const ShaftGeometry& g);
 // corner below -pl.tol), 2 INTERSECTS (conservative); from the two corners the signs of
 // pl.n pick, the same answer as from all eight.
 int classify_box_plane(const AABBd& b, const ConservativePlane& pl);
+// Table 4.1 for a triangle with plane `pl` (plane_through at the shaft's scale) in shaft
+// g: Inconsistent for a zero-area triangle, as UPDATE-PATCH-FACINGS decides it.
+Facing triangle_facing(const ConservativePlane& pl, const ShaftGeometry& g);
 // UPDATE-PATCH-FACINGS (Figure 4.22); returns the number of patches that became consistent.
 size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g);
 void merge_patches(Surface& s, Workspace& ws);                                 // Figure 4.23
+// The lazy band (an addition to sections 4.7.1-4.7.3 in the spirit of 4.13; Traversal's
+// Shaft::band): removes every inconsistent triangle patch of `s` and appends its mesh
+// triangle to `band`. What is left is the chain of a subset of the same valid blockers,
+// which is all BLOCKS-SHAFT needs (see the guarantee above); the edges a removed patch
+// shared with the rest become boundary edges (labelled, so loose edges for COMBINE), so
+// the rest cannot block a shaft they stay inside. The result may be disconnected: the
+// caller splits it (SPLIT-SURFACE) before any removal test relies on connectivity.
+// Returns the number of patches removed.
+size_t extract_inconsistent(Surface& s, std::vector<uint32_t>& band, Workspace& ws);
 void simplify_patches(Surface& s, const ShaftGeometry& g, Workspace& ws);     // section 4.7.5
 void split_surface(Surface&& s, std::vector<Surface>& out, Workspace& ws);    // Figure 4.25
 void compute_loose_edges(const BlockerContext& ctx, Surface& s);              // Figure 4.26

@@ -205,7 +205,24 @@ RootPlan plan_roots(const Scene& scene, const mesh::PreparedMesh& m, const Trian
   // shaft's triangles may be seen by no other light), or a single light sees the
   // scene. Lights all open on a compact object (scan: 10 lights, 74,896 of 74,904
   // triangles kept) cost the walk (2% of the solve) and save nothing.
-  const bool walk = open.size() < scene.lights.size() || scene.lights.size() == 1;
+  bool walk = open.size() < scene.lights.size() || scene.lights.size() == 1;
+  // A shaft whose planes all pass the mesh box's farthest corner would take every
+  // triangle: plane values are monotone in each coordinate as evaluated
+  // (classify_box_plane), so each triangle box's nearest corner passes too, which is
+  // may_intersect_box's test. One light above a compact mesh (the real meshes'
+  // file: scenes) then skips the walk and keeps the same triangles.
+  if (walk && !open.empty() && !m.triangles.empty()) {
+    AABBd mb = to_double(bvh.tree().node(0).box);
+    auto contains = [&](const ShaftGeometry& g) {
+      for (int i = 0; i < g.plane_count(); ++i) {
+        const ConservativePlane& p = g.plane(i);
+        const Vec3d far(p.n.x > 0 ? mb.hi.x : mb.lo.x, p.n.y > 0 ? mb.hi.y : mb.lo.y, p.n.z > 0 ? mb.hi.z : mb.lo.z);
+        if (!(p.eval(far) <= p.tol)) return false;
+      }
+      return true;
+    };
+    if (std::any_of(open.begin(), open.end(), contains)) walk = false;
+  }
   std::vector<uint32_t> hit;
   if (walk && !open.empty()) bvh.query_shafts(open, hit);
   for (uint32_t t : hit) plan.keep[m.triangles[t].source] = 1;
@@ -232,6 +249,10 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"clusters", "initial shafts' surfaces from pre-merged consistent triangle clusters (surface_clusters.h): auto once an initial shaft holds 8192 triangles and an eighth of the mesh, on always, off never", {"auto", "on", "off"}},
+      {"lazy_band", "keep the triangles a shaft finds inconsistent (Table 4.1) out of its surfaces as a list that sub-shafts filter by box (never blocking, never empty): auto once the clusters are built (dense meshes), on always, off never (Embree caster only)", {"auto", "on", "off"}},
+      {"band_build", "with the lazy band, build a band triangle into a sub-shaft's surfaces once it is consistent there (default off: it stays in the band, never blocking)", {"on", "off"}},
+      {"cost_rays", "with auto_rays, also cast the relations of shafts of a size once subdividing them went through more blocker elements (raw edges, band entries) per relation decided below than cost_factor rays' worth (every 8th still subdivides): auto with the lazy band (dense meshes), on always, off never", {"auto", "on", "off"}},
+      {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 2)", {}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
@@ -257,6 +278,12 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.direct_rays = opt.get_bool("direct_rays", true);
   p.clusters = opt.get("clusters", "auto") != "off";
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
+  p.lazy_band_on = opt.get("lazy_band", "auto") == "on";
+  p.lazy_band_auto = opt.get("lazy_band", "auto") == "auto";
+  p.band_build = opt.get_bool("band_build", false);
+  p.cost_rays_on = opt.get("cost_rays", "auto") == "on";
+  p.cost_rays_auto = opt.get("cost_rays", "auto") == "auto";
+  p.cost_factor = double(std::max(0L, opt.get_int("cost_factor", long(p.cost_factor))));
   // The trial compares costs in automatic-ray terms: Embree leaf rays only.
   p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;
   p.light_split_always = opt.get("light_split", "auto") == "on";

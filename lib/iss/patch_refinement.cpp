@@ -39,6 +39,17 @@ int classify_box_plane(const AABBd& b, const ConservativePlane& pl) {
   return 2;
 }
 
+Facing triangle_facing(const ConservativePlane& pl, const ShaftGeometry& g) {
+  if (pl.n == Vec3d(0, 0, 0)) return Facing::Inconsistent;  // zero-area triangle
+  const int rr = classify_box_plane(g.receiver(), pl), lr = classify_box_plane(g.light(), pl);
+  // Table 4.1.
+  if (rr == 0) return Facing::TowardsReceiver;
+  if (rr == 1) return Facing::TowardsLight;
+  if (lr == 0) return Facing::TowardsLight;
+  if (lr == 1) return Facing::TowardsReceiver;
+  return Facing::Inconsistent;
+}
+
 size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGeometry& g) {
   size_t changed = 0;
   for (Patch& p : s.patches) {
@@ -46,14 +57,7 @@ size_t update_patch_facings(const BlockerContext& ctx, Surface& s, const ShaftGe
     uint32_t t = uint32_t(p.tri);
     ConservativePlane pl = plane_through(corner_d(*ctx.mesh, t, 0), corner_d(*ctx.mesh, t, 1), corner_d(*ctx.mesh, t, 2),
                                g.scale());
-    if (pl.n == Vec3d(0, 0, 0)) continue;  // zero-area triangle: stays inconsistent
-    int rr = classify_box_plane(g.receiver(), pl), lr = classify_box_plane(g.light(), pl);
-    // Table 4.1.
-    if (rr == 0) p.facing = Facing::TowardsReceiver;
-    else if (rr == 1) p.facing = Facing::TowardsLight;
-    else if (lr == 0) p.facing = Facing::TowardsLight;
-    else if (lr == 1) p.facing = Facing::TowardsReceiver;
-    else p.facing = Facing::Inconsistent;
+    p.facing = triangle_facing(pl, g);
     changed += p.facing != Facing::Inconsistent;
   }
   return changed;
@@ -141,6 +145,38 @@ void merge_patches(Surface& s, Workspace& ws) {
         if (re.nb[k] != kNoPatch) re.nb[k] = ws.remap[size_t(re.nb[k])];
   }
   compact_raw(s, ws);
+}
+
+size_t extract_inconsistent(Surface& s, std::vector<uint32_t>& band, Workspace& ws) {
+  auto removed = [](const Patch& p) { return p.facing == Facing::Inconsistent && p.tri >= 0; };
+  if (std::none_of(s.patches.begin(), s.patches.end(), removed)) return 0;
+  const size_t np = s.patches.size();
+  ws.remap2.assign(np, kNoPatch);  // a removed patch's side of an edge becomes empty
+  std::vector<Edge>& out = ws.edge_tmp;
+  out.clear();
+  std::vector<Patch>& newp = ws.patch_tmp2;
+  newp.clear();
+  size_t n = 0;
+  for (size_t pi = 0; pi < np; ++pi) {
+    Patch p = s.patches[pi];
+    if (removed(p)) {
+      band.push_back(uint32_t(p.tri));
+      ++n;
+      continue;
+    }
+    ws.remap2[pi] = int32_t(newp.size());
+    const uint32_t first = uint32_t(out.size());
+    for (uint32_t k = p.first; k < p.first + p.count; ++k) out.push_back(s.edges[k]);
+    p.first = first;
+    newp.push_back(p);
+  }
+  s.edges.swap(out);
+  s.patches.assign(newp.begin(), newp.end());
+  for (RawEdge& re : s.raw)
+    for (int k = 0; k < 2; ++k)
+      if (re.nb[k] != kNoPatch) re.nb[k] = ws.remap2[size_t(re.nb[k])];
+  compact_raw(s, ws);  // raw edges only the removed patches used
+  return n;
 }
 
 namespace {

@@ -73,9 +73,13 @@ class SurfaceClusters {
 // whose box may meet the shaft, as the same oriented chain restricted to the slab
 // (triangles outside the shaft but inside a node taken whole are real triangles that
 // meet neither node box, which blockers.h allows).
-// `whole`, when given, is increased by the number of nodes taken whole.
+// `whole`, when given, is increased by the number of nodes taken whole. With `band`, a
+// leaf triangle that is a valid blocker by add_triangle's tests, is not beyond a clip
+// plane by its box and is inconsistent by Table 4.1 (triangle_facing) is appended to
+// `band` instead of built (the lazy band, traversal.h: Shaft::band), in the
+// hierarchy's leaf order.
 Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClusters& clusters, const ShaftGeometry& g,
                                     const TreeNode& rnode, const TreeNode& lnode, Workspace& ws,
-                                    double* whole_nodes = nullptr);
+                                    double* whole_nodes = nullptr, std::vector<uint32_t>* band = nullptr);
 
 }  // namespace visgate::iss

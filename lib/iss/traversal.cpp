@@ -20,7 +20,7 @@ const char* const kTimerNames[kTimerCount] = {
     "time_tree_construction", "time_shaft_geometry", "time_triangle_surface", "time_copying_surfaces",
     "time_classifying_edges", "time_updating_facings", "time_merging_patches", "time_simplifying_patches",
     "time_splitting_surfaces", "time_combining_surfaces", "time_computing_loose_edges",
-    "time_computing_surface_aabbs", "time_blocking_tests", "time_ray_casting", "time_probe"};
+    "time_computing_surface_aabbs", "time_blocking_tests", "time_ray_casting", "time_probe", "time_lazy_band"};
 
 }  // namespace
 
@@ -83,6 +83,7 @@ void Traversal::run_light(size_t li) {
   light_offset_ = scene_.light_offset(li);
   auto_buckets_ = {};
   split_buckets_ = {};
+  light_work_ = 0;
   trial_ = {};
   in_trial_ = false;
   light_mode_ = p_.light_split_always ? LightMode::Split : p_.light_split_auto ? LightMode::Trial : LightMode::Whole;
@@ -156,9 +157,16 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("direct_rays_uncertified", n_direct_uncertain_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
+  st.set("band_triangles_extracted", n_band_extracted_);
+  st.set("band_triangles_built", n_band_built_);
+  st.set("band_triangles_dropped", n_band_dropped_);
+  st.set("band_triangles_kept", n_band_kept_);
+  st.set("shaft_work", n_shaft_work_);
+  st.set("cost_ray_shafts", n_cost_ray_shafts_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
   double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
-                       (clusters_ ? clusters_->memory_bytes() : 0));
+                       (clusters_ ? clusters_->memory_bytes() : 0) + tri_pos_.capacity() * sizeof(uint32_t) +
+                       tri_planes_.capacity() * sizeof(ConservativePlane) + tri_plane_ok_.capacity());
   st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
   st.set("receiver_tree_nodes", double(rtree_->node_count()));
   double secs = std::chrono::duration<double>(Clock::now() - clock0_).count();
@@ -257,7 +265,8 @@ void Traversal::shaft_traverse(Shaft& sh) {
   // surfaces only err towards "inside", so the rule stays conservative.
   // Not for a shaft too thin to clip into (shaft_too_thin, blockers.h): clipping the
   // blockers to such a slab can lose them all.
-  if (sh.surfaces.empty() && !L.had_triangles && !shaft_too_thin(sh.g) &&
+  // A band triangle left in the shaft (Shaft::band) may meet it: never empty then.
+  if (sh.surfaces.empty() && sh.band.empty() && !L.had_triangles && !shaft_too_thin(sh.g) &&
       (!R.had_triangles || node_triangles_face_away(sh.r, L.box))) {
     record_visible(sh.r, sh.l);
     return;
@@ -304,7 +313,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   // Lines 5-8.
   if (receiver_leaf(R) && light_leaf(L)) {
     double n = double(R.size()) * double(L.size());
-    if (!sh.surfaces.empty()) n_leaf_surfaces_ += n;
+    if (!sh.surfaces.empty() || !sh.band.empty()) n_leaf_surfaces_ += n;
     else if (!sh.ghosts.empty()) n_leaf_ghosts_ += n;
     else n_leaf_node_tris_ += n;
     cast_rays(sh.r, sh.l, &sh, nullptr);
@@ -315,14 +324,24 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   const int bucket = std::min(63, std::ilogb(std::max(1.0, double(R.size()) * double(L.size()))));
   AutoRayBucket& ab = (split_now_ ? split_buckets_ : auto_buckets_)[size_t(bucket)];
   const double threshold = split_now_ ? p_.split_auto_ray_relations : p_.auto_ray_relations;
-  if (p_.auto_rays && !p_.custom_rays && ab.subdivided >= kAutoRayMinShafts &&
-      ab.decided_below < threshold * ab.shafts_below && ++ab.skipped % kAutoRayExplore != 0) {
+  // And by cost (Params::cost_rays): the shafts built below subdivided shafts of this
+  // size went through more blocker elements than cost_factor * work_per_ray per relation
+  // they decided, so subdividing costs more than casting saves. That happens where a dense
+  // mesh leaves most receivers in penumbra (the real meshes' scenes, where a shaft holds
+  // thousands of band entries); it is judged after one subdivided shaft of the size, so
+  // that the largest shafts, of which a light has one or two, are judged too. Counts,
+  // not times: the same choice on every run.
+  const bool not_paying = ab.subdivided >= kAutoRayMinShafts && ab.decided_below < threshold * ab.shafts_below;
+  const bool too_costly =
+      cost_rays() && ab.subdivided >= 1 && ab.work_below > p_.cost_factor * p_.work_per_ray * ab.decided_below;
+  if (p_.auto_rays && !p_.custom_rays && (not_paying || too_costly) && ++ab.skipped % kAutoRayExplore != 0) {
+    n_cost_ray_shafts_ += !not_paying;
     n_auto_shafts_ += 1;
     n_auto_relations_ += double(R.size()) * double(L.size());
     cast_rays(sh.r, sh.l, &sh, nullptr);
     return;
   }
-  const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_;
+  const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_, work0 = light_work_;
   SplitMode mode;
   SplitGeometries cand;
   if (receiver_leaf(R)) mode = SplitMode::Light;
@@ -364,6 +383,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   ab.subdivided += 1;  // auto_buckets_ is a fixed array: `ab` outlives the recursion
   ab.shafts_below += n_shafts_ - shafts0;
   ab.decided_below += n_blocked_shaft_ + n_empty_ - decided0;
+  ab.work_below += light_work_ - work0;
 }
 
 // Lines 20-25 of Figure 4.32: splits the receiver or light node and pre-traverses the

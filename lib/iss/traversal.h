@@ -43,7 +43,7 @@ using Clock = std::chrono::steady_clock;
 // which the thesis does not have); "miscellaneous" is the rest of the traversal.
 enum TimerId {
   kTree, kShaftGeometry, kTriangleSurface, kCopy, kClassify, kFacings, kMerge, kSimplify, kSplit,
-  kCombine, kLoose, kBounds, kBlocking, kRays, kProbe, kTimerCount
+  kCombine, kLoose, kBounds, kBlocking, kRays, kProbe, kBand, kTimerCount
 };
 
 // Timer ticks: the time-stamp counter where available. The breakdown timers run around
@@ -76,6 +76,13 @@ struct Shaft {
   std::vector<Surface> surfaces;
   std::vector<AABBd> ghosts;  // boxes of removed redundant surfaces (section 4.7.8)
   size_t bytes = 0;
+  // The lazy band (Params::lazy_band): mesh triangles that meet the shaft as far as
+  // their box says, are valid blockers (in neither node's inside list) and are
+  // inconsistent for it by Table 4.1, kept out of the surfaces. They never block (the
+  // surfaces' edges along them are boundary edges), the shaft is never empty while one
+  // is left, a sub-shaft drops those whose box misses it and builds into its surfaces
+  // those that turn consistent for it (as gone triangles are built, section 4.7.1).
+  std::vector<uint32_t> band;
 };
 
 enum class SplitMode { Receiver, Light };
@@ -117,6 +124,23 @@ struct Params {
   // Option clusters: auto (this), on (cluster_min_triangles 0), off.
   bool clusters = true;
   size_t cluster_min_triangles = 8192;
+  // Lazy band (Shaft::band): on, off, or auto (on once the clusters are built, i.e.
+  // on dense meshes). Never with the custom caster, which tests the surfaces' triangles.
+  bool lazy_band_on = false, lazy_band_auto = true;
+  // Build a band triangle into a sub-shaft's surfaces once it is consistent there. Off
+  // by default: on scan and the real meshes the rebuilding cost more than the relations
+  // it let shafts decide (docs/log/iss-scan.md, the lazy band).
+  bool band_build = false;
+  // Automatic rays by cost (traversal.cpp, shaft_subdivide): shafts of a size whose
+  // subdivisions went through more than cost_factor * work_per_ray blocker elements per
+  // relation they decided cast their relations. work_per_ray: a verified leaf ray cost
+  // about 1,100-1,300 instructions on scan and the bunny, a blocker element about
+  // 300-500 in the shaft constructions (callgrind, docs/log/iss-scan.md).
+  // auto: with the lazy band (dense meshes), where shafts hold thousands of elements;
+  // rooms and columns keep the rule they were tuned with (cost_rays=on there moved
+  // rooms at 1024 x 64 from 17.9% to 19.8% ray-cast).
+  bool cost_rays_on = false, cost_rays_auto = true;
+  double work_per_ray = 3.0, cost_factor = 2.0;
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
@@ -140,6 +164,7 @@ constexpr double kAutoRayRelationsPerShaft = 64.0;
 struct AutoRayBucket {
   int subdivided = 0, skipped = 0;
   double shafts_below = 0, decided_below = 0;
+  double work_below = 0;  // blocker elements the shafts below went through (cost_rays)
 };
 
 // Per-light choice between whole-light leaves and light splits (option light_split,
@@ -201,7 +226,7 @@ class Traversal {
   }
 
   void account(Shaft& sh) {
-    sh.bytes = sizeof(Shaft) + sh.ghosts.capacity() * sizeof(AABBd);
+    sh.bytes = sizeof(Shaft) + sh.ghosts.capacity() * sizeof(AABBd) + sh.band.capacity() * sizeof(uint32_t);
     for (const Surface& s : sh.surfaces) sh.bytes += s.bytes();
     live_bytes_ += sh.bytes;
     peak_bytes_ = std::max(peak_bytes_, live_bytes_);
@@ -236,6 +261,12 @@ class Traversal {
 
   // ---- sections 4.7, 4.8: shaft construction (shaft_construction.cpp) --------------------
   void refine(Surface&& s, const ShaftGeometry& g, std::vector<Surface>& out, bool settled);
+  bool cost_rays() const { return p_.cost_rays_on || (p_.cost_rays_auto && lazy_band()); }
+  bool lazy_band() const { return !p_.custom_rays && (p_.lazy_band_on || (p_.lazy_band_auto && clusters_)); }
+  // Table 4.1 for mesh triangle t in shaft g (update_patch_facings' rule).
+  Facing triangle_facing(uint32_t t, const ShaftGeometry& g);
+  Facing band_facing(uint32_t t, const ShaftGeometry& g, bool light_same);
+  void filter_band(const Shaft& parent, Shaft& sub, const std::vector<uint32_t>& gone, std::vector<uint32_t>& build);
   void finish_surfaces(Shaft& sh, std::vector<Surface>& temp);
   Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent,
                             const ShaftGeometry* made = nullptr);
@@ -310,6 +341,25 @@ class Traversal {
   SplitTrial trial_;
   double n_split_lights_ = 0, n_trial_shafts_ = 0;
   double n_cluster_patches_ = 0;  // cluster nodes taken whole (surface_clusters.h)
+  double n_band_extracted_ = 0, n_band_built_ = 0, n_band_dropped_ = 0, n_band_kept_ = 0;
+  // Shaft work (Params::cost_rays): blocker elements the shaft constructions went
+  // through (the parent's raw edges and band entries, the new triangles' edges).
+  double light_work_ = 0, n_shaft_work_ = 0, n_cost_ray_shafts_ = 0;
+  std::vector<uint32_t> band_build_;
+  // Per mesh triangle, built on the first use of the band (counted against the memory
+  // budget as "band order and planes"): its position in the triangle hierarchy's leaf
+  // order (a band is kept in that order, so consecutive entries are near each other and
+  // are tested by chunks, filter_band) and, with Params::band_build, its plane with
+  // plane_through's tolerance at the solve's scale, which the facing test asks once per
+  // sub-shaft.
+  std::vector<uint32_t> tri_pos_;
+  std::vector<ConservativePlane> tri_planes_;
+  std::vector<uint8_t> tri_plane_ok_;
+  MemoryCharge band_charge_;
+  static constexpr size_t kBandChunk = 8;
+  void prepare_band();
+  const ConservativePlane& tri_plane(uint32_t t);
+  std::vector<std::vector<uint32_t>> band_lists_;
   bool light_leaf(const TreeNode& L) const {
     return L.is_leaf || (!split_now_ && L.size() <= uint32_t(p_.leaf_samples));
   }
@@ -326,7 +376,7 @@ class Traversal {
   std::unordered_map<int, PendingRays> pending_;  // by receiver node, this light only
   std::vector<uint32_t> pending_samples_;
   std::vector<uint32_t> probe_tris_;
-  std::vector<Surface> probe_out_, temp_;
+  std::vector<Surface> probe_out_, temp_, band_split_;
   std::vector<std::vector<Surface>> surface_lists_;
   std::vector<std::vector<AABBd>> ghost_lists_;
   size_t live_bytes_ = 0, peak_bytes_ = 0, light_tree_bytes_peak_ = 0;

@@ -157,7 +157,7 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
 
 Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClusters& clusters, const ShaftGeometry& g,
                                     const TreeNode& rnode, const TreeNode& lnode, Workspace& ws,
-                                    double* whole_nodes) {
+                                    double* whole_nodes, std::vector<uint32_t>* band) {
   Surface s = ws.take_surface();
   const mesh::PreparedMesh& m = *ctx.mesh;
   ws.reset_labels(m.edge_count());
@@ -202,7 +202,24 @@ Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClus
       }
     }
     if (bvh.is_leaf(nd)) {
-      for (uint32_t t : bvh.leaf_items(nd)) add_triangle(m, t, g, rnode, lnode, ws, s);
+      for (uint32_t t : bvh.leaf_items(nd)) {
+        if (band) {
+          // add_triangle's valid-blocker tests, then the band's: an inconsistent one
+          // is not built (its patch would only be taken out again, extract_inconsistent).
+          const Vec3d a = corner_d(m, t, 0), b = corner_d(m, t, 1), c = corner_d(m, t, 2);
+          if (g.separated_by_shaft_plane(a, b, c) || rnode.contains_triangle(t) || lnode.contains_triangle(t) ||
+              g.separated_by_triangle_plane(a, b, c))
+            continue;
+          AABBd tb(a, b);
+          tb.extend(c);
+          if (beyond_clip_planes(tb, g)) continue;  // clipped away: not a blocker
+          if (triangle_facing(plane_through(a, b, c, g.scale()), g) == Facing::Inconsistent) {
+            band->push_back(t);
+            continue;
+          }
+        }
+        add_triangle(m, t, g, rnode, lnode, ws, s);
+      }
       continue;
     }
     stack[top++] = bvh.right(i);

@@ -186,6 +186,10 @@ TEST(IssClusters, ClusteredSolveEqualsPerTriangleSolveAndOracle) {
   for (const Scene& s : scenes) {
     oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
     for (auto o : kOptionSets) {
+      // The clusters' construction alone: the lazy band (which the clusters switch on,
+      // with cost_rays) moves relations between shafts and rays, so that near-degenerate
+      // ones may differ; lazy_band_test.cpp compares it with the oracle.
+      o["lazy_band"] = "off";
       o["clusters"] = "on";
       SolveResult on = run_iss(s, o);
       o["clusters"] = "off";
