@@ -25,6 +25,9 @@ namespace {
 // the AVX2 test reads and writes its last step of eight whole, masked (count_run_avx2).
 constexpr size_t kRunPad = 8;
 
+// Pieces whose v-range reaches at most this many positions test them one by one.
+constexpr int kOneByOne = 512;
+
 // Index of the first element of a[0, n) (ascending) that is not less than x, like
 // std::lower_bound, written so that the compiler emits conditional moves: the searches
 // of add_piece and add_step on sample coordinates are data-dependent and would
@@ -158,6 +161,31 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
     vu_[k] = a.u;
     vv_[k] = a.v;
   }
+  ord_ = strips.vorder.data();
+  sorted_ = false;
+  if (allow_sorted_ && n <= size_t(kOneByOne)) {
+    // Few samples: no piece ever uses the strips (add_piece tests at most kOneByOne
+    // positions one by one), so order the picked points by their own v instead of their
+    // boxes' v_lo. A piece's v-range is then exactly a range of positions, without the
+    // tallest box's slack. Insertion sort from the v_lo order: each point lies in its
+    // box, so only samples with overlapping boxes are out of order.
+    order_.assign(strips.vorder.begin(), strips.vorder.end());
+    for (size_t k = 1; k < n; ++k) {
+      const float u = vu_[k], v = vv_[k];
+      const int j = order_[k];
+      size_t q = k;
+      for (; q > 0 && vv_[q - 1] > v; --q) {
+        vu_[q] = vu_[q - 1];
+        vv_[q] = vv_[q - 1];
+        order_[q] = order_[q - 1];
+      }
+      vu_[q] = u;
+      vv_[q] = v;
+      order_[q] = j;
+    }
+    ord_ = order_.data();
+    sorted_ = true;
+  }
   extent_ = extent;
   zero_counters();
 }
@@ -167,6 +195,8 @@ void DepthCounter::clear_counters() {
   // loops below then read consecutive memory and the compiler vectorises them.
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
+  ord_ = S.vorder.data();
+  sorted_ = false;
   vu_.resize(n + kRunPad);
   vv_.resize(n + kRunPad);
   for (size_t k = 0; k < n; ++k) {
@@ -210,7 +240,6 @@ void DepthCounter::use_strip_order() {
 }
 
 namespace {
-constexpr int kOneByOne = 512;
 
 // One piece's one-by-one test (DepthCounter::add_piece): the line from (lou, lov) with
 // direction (du, dv), its v-range [lov, hiv), the weight c of a sample strictly left and
@@ -417,11 +446,16 @@ bool use_avx2() {
 #endif
 }
 
-void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
-               bool v_range) {
 #if defined(VG_SSV_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
-  if (avx2) return count_run_avx2(t, u, v, out, flag, k0, k1, v_range);
+// Set once at start-up: count_run runs once per piece, a guarded local static cost a
+// check per call.
+const bool kCountRunAvx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+#endif
+
+inline void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
+                      bool v_range) {
+#if defined(VG_SSV_AVX2)
+  if (kCountRunAvx2) return count_run_avx2(t, u, v, out, flag, k0, k1, v_range);
 #endif
   count_run_sse2(t, u, v, out, flag, k0, k1, v_range);
 }
@@ -434,6 +468,17 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   const bool up = Q.v > P.v;
   const Vec2f lo = up ? P : Q, hi = up ? Q : P;
   const int c = up ? w : -w;
+  // Positions [kb, ke) of the picked points' own v order (sorted_): exactly the samples
+  // with v in [lo.v, hi.v). A piece that reaches none (most pieces of small triangles
+  // over few samples) ends here, before its margin and line are set up.
+  int kb = 0, ke = 0;
+  if (sorted_) {
+    const int n = int(uv_.size());
+    kb = branchless_lower_bound(vv_.data(), n, lo.v);
+    ke = kb;  // a piece reaches few samples: a forward scan finds the same end
+    while (ke < n && vv_[size_t(ke)] < hi.v) ++ke;
+    if (kb >= ke) return;
+  }
   const float du = hi.u - lo.u, dv = hi.v - lo.v;
   // Margin. The float cross product below errs only for samples within a few float32
   // ulps (about 1e-7 relative to the coordinates' magnitude) of the line; `margin`, 1e-6
@@ -454,11 +499,16 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   auto run = [&pt](const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
     count_run(pt, u, v, out, flag, k0, k1, v_range);
   };
+  if (sorted_) {
+    // The same one-by-one test over exactly the samples in the v-range.
+    run(vu_.data(), vv_.data(), dv_.data(), fv_.data(), kb, ke, true);
+    return;
+  }
   const double slope = double(du) / double(dv);
   // Only samples with v_lo in [lo.v - max_height, hi.v) can have v in [lo.v, hi.v): a
   // range [kb, ke) of the v_lo order, met by a run of consecutive strips.
-  const int kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
-  const int ke = S.vlo_lower_bound(hi.v);
+  kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
+  ke = S.vlo_lower_bound(hi.v);
   if (kb >= ke) return;
   // Up to a few hundred samples in range, testing each one by one (four per SSE2 step)
   // costs less than the strips' searches: the same test, so the same counts.
@@ -498,6 +548,14 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
 }
 
 void DepthCounter::add_step(float vc, int w) {
+  if (sorted_) {
+    // Every sample with v >= vc: a suffix of the picked points' v order.
+    const int kb = branchless_lower_bound(vv_.data(), int(uv_.size()), vc);
+    diffv_[size_t(kb)] += w;
+    step_list_.emplace_back(kb, w);
+    steps_ = true;
+    return;
+  }
   const SampleStrips& S = *strips_;
   // Boxes with v_lo >= vc: a suffix of the v_lo order. Boxes below it with v_lo within
   // the tallest box of vc may reach it: tested one by one.
@@ -514,6 +572,14 @@ void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unc
   const size_t n = uv_.size();
   fold_steps();
   depth.resize(n);
+  if (sorted_) {
+    for (size_t k = 0; k < n; ++k) depth[size_t(ord_[k])] = dv_[k];
+    if (unclear) {
+      unclear->resize(n);
+      for (size_t k = 0; k < n; ++k) (*unclear)[size_t(ord_[k])] = uint8_t(fv_[k] != 0);
+    }
+    return;
+  }
   if (strip_order_) {
     for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
   } else {
@@ -545,7 +611,7 @@ DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, 
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
   depth.resize(n);
-  const int* vorder = S.vorder.data();
+  const int* vorder = ord_;  // the order of the positions (strip_order_ only with S.vorder)
 #if defined(VG_SSV_AVX2)
   if (!strip_order_ && use_avx2()) {
     if (step_list_.size() > kMaxLaneSteps) fold_steps();

@@ -174,6 +174,11 @@ class DepthCounter {
   };
   Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value);
   size_t size() const { return uv_.size(); }
+  // Whether a light's samples (the strips form of reset) may be kept in the order of the
+  // picked points' own v when there are few (at most 512): the same counts and flags
+  // per sample as the v_lo order, with fewer positions tested per piece. On by default;
+  // off compares the two in tests. Takes effect at the next reset.
+  void allow_sorted_order(bool on) { allow_sorted_ = on; }
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
@@ -195,6 +200,12 @@ class DepthCounter {
   // The steps' (position, weight) since the last reset: diffv_ is zero elsewhere, so
   // clearing these entries clears it, and the AVX2 class scan adds them per block.
   std::vector<std::pair<int32_t, int32_t>> step_list_;
+  // The sample at each position of vu_, vv_, dv_, fv_: strips_->vorder, or order_ when
+  // sorted_ (positions in the picked points' own v order, never with the strip order).
+  const int* ord_ = nullptr;
+  std::vector<int> order_;
+  bool sorted_ = false;
+  bool allow_sorted_ = true;
 };
 
 // The point where the edge between vertices i and j (frame coordinates `fp`) crosses
