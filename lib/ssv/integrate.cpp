@@ -185,6 +185,15 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
     }
     ord_ = order_.data();
     sorted_ = true;
+    // n buckets over [v_0, v_n-1] of the sorted points for sorted_lower_bound.
+    const double span = n > 0 ? double(vv_[n - 1]) - double(vv_[0]) : 0.0;
+    vb_scale_ = span > 0.0 ? double(n) / span : 0.0;
+    vb_first_.resize(n + 1);
+    for (size_t b = 0, k = 0; b <= n; ++b) {
+      const double start = double(vv_[0]) + (vb_scale_ > 0.0 ? double(b) / vb_scale_ : 0.0);
+      while (k < n && double(vv_[k]) < start) ++k;
+      vb_first_[b] = int(k);
+    }
   }
   extent_ = extent;
   zero_counters();
@@ -462,6 +471,20 @@ inline void count_run(const PieceTest& t, const float* u, const float* v, int32_
 
 }  // namespace
 
+int DepthCounter::sorted_lower_bound(float x) const {
+  // std::lower_bound on the sorted picked v's: start at x's bucket, step forward over
+  // the points below x. The start is checked (the point before it lies below x), so a
+  // bucket misjudged by rounding costs a search, never a wrong position.
+  const int n = int(uv_.size());
+  if (n == 0 || !(x > vv_[0])) return 0;
+  if (x > vv_[size_t(n - 1)]) return n;
+  const int b = std::clamp(int((double(x) - double(vv_[0])) * vb_scale_), 0, n - 1);
+  int k = vb_first_[size_t(b)];
+  if (k > 0 && !(vv_[size_t(k - 1)] < x)) return branchless_lower_bound(vv_.data(), n, x);
+  while (k < n && vv_[size_t(k)] < x) ++k;
+  return k;
+}
+
 void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   if (P.v == Q.v || w == 0) return;
   const SampleStrips& S = *strips_;
@@ -474,7 +497,7 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   int kb = 0, ke = 0;
   if (sorted_) {
     const int n = int(uv_.size());
-    kb = branchless_lower_bound(vv_.data(), n, lo.v);
+    kb = sorted_lower_bound(lo.v);
     ke = kb;  // a piece reaches few samples: a forward scan finds the same end
     while (ke < n && vv_[size_t(ke)] < hi.v) ++ke;
     if (kb >= ke) return;
@@ -550,7 +573,7 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
 void DepthCounter::add_step(float vc, int w) {
   if (sorted_) {
     // Every sample with v >= vc: a suffix of the picked points' v order.
-    const int kb = branchless_lower_bound(vv_.data(), int(uv_.size()), vc);
+    const int kb = sorted_lower_bound(vc);
     diffv_[size_t(kb)] += w;
     step_list_.emplace_back(kb, w);
     steps_ = true;

@@ -186,6 +186,7 @@ class DepthCounter {
   void zero_counters();  // counters, flags and steps to zero (uv_, vu_, vv_ filled)
   void fold_steps();     // rule 2's difference array into dv_
   void use_strip_order();
+  int sorted_lower_bound(float x) const;  // first position with v >= x (sorted_)
 
   const SampleStrips* strips_ = nullptr;
   SampleStrips own_;  // for reset(uv, extent)
@@ -205,6 +206,8 @@ class DepthCounter {
   const int* ord_ = nullptr;
   std::vector<int> order_;
   bool sorted_ = false;
+  std::vector<int> vb_first_;  // sorted_: first position of each of n buckets over v
+  double vb_scale_ = 0.0;      // buckets per unit of v (0: all v equal)
   bool allow_sorted_ = true;
 };
 
