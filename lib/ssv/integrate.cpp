@@ -456,6 +456,28 @@ bool use_avx2() {
 }
 
 #if defined(VG_SSV_AVX2)
+// The four side planes of L' (add_segment) at both ends of a segment in AVX2 lanes:
+// each lane the same products and sums as dot(side, a - r) in double (no fused
+// multiply-add), so the same values. 0: some plane has both ends outside (<= 0), 1:
+// every plane has both inside (> 0), 2: otherwise.
+__attribute__((target("avx2"))) int side_class_avx2(const double* sx, const double* sy, const double* sz,
+                                                    const Vec3d& da, const Vec3d& db) {
+  const __m256d nx = _mm256_loadu_pd(sx), ny = _mm256_loadu_pd(sy), nz = _mm256_loadu_pd(sz);
+  const __m256d fa = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(da.x)), _mm256_mul_pd(ny, _mm256_set1_pd(da.y))),
+      _mm256_mul_pd(nz, _mm256_set1_pd(da.z)));
+  const __m256d fb = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(db.x)), _mm256_mul_pd(ny, _mm256_set1_pd(db.y))),
+      _mm256_mul_pd(nz, _mm256_set1_pd(db.z)));
+  const __m256d zero = _mm256_setzero_pd();
+  const int out = _mm256_movemask_pd(
+      _mm256_and_pd(_mm256_cmp_pd(fa, zero, _CMP_LE_OQ), _mm256_cmp_pd(fb, zero, _CMP_LE_OQ)));
+  if (out != 0) return 0;
+  const int in = _mm256_movemask_pd(
+      _mm256_and_pd(_mm256_cmp_pd(fa, zero, _CMP_GT_OQ), _mm256_cmp_pd(fb, zero, _CMP_GT_OQ)));
+  return in == 15 ? 1 : 2;
+}
+
 // Set once at start-up: count_run runs once per piece, a guarded local static cost a
 // check per call.
 const bool kCountRunAvx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
@@ -751,6 +773,20 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
     if (!(length(nrm) > 1e-12 * length(a - r_) * length(b - r_))) doubtful_ = true;
     side_[i] = nrm;
   }
+  // The planes in AVX2 lanes for add_segment; lanes beyond n repeat plane 0, which
+  // changes neither "some plane rejects" nor "every plane keeps".
+  side_lanes_ = false;
+#if defined(VG_SSV_AVX2)
+  if (kCountRunAvx2 && n >= 1 && n <= 4) {
+    for (size_t i = 0; i < 4; ++i) {
+      const Vec3d& nrm = side_[i < n ? i : 0];
+      sx_[i] = nrm.x;
+      sy_[i] = nrm.y;
+      sz_[i] = nrm.z;
+    }
+    side_lanes_ = true;
+  }
+#endif
 }
 
 int ReceiverIntegrator::facing(size_t t) const {
@@ -916,7 +952,16 @@ bool ReceiverIntegrator::add_segment(const Vec3d& a, const Vec3d& b, int w) {
   // needs the step of a right-chain contact).
   double t0 = 0.0, t1 = 1.0;
   int enter = -1, exit = -1;
-  for (size_t i = 0; i < side_.size(); ++i) {
+  // Up to four planes in AVX2 lanes first: a plane with both ends outside rejects the
+  // segment whatever the others (the loop below returns false there too), and with
+  // both ends inside every plane the loop changes nothing; only a segment that crosses a
+  // plane goes through the loop.
+  int sides = 2;
+#if defined(VG_SSV_AVX2)
+  if (side_lanes_) sides = side_class_avx2(sx_, sy_, sz_, a - r_, b - r_);
+#endif
+  if (sides == 0) return false;
+  for (size_t i = 0; i < (sides == 1 ? 0 : side_.size()); ++i) {
     const double fa = dot(side_[i], a - r_), fb = dot(side_[i], b - r_);
     if (fa <= 0.0 && fb <= 0.0) return false;
     if (fa > 0.0 && fb > 0.0) continue;

@@ -295,6 +295,8 @@ class ReceiverIntegrator {
   Vec3d r_world_{};
   Vec3d r_{};                    // frame coordinates (double, not rounded)
   std::vector<Vec3d> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  double sx_[4] = {}, sy_[4] = {}, sz_[4] = {};  // the same by coordinate (side_lanes_)
+  bool side_lanes_ = false;      // at most four planes and AVX2: add_segment tests them at once
   mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;
