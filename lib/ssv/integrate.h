@@ -174,11 +174,12 @@ class DepthCounter {
   };
   Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value);
   size_t size() const { return uv_.size(); }
-  // Whether a light's samples (the strips form of reset) may be kept in the order of the
-  // picked points' own v when there are few (at most 512): the same counts and flags
-  // per sample as the v_lo order, with fewer positions tested per piece. On by default;
-  // off compares the two in tests. Takes effect at the next reset.
-  void allow_sorted_order(bool on) { allow_sorted_ = on; }
+  // After the strips form of reset and before any piece or step: keeps the picked
+  // points in their own v order instead of their boxes' v_lo order when there are few
+  // (at most 512). The same counts and flags per sample, with exactly the samples in a
+  // piece's v-range tested; the sort costs a few thousand instructions per receiver, so
+  // it pays from a dozen or so pieces. Returns whether the order is in use.
+  bool use_sorted_order();
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
@@ -242,6 +243,10 @@ class ReceiverIntegrator {
   // The same with samples given as picked jitter points of a light with its strips
   // (DepthCounter::reset).
   void begin(const Vec3f& receiver, const SampleStrips& strips, const std::vector<uint32_t>& pick);
+  // The number of edges about to be added (add_edge) since begin(): with enough of
+  // them the counter sorts its samples by v first (DepthCounter::use_sorted_order; the
+  // same counts). Optional; before the first add_edge.
+  void expect_edges(size_t edges);
   // sign(orient3d(T, r)) in double: +1 when r is on T's front side; 0 as well for a
   // triangle with no vertex strictly above the light plane (h > 0): it meets no open
   // segment from r to the light plane, so R_T is empty (a triangle lying in the light

@@ -81,6 +81,8 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
           }
           DepthCounter dc;
           dc.reset(strips, jitter, pick, 2.0);
+          // Every other receiver in the picked points' own v order (at most 512 samples).
+          EXPECT_EQ(receiver % 2 == 1 && dc.use_sorted_order(), receiver % 2 == 1 && n <= 512);
           std::vector<int32_t> naive(size_t(n), 0);
           std::vector<uint8_t> naive_unclear(size_t(n), 0);
           for (int k = 0; k < 150; ++k) {
@@ -188,6 +190,10 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
           b.add_step(uv[0].v, 3);
           b.add_step(-2.0f, -1);
           b.reset(strips, jitter, pick, 2.0);
+          if (n_steps % 2 == 1) {  // both in the picked points' own v order (n <= 512)
+            a.use_sorted_order();
+            b.use_sorted_order();
+          }
           for (int k = 0; k < 40; ++k) {
             Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
             if (k % 2 == 0) {  // through samples exactly
@@ -226,8 +232,8 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
 }
 
 TEST(SsvIntegration, SortedOrderEqualsVloOrder) {
-  // Up to 512 samples the counter keeps the picked points in their own v order
-  // (allow_sorted_order, the default) instead of the boxes' v_lo order: the same counts,
+  // Up to 512 samples the counter may keep the picked points in their own v order
+  // (use_sorted_order) instead of the boxes' v_lo order: the same counts,
   // flags and classes per sample. Stratified, wide, coincident and few-point layouts,
   // pieces and steps exactly on sample v's (ties at the range ends), weights of both signs.
   std::mt19937_64 g(31);
@@ -253,8 +259,10 @@ TEST(SsvIntegration, SortedOrderEqualsVloOrder) {
           for (int j = 0; j < n; ++j) pick[size_t(j)] = uint32_t(j * K + int(g() % uint64_t(K)));
           DepthCounter dc[4];
           for (int m = 0; m < 4; ++m) {
-            dc[m].allow_sorted_order(m % 2 == 1);
             dc[m].reset(strips, jitter, pick, 2.0);
+            if (m % 2 == 1) {
+              EXPECT_TRUE(dc[m].use_sorted_order());
+            }
           }
           for (int k = 0; k < 120; ++k) {
             Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
