@@ -470,7 +470,8 @@ bool use_avx2() {
 // multiply-add), so the same values. 0: some plane has both ends outside (<= 0), 1:
 // every plane has both inside (> 0), 2: otherwise.
 __attribute__((target("avx2"))) int side_class_avx2(const double* sx, const double* sy, const double* sz,
-                                                    const Vec3d& da, const Vec3d& db) {
+                                                    const Vec3d& da, const Vec3d& db, double* fa_out,
+                                                    double* fb_out) {
   const __m256d nx = _mm256_loadu_pd(sx), ny = _mm256_loadu_pd(sy), nz = _mm256_loadu_pd(sz);
   const __m256d fa = _mm256_add_pd(
       _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(da.x)), _mm256_mul_pd(ny, _mm256_set1_pd(da.y))),
@@ -478,6 +479,8 @@ __attribute__((target("avx2"))) int side_class_avx2(const double* sx, const doub
   const __m256d fb = _mm256_add_pd(
       _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(db.x)), _mm256_mul_pd(ny, _mm256_set1_pd(db.y))),
       _mm256_mul_pd(nz, _mm256_set1_pd(db.z)));
+  _mm256_storeu_pd(fa_out, fa);
+  _mm256_storeu_pd(fb_out, fb);
   const __m256d zero = _mm256_setzero_pd();
   const int out = _mm256_movemask_pd(
       _mm256_and_pd(_mm256_cmp_pd(fa, zero, _CMP_LE_OQ), _mm256_cmp_pd(fb, zero, _CMP_LE_OQ)));
@@ -751,10 +754,10 @@ void ReceiverIntegrator::begin(const Vec3f& receiver, const SampleStrips& strips
 }
 
 void ReceiverIntegrator::expect_edges(size_t edges) {
-  // The sort and its buckets cost about 2,000 instructions at 64 samples, an exact
-  // v-range saves about 100-200 per piece (callgrind, foliage and scan).
-  constexpr size_t kSortedFrom = 16;
-  if (edges >= kSortedFrom) counter_.use_sorted_order();
+  // The sort and its buckets cost about 5,000 instructions at 64 samples and more than
+  // 20,000 at 256 (many boxes overlap), an exact v-range saves about 100-200 per piece
+  // (callgrind on foliage, scan, rooms and columns): sort from two edges per sample.
+  if (edges >= 16 && edges >= 2 * counter_.size()) counter_.use_sorted_order();
 }
 
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
@@ -972,13 +975,15 @@ bool ReceiverIntegrator::add_segment(const Vec3d& a, const Vec3d& b, int w) {
   // segment whatever the others (the loop below returns false there too), and with
   // both ends inside every plane the loop changes nothing; only a segment that crosses a
   // plane goes through the loop.
+  // A crossing segment's loop reads the lanes' values (the same numbers).
   int sides = 2;
+  double fav[4], fbv[4];
 #if defined(VG_SSV_AVX2)
-  if (side_lanes_) sides = side_class_avx2(sx_, sy_, sz_, a - r_, b - r_);
+  if (side_lanes_) sides = side_class_avx2(sx_, sy_, sz_, a - r_, b - r_, fav, fbv);
 #endif
   if (sides == 0) return false;
   for (size_t i = 0; i < (sides == 1 ? 0 : side_.size()); ++i) {
-    const double fa = dot(side_[i], a - r_), fb = dot(side_[i], b - r_);
+    const double fa = side_lanes_ ? fav[i] : dot(side_[i], a - r_), fb = side_lanes_ ? fbv[i] : dot(side_[i], b - r_);
     if (fa <= 0.0 && fb <= 0.0) return false;
     if (fa > 0.0 && fb > 0.0) continue;
     const double t = fa / (fa - fb);

@@ -177,8 +177,8 @@ class DepthCounter {
   // After the strips form of reset and before any piece or step: keeps the picked
   // points in their own v order instead of their boxes' v_lo order when there are few
   // (at most 512). The same counts and flags per sample, with exactly the samples in a
-  // piece's v-range tested; the sort costs a few thousand instructions per receiver, so
-  // it pays from a dozen or so pieces. Returns whether the order is in use.
+  // piece's v-range tested; the sort costs thousands of instructions per receiver, so
+  // it pays only with many pieces per sample. Returns whether the order is in use.
   bool use_sorted_order();
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
