@@ -69,7 +69,10 @@
 // v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step,
 // eight with AVX2 where the processor has it:
 // cheaper than the searches at that size, and the same test); the strip-order arrays are
-// filled only for a receiver with a piece over more.
+// filled only for a receiver with a piece over more. With at most 512 samples and many
+// edges to come (ReceiverIntegrator::expect_edges) the picked points are instead sorted
+// by their own v per receiver, so a piece tests exactly the samples in its v-range
+// (DepthCounter::use_sorted_order): the same test per sample, so the same counts.
 //
 // Active triangles. R_T is empty for a triangle with no vertex strictly above the light
 // plane (entirely below it, lying in it, or touching it from below): such a triangle
@@ -209,7 +212,6 @@ class DepthCounter {
   bool sorted_ = false;
   std::vector<int> vb_first_;  // sorted_: first position of each of n buckets over v
   double vb_scale_ = 0.0;      // buckets per unit of v (0: all v equal)
-  bool allow_sorted_ = true;
 };
 
 // The point where the edge between vertices i and j (frame coordinates `fp`) crosses
