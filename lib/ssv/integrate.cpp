@@ -25,6 +25,9 @@ namespace {
 // the AVX2 test reads and writes its last step of eight whole, masked (count_run_avx2).
 constexpr size_t kRunPad = 8;
 
+// Pieces whose v-range reaches at most this many positions test them one by one.
+constexpr int kOneByOne = 512;
+
 // Index of the first element of a[0, n) (ascending) that is not less than x, like
 // std::lower_bound, written so that the compiler emits conditional moves: the searches
 // of add_piece and add_step on sample coordinates are data-dependent and would
@@ -158,8 +161,51 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
     vu_[k] = a.u;
     vv_[k] = a.v;
   }
+  ord_ = strips.vorder.data();
+  sorted_ = false;
   extent_ = extent;
   zero_counters();
+}
+
+bool DepthCounter::use_sorted_order() {
+  VG_CHECK(step_list_.empty() && !strip_order_);
+  const size_t n = uv_.size();
+  if (sorted_ || n > size_t(kOneByOne) || strips_ == &own_) return sorted_;
+  {
+    // Few samples: no piece ever uses the strips (add_piece tests at most kOneByOne
+    // positions one by one), so order the picked points by their own v instead of their
+    // boxes' v_lo. A piece's v-range is then exactly a range of positions, without the
+    // tallest box's slack. Insertion sort from the v_lo order: each point lies in its
+    // box, so only samples with overlapping boxes are out of order.
+    order_.assign(strips_->vorder.begin(), strips_->vorder.end());
+    for (size_t k = 1; k < n; ++k) {
+      const float u = vu_[k], v = vv_[k];
+      const int j = order_[k];
+      size_t q = k;
+      for (; q > 0 && vv_[q - 1] > v; --q) {
+        vu_[q] = vu_[q - 1];
+        vv_[q] = vv_[q - 1];
+        order_[q] = order_[q - 1];
+      }
+      vu_[q] = u;
+      vv_[q] = v;
+      order_[q] = j;
+    }
+    ord_ = order_.data();
+    sorted_ = true;
+    // n buckets over [v_0, v_n-1] of the sorted points for sorted_lower_bound (any
+    // bucket starts do: its start is checked).
+    const double span = n > 0 ? double(vv_[n - 1]) - double(vv_[0]) : 0.0;
+    vb_scale_ = span > 0.0 ? double(n) / span : 0.0;
+    const double width = span / double(std::max<size_t>(n, 1));
+    vb_first_.resize(n + 1);
+    for (size_t b = 0, k = 0; b <= n; ++b) {
+      const double start = double(vv_[0]) + double(b) * width;
+      while (k < n && double(vv_[k]) < start) ++k;
+      vb_first_[b] = int(k);
+    }
+  }
+  return true;
 }
 
 void DepthCounter::clear_counters() {
@@ -167,6 +213,8 @@ void DepthCounter::clear_counters() {
   // loops below then read consecutive memory and the compiler vectorises them.
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
+  ord_ = S.vorder.data();
+  sorted_ = false;
   vu_.resize(n + kRunPad);
   vv_.resize(n + kRunPad);
   for (size_t k = 0; k < n; ++k) {
@@ -210,7 +258,6 @@ void DepthCounter::use_strip_order() {
 }
 
 namespace {
-constexpr int kOneByOne = 512;
 
 // One piece's one-by-one test (DepthCounter::add_piece): the line from (lou, lov) with
 // direction (du, dv), its v-range [lov, hiv), the weight c of a sample strictly left and
@@ -417,16 +464,60 @@ bool use_avx2() {
 #endif
 }
 
-void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
-               bool v_range) {
 #if defined(VG_SSV_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
-  if (avx2) return count_run_avx2(t, u, v, out, flag, k0, k1, v_range);
+// The four side planes of L' (add_segment) at both ends of a segment in AVX2 lanes:
+// each lane the same products and sums as dot(side, a - r) in double (no fused
+// multiply-add), so the same values. 0: some plane has both ends outside (<= 0), 1:
+// every plane has both inside (> 0), 2: otherwise.
+__attribute__((target("avx2"))) int side_class_avx2(const double* sx, const double* sy, const double* sz,
+                                                    const Vec3d& da, const Vec3d& db, double* fa_out,
+                                                    double* fb_out) {
+  const __m256d nx = _mm256_loadu_pd(sx), ny = _mm256_loadu_pd(sy), nz = _mm256_loadu_pd(sz);
+  const __m256d fa = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(da.x)), _mm256_mul_pd(ny, _mm256_set1_pd(da.y))),
+      _mm256_mul_pd(nz, _mm256_set1_pd(da.z)));
+  const __m256d fb = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(db.x)), _mm256_mul_pd(ny, _mm256_set1_pd(db.y))),
+      _mm256_mul_pd(nz, _mm256_set1_pd(db.z)));
+  _mm256_storeu_pd(fa_out, fa);
+  _mm256_storeu_pd(fb_out, fb);
+  const __m256d zero = _mm256_setzero_pd();
+  const int out = _mm256_movemask_pd(
+      _mm256_and_pd(_mm256_cmp_pd(fa, zero, _CMP_LE_OQ), _mm256_cmp_pd(fb, zero, _CMP_LE_OQ)));
+  if (out != 0) return 0;
+  const int in = _mm256_movemask_pd(
+      _mm256_and_pd(_mm256_cmp_pd(fa, zero, _CMP_GT_OQ), _mm256_cmp_pd(fb, zero, _CMP_GT_OQ)));
+  return in == 15 ? 1 : 2;
+}
+
+// Set once at start-up: count_run runs once per piece, a guarded local static cost a
+// check per call.
+const bool kCountRunAvx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+#endif
+
+inline void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
+                      bool v_range) {
+#if defined(VG_SSV_AVX2)
+  if (kCountRunAvx2) return count_run_avx2(t, u, v, out, flag, k0, k1, v_range);
 #endif
   count_run_sse2(t, u, v, out, flag, k0, k1, v_range);
 }
 
 }  // namespace
+
+int DepthCounter::sorted_lower_bound(float x) const {
+  // std::lower_bound on the sorted picked v's: start at x's bucket, step forward over
+  // the points below x. The start is checked (the point before it lies below x), so a
+  // bucket misjudged by rounding costs a search, never a wrong position.
+  const int n = int(uv_.size());
+  if (n == 0 || !(x > vv_[0])) return 0;
+  if (x > vv_[size_t(n - 1)]) return n;
+  const int b = std::clamp(int((double(x) - double(vv_[0])) * vb_scale_), 0, n - 1);
+  int k = vb_first_[size_t(b)];
+  if (k > 0 && !(vv_[size_t(k - 1)] < x)) return branchless_lower_bound(vv_.data(), n, x);
+  while (k < n && vv_[size_t(k)] < x) ++k;
+  return k;
+}
 
 void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   if (P.v == Q.v || w == 0) return;
@@ -434,6 +525,17 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   const bool up = Q.v > P.v;
   const Vec2f lo = up ? P : Q, hi = up ? Q : P;
   const int c = up ? w : -w;
+  // Positions [kb, ke) of the picked points' own v order (sorted_): exactly the samples
+  // with v in [lo.v, hi.v). A piece that reaches none (most pieces of small triangles
+  // over few samples) ends here, before its margin and line are set up.
+  int kb = 0, ke = 0;
+  if (sorted_) {
+    const int n = int(uv_.size());
+    kb = sorted_lower_bound(lo.v);
+    ke = kb;  // a piece reaches few samples: a forward scan finds the same end
+    while (ke < n && vv_[size_t(ke)] < hi.v) ++ke;
+    if (kb >= ke) return;
+  }
   const float du = hi.u - lo.u, dv = hi.v - lo.v;
   // Margin. The float cross product below errs only for samples within a few float32
   // ulps (about 1e-7 relative to the coordinates' magnitude) of the line; `margin`, 1e-6
@@ -454,11 +556,16 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
   auto run = [&pt](const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
     count_run(pt, u, v, out, flag, k0, k1, v_range);
   };
+  if (sorted_) {
+    // The same one-by-one test over exactly the samples in the v-range.
+    run(vu_.data(), vv_.data(), dv_.data(), fv_.data(), kb, ke, true);
+    return;
+  }
   const double slope = double(du) / double(dv);
   // Only samples with v_lo in [lo.v - max_height, hi.v) can have v in [lo.v, hi.v): a
   // range [kb, ke) of the v_lo order, met by a run of consecutive strips.
-  const int kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
-  const int ke = S.vlo_lower_bound(hi.v);
+  kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
+  ke = S.vlo_lower_bound(hi.v);
   if (kb >= ke) return;
   // Up to a few hundred samples in range, testing each one by one (four per SSE2 step)
   // costs less than the strips' searches: the same test, so the same counts.
@@ -498,6 +605,14 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
 }
 
 void DepthCounter::add_step(float vc, int w) {
+  if (sorted_) {
+    // Every sample with v >= vc: a suffix of the picked points' v order.
+    const int kb = sorted_lower_bound(vc);
+    diffv_[size_t(kb)] += w;
+    step_list_.emplace_back(kb, w);
+    steps_ = true;
+    return;
+  }
   const SampleStrips& S = *strips_;
   // Boxes with v_lo >= vc: a suffix of the v_lo order. Boxes below it with v_lo within
   // the tallest box of vc may reach it: tested one by one.
@@ -514,6 +629,14 @@ void DepthCounter::finish(std::vector<int32_t>& depth, std::vector<uint8_t>* unc
   const size_t n = uv_.size();
   fold_steps();
   depth.resize(n);
+  if (sorted_) {
+    for (size_t k = 0; k < n; ++k) depth[size_t(ord_[k])] = dv_[k];
+    if (unclear) {
+      unclear->resize(n);
+      for (size_t k = 0; k < n; ++k) (*unclear)[size_t(ord_[k])] = uint8_t(fv_[k] != 0);
+    }
+    return;
+  }
   if (strip_order_) {
     for (size_t j = 0; j < n; ++j) depth[j] = dv_[size_t(S.vrank[j])] + ds_[size_t(S.srank[j])];
   } else {
@@ -545,7 +668,7 @@ DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, 
   const SampleStrips& S = *strips_;
   const size_t n = uv_.size();
   depth.resize(n);
-  const int* vorder = S.vorder.data();
+  const int* vorder = ord_;  // the order of the positions (strip_order_ only with S.vorder)
 #if defined(VG_SSV_AVX2)
   if (!strip_order_ && use_avx2()) {
     if (step_list_.size() > kMaxLaneSteps) fold_steps();
@@ -630,6 +753,13 @@ void ReceiverIntegrator::begin(const Vec3f& receiver, const SampleStrips& strips
   counter_.reset(strips, frame_.jitter_uv, pick, frame_.extent);
 }
 
+void ReceiverIntegrator::expect_edges(size_t edges) {
+  // The sort and its buckets cost about 5,000 instructions at 64 samples and more than
+  // 20,000 at 256 (many boxes overlap), an exact v-range saves about 100-200 per piece
+  // (callgrind on foliage, scan, rooms and columns): sort from two edges per sample.
+  if (edges >= 16 && edges >= 2 * counter_.size()) counter_.use_sorted_order();
+}
+
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   r_world_ = to_double(receiver);
   r_ = frame_.to_local(receiver);
@@ -662,6 +792,20 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
     if (!(length(nrm) > 1e-12 * length(a - r_) * length(b - r_))) doubtful_ = true;
     side_[i] = nrm;
   }
+  // The planes in AVX2 lanes for add_segment; lanes beyond n repeat plane 0, which
+  // changes neither "some plane rejects" nor "every plane keeps".
+  side_lanes_ = false;
+#if defined(VG_SSV_AVX2)
+  if (kCountRunAvx2 && n >= 1 && n <= 4) {
+    for (size_t i = 0; i < 4; ++i) {
+      const Vec3d& nrm = side_[i < n ? i : 0];
+      sx_[i] = nrm.x;
+      sy_[i] = nrm.y;
+      sz_[i] = nrm.z;
+    }
+    side_lanes_ = true;
+  }
+#endif
 }
 
 int ReceiverIntegrator::facing(size_t t) const {
@@ -827,8 +971,19 @@ bool ReceiverIntegrator::add_segment(const Vec3d& a, const Vec3d& b, int w) {
   // needs the step of a right-chain contact).
   double t0 = 0.0, t1 = 1.0;
   int enter = -1, exit = -1;
-  for (size_t i = 0; i < side_.size(); ++i) {
-    const double fa = dot(side_[i], a - r_), fb = dot(side_[i], b - r_);
+  // Up to four planes in AVX2 lanes first: a plane with both ends outside rejects the
+  // segment whatever the others (the loop below returns false there too), and with
+  // both ends inside every plane the loop changes nothing; only a segment that crosses a
+  // plane goes through the loop.
+  // A crossing segment's loop reads the lanes' values (the same numbers).
+  int sides = 2;
+  double fav[4], fbv[4];
+#if defined(VG_SSV_AVX2)
+  if (side_lanes_) sides = side_class_avx2(sx_, sy_, sz_, a - r_, b - r_, fav, fbv);
+#endif
+  if (sides == 0) return false;
+  for (size_t i = 0; i < (sides == 1 ? 0 : side_.size()); ++i) {
+    const double fa = side_lanes_ ? fav[i] : dot(side_[i], a - r_), fb = side_lanes_ ? fbv[i] : dot(side_[i], b - r_);
     if (fa <= 0.0 && fb <= 0.0) return false;
     if (fa > 0.0 && fb > 0.0) continue;
     const double t = fa / (fa - fb);

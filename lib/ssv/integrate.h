@@ -69,7 +69,10 @@
 // v-range reaches at most 512 boxes tests those one by one instead (four per SSE2 step,
 // eight with AVX2 where the processor has it:
 // cheaper than the searches at that size, and the same test); the strip-order arrays are
-// filled only for a receiver with a piece over more.
+// filled only for a receiver with a piece over more. With at most 512 samples and many
+// edges to come (ReceiverIntegrator::expect_edges) the picked points are instead sorted
+// by their own v per receiver, so a piece tests exactly the samples in its v-range
+// (DepthCounter::use_sorted_order): the same test per sample, so the same counts.
 //
 // Active triangles. R_T is empty for a triangle with no vertex strictly above the light
 // plane (entirely below it, lying in it, or touching it from below): such a triangle
@@ -174,6 +177,12 @@ class DepthCounter {
   };
   Classes finish_classes(std::vector<int32_t>& depth, int32_t unclear_value);
   size_t size() const { return uv_.size(); }
+  // After the strips form of reset and before any piece or step: keeps the picked
+  // points in their own v order instead of their boxes' v_lo order when there are few
+  // (at most 512). The same counts and flags per sample, with exactly the samples in a
+  // piece's v-range tested; the sort costs thousands of instructions per receiver, so
+  // it pays only with many pieces per sample. Returns whether the order is in use.
+  bool use_sorted_order();
   const Vec2f& sample_uv(size_t j) const { return uv_[j]; }
 
  private:
@@ -181,6 +190,7 @@ class DepthCounter {
   void zero_counters();  // counters, flags and steps to zero (uv_, vu_, vv_ filled)
   void fold_steps();     // rule 2's difference array into dv_
   void use_strip_order();
+  int sorted_lower_bound(float x) const;  // first position with v >= x (sorted_)
 
   const SampleStrips* strips_ = nullptr;
   SampleStrips own_;  // for reset(uv, extent)
@@ -195,6 +205,13 @@ class DepthCounter {
   // The steps' (position, weight) since the last reset: diffv_ is zero elsewhere, so
   // clearing these entries clears it, and the AVX2 class scan adds them per block.
   std::vector<std::pair<int32_t, int32_t>> step_list_;
+  // The sample at each position of vu_, vv_, dv_, fv_: strips_->vorder, or order_ when
+  // sorted_ (positions in the picked points' own v order, never with the strip order).
+  const int* ord_ = nullptr;
+  std::vector<int> order_;
+  bool sorted_ = false;
+  std::vector<int> vb_first_;  // sorted_: first position of each of n buckets over v
+  double vb_scale_ = 0.0;      // buckets per unit of v (0: all v equal)
 };
 
 // The point where the edge between vertices i and j (frame coordinates `fp`) crosses
@@ -228,6 +245,10 @@ class ReceiverIntegrator {
   // The same with samples given as picked jitter points of a light with its strips
   // (DepthCounter::reset).
   void begin(const Vec3f& receiver, const SampleStrips& strips, const std::vector<uint32_t>& pick);
+  // The number of edges about to be added (add_edge) since begin(): with enough of
+  // them the counter sorts its samples by v first (DepthCounter::use_sorted_order; the
+  // same counts). Optional; before the first add_edge.
+  void expect_edges(size_t edges);
   // sign(orient3d(T, r)) in double: +1 when r is on T's front side; 0 as well for a
   // triangle with no vertex strictly above the light plane (h > 0): it meets no open
   // segment from r to the light plane, so R_T is empty (a triangle lying in the light
@@ -281,6 +302,8 @@ class ReceiverIntegrator {
   Vec3d r_world_{};
   Vec3d r_{};                    // frame coordinates (double, not rounded)
   std::vector<Vec3d> side_;      // normals of the planes (r, L'_i, L'_i+1), inside positive
+  double sx_[4] = {}, sy_[4] = {}, sz_[4] = {};  // the same by coordinate (side_lanes_)
+  bool side_lanes_ = false;      // at most four planes and AVX2: add_segment tests them at once
   mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;

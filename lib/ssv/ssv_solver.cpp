@@ -417,6 +417,7 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
     if (weight != 0) st.valid.emplace_back(w.edge, weight);
   }
   auto d = Clock::now();
+  st.integrator.expect_edges(st.valid.size() + ls.cut_triangles.size());
   for (const auto& [edge, weight] : st.valid) st.integrator.add_edge(sc.edges[edge], weight);
   for (uint32_t t : ls.cut_triangles) st.integrator.add_cut(t);
   st.classes = st.integrator.finish_classes(st.depth, kUnclear);

@@ -81,6 +81,8 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
           }
           DepthCounter dc;
           dc.reset(strips, jitter, pick, 2.0);
+          // Every other receiver in the picked points' own v order (at most 512 samples).
+          EXPECT_EQ(receiver % 2 == 1 && dc.use_sorted_order(), receiver % 2 == 1 && n <= 512);
           std::vector<int32_t> naive(size_t(n), 0);
           std::vector<uint8_t> naive_unclear(size_t(n), 0);
           for (int k = 0; k < 150; ++k) {
@@ -188,6 +190,10 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
           b.add_step(uv[0].v, 3);
           b.add_step(-2.0f, -1);
           b.reset(strips, jitter, pick, 2.0);
+          if (n_steps % 2 == 1) {  // both in the picked points' own v order (n <= 512)
+            a.use_sorted_order();
+            b.use_sorted_order();
+          }
           for (int k = 0; k < 40; ++k) {
             Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
             if (k % 2 == 0) {  // through samples exactly
@@ -223,6 +229,70 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
           EXPECT_EQ(c.dmin, dmin) << where;
           EXPECT_EQ(c.second, second) << where;
         }
+}
+
+TEST(SsvIntegration, SortedOrderEqualsVloOrder) {
+  // Up to 512 samples the counter may keep the picked points in their own v order
+  // (use_sorted_order) instead of the boxes' v_lo order: the same counts,
+  // flags and classes per sample. Stratified, wide, coincident and few-point layouts,
+  // pieces and steps exactly on sample v's (ties at the range ends), weights of both signs.
+  std::mt19937_64 g(31);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  const int32_t kU = std::numeric_limits<int32_t>::max();
+  for (int layout = 0; layout < 4; ++layout)
+    for (int K : {1, 4, 16})
+      for (int n : {1, 2, 9, 64, 300, 512}) {
+        const int side = std::max(1, int(std::sqrt(double(n))));
+        std::vector<Vec2f> jitter(size_t(n) * size_t(K));
+        for (size_t q = 0; q < jitter.size(); ++q) {
+          const int j = int(q) / K;
+          const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
+          const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
+          if (layout == 0) jitter[q] = {cu + 0.3f * (u01(g) - 0.5f), cv + 0.3f * (u01(g) - 0.5f)};
+          if (layout == 1) jitter[q] = {u(g), u(g)};
+          if (layout == 2) jitter[q] = {0.25f, -0.5f};
+          if (layout == 3) jitter[q] = {0.5f * float(q % 3), 0.25f * float(q % 2)};
+        }
+        const SampleStrips strips = make_sample_strips(jitter, n, K);
+        for (int receiver = 0; receiver < 3; ++receiver) {
+          std::vector<uint32_t> pick(static_cast<size_t>(n));
+          for (int j = 0; j < n; ++j) pick[size_t(j)] = uint32_t(j * K + int(g() % uint64_t(K)));
+          DepthCounter dc[4];
+          for (int m = 0; m < 4; ++m) {
+            dc[m].reset(strips, jitter, pick, 2.0);
+            if (m % 2 == 1) {
+              EXPECT_TRUE(dc[m].use_sorted_order());
+            }
+          }
+          for (int k = 0; k < 120; ++k) {
+            Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
+            float vc = 1.2f * u(g);
+            if (k % 2 == 0) {
+              P = jitter[pick[g() % pick.size()]];
+              Q = jitter[pick[g() % pick.size()]];
+              vc = jitter[pick[g() % pick.size()]].v;
+            }
+            const int w = int(g() % 5) - 2;
+            for (auto& d : dc) {
+              d.add_piece(P, Q, w);
+              if (k % 7 == 0) d.add_step(vc, w);
+            }
+          }
+          std::vector<int32_t> depth0, depth1, fused0, fused1;
+          std::vector<uint8_t> unclear0, unclear1;
+          dc[0].finish(depth0, &unclear0);
+          dc[1].finish(depth1, &unclear1);
+          const DepthCounter::Classes c0 = dc[2].finish_classes(fused0, kU), c1 = dc[3].finish_classes(fused1, kU);
+          const std::string where =
+              "layout " + std::to_string(layout) + " K " + std::to_string(K) + " n " + std::to_string(n);
+          EXPECT_EQ(depth1, depth0) << where;
+          EXPECT_EQ(unclear1, unclear0) << where;
+          EXPECT_EQ(fused1, fused0) << where;
+          EXPECT_EQ(c1.dmin, c0.dmin) << where;
+          EXPECT_EQ(c1.second, c0.second) << where;
+          EXPECT_EQ(c1.unclear, c0.unclear) << where;
+        }
+      }
 }
 
 TEST(SsvIntegration, RelativeDepthEqualsDirectCounting) {
