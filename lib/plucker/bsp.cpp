@@ -293,7 +293,20 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   };
   for (size_t f = in.size(); f-- > 0;) {
     reserve(size_t(in.count(f)));
-    stack_.push_back(Work{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit});
+    // The piece's box, kept by every fragment split from it (box_side): a split piece's
+    // vertices are interpolated on its edges, so they leave the box by rounding only,
+    // about 3 u_d mag per split on their path; widened by 2^-40 mag, the box holds them
+    // for paths of over two thousand splits, far more than a tree is deep.
+    const double e = 0x1p-40 * light_bounds_.mag;
+    Work w0{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit, in.data(f)[0], in.data(f)[0]};
+    for (int k = 1; k < in.count(f); ++k) {
+      const Vec3d& x = in.data(f)[k];
+      w0.lo.x = std::min(w0.lo.x, x.x), w0.lo.y = std::min(w0.lo.y, x.y), w0.lo.z = std::min(w0.lo.z, x.z);
+      w0.hi.x = std::max(w0.hi.x, x.x), w0.hi.y = std::max(w0.hi.y, x.y), w0.hi.z = std::max(w0.hi.z, x.z);
+    }
+    w0.lo = w0.lo - Vec3d(e, e, e);
+    w0.hi = w0.hi + Vec3d(e, e, e);
+    stack_.push_back(w0);
     std::copy(in.data(f), in.data(f) + in.count(f), work_.begin() + std::ptrdiff_t(wtop));
     wtop += size_t(in.count(f));
   }
@@ -326,17 +339,23 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
     uint32_t cb = w.begin, cn = w.count;  // the fragment being walked: work_[cb, cb + cn)
     int32_t node = w.node;
     uint32_t split = w.split;
+    const Vec3d blo = w.lo, bhi = w.hi;  // a box holding the fragment: its input piece's
     for (;;) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.kind == kInner) {
         // Lines 17-27: position of the fragment against makePlane(xyz, hyperplane).
         ++counters_.visits;
+        const NodePlane& pl = edge_plane(nd.occ, nd.edge);
+        if (const int side = box_side(pl, blo, bhi)) {  // split_fragment's answer, from the box
+          node = side > 0 ? nd.left : nd.right;
+          continue;
+        }
         // Room for both pieces (2 cn each) before taking pointers into work_.
         reserve(4 * size_t(cn));
         Vec3d* negp = work_.data() + wtop;
         Vec3d* posp = negp + 2 * size_t(cn);
         int npos = 0, nneg = 0;
-        SplitResult s = split_fragment(edge_plane(nd.occ, nd.edge), work_.data() + cb, int(cn), posp, npos, negp, nneg);
+        SplitResult s = split_fragment(pl, work_.data() + cb, int(cn), posp, npos, negp, nneg);
         if (s == SplitResult::Positive) {
           node = nd.left;
         } else if (s == SplitResult::Negative) {
@@ -366,7 +385,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
           splits_.push_back(sp);
           const uint32_t nb = uint32_t(wtop), pb = uint32_t(wtop + 2 * size_t(cn));
           wtop = size_t(pb) + size_t(npos);
-          if (nneg != 0) stack_.push_back(Work{nd.right, nb, uint32_t(nneg), id});
+          if (nneg != 0) stack_.push_back(Work{nd.right, nb, uint32_t(nneg), id, blo, bhi});
           if (npos == 0) break;
           cb = pb;
           cn = uint32_t(npos);
