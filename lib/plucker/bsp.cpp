@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 
 #include "lib/base/check.h"
 
@@ -278,6 +279,25 @@ void LazyBsp::query(const Vec3d& r, FragmentList& out) {
   query(r, whole, out);
 }
 
+namespace {
+// The box of the n points p, widened by e on every side; NaN for no point (box_side
+// then decides nothing, and the empty piece meets split_fragment as before).
+void widened_box(const Vec3d* p, int n, double e, Vec3d& lo, Vec3d& hi) {
+  if (n <= 0) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    lo = hi = Vec3d(nan, nan, nan);
+    return;
+  }
+  lo = hi = p[0];
+  for (int k = 1; k < n; ++k) {
+    lo.x = std::min(lo.x, p[k].x), lo.y = std::min(lo.y, p[k].y), lo.z = std::min(lo.z, p[k].z);
+    hi.x = std::max(hi.x, p[k].x), hi.y = std::max(hi.y, p[k].y), hi.z = std::max(hi.z, p[k].z);
+  }
+  lo = lo - Vec3d(e, e, e);
+  hi = hi + Vec3d(e, e, e);
+}
+}  // namespace
+
 void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   begin_query(r);
   out.clear();
@@ -297,16 +317,8 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
     // vertices are interpolated on its edges, so they leave the box by rounding only,
     // about 3 u_d mag per split on their path; widened by 2^-40 mag, the box holds them
     // for paths of over two thousand splits, far more than a tree is deep.
-    const double e = 0x1p-40 * light_bounds_.mag;
-    Work w0{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit, in.data(f)[0], in.data(f)[0]};
-    for (int k = 1; k < in.count(f); ++k) {
-      const Vec3d& x = in.data(f)[k];
-      w0.lo.x = std::min(w0.lo.x, x.x), w0.lo.y = std::min(w0.lo.y, x.y), w0.lo.z = std::min(w0.lo.z, x.z);
-      w0.hi.x = std::max(w0.hi.x, x.x), w0.hi.y = std::max(w0.hi.y, x.y), w0.hi.z = std::max(w0.hi.z, x.z);
-    }
-    w0.lo = w0.lo - Vec3d(e, e, e);
-    w0.hi = w0.hi + Vec3d(e, e, e);
-    stack_.push_back(w0);
+    stack_.push_back(Work{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit, {}, {}});
+    widened_box(in.data(f), in.count(f), 0x1p-40 * light_bounds_.mag, stack_.back().lo, stack_.back().hi);
     std::copy(in.data(f), in.data(f) + in.count(f), work_.begin() + std::ptrdiff_t(wtop));
     wtop += size_t(in.count(f));
   }
