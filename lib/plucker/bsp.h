@@ -42,6 +42,7 @@
 //    insertion.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -221,6 +222,7 @@ class LazyBsp {
     int32_t node;
     uint32_t begin, count;  // fragment vertices in work_
     uint32_t split;         // the split it is a piece of (splits_), or kNoSplit
+    Vec3d lo, hi;           // a box holding the fragment: its input piece's, widened (box_side)
   };
   // A split of one query (line 25) whose pieces are still being walked. When every piece
   // has come out visible, the pieces' output is replaced by the fragment that was split

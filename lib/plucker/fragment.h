@@ -11,6 +11,7 @@
 // bound lies "on" the plane and goes to both pieces).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -65,6 +66,27 @@ NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Light
 // query's r) compute them once.
 NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const LightBounds& light, double dr, double da,
                      double db);
+
+// +1 / -1 when split_fragment(pl, ...) would find every vertex of a fragment lying in
+// the box [lo, hi] strictly positive / negative (so it would return Positive /
+// Negative), 0 when the box does not show it; the BSP walk skips the vertices then.
+// Why it holds: for x in the box the exact s(x) = (x - base) . N >= L = sum_i N_i (c_i -
+// base_i), c the corner minimising it, computed here with error < 5 u_d t, t = sum_i
+// |N_i| max|B_i - base_i|; split_fragment's fl(s(x)) errs by < 4.01 u_d |N|_inf |x -
+// base|_1. For a box around fragment vertices (widened by far less than d1) each max|B_i
+// - base_i| <= d1 = max |x - base|_1 over fragment vertices (LightBounds), so t <= 3
+// |N|_inf d1 (1 + tiny), while pl.bound >= 8 u_d |N|_inf d1 (node_plane): the errors
+// stay below 4 bound, and computed L > 8 bound gives fl(s(x)) > bound at every vertex.
+inline int box_side(const NodePlane& pl, const Vec3d& lo, const Vec3d& hi) {
+  if (pl.on_line) return 0;
+  const double ax = pl.n.x * (lo.x - pl.base.x), bx = pl.n.x * (hi.x - pl.base.x);
+  const double ay = pl.n.y * (lo.y - pl.base.y), by = pl.n.y * (hi.y - pl.base.y);
+  const double az = pl.n.z * (lo.z - pl.base.z), bz = pl.n.z * (hi.z - pl.base.z);
+  const double m = 8.0 * pl.bound;
+  if (std::min(ax, bx) + std::min(ay, by) + std::min(az, bz) > m) return 1;
+  if (std::max(ax, bx) + std::max(ay, by) + std::max(az, bz) < -m) return -1;
+  return 0;
+}
 
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or

@@ -332,3 +332,83 @@ TEST(PluckerFragment, AxisMemberIsTheIndexedCoordinate) {
   const Vec3d p(1.5, -2.25, 7.0);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(p.*axis_member(i), p[i]);
 }
+
+TEST(PluckerFragment, BoxSideAgreesWithSplitFragmentOnEveryPieceInTheBox) {
+  // box_side's answer for a box must be split_fragment's for every fragment inside it:
+  // pieces of random lights (far from the origin too) made by random splits, so their
+  // vertices are interpolated; the boxes are the light's own (widened by 2^-40 mag, as the
+  // BSP walk keeps an input piece's box for all its split pieces) and each piece's.
+  Rng rng(91);
+  int decided = 0, undecided = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const double scale = std::pow(10.0, rng.uniform(-3, 3)), off = trial % 3 == 0 ? 0.0 : rng.uniform(-1e3, 1e3);
+    std::vector<Vec3d> light = {Vec3d(off, off, 2), Vec3d(off, off + scale, 2), Vec3d(off + scale, off + scale, 2),
+                                Vec3d(off + scale, off, 2)};
+    const LightBounds lb = LightBounds::of(light.data(), 4);
+    auto random_point = [&](double zlo, double zhi) {
+      return Vec3d(off + scale * rng.uniform(-0.5, 1.5), off + scale * rng.uniform(-0.5, 1.5), rng.uniform(zlo, zhi));
+    };
+    auto box_of = [](const std::vector<Vec3d>& p, double e, Vec3d& lo, Vec3d& hi) {
+      lo = hi = p[0];
+      for (const Vec3d& x : p) {
+        lo = Vec3d(std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z));
+        hi = Vec3d(std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z));
+      }
+      lo = lo - Vec3d(e, e, e);
+      hi = hi + Vec3d(e, e, e);
+    };
+    std::vector<std::vector<Vec3d>> pieces = {light};
+    std::vector<Vec3d> pos, neg;
+    for (int k = 0; k < 6; ++k) {
+      const NodePlane pl = node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb);
+      std::vector<std::vector<Vec3d>> next;
+      for (const auto& pc : pieces) {
+        if (split_fragment(pl, pc.data(), int(pc.size()), pos, neg) != SplitResult::Both) {
+          next.push_back(pc);
+          continue;
+        }
+        if (!pos.empty()) next.push_back(pos);
+        if (!neg.empty()) next.push_back(neg);
+      }
+      pieces.swap(next);
+    }
+    Vec3d llo, lhi;
+    box_of(light, 0x1p-40 * lb.mag, llo, lhi);
+    for (int q = 0; q < 20; ++q) {
+      const NodePlane pl = node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb);
+      const int light_side = box_side(pl, llo, lhi);
+      for (const auto& pc : pieces) {
+        Vec3d plo, phi;
+        box_of(pc, 0.0, plo, phi);
+        const SplitResult sr = split_fragment(pl, pc.data(), int(pc.size()), pos, neg);
+        for (const int side : {light_side, box_side(pl, plo, phi)}) {
+          if (side == 0) {
+            ++undecided;
+            continue;
+          }
+          ++decided;
+          EXPECT_EQ(sr, side > 0 ? SplitResult::Positive : SplitResult::Negative);
+        }
+      }
+    }
+  }
+  EXPECT_GT(decided, 5000);
+  EXPECT_GT(undecided, 1000);
+}
+
+TEST(PluckerFragment, BoxSideOfAHandWorkedBox) {
+  // The plane through r = 0 and the line (1, 0, 1) -> (1, 1, 1) is x = z; lines.h's
+  // orientation makes points with x < z positive or negative, and a box straddling it,
+  // or touching it at a corner, is undecided.
+  const LightBounds lb = LightBounds::of(std::vector<Vec3d>{{0, 0, 2}, {4, 0, 2}, {4, 4, 2}, {0, 4, 2}}.data(), 4);
+  const NodePlane pl = node_plane(Vec3d(0, 0, 0), Vec3d(1, 0, 1), Vec3d(1, 1, 1), lb);
+  ASSERT_FALSE(pl.on_line);
+  const int left = box_side(pl, Vec3d(0, 0, 2), Vec3d(1, 4, 2));   // x < z = 2
+  const int right = box_side(pl, Vec3d(3, 0, 2), Vec3d(4, 4, 2));  // x > z = 2
+  EXPECT_NE(left, 0);
+  EXPECT_EQ(right, -left);
+  const Vec3d l[4] = {{0, 0, 2}, {1, 0, 2}, {1, 4, 2}, {0, 4, 2}};
+  EXPECT_EQ(classify_fragment(pl, l, 4), left > 0 ? SplitResult::Positive : SplitResult::Negative);
+  EXPECT_EQ(box_side(pl, Vec3d(1, 0, 2), Vec3d(3, 4, 2)), 0);  // straddles x = 2
+  EXPECT_EQ(box_side(pl, Vec3d(0, 0, 2), Vec3d(2, 4, 2)), 0);  // touches it
+}
