@@ -17,23 +17,13 @@
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "oracle/relation_oracle.h"
+#include "tests/support/family_scene.h"
 #include "tests/support/iss_fixtures.h"
 
 using namespace visgate;
 using namespace visgate::test_support;
 
 namespace {
-
-Scene family(const std::string& fam, long triangles, uint64_t seed, int receivers, int samples) {
-  FamilyParams fp;
-  fp.seed = seed;
-  fp.receivers = receivers;
-  fp.samples = samples;
-  if (triangles > 0) fp.triangles = triangles;
-  auto gen = generate_family(fam, fp);
-  EXPECT_TRUE(gen.ok()) << fam;
-  return gen.ok() ? std::move(gen.value()) : Scene{};
-}
 
 // A directed edge by its end points, and the patch's triangle (-1: merged, consistent).
 using DirectedEdge = std::tuple<double, double, double, double, double, double, int32_t>;
@@ -62,7 +52,7 @@ TEST(IssLazyBand, ExtractionKeepsTheConsistentChainAndListsTheBand) {
   // keep every consistent patch's edges (same end points, same direction), list exactly
   // the inconsistent triangles, leave a valid surface, and turn the edges between the two
   // into boundary edges that keep their mesh label (COMBINE's loose edges).
-  Scene sc = family("scan", 3000, 3, 64, 16);
+  Scene sc = family("scan", 3, 3000, 64, 16);
   mesh::PreparedMesh pm = mesh::prepare_mesh(sc.mesh);
   iss::BlockerContext ctx{&pm, 0};
   AABB rb, lb;
@@ -136,7 +126,7 @@ TEST(IssLazyBand, LazySolveEqualsEagerSolveAndOracle) {
   for (const std::string fam : {"scan", "torus", "pouch", "double-surface", "shared-edge-fan", "on-surface",
                                 "random-soup", "columns", "rooms", "foliage"})
     for (uint64_t seed : {1, 2})
-      scenes.push_back(family(fam, fam == "rooms" || fam == "columns" || fam == "scan" ? 3000 : 0, seed, 128, 16));
+      scenes.push_back(family(fam, seed, fam == "rooms" || fam == "columns" || fam == "scan" ? 3000 : -1, 128, 16));
   for (const Scene& s : scenes) {
     oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
     for (auto o : kOptionSets) {

@@ -15,6 +15,7 @@
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "oracle/relation_oracle.h"
+#include "tests/support/family_scene.h"
 #include "tests/support/iss_fixtures.h"
 
 using namespace visgate;
@@ -60,17 +61,6 @@ std::vector<uint32_t> triangles_below(const accel::Bvh<float>& bvh, uint32_t i) 
   return out;
 }
 
-Scene family(const std::string& fam, long triangles, uint64_t seed, int receivers = 96, int samples = 16) {
-  FamilyParams fp;
-  fp.seed = seed;
-  fp.receivers = receivers;
-  fp.samples = samples;
-  if (triangles > 0) fp.triangles = triangles;
-  auto gen = generate_family(fam, fp);
-  EXPECT_TRUE(gen.ok()) << fam;
-  return gen.ok() ? std::move(gen.value()) : Scene{};
-}
-
 // An open hemisphere (a boundary loop), a closed box sharing no vertex with it, and a
 // fan of three triangles on one edge (non-manifold): several components, open and
 // non-manifold edges in one mesh, between a floor of receivers and a light above.
@@ -99,9 +89,9 @@ TEST(IssClusters, BoundariesAndConesHoldForEveryNode) {
   // whose double-edge neighbour is outside the node (the cones are checked through
   // their use, below). Closed, open and non-manifold meshes; some nodes eligible.
   std::vector<Scene> scenes;
-  scenes.push_back(family("scan", 3000, 3));
-  scenes.push_back(family("torus", 0, 2));
-  scenes.push_back(family("shared-edge-fan", 0, 5));
+  scenes.push_back(family("scan", 3, 3000, 96, 16));
+  scenes.push_back(family("torus", 2, -1, 96, 16));
+  scenes.push_back(family("shared-edge-fan", 5, -1, 96, 16));
   scenes.push_back(mixed_scene());
   for (const Scene& s : scenes) {
     auto p = prepare(s);
@@ -133,7 +123,7 @@ TEST(IssClusters, FacingProofsAgreeWithExactOrientation) {
   // (all eight corners, exact orient3d), or else the light box on the matching side.
   // Random boxes near and far, scan and torus meshes.
   std::mt19937 rng(5);
-  for (const Scene& s : {family("scan", 3000, 1), family("torus", 0, 4)}) {
+  for (const Scene& s : {family("scan", 1, 3000, 96, 16), family("torus", 4, -1, 96, 16)}) {
     auto p = prepare(s);
     const auto& bvh = p->clusters->tree();
     AABB sb = s.bounds();
@@ -181,7 +171,7 @@ TEST(IssClusters, ClusteredSolveEqualsPerTriangleSolveAndOracle) {
   std::vector<Scene> scenes;
   for (const std::string fam : {"scan", "torus", "pouch", "double-surface", "shared-edge-fan", "on-surface",
                                 "random-soup", "columns", "rooms"})
-    for (uint64_t seed : {1, 2}) scenes.push_back(family(fam, fam == "rooms" || fam == "columns" || fam == "scan" ? 3000 : 0, seed, 128, 16));
+    for (uint64_t seed : {1, 2}) scenes.push_back(family(fam, seed, fam == "rooms" || fam == "columns" || fam == "scan" ? 3000 : -1, 128, 16));
   scenes.push_back(mixed_scene());
   for (const Scene& s : scenes) {
     oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
