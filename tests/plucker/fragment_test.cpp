@@ -19,6 +19,25 @@ using namespace visgate;
 using namespace visgate::plucker;
 using namespace visgate::test_support;
 
+namespace {
+
+// The pieces after a split by `pl`: each piece it cuts replaced by its two sides.
+std::vector<std::vector<Vec3d>> split_all(const NodePlane& pl, const std::vector<std::vector<Vec3d>>& pieces) {
+  std::vector<std::vector<Vec3d>> out;
+  std::vector<Vec3d> pos, neg;
+  for (const auto& pc : pieces) {
+    if (split_fragment(pl, pc.data(), int(pc.size()), pos, neg) != SplitResult::Both) {
+      out.push_back(pc);
+      continue;
+    }
+    if (!pos.empty()) out.push_back(pos);
+    if (!neg.empty()) out.push_back(neg);
+  }
+  return out;
+}
+
+}  // namespace
+
 TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
   // A node plane's one error bound per plane (fragment.h LightBounds, the largest over
   // the light polygon): on pieces of random lights (far from the local origin too), made
@@ -63,15 +82,7 @@ TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
     if (pl.on_line) continue;
     // Split by this plane too: the crossing points lie on it up to their rounding, where
     // only the bound keeps a decided sign exact.
-    std::vector<std::vector<Vec3d>> last;
-    for (const auto& pc : pieces) {
-      if (split_fragment(pl, pc.data(), int(pc.size()), pos, neg) != SplitResult::Both) {
-        last.push_back(pc);
-        continue;
-      }
-      if (!pos.empty()) last.push_back(pos);
-      if (!neg.empty()) last.push_back(neg);
-    }
+    const std::vector<std::vector<Vec3d>> last = split_all(pl, pieces);
     for (const auto& pc : last)
       for (const Vec3d& x : pc) {
         const SplitResult sr = classify_fragment(pl, &x, 1);
@@ -360,17 +371,7 @@ TEST(PluckerFragment, BoxSideAgreesWithSplitFragmentOnEveryPieceInTheBox) {
     std::vector<std::vector<Vec3d>> pieces = {light};
     std::vector<Vec3d> pos, neg;
     for (int k = 0; k < 6; ++k) {
-      const NodePlane pl = node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb);
-      std::vector<std::vector<Vec3d>> next;
-      for (const auto& pc : pieces) {
-        if (split_fragment(pl, pc.data(), int(pc.size()), pos, neg) != SplitResult::Both) {
-          next.push_back(pc);
-          continue;
-        }
-        if (!pos.empty()) next.push_back(pos);
-        if (!neg.empty()) next.push_back(neg);
-      }
-      pieces.swap(next);
+      pieces = split_all(node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb), pieces);
     }
     Vec3d llo, lhi;
     box_of(light, 0x1p-40 * lb.mag, llo, lhi);
