@@ -17,6 +17,28 @@ using namespace visgate;
 using namespace visgate::ssv;
 using namespace visgate::test_support;
 
+namespace {
+
+// n samples of K jitter positions each in the light's [-1, 1]^2 frame: layout 0 a
+// stratified grid moved by up to +-spread/2, 1 uniform, 2 all coincident, 3 a few points.
+std::vector<Vec2f> jitter_layout(int layout, int n, int K, float spread, std::mt19937_64& g) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  const int side = std::max(1, int(std::sqrt(double(n))));
+  std::vector<Vec2f> jitter(size_t(n) * size_t(K));
+  for (size_t q = 0; q < jitter.size(); ++q) {
+    const int j = int(q) / K;
+    const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
+    const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
+    if (layout == 0) jitter[q] = {cu + spread * (u01(g) - 0.5f), cv + spread * (u01(g) - 0.5f)};
+    if (layout == 1) jitter[q] = {u(g), u(g)};
+    if (layout == 2) jitter[q] = {0.25f, -0.5f};
+    if (layout == 3) jitter[q] = {0.5f * float(q % 3), 0.25f * float(q % 2)};
+  }
+  return jitter;
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------- integration rule
 
 TEST(SsvIntegration, StripCounterEqualsNaiveRule) {
@@ -59,18 +81,11 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
   // light (a random pattern: everything is tested one by one) and K = 1, with pieces and
   // steps placed exactly on sample coordinates as well as at random.
   std::mt19937_64 g(11);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (int K : {1, 4, 16})
     for (float spread : {0.02f, 2.0f})
       for (int n : {1, 7, 64, 256, 2048}) {
-        const int side = std::max(1, int(std::sqrt(double(n))));
-        std::vector<Vec2f> jitter(size_t(n) * size_t(K));
-        for (int j = 0; j < n; ++j) {
-          const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
-          const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
-          for (int k = 0; k < K; ++k)
-            jitter[size_t(j) * size_t(K) + size_t(k)] = {cu + spread * (u01(g) - 0.5f), cv + spread * (u01(g) - 0.5f)};
-        }
+        const std::vector<Vec2f> jitter = jitter_layout(0, n, K, spread, g);
         const SampleStrips strips = make_sample_strips(jitter, n, K);
         for (int receiver = 0; receiver < 3; ++receiver) {
           std::vector<uint32_t> pick(static_cast<size_t>(n));
@@ -159,23 +174,13 @@ TEST(SsvIntegration, FinishClassesEqualsFinishThenClasses) {
   // no steps, as many as the AVX2 scan adds per block (up to 4) and more (folded), and
   // sizes below and above the one-by-one limit (strip order).
   std::mt19937_64 g(23);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   const int32_t kU = std::numeric_limits<int32_t>::max();
   for (int layout = 0; layout < 4; ++layout)
     for (int K : {1, 4})
       for (int n : {1, 5, 256, 2048})
         for (int n_steps : {0, 1, 3, 4, 5, 40}) {
-          const int side = std::max(1, int(std::sqrt(double(n))));
-          std::vector<Vec2f> jitter(size_t(n) * size_t(K));
-          for (size_t q = 0; q < jitter.size(); ++q) {
-            const int j = int(q) / K;
-            const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
-            const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
-            if (layout == 0) jitter[q] = {cu + 0.02f * (u01(g) - 0.5f), cv + 0.02f * (u01(g) - 0.5f)};
-            if (layout == 1) jitter[q] = {u(g), u(g)};
-            if (layout == 2) jitter[q] = {0.25f, -0.5f};                        // all coincident
-            if (layout == 3) jitter[q] = {0.5f * float(q % 3), 0.25f * float(q % 2)};  // few points
-          }
+          const std::vector<Vec2f> jitter = jitter_layout(layout, n, K, 0.02f, g);
           const SampleStrips strips = make_sample_strips(jitter, n, K);
           std::vector<uint32_t> pick(static_cast<size_t>(n));
           std::vector<Vec2f> uv(static_cast<size_t>(n));
@@ -237,22 +242,12 @@ TEST(SsvIntegration, SortedOrderEqualsVloOrder) {
   // flags and classes per sample. Stratified, wide, coincident and few-point layouts,
   // pieces and steps exactly on sample v's (ties at the range ends), weights of both signs.
   std::mt19937_64 g(31);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   const int32_t kU = std::numeric_limits<int32_t>::max();
   for (int layout = 0; layout < 4; ++layout)
     for (int K : {1, 4, 16})
       for (int n : {1, 2, 9, 64, 300, 512}) {
-        const int side = std::max(1, int(std::sqrt(double(n))));
-        std::vector<Vec2f> jitter(size_t(n) * size_t(K));
-        for (size_t q = 0; q < jitter.size(); ++q) {
-          const int j = int(q) / K;
-          const float cu = -1.0f + 2.0f * (float(j % side) + 0.5f) / float(side);
-          const float cv = -1.0f + 2.0f * (float(j / side) + 0.5f) / float(n / side + 1);
-          if (layout == 0) jitter[q] = {cu + 0.3f * (u01(g) - 0.5f), cv + 0.3f * (u01(g) - 0.5f)};
-          if (layout == 1) jitter[q] = {u(g), u(g)};
-          if (layout == 2) jitter[q] = {0.25f, -0.5f};
-          if (layout == 3) jitter[q] = {0.5f * float(q % 3), 0.25f * float(q % 2)};
-        }
+        const std::vector<Vec2f> jitter = jitter_layout(layout, n, K, 0.3f, g);
         const SampleStrips strips = make_sample_strips(jitter, n, K);
         for (int receiver = 0; receiver < 3; ++receiver) {
           std::vector<uint32_t> pick(static_cast<size_t>(n));
