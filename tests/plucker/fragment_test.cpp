@@ -36,6 +36,23 @@ std::vector<std::vector<Vec3d>> split_all(const NodePlane& pl, const std::vector
   return out;
 }
 
+// A square light at height 2 of random size (1e-3 to 1e3) and offset (0 every third
+// trial, else up to 1e3 away), and random points around it between two heights.
+struct RandomSquareLight {
+  double scale, off;
+  std::vector<Vec3d> light;
+  LightBounds lb;
+  RandomSquareLight(Rng& rng, int trial)
+      : scale(std::pow(10.0, rng.uniform(-3, 3))), off(trial % 3 == 0 ? 0.0 : rng.uniform(-1e3, 1e3)),
+        light({Vec3d(off, off, 2), Vec3d(off, off + scale, 2), Vec3d(off + scale, off + scale, 2),
+               Vec3d(off + scale, off, 2)}),
+        lb(LightBounds::of(light.data(), 4)) {}
+  Vec3d point(Rng& rng, double zlo, double zhi) const {
+    const double x = off + scale * rng.uniform(-0.5, 1.5), y = off + scale * rng.uniform(-0.5, 1.5);
+    return Vec3d(x, y, rng.uniform(zlo, zhi));
+  }
+};
+
 }  // namespace
 
 TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
@@ -47,13 +64,10 @@ TEST(PluckerFragment, NodePlaneSignsFromTheLightsBoundsAreExact) {
   Rng rng(33);
   int decided = 0;
   for (int trial = 0; trial < 300; ++trial) {
-    const double scale = std::pow(10.0, rng.uniform(-3, 3)), off = trial % 3 == 0 ? 0.0 : rng.uniform(-1e3, 1e3);
-    std::vector<Vec3d> light = {Vec3d(off, off, 2), Vec3d(off, off + scale, 2), Vec3d(off + scale, off + scale, 2),
-                                Vec3d(off + scale, off, 2)};
-    const LightBounds lb = LightBounds::of(light.data(), 4);
-    auto random_point = [&](double zlo, double zhi) {
-      return Vec3d(off + scale * rng.uniform(-0.5, 1.5), off + scale * rng.uniform(-0.5, 1.5), rng.uniform(zlo, zhi));
-    };
+    const RandomSquareLight sq(rng, trial);
+    const std::vector<Vec3d>& light = sq.light;
+    const LightBounds& lb = sq.lb;
+    auto random_point = [&](double zlo, double zhi) { return sq.point(rng, zlo, zhi); };
     std::vector<std::vector<Vec3d>> pieces = {light};
     std::vector<Vec3d> pos, neg;
     for (int k = 0; k < 6; ++k) {  // split every piece by a random plane through a random query point
@@ -352,13 +366,10 @@ TEST(PluckerFragment, BoxSideAgreesWithSplitFragmentOnEveryPieceInTheBox) {
   Rng rng(91);
   int decided = 0, undecided = 0;
   for (int trial = 0; trial < 300; ++trial) {
-    const double scale = std::pow(10.0, rng.uniform(-3, 3)), off = trial % 3 == 0 ? 0.0 : rng.uniform(-1e3, 1e3);
-    std::vector<Vec3d> light = {Vec3d(off, off, 2), Vec3d(off, off + scale, 2), Vec3d(off + scale, off + scale, 2),
-                                Vec3d(off + scale, off, 2)};
-    const LightBounds lb = LightBounds::of(light.data(), 4);
-    auto random_point = [&](double zlo, double zhi) {
-      return Vec3d(off + scale * rng.uniform(-0.5, 1.5), off + scale * rng.uniform(-0.5, 1.5), rng.uniform(zlo, zhi));
-    };
+    const RandomSquareLight sq(rng, trial);
+    const std::vector<Vec3d>& light = sq.light;
+    const LightBounds& lb = sq.lb;
+    auto random_point = [&](double zlo, double zhi) { return sq.point(rng, zlo, zhi); };
     auto box_of = [](const std::vector<Vec3d>& p, double e, Vec3d& lo, Vec3d& hi) {
       lo = hi = p[0];
       for (const Vec3d& x : p) {
