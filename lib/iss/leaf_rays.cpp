@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "lib/base/cpu_features.h"
 #include "lib/iss/iss_solver.h"
 #include "lib/iss/traversal.h"
 
@@ -144,7 +145,7 @@ __attribute__((target("avx2"))) void direct_classify_avx2(const double* t, size_
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
 bool have_avx2() {
-  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_ISS_NO_AVX2") == nullptr;
+  static const bool avx2 = avx2_enabled("VISGATE_ISS_NO_AVX2");
   return avx2;
 }
 #endif

@@ -1,6 +1,7 @@
 // Candidate silhouette edges from the edge hierarchy (see edge_tree.h).
 #include "lib/ssv/edge_tree.h"
 
+#include "lib/base/cpu_features.h"
 #include "lib/geom/morton.h"
 
 #include <algorithm>
@@ -565,7 +566,7 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
 void EdgeTree::query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps,
                            const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs) const {
 #if defined(VISGATE_EDGE_TREE_AVX2) && defined(__SSE2__)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
   if (avx2) {
     for (size_t k = 0; k < n; ++k) outs[k].clear();
     if (empty()) return;

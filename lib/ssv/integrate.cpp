@@ -16,6 +16,7 @@
 #endif
 
 #include "lib/base/check.h"
+#include "lib/base/cpu_features.h"
 
 namespace visgate::ssv {
 
@@ -457,7 +458,7 @@ __attribute__((target("avx2"))) DepthCounter::Classes classes_avx2(int32_t* x, c
 
 bool use_avx2() {
 #if defined(VG_SSV_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
   return avx2;
 #else
   return false;
@@ -492,7 +493,7 @@ __attribute__((target("avx2"))) int side_class_avx2(const double* sx, const doub
 
 // Set once at start-up: count_run runs once per piece, a guarded local static cost a
 // check per call.
-const bool kCountRunAvx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+const bool kCountRunAvx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
 #endif
 
 inline void count_run(const PieceTest& t, const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1,
@@ -846,7 +847,7 @@ void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t
   const bool pow2 = (K & (K - 1)) == 0;
   int j = 0;
 #if defined(VG_SSV_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && std::getenv("VISGATE_SSV_NO_AVX2") == nullptr;
+  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
   if (avx2 && pow2 && K <= (uint64_t(1) << 24)) j = jitter_picks_avx2(prefix, samples, uint32_t(K), pick.data());
 #endif
   for (; j < samples; ++j) {
