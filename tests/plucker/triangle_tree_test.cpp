@@ -65,6 +65,15 @@ void expect_convex_patch(const TriangleSoup& m, const TriangleTree& tree, int32_
   EXPECT_NEAR(0.5 * length(area2), tri_area, 1e-12 * tri_area);
 }
 
+// A box about a random point of `sb`, half-extents in [emin, emax) per axis, in the
+// local frame at `origin` (rounded to float there, as the shafts' boxes are).
+AABB random_local_box(Rng& rng, const AABB& sb, const Vec3f& origin, double emin, double emax) {
+  const Vec3d lo = to_double(sb.lo), hi = to_double(sb.hi);
+  const Vec3d c(rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y), rng.uniform(lo.z, hi.z));
+  const Vec3d e(rng.uniform(emin, emax), rng.uniform(emin, emax), rng.uniform(emin, emax));
+  return AABB(Vec3f(c - e) - origin, Vec3f(c + e) - origin);
+}
+
 }  // namespace
 
 TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
@@ -79,14 +88,8 @@ TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
   std::vector<uint32_t> cand;
   for (int trial = 0; trial < 50; ++trial) {
     Vec3f origin = s.mesh.vertices[size_t(rng.below(s.mesh.vertices.size()))];
-    AABB sb = s.mesh.bounds();
-    auto pick = [&]() {
-      Vec3d lo = to_double(sb.lo), hi = to_double(sb.hi);
-      Vec3d c(rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y), rng.uniform(lo.z, hi.z));
-      Vec3d e(rng.uniform(0, 1), rng.uniform(0, 1), rng.uniform(0, 1));
-      return AABB(Vec3f(c - e) - origin, Vec3f(c + e) - origin);
-    };
-    Shaft shaft(pick(), pick());
+    const AABB sb = s.mesh.bounds();
+    Shaft shaft(random_local_box(rng, sb, origin, 0, 1), random_local_box(rng, sb, origin, 0, 1));
     tree.candidates(shaft, origin, cand);
     EXPECT_TRUE(std::is_sorted(cand.begin(), cand.end()));
     size_t kept = 0;
@@ -118,13 +121,7 @@ TEST(PluckerSelection, TriangleTreeSkippedSubtreesHoldTheirTrianglesAndMissNone)
   for (int trial = 0; trial < 40; ++trial) {
     const Vec3f origin = s.mesh.vertices[size_t(rng.below(s.mesh.vertices.size()))];
     const AABB sb = s.mesh.bounds();
-    auto pick = [&]() {
-      Vec3d lo = to_double(sb.lo), hi = to_double(sb.hi);
-      Vec3d c(rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y), rng.uniform(lo.z, hi.z));
-      Vec3d e(rng.uniform(0.5, 2), rng.uniform(0.5, 2), rng.uniform(0.5, 2));
-      return AABB(Vec3f(c - e) - origin, Vec3f(c + e) - origin);
-    };
-    const Shaft shaft(pick(), pick());
+    const Shaft shaft(random_local_box(rng, sb, origin, 0.5, 2), random_local_box(rng, sb, origin, 0.5, 2));
     tree.candidates(shaft, origin, plain);
     // Accept the boxes lying on one side of a random plane x = cut (local).
     const double cut = rng.uniform(-2.0, 2.0);
