@@ -249,6 +249,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"clusters", "initial shafts' surfaces from pre-merged consistent triangle clusters (surface_clusters.h): auto once an initial shaft holds 8192 triangles and an eighth of the mesh, on always, off never", {"auto", "on", "off"}},
+      {"cluster_exact", "with the clusters, nodes of at most this many triangles whose normal cone proves no facing are taken whole when every triangle's own Table 4.1 facing is the same (default 512; 0 off)", {}},
       {"lazy_band", "keep the triangles a shaft finds inconsistent (Table 4.1) out of its surfaces as a list that sub-shafts filter by box (never blocking, never empty): auto once the clusters are built (dense meshes), on always, off never (Embree caster only)", {"auto", "on", "off"}},
       {"band_build", "with the lazy band, build a band triangle into a sub-shaft's surfaces once it is consistent there (default off: it stays in the band, never blocking)", {"on", "off"}},
       {"cost_rays", "with auto_rays, also cast the relations of shafts of a size once subdividing them went through more blocker elements (raw edges, band entries) per relation decided below than cost_factor rays' worth (every 8th still subdivides): auto with the lazy band (dense meshes), on always, off never", {"auto", "on", "off"}},
@@ -278,6 +279,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.direct_rays = opt.get_bool("direct_rays", true);
   p.clusters = opt.get("clusters", "auto") != "off";
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
+  p.cluster_exact_max = size_t(std::max(0L, opt.get_int("cluster_exact", long(p.cluster_exact_max))));
   p.lazy_band_on = opt.get("lazy_band", "auto") == "on";
   p.lazy_band_auto = opt.get("lazy_band", "auto") == "auto";
   p.band_build = opt.get_bool("band_build", false);

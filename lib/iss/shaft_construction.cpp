@@ -390,7 +390,7 @@ Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::v
   init_shaft(sh);
   if (p_.clusters && !clusters_ && tris.size() >= p_.cluster_min_triangles && 8 * tris.size() >= mesh_.triangles.size()) {
     ScopedTimer t(times_[kTree]);
-    clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_);
+    clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_, p_.cluster_exact_max > 0 ? scale_ : 0.0);
     clusters_charge_.bind(budget_, "surface clusters");
     clusters_charge_.set(clusters_->memory_bytes());
   }
@@ -402,7 +402,7 @@ Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::v
     // With the lazy band its triangles go to sh.band unbuilt (construct_clustered_surface).
     if (clusters_ && lazy_band()) prepare_band();
     s = clusters_ ? construct_clustered_surface(ctx_, *clusters_, sh.g, rn(r), ln(l), ws_, &n_cluster_patches_,
-                                                lazy_band() ? &sh.band : nullptr)
+                                                lazy_band() ? &sh.band : nullptr, p_.cluster_exact_max)
                   : construct_triangle_surface(ctx_, tris, sh.g, rn(r), ln(l), ws_);
   }
   check(s, "construct_triangle_surface");

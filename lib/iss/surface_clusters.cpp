@@ -20,7 +20,8 @@ constexpr double kSpreadSlack = 1e-9;
 
 }  // namespace
 
-SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh) : bvh_(bvh.tree()) {
+SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh, double plane_scale)
+    : bvh_(bvh.tree()) {
   const size_t nn = bvh_.node_count();
   nodes_.resize(nn);
   if (nn == 0 || m.triangles.size() >= (size_t(1) << 30)) {  // 4t + k must fit; else no clusters
@@ -79,6 +80,7 @@ SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh&
     // relative 1e-12 for the rounding of the centre and the length).
     n.radius = 0.5 * length(box.hi - box.lo) * (1 + 1e-12);
     n.first_edge = uint32_t(edges_.size());
+    n.first_pos = lo;
     if (bvh_.is_leaf(nd)) {
       for (uint32_t p = lo; p < hi; ++p) {
         uint32_t t = order[p];
@@ -125,6 +127,15 @@ SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh&
     n.eligible = spread <= kMaxSpread;
   }
   edges_.shrink_to_fit();
+  if (plane_scale > 0) {
+    plane_scale_ = plane_scale;
+    planes_.resize(order.size());
+    for (uint32_t p = 0; p < order.size(); ++p) {
+      const uint32_t t = order[p];
+      planes_[p] = plane_through(to_double(m.corner(t, 0)), to_double(m.corner(t, 1)), to_double(m.corner(t, 2)),
+                                 plane_scale);
+    }
+  }
 }
 
 int SurfaceClusters::side_of(const Node& n, const AABBd& b) const {

@@ -22,6 +22,7 @@
 // traverse it in opposite directions, mesh::PreparedMesh), so they cancel.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -35,7 +36,9 @@ class SurfaceClusters {
   // One boundary edge: edge k (corner k to corner k + 1) of triangle t, as t * 4 + k.
   using BoundaryEdge = uint32_t;
 
-  SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh);
+  // With `plane_scale` > 0 every triangle's plane_through at that scale is kept too, in
+  // leaf order (40 bytes a triangle), for exact_facing.
+  SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh, double plane_scale = 0);
 
   const accel::Bvh<float>& tree() const { return bvh_; }
   bool eligible(uint32_t node) const { return nodes_[node].eligible; }
@@ -45,8 +48,42 @@ class SurfaceClusters {
   // The node's boundary edges.
   const BoundaryEdge* boundary(uint32_t node) const { return edges_.data() + nodes_[node].first_edge; }
   uint32_t boundary_count(uint32_t node) const { return nodes_[node].edge_count; }
+  // The node's triangles are the hierarchy's order() at positions [first_pos, first_pos + count).
+  uint32_t first_pos(uint32_t node) const { return nodes_[node].first_pos; }
 
-  size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + edges_.capacity() * sizeof(BoundaryEdge); }
+  // Planes kept (constructed with plane_scale > 0) and the scale they were computed at.
+  bool has_planes() const { return !planes_.empty(); }
+  double plane_scale() const { return plane_scale_; }
+  // Table 4.1 by triangle_facing for the triangle at leaf position `pos`, from the kept
+  // plane: the same bits as triangle_facing(plane_through(...)) at plane_scale().
+  Facing exact_facing(uint32_t pos, const ShaftGeometry& g) const {
+    const ConservativePlane& pl = planes_[pos];
+    if (pl.n == Vec3d(0, 0, 0)) return Facing::Inconsistent;  // zero-area triangle
+    const int rr = box_side(g.receiver(), pl);
+    if (rr != 2) return rr == 0 ? Facing::TowardsReceiver : Facing::TowardsLight;
+    const int lr = box_side(g.light(), pl);
+    return lr == 0 ? Facing::TowardsLight : lr == 1 ? Facing::TowardsReceiver : Facing::Inconsistent;
+  }
+  // classify_box_plane inline, with the same operations in the same order (so the same
+  // bits): 0 box in front, 1 behind, 2 neither.
+  static int box_side(const AABBd& b, const ConservativePlane& pl) {
+    const Vec3d lo(pl.n.x > 0 ? std::min(b.lo.x, b.hi.x) : std::max(b.lo.x, b.hi.x),
+                   pl.n.y > 0 ? std::min(b.lo.y, b.hi.y) : std::max(b.lo.y, b.hi.y),
+                   pl.n.z > 0 ? std::min(b.lo.z, b.hi.z) : std::max(b.lo.z, b.hi.z));
+    const double mn = pl.eval(lo);
+    if (mn > pl.tol) return 0;
+    const Vec3d hi(pl.n.x > 0 ? std::max(b.lo.x, b.hi.x) : std::min(b.lo.x, b.hi.x),
+                   pl.n.y > 0 ? std::max(b.lo.y, b.hi.y) : std::min(b.lo.y, b.hi.y),
+                   pl.n.z > 0 ? std::max(b.lo.z, b.hi.z) : std::min(b.lo.z, b.hi.z));
+    const double mx = pl.eval(hi);
+    if (mx < -pl.tol) return 1;
+    return 2;
+  }
+
+  size_t memory_bytes() const {
+    return nodes_.capacity() * sizeof(Node) + edges_.capacity() * sizeof(BoundaryEdge) +
+           planes_.capacity() * sizeof(ConservativePlane);
+  }
 
  private:
   struct Node {
@@ -54,6 +91,7 @@ class SurfaceClusters {
     Vec3d centre{0, 0, 0};
     double spread = 0, radius = 0;
     uint32_t first_edge = 0, edge_count = 0;
+    uint32_t first_pos = 0;
     bool eligible = false;
   };
   // -1, 0 or 1: box below every plane of the node, unknown, above every plane.
@@ -62,6 +100,8 @@ class SurfaceClusters {
   const accel::Bvh<float>& bvh_;
   std::vector<Node> nodes_;
   std::vector<BoundaryEdge> edges_;
+  std::vector<ConservativePlane> planes_;  // by leaf position, when kept
+  double plane_scale_ = 0;
 };
 
 // CONSTRUCT-TRIANGLE-SURFACE for an initial shaft from the clusters: walks the triangle
@@ -80,6 +120,7 @@ class SurfaceClusters {
 // hierarchy's leaf order.
 Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClusters& clusters, const ShaftGeometry& g,
                                     const TreeNode& rnode, const TreeNode& lnode, Workspace& ws,
-                                    double* whole_nodes = nullptr, std::vector<uint32_t>* band = nullptr);
+                                    double* whole_nodes = nullptr, std::vector<uint32_t>* band = nullptr,
+                                    size_t exact_max = 0);
 
 }  // namespace visgate::iss

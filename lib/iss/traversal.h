@@ -124,6 +124,10 @@ struct Params {
   // Option clusters: auto (this), on (cluster_min_triangles 0), off.
   bool clusters = true;
   size_t cluster_min_triangles = 8192;
+  // Where the normal cone cannot prove a node's facing, nodes of at most this many
+  // triangles are decided by their triangles' own Table 4.1 facings (planes kept by
+  // the clusters), so a consistent node near the band is still taken whole. 0: off.
+  size_t cluster_exact_max = 512;
   // Lazy band (Shaft::band): on, off, or auto (on once the clusters are built, i.e.
   // on dense meshes). Never with the custom caster, which tests the surfaces' triangles.
   bool lazy_band_on = false, lazy_band_auto = true;
