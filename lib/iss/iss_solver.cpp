@@ -253,6 +253,8 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"lazy_band", "keep the triangles a shaft finds inconsistent (Table 4.1) out of its surfaces as a list that sub-shafts filter by box (never blocking, never empty): auto once the clusters are built (dense meshes), on always, off never (Embree caster only)", {"auto", "on", "off"}},
       {"band_build", "with the lazy band, build a band triangle into a sub-shaft's surfaces once it is consistent there (default off: it stays in the band, never blocking)", {"on", "off"}},
       {"cost_rays", "with auto_rays, also cast the relations of shafts of a size once subdividing them went through more blocker elements (raw edges, band entries) per relation decided below than cost_factor rays' worth (every 8th still subdivides): auto with the lazy band (dense meshes), on always, off never", {"auto", "on", "off"}},
+      {"cost_initial", "with cost_rays, the same rule for initial shafts over the lights: once the initial shafts built so far went through more blocker elements per relation they decided than cost_factor rays' worth, a light's initial shaft is not built and its relations are cast (every 8th is still built)", {"on", "off"}},
+      {"cost_initial_factor", "cost_initial casts once the initial shafts went through more than cost_initial_factor * 3 blocker elements per relation they decided (default 1)", {}},
       {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 2)", {}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
@@ -285,6 +287,8 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.band_build = opt.get_bool("band_build", false);
   p.cost_rays_on = opt.get("cost_rays", "auto") == "on";
   p.cost_rays_auto = opt.get("cost_rays", "auto") == "auto";
+  p.cost_initial = opt.get_bool("cost_initial", true);
+  p.cost_initial_factor = double(std::max(0L, opt.get_int("cost_initial_factor", long(p.cost_initial_factor))));
   p.cost_factor = double(std::max(0L, opt.get_int("cost_factor", long(p.cost_factor))));
   // The trial compares costs in automatic-ray terms: Embree leaf rays only.
   p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;

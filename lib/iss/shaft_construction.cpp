@@ -337,6 +337,24 @@ void Traversal::filter_band(const Shaft& parent, Shaft& sub, const std::vector<u
   }
 }
 
+// The cost rule of shaft_subdivide (automatic rays by cost) for initial shafts, judged
+// over the lights: an initial shaft has no smaller shaft of its light to learn from, so
+// the initial shafts built so far (with every shaft below them) stand for it. Counts,
+// not times, so the choice is the same on every run; the first initial shaft is always
+// built, and every kAutoRayExplore-th skipped one still is.
+bool Traversal::initial_shaft_by_rays(int r, int l) {
+  const AutoRayBucket& ib = initial_bucket_;
+  if (!p_.cost_initial || !p_.auto_rays || p_.custom_rays || !cost_rays() || ib.subdivided < 1) return false;
+  if (!(ib.work_below > p_.cost_initial_factor * p_.work_per_ray * ib.decided_below)) return false;
+  if (++initial_bucket_.skipped % kAutoRayExplore == 0) return false;
+  n_cost_ray_initial_ += 1;
+  n_cost_ray_shafts_ += 1;
+  n_auto_shafts_ += 1;
+  n_auto_relations_ += double(rn(r).size()) * double(ln(l).size());
+  cast_rays(r, l, nullptr, nullptr);
+  return true;
+}
+
 // Blocker probe before CONSTRUCT-INITIAL-SHAFT (an addition to section 4.8, in the
 // spirit of the early exits of section 4.13). A surface built from any subset of the
 // valid blockers of a shaft (triangles that meet the shaft and neither node) that
