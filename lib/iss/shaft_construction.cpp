@@ -408,7 +408,7 @@ Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::v
   init_shaft(sh);
   if (p_.clusters && !clusters_ && tris.size() >= p_.cluster_min_triangles && 8 * tris.size() >= mesh_.triangles.size()) {
     ScopedTimer t(times_[kTree]);
-    clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_, p_.cluster_exact_max > 0 ? scale_ : 0.0);
+    clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_);
     clusters_charge_.bind(budget_, "surface clusters");
     clusters_charge_.set(clusters_->memory_bytes());
   }

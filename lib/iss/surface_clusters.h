@@ -36,28 +36,28 @@ class SurfaceClusters {
   // One boundary edge: edge k (corner k to corner k + 1) of triangle t, as t * 4 + k.
   using BoundaryEdge = uint32_t;
 
-  // With `plane_scale` > 0 every triangle's plane_through at that scale is kept too, in
-  // leaf order (40 bytes a triangle), for exact_facing.
-  SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh, double plane_scale = 0);
+  SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh);
 
   const accel::Bvh<float>& tree() const { return bvh_; }
   bool eligible(uint32_t node) const { return nodes_[node].eligible; }
   // Facing shared by every triangle of an eligible node for the shaft's two boxes by
   // Table 4.1, from the cone bound; Inconsistent when the bound does not prove one.
   Facing facing_of(uint32_t node, const AABBd& receiver, const AABBd& light) const;
-  // The node's boundary edges.
-  const BoundaryEdge* boundary(uint32_t node) const { return edges_.data() + nodes_[node].first_edge; }
-  uint32_t boundary_count(uint32_t node) const { return nodes_[node].edge_count; }
+  // The node's boundary edges, appended to `out` in leaf order (triangle by triangle,
+  // edges 0 to 2): the edges whose neighbour across a double edge is outside the node.
+  // Computed on demand, in time linear in the node's triangles: a node is taken whole
+  // at most once per initial shaft, and most nodes never are.
+  void boundary(uint32_t node, std::vector<BoundaryEdge>& out) const;
   // The node's triangles are the hierarchy's order() at positions [first_pos, first_pos + count).
   uint32_t first_pos(uint32_t node) const { return nodes_[node].first_pos; }
 
-  // Planes kept (constructed with plane_scale > 0) and the scale they were computed at.
-  bool has_planes() const { return !planes_.empty(); }
-  double plane_scale() const { return plane_scale_; }
-  // Table 4.1 by triangle_facing for the triangle at leaf position `pos`, from the kept
-  // plane: the same bits as triangle_facing(plane_through(...)) at plane_scale().
+  // Table 4.1 by triangle_facing(plane_through(a, b, c, scale), g) for the triangle at
+  // leaf position `pos`, inline, with the same operations in the same order (the same
+  // bits as the per-triangle construction's UPDATE-PATCH-FACINGS).
   Facing exact_facing(uint32_t pos, const ShaftGeometry& g) const {
-    const ConservativePlane& pl = planes_[pos];
+    const uint32_t t = bvh_.order()[pos];
+    const ConservativePlane pl = plane_through(to_double(m_.corner(t, 0)), to_double(m_.corner(t, 1)),
+                                               to_double(m_.corner(t, 2)), g.scale());
     if (pl.n == Vec3d(0, 0, 0)) return Facing::Inconsistent;  // zero-area triangle
     const int rr = box_side(g.receiver(), pl);
     if (rr != 2) return rr == 0 ? Facing::TowardsReceiver : Facing::TowardsLight;
@@ -80,28 +80,23 @@ class SurfaceClusters {
     return 2;
   }
 
-  size_t memory_bytes() const {
-    return nodes_.capacity() * sizeof(Node) + edges_.capacity() * sizeof(BoundaryEdge) +
-           planes_.capacity() * sizeof(ConservativePlane);
-  }
+  size_t memory_bytes() const { return nodes_.capacity() * sizeof(Node) + pos_.capacity() * sizeof(uint32_t); }
 
  private:
   struct Node {
     Vec3d axis{0, 0, 0};
     Vec3d centre{0, 0, 0};
     double spread = 0, radius = 0;
-    uint32_t first_edge = 0, edge_count = 0;
     uint32_t first_pos = 0;
     bool eligible = false;
   };
   // -1, 0 or 1: box below every plane of the node, unknown, above every plane.
   int side_of(const Node& n, const AABBd& b) const;
 
+  const mesh::PreparedMesh& m_;
   const accel::Bvh<float>& bvh_;
   std::vector<Node> nodes_;
-  std::vector<BoundaryEdge> edges_;
-  std::vector<ConservativePlane> planes_;  // by leaf position, when kept
-  double plane_scale_ = 0;
+  std::vector<uint32_t> pos_;  // leaf-order position of each triangle
 };
 
 // CONSTRUCT-TRIANGLE-SURFACE for an initial shaft from the clusters: walks the triangle

@@ -163,25 +163,24 @@ Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClus
   ws.reset_labels(m.edge_count());
   const accel::Bvh<float>& bvh = clusters.tree();
   const int ax = g.main_axis();
-  // Exact facings (kept planes at this shaft's scale): computed once for the positions
+  // Exact facings (SurfaceClusters::exact_facing): computed once for the positions
   // [exact_lo, exact_hi) of the topmost node the cone could not decide, and read by its
   // descendants, which the depth-first walk visits before any other node.
-  const bool exact = exact_max > 0 && clusters.has_planes() && clusters.plane_scale() == g.scale();
+  const bool exact = exact_max > 0;
   std::vector<uint8_t> facing;  // Facing per position - exact_lo
   uint32_t exact_lo = 0, exact_hi = 0;
   AABBd whole = empty_box();
-  auto take_whole = [&](uint32_t i, Facing f, const AABBd& box) {
+  std::vector<SurfaceClusters::BoundaryEdge> be;  // the boundary of the node taken whole
+  auto take_whole = [&](Facing f, const AABBd& box) {
     Patch p;
     p.first = uint32_t(s.edges.size());
     p.facing = f;
     p.tri = -1;
     const int32_t pi = int32_t(s.patches.size());
-    const SurfaceClusters::BoundaryEdge* be = clusters.boundary(i);
-    const uint32_t ne = clusters.boundary_count(i);
-    for (uint32_t k = 0; k < ne; ++k) {
-      const uint32_t t = be[k] >> 2;
-      const int e = int(be[k] & 3);
-      add_edge(s, ws, pi, corner_d(m, t, e), corner_d(m, t, (e + 1) % 3), int32_t(m.triangles[t].edge_labels[size_t(e)]));
+    for (const SurfaceClusters::BoundaryEdge e : be) {
+      const uint32_t t = e >> 2;
+      const int k = int(e & 3);
+      add_edge(s, ws, pi, corner_d(m, t, k), corner_d(m, t, (k + 1) % 3), int32_t(m.triangles[t].edge_labels[size_t(k)]));
     }
     end_patch(s, p);
     whole.extend(box);
@@ -217,13 +216,16 @@ Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClus
         for (uint32_t p = lo + 1; p < hi && same; ++p) same = facing[p - exact_lo] == f0;
         if (same) f = Facing(f0);
       }
-      const uint32_t ne = clusters.boundary_count(i);
-      // A closed consistent piece meets no segment between the boxes (each would cross
-      // it as often in as out, and all cross it the same way): MERGE-PATCHES drops it.
-      if (f != Facing::Inconsistent && ne == 0) continue;
-      if (f != Facing::Inconsistent && ne >= 3) {
-        take_whole(i, f, box);
-        continue;
+      if (f != Facing::Inconsistent) {
+        be.clear();
+        clusters.boundary(i, be);
+        // A closed consistent piece meets no segment between the boxes (each would cross
+        // it as often in as out, and all cross it the same way): MERGE-PATCHES drops it.
+        if (be.empty()) continue;
+        if (be.size() >= 3) {
+          take_whole(f, box);
+          continue;
+        }
       }
     }
     if (bvh.is_leaf(nd)) {
