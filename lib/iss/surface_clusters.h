@@ -7,7 +7,7 @@
 // silhouette; that was linear work per light. This structure, built once per solve over
 // the nodes of the triangle hierarchy (triangle_bvh.h), lets the construction insert a
 // whole node as one patch when every triangle of it is provably consistent with the
-// same facing: the patch is the node's precomputed boundary (the edges whose neighbour
+// same facing: the patch is the node's boundary (the edges whose neighbour
 // triangle is outside the node, directed as their triangle traverses them), which is
 // what MERGE-PATCHES would have left of the node's triangles.
 //
@@ -113,6 +113,11 @@ class SurfaceClusters {
 // plane by its box and is inconsistent by Table 4.1 (triangle_facing) is appended to
 // `band` instead of built (the lazy band, traversal.h: Shaft::band), in the
 // hierarchy's leaf order.
+// `exact_max` > 0: a node of at most that many triangles whose cone proves no facing is
+// still taken whole when every triangle's own facing (exact_facing, the same bits as
+// UPDATE-PATCH-FACINGS would give its patch) is the same consistent one; the cone's
+// slack (spread times the distance to the boxes) fails near the band long before the
+// triangles do.
 Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClusters& clusters, const ShaftGeometry& g,
                                     const TreeNode& rnode, const TreeNode& lnode, Workspace& ws,
                                     double* whole_nodes = nullptr, std::vector<uint32_t>* band = nullptr,
