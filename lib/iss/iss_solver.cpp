@@ -249,9 +249,12 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
       {"clusters", "initial shafts' surfaces from pre-merged consistent triangle clusters (surface_clusters.h): auto once an initial shaft holds 8192 triangles and an eighth of the mesh, on always, off never", {"auto", "on", "off"}},
+      {"cluster_exact", "with the clusters, nodes of at most this many triangles whose normal cone proves no facing are taken whole when every triangle's own Table 4.1 facing is the same (default 512; 0 off)", {}},
       {"lazy_band", "keep the triangles a shaft finds inconsistent (Table 4.1) out of its surfaces as a list that sub-shafts filter by box (never blocking, never empty): auto once the clusters are built (dense meshes), on always, off never (Embree caster only)", {"auto", "on", "off"}},
       {"band_build", "with the lazy band, build a band triangle into a sub-shaft's surfaces once it is consistent there (default off: it stays in the band, never blocking)", {"on", "off"}},
       {"cost_rays", "with auto_rays, also cast the relations of shafts of a size once subdividing them went through more blocker elements (raw edges, band entries) per relation decided below than cost_factor rays' worth (every 8th still subdivides): auto with the lazy band (dense meshes), on always, off never", {"auto", "on", "off"}},
+      {"cost_initial", "with cost_rays, the same rule for initial shafts over the lights: once the initial shafts built so far went through more blocker elements per relation they decided than cost_factor rays' worth, a light's initial shaft is not built and its relations are cast (every 8th is still built)", {"on", "off"}},
+      {"cost_initial_factor", "cost_initial casts once the initial shafts went through more than cost_initial_factor * 3 blocker elements per relation they decided (default 1)", {}},
       {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 2)", {}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
@@ -278,11 +281,14 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.direct_rays = opt.get_bool("direct_rays", true);
   p.clusters = opt.get("clusters", "auto") != "off";
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
+  p.cluster_exact_max = size_t(std::max(0L, opt.get_int("cluster_exact", long(p.cluster_exact_max))));
   p.lazy_band_on = opt.get("lazy_band", "auto") == "on";
   p.lazy_band_auto = opt.get("lazy_band", "auto") == "auto";
   p.band_build = opt.get_bool("band_build", false);
   p.cost_rays_on = opt.get("cost_rays", "auto") == "on";
   p.cost_rays_auto = opt.get("cost_rays", "auto") == "auto";
+  p.cost_initial = opt.get_bool("cost_initial", true);
+  p.cost_initial_factor = double(std::max(0L, opt.get_int("cost_initial_factor", long(p.cost_initial_factor))));
   p.cost_factor = double(std::max(0L, opt.get_int("cost_factor", long(p.cost_factor))));
   // The trial compares costs in automatic-ray terms: Embree leaf rays only.
   p.light_split_auto = opt.get("light_split", "auto") == "auto" && !p.custom_rays;

@@ -337,6 +337,24 @@ void Traversal::filter_band(const Shaft& parent, Shaft& sub, const std::vector<u
   }
 }
 
+// The cost rule of shaft_subdivide (automatic rays by cost) for initial shafts, judged
+// over the lights: an initial shaft has no smaller shaft of its light to learn from, so
+// the initial shafts built so far (with every shaft below them) stand for it. Counts,
+// not times, so the choice is the same on every run; the first initial shaft is always
+// built, and every kAutoRayExplore-th skipped one still is.
+bool Traversal::initial_shaft_by_rays(int r, int l) {
+  const AutoRayBucket& ib = initial_bucket_;
+  if (!p_.cost_initial || !p_.auto_rays || p_.custom_rays || !cost_rays() || ib.subdivided < 1) return false;
+  if (!(ib.work_below > p_.cost_initial_factor * p_.work_per_ray * ib.decided_below)) return false;
+  if (++initial_bucket_.skipped % kAutoRayExplore == 0) return false;
+  n_cost_ray_initial_ += 1;
+  n_cost_ray_shafts_ += 1;
+  n_auto_shafts_ += 1;
+  n_auto_relations_ += double(rn(r).size()) * double(ln(l).size());
+  cast_rays(r, l, nullptr, nullptr);
+  return true;
+}
+
 // Blocker probe before CONSTRUCT-INITIAL-SHAFT (an addition to section 4.8, in the
 // spirit of the early exits of section 4.13). A surface built from any subset of the
 // valid blockers of a shaft (triangles that meet the shaft and neither node) that
@@ -402,7 +420,7 @@ Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::v
     // With the lazy band its triangles go to sh.band unbuilt (construct_clustered_surface).
     if (clusters_ && lazy_band()) prepare_band();
     s = clusters_ ? construct_clustered_surface(ctx_, *clusters_, sh.g, rn(r), ln(l), ws_, &n_cluster_patches_,
-                                                lazy_band() ? &sh.band : nullptr)
+                                                lazy_band() ? &sh.band : nullptr, p_.cluster_exact_max)
                   : construct_triangle_surface(ctx_, tris, sh.g, rn(r), ln(l), ws_);
   }
   check(s, "construct_triangle_surface");

@@ -1,9 +1,10 @@
 // Pre-merged triangle clusters (see surface_clusters.h): cones, spheres and boundaries
-// of the triangle hierarchy's nodes, bottom-up in linear time.
+// of the triangle hierarchy's nodes: cones bottom-up in linear time, boundaries on demand.
 #include "lib/iss/surface_clusters.h"
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "lib/base/check.h"
 
@@ -20,7 +21,7 @@ constexpr double kSpreadSlack = 1e-9;
 
 }  // namespace
 
-SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh) : bvh_(bvh.tree()) {
+SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh& bvh) : m_(m), bvh_(bvh.tree()) {
   const size_t nn = bvh_.node_count();
   nodes_.resize(nn);
   if (nn == 0 || m.triangles.size() >= (size_t(1) << 30)) {  // 4t + k must fit; else no clusters
@@ -29,80 +30,57 @@ SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh&
   }
   // Position of each triangle in leaf order, and each node's first position: a node
   // covers the positions [begin, begin + count) (pre-order: the left child is i + 1).
-  std::vector<uint32_t> pos(m.triangles.size(), 0);
+  pos_.assign(m.triangles.size(), 0);
   std::span<const uint32_t> order = bvh_.order();
-  for (uint32_t p = 0; p < order.size(); ++p) pos[order[p]] = p;
-  std::vector<uint32_t> begin(nn, 0);
+  for (uint32_t p = 0; p < order.size(); ++p) pos_[order[p]] = p;
   for (uint32_t i = 0; i < nn; ++i) {
     const auto& nd = bvh_.node(i);
     if (bvh_.is_leaf(nd)) {
-      VG_CHECK(begin[i] == nd.first);  // leaves are numbered in pre-order
+      VG_CHECK(nodes_[i].first_pos == nd.first);  // leaves are numbered in pre-order
     } else {
-      begin[i + 1] = begin[i];
-      begin[nd.first] = begin[i] + bvh_.node(i + 1).count;
+      nodes_[i + 1].first_pos = nodes_[i].first_pos;
+      nodes_[nd.first].first_pos = nodes_[i].first_pos + bvh_.node(i + 1).count;
     }
   }
-  // Unit normals (zero for a triangle without a usable one).
-  std::vector<Vec3d> normal(m.triangles.size());
-  std::vector<uint8_t> degenerate(m.triangles.size(), 0);
-  for (size_t t = 0; t < m.triangles.size(); ++t) {
+  // Unit normals (zero for a triangle without a usable one), in leaf order.
+  std::vector<Vec3d> normal(order.size());
+  std::vector<uint8_t> degenerate(order.size(), 0);
+  for (uint32_t p = 0; p < order.size(); ++p) {
+    const uint32_t t = order[p];
     Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
     Vec3d n = cross(b - a, c - a);
     double len = length(n);
     // A normal shorter than 1e-6 of its edges' product is a sliver whose direction the
     // double cross product may not resolve well: such a triangle's node stays per triangle.
     if (!(len > 1e-6 * length(b - a) * length(c - a)) || !std::isfinite(len)) {
-      degenerate[t] = 1;
+      degenerate[p] = 1;
       continue;
     }
-    normal[t] = n / len;
+    normal[p] = n / len;
   }
-  auto interior = [&](uint32_t t, int k, uint32_t lo, uint32_t hi) {
-    const auto& tri = m.triangles[t];
-    int32_t nb = tri.neighbors[size_t(k)];
-    if (nb < 0 || !m.is_double_edge[tri.edge_labels[size_t(k)]]) return false;
-    uint32_t p = pos[size_t(nb)];
-    return p >= lo && p < hi;
-  };
-  // Bottom-up (children have larger indices): cones, then boundaries appended per node.
+  // Bottom-up (children have larger indices): cones.
   std::vector<Vec3d> sum(nn, Vec3d(0, 0, 0));
   std::vector<uint8_t> bad(nn, 0);  // a degenerate triangle below, or a cone undefined
-  edges_.reserve(m.triangles.size() * 3);
   for (size_t ii = nn; ii-- > 0;) {
     const uint32_t i = uint32_t(ii);
     const auto& nd = bvh_.node(i);
     Node& n = nodes_[i];
-    const uint32_t lo = begin[i], hi = begin[i] + nd.count;
+    const uint32_t lo = n.first_pos, hi = n.first_pos + nd.count;
     AABBd box = to_double(nd.box);
     n.centre = (box.lo + box.hi) * 0.5;
     // Every vertex is in the box: within half its diagonal of the centre (grown by a
     // relative 1e-12 for the rounding of the centre and the length).
     n.radius = 0.5 * length(box.hi - box.lo) * (1 + 1e-12);
-    n.first_edge = uint32_t(edges_.size());
     if (bvh_.is_leaf(nd)) {
       for (uint32_t p = lo; p < hi; ++p) {
-        uint32_t t = order[p];
-        bad[i] |= degenerate[t];
-        sum[i] += normal[t];
-        for (int k = 0; k < 3; ++k)
-          if (!interior(t, k, lo, hi)) edges_.push_back(t * 4 + uint32_t(k));
+        bad[i] |= degenerate[p];
+        sum[i] += normal[p];
       }
     } else {
       const uint32_t l = i + 1, r = nd.first;
       bad[i] = bad[l] | bad[r];
       sum[i] = sum[l] + sum[r];
-      const uint32_t rlo = begin[r], rhi = begin[r] + bvh_.node(r).count;
-      const uint32_t llo = begin[l], lhi = begin[l] + bvh_.node(l).count;
-      for (uint32_t k = 0; k < nodes_[l].edge_count; ++k) {
-        BoundaryEdge e = edges_[nodes_[l].first_edge + k];
-        if (!interior(e >> 2, int(e & 3), rlo, rhi)) edges_.push_back(e);
-      }
-      for (uint32_t k = 0; k < nodes_[r].edge_count; ++k) {
-        BoundaryEdge e = edges_[nodes_[r].first_edge + k];
-        if (!interior(e >> 2, int(e & 3), llo, lhi)) edges_.push_back(e);
-      }
     }
-    n.edge_count = uint32_t(edges_.size()) - n.first_edge;
     double sl = length(sum[i]);
     if (bad[i] || !(sl > 0)) {
       bad[i] = 1;
@@ -113,7 +91,7 @@ SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh&
     // above (triangle inequality).
     double spread = 0;
     if (bvh_.is_leaf(nd)) {
-      for (uint32_t p = lo; p < hi; ++p) spread = std::max(spread, length(normal[order[p]] - n.axis));
+      for (uint32_t p = lo; p < hi; ++p) spread = std::max(spread, length(normal[p] - n.axis));
       spread += kSpreadSlack;
     } else {
       const Node& L = nodes_[i + 1];
@@ -124,7 +102,23 @@ SurfaceClusters::SurfaceClusters(const mesh::PreparedMesh& m, const TriangleBvh&
     n.spread = spread;
     n.eligible = spread <= kMaxSpread;
   }
-  edges_.shrink_to_fit();
+}
+
+void SurfaceClusters::boundary(uint32_t node, std::vector<BoundaryEdge>& out) const {
+  const uint32_t lo = nodes_[node].first_pos, hi = lo + bvh_.node(node).count;
+  std::span<const uint32_t> order = bvh_.order();
+  for (uint32_t p = lo; p < hi; ++p) {
+    const uint32_t t = order[p];
+    const auto& tri = m_.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      // Interior: a double edge whose other triangle is in the node; the two traverse
+      // it in opposite directions, so they cancel in the node's chain.
+      const int32_t nb = tri.neighbors[size_t(k)];
+      const bool interior = nb >= 0 && m_.is_double_edge[tri.edge_labels[size_t(k)]] && pos_[size_t(nb)] >= lo &&
+                            pos_[size_t(nb)] < hi;
+      if (!interior) out.push_back(t * 4 + uint32_t(k));
+    }
+  }
 }
 
 int SurfaceClusters::side_of(const Node& n, const AABBd& b) const {

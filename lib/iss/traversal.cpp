@@ -163,6 +163,7 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("band_triangles_kept", n_band_kept_);
   st.set("shaft_work", n_shaft_work_);
   st.set("cost_ray_shafts", n_cost_ray_shafts_);
+  st.set("cost_ray_initial_shafts", n_cost_ray_initial_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
   double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
                        (clusters_ ? clusters_->memory_bytes() : 0) + tri_pos_.capacity() * sizeof(uint32_t) +
@@ -416,9 +417,14 @@ void Traversal::pre_traverse(int r, int l, const std::vector<uint32_t>& tris, bo
         record_blocked(r, l);
         return;
       }
+      if (initial_shaft_by_rays(r, l)) return;
+      const double work0 = light_work_, decided0 = n_blocked_shaft_ + n_empty_;
       Shaft sh = construct_initial_shaft(r, l, ax, tris);
       shaft_traverse(sh);
       release(sh);
+      initial_bucket_.subdivided += 1;
+      initial_bucket_.work_below += light_work_ - work0;
+      initial_bucket_.decided_below += n_blocked_shaft_ + n_empty_ - decided0;
       return;
     }
   }

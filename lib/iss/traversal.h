@@ -124,6 +124,10 @@ struct Params {
   // Option clusters: auto (this), on (cluster_min_triangles 0), off.
   bool clusters = true;
   size_t cluster_min_triangles = 8192;
+  // Where the normal cone cannot prove a node's facing, nodes of at most this many
+  // triangles are decided by their triangles' own Table 4.1 facings (planes kept by
+  // the clusters), so a consistent node near the band is still taken whole. 0: off.
+  size_t cluster_exact_max = 512;
   // Lazy band (Shaft::band): on, off, or auto (on once the clusters are built, i.e.
   // on dense meshes). Never with the custom caster, which tests the surfaces' triangles.
   bool lazy_band_on = false, lazy_band_auto = true;
@@ -141,6 +145,14 @@ struct Params {
   // rooms at 1024 x 64 from 17.9% to 19.8% ray-cast).
   bool cost_rays_on = false, cost_rays_auto = true;
   double work_per_ray = 3.0, cost_factor = 2.0;
+  // The same rule for initial shafts, over the lights (cost_initial): once the initial
+  // shafts built so far and the shafts below them went through more than cost_factor *
+  // work_per_ray elements per relation they decided, a further initial shaft is not
+  // built and its relations are cast (every kAutoRayExplore-th is still built). An
+  // initial shaft of a dense mesh costs about as much as all its relations' rays, and
+  // nothing before it can tell whether it will decide them. With cost_rays only.
+  bool cost_initial = true;
+  double cost_initial_factor = 1.0;
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
@@ -271,6 +283,9 @@ class Traversal {
   Shaft construct_sub_shaft(int r, int l, const TreeNode& split_node, Shaft& parent, bool move_parent,
                             const ShaftGeometry* made = nullptr);
   bool probe_blocked(int r, int l, MainAxis ax, size_t n_tris);
+  // The cost rule across initial shafts (Params::cost_initial, shaft_construction.cpp):
+  // true when the relations of r x l were cast instead of building its initial shaft.
+  bool initial_shaft_by_rays(int r, int l);
   Shaft construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris);
 
   // ---- section 4.12: empty shafts (empty_shaft.cpp) --------------------------------------
@@ -345,6 +360,10 @@ class Traversal {
   // Shaft work (Params::cost_rays): blocker elements the shaft constructions went
   // through (the parent's raw edges and band entries, the new triangles' edges).
   double light_work_ = 0, n_shaft_work_ = 0, n_cost_ray_shafts_ = 0;
+  // Initial shafts over all lights (Params::cost_initial): their work and decided
+  // relations (the shaft and every shaft below), and those cast instead.
+  AutoRayBucket initial_bucket_;
+  double n_cost_ray_initial_ = 0;
   std::vector<uint32_t> band_build_;
   // Per mesh triangle, built on the first use of the band (counted against the memory
   // budget as "band order and planes"): its position in the triangle hierarchy's leaf

@@ -157,13 +157,35 @@ Surface construct_triangle_surface(const BlockerContext& ctx, const std::vector<
 
 Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClusters& clusters, const ShaftGeometry& g,
                                     const TreeNode& rnode, const TreeNode& lnode, Workspace& ws,
-                                    double* whole_nodes, std::vector<uint32_t>* band) {
+                                    double* whole_nodes, std::vector<uint32_t>* band, size_t exact_max) {
   Surface s = ws.take_surface();
   const mesh::PreparedMesh& m = *ctx.mesh;
   ws.reset_labels(m.edge_count());
   const accel::Bvh<float>& bvh = clusters.tree();
   const int ax = g.main_axis();
+  // Exact facings (SurfaceClusters::exact_facing): computed once for the positions
+  // [exact_lo, exact_hi) of the topmost node the cone could not decide, and read by its
+  // descendants, which the depth-first walk visits before any other node.
+  const bool exact = exact_max > 0;
+  std::vector<uint8_t> facing;  // Facing per position - exact_lo
+  uint32_t exact_lo = 0, exact_hi = 0;
   AABBd whole = empty_box();
+  std::vector<SurfaceClusters::BoundaryEdge> be;  // the boundary of the node taken whole
+  auto take_whole = [&](Facing f, const AABBd& box) {
+    Patch p;
+    p.first = uint32_t(s.edges.size());
+    p.facing = f;
+    p.tri = -1;
+    const int32_t pi = int32_t(s.patches.size());
+    for (const SurfaceClusters::BoundaryEdge e : be) {
+      const uint32_t t = e >> 2;
+      const int k = int(e & 3);
+      add_edge(s, ws, pi, corner_d(m, t, k), corner_d(m, t, (k + 1) % 3), int32_t(m.triangles[t].edge_labels[size_t(k)]));
+    }
+    end_patch(s, p);
+    whole.extend(box);
+    if (whole_nodes) *whole_nodes += 1;
+  };
   std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
   size_t top = 0;
   if (!bvh.empty()) stack[top++] = 0;
@@ -172,37 +194,45 @@ Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClus
     const auto& nd = bvh.node(i);
     const AABBd box = to_double(nd.box);
     if (!g.may_intersect_box(box)) continue;  // every triangle below misses the shaft
+    const uint32_t lo = clusters.first_pos(i), hi = lo + nd.count;
+    const bool in_exact = exact && lo >= exact_lo && hi <= exact_hi;
     // Taken whole: no triangle below can be in a node's inside list (those meet the
     // node's box, tree.cpp), none needs clipping (add_triangle's test), and the cone
-    // proves one facing for all (surface_clusters.h).
-    if (clusters.eligible(i) && !nd.box.overlaps(rnode.box) && !nd.box.overlaps(lnode.box) &&
-        !(box.lo[ax] < g.clip_lo()) && !(box.hi[ax] > g.clip_hi())) {
-      const Facing f = clusters.facing_of(i, g.receiver(), g.light());
-      const uint32_t ne = clusters.boundary_count(i);
-      // A closed consistent piece meets no segment between the boxes (each would cross
-      // it as often in as out, and all cross it the same way): MERGE-PATCHES drops it.
-      if (f != Facing::Inconsistent && ne == 0) continue;
-      if (f != Facing::Inconsistent && ne >= 3) {
-        Patch p;
-        p.first = uint32_t(s.edges.size());
-        p.facing = f;
-        p.tri = -1;
-        const int32_t pi = int32_t(s.patches.size());
-        const SurfaceClusters::BoundaryEdge* be = clusters.boundary(i);
-        for (uint32_t k = 0; k < ne; ++k) {
-          const uint32_t t = be[k] >> 2;
-          const int e = int(be[k] & 3);
-          add_edge(s, ws, pi, corner_d(m, t, e), corner_d(m, t, (e + 1) % 3),
-                   int32_t(m.triangles[t].edge_labels[size_t(e)]));
+    // or every triangle's own Table 4.1 facing proves one facing for all
+    // (surface_clusters.h).
+    if (!nd.box.overlaps(rnode.box) && !nd.box.overlaps(lnode.box) && !(box.lo[ax] < g.clip_lo()) &&
+        !(box.hi[ax] > g.clip_hi())) {
+      Facing f = clusters.eligible(i) ? clusters.facing_of(i, g.receiver(), g.light()) : Facing::Inconsistent;
+      if (f == Facing::Inconsistent && exact && (in_exact || nd.count <= exact_max)) {
+        if (!in_exact) {
+          exact_lo = lo;
+          exact_hi = hi;
+          facing.resize(nd.count);
+          for (uint32_t p = lo; p < hi; ++p) facing[p - lo] = uint8_t(clusters.exact_facing(p, g));
         }
-        end_patch(s, p);
-        whole.extend(box);
-        if (whole_nodes) *whole_nodes += 1;
-        continue;
+        // One facing for every triangle below, or Inconsistent.
+        const uint8_t f0 = facing[lo - exact_lo];
+        bool same = true;
+        for (uint32_t p = lo + 1; p < hi && same; ++p) same = facing[p - exact_lo] == f0;
+        if (same) f = Facing(f0);
+      }
+      if (f != Facing::Inconsistent) {
+        be.clear();
+        clusters.boundary(i, be);
+        // A closed consistent piece meets no segment between the boxes (each would cross
+        // it as often in as out, and all cross it the same way): MERGE-PATCHES drops it.
+        if (be.empty()) continue;
+        if (be.size() >= 3) {
+          take_whole(f, box);
+          continue;
+        }
       }
     }
     if (bvh.is_leaf(nd)) {
+      const bool known = exact && lo >= exact_lo && hi <= exact_hi;
+      uint32_t p = lo;
       for (uint32_t t : bvh.leaf_items(nd)) {
+        const uint32_t pos = p++;
         if (band) {
           // add_triangle's valid-blocker tests, then the band's: an inconsistent one
           // is not built (its patch would only be taken out again, extract_inconsistent).
@@ -213,7 +243,9 @@ Surface construct_clustered_surface(const BlockerContext& ctx, const SurfaceClus
           AABBd tb(a, b);
           tb.extend(c);
           if (beyond_clip_planes(tb, g)) continue;  // clipped away: not a blocker
-          if (triangle_facing(plane_through(a, b, c, g.scale()), g) == Facing::Inconsistent) {
+          const Facing tf = known ? Facing(facing[pos - exact_lo])
+                                  : triangle_facing(plane_through(a, b, c, g.scale()), g);
+          if (tf == Facing::Inconsistent) {
             band->push_back(t);
             continue;
           }
