@@ -198,15 +198,14 @@ std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile)
 
 int default_tile(const Scene& scene, const ClosedSurfaces* cs, const InteriorOccluders* io) {
   if (!cs || !io || scene.lights.empty() || scene.mesh.size() == 0) return kDefaultTile;
-  // Polygons per surface: exactly one per light means the first polygon covered the
-  // cross-section for every light (no further polygon was needed).
+  // The triangles of closed surfaces with at least one interior polygon.
   std::vector<size_t> polys(cs->count(), 0), tris(cs->count(), 0);
   for (const InteriorOccluders::Entry& e : io->entries()) ++polys[size_t(e.surface)];
   for (uint32_t t = 0; t < scene.mesh.size(); ++t)
     if (const int32_t sf = cs->surface(t); sf >= 0) ++tris[size_t(sf)];
   size_t covered = 0;
   for (size_t sf = 0; sf < cs->count(); ++sf)
-    if (polys[sf] == scene.lights.size()) covered += tris[sf];
+    if (polys[sf] > 0) covered += tris[sf];
   return 2 * covered >= scene.mesh.size() ? kConvexSolidTile : kDefaultTile;
 }
 
@@ -351,7 +350,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
 std::vector<OptionSpec> PluckerSolver::options() const {
   return {{"coherence", "on: queries reuse the tree; off: reset between queries (paper 002 section 5.1)", {"on", "off"}},
           {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order); 0, the default: 16 "
-                   "when most triangles are on closed surfaces that one interior polygon per light covers, else 8",
+                   "when most triangles are on closed surfaces with interior polygons, else 8",
            {}},
           {"choice", "relevant: develop with an occluder the query sees (bsp.h); random: the paper's random occluder",
            {"relevant", "random"}},

@@ -97,15 +97,15 @@ namespace visgate::plucker {
 SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vector<double>* irradiance);
 
 // The group side when the option `tile` is absent or 0: kConvexSolidTile when at least
-// half of the scene's triangles lie on closed surfaces that got exactly one interior
-// polygon per light (interior_occluders.h: the first polygon covered the cross-section,
-// a convex-like solid such as scan's ellipsoid), else kDefaultTile. Measured (callgrind,
-// scan, 1024 receivers, 16 samples per light, the whole process): tile 8 / 12 / 16 / 24
-// / 32 took 7.36G / 7.29G / 6.49G / 7.01G / 7.16G instructions at 75k triangles, tile 8 /
-// 16 / 32 30.2G / 25.5G / 28.2G at 300k: there the interior polygon hides most of the
-// shadow, the trees hold little (42 occluders at tile 16), and larger groups share one
-// selection among more receivers. Non-convex solids (several polygons per light: CGAL's
-// bunny, armadillo, elephant) and scenes of open or small surfaces keep 8.
+// half of the scene's triangles lie on closed surfaces with an interior polygon
+// (interior_occluders.h: dense solids, whose shadow the polygons hide in the trees, so
+// that the per-receiver near polygons do the work), else kDefaultTile. Measured
+// (callgrind, the whole `visgate solve` process, 1024 receivers): scan (16 samples per
+// light) tile 8 / 12 / 16 / 24 / 32 7.36G / 7.29G / 6.49G / 7.01G / 7.16G instructions at
+// 75k triangles, tile 8 / 16 / 32 30.2G / 25.5G / 28.2G at 300k; CGAL's bunny (64 samples)
+// 80.0G at tile 8, 56.7G at 16. Larger groups share one selection among more receivers
+// and the trees hold little there (scan at 16: 42 tree occluders). Scenes of open or
+// small surfaces (columns, rooms) keep 8.
 constexpr int kDefaultTile = 8;
 constexpr int kConvexSolidTile = 16;
 class ClosedSurfaces;
