@@ -196,6 +196,19 @@ std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile)
   return groups;
 }
 
+int default_tile(const Scene& scene, const ClosedSurfaces* cs, const InteriorOccluders* io) {
+  if (!cs || !io || scene.lights.empty() || scene.mesh.size() == 0) return kDefaultTile;
+  // The triangles of closed surfaces with at least one interior polygon.
+  std::vector<size_t> polys(cs->count(), 0), tris(cs->count(), 0);
+  for (const InteriorOccluders::Entry& e : io->entries()) ++polys[size_t(e.surface)];
+  for (uint32_t t = 0; t < scene.mesh.size(); ++t)
+    if (const int32_t sf = cs->surface(t); sf >= 0) ++tris[size_t(sf)];
+  size_t covered = 0;
+  for (size_t sf = 0; sf < cs->count(); ++sf)
+    if (polys[sf] > 0) covered += tris[sf];
+  return 2 * covered >= scene.mesh.size() ? kConvexSolidTile : kDefaultTile;
+}
+
 SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vector<double>* irradiance) {
   ThreadLimit limit(opt.threads);
   Clock::time_point start = Clock::now();
@@ -203,7 +216,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   for (auto& rr : result.receivers) rr.fragments.assign(scene.lights.size(), {});
   if (irradiance) irradiance->assign(scene.receivers.size() * scene.lights.size(), 0.0);
   bool coherence = opt.get_bool("coherence", true);
-  int tile = int(opt.get_int("tile", 8));
+  int tile = int(opt.get_int("tile", 0));  // 0: default_tile below
   LazyBsp::Choice choice = opt.get("choice", "relevant") == "random" ? LazyBsp::Choice::Random : LazyBsp::Choice::Relevant;
   MemoryMeter memory;
   MemoryBudget budget("plucker-bsp", opt.memory_budget_mb);  // outlives the trees in thread_work
@@ -241,6 +254,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   }
   ctx.cover_nodes = opt.get_bool("cover_nodes", true);
   ctx.near_merge = opt.get_bool("near_merge", true);
+  if (tile <= 0) tile = default_tile(scene, ctx.closed, ctx.interior);
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
   for (const auto& rcv : scene.receivers) rbox_all.extend(rcv.p);
@@ -335,7 +349,9 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
 
 std::vector<OptionSpec> PluckerSolver::options() const {
   return {{"coherence", "on: queries reuse the tree; off: reset between queries (paper 002 section 5.1)", {"on", "off"}},
-          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order)", {}},
+          {"tile", "receivers per group side (grid tiles, or tile^2 receivers in Morton order); 0, the default: 16 "
+                   "when most triangles are on closed surfaces with interior polygons, else 8",
+           {}},
           {"choice", "relevant: develop with an occluder the query sees (bsp.h); random: the paper's random occluder",
            {"relevant", "random"}},
           {"closed", "on: occluder selection keeps of a closed surface only what one crossing side needs "

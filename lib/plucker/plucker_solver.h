@@ -79,7 +79,7 @@
 //
 // Options: coherence=on|off (off: each tree is reset between queries, the paper's
 // "modified version", section 5.1; the reset is excluded from the timings), tile=N
-// (group side, default 8). Stats (Figure 8): peak_memory_bytes, occluder_selection_
+// (group side; default_tile below when absent or 0). Stats (Figure 8): peak_memory_bytes, occluder_selection_
 // seconds / tree_init_seconds / query_seconds and their percentages, bsp_nodes;
 // bsp_query_seconds (Algorithm 1 on the pieces the near polygons leave) and
 // tree_seconds (every LazyBsp call of the queries: the hides_all walk too), the part of
@@ -95,6 +95,22 @@ namespace visgate::plucker {
 
 // The solve with per-receiver irradiance: irradiance[i * lights + l] (when non-null).
 SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vector<double>* irradiance);
+
+// The group side when the option `tile` is absent or 0: kConvexSolidTile when at least
+// half of the scene's triangles lie on closed surfaces with an interior polygon
+// (interior_occluders.h: dense solids, whose shadow the polygons hide in the trees, so
+// that the per-receiver near polygons do the work), else kDefaultTile. Measured
+// (callgrind, the whole `visgate solve` process, 1024 receivers): scan (16 samples per
+// light) tile 8 / 12 / 16 / 24 / 32 7.36G / 7.29G / 6.49G / 7.01G / 7.16G instructions at
+// 75k triangles, tile 8 / 16 / 32 30.2G / 25.5G / 28.2G at 300k; CGAL's bunny (64 samples)
+// 80.0G at tile 8, 56.7G at 16. Larger groups share one selection among more receivers
+// and the trees hold little there (scan at 16: 42 tree occluders). Scenes of open or
+// small surfaces (columns, rooms) keep 8.
+constexpr int kDefaultTile = 8;
+constexpr int kConvexSolidTile = 16;
+class ClosedSurfaces;
+class InteriorOccluders;
+int default_tile(const Scene& scene, const ClosedSurfaces* cs, const InteriorOccluders* io);
 
 // Receiver groups of Algorithm 2 (exposed for tests): every receiver in exactly one group.
 std::vector<std::vector<uint32_t>> receiver_groups(const Scene& scene, int tile);

@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "lib/geom/predicates.h"
+#include "lib/plucker/plucker_solver.h"
 #include "lib/scene/rng.h"
 #include "tests/support/plucker_scenes.h"
 
@@ -216,6 +217,66 @@ TEST(PluckerInteriorOccluders, ConcaveInterpenetratingAndOpenMeshesMatchThePrevi
     expect_same_answers(s, on, run(s, {{"near_merge", "off"}}));
     expect_region_oracle(s, on);
   }
+}
+
+// The default group side (plucker_solver.h default_tile): 16 on a scan (a dense closed
+// surface with interior polygons) and on a torus made mostly of open strips around a
+// small closed one, 8 without interior polygons (columns) or when the closed surface
+// with polygons holds under half of the triangles; the answers with the larger groups as
+// with tile 8 (the previous default) and the region oracle.
+TEST(PluckerInteriorOccluders, DefaultTileFollowsTheInteriorPolygons) {
+  auto s = family_scene("scan", 3, 3000, 256, 4);
+  ASSERT_TRUE(s.ok());
+  const plucker::ClosedSurfaces cs(s->mesh);
+  const plucker::InteriorOccluders io(*s, cs);
+  ASSERT_GT(io.entries().size(), 0u);
+  EXPECT_EQ(plucker::default_tile(*s, &cs, &io), plucker::kConvexSolidTile);
+  EXPECT_EQ(plucker::default_tile(*s, &cs, nullptr), plucker::kDefaultTile);
+  const SolveResult dflt = run(*s), eight = run(*s, {{"tile", "8"}}), zero = run(*s, {{"tile", "0"}});
+  EXPECT_EQ(dflt.stats.get("groups"), 1.0);  // 16 x 16 receivers
+  EXPECT_EQ(eight.stats.get("groups"), 4.0);
+  EXPECT_EQ(zero.stats.get("groups"), 1.0);
+  expect_same_answers(*s, dflt, eight);
+  for (size_t i = 0; i < s->receivers.size(); i += 9)  // a spread subset: the oracle is slow
+    for (size_t li = 0; li < s->lights.size(); ++li) {
+      const oracle::RegionAnswer reg = oracle::visible_region(*s, i, li);
+      if (!reg.edge_on) {
+        EXPECT_NEAR(dflt.receivers[i].visible_fraction[li], reg.visible_fraction, 1e-4) << i << " " << li;
+      }
+    }
+
+  std::vector<Vec3f> rec;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) rec.push_back(Vec3f(-1.3f + 0.8f * float(a), -1.3f + 0.8f * float(b), 0.0f));
+  Scene torus = light_scene(rec, 8, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_torus(torus.mesh, Vec3d(0, 0, 1.2), 0.6, 0.2, 48, 24);
+  ASSERT_TRUE(finish_scene(torus).ok());
+  const plucker::ClosedSurfaces tcs(torus.mesh);
+  const plucker::InteriorOccluders tio(torus, tcs);
+  ASSERT_GT(tio.entries().size(), 0u);
+  EXPECT_EQ(plucker::default_tile(torus, &tcs, &tio), plucker::kConvexSolidTile);
+  // Open triangles (no closed surface) outnumbering the torus's: 8.
+  const size_t torus_tris = torus.mesh.size();
+  Scene mixed = light_scene(rec, 8, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_torus(mixed.mesh, Vec3d(0, 0, 1.2), 0.6, 0.2, 48, 24);
+  Rng rng(5);
+  for (size_t k = 0; k <= torus_tris; ++k) {
+    const Vec3d c(rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0), rng.uniform(2.0, 2.5));
+    const uint32_t b = uint32_t(mixed.mesh.vertices.size());
+    for (const Vec3d& v : {c, c + Vec3d(0.01, 0, 0), c + Vec3d(0, 0.01, 0)}) mixed.mesh.vertices.push_back(Vec3f(v));
+    mixed.mesh.triangles.push_back({b, b + 1, b + 2});
+  }
+  ASSERT_TRUE(finish_scene(mixed).ok());
+  const plucker::ClosedSurfaces mcs(mixed.mesh);
+  const plucker::InteriorOccluders mio(mixed, mcs);
+  ASSERT_GT(mio.entries().size(), 0u);
+  EXPECT_EQ(plucker::default_tile(mixed, &mcs, &mio), plucker::kDefaultTile);
+
+  auto cols = family_scene("columns", 3, 2000, 64, 4);
+  ASSERT_TRUE(cols.ok());
+  const plucker::ClosedSurfaces ccs(cols->mesh);
+  const plucker::InteriorOccluders cio(*cols, ccs);
+  EXPECT_EQ(plucker::default_tile(*cols, &ccs, &cio), plucker::kDefaultTile);
 }
 
 }  // namespace
