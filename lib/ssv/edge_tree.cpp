@@ -83,8 +83,7 @@ namespace {
 
 }  // namespace
 
-EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
-                   const TrianglePlanes& planes, double M)
+EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
   const size_t E = edges.size();
   if (E == 0) return;
@@ -160,8 +159,10 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       if (ed.t2 < 0) nd.single = 1;
       for (int32_t t : {ed.t1, ed.t2}) {
         if (t < 0) continue;
-        nd.single |= uint8_t(!(planes[size_t(t)].nn > 0.0));  // no plane: never proven weight 0
-        const Vec3f n(planes[size_t(t)].unit());  // each triangle about three times: no fresh array
+        // Each triangle about three times, from its corners: no fresh array.
+        const TrianglePlane plane = triangle_plane(m, size_t(t));
+        nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
+        const Vec3f n(plane.unit());
         for (int v = 0; v < 3; ++v) {
           const Vec3f& x = m.corner(size_t(t), v);
           for (int c = 0; c < 3; ++c) {

@@ -234,10 +234,14 @@ class ReceiverIntegrator {
  public:
   // `frame_pos`: the prepared mesh's vertices in frame coordinates (double, not rounded).
   ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
-      : m_(m), own_planes_(triangle_planes(m)), planes_(own_planes_), fp_(frame_pos), frame_(frame) {}
+      : m_(m), planes_{&m, nullptr}, fp_(frame_pos), frame_(frame) {}
   // The same with the triangle planes computed once by the caller.
   ReceiverIntegrator(const mesh::PreparedMesh& m, const TrianglePlanes& planes,
                      const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
+      : m_(m), planes_{&m, &planes}, fp_(frame_pos), frame_(frame) {}
+  // The same with the planes from `planes` (an array, or the mesh on each call).
+  ReceiverIntegrator(const mesh::PreparedMesh& m, PlaneSource planes, const std::vector<Vec3d>& frame_pos,
+                     const LightFrame& frame)
       : m_(m), planes_(planes), fp_(frame_pos), frame_(frame) {}
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
@@ -295,8 +299,7 @@ class ReceiverIntegrator {
   void set_receiver(const Vec3f& receiver);
 
   const mesh::PreparedMesh& m_;
-  TrianglePlanes own_planes_;
-  const TrianglePlanes& planes_;
+  PlaneSource planes_;
   const std::vector<Vec3d>& fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};

@@ -63,8 +63,7 @@ struct Counts {
 };
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const TrianglePlanes& planes, const std::vector<Vec3d>& fp,
-              const LightFrame& f)
+  ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, const std::vector<Vec3d>& fp, const LightFrame& f)
       : integrator(m, planes, fp, f) {}
   ReceiverIntegrator integrator;
   std::vector<WedgeState> candidates;
@@ -327,7 +326,7 @@ struct SceneSetup {
   const std::vector<Edge>& edges;
   float eps;
   const mesh::PreparedMesh& pm;
-  const TrianglePlanes& planes;
+  PlaneSource planes;  // an array (the wedge indexes) or the mesh (the edge index)
   const std::vector<Vec3d>& frame_pos;  // of the current light
   double tol;                           // build_wedges' tolerance
 };
@@ -691,7 +690,7 @@ struct Culling {
   EdgeTree edge_tree;  // wedge_index=edges
   std::vector<int32_t> units;
   Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
-          const TrianglePlanes& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
+          PlaneSource planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
           double M) {
     if (tree_on) {
       std::vector<Vec3d> points(scene.receivers.size());
@@ -711,7 +710,7 @@ struct Culling {
       occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
     }
     if (shafts_on) build_shaft_bvh(pm, edges);
-    if (edges_on) edge_tree = EdgeTree(edges, pm, planes, M);
+    if (edges_on) edge_tree = EdgeTree(edges, pm, M);
   }
   void build_shaft_bvh(const mesh::PreparedMesh& pm, const std::vector<Edge>& edges) {
     std::vector<AABB> boxes(edges.size());
@@ -824,7 +823,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   if (auto_index) index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
   bool use_edges = index == "edges";
   bool use_scatter = index == "receivers";
-  const TrianglePlanes tri_planes = triangle_planes(pm);
+  // The triangle planes as an array for the wedge indexes (build_wedges reads every
+  // edge's per light); the edge index reads only its candidates' and computes them.
+  TrianglePlanes tri_planes;
+  if (!use_edges) tri_planes = triangle_planes(pm);
+  PlaneSource planes{&pm, use_edges ? nullptr : &tri_planes};
 
   // Root box. Paper 001 (section 4.1) roots the BSP at the scene bounds, assuming every
   // query lies inside. Here every query point is known in advance: the receivers. The
@@ -844,10 +847,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const float eps = float(4e-6 * M);
   const double tol = 1e-9 * M;
   std::vector<Vec3d> frame_pos;  // per light, its capacity reused
-  const SceneSetup sc{scene, embree, edges, eps, pm, tri_planes, frame_pos, tol};
 
   auto tc0 = Clock::now();
-  Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts && !use_edges,
+  Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges,
                use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   // wedge_index=auto: more than kMaxProbeCandidates candidates per receiver (CGAL's
   // scanned armadillo 3,164 and bunny 1,364 against 12.6 on scan 75k; the armadillo ran
@@ -857,7 +859,10 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     use_scatter = true;
     cull.edge_tree = EdgeTree();
     if (use_shafts) cull.build_shaft_bvh(pm, edges);
+    tri_planes = triangle_planes(pm);
+    planes.planes = &tri_planes;
   }
+  const SceneSetup sc{scene, embree, edges, eps, pm, planes, frame_pos, tol};
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
@@ -933,7 +938,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       // index only: it hands out exactly the wedges these boxes would not all exclude).
       const bool by_region = use_region && use_scatter;
       const RegionBoxes regions = by_region ? region_boxes(scene, receiver_tree, cull.units, occluded, eps) : RegionBoxes{};
-      build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr,
+      build_wedges(pm, edges, frame_pos, frame, tol, counts, planes.planes, wedges, subset ? &edge_subset : nullptr,
                    by_region ? &regions : nullptr);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
@@ -952,7 +957,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                         frame,         light_fallback, wedges,
                         cut_triangles, bsp ? &*bsp : nullptr, &scatter,
                         receiver_tree, strips, occluded, use_edges ? &cull.edge_tree : nullptr};
-    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
+    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, planes, frame_pos, frame); });
     total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;
     nodes += bsp ? double(bsp->node_count()) : 0.0;

@@ -61,7 +61,7 @@ struct TreeSetup {
     planes = triangle_planes(pm);
     const AABB b = s.bounds();
     M = std::max(max_component(vabs(b.lo)), max_component(vabs(b.hi)));
-    tree = EdgeTree(edges, pm, planes, M);
+    tree = EdgeTree(edges, pm, M);
   }
 };
 
