@@ -812,7 +812,7 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
 int ReceiverIntegrator::facing(size_t t) const {
   const auto& v = m_.triangles[t].v;
   if (!(fp_[v[0]].z > 0.0 || fp_[v[1]].z > 0.0 || fp_[v[2]].z > 0.0)) return 0;
-  const TrianglePlane p = planes_[t];
+  const TrianglePlane p = plane(t);
   const double f = dot(p.n, r_world_ - p.a);
   // Nearly edge-on. With r within 2^-20 (relative to its distance from the triangle) of
   // the triangle's plane, T projects to a sliver narrower than float resolution in the

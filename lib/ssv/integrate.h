@@ -258,6 +258,22 @@ class ReceiverIntegrator {
   // segment from r to the light plane, so R_T is empty (a triangle lying in the light
   // plane, or touching it from below, adds nothing).
   int facing(size_t t) const;
+  // Triangle t's plane record (the same doubles as triangle_planes'). Computed from the
+  // mesh when no array was given, then kept in a small direct-mapped cache: the
+  // receivers of a batch validate mostly the same edges.
+  TrianglePlane plane(size_t t) const {
+    if (planes_.planes) return (*planes_.planes)[t];
+    if (plane_keys_.empty()) {
+      plane_keys_.assign(kPlaneCache, -1);
+      plane_cache_.resize(kPlaneCache);
+    }
+    const size_t slot = t & (kPlaneCache - 1);
+    if (plane_keys_[slot] != int64_t(t)) {
+      plane_cache_[slot] = triangle_plane(m_, t);
+      plane_keys_[slot] = int64_t(t);
+    }
+    return plane_cache_[slot];
+  }
   // Edge weight of section "Side of a projected edge" (0: not a silhouette from r).
   int edge_weight(const Edge& e) const;
   // Clips the edge to h >= 0 and to the pyramid from r over L', projects and integrates
@@ -308,6 +324,9 @@ class ReceiverIntegrator {
   double sx_[4] = {}, sy_[4] = {}, sz_[4] = {};  // the same by coordinate (side_lanes_)
   bool side_lanes_ = false;      // at most four planes and AVX2: add_segment tests them at once
   mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
+  static constexpr size_t kPlaneCache = 1024;  // entries of plane()'s cache (64 KiB)
+  mutable std::vector<int64_t> plane_keys_;
+  mutable std::vector<TrianglePlane> plane_cache_;
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;
   DepthCounter counter_;

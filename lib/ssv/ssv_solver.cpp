@@ -62,6 +62,8 @@ struct Counts {
   }
 };
 
+constexpr size_t kWedgeMemo = 4096;
+
 struct ThreadState {
   ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, const std::vector<Vec3d>& fp, const LightFrame& f)
       : integrator(m, planes, fp, f) {}
@@ -76,6 +78,9 @@ struct ThreadState {
   std::vector<std::vector<uint32_t>> batch_lists;
   std::vector<uint32_t>* batched = nullptr;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
+  // wedge_index=edges: wedge_edge's answers of this light by edge, direct-mapped: entry
+  // (edge + 1) << 1 | answer, 0 empty.
+  std::vector<uint64_t> wedge_memo;
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
   DepthCounter::Classes classes{};  // of `depth` (DepthCounter::finish_classes)
@@ -326,7 +331,6 @@ struct SceneSetup {
   const std::vector<Edge>& edges;
   float eps;
   const mesh::PreparedMesh& pm;
-  PlaneSource planes;  // an array (the wedge indexes) or the mesh (the edge index)
   const std::vector<Vec3d>& frame_pos;  // of the current light
   double tol;                           // build_wedges' tolerance
 };
@@ -336,7 +340,7 @@ struct SceneSetup {
 // endpoint not below the light plane, and for a pair of active triangles, not a
 // silhouette from no point of L' (wedge.h light_side). What the wedges' boxes would
 // exclude beyond that has weight 0 or misses the frustum (edge_tree.h).
-bool wedge_edge(const SceneSetup& sc, const LightFrame& frame, const Edge& e) {
+bool wedge_edge(const SceneSetup& sc, const ReceiverIntegrator& integ, const LightFrame& frame, const Edge& e) {
   const auto& fp = sc.frame_pos;
   auto active = [&](int32_t t) {
     if (t < 0) return false;
@@ -346,8 +350,8 @@ bool wedge_edge(const SceneSetup& sc, const LightFrame& frame, const Edge& e) {
   const bool act1 = active(e.t1), act2 = active(e.t2);
   if (!(act1 || act2) || (fp[e.a].z < 0.0 && fp[e.b].z < 0.0)) return false;
   if (!(act1 && act2)) return true;
-  const int s1 = light_side(sc.planes[size_t(e.t1)], frame.poly_world, sc.tol);
-  return s1 == 0 || s1 != light_side(sc.planes[size_t(e.t2)], frame.poly_world, sc.tol);
+  const int s1 = light_side(integ.plane(size_t(e.t1)), frame.poly_world, sc.tol);
+  return s1 == 0 || s1 != light_side(integ.plane(size_t(e.t2)), frame.poly_world, sc.tol);
 }
 
 // One ray per sample of the light (the fallback of every receiver-level doubt).
@@ -404,7 +408,12 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   if (ls.edge_tree) {
     for (uint32_t ei : st.edge_candidates) {
       const Edge& edge = sc.edges[ei];
-      if (!wedge_edge(sc, ls.frame, edge)) continue;
+      // wedge_edge depends on the edge and the light only: memoised per thread and light.
+      const size_t slot = ei & (kWedgeMemo - 1);
+      if (st.wedge_memo.empty()) st.wedge_memo.assign(kWedgeMemo, 0);
+      if (st.wedge_memo[slot] >> 1 != uint64_t(ei) + 1)
+        st.wedge_memo[slot] = (uint64_t(ei) + 1) << 1 | uint64_t(wedge_edge(sc, st.integrator, ls.frame, edge));
+      if (!(st.wedge_memo[slot] & 1)) continue;
       int weight = st.integrator.edge_weight(edge);
       if (weight != 0) st.valid.emplace_back(ei, weight);
     }
@@ -862,7 +871,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     tri_planes = triangle_planes(pm);
     planes.planes = &tri_planes;
   }
-  const SceneSetup sc{scene, embree, edges, eps, pm, planes, frame_pos, tol};
+  const SceneSetup sc{scene, embree, edges, eps, pm, frame_pos, tol};
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
