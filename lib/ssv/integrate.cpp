@@ -856,17 +856,6 @@ void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t
   }
 }
 
-Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {
-  if (fp[i].z == 0.0) return fp[i];
-  if (fp[j].z == 0.0) return fp[j];
-  if (i > j) std::swap(i, j);
-  const Vec3d& p = fp[i];
-  const Vec3d& q = fp[j];
-  const double t = p.z / (p.z - q.z);
-  Vec3d x = p + (q - p) * t;
-  x.z = 0.0;
-  return x;
-}
 
 Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const { return light_plane_point(fp_, i, j); }
 
@@ -876,8 +865,11 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
   return light_plane_cuts(m, fp, f, all);
 }
 
-std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
-                                       const std::vector<uint32_t>& candidates) {
+namespace {
+
+template <class Positions>
+std::vector<uint32_t> cuts_among(const mesh::PreparedMesh& m, const Positions& fp, const LightFrame& f,
+                                 const std::vector<uint32_t>& candidates) {
   // L' in double, with its bounding box.
   const size_t nl = f.poly.size();
   double ulo = INFINITY, uhi = -INFINITY, vlo = INFINITY, vhi = -INFINITY;
@@ -929,6 +921,18 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
     if (!outside) out.push_back(uint32_t(t));
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates) {
+  return cuts_among(m, fp, f, candidates);
+}
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const FramePositions& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates) {
+  return cuts_among(m, fp, f, candidates);
 }
 
 bool ReceiverIntegrator::add_edge(const Edge& e, int w) {

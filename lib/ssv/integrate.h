@@ -98,6 +98,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "lib/mesh/prepare.h"
@@ -214,9 +215,54 @@ class DepthCounter {
   double vb_scale_ = 0.0;      // buckets per unit of v (0: all v equal)
 };
 
-// The point where the edge between vertices i and j (frame coordinates `fp`) crosses
-// h = 0, computed from the pair in index order so every user gets the same point.
-Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
+// The prepared mesh's vertices in a light's frame coordinates (double, not rounded:
+// LightFrame::to_local): from an array over every vertex (the wedge indexes read most of
+// them per light), or computed on use and kept in a direct-mapped cache (the edge index
+// reads only its candidates' vertices, and a full array is a linear pass and 24 bytes a
+// vertex of fresh memory per light). The same doubles either way. One per thread: the
+// cache is not shared.
+class FramePositions {
+ public:
+  explicit FramePositions(const std::vector<Vec3d>& all) : all_(&all) {}
+  FramePositions(const std::vector<Vec3f>& vertices, const LightFrame& frame) : vertices_(&vertices), frame_(&frame) {}
+  Vec3d operator[](uint32_t v) const {
+    if (all_) return (*all_)[v];
+    if (keys_.empty()) {
+      keys_.assign(kCache, UINT32_MAX);
+      cache_.resize(kCache);
+    }
+    const size_t slot = v & (kCache - 1);
+    if (keys_[slot] != v) {
+      cache_[slot] = frame_->to_local((*vertices_)[v]);
+      keys_[slot] = v;
+    }
+    return cache_[slot];
+  }
+
+ private:
+  static constexpr size_t kCache = 2048;  // entries (56 KiB)
+  const std::vector<Vec3d>* all_ = nullptr;
+  const std::vector<Vec3f>* vertices_ = nullptr;
+  const LightFrame* frame_ = nullptr;
+  mutable std::vector<uint32_t> keys_;
+  mutable std::vector<Vec3d> cache_;
+};
+
+// The point where the edge between vertices i and j (frame coordinates `fp`: a vector or
+// FramePositions) crosses h = 0, computed from the pair in index order so every user gets
+// the same point.
+template <class Positions>
+Vec3d light_plane_point(const Positions& fp, uint32_t i, uint32_t j) {
+  const Vec3d p0 = fp[i], q0 = fp[j];
+  if (p0.z == 0.0) return p0;
+  if (q0.z == 0.0) return q0;
+  const Vec3d& p = i > j ? q0 : p0;
+  const Vec3d& q = i > j ? p0 : q0;
+  const double t = p.z / (p.z - q.z);
+  Vec3d x = p + (q - p) * t;
+  x.z = 0.0;
+  return x;
+}
 
 // The triangles crossing the light plane whose cut segment may meet L': the candidates
 // for ReceiverIntegrator::add_cut. A cut segment lies in the light plane, so its
@@ -227,6 +273,8 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
 // The same among `candidates` (ascending; a superset of the triangles with vertices
 // strictly on both sides of the light plane, EdgeTree::crossing_triangles): the same list.
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates);
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const FramePositions& fp, const LightFrame& f,
                                        const std::vector<uint32_t>& candidates);
 
 // Everything the integration of one receiver against one light needs.
@@ -240,9 +288,11 @@ class ReceiverIntegrator {
                      const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
       : m_(m), planes_{&m, &planes}, fp_(frame_pos), frame_(frame) {}
   // The same with the planes from `planes` (an array, or the mesh on each call).
-  ReceiverIntegrator(const mesh::PreparedMesh& m, PlaneSource planes, const std::vector<Vec3d>& frame_pos,
+  ReceiverIntegrator(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions frame_pos,
                      const LightFrame& frame)
-      : m_(m), planes_(planes), fp_(frame_pos), frame_(frame) {}
+      : m_(m), planes_(planes), fp_(std::move(frame_pos)), frame_(frame) {}
+  // The vertices' frame coordinates it reads (and caches, when computed on use).
+  const FramePositions& positions() const { return fp_; }
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
   void begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv);
@@ -316,7 +366,7 @@ class ReceiverIntegrator {
 
   const mesh::PreparedMesh& m_;
   PlaneSource planes_;
-  const std::vector<Vec3d>& fp_;
+  FramePositions fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};
   Vec3d r_{};                    // frame coordinates (double, not rounded)

@@ -65,8 +65,8 @@ struct Counts {
 constexpr size_t kWedgeMemo = 4096;
 
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, const std::vector<Vec3d>& fp, const LightFrame& f)
-      : integrator(m, planes, fp, f) {}
+  ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions fp, const LightFrame& f)
+      : integrator(m, planes, std::move(fp), f) {}
   ReceiverIntegrator integrator;
   std::vector<WedgeState> candidates;
   std::vector<uint32_t> edge_candidates;  // wedge_index=edges
@@ -331,7 +331,6 @@ struct SceneSetup {
   const std::vector<Edge>& edges;
   float eps;
   const mesh::PreparedMesh& pm;
-  const std::vector<Vec3d>& frame_pos;  // of the current light
   double tol;                           // build_wedges' tolerance
 };
 
@@ -341,7 +340,7 @@ struct SceneSetup {
 // silhouette from no point of L' (wedge.h light_side). What the wedges' boxes would
 // exclude beyond that has weight 0 or misses the frustum (edge_tree.h).
 bool wedge_edge(const SceneSetup& sc, const ReceiverIntegrator& integ, const LightFrame& frame, const Edge& e) {
-  const auto& fp = sc.frame_pos;
+  const FramePositions& fp = integ.positions();
   auto active = [&](int32_t t) {
     if (t < 0) return false;
     const auto& v = sc.pm.triangles[size_t(t)].v;
@@ -871,7 +870,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     tri_planes = triangle_planes(pm);
     planes.planes = &tri_planes;
   }
-  const SceneSetup sc{scene, embree, edges, eps, pm, frame_pos, tol};
+  const SceneSetup sc{scene, embree, edges, eps, pm, tol};
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
@@ -928,13 +927,15 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     if (root.empty() && !scene.receivers.empty()) root = scene_box;
     root.lo -= Vec3f(grow, grow, grow);
     root.hi += Vec3f(grow, grow, grow);
-    frame_pos.resize(all_hidden ? 0 : pm.vertex_pos.size());
+    // The wedge indexes read most vertices' frame positions: an array. The edge index
+    // computes those of its candidates on use, per thread (FramePositions).
+    frame_pos.resize(all_hidden || use_edges ? 0 : pm.vertex_pos.size());
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
     wedges.clear();
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback && !all_hidden && use_edges) {
       cull.edge_tree.crossing_triangles(edges, frame, crossing);
-      cut_triangles = light_plane_cuts(pm, frame_pos, frame, crossing);
+      cut_triangles = light_plane_cuts(pm, FramePositions(pm.vertex_pos, frame), frame, crossing);
     } else if (!light_fallback && !all_hidden) {
       const bool subset = use_shafts && !cull.edge_bvh.empty();
       if (subset) {
@@ -966,7 +967,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                         frame,         light_fallback, wedges,
                         cut_triangles, bsp ? &*bsp : nullptr, &scatter,
                         receiver_tree, strips, occluded, use_edges ? &cull.edge_tree : nullptr};
-    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, planes, frame_pos, frame); });
+    tbb::enumerable_thread_specific<ThreadState> states([&] {
+      return ThreadState(pm, planes, use_edges ? FramePositions(pm.vertex_pos, frame) : FramePositions(frame_pos), frame);
+    });
     total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;
     nodes += bsp ? double(bsp->node_count()) : 0.0;
