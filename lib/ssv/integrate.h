@@ -227,19 +227,16 @@ class FramePositions {
   FramePositions(const std::vector<Vec3f>& vertices, const LightFrame& frame) : vertices_(&vertices), frame_(&frame) {}
   Vec3d operator[](uint32_t v) const {
     if (all_) return (*all_)[v];
-    if (keys_.empty()) {
-      keys_.assign(kCache, UINT32_MAX);
-      cache_.resize(kCache);
-    }
     const size_t slot = v & (kCache - 1);
-    if (keys_[slot] != v) {
-      cache_[slot] = frame_->to_local((*vertices_)[v]);
-      keys_[slot] = v;
-    }
-    return cache_[slot];
+    if (!keys_.empty() && keys_[slot] == v) return cache_[slot];
+    return fill(v);
   }
+  const std::vector<Vec3d>* array() const { return all_; }  // null: computed on use
+  // Its height over the light plane alone (the activity and crossing tests).
+  double h(uint32_t v) const { return all_ ? (*all_)[v].z : (*this)[v].z; }
 
  private:
+  [[gnu::noinline]] Vec3d fill(uint32_t v) const;  // computes v's position into its slot (off the hot path)
   static constexpr size_t kCache = 2048;  // entries (56 KiB)
   const std::vector<Vec3d>* all_ = nullptr;
   const std::vector<Vec3f>* vertices_ = nullptr;
@@ -311,18 +308,12 @@ class ReceiverIntegrator {
   // Triangle t's plane record (the same doubles as triangle_planes'). Computed from the
   // mesh when no array was given, then kept in a small direct-mapped cache: the
   // receivers of a batch validate mostly the same edges.
-  TrianglePlane plane(size_t t) const {
+  // The reference is valid until the next call.
+  const TrianglePlane& plane(size_t t) const {
     if (planes_.planes) return (*planes_.planes)[t];
-    if (plane_keys_.empty()) {
-      plane_keys_.assign(kPlaneCache, -1);
-      plane_cache_.resize(kPlaneCache);
-    }
     const size_t slot = t & (kPlaneCache - 1);
-    if (plane_keys_[slot] != int64_t(t)) {
-      plane_cache_[slot] = triangle_plane(m_, t);
-      plane_keys_[slot] = int64_t(t);
-    }
-    return plane_cache_[slot];
+    if (!plane_keys_.empty() && plane_keys_[slot] == int64_t(t)) return plane_cache_[slot];
+    return fill_plane(t);
   }
   // Edge weight of section "Side of a projected edge" (0: not a silhouette from r).
   int edge_weight(const Edge& e) const;
@@ -363,6 +354,10 @@ class ReceiverIntegrator {
  private:
   bool add_segment(const Vec3d& a, const Vec3d& b, int w);
   void set_receiver(const Vec3f& receiver);
+  // facing with both sources arrays (kArrays: the wedge indexes, read directly) or not.
+  template <bool kArrays>
+  int facing_from(size_t t) const;
+  bool arrays() const { return planes_.planes && fp_.array(); }
 
   const mesh::PreparedMesh& m_;
   PlaneSource planes_;
@@ -374,7 +369,8 @@ class ReceiverIntegrator {
   double sx_[4] = {}, sy_[4] = {}, sz_[4] = {};  // the same by coordinate (side_lanes_)
   bool side_lanes_ = false;      // at most four planes and AVX2: add_segment tests them at once
   mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
-  static constexpr size_t kPlaneCache = 1024;  // entries of plane()'s cache (64 KiB)
+  [[gnu::noinline]] const TrianglePlane& fill_plane(size_t t) const;  // into its slot (off the hot path)
+  static constexpr size_t kPlaneCache = 1024;        // entries of plane()'s cache (64 KiB)
   mutable std::vector<int64_t> plane_keys_;
   mutable std::vector<TrianglePlane> plane_cache_;
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)

@@ -344,10 +344,10 @@ bool wedge_edge(const SceneSetup& sc, const ReceiverIntegrator& integ, const Lig
   auto active = [&](int32_t t) {
     if (t < 0) return false;
     const auto& v = sc.pm.triangles[size_t(t)].v;
-    return fp[v[0]].z > 0.0 || fp[v[1]].z > 0.0 || fp[v[2]].z > 0.0;
+    return fp.h(v[0]) > 0.0 || fp.h(v[1]) > 0.0 || fp.h(v[2]) > 0.0;
   };
   const bool act1 = active(e.t1), act2 = active(e.t2);
-  if (!(act1 || act2) || (fp[e.a].z < 0.0 && fp[e.b].z < 0.0)) return false;
+  if (!(act1 || act2) || (fp.h(e.a) < 0.0 && fp.h(e.b) < 0.0)) return false;
   if (!(act1 && act2)) return true;
   const int s1 = light_side(integ.plane(size_t(e.t1)), frame.poly_world, sc.tol);
   return s1 == 0 || s1 != light_side(integ.plane(size_t(e.t2)), frame.poly_world, sc.tol);
