@@ -834,11 +834,11 @@ const TrianglePlane& ReceiverIntegrator::fill_plane(size_t t) const {
 int ReceiverIntegrator::facing(size_t t) const { return arrays() ? facing_from<true>(t) : facing_from<false>(t); }
 
 template <bool kArrays>
-int ReceiverIntegrator::facing_from(size_t t) const {
+inline int ReceiverIntegrator::facing_from(size_t t) const {
   const auto& v = m_.triangles[t].v;
-  auto h = [&](uint32_t i) { return kArrays ? (*fp_.array())[i].z : fp_.h(i); };
+  auto h = [&](uint32_t i) { return kArrays ? fp_data_[i].z : fp_.h(i); };
   if (!(h(v[0]) > 0.0 || h(v[1]) > 0.0 || h(v[2]) > 0.0)) return 0;
-  const TrianglePlane& p = kArrays ? (*planes_.planes)[t] : plane(t);  // used before the next plane() call
+  const TrianglePlane& p = kArrays ? plane_data_[t] : plane(t);  // used before the next plane() call
   const double f = dot(p.n, r_world_ - p.a);
   // Nearly edge-on. With r within 2^-20 (relative to its distance from the triangle) of
   // the triangle's plane, T projects to a sliver narrower than float resolution in the

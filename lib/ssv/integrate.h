@@ -283,11 +283,15 @@ class ReceiverIntegrator {
   // The same with the triangle planes computed once by the caller.
   ReceiverIntegrator(const mesh::PreparedMesh& m, const TrianglePlanes& planes,
                      const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
-      : m_(m), planes_{&m, &planes}, fp_(frame_pos), frame_(frame) {}
+      : m_(m), planes_{&m, &planes}, fp_(frame_pos), frame_(frame) {
+    set_arrays();
+  }
   // The same with the planes from `planes` (an array, or the mesh on each call).
   ReceiverIntegrator(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions frame_pos,
                      const LightFrame& frame)
-      : m_(m), planes_(planes), fp_(std::move(frame_pos)), frame_(frame) {}
+      : m_(m), planes_(planes), fp_(std::move(frame_pos)), frame_(frame) {
+    set_arrays();
+  }
   // The vertices' frame coordinates it reads (and caches, when computed on use).
   const FramePositions& positions() const { return fp_; }
 
@@ -356,8 +360,18 @@ class ReceiverIntegrator {
   void set_receiver(const Vec3f& receiver);
   // facing with both sources arrays (kArrays: the wedge indexes, read directly) or not.
   template <bool kArrays>
-  int facing_from(size_t t) const;
-  bool arrays() const { return planes_.planes && fp_.array(); }
+  [[gnu::always_inline]] inline int facing_from(size_t t) const;
+  // Both sources arrays: their data, read in place by facing_from<true> (the arrays are
+  // not resized while the integrator lives: the solver fills them before).
+  void set_arrays() {
+    if (planes_.planes && fp_.array()) {
+      plane_data_ = planes_.planes->data();
+      fp_data_ = fp_.array()->data();
+    }
+  }
+  bool arrays() const { return plane_data_ != nullptr; }
+  const TrianglePlane* plane_data_ = nullptr;
+  const Vec3d* fp_data_ = nullptr;
 
   const mesh::PreparedMesh& m_;
   PlaneSource planes_;
