@@ -83,8 +83,7 @@ namespace {
 
 }  // namespace
 
-EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
-                   const TrianglePlanes& planes, double M)
+EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
   const size_t E = edges.size();
   if (E == 0) return;
@@ -150,6 +149,11 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
     nd.child = uint32_t(j * kLeaf);
     nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
     nd.edges = nd.n;
+    // A leaf's edges share triangles (about half of the 16 references repeat): each
+    // triangle's corners and normal enter the node's bounds once (min and max are
+    // idempotent, so the node is the same).
+    int32_t done[2 * kLeaf];
+    size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
       const Vec3f &va = m.vertex_pos[ed.a], &vb = m.vertex_pos[ed.b];
@@ -159,9 +163,12 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m,
       }
       if (ed.t2 < 0) nd.single = 1;
       for (int32_t t : {ed.t1, ed.t2}) {
-        if (t < 0) continue;
-        nd.single |= uint8_t(!(planes[size_t(t)].nn > 0.0));  // no plane: never proven weight 0
-        const Vec3f n(planes[size_t(t)].unit());  // each triangle about three times: no fresh array
+        if (t < 0 || std::find(done, done + n_done, t) != done + n_done) continue;
+        done[n_done++] = t;
+        // Each triangle in about two leaves, from its corners: no fresh array.
+        const TrianglePlane plane = triangle_plane(m, size_t(t));
+        nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
+        const Vec3f n(plane.unit());
         for (int v = 0; v < 3; ++v) {
           const Vec3f& x = m.corner(size_t(t), v);
           for (int c = 0; c < 3; ++c) {

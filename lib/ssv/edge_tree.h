@@ -69,8 +69,8 @@ class EdgeTree {
   // Over every edge of `edges` (index = edge index); `M` bounds every coordinate (the
   // solver's tolerance scale). `m` must outlive the tree (its vertices are read by the
   // queries).
-  EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const TrianglePlanes& planes,
-           double M);
+  // Each triangle's unit normal is triangle_plane(m, t)'s, rounded to float.
+  EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M);
   bool empty() const { return nodes_.empty(); }
   // The candidate edges of the receiver of `f` for the light of `frame` (see above),
   // ascending, into `out` (cleared first), from the nodes `starts` (frontier()).

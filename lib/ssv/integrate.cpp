@@ -809,10 +809,36 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
 #endif
 }
 
-int ReceiverIntegrator::facing(size_t t) const {
+Vec3d FramePositions::fill(uint32_t v) const {
+  if (keys_.empty()) {
+    keys_.assign(kCache, UINT32_MAX);
+    cache_.resize(kCache);
+  }
+  const size_t slot = v & (kCache - 1);
+  cache_[slot] = frame_->to_local((*vertices_)[v]);
+  keys_[slot] = v;
+  return cache_[slot];
+}
+
+const TrianglePlane& ReceiverIntegrator::fill_plane(size_t t) const {
+  if (plane_keys_.empty()) {
+    plane_keys_.assign(kPlaneCache, -1);
+    plane_cache_.resize(kPlaneCache);
+  }
+  const size_t slot = t & (kPlaneCache - 1);
+  plane_cache_[slot] = triangle_plane(m_, t);
+  plane_keys_[slot] = int64_t(t);
+  return plane_cache_[slot];
+}
+
+int ReceiverIntegrator::facing(size_t t) const { return arrays() ? facing_from<true>(t) : facing_from<false>(t); }
+
+template <bool kArrays>
+inline int ReceiverIntegrator::facing_from(size_t t) const {
   const auto& v = m_.triangles[t].v;
-  if (!(fp_[v[0]].z > 0.0 || fp_[v[1]].z > 0.0 || fp_[v[2]].z > 0.0)) return 0;
-  const TrianglePlane& p = planes_[t];
+  auto h = [&](uint32_t i) { return kArrays ? fp_data_[i].z : fp_.h(i); };
+  if (!(h(v[0]) > 0.0 || h(v[1]) > 0.0 || h(v[2]) > 0.0)) return 0;
+  const TrianglePlane& p = kArrays ? plane_data_[t] : plane(t);  // used before the next plane() call
   const double f = dot(p.n, r_world_ - p.a);
   // Nearly edge-on. With r within 2^-20 (relative to its distance from the triangle) of
   // the triangle's plane, T projects to a sliver narrower than float resolution in the
@@ -836,8 +862,13 @@ int ReceiverIntegrator::facing(size_t t) const {
 }
 
 int ReceiverIntegrator::edge_weight(const Edge& e) const {
-  int w = facing(size_t(e.t1));
-  if (e.t2 >= 0) w -= facing(size_t(e.t2));
+  if (arrays()) {
+    int w = facing_from<true>(size_t(e.t1));
+    if (e.t2 >= 0) w -= facing_from<true>(size_t(e.t2));
+    return w;
+  }
+  int w = facing_from<false>(size_t(e.t1));
+  if (e.t2 >= 0) w -= facing_from<false>(size_t(e.t2));
   return w;
 }
 
@@ -856,17 +887,6 @@ void jitter_picks(uint64_t prefix, int samples, int jitter, std::vector<uint32_t
   }
 }
 
-Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j) {
-  if (fp[i].z == 0.0) return fp[i];
-  if (fp[j].z == 0.0) return fp[j];
-  if (i > j) std::swap(i, j);
-  const Vec3d& p = fp[i];
-  const Vec3d& q = fp[j];
-  const double t = p.z / (p.z - q.z);
-  Vec3d x = p + (q - p) * t;
-  x.z = 0.0;
-  return x;
-}
 
 Vec3d ReceiverIntegrator::cut_point(uint32_t i, uint32_t j) const { return light_plane_point(fp_, i, j); }
 
@@ -876,8 +896,11 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
   return light_plane_cuts(m, fp, f, all);
 }
 
-std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
-                                       const std::vector<uint32_t>& candidates) {
+namespace {
+
+template <class Positions>
+std::vector<uint32_t> cuts_among(const mesh::PreparedMesh& m, const Positions& fp, const LightFrame& f,
+                                 const std::vector<uint32_t>& candidates) {
   // L' in double, with its bounding box.
   const size_t nl = f.poly.size();
   double ulo = INFINITY, uhi = -INFINITY, vlo = INFINITY, vhi = -INFINITY;
@@ -931,13 +954,28 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
   return out;
 }
 
+}  // namespace
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates) {
+  return cuts_among(m, fp, f, candidates);
+}
+
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const FramePositions& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates) {
+  return cuts_among(m, fp, f, candidates);
+}
+
 bool ReceiverIntegrator::add_edge(const Edge& e, int w) {
-  const Vec3d& a = fp_[e.a];
-  const Vec3d& b = fp_[e.b];
-  if (a.z < 0.0 && b.z < 0.0) return false;
-  const Vec3d A = a.z < 0.0 ? cut_point(e.a, e.b) : a;
-  const Vec3d B = b.z < 0.0 ? cut_point(e.a, e.b) : b;
-  return add_segment(A, B, w);
+  auto from = [&](const auto& fp) {  // an array (read in place) or FramePositions
+    const Vec3d& a = fp[e.a];
+    const Vec3d& b = fp[e.b];
+    if (a.z < 0.0 && b.z < 0.0) return false;
+    const Vec3d A = a.z < 0.0 ? light_plane_point(fp, e.a, e.b) : a;
+    const Vec3d B = b.z < 0.0 ? light_plane_point(fp, e.a, e.b) : b;
+    return add_segment(A, B, w);
+  };
+  return fp_.array() ? from(*fp_.array()) : from(fp_);
 }
 
 bool ReceiverIntegrator::add_cut(size_t t) {

@@ -98,6 +98,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "lib/mesh/prepare.h"
@@ -214,9 +215,51 @@ class DepthCounter {
   double vb_scale_ = 0.0;      // buckets per unit of v (0: all v equal)
 };
 
-// The point where the edge between vertices i and j (frame coordinates `fp`) crosses
-// h = 0, computed from the pair in index order so every user gets the same point.
-Vec3d light_plane_point(const std::vector<Vec3d>& fp, uint32_t i, uint32_t j);
+// The prepared mesh's vertices in a light's frame coordinates (double, not rounded:
+// LightFrame::to_local): from an array over every vertex (the wedge indexes read most of
+// them per light), or computed on use and kept in a direct-mapped cache (the edge index
+// reads only its candidates' vertices, and a full array is a linear pass and 24 bytes a
+// vertex of fresh memory per light). The same doubles either way. One per thread: the
+// cache is not shared.
+class FramePositions {
+ public:
+  explicit FramePositions(const std::vector<Vec3d>& all) : all_(&all) {}
+  FramePositions(const std::vector<Vec3f>& vertices, const LightFrame& frame) : vertices_(&vertices), frame_(&frame) {}
+  Vec3d operator[](uint32_t v) const {
+    if (all_) return (*all_)[v];
+    const size_t slot = v & (kCache - 1);
+    if (!keys_.empty() && keys_[slot] == v) return cache_[slot];
+    return fill(v);
+  }
+  const std::vector<Vec3d>* array() const { return all_; }  // null: computed on use
+  // Its height over the light plane alone (the activity and crossing tests).
+  double h(uint32_t v) const { return all_ ? (*all_)[v].z : (*this)[v].z; }
+
+ private:
+  [[gnu::noinline]] Vec3d fill(uint32_t v) const;  // computes v's position into its slot (off the hot path)
+  static constexpr size_t kCache = 2048;  // entries (56 KiB)
+  const std::vector<Vec3d>* all_ = nullptr;
+  const std::vector<Vec3f>* vertices_ = nullptr;
+  const LightFrame* frame_ = nullptr;
+  mutable std::vector<uint32_t> keys_;
+  mutable std::vector<Vec3d> cache_;
+};
+
+// The point where the edge between vertices i and j (frame coordinates `fp`: a vector or
+// FramePositions) crosses h = 0, computed from the pair in index order so every user gets
+// the same point.
+template <class Positions>
+Vec3d light_plane_point(const Positions& fp, uint32_t i, uint32_t j) {
+  const Vec3d p0 = fp[i], q0 = fp[j];
+  if (p0.z == 0.0) return p0;
+  if (q0.z == 0.0) return q0;
+  const Vec3d& p = i > j ? q0 : p0;
+  const Vec3d& q = i > j ? p0 : q0;
+  const double t = p.z / (p.z - q.z);
+  Vec3d x = p + (q - p) * t;
+  x.z = 0.0;
+  return x;
+}
 
 // The triangles crossing the light plane whose cut segment may meet L': the candidates
 // for ReceiverIntegrator::add_cut. A cut segment lies in the light plane, so its
@@ -228,17 +271,29 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::v
 // strictly on both sides of the light plane, EdgeTree::crossing_triangles): the same list.
 std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const std::vector<Vec3d>& fp, const LightFrame& f,
                                        const std::vector<uint32_t>& candidates);
+std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const FramePositions& fp, const LightFrame& f,
+                                       const std::vector<uint32_t>& candidates);
 
 // Everything the integration of one receiver against one light needs.
 class ReceiverIntegrator {
  public:
   // `frame_pos`: the prepared mesh's vertices in frame coordinates (double, not rounded).
   ReceiverIntegrator(const mesh::PreparedMesh& m, const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
-      : m_(m), own_planes_(triangle_planes(m)), planes_(own_planes_), fp_(frame_pos), frame_(frame) {}
+      : m_(m), planes_{&m, nullptr}, fp_(frame_pos), frame_(frame) {}
   // The same with the triangle planes computed once by the caller.
   ReceiverIntegrator(const mesh::PreparedMesh& m, const TrianglePlanes& planes,
                      const std::vector<Vec3d>& frame_pos, const LightFrame& frame)
-      : m_(m), planes_(planes), fp_(frame_pos), frame_(frame) {}
+      : m_(m), planes_{&m, &planes}, fp_(frame_pos), frame_(frame) {
+    set_arrays();
+  }
+  // The same with the planes from `planes` (an array, or the mesh on each call).
+  ReceiverIntegrator(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions frame_pos,
+                     const LightFrame& frame)
+      : m_(m), planes_(planes), fp_(std::move(frame_pos)), frame_(frame) {
+    set_arrays();
+  }
+  // The vertices' frame coordinates it reads (and caches, when computed on use).
+  const FramePositions& positions() const { return fp_; }
 
   // Starts a receiver (world position; its frame height must be > 0) with its samples.
   void begin(const Vec3f& receiver, const std::vector<Vec2f>& samples_uv);
@@ -254,6 +309,16 @@ class ReceiverIntegrator {
   // segment from r to the light plane, so R_T is empty (a triangle lying in the light
   // plane, or touching it from below, adds nothing).
   int facing(size_t t) const;
+  // Triangle t's plane record (the same doubles as triangle_planes'). Computed from the
+  // mesh when no array was given, then kept in a small direct-mapped cache: the
+  // receivers of a batch validate mostly the same edges.
+  // The reference is valid until the next call.
+  const TrianglePlane& plane(size_t t) const {
+    if (planes_.planes) return (*planes_.planes)[t];
+    const size_t slot = t & (kPlaneCache - 1);
+    if (!plane_keys_.empty() && plane_keys_[slot] == int64_t(t)) return plane_cache_[slot];
+    return fill_plane(t);
+  }
   // Edge weight of section "Side of a projected edge" (0: not a silhouette from r).
   int edge_weight(const Edge& e) const;
   // Clips the edge to h >= 0 and to the pyramid from r over L', projects and integrates
@@ -293,11 +358,24 @@ class ReceiverIntegrator {
  private:
   bool add_segment(const Vec3d& a, const Vec3d& b, int w);
   void set_receiver(const Vec3f& receiver);
+  // facing with both sources arrays (kArrays: the wedge indexes, read directly) or not.
+  template <bool kArrays>
+  [[gnu::always_inline]] inline int facing_from(size_t t) const;
+  // Both sources arrays: their data, read in place by facing_from<true> (the arrays are
+  // not resized while the integrator lives: the solver fills them before).
+  void set_arrays() {
+    if (planes_.planes && fp_.array()) {
+      plane_data_ = planes_.planes->data();
+      fp_data_ = fp_.array()->data();
+    }
+  }
+  bool arrays() const { return plane_data_ != nullptr; }
+  const TrianglePlane* plane_data_ = nullptr;
+  const Vec3d* fp_data_ = nullptr;
 
   const mesh::PreparedMesh& m_;
-  TrianglePlanes own_planes_;
-  const TrianglePlanes& planes_;
-  const std::vector<Vec3d>& fp_;
+  PlaneSource planes_;
+  FramePositions fp_;
   const LightFrame& frame_;
   Vec3d r_world_{};
   Vec3d r_{};                    // frame coordinates (double, not rounded)
@@ -305,6 +383,10 @@ class ReceiverIntegrator {
   double sx_[4] = {}, sy_[4] = {}, sz_[4] = {};  // the same by coordinate (side_lanes_)
   bool side_lanes_ = false;      // at most four planes and AVX2: add_segment tests them at once
   mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
+  [[gnu::noinline]] const TrianglePlane& fill_plane(size_t t) const;  // into its slot (off the hot path)
+  static constexpr size_t kPlaneCache = 1024;        // entries of plane()'s cache (64 KiB)
+  mutable std::vector<int64_t> plane_keys_;
+  mutable std::vector<TrianglePlane> plane_cache_;
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)
   double clear_min_ = 0.0;
   DepthCounter counter_;

@@ -49,8 +49,7 @@ bool make_occluder(const Vec3d* v, int n, const Vec3d& unit, PlanarOccluder& o) 
 }  // namespace
 
 std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                             const TrianglePlanes& planes, size_t max_count,
-                                             double min_area) {
+                                             PlaneSource planes, size_t max_count, double min_area) {
   std::vector<PlanarOccluder> out;
   if (max_count == 0) return out;
   // Candidates of at least min_area: triangle t as (area, t), the union of the two exactly
@@ -58,6 +57,7 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
   // built (linear selection, then a sort of those).
   const size_t T = m.triangles.size();
   auto tri_area = [&](size_t t) { return 0.5 * std::sqrt(planes[t].nn); };
+  auto area_of = [](double nn) { return 0.5 * std::sqrt(nn); };
   auto third = [&](int32_t t, const Edge& e) {
     for (uint32_t w : m.triangles[size_t(t)].v)
       if (w != e.a && w != e.b) return w;
@@ -68,12 +68,19 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
   // exact expressions (a dense mesh's triangles are mostly far below a light's area).
   const double nn_tri = 4.0 * min_area * min_area * (1.0 - 1e-6), nn_pair = 0.25 * nn_tri;
   std::vector<std::pair<double, size_t>> cand;
-  for (size_t t = 0; t < T; ++t)
-    if (planes[t].nn > 0.0 && planes[t].nn >= nn_tri && tri_area(t) >= min_area) cand.emplace_back(tri_area(t), t);
+  // Per triangle nn > 0 and nn >= nn_pair, for the pairs' prefilter: each plane is read
+  // (or computed) once here, and only the pairs that pass read theirs again.
+  std::vector<bool> has_plane(T), pair_size(T);
+  for (size_t t = 0; t < T; ++t) {
+    const double nn = planes[t].nn;
+    has_plane[t] = nn > 0.0;
+    pair_size[t] = nn >= nn_pair;
+    if (nn > 0.0 && nn >= nn_tri && area_of(nn) >= min_area) cand.emplace_back(area_of(nn), t);
+  }
   for (size_t i = 0; i < edges.size(); ++i) {
     const Edge& e = edges[i];
-    if (e.t2 < 0 || !(planes[size_t(e.t1)].nn > 0.0)) continue;
-    if (std::max(planes[size_t(e.t1)].nn, planes[size_t(e.t2)].nn) < nn_pair) continue;  // both below min_area / 2
+    if (e.t2 < 0 || !has_plane[size_t(e.t1)]) continue;
+    if (!pair_size[size_t(e.t1)] && !pair_size[size_t(e.t2)]) continue;  // both below min_area / 2
     const double area = tri_area(size_t(e.t1)) + tri_area(size_t(e.t2));
     if (!(area >= min_area)) continue;
     const uint32_t c = third(e.t1, e), d = third(e.t2, e);

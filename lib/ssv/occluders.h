@@ -60,8 +60,12 @@ struct PlanarOccluder {
 // least min_area, largest first, at most max_count. `edges` and `planes` as built by
 // mesh_edges and triangle_planes.
 std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                             const TrianglePlanes& planes, size_t max_count,
-                                             double min_area = 0.0);
+                                             PlaneSource planes, size_t max_count, double min_area = 0.0);
+inline std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
+                                                    const TrianglePlanes& planes, size_t max_count,
+                                                    double min_area = 0.0) {
+  return planar_occluders(m, edges, PlaneSource{&m, &planes}, max_count, min_area);
+}
 
 // True when every segment from a point of `box` to a point of the hull of `light` meets
 // the occluder's interior (see the file comment for the exact condition).

@@ -62,10 +62,11 @@ struct Counts {
   }
 };
 
+constexpr size_t kWedgeMemo = 4096;
+
 struct ThreadState {
-  ThreadState(const mesh::PreparedMesh& m, const TrianglePlanes& planes, const std::vector<Vec3d>& fp,
-              const LightFrame& f)
-      : integrator(m, planes, fp, f) {}
+  ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions fp, const LightFrame& f)
+      : integrator(m, planes, std::move(fp), f) {}
   ReceiverIntegrator integrator;
   std::vector<WedgeState> candidates;
   std::vector<uint32_t> edge_candidates;  // wedge_index=edges
@@ -77,6 +78,9 @@ struct ThreadState {
   std::vector<std::vector<uint32_t>> batch_lists;
   std::vector<uint32_t>* batched = nullptr;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
+  // wedge_index=edges: wedge_edge's answers of this light by edge, direct-mapped: entry
+  // (edge + 1) << 1 | answer, 0 empty.
+  std::vector<uint64_t> wedge_memo;
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
   DepthCounter::Classes classes{};  // of `depth` (DepthCounter::finish_classes)
@@ -327,8 +331,6 @@ struct SceneSetup {
   const std::vector<Edge>& edges;
   float eps;
   const mesh::PreparedMesh& pm;
-  const TrianglePlanes& planes;
-  const std::vector<Vec3d>& frame_pos;  // of the current light
   double tol;                           // build_wedges' tolerance
 };
 
@@ -337,18 +339,18 @@ struct SceneSetup {
 // endpoint not below the light plane, and for a pair of active triangles, not a
 // silhouette from no point of L' (wedge.h light_side). What the wedges' boxes would
 // exclude beyond that has weight 0 or misses the frustum (edge_tree.h).
-bool wedge_edge(const SceneSetup& sc, const LightFrame& frame, const Edge& e) {
-  const auto& fp = sc.frame_pos;
+bool wedge_edge(const SceneSetup& sc, const ReceiverIntegrator& integ, const LightFrame& frame, const Edge& e) {
+  const FramePositions& fp = integ.positions();
   auto active = [&](int32_t t) {
     if (t < 0) return false;
     const auto& v = sc.pm.triangles[size_t(t)].v;
-    return fp[v[0]].z > 0.0 || fp[v[1]].z > 0.0 || fp[v[2]].z > 0.0;
+    return fp.h(v[0]) > 0.0 || fp.h(v[1]) > 0.0 || fp.h(v[2]) > 0.0;
   };
   const bool act1 = active(e.t1), act2 = active(e.t2);
-  if (!(act1 || act2) || (fp[e.a].z < 0.0 && fp[e.b].z < 0.0)) return false;
+  if (!(act1 || act2) || (fp.h(e.a) < 0.0 && fp.h(e.b) < 0.0)) return false;
   if (!(act1 && act2)) return true;
-  const int s1 = light_side(sc.planes[size_t(e.t1)], frame.poly_world, sc.tol);
-  return s1 == 0 || s1 != light_side(sc.planes[size_t(e.t2)], frame.poly_world, sc.tol);
+  const int s1 = light_side(integ.plane(size_t(e.t1)), frame.poly_world, sc.tol);
+  return s1 == 0 || s1 != light_side(integ.plane(size_t(e.t2)), frame.poly_world, sc.tol);
 }
 
 // One ray per sample of the light (the fallback of every receiver-level doubt).
@@ -405,7 +407,12 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   if (ls.edge_tree) {
     for (uint32_t ei : st.edge_candidates) {
       const Edge& edge = sc.edges[ei];
-      if (!wedge_edge(sc, ls.frame, edge)) continue;
+      // wedge_edge depends on the edge and the light only: memoised per thread and light.
+      const size_t slot = ei & (kWedgeMemo - 1);
+      if (st.wedge_memo.empty()) st.wedge_memo.assign(kWedgeMemo, 0);
+      if (st.wedge_memo[slot] >> 1 != uint64_t(ei) + 1)
+        st.wedge_memo[slot] = (uint64_t(ei) + 1) << 1 | uint64_t(wedge_edge(sc, st.integrator, ls.frame, edge));
+      if (!(st.wedge_memo[slot] & 1)) continue;
       int weight = st.integrator.edge_weight(edge);
       if (weight != 0) st.valid.emplace_back(ei, weight);
     }
@@ -691,7 +698,7 @@ struct Culling {
   EdgeTree edge_tree;  // wedge_index=edges
   std::vector<int32_t> units;
   Culling(const Scene& scene, const mesh::PreparedMesh& pm, const std::vector<Edge>& edges,
-          const TrianglePlanes& planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
+          PlaneSource planes, bool occluders_on, bool shafts_on, bool tree_on, bool edges_on,
           double M) {
     if (tree_on) {
       std::vector<Vec3d> points(scene.receivers.size());
@@ -711,7 +718,7 @@ struct Culling {
       occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
     }
     if (shafts_on) build_shaft_bvh(pm, edges);
-    if (edges_on) edge_tree = EdgeTree(edges, pm, planes, M);
+    if (edges_on) edge_tree = EdgeTree(edges, pm, M);
   }
   void build_shaft_bvh(const mesh::PreparedMesh& pm, const std::vector<Edge>& edges) {
     std::vector<AABB> boxes(edges.size());
@@ -824,7 +831,11 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   if (auto_index) index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
   bool use_edges = index == "edges";
   bool use_scatter = index == "receivers";
-  const TrianglePlanes tri_planes = triangle_planes(pm);
+  // The triangle planes as an array for the wedge indexes (build_wedges reads every
+  // edge's per light); the edge index reads only its candidates' and computes them.
+  TrianglePlanes tri_planes;
+  if (!use_edges) tri_planes = triangle_planes(pm);
+  PlaneSource planes{&pm, use_edges ? nullptr : &tri_planes};
 
   // Root box. Paper 001 (section 4.1) roots the BSP at the scene bounds, assuming every
   // query lies inside. Here every query point is known in advance: the receivers. The
@@ -844,10 +855,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const float eps = float(4e-6 * M);
   const double tol = 1e-9 * M;
   std::vector<Vec3d> frame_pos;  // per light, its capacity reused
-  const SceneSetup sc{scene, embree, edges, eps, pm, tri_planes, frame_pos, tol};
 
   auto tc0 = Clock::now();
-  Culling cull(scene, pm, edges, tri_planes, use_occluders, use_shafts && !use_edges,
+  Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges,
                use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   // wedge_index=auto: more than kMaxProbeCandidates candidates per receiver (CGAL's
   // scanned armadillo 3,164 and bunny 1,364 against 12.6 on scan 75k; the armadillo ran
@@ -857,7 +867,10 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     use_scatter = true;
     cull.edge_tree = EdgeTree();
     if (use_shafts) cull.build_shaft_bvh(pm, edges);
+    tri_planes = triangle_planes(pm);
+    planes.planes = &tri_planes;
   }
+  const SceneSetup sc{scene, embree, edges, eps, pm, tol};
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
@@ -914,13 +927,15 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     if (root.empty() && !scene.receivers.empty()) root = scene_box;
     root.lo -= Vec3f(grow, grow, grow);
     root.hi += Vec3f(grow, grow, grow);
-    frame_pos.resize(all_hidden ? 0 : pm.vertex_pos.size());
+    // The wedge indexes read most vertices' frame positions: an array. The edge index
+    // computes those of its candidates on use, per thread (FramePositions).
+    frame_pos.resize(all_hidden || use_edges ? 0 : pm.vertex_pos.size());
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
     wedges.clear();
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback && !all_hidden && use_edges) {
       cull.edge_tree.crossing_triangles(edges, frame, crossing);
-      cut_triangles = light_plane_cuts(pm, frame_pos, frame, crossing);
+      cut_triangles = light_plane_cuts(pm, FramePositions(pm.vertex_pos, frame), frame, crossing);
     } else if (!light_fallback && !all_hidden) {
       const bool subset = use_shafts && !cull.edge_bvh.empty();
       if (subset) {
@@ -933,7 +948,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       // index only: it hands out exactly the wedges these boxes would not all exclude).
       const bool by_region = use_region && use_scatter;
       const RegionBoxes regions = by_region ? region_boxes(scene, receiver_tree, cull.units, occluded, eps) : RegionBoxes{};
-      build_wedges(pm, edges, frame_pos, frame, tol, counts, &tri_planes, wedges, subset ? &edge_subset : nullptr,
+      build_wedges(pm, edges, frame_pos, frame, tol, counts, planes.planes, wedges, subset ? &edge_subset : nullptr,
                    by_region ? &regions : nullptr);
       cut_triangles = light_plane_cuts(pm, frame_pos, frame);
     }
@@ -952,7 +967,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                         frame,         light_fallback, wedges,
                         cut_triangles, bsp ? &*bsp : nullptr, &scatter,
                         receiver_tree, strips, occluded, use_edges ? &cull.edge_tree : nullptr};
-    tbb::enumerable_thread_specific<ThreadState> states([&] { return ThreadState(pm, tri_planes, frame_pos, frame); });
+    tbb::enumerable_thread_specific<ThreadState> states([&] {
+      return ThreadState(pm, planes, use_edges ? FramePositions(pm.vertex_pos, frame) : FramePositions(frame_pos), frame);
+    });
     total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;
     nodes += bsp ? double(bsp->node_count()) : 0.0;

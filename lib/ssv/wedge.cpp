@@ -13,14 +13,7 @@ namespace visgate::ssv {
 
 TrianglePlanes triangle_planes(const mesh::PreparedMesh& m) {
   TrianglePlanes out(m.triangles.size());
-  for (size_t t = 0; t < m.triangles.size(); ++t) {
-    TrianglePlane& p = out[t];
-    const Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
-    p.n = cross(b - a, c - a);
-    p.a = a;
-    p.nn = dot(p.n, p.n);
-    p.reach2 = std::max(dot(b - a, b - a), dot(c - a, c - a));
-  }
+  for (size_t t = 0; t < m.triangles.size(); ++t) out[t] = triangle_plane(m, t);
   return out;
 }
 

@@ -24,6 +24,7 @@
 // at least eps inside both front half-spaces or both back half-spaces.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -60,6 +61,25 @@ struct TrianglePlane {
 // On populated mappings (populated.h): 19 MB of fresh pages at 300k triangles.
 using TrianglePlanes = PopulatedVector<TrianglePlane>;
 TrianglePlanes triangle_planes(const mesh::PreparedMesh& m);
+// Triangle t's record computed from the mesh: the same doubles as triangle_planes' entry.
+inline TrianglePlane triangle_plane(const mesh::PreparedMesh& m, size_t t) {
+  TrianglePlane p;
+  const Vec3d a = to_double(m.corner(t, 0)), b = to_double(m.corner(t, 1)), c = to_double(m.corner(t, 2));
+  p.n = cross(b - a, c - a);
+  p.a = a;
+  p.nn = dot(p.n, p.n);
+  p.reach2 = std::max(dot(b - a, b - a), dot(c - a, c - a));
+  return p;
+}
+// The planes from an array when the caller built one (the wedge indexes: every edge per
+// light), else from the mesh on each call (the edge index: only candidates' triangles are
+// read, and a 64-byte record per triangle of a dense mesh is more fresh memory per solve
+// than the few hundred thousand cross products it saves). The same doubles either way.
+struct PlaneSource {
+  const mesh::PreparedMesh* m = nullptr;
+  const TrianglePlanes* planes = nullptr;
+  TrianglePlane operator[](size_t t) const { return planes ? (*planes)[t] : triangle_plane(*m, t); }
+};
 
 // The side of L' (vertices `light`) w.r.t. the triangle's plane: +1 when every vertex lies
 // more than `tol` in front of it, -1 when every one lies more than tol behind, else 0

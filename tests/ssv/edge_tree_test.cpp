@@ -12,6 +12,7 @@
 
 #include "lib/solver.h"
 #include "lib/ssv/integrate.h"
+#include "lib/ssv/occluders.h"
 #include "tests/support/family_scene.h"
 #include "tests/support/ssv_fixtures.h"
 
@@ -61,7 +62,7 @@ struct TreeSetup {
     planes = triangle_planes(pm);
     const AABB b = s.bounds();
     M = std::max(max_component(vabs(b.lo)), max_component(vabs(b.hi)));
-    tree = EdgeTree(edges, pm, planes, M);
+    tree = EdgeTree(edges, pm, M);
   }
 };
 
@@ -263,6 +264,66 @@ TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseSmoothMeshes) {
   EXPECT_GT(b.stats.get("wedges_reported"), 256.0);
   for (size_t i = 0; i < a.receivers.size(); ++i)
     EXPECT_EQ(a.receivers[i].visible_bits, b.receivers[i].visible_bits) << "receiver " << i;
+}
+
+// The edge index's on-use sources (wedge.h PlaneSource, ReceiverIntegrator::plane,
+// integrate.h FramePositions) against the arrays the wedge indexes build: the same
+// doubles, bit for bit, whatever the access order (random, so the direct-mapped caches
+// evict and refill: the scan mesh has more triangles and vertices than their slots).
+TEST(SsvEdgeTree, OnUsePlanesAndFramePositionsEqualTheArrays) {
+  const Scene s = family("scan", 5, 8000, 16, 8);
+  const mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
+  const TrianglePlanes planes = triangle_planes(pm);
+  ASSERT_GT(pm.triangles.size(), 4096u);
+  const LightFrame frame = make_light_frame(s.lights[0]);
+  const std::vector<Vec3d> fp = frame_positions(pm, frame);
+  const ReceiverIntegrator on_use(pm, PlaneSource{&pm, nullptr}, FramePositions(pm.vertex_pos, frame), frame);
+  const FramePositions from_array(fp);
+  auto same = [](const Vec3d& a, const Vec3d& b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+  std::mt19937_64 g(3);
+  for (int pass = 0; pass < 3; ++pass) {
+    for (int k = 0; k < 20000; ++k) {
+      const size_t t = size_t(g() % pm.triangles.size());
+      const TrianglePlane a = on_use.plane(t), b = planes[t], c = triangle_plane(pm, t);
+      EXPECT_TRUE(same(a.n, b.n) && same(a.a, b.a) && a.nn == b.nn && a.reach2 == b.reach2) << "triangle " << t;
+      EXPECT_TRUE(same(c.n, b.n) && same(c.a, b.a) && c.nn == b.nn && c.reach2 == b.reach2) << "triangle " << t;
+      const uint32_t v = uint32_t(g() % pm.vertex_pos.size());
+      EXPECT_TRUE(same(on_use.positions()[v], fp[v])) << "vertex " << v;
+      EXPECT_TRUE(same(from_array[v], fp[v])) << "vertex " << v;
+    }
+  }
+  // Every light-plane cut and edge crossing point: the on-use positions give the array's.
+  for (uint64_t seed : {12u, 31u}) {
+    Scene r = random_scene(seed, 16, 16);
+    const TreeSetup st(r, 0);
+    std::vector<uint32_t> all(st.pm.triangles.size());
+    for (size_t t = 0; t < all.size(); ++t) all[t] = uint32_t(t);
+    const FramePositions on_use_fp(st.pm.vertex_pos, st.frame);
+    EXPECT_EQ(light_plane_cuts(st.pm, on_use_fp, st.frame, all), light_plane_cuts(st.pm, st.fp, st.frame));
+    size_t crossing_pairs = 0;
+    for (const Edge& e : st.edges) {
+      if ((st.fp[e.a].z < 0.0) == (st.fp[e.b].z < 0.0)) continue;  // the callers ask crossing pairs only
+      EXPECT_TRUE(same(light_plane_point(on_use_fp, e.a, e.b), light_plane_point(st.fp, e.a, e.b)));
+      EXPECT_TRUE(same(light_plane_point(on_use_fp, e.b, e.a), light_plane_point(st.fp, e.b, e.a)));
+      ++crossing_pairs;
+    }
+    EXPECT_GT(crossing_pairs, 0u) << "seed " << seed;
+  }
+  // The occluders from planes computed on use: the same list as from the array.
+  for (const char* fam : {"rooms", "columns", "scan"}) {
+    const Scene f = family(fam, 2, fam[0] == 's' ? 8000 : -1, 16, 8);
+    const mesh::PreparedMesh m = mesh::prepare_mesh(f.mesh);
+    const std::vector<Edge> edges = mesh_edges(m);
+    const auto a = planar_occluders(m, edges, triangle_planes(m), 1024, 0.01);
+    const auto b = planar_occluders(m, edges, PlaneSource{&m, nullptr}, 1024, 0.01);
+    ASSERT_EQ(a.size(), b.size()) << fam;
+    EXPECT_GT(a.size(), 0u) << fam;
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].n, b[i].n) << fam;
+      EXPECT_TRUE(same(a[i].normal, b[i].normal) && a[i].offset == b[i].offset) << fam << " occluder " << i;
+      for (int k = 0; k < a[i].n; ++k) EXPECT_TRUE(same(a[i].v[k], b[i].v[k])) << fam << " occluder " << i;
+    }
+  }
 }
 
 // lib/ssv/populated.h: vectors on populated mappings (large) and operator new (small)
