@@ -110,6 +110,86 @@ TEST(IssShaft, ObliquePlanesEqualTheCornerLineReferenceBitForBit) {
   EXPECT_GT(oblique, 4000u);  // most pairs have oblique planes: the comparison is not empty
 }
 
+// The scalar loops may_intersect_segment and may_intersect_box were before they
+// evaluated four planes per vector: the references for the vector versions, which must
+// give the same answer on every input (the same plane values bit for bit, and answers
+// that do not depend on the planes' order).
+static bool reference_segment(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < g.plane_count(); ++i) {
+    const iss::ConservativePlane& p = g.plane(i);
+    const double ea = p.eval(a) - p.tol, eb = p.eval(b) - p.tol;
+    if (ea > 0 && eb > 0) return false;
+    if (ea <= 0 && eb <= 0) continue;
+    const double t = ea / (ea - eb);
+    if (ea > 0) t0 = std::max(t0, t);
+    else t1 = std::min(t1, t);
+    if (t0 > t1 + 0x1p-40) return false;
+  }
+  return true;
+}
+static bool reference_box(const iss::ShaftGeometry& g, const AABBd& b) {
+  for (int i = 0; i < g.plane_count(); ++i) {
+    const iss::ConservativePlane& p = g.plane(i);
+    const Vec3d q(p.n.x > 0 ? b.lo.x : b.hi.x, p.n.y > 0 ? b.lo.y : b.hi.y, p.n.z > 0 ? b.lo.z : b.hi.z);
+    if (p.eval(q) > p.tol) return false;
+  }
+  return true;
+}
+
+TEST(IssShaft, VectorSegmentAndBoxTestsAnswerAsTheScalarLoops) {
+  // Random shafts (also with shared coordinates, so fewer oblique planes and plane counts
+  // that are not multiples of four), segments and boxes around them: end points on the
+  // shaft's corners, on its planes (exactly, as far as double allows) and random; both
+  // answers are seen often, so the comparison covers both branches.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-0.5, 1.5);
+  size_t seg_in = 0, seg_out = 0, box_in = 0, box_out = 0;
+  for (double offset : {0.0, 1e5}) {
+    for (int it = 0; it < 400; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      AABB r = random_box(rng, o), l = random_box(rng, o);
+      if (it % 3 == 1) l.lo.x = r.lo.x;
+      if (it % 5 == 2) { l.lo.y = r.lo.y; l.hi.y = r.hi.y; }
+      iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
+      AABBd all = iss::to_double(r);
+      all.extend(iss::to_double(l));
+      auto point = [&]() {
+        Vec3d p;
+        for (int a = 0; a < 3; ++a) p[a] = all.lo[a] + (all.hi[a] - all.lo[a]) * u(rng);
+        const int kind = int(rng() % 4);
+        if (kind == 1) {  // a corner of one of the boxes
+          const AABBd& bx = rng() % 2 ? g.receiver() : g.light();
+          p = Vec3d(rng() % 2 ? bx.hi.x : bx.lo.x, rng() % 2 ? bx.hi.y : bx.lo.y, rng() % 2 ? bx.hi.z : bx.lo.z);
+        } else if (kind == 2) {  // moved onto a random plane along its normal
+          const iss::ConservativePlane& pl = g.plane(int(rng() % unsigned(g.plane_count())));
+          const double nn = dot(pl.n, pl.n);
+          if (nn > 0) p = p - pl.n * ((pl.eval(p)) / nn);
+        }
+        return p;
+      };
+      for (int k = 0; k < 60; ++k) {
+        const Vec3d a = point(), b = point();
+        const bool ref = reference_segment(g, a, b);
+        ASSERT_EQ(g.may_intersect_segment(a, b), ref);
+        (ref ? seg_in : seg_out) += 1;
+        AABBd bx;
+        bx.lo = vmin(a, b);
+        bx.hi = vmax(a, b);
+        const bool rb = reference_box(g, bx);
+        ASSERT_EQ(g.may_intersect_box(bx), rb);
+        (rb ? box_in : box_out) += 1;
+      }
+      // The empty box ISS starts its boxes from: outside, as the scalar loop says.
+      ASSERT_EQ(g.may_intersect_box(iss::empty_box()), reference_box(g, iss::empty_box()));
+    }
+  }
+  EXPECT_GT(seg_in, 5000u);
+  EXPECT_GT(seg_out, 5000u);
+  EXPECT_GT(box_in, 5000u);
+  EXPECT_GT(box_out, 2000u);
+}
+
 TEST(IssShaft, ObliquePlanesCutTheCommonBox) {
   // Unit box at the origin, unit box at (10, 10, 0): the hull excludes (0, 10, 0.5).
   AABB r(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), l(Vec3f(10, 10, 0), Vec3f(11, 11, 1));
