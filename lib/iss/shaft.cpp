@@ -216,6 +216,30 @@ __attribute__((always_inline)) inline bool box_body(const double (*v)[20], int c
   return true;
 }
 
+// separated_by_shaft_plane's body, four planes per vector: some plane with eval() beyond
+// tol at all three vertices (the answer of the scalar loop, whatever the order).
+__attribute__((always_inline)) inline bool triangle_body(const double (*v)[20], int count, const Vec3d& a,
+                                                         const Vec3d& b, const Vec3d& c) {
+  for (int g = 0; g < count; g += 4) {
+    V4 nx, ny, nz, d, tol;
+    std::memcpy(&nx, v[0] + g, sizeof nx);
+    std::memcpy(&ny, v[1] + g, sizeof ny);
+    std::memcpy(&nz, v[2] + g, sizeof nz);
+    std::memcpy(&d, v[3] + g, sizeof d);
+    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const V4 ea = ((nx * a.x + ny * a.y) + nz * a.z) - d;
+    const V4 eb = ((nx * b.x + ny * b.y) + nz * b.z) - d;
+    const V4 ec = ((nx * c.x + ny * c.y) + nz * c.z) - d;
+    const M4 out = (ea > tol) & (eb > tol) & (ec > tol);
+    if ((out[0] | out[1] | out[2] | out[3]) != 0) return true;
+  }
+  return false;
+}
+
+bool triangle_default(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return triangle_body(v, count, a, b, c);
+}
+
 bool box_default(const double (*v)[20], int count, const AABBd& b) { return box_body(v, count, b); }
 
 bool segment_default(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b) {
@@ -227,6 +251,10 @@ __attribute__((target("avx2"))) bool segment_avx2(const double (*v)[20], int cou
 }
 __attribute__((target("avx2"))) bool box_avx2(const double (*v)[20], int count, const AABBd& b) {
   return box_body(v, count, b);
+}
+__attribute__((target("avx2"))) bool triangle_avx2(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b,
+                                                   const Vec3d& c) {
+  return triangle_body(v, count, a, b, c);
 }
 // VISGATE_ISS_NO_AVX2 selects the default build, as for leaf_rays.cpp's kernels.
 bool shaft_avx2() {
@@ -253,28 +281,27 @@ bool ShaftGeometry::may_intersect_triangle(const Vec3d& a, const Vec3d& b, const
 }
 
 bool ShaftGeometry::separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
-  for (int i = 0; i < count_; ++i) {
-    const ConservativePlane& p = planes_[size_t(i)].p;
-    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
-  }
-  return false;
+  // Some plane with all three vertices beyond it (triangle_body).
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (shaft_avx2()) return triangle_avx2(soa_.v, count_, a, b, c);
+#endif
+  return triangle_default(soa_.v, count_, a, b, c);
 }
 
 bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
-  // Every box corner strictly on one side of the triangle's plane.
+  // Every corner of both boxes strictly on one side of the triangle's plane. Per box,
+  // the smallest and the largest plane value over its eight corners, as evaluated, are
+  // those of the two corners the signs of the normal pick: eval() is monotone in each
+  // coordinate (each rounded operation is; classify_box_plane in blockers.h makes the
+  // same argument), so these four evaluations give the answer of all sixteen.
   ConservativePlane tp = plane_through(a, b, c, scale_);
   if (tp.n == Vec3d(0, 0, 0)) return false;
-  bool all_pos = true, all_neg = true;
-  // Both boxes' corners, the receiver's first (bit i of the index: hi on axis i).
-  for (int i = 0; i < 16; ++i) {
-    const AABBd& box = i < 8 ? r_ : l_;
-    const Vec3d q(i & 1 ? box.hi.x : box.lo.x, i & 2 ? box.hi.y : box.lo.y, i & 4 ? box.hi.z : box.lo.z);
-    double e = tp.eval(q);
-    if (!(e > tp.tol)) all_pos = false;
-    if (!(e < -tp.tol)) all_neg = false;
-    if (!all_pos && !all_neg) return false;
-  }
-  return all_pos || all_neg;
+  auto corner = [&](const AABBd& box, bool high) {
+    auto pick = [&](double n, double lo, double hi) { return (n > 0) == high ? std::max(lo, hi) : std::min(lo, hi); };
+    return Vec3d(pick(tp.n.x, box.lo.x, box.hi.x), pick(tp.n.y, box.lo.y, box.hi.y), pick(tp.n.z, box.lo.z, box.hi.z));
+  };
+  if (tp.eval(corner(r_, false)) > tp.tol && tp.eval(corner(l_, false)) > tp.tol) return true;
+  return tp.eval(corner(r_, true)) < -tp.tol && tp.eval(corner(l_, true)) < -tp.tol;
 }
 
 bool ShaftGeometry::may_intersect_box(const AABBd& b) const {

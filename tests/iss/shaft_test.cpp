@@ -110,10 +110,12 @@ TEST(IssShaft, ObliquePlanesEqualTheCornerLineReferenceBitForBit) {
   EXPECT_GT(oblique, 4000u);  // most pairs have oblique planes: the comparison is not empty
 }
 
-// The scalar loops may_intersect_segment and may_intersect_box were before they
-// evaluated four planes per vector: the references for the vector versions, which must
-// give the same answer on every input (the same plane values bit for bit, and answers
-// that do not depend on the planes' order).
+// The scalar loops may_intersect_segment, may_intersect_box and separated_by_shaft_plane
+// were before they evaluated four planes per vector, and separated_by_triangle_plane
+// before it evaluated only the two corners per box the normal picks: the references,
+// which the new versions must answer as on every input (the same plane values bit for
+// bit, answers that do not depend on the planes' order, and eval() monotone in each
+// coordinate).
 static bool reference_segment(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b) {
   double t0 = 0.0, t1 = 1.0;
   for (int i = 0; i < g.plane_count(); ++i) {
@@ -137,14 +139,35 @@ static bool reference_box(const iss::ShaftGeometry& g, const AABBd& b) {
   return true;
 }
 
-TEST(IssShaft, VectorSegmentAndBoxTestsAnswerAsTheScalarLoops) {
+static bool reference_shaft_plane(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  for (int i = 0; i < g.plane_count(); ++i) {
+    const iss::ConservativePlane& p = g.plane(i);
+    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
+  }
+  return false;
+}
+static bool reference_triangle_plane(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const iss::ConservativePlane tp = iss::plane_through(a, b, c, g.scale());
+  if (tp.n == Vec3d(0, 0, 0)) return false;
+  bool all_pos = true, all_neg = true;
+  for (int i = 0; i < 16; ++i) {  // all sixteen corners of the two boxes
+    const AABBd& box = i < 8 ? g.receiver() : g.light();
+    const Vec3d q(i & 1 ? box.hi.x : box.lo.x, i & 2 ? box.hi.y : box.lo.y, i & 4 ? box.hi.z : box.lo.z);
+    const double e = tp.eval(q);
+    all_pos = all_pos && e > tp.tol;
+    all_neg = all_neg && e < -tp.tol;
+  }
+  return all_pos || all_neg;
+}
+
+TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
   // Random shafts (also with shared coordinates, so fewer oblique planes and plane counts
   // that are not multiples of four), segments and boxes around them: end points on the
   // shaft's corners, on its planes (exactly, as far as double allows) and random; both
   // answers are seen often, so the comparison covers both branches.
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u(-0.5, 1.5);
-  size_t seg_in = 0, seg_out = 0, box_in = 0, box_out = 0;
+  size_t seg_in = 0, seg_out = 0, box_in = 0, box_out = 0, tris = 0, tri_shaft = 0, tri_own = 0;
   for (double offset : {0.0, 1e5}) {
     for (int it = 0; it < 400; ++it) {
       Vec3f o(float(offset), float(-offset), float(offset));
@@ -180,6 +203,16 @@ TEST(IssShaft, VectorSegmentAndBoxTestsAnswerAsTheScalarLoops) {
         ASSERT_EQ(g.may_intersect_box(bx), rb);
         (rb ? box_in : box_out) += 1;
       }
+      for (int k = 0; k < 60; ++k) {  // triangles: separated by a shaft plane / by their own plane
+        Vec3d a = point(), b = point(), c = point();
+        if (k % 4 == 0) c = a + (b - a) * 0.5;  // degenerate: zero normal
+        const bool rs = reference_shaft_plane(g, a, b, c), rt = reference_triangle_plane(g, a, b, c);
+        ASSERT_EQ(g.separated_by_shaft_plane(a, b, c), rs);
+        ASSERT_EQ(g.separated_by_triangle_plane(a, b, c), rt);
+        tri_shaft += rs;
+        tri_own += rt;
+        ++tris;
+      }
       // The empty box ISS starts its boxes from: outside, as the scalar loop says.
       ASSERT_EQ(g.may_intersect_box(iss::empty_box()), reference_box(g, iss::empty_box()));
     }
@@ -188,6 +221,10 @@ TEST(IssShaft, VectorSegmentAndBoxTestsAnswerAsTheScalarLoops) {
   EXPECT_GT(seg_out, 5000u);
   EXPECT_GT(box_in, 5000u);
   EXPECT_GT(box_out, 2000u);
+  EXPECT_GT(tri_shaft, tris / 20);  // both answers of both triangle tests are seen
+  EXPECT_LT(tri_shaft, tris - tris / 20);
+  EXPECT_GT(tri_own, tris / 50);
+  EXPECT_LT(tri_own, tris - tris / 20);
 }
 
 TEST(IssShaft, ObliquePlanesCutTheCommonBox) {
