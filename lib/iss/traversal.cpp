@@ -124,7 +124,10 @@ void Traversal::run_light(size_t li) {
   // Once the clusters are built an initial shaft at the roots walks the hierarchy
   // itself (construct_clustered_surface) and the array is not read: it is needed only
   // when the root boxes overlap (PRE-TRAVERSE narrows it down to the initial shafts).
-  std::vector<uint32_t> tris;
+  // Kept across lights (root_tris_): a fresh array per light grew by doubling into
+  // fresh heap pages every light.
+  std::vector<uint32_t>& tris = root_tris_;
+  tris.clear();
   if (!clusters_ || rn(r0).box.overlaps(ln(l0).box) || choose_main_axis(rn(r0).box, ln(l0).box).axis < 0) {
     ScopedTimer t(times_[kTriangleSurface]);
     bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);

@@ -385,7 +385,7 @@ class Traversal {
   };
   std::unordered_map<int, PendingRays> pending_;  // by receiver node, this light only
   std::vector<uint32_t> pending_samples_;
-  std::vector<uint32_t> probe_tris_;
+  std::vector<uint32_t> probe_tris_, root_tris_;
   std::vector<Surface> probe_out_, temp_, band_split_;
   std::vector<std::vector<Surface>> surface_lists_;
   std::vector<std::vector<AABBd>> ghost_lists_;
