@@ -36,9 +36,26 @@ void Workspace::reset_labels(size_t n) {
 }
 
 Surface Workspace::take_surface(size_t expect_raw) {
-  if (expect_raw > kMaxSpareEdges && big.raw.capacity() > kMaxSpareEdges) {
-    big_charge.set(0);
-    return std::move(big);  // leaves `big` empty (moved-from vectors are empty)
+  if (expect_raw > kMaxSpareEdges) {
+    // The large surface, with room for what the caller expects reserved here: its
+    // arrays then come back to recycle() above kMaxSpareEdges whatever the surface's
+    // final size, and the next large construction writes into pages already touched.
+    // (Left to grow from a pooled surface, a construction that ended at kMaxSpareEdges
+    // went to the small pool, and every light's initial shaft touched fresh pages.)
+    Surface s;
+    if (big.raw.capacity() > kMaxSpareEdges) {
+      big_charge.set(0);
+      s = std::move(big);  // leaves `big` empty (moved-from vectors are empty)
+    } else if (!spare.empty()) {
+      s = std::move(spare.back());
+      spare.pop_back();
+    }
+    // A quarter more than asked: the next light's initial shaft, a little larger, then
+    // fits too instead of reallocating into fresh pages (reserve() touches none).
+    if (s.raw.capacity() < expect_raw) s.raw.reserve(expect_raw + expect_raw / 4);
+    if (s.edges.capacity() < expect_raw) s.edges.reserve(expect_raw + expect_raw / 4);
+    if (s.patches.capacity() < expect_raw / 3) s.patches.reserve((expect_raw + expect_raw / 4) / 3);
+    return s;
   }
   if (spare.empty()) return Surface{};
   Surface s = std::move(spare.back());

@@ -65,52 +65,22 @@ struct RootPlan {
   size_t kept = 0;
 };
 
-// The probe's candidates per main axis (as the Traversal constructor orders them): the
-// triangles by their smaller box extent across the axis, largest first, ties by index;
-// only the first cap + 1 are kept, cap = max(64, triangles / 16), the most a probe takes.
-struct ProbeOrder {
-  std::vector<uint32_t> tris[3];
-  std::vector<float> extent[3];
-  bool done[3] = {false, false, false};
-  bool truncated = false;
-};
-
-// Fills po's order for `axis` (computed on first use: root shafts usually share one main
-// axis).
-void probe_order(const std::vector<AABB>& boxes, int axis, ProbeOrder& po) {
-  if (po.done[axis]) return;
-  po.done[axis] = true;
-  const size_t n = boxes.size(), keep = std::min(n, std::max<size_t>(64, n / 16) + 1);
-  po.truncated = keep < n;
-  std::vector<float> cross(n);
-  std::vector<uint32_t>& w = po.tris[axis];
-  w.resize(n);
-  for (uint32_t t = 0; t < n; ++t) {
-    w[t] = t;
-    const Vec3f e = boxes[t].extent();
-    cross[t] = std::min(e[(axis + 1) % 3], e[(axis + 2) % 3]);
-  }
-  auto wider = [&](uint32_t x, uint32_t y) { return cross[x] != cross[y] ? cross[x] > cross[y] : x < y; };
-  if (keep > 0) std::nth_element(w.begin(), w.begin() + long(keep) - 1, w.end(), wider);
-  w.resize(keep);
-  std::sort(w.begin(), w.end(), wider);
-  for (uint32_t t : w) po.extent[axis].push_back(cross[t]);
-}
-
-bool root_probe_blocked(const mesh::PreparedMesh& m, const std::vector<AABB>& boxes, ProbeOrder& po,
-                        const AABB& rbox, const AABB& lbox, MainAxis ax, double scale, Workspace& ws,
-                        std::vector<Surface>& out) {
+// The probe's candidates are the traversal's (Traversal::probe_order), and so are the
+// triangle boxes.
+bool root_probe_blocked(const mesh::PreparedMesh& m, Traversal& tr, const AABB& rbox, const AABB& lbox, MainAxis ax,
+                        double scale, Workspace& ws, std::vector<Surface>& out) {
   const int a = ax.axis, b = (a + 1) % 3, c = (a + 2) % 3;
   const Vec3f re = rbox.extent(), le = lbox.extent();
   const float thr = std::min(std::min(re[b], le[b]), std::min(re[c], le[c]));
-  probe_order(boxes, a, po);
-  const std::vector<float>& ext = po.extent[a];
+  tr.probe_order(a);
+  const std::vector<float>& ext = tr.probe_extents(a);
+  const std::vector<AABB>& boxes = tr.triangle_boxes();
   const size_t n =
       size_t(std::lower_bound(ext.begin(), ext.end(), thr, [](float x, float v) { return x >= v; }) - ext.begin());
   const size_t cap = std::max<size_t>(64, m.triangles.size() / 16);
   // Not few: the traversal builds the shaft (a full prefix means more than the cap).
-  if (n == 0 || n > cap || (po.truncated && n == ext.size())) return false;
-  std::vector<uint32_t> cand(po.tris[a].begin(), po.tris[a].begin() + long(n));
+  if (n == 0 || n > cap || (tr.probe_truncated() && n == ext.size())) return false;
+  std::vector<uint32_t> cand(tr.probe_triangles(a).begin(), tr.probe_triangles(a).begin() + long(n));
   std::sort(cand.begin(), cand.end());
   TreeNode rn, ln;
   for (uint32_t t : cand) {
@@ -169,15 +139,12 @@ void exclude_setup_time(Stats& st, double setup) {
   st.set("percent_time_shaft_operations", secs > 0 ? 100.0 * (secs - rays) / secs : 0.0);
 }
 
-RootPlan plan_roots(const Scene& scene, const mesh::PreparedMesh& m, const TriangleBvh& bvh, double scale) {
+RootPlan plan_roots(const Scene& scene, const mesh::PreparedMesh& m, Traversal& tr, double scale) {
   RootPlan plan;
   plan.blocked.assign(scene.lights.size(), 0);
   plan.keep.assign(scene.mesh.size(), 0);
   if (scene.receivers.empty()) return plan;
-  std::vector<AABB> boxes(m.triangles.size());
-  for (size_t t = 0; t < boxes.size(); ++t)
-    for (int k = 0; k < 3; ++k) boxes[t].extend(m.corner(t, k));
-  ProbeOrder po;
+  const TriangleBvh& bvh = tr.triangle_bvh();
   AABB rbox;
   for (const Receiver& r : scene.receivers) rbox.extend(r.p);
   Workspace ws;
@@ -189,7 +156,7 @@ RootPlan plan_roots(const Scene& scene, const mesh::PreparedMesh& m, const Trian
     for (const AABB& jb : light.jitter_boxes) lbox.extend(jb);
     if (!rbox.overlaps(lbox)) {
       const MainAxis ax = choose_main_axis(rbox, lbox);
-      if (ax.axis >= 0 && root_probe_blocked(m, boxes, po, rbox, lbox, ax, scale, ws, out)) {
+      if (ax.axis >= 0 && root_probe_blocked(m, tr, rbox, lbox, ax, scale, ws, out)) {
         plan.blocked[li] = 1;
         plan.blocked_relations += double(scene.receivers.size()) * double(light.samples);
         continue;
@@ -320,7 +287,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   Traversal tr(scene, m, p, result);
   tr.set_memory_budget(&budget);
   auto tb = Clock::now();
-  const RootPlan plan = plan_roots(scene, m, tr.triangle_bvh(), scale);
+  const RootPlan plan = plan_roots(scene, m, tr, scale);
   const double root_plan_seconds = std::chrono::duration<double>(Clock::now() - tb).count();
   // The leaf caster's mesh: the triangles a leaf ray may meet, when that leaves some out.
   TriangleSoup ray_mesh;

@@ -3,6 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include "lib/base/cpu_features.h"
 
 #include "lib/geom/predicates.h"
 
@@ -41,6 +46,11 @@ void ShaftGeometry::add_plane(const Vec3d& n, double d) {
   p.n = n;
   p.d = d;
   p.tol = kTolFactor * l1(n) * scale_;
+  soa_.v[0][count_] = n.x;
+  soa_.v[1][count_] = n.y;
+  soa_.v[2][count_] = n.z;
+  soa_.v[3][count_] = d;
+  soa_.v[4][count_] = p.tol;
   planes_[size_t(count_++)].p = p;
 }
 
@@ -117,6 +127,10 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
         }
       }
     }
+  for (int i = count_; i % 4 != 0; ++i) {  // never separating (see soa_)
+    soa_.v[0][i] = soa_.v[1][i] = soa_.v[2][i] = soa_.v[3][i] = 0.0;
+    soa_.v[4][i] = std::numeric_limits<double>::infinity();
+  }
   if (axis_.axis >= 0) {
     int a = axis_.axis;
     if (axis_.dir > 0) {
@@ -135,33 +149,40 @@ bool ShaftGeometry::may_contain_point(const Vec3d& p) const {
   return true;
 }
 
-bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const {
-  // Cyrus-Beck clipping of the parameter interval against every plane, each plane
-  // moved outwards by its tolerance.
-  // The first six planes are the common box's faces, n = +e_k then -e_k (constructor),
-  // for which n.p - d is exactly p_k - d or -p_k - d: the products by 0 and 1 are exact
-  // and adding the zeros changes nothing, so the shortcut gives the same bits as eval().
-  // The endpoints are read once into locals (the hot predicate of classify_edges: every
-  // load from memory is also an ASan check in the fuzz build); the expressions are those
-  // of eval(), in the same order, so the bits are the same.
+namespace {
+
+typedef double V4 __attribute__((vector_size(32)));
+typedef int64_t M4 __attribute__((vector_size(32)));
+
+// may_intersect_segment's body over the plane arrays (ShaftGeometry::soa_), four planes
+// per vector: plane values of both end points, each n.p - d - tol in the operation
+// order of eval() (n.x a.x + n.y a.y, + n.z a.z, - d, - tol), so the same bits as the
+// scalar loop it replaces (the build has -ffp-contract=off: no fused multiply-add). A
+// plane with both ends beyond it separates; then Cyrus-Beck over the planes the segment
+// crosses, in plane order. The answer does not depend on the order: t0 only rises and
+// t1 only falls, so the interval test fails at some plane iff it fails with the final
+// t0 and t1.
+__attribute__((always_inline)) inline bool segment_body(const double (*v)[20], int count, const Vec3d& a,
+                                                        const Vec3d& b) {
+  alignas(32) double ea_all[20], eb_all[20];
   const double ax = a.x, ay = a.y, az = a.z, bx = b.x, by = b.y, bz = b.z;
-  const double ak[3] = {ax, ay, az}, bk[3] = {bx, by, bz};
+  for (int g = 0; g < count; g += 4) {
+    V4 nx, ny, nz, d, tol;
+    std::memcpy(&nx, v[0] + g, sizeof nx);
+    std::memcpy(&ny, v[1] + g, sizeof ny);
+    std::memcpy(&nz, v[2] + g, sizeof nz);
+    std::memcpy(&d, v[3] + g, sizeof d);
+    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const V4 ea = (((nx * ax + ny * ay) + nz * az) - d) - tol;
+    const V4 eb = (((nx * bx + ny * by) + nz * bz) - d) - tol;
+    const M4 out = (ea > 0.0) & (eb > 0.0);
+    if ((out[0] | out[1] | out[2] | out[3]) != 0) return false;
+    std::memcpy(ea_all + g, &ea, sizeof ea);
+    std::memcpy(eb_all + g, &eb, sizeof eb);
+  }
   double t0 = 0.0, t1 = 1.0;
-  for (int i = 0; i < count_; ++i) {
-    const ConservativePlane& p = planes_[size_t(i)].p;
-    const double pd = p.d, tol = p.tol;
-    double ea, eb;
-    if (i < 6) {
-      int k = i >> 1;
-      double s = i & 1 ? -1.0 : 1.0;
-      ea = (s * ak[k] - pd) - tol;
-      eb = (s * bk[k] - pd) - tol;
-    } else {
-      const double nx = p.n.x, ny = p.n.y, nz = p.n.z;
-      ea = (nx * ax + ny * ay + nz * az - pd) - tol;
-      eb = (nx * bx + ny * by + nz * bz - pd) - tol;
-    }
-    if (ea > 0 && eb > 0) return false;
+  for (int i = 0; i < count; ++i) {
+    const double ea = ea_all[i], eb = eb_all[i];
     if (ea <= 0 && eb <= 0) continue;
     double t = ea / (ea - eb);
     if (ea > 0) t0 = std::max(t0, t);
@@ -172,43 +193,123 @@ bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const 
   return true;
 }
 
+// may_intersect_box's body, four planes per vector: per plane the box corner nearest to
+// the plane's inside (lo where n_k > 0, else hi) and its value n.q - d in eval()'s order,
+// beyond tol: the box is outside. The same bits and answer as the scalar loop (the
+// answer is whether any plane rejects, whatever the order).
+__attribute__((always_inline)) inline bool box_body(const double (*v)[20], int count, const AABBd& b) {
+  for (int g = 0; g < count; g += 4) {
+    V4 nx, ny, nz, d, tol;
+    std::memcpy(&nx, v[0] + g, sizeof nx);
+    std::memcpy(&ny, v[1] + g, sizeof ny);
+    std::memcpy(&nz, v[2] + g, sizeof nz);
+    std::memcpy(&d, v[3] + g, sizeof d);
+    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const V4 lox = {b.lo.x, b.lo.x, b.lo.x, b.lo.x}, hix = {b.hi.x, b.hi.x, b.hi.x, b.hi.x};
+    const V4 loy = {b.lo.y, b.lo.y, b.lo.y, b.lo.y}, hiy = {b.hi.y, b.hi.y, b.hi.y, b.hi.y};
+    const V4 loz = {b.lo.z, b.lo.z, b.lo.z, b.lo.z}, hiz = {b.hi.z, b.hi.z, b.hi.z, b.hi.z};
+    const V4 qx = nx > 0.0 ? lox : hix, qy = ny > 0.0 ? loy : hiy, qz = nz > 0.0 ? loz : hiz;
+    const V4 e = ((nx * qx + ny * qy) + nz * qz) - d;
+    const M4 out = e > tol;
+    if ((out[0] | out[1] | out[2] | out[3]) != 0) return false;
+  }
+  return true;
+}
+
+// separated_by_shaft_plane's body, four planes per vector: some plane with eval() beyond
+// tol at all three vertices (the answer of the scalar loop, whatever the order).
+__attribute__((always_inline)) inline bool triangle_body(const double (*v)[20], int count, const Vec3d& a,
+                                                         const Vec3d& b, const Vec3d& c) {
+  for (int g = 0; g < count; g += 4) {
+    V4 nx, ny, nz, d, tol;
+    std::memcpy(&nx, v[0] + g, sizeof nx);
+    std::memcpy(&ny, v[1] + g, sizeof ny);
+    std::memcpy(&nz, v[2] + g, sizeof nz);
+    std::memcpy(&d, v[3] + g, sizeof d);
+    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const V4 ea = ((nx * a.x + ny * a.y) + nz * a.z) - d;
+    const V4 eb = ((nx * b.x + ny * b.y) + nz * b.z) - d;
+    const V4 ec = ((nx * c.x + ny * c.y) + nz * c.z) - d;
+    const M4 out = (ea > tol) & (eb > tol) & (ec > tol);
+    if ((out[0] | out[1] | out[2] | out[3]) != 0) return true;
+  }
+  return false;
+}
+
+bool triangle_default(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return triangle_body(v, count, a, b, c);
+}
+
+bool box_default(const double (*v)[20], int count, const AABBd& b) { return box_body(v, count, b); }
+
+bool segment_default(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b) {
+  return segment_body(v, count, a, b);
+}
+#if defined(__GNUC__) && defined(__x86_64__)
+__attribute__((target("avx2"))) bool segment_avx2(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b) {
+  return segment_body(v, count, a, b);
+}
+__attribute__((target("avx2"))) bool box_avx2(const double (*v)[20], int count, const AABBd& b) {
+  return box_body(v, count, b);
+}
+__attribute__((target("avx2"))) bool triangle_avx2(const double (*v)[20], int count, const Vec3d& a, const Vec3d& b,
+                                                   const Vec3d& c) {
+  return triangle_body(v, count, a, b, c);
+}
+// VISGATE_ISS_NO_AVX2 selects the default build, as for leaf_rays.cpp's kernels.
+bool shaft_avx2() {
+  static const bool avx2 = avx2_enabled("VISGATE_ISS_NO_AVX2");
+  return avx2;
+}
+#endif
+
+}  // namespace
+
+bool ShaftGeometry::may_intersect_segment(const Vec3d& a, const Vec3d& b) const {
+  // Cyrus-Beck clipping of the parameter interval against every plane, each plane
+  // moved outwards by its tolerance (segment_body). The hot predicate of
+  // classify_edges.
+  static_assert(kSoaSlots == 20, "segment_body's arrays");
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (shaft_avx2()) return segment_avx2(soa_.v, count_, a, b);
+#endif
+  return segment_default(soa_.v, count_, a, b);
+}
+
 bool ShaftGeometry::may_intersect_triangle(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
   return !separated_by_shaft_plane(a, b, c) && !separated_by_triangle_plane(a, b, c);
 }
 
 bool ShaftGeometry::separated_by_shaft_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
-  for (int i = 0; i < count_; ++i) {
-    const ConservativePlane& p = planes_[size_t(i)].p;
-    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
-  }
-  return false;
+  // Some plane with all three vertices beyond it (triangle_body).
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (shaft_avx2()) return triangle_avx2(soa_.v, count_, a, b, c);
+#endif
+  return triangle_default(soa_.v, count_, a, b, c);
 }
 
 bool ShaftGeometry::separated_by_triangle_plane(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
-  // Every box corner strictly on one side of the triangle's plane.
+  // Every corner of both boxes strictly on one side of the triangle's plane. Per box,
+  // the smallest and the largest plane value over its eight corners, as evaluated, are
+  // those of the two corners the signs of the normal pick: eval() is monotone in each
+  // coordinate (each rounded operation is; classify_box_plane in blockers.h makes the
+  // same argument), so these four evaluations give the answer of all sixteen.
   ConservativePlane tp = plane_through(a, b, c, scale_);
   if (tp.n == Vec3d(0, 0, 0)) return false;
-  bool all_pos = true, all_neg = true;
-  // Both boxes' corners, the receiver's first (bit i of the index: hi on axis i).
-  for (int i = 0; i < 16; ++i) {
-    const AABBd& box = i < 8 ? r_ : l_;
-    const Vec3d q(i & 1 ? box.hi.x : box.lo.x, i & 2 ? box.hi.y : box.lo.y, i & 4 ? box.hi.z : box.lo.z);
-    double e = tp.eval(q);
-    if (!(e > tp.tol)) all_pos = false;
-    if (!(e < -tp.tol)) all_neg = false;
-    if (!all_pos && !all_neg) return false;
-  }
-  return all_pos || all_neg;
+  auto corner = [&](const AABBd& box, bool high) {
+    auto pick = [&](double n, double lo, double hi) { return (n > 0) == high ? std::max(lo, hi) : std::min(lo, hi); };
+    return Vec3d(pick(tp.n.x, box.lo.x, box.hi.x), pick(tp.n.y, box.lo.y, box.hi.y), pick(tp.n.z, box.lo.z, box.hi.z));
+  };
+  if (tp.eval(corner(r_, false)) > tp.tol && tp.eval(corner(l_, false)) > tp.tol) return true;
+  return tp.eval(corner(r_, true)) < -tp.tol && tp.eval(corner(l_, true)) < -tp.tol;
 }
 
 bool ShaftGeometry::may_intersect_box(const AABBd& b) const {
-  for (int i = 0; i < count_; ++i) {
-    const ConservativePlane& p = planes_[size_t(i)].p;
-    // Box corner nearest to the plane's inside.
-    Vec3d q(p.n.x > 0 ? b.lo.x : b.hi.x, p.n.y > 0 ? b.lo.y : b.hi.y, p.n.z > 0 ? b.lo.z : b.hi.z);
-    if (p.eval(q) > p.tol) return false;
-  }
-  return true;
+  // Per plane, the box corner nearest to the plane's inside (box_body).
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (shaft_avx2()) return box_avx2(soa_.v, count_, b);
+#endif
+  return box_default(soa_.v, count_, b);
 }
 
 bool ShaftGeometry::prism_may_intersect(const AABBd& face_box, int away_sign, const Vec3d& a, const Vec3d& b,

@@ -113,6 +113,16 @@ class ShaftGeometry {
   double clip_lo_ = 0, clip_hi_ = 0;
   std::array<PlaneSlot, 18> planes_;  // 6 box planes + at most 4 oblique per projection
   int count_ = 0;
+  // The planes again as arrays of n.x, n.y, n.z, d and tol, so that
+  // may_intersect_segment evaluates four planes per vector. The slots from count_ up to
+  // the next multiple of 4 hold a plane that never separates (n = 0, d = 0, tol = +inf:
+  // every evaluation is -inf); the rest are never read and left unwritten, as planes_.
+  static constexpr int kSoaSlots = 20;
+  union SoaSlots {
+    SoaSlots() {}
+    double v[5][kSoaSlots];
+  };
+  SoaSlots soa_;
 };
 
 // Plane through three points in double with its tolerance for coordinates up to `scale`.

@@ -372,6 +372,7 @@ bool Traversal::probe_blocked(int r, int l, MainAxis ax, size_t n_tris) {
   int a = ax.axis, b = (a + 1) % 3, c = (a + 2) % 3;
   Vec3f re = R.box.extent(), le = L.box.extent();
   float thr = std::min(std::min(re[b], le[b]), std::min(re[c], le[c]));
+  probe_order(a);
   const std::vector<float>& ext = wide_extent_[a];
   // Number of triangles with cross extent >= thr (ext is descending; a full prefix
   // means more than any cap).

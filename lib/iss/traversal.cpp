@@ -52,29 +52,38 @@ Traversal::Traversal(const Scene& scene, const mesh::PreparedMesh& m, const Para
   bvh_->query_box(PointTree::bounds_of(boxes), cand);
   rtree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), p.leaf_receivers, mesh_, tri_boxes_,
                                        &cand);
-  // Probe candidates (see probe_blocked): per main axis, the triangles ordered by
-  // their smaller box extent across that axis, largest first (ties by index). The
-  // probe never takes more than max(64, triangles / 16) of them, so only that many
-  // plus one are kept: a full prefix then says "more than the cap".
-  size_t keep = std::min(m.triangles.size(), std::max<size_t>(64, m.triangles.size() / 16) + 1);
-  for (int a = 0; a < 3; ++a) {
-    std::vector<uint32_t>& w = wide_[a];
-    w.resize(m.triangles.size());
-    for (uint32_t t2 = 0; t2 < w.size(); ++t2) w[t2] = t2;
-    cross_.resize(m.triangles.size());
-    for (size_t t2 = 0; t2 < w.size(); ++t2) {
-      Vec3f e = tri_boxes_[t2].extent();
-      cross_[t2] = std::min(e[(a + 1) % 3], e[(a + 2) % 3]);
-    }
-    auto wider = [&](uint32_t x, uint32_t y) { return cross_[x] != cross_[y] ? cross_[x] > cross_[y] : x < y; };
-    std::nth_element(w.begin(), w.begin() + long(keep) - (keep > 0), w.end(), wider);
-    w.resize(keep);
-    std::sort(w.begin(), w.end(), wider);
-    wide_extent_[a].resize(w.size());
-    for (size_t k = 0; k < w.size(); ++k) wide_extent_[a][k] = cross_[w[k]];
+  // Probe candidates (see probe_blocked): per main axis, on first use (probe_order).
+  wide_truncated_ = probe_keep() < m.triangles.size();
+}
+
+// The probe never takes more than max(64, triangles / 16) candidates, so only that many
+// plus one are kept: a full prefix then says "more than the cap".
+size_t Traversal::probe_keep() const {
+  return std::min(mesh_.triangles.size(), std::max<size_t>(64, mesh_.triangles.size() / 16) + 1);
+}
+
+// The triangles ordered by their smaller box extent across `a`, largest first (ties by
+// index), the first probe_keep() of them. Built when a probe first needs the axis (the
+// root shafts of a scene usually share one main axis): three sorts of the whole mesh
+// in the constructor were half its cost on rooms.
+void Traversal::probe_order(int a) {
+  if (wide_done_[a]) return;
+  wide_done_[a] = true;
+  const size_t keep = probe_keep();
+  std::vector<uint32_t>& w = wide_[a];
+  w.resize(mesh_.triangles.size());
+  for (uint32_t t2 = 0; t2 < w.size(); ++t2) w[t2] = t2;
+  std::vector<float> cross(mesh_.triangles.size());
+  for (size_t t2 = 0; t2 < w.size(); ++t2) {
+    Vec3f e = tri_boxes_[t2].extent();
+    cross[t2] = std::min(e[(a + 1) % 3], e[(a + 2) % 3]);
   }
-  cross_ = {};
-  wide_truncated_ = keep < m.triangles.size();
+  auto wider = [&](uint32_t x, uint32_t y) { return cross[x] != cross[y] ? cross[x] > cross[y] : x < y; };
+  std::nth_element(w.begin(), w.begin() + long(keep) - (keep > 0), w.end(), wider);
+  w.resize(keep);
+  std::sort(w.begin(), w.end(), wider);
+  wide_extent_[a].resize(w.size());
+  for (size_t k = 0; k < w.size(); ++k) wide_extent_[a][k] = cross[w[k]];
 }
 
 void Traversal::run_light(size_t li) {
@@ -115,7 +124,10 @@ void Traversal::run_light(size_t li) {
   // Once the clusters are built an initial shaft at the roots walks the hierarchy
   // itself (construct_clustered_surface) and the array is not read: it is needed only
   // when the root boxes overlap (PRE-TRAVERSE narrows it down to the initial shafts).
-  std::vector<uint32_t> tris;
+  // Kept across lights (root_tris_): a fresh array per light grew by doubling into
+  // fresh heap pages every light.
+  std::vector<uint32_t>& tris = root_tris_;
+  tris.clear();
   if (!clusters_ || rn(r0).box.overlaps(ln(l0).box) || choose_main_axis(rn(r0).box, ln(l0).box).axis < 0) {
     ScopedTimer t(times_[kTriangleSurface]);
     bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);

@@ -213,6 +213,14 @@ class Traversal {
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
   const TriangleBvh& triangle_bvh() const { return *bvh_; }  // over the prepared mesh
+  const std::vector<AABB>& triangle_boxes() const { return tri_boxes_; }  // per prepared triangle
+  // The blocker probe's candidates for main axis `a` (probe_blocked): the triangles by
+  // their smaller box extent across `a`, largest first, ties by index, and those
+  // extents; only the first max(64, triangles / 16) + 1 (truncated: fewer than all).
+  void probe_order(int a);
+  const std::vector<uint32_t>& probe_triangles(int a) const { return wide_[a]; }
+  const std::vector<float>& probe_extents(int a) const { return wide_extent_[a]; }
+  bool probe_truncated() const { return wide_truncated_; }
   // Counts the live shafts and the clusters (charged when built, after this call).
   void set_memory_budget(MemoryBudget* b) { budget_ = b; ws_.bind_budget(b); }
   // Relations some rule decided (blocked shaft, empty shaft, leaf or automatic rays).
@@ -386,15 +394,17 @@ class Traversal {
     return R.is_leaf || (split_now_ && R.size() <= uint32_t(p_.split_receivers));
   }
   std::vector<uint32_t> wide_[3];
-  std::vector<float> wide_extent_[3], cross_;
+  std::vector<float> wide_extent_[3];
+  bool wide_done_[3] = {false, false, false};
   bool wide_truncated_ = false;
+  size_t probe_keep() const;
   struct PendingRays {
     std::vector<std::pair<uint32_t, uint32_t>> ranges;  // light-tree order ranges
     uint32_t samples = 0;
   };
   std::unordered_map<int, PendingRays> pending_;  // by receiver node, this light only
   std::vector<uint32_t> pending_samples_;
-  std::vector<uint32_t> probe_tris_;
+  std::vector<uint32_t> probe_tris_, root_tris_;
   std::vector<Surface> probe_out_, temp_, band_split_;
   std::vector<std::vector<Surface>> surface_lists_;
   std::vector<std::vector<AABBd>> ghost_lists_;

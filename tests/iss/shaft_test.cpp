@@ -110,6 +110,123 @@ TEST(IssShaft, ObliquePlanesEqualTheCornerLineReferenceBitForBit) {
   EXPECT_GT(oblique, 4000u);  // most pairs have oblique planes: the comparison is not empty
 }
 
+// The scalar loops may_intersect_segment, may_intersect_box and separated_by_shaft_plane
+// were before they evaluated four planes per vector, and separated_by_triangle_plane
+// before it evaluated only the two corners per box the normal picks: the references,
+// which the new versions must answer as on every input (the same plane values bit for
+// bit, answers that do not depend on the planes' order, and eval() monotone in each
+// coordinate).
+static bool reference_segment(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < g.plane_count(); ++i) {
+    const iss::ConservativePlane& p = g.plane(i);
+    const double ea = p.eval(a) - p.tol, eb = p.eval(b) - p.tol;
+    if (ea > 0 && eb > 0) return false;
+    if (ea <= 0 && eb <= 0) continue;
+    const double t = ea / (ea - eb);
+    if (ea > 0) t0 = std::max(t0, t);
+    else t1 = std::min(t1, t);
+    if (t0 > t1 + 0x1p-40) return false;
+  }
+  return true;
+}
+static bool reference_box(const iss::ShaftGeometry& g, const AABBd& b) {
+  for (int i = 0; i < g.plane_count(); ++i) {
+    const iss::ConservativePlane& p = g.plane(i);
+    const Vec3d q(p.n.x > 0 ? b.lo.x : b.hi.x, p.n.y > 0 ? b.lo.y : b.hi.y, p.n.z > 0 ? b.lo.z : b.hi.z);
+    if (p.eval(q) > p.tol) return false;
+  }
+  return true;
+}
+
+static bool reference_shaft_plane(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  for (int i = 0; i < g.plane_count(); ++i) {
+    const iss::ConservativePlane& p = g.plane(i);
+    if (p.eval(a) > p.tol && p.eval(b) > p.tol && p.eval(c) > p.tol) return true;
+  }
+  return false;
+}
+static bool reference_triangle_plane(const iss::ShaftGeometry& g, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const iss::ConservativePlane tp = iss::plane_through(a, b, c, g.scale());
+  if (tp.n == Vec3d(0, 0, 0)) return false;
+  bool all_pos = true, all_neg = true;
+  for (int i = 0; i < 16; ++i) {  // all sixteen corners of the two boxes
+    const AABBd& box = i < 8 ? g.receiver() : g.light();
+    const Vec3d q(i & 1 ? box.hi.x : box.lo.x, i & 2 ? box.hi.y : box.lo.y, i & 4 ? box.hi.z : box.lo.z);
+    const double e = tp.eval(q);
+    all_pos = all_pos && e > tp.tol;
+    all_neg = all_neg && e < -tp.tol;
+  }
+  return all_pos || all_neg;
+}
+
+TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
+  // Random shafts (also with shared coordinates, so fewer oblique planes and plane counts
+  // that are not multiples of four), segments and boxes around them: end points on the
+  // shaft's corners, on its planes (exactly, as far as double allows) and random; both
+  // answers are seen often, so the comparison covers both branches.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-0.5, 1.5);
+  size_t seg_in = 0, seg_out = 0, box_in = 0, box_out = 0, tris = 0, tri_shaft = 0, tri_own = 0;
+  for (double offset : {0.0, 1e5}) {
+    for (int it = 0; it < 400; ++it) {
+      Vec3f o(float(offset), float(-offset), float(offset));
+      AABB r = random_box(rng, o), l = random_box(rng, o);
+      if (it % 3 == 1) l.lo.x = r.lo.x;
+      if (it % 5 == 2) { l.lo.y = r.lo.y; l.hi.y = r.hi.y; }
+      iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
+      AABBd all = iss::to_double(r);
+      all.extend(iss::to_double(l));
+      auto point = [&]() {
+        Vec3d p;
+        for (int a = 0; a < 3; ++a) p[a] = all.lo[a] + (all.hi[a] - all.lo[a]) * u(rng);
+        const int kind = int(rng() % 4);
+        if (kind == 1) {  // a corner of one of the boxes
+          const AABBd& bx = rng() % 2 ? g.receiver() : g.light();
+          p = Vec3d(rng() % 2 ? bx.hi.x : bx.lo.x, rng() % 2 ? bx.hi.y : bx.lo.y, rng() % 2 ? bx.hi.z : bx.lo.z);
+        } else if (kind == 2) {  // moved onto a random plane along its normal
+          const iss::ConservativePlane& pl = g.plane(int(rng() % unsigned(g.plane_count())));
+          const double nn = dot(pl.n, pl.n);
+          if (nn > 0) p = p - pl.n * ((pl.eval(p)) / nn);
+        }
+        return p;
+      };
+      for (int k = 0; k < 60; ++k) {
+        const Vec3d a = point(), b = point();
+        const bool ref = reference_segment(g, a, b);
+        ASSERT_EQ(g.may_intersect_segment(a, b), ref);
+        (ref ? seg_in : seg_out) += 1;
+        AABBd bx;
+        bx.lo = vmin(a, b);
+        bx.hi = vmax(a, b);
+        const bool rb = reference_box(g, bx);
+        ASSERT_EQ(g.may_intersect_box(bx), rb);
+        (rb ? box_in : box_out) += 1;
+      }
+      for (int k = 0; k < 60; ++k) {  // triangles: separated by a shaft plane / by their own plane
+        Vec3d a = point(), b = point(), c = point();
+        if (k % 4 == 0) c = a + (b - a) * 0.5;  // degenerate: zero normal
+        const bool rs = reference_shaft_plane(g, a, b, c), rt = reference_triangle_plane(g, a, b, c);
+        ASSERT_EQ(g.separated_by_shaft_plane(a, b, c), rs);
+        ASSERT_EQ(g.separated_by_triangle_plane(a, b, c), rt);
+        tri_shaft += rs;
+        tri_own += rt;
+        ++tris;
+      }
+      // The empty box ISS starts its boxes from: outside, as the scalar loop says.
+      ASSERT_EQ(g.may_intersect_box(iss::empty_box()), reference_box(g, iss::empty_box()));
+    }
+  }
+  EXPECT_GT(seg_in, 5000u);
+  EXPECT_GT(seg_out, 5000u);
+  EXPECT_GT(box_in, 5000u);
+  EXPECT_GT(box_out, 2000u);
+  EXPECT_GT(tri_shaft, tris / 20);  // both answers of both triangle tests are seen
+  EXPECT_LT(tri_shaft, tris - tris / 20);
+  EXPECT_GT(tri_own, tris / 50);
+  EXPECT_LT(tri_own, tris - tris / 20);
+}
+
 TEST(IssShaft, ObliquePlanesCutTheCommonBox) {
   // Unit box at the origin, unit box at (10, 10, 0): the hull excludes (0, 10, 0.5).
   AABB r(Vec3f(0, 0, 0), Vec3f(1, 1, 1)), l(Vec3f(10, 10, 0), Vec3f(11, 11, 1));
