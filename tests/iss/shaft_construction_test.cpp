@@ -44,11 +44,9 @@ TEST(IssInitialCost, InitialShaftsCastByCostEqualBuiltOnesAndOracle) {
   for (const Scene& s : {test_support::family("scan", 1, 6000, 96, 16), test_support::family("scan", 2, 6000, 96, 16),
                          test_support::family("torus", 3, -1, 96, 16)}) {
     oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
-    std::map<std::string, std::string> o{{"clusters", "on"}, {"cost_initial", "off"}};
-    SolveResult off = test_support::run_iss(s, o);
-    o["cost_initial"] = "on";
-    o["cost_initial_factor"] = "0";
-    SolveResult on = test_support::run_iss(s, o);
+    SolveResult off = test_support::run_iss(s, {{"clusters", "on"}, {"cost_initial", "off"}});
+    SolveResult on =
+        test_support::run_iss(s, {{"clusters", "on"}, {"cost_initial", "on"}, {"cost_initial_factor", "0"}});
     size_t bad = 0, differ = 0;
     for (size_t i = 0; i < s.receivers.size(); ++i)
       for (size_t k = 0; k < ex.classes[i].size(); ++k) {
