@@ -154,6 +154,21 @@ namespace {
 typedef double V4 __attribute__((vector_size(32)));
 typedef int64_t M4 __attribute__((vector_size(32)));
 
+// Planes g..g+3 of the plane arrays (ShaftGeometry::soa_; padded to a multiple of four
+// with planes that never separate).
+struct Planes4 {
+  V4 nx, ny, nz, d, tol;
+};
+__attribute__((always_inline)) inline Planes4 load_planes(const double (*v)[20], int g) {
+  Planes4 P;
+  std::memcpy(&P.nx, v[0] + g, sizeof P.nx);
+  std::memcpy(&P.ny, v[1] + g, sizeof P.ny);
+  std::memcpy(&P.nz, v[2] + g, sizeof P.nz);
+  std::memcpy(&P.d, v[3] + g, sizeof P.d);
+  std::memcpy(&P.tol, v[4] + g, sizeof P.tol);
+  return P;
+}
+
 // may_intersect_segment's body over the plane arrays (ShaftGeometry::soa_), four planes
 // per vector: plane values of both end points, each n.p - d - tol in the operation
 // order of eval() (n.x a.x + n.y a.y, + n.z a.z, - d, - tol), so the same bits as the
@@ -167,12 +182,8 @@ __attribute__((always_inline)) inline bool segment_body(const double (*v)[20], i
   alignas(32) double ea_all[20], eb_all[20];
   const double ax = a.x, ay = a.y, az = a.z, bx = b.x, by = b.y, bz = b.z;
   for (int g = 0; g < count; g += 4) {
-    V4 nx, ny, nz, d, tol;
-    std::memcpy(&nx, v[0] + g, sizeof nx);
-    std::memcpy(&ny, v[1] + g, sizeof ny);
-    std::memcpy(&nz, v[2] + g, sizeof nz);
-    std::memcpy(&d, v[3] + g, sizeof d);
-    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const Planes4 P = load_planes(v, g);
+    const V4 &nx = P.nx, &ny = P.ny, &nz = P.nz, &d = P.d, &tol = P.tol;
     const V4 ea = (((nx * ax + ny * ay) + nz * az) - d) - tol;
     const V4 eb = (((nx * bx + ny * by) + nz * bz) - d) - tol;
     const M4 out = (ea > 0.0) & (eb > 0.0);
@@ -199,12 +210,8 @@ __attribute__((always_inline)) inline bool segment_body(const double (*v)[20], i
 // answer is whether any plane rejects, whatever the order).
 __attribute__((always_inline)) inline bool box_body(const double (*v)[20], int count, const AABBd& b) {
   for (int g = 0; g < count; g += 4) {
-    V4 nx, ny, nz, d, tol;
-    std::memcpy(&nx, v[0] + g, sizeof nx);
-    std::memcpy(&ny, v[1] + g, sizeof ny);
-    std::memcpy(&nz, v[2] + g, sizeof nz);
-    std::memcpy(&d, v[3] + g, sizeof d);
-    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const Planes4 P = load_planes(v, g);
+    const V4 &nx = P.nx, &ny = P.ny, &nz = P.nz, &d = P.d, &tol = P.tol;
     const V4 lox = {b.lo.x, b.lo.x, b.lo.x, b.lo.x}, hix = {b.hi.x, b.hi.x, b.hi.x, b.hi.x};
     const V4 loy = {b.lo.y, b.lo.y, b.lo.y, b.lo.y}, hiy = {b.hi.y, b.hi.y, b.hi.y, b.hi.y};
     const V4 loz = {b.lo.z, b.lo.z, b.lo.z, b.lo.z}, hiz = {b.hi.z, b.hi.z, b.hi.z, b.hi.z};
@@ -221,12 +228,8 @@ __attribute__((always_inline)) inline bool box_body(const double (*v)[20], int c
 __attribute__((always_inline)) inline bool triangle_body(const double (*v)[20], int count, const Vec3d& a,
                                                          const Vec3d& b, const Vec3d& c) {
   for (int g = 0; g < count; g += 4) {
-    V4 nx, ny, nz, d, tol;
-    std::memcpy(&nx, v[0] + g, sizeof nx);
-    std::memcpy(&ny, v[1] + g, sizeof ny);
-    std::memcpy(&nz, v[2] + g, sizeof nz);
-    std::memcpy(&d, v[3] + g, sizeof d);
-    std::memcpy(&tol, v[4] + g, sizeof tol);
+    const Planes4 P = load_planes(v, g);
+    const V4 &nx = P.nx, &ny = P.ny, &nz = P.nz, &d = P.d, &tol = P.tol;
     const V4 ea = ((nx * a.x + ny * a.y) + nz * a.z) - d;
     const V4 eb = ((nx * b.x + ny * b.y) + nz * b.z) - d;
     const V4 ec = ((nx * c.x + ny * c.y) + nz * c.z) - d;

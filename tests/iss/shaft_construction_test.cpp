@@ -47,17 +47,9 @@ TEST(IssInitialCost, InitialShaftsCastByCostEqualBuiltOnesAndOracle) {
     SolveResult off = test_support::run_iss(s, {{"clusters", "on"}, {"cost_initial", "off"}});
     SolveResult on =
         test_support::run_iss(s, {{"clusters", "on"}, {"cost_initial", "on"}, {"cost_initial_factor", "0"}});
-    size_t bad = 0, differ = 0;
-    for (size_t i = 0; i < s.receivers.size(); ++i)
-      for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-        char cls = ex.classes[i][k];
-        if (cls == 'd') continue;  // touching: either answer is exact (DESIGN)
-        differ += on.receivers[i].visible(k) != off.receivers[i].visible(k);
-        if (ex.margins[i][k] < tau) continue;
-        bad += on.receivers[i].visible(k) != (cls == 'v');
-      }
-    EXPECT_EQ(differ, 0u) << s.name;
-    EXPECT_EQ(bad, 0u) << s.name;
+    const test_support::OracleTally t = test_support::tally_against_oracle(s, ex, tau, {&on, &off});
+    EXPECT_EQ(t.differ_any, 0u) << s.name;
+    EXPECT_EQ(t.wrong, 0u) << s.name;
     EXPECT_EQ(off.stats.get("cost_ray_initial_shafts"), 0.0) << s.name;
     if (s.lights.size() > 1) {
       EXPECT_GT(on.stats.get("cost_ray_initial_shafts"), 0.0) << s.name;

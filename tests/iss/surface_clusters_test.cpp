@@ -187,21 +187,13 @@ TEST(IssClusters, ClusteredSolveEqualsPerTriangleSolveAndOracle) {
       SolveResult on = run_iss(s, o);
       o["clusters"] = "off";
       SolveResult off = run_iss(s, o);
-      size_t bad = 0, differ = 0;
-      for (size_t i = 0; i < s.receivers.size(); ++i)
-        for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-          char cls = ex.classes[i][k];
-          if (cls == 'd') continue;  // touching: either answer is exact (DESIGN)
-          differ += on.receivers[i].visible(k) != off.receivers[i].visible(k);
-          if (ex.margins[i][k] < tau) continue;
-          bad += on.receivers[i].visible(k) != (cls == 'v');
-        }
-      EXPECT_EQ(differ, 0u) << s.name << " " << describe(o);
+      const OracleTally t = tally_against_oracle(s, ex, tau, {&on, &off});
+      EXPECT_EQ(t.differ_any, 0u) << s.name << " " << describe(o);
       EXPECT_EQ(off.stats.get("cluster_patches"), 0.0);
       if (s.name.rfind("scan", 0) == 0 || s.name.empty()) {
         EXPECT_GT(on.stats.get("cluster_patches"), 0.0) << s.name;
       }
-      EXPECT_EQ(bad, 0u) << s.name << " " << describe(o);
+      EXPECT_EQ(t.wrong, 0u) << s.name << " " << describe(o);
     }
   }
 }
@@ -264,17 +256,9 @@ TEST(IssClusters, ExactNodeFacingsEqualConeOnlyAndOracle) {
       for (const char* k : {"64", "1000000"}) {
         o["cluster_exact"] = k;
         SolveResult exact = run_iss(s, o);
-        size_t bad = 0, differ = 0;
-        for (size_t i = 0; i < s.receivers.size(); ++i)
-          for (size_t j = 0; j < ex.classes[i].size(); ++j) {
-            char cls = ex.classes[i][j];
-            if (cls == 'd') continue;  // touching: either answer is exact (DESIGN)
-            differ += exact.receivers[i].visible(j) != cone.receivers[i].visible(j);
-            if (ex.margins[i][j] < tau) continue;
-            bad += exact.receivers[i].visible(j) != (cls == 'v');
-          }
-        EXPECT_EQ(differ, 0u) << s.name << " lazy_band=" << band << " cluster_exact=" << k;
-        EXPECT_EQ(bad, 0u) << s.name << " lazy_band=" << band << " cluster_exact=" << k;
+        const OracleTally t = tally_against_oracle(s, ex, tau, {&exact, &cone});
+        EXPECT_EQ(t.differ_any, 0u) << s.name << " lazy_band=" << band << " cluster_exact=" << k;
+        EXPECT_EQ(t.wrong, 0u) << s.name << " lazy_band=" << band << " cluster_exact=" << k;
         if (s.name.rfind("scan", 0) == 0) {
           // Fewer, larger nodes taken whole than with the cone alone.
           EXPECT_LT(exact.stats.get("cluster_patches"), cone.stats.get("cluster_patches")) << s.name << " " << k;

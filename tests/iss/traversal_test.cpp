@@ -15,28 +15,6 @@ using namespace visgate::test_support;
 
 namespace {
 
-// Against the exact relation oracle: the relations it decides with margin at least tau
-// (`checked`), how many answers of `rs` are wrong there (`wrong`), and how many of those
-// relations the first two of `rs` answer differently (`differ`).
-struct OracleTally {
-  size_t checked = 0, wrong = 0, differ = 0;
-};
-OracleTally tally_against_oracle(const Scene& s, const oracle::RelationOracleResult& ex, double tau,
-                                 std::initializer_list<const SolveResult*> rs) {
-  OracleTally t;
-  const SolveResult* first = *rs.begin();
-  const SolveResult* second = rs.size() > 1 ? *(rs.begin() + 1) : first;
-  for (size_t i = 0; i < s.receivers.size(); ++i)
-    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-      const char cls = ex.classes[i][k];
-      if (cls == 'd' || ex.margins[i][k] < tau) continue;
-      ++t.checked;
-      for (const SolveResult* r : rs) t.wrong += r->receivers[i].visible(k) != (cls == 'v');
-      t.differ += first->receivers[i].visible(k) != second->receivers[i].visible(k);
-    }
-  return t;
-}
-
 // Every relation is answered exactly once: by a ray, a blocked shaft or an empty shaft.
 double relations_answered(const SolveResult& r) {
   return r.stats.get("relations_ray_cast") + r.stats.get("relations_blocked_by_shaft") +

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <random>
 #include <string>
@@ -14,6 +15,7 @@
 #include "lib/iss/blockers.h"
 #include "lib/iss/iss_solver.h"
 #include "lib/solver.h"
+#include "oracle/relation_oracle.h"
 #include "tests/support/scenes.h"
 
 namespace visgate::test_support {
@@ -39,6 +41,32 @@ inline SolveResult run_iss(const Scene& s, const std::map<std::string, std::stri
   so.threads = 1;
   EXPECT_TRUE(solver.check_options(so).ok());
   return solver.solve(s, so);
+}
+
+// Against the exact relation oracle: the relations it decides with margin at least tau
+// (`checked`), how many answers of `rs` are wrong there (`wrong`), how many of those
+// relations the first two of `rs` answer differently (`differ`), and how many relations
+// not touching (any margin) they answer differently (`differ_any`).
+struct OracleTally {
+  size_t checked = 0, wrong = 0, differ = 0, differ_any = 0;
+};
+inline OracleTally tally_against_oracle(const Scene& s, const oracle::RelationOracleResult& ex, double tau,
+                                        std::initializer_list<const SolveResult*> rs) {
+  OracleTally t;
+  const SolveResult* first = *rs.begin();
+  const SolveResult* second = rs.size() > 1 ? *(rs.begin() + 1) : first;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      const char cls = ex.classes[i][k];
+      if (cls == 'd') continue;  // touching: either answer is exact (DESIGN)
+      const bool differ = first->receivers[i].visible(k) != second->receivers[i].visible(k);
+      t.differ_any += differ;
+      if (ex.margins[i][k] < tau) continue;
+      ++t.checked;
+      for (const SolveResult* r : rs) t.wrong += r->receivers[i].visible(k) != (cls == 'v');
+      t.differ += differ;
+    }
+  return t;
 }
 
 inline std::string describe(const std::map<std::string, std::string>& o) {
