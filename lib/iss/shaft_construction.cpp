@@ -403,16 +403,19 @@ bool Traversal::probe_blocked(int r, int l, MainAxis ax, size_t n_tris) {
   return blocked;
 }
 
+void Traversal::maybe_build_clusters(size_t n_tris) {
+  if (!p_.clusters || clusters_ || n_tris < cluster_threshold()) return;
+  ScopedTimer t(times_[kTree]);
+  clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_);
+  clusters_charge_.bind(budget_, "surface clusters");
+  clusters_charge_.set(clusters_->memory_bytes());
+}
+
 // CONSTRUCT-INITIAL-SHAFT (Figure 4.31).
 Shaft Traversal::construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris) {
   Shaft sh{r, l, geometry(r, l, ax), {}, {}, 0, {}};  // in place, as in construct_sub_shaft
   init_shaft(sh);
-  if (p_.clusters && !clusters_ && tris.size() >= p_.cluster_min_triangles && 8 * tris.size() >= mesh_.triangles.size()) {
-    ScopedTimer t(times_[kTree]);
-    clusters_ = std::make_unique<SurfaceClusters>(mesh_, *bvh_);
-    clusters_charge_.bind(budget_, "surface clusters");
-    clusters_charge_.set(clusters_->memory_bytes());
-  }
+  maybe_build_clusters(tris.size());
   Surface s;
   {
     ScopedTimer t(times_[kTriangleSurface]);

@@ -126,9 +126,18 @@ void Traversal::run_light(size_t li) {
   // when the root boxes overlap (PRE-TRAVERSE narrows it down to the initial shafts).
   // Kept across lights (root_tris_): a fresh array per light grew by doubling into
   // fresh heap pages every light.
+  // Before any initial shaft is built (so the cost rule cannot cast this one), an
+  // initial shaft at the roots decides the clusters by the array's size alone
+  // (construct_initial_shaft's rule): counted, not collected and sorted.
   std::vector<uint32_t>& tris = root_tris_;
   tris.clear();
-  if (!clusters_ || rn(r0).box.overlaps(ln(l0).box) || choose_main_axis(rn(r0).box, ln(l0).box).axis < 0) {
+  const bool at_roots = !rn(r0).box.overlaps(ln(l0).box) && choose_main_axis(rn(r0).box, ln(l0).box).axis >= 0;
+  if (at_roots && p_.clusters && !clusters_ && initial_bucket_.subdivided == 0) {
+    ScopedTimer t(times_[kTriangleSurface]);
+    const size_t need = cluster_threshold();
+    maybe_build_clusters(bvh_->count_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), need));
+  }
+  if (!clusters_ || !at_roots) {
     ScopedTimer t(times_[kTriangleSurface]);
     bvh_->query_shaft(ShaftGeometry(rn(r0).box, ln(l0).box, MainAxis{}, scale_), tris);
   }

@@ -10,6 +10,7 @@
 // Internal to lib/iss.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -295,6 +296,12 @@ class Traversal {
   // true when the relations of r x l were cast instead of building its initial shaft.
   bool initial_shaft_by_rays(int r, int l);
   Shaft construct_initial_shaft(int r, int l, MainAxis ax, const std::vector<uint32_t>& tris);
+  // Builds the clusters (Params::clusters) when an initial shaft over `n_tris` triangles,
+  // at least cluster_threshold(), is the first to want them.
+  void maybe_build_clusters(size_t n_tris);
+  size_t cluster_threshold() const {
+    return std::max(p_.cluster_min_triangles, (mesh_.triangles.size() + 7) / 8);
+  }
 
   // ---- section 4.12: empty shafts (empty_shaft.cpp) --------------------------------------
   void record_visible(int r, int l);

@@ -27,6 +27,13 @@ void TriangleBvh::query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out
   collect([&](const AABB& b) { return g.may_intersect_box(to_double(b)); }, false, out);
 }
 
+size_t TriangleBvh::count_shaft(const ShaftGeometry& g, size_t limit) const {
+  size_t n = 0;
+  bvh_.for_each_leaf([&](const AABB& b) { return n < limit && g.may_intersect_box(to_double(b)); },
+                     [&](const accel::Bvh<float>::Node& leaf) { n += bvh_.leaf_items(leaf).size(); });
+  return n;
+}
+
 void TriangleBvh::query_shafts(const std::vector<ShaftGeometry>& gs, std::vector<uint32_t>& out) const {
   size_t last = 0;  // the shaft that admitted the previous node first: neighbours agree
   collect(

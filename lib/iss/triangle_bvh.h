@@ -39,6 +39,9 @@ class TriangleBvh {
   void query_box(const AABB& box, std::vector<uint32_t>& out) const;
   // Triangles whose box may intersect the shaft `g` (and others of the same leaves).
   void query_shaft(const ShaftGeometry& g, std::vector<uint32_t>& out) const;
+  // The size query_shaft's `out` would have when it is below `limit`, else some count
+  // of at least `limit` (the walk stops there), without collecting or sorting.
+  size_t count_shaft(const ShaftGeometry& g, size_t limit) const;
   // Triangles whose box may intersect one of the shafts: one walk for all, a node
   // entered and a triangle taken when some shaft may meet its box. Each triangle is
   // tested: a leaf's other triangles may be large (a floor slab), and every one in the
