@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <random>
+#include <utility>
 
 #include "lib/geom/haines_shaft.h"
 #include "lib/iss/shaft.h"
@@ -10,6 +11,22 @@
 
 using namespace visgate;
 using namespace visgate::test_support;
+
+namespace {
+
+// Two random boxes near `offset` (iteration `it` of a loop): some share coordinates with
+// the other (equal corners give axis-aligned lines and duplicate candidates), and with
+// `equal_too` every 7th pair is one box twice.
+std::pair<AABB, AABB> shaft_boxes(std::mt19937& rng, double offset, int it, bool equal_too) {
+  Vec3f o(float(offset), float(-offset), float(offset));
+  AABB r = random_box(rng, o), l = random_box(rng, o);
+  if (it % 3 == 1) l.lo.x = r.lo.x;
+  if (it % 5 == 2) { l.lo.y = r.lo.y; l.hi.y = r.hi.y; }
+  if (equal_too && it % 7 == 3) l = r;
+  return {r, l};
+}
+
+}  // namespace
 
 // ---- shaft geometry (section 4.4.1) ----------------------------------------------------
 
@@ -89,11 +106,7 @@ TEST(IssShaft, ObliquePlanesEqualTheCornerLineReferenceBitForBit) {
   size_t oblique = 0;
   for (double offset : {0.0, 1e5}) {
     for (int it = 0; it < 2000; ++it) {
-      Vec3f o(float(offset), float(-offset), float(offset));
-      AABB r = random_box(rng, o), l = random_box(rng, o);
-      if (it % 3 == 1) l.lo.x = r.lo.x;
-      if (it % 5 == 2) { l.lo.y = r.lo.y; l.hi.y = r.hi.y; }
-      if (it % 7 == 3) l = r;
+      auto [r, l] = shaft_boxes(rng, offset, it, true);
       const double scale = 2e5;
       iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), scale);
       std::vector<iss::ConservativePlane> ref = reference_oblique_planes(r, l, scale);
@@ -170,10 +183,7 @@ TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
   size_t seg_in = 0, seg_out = 0, box_in = 0, box_out = 0, tris = 0, tri_shaft = 0, tri_own = 0;
   for (double offset : {0.0, 1e5}) {
     for (int it = 0; it < 400; ++it) {
-      Vec3f o(float(offset), float(-offset), float(offset));
-      AABB r = random_box(rng, o), l = random_box(rng, o);
-      if (it % 3 == 1) l.lo.x = r.lo.x;
-      if (it % 5 == 2) { l.lo.y = r.lo.y; l.hi.y = r.hi.y; }
+      auto [r, l] = shaft_boxes(rng, offset, it, false);
       iss::ShaftGeometry g(r, l, iss::choose_main_axis(r, l), 2e5);
       AABBd all = iss::to_double(r);
       all.extend(iss::to_double(l));

@@ -18,6 +18,7 @@ namespace {
 
 using test_support::family_scene;
 using test_support::light_scene;
+using test_support::receiver_square;
 using test_support::expect_region_oracle;
 using test_support::expect_same_answers;
 using test_support::run;
@@ -63,9 +64,7 @@ TEST(PluckerClosedSurfaces, ScanAnswersMatchEveryTriangleAndTheOracle) {
 // shines through, a tilted torus, and two interpenetrating boxes (each closed; their union
 // is not convex). Receivers on a grid below, with the default groups.
 TEST(PluckerClosedSurfaces, ConcaveClosedMeshesMatchEveryTriangleAndTheOracle) {
-  std::vector<Vec3f> rec;
-  for (int a = 0; a < 8; ++a)
-    for (int b = 0; b < 8; ++b) rec.push_back(Vec3f(-1.4f + 0.4f * float(a), -1.4f + 0.4f * float(b), 0.0f));
+  std::vector<Vec3f> rec = receiver_square(8, -1.4f, 0.4f);
   for (int variant = 0; variant < 3; ++variant) {
     Scene s = light_scene(rec, 32, Vec3d(0.1, -0.05, 2.5));
     if (variant == 0) shapes::add_torus(s.mesh, Vec3d(0, 0, 1.2), 0.6, 0.2, 24, 12);

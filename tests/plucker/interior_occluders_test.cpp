@@ -20,6 +20,7 @@ namespace {
 
 using test_support::family_scene;
 using test_support::light_scene;
+using test_support::receiver_square;
 using test_support::expect_region_oracle;
 using test_support::expect_same_answers;
 using test_support::run;
@@ -126,9 +127,7 @@ TEST(PluckerInteriorOccluders, ScanPolygonsArePlanarConvexAndInside) {
 // pinched at the centre, so rays from it reach little of the two lobes. The polygons pass the independent
 // checks, and the solves match the previous path (no interior occluder) and the oracle.
 TEST(PluckerInteriorOccluders, FurtherPolygonsCoverNonConvexSolids) {
-  std::vector<Vec3f> rec;
-  for (int a = 0; a < 6; ++a)
-    for (int b = 0; b < 6; ++b) rec.push_back(Vec3f(-1.3f + 0.5f * float(a), -1.3f + 0.5f * float(b), 0.0f));
+  std::vector<Vec3f> rec = receiver_square(6, -1.3f, 0.5f);
   for (int variant = 0; variant < 2; ++variant) {
     Scene s = light_scene(rec, 32, Vec3d(0.1, -0.05, 3.0));
     if (variant == 0) shapes::add_torus(s.mesh, Vec3d(0, 0, 1.2), 0.6, 0.2, 48, 24);
@@ -187,9 +186,7 @@ TEST(PluckerInteriorOccluders, ScanAnswersMatchThePreviousPathAndTheOracle) {
 // the hole: no first polygon there, further ones on the ring), two interpenetrating spheres (each closed, their union
 // not convex), and an open sphere (no closed surface, nothing added).
 TEST(PluckerInteriorOccluders, ConcaveInterpenetratingAndOpenMeshesMatchThePreviousPathAndTheOracle) {
-  std::vector<Vec3f> rec;
-  for (int a = 0; a < 8; ++a)
-    for (int b = 0; b < 8; ++b) rec.push_back(Vec3f(-1.4f + 0.4f * float(a), -1.4f + 0.4f * float(b), 0.0f));
+  std::vector<Vec3f> rec = receiver_square(8, -1.4f, 0.4f);
   rec.push_back(Vec3f(0.05f, 0.02f, 0.499f));
   for (int variant = 0; variant < 4; ++variant) {
     Scene s = light_scene(rec, 32, Vec3d(0.1, -0.05, 3.0));
@@ -245,9 +242,7 @@ TEST(PluckerInteriorOccluders, DefaultTileFollowsTheInteriorPolygons) {
       }
     }
 
-  std::vector<Vec3f> rec;
-  for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b) rec.push_back(Vec3f(-1.3f + 0.8f * float(a), -1.3f + 0.8f * float(b), 0.0f));
+  std::vector<Vec3f> rec = receiver_square(4, -1.3f, 0.8f);
   Scene torus = light_scene(rec, 8, Vec3d(0.1, -0.05, 3.0));
   shapes::add_torus(torus.mesh, Vec3d(0, 0, 1.2), 0.6, 0.2, 48, 24);
   ASSERT_TRUE(finish_scene(torus).ok());

@@ -19,6 +19,14 @@
 namespace visgate::test_support {
 
 // Square light [-1,1]^2 (centre c) at height c.z emitting down, one receiver per point.
+// An n x n grid of receivers on the plane z = 0, from (start, start) in steps of `step`.
+inline std::vector<Vec3f> receiver_square(int n, float start, float step) {
+  std::vector<Vec3f> rec;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) rec.push_back(Vec3f(start + step * float(a), start + step * float(b), 0.0f));
+  return rec;
+}
+
 inline Scene light_scene(const std::vector<Vec3f>& receivers, int samples = 64, Vec3d c = Vec3d(0, 0, 2)) {
   Scene s;
   s.name = "hand";
