@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <stdexcept>
+#include <utility>
 
 #include "lib/base/check.h"
 
@@ -58,6 +60,7 @@ void LazyBsp::reset() {
   // occluders associated to a single undefined leaf").
   lists_.resize(occ_.size());
   for (size_t k = 0; k < occ_.size(); ++k) lists_[k] = uint32_t(k);
+  dead_ = 0;
   nodes_.resize(1);
   nodes_[0] = Node{};
   nodes_[0].occ_begin = 0;
@@ -77,6 +80,7 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
   // Copy the leaf's list: the lists arena grows below.
   const Node& lf = nodes_[size_t(leaf)];
   list_scratch_.assign(lists_.begin() + lf.occ_begin, lists_.begin() + lf.occ_begin + lf.occ_count);
+  dead_ += lf.occ_count;
   // Line 31: the chosen occluder, or a random one, seeded (reproducible).
   uint32_t ro = forced >= 0 ? uint32_t(forced) : list_scratch_[size_t(rng_.below(list_scratch_.size()))];
   const Occluder& o = occ_[ro];
@@ -156,6 +160,9 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
       if (s != Orientation::Positive) walk[top++] = nd.right;
     }
   }
+  size_t add = 0;
+  for (int32_t id : new_leaves_) add += leaf_lists_[nodes_[size_t(id)].occ_begin].size();
+  grow_lists(add);
   for (int32_t id : new_leaves_) {
     Node& vis = nodes_[size_t(id)];
     const std::vector<uint32_t>& l = leaf_lists_[vis.occ_begin];
@@ -164,6 +171,36 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
     lists_.insert(lists_.end(), l.begin(), l.end());
   }
   budget_charge_.set(memory_bytes());
+}
+
+void LazyBsp::grow_lists(size_t add) {
+  if (lists_.size() + add <= lists_.capacity()) return;
+  if (2 * dead_ >= lists_.size()) {
+    // Compaction: the live leaves' lists moved down in arena order, each list's content
+    // and order unchanged (so every later choice, and answer, is the same). The new
+    // leaves of the development under way still hold scratch indices and no count.
+    std::vector<std::pair<uint32_t, int32_t>> live;
+    for (size_t i = 0; i < nodes_.size(); ++i)
+      if (nodes_[i].kind == kLeaf && nodes_[i].occ_count > 0) live.emplace_back(nodes_[i].occ_begin, int32_t(i));
+    std::sort(live.begin(), live.end());
+    size_t w = 0;
+    for (const auto& [begin, id] : live) {
+      Node& nd = nodes_[size_t(id)];
+      std::copy(lists_.begin() + begin, lists_.begin() + begin + nd.occ_count, lists_.begin() + ptrdiff_t(w));
+      nd.occ_begin = uint32_t(w);
+      w += nd.occ_count;
+    }
+    lists_.resize(w);
+    dead_ = 0;
+    ++counters_.list_compactions;
+    if (lists_.size() + add <= lists_.capacity()) return;
+  }
+  // Leaves index the arena with 32 bits.
+  if (lists_.size() + add > size_t(UINT32_MAX))
+    throw std::length_error("plucker-bsp: a BSP's live occluder lists passed 2^32 entries");
+  const size_t cap = std::max(2 * lists_.capacity(), lists_.size() + add);
+  budget_charge_.set(memory_bytes() + (cap - lists_.capacity()) * sizeof(uint32_t));
+  lists_.reserve(cap);
 }
 
 void LazyBsp::begin_query(const Vec3d& r) {

@@ -117,6 +117,7 @@ struct BspCounters {
   uint64_t lazy_visible = 0;     // Choice::Relevant: fragments returned visible from an undefined leaf
   uint64_t merged = 0;           // splits undone in a query: every piece came out visible
   uint64_t visits = 0;           // inner nodes a query fragment was classified against (lines 17-27)
+  uint64_t list_compactions = 0; // the leaves' list arena compacted (grow_lists)
 };
 
 class LazyBsp {
@@ -280,7 +281,14 @@ class LazyBsp {
   EdgeFan light_fans_[kMaxOccluderVertices];
   EdgeFan region_fans_[kMaxOccluderVertices];
   std::vector<Node> nodes_;
-  std::vector<uint32_t> lists_;  // occluder lists of leaves, back to back
+  // Occluder lists of leaves, back to back. A developed leaf's list is dead space
+  // (`dead_` entries) until grow_lists compacts the arena.
+  std::vector<uint32_t> lists_;
+  size_t dead_ = 0;
+  // Makes room for `add` more entries in lists_: compacts it when at least half is dead
+  // and it would otherwise reallocate, and charges a reallocation to the budget before
+  // it allocates (so a tree stops at the budget, not one doubling past it).
+  void grow_lists(size_t add);
   Rng rng_;
   BspCounters counters_;
 

@@ -49,6 +49,7 @@ void Totals::merge(const Totals& o) {
   bsp.insert_tests += o.bsp.insert_tests; bsp.splits += o.bsp.splits;
   bsp.occlusion_tests += o.bsp.occlusion_tests; bsp.lazy_visible += o.bsp.lazy_visible;
   bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area; bsp.merged += o.bsp.merged; bsp.visits += o.bsp.visits;
+  bsp.list_compactions += o.bsp.list_compactions;
 }
 
 void GroupState::clear() {
@@ -131,6 +132,7 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   tot.bsp.lazy_visible += c.lazy_visible;
   tot.bsp.merged += c.merged;
   tot.bsp.visits += c.visits;
+  tot.bsp.list_compactions += c.list_compactions;
   tot.bsp.splits += c.splits + near_counters.splits;
   tot.near_splits += near_counters.splits;
   tot.bsp.on_line += c.on_line + near_counters.on_line;
@@ -307,6 +309,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("merged_splits", double(totals.bsp.merged));
   st.set("splits", double(totals.bsp.splits));
   st.set("node_visits", double(totals.bsp.visits));
+  st.set("bsp_list_compactions", double(totals.bsp.list_compactions));
   st.set("degenerate_on_line", double(totals.bsp.on_line));
   st.set("degenerate_zero_area", double(totals.bsp.zero_area));
   st.set("fallback_receivers", double(totals.fallback));

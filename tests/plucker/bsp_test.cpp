@@ -262,6 +262,50 @@ TEST(PluckerBsp, ARebuiltTreeAnswersAsAFreshOne) {
   }
 }
 
+TEST(PluckerBsp, CompactedListArenaAnswersAsTheOccluders) {
+  // The leaves' occluder lists share one arena that grow_lists compacts when half of it is
+  // dead (bsp.h). After many developments and compactions every query still answers as
+  // the occluders do: a light point lies in a returned fragment iff the segment from r to
+  // it misses every occluder (double orientations; points within 1e-9 of deciding, i.e.
+  // near a shadow edge, skipped).
+  Rng rng(33);
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  const std::vector<Occluder> occ = random_occluders(rng, 60);
+  LazyBsp tree(light, 4, occ, 7);
+  tree.set_choice(LazyBsp::Choice::Random);  // develops far more leaves than needed
+  auto det = [](const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) {
+    const Vec3d u = b - a, v = c - a, w = d - a;
+    return u.x * (v.y * w.z - v.z * w.y) - u.y * (v.x * w.z - v.z * w.x) + u.z * (v.x * w.y - v.y * w.x);
+  };
+  const UVAxes axes = UVAxes::from_normal(Vec3f(0, 0, -1));  // the light square runs clockwise about +z
+  FragmentList out;
+  // Queries until the arena has been compacted twice, then 40 checked ones.
+  for (int q = 0; q < 500 && tree.counters().list_compactions < 2; ++q)
+    tree.query(Vec3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0), out);
+  ASSERT_GE(tree.counters().list_compactions, 2u);
+  int checked = 0;
+  for (int q = 0; q < 40; ++q) {
+    const Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
+    tree.query(r, out);
+    for (int k = 0; k < 64; ++k) {
+      const Vec3d p(rng.uniform(-1, 1), rng.uniform(-1, 1), 2);
+      bool blocked = false, near = false;
+      for (const Occluder& o : occ) {
+        const double s[5] = {det(o.v[0], o.v[1], o.v[2], r), det(o.v[0], o.v[1], o.v[2], p), det(r, p, o.v[0], o.v[1]),
+                             det(r, p, o.v[1], o.v[2]), det(r, p, o.v[2], o.v[0])};
+        for (double x : s) near |= std::abs(x) < 1e-9;
+        blocked |= (s[0] > 0) != (s[1] > 0) && (s[2] > 0) == (s[3] > 0) && (s[3] > 0) == (s[4] > 0);
+      }
+      if (near) continue;
+      bool inside = false;
+      for (size_t f = 0; f < out.size() && !inside; ++f) inside = point_in_fragment(axes, out.data(f), out.count(f), p);
+      EXPECT_EQ(inside, !blocked) << "query " << q << " point " << k;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 2000);
+}
+
 TEST(PluckerBsp, HidesAllWhenOneOccluderCoversTheLight) {
   Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Occluder big, small;
