@@ -306,6 +306,30 @@ TEST(PluckerBsp, CompactedListArenaAnswersAsTheOccluders) {
   EXPECT_GT(checked, 2000);
 }
 
+TEST(PluckerBsp, ListArenaStopsAtTheBudgetBeforeGrowingPastIt) {
+  // A tree bound to a 4 MB budget and developed until it throws holds at most the budget
+  // afterwards: the arena's growth is charged before it is allocated (grow_lists), so the
+  // throw comes instead of the doubling, not after it.
+  Rng rng(34);
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  const std::vector<Occluder> occ = random_occluders(rng, 300);
+  MemoryBudget budget("plucker-bsp", 4);
+  LazyBsp tree(light, 4, occ, 7);
+  tree.set_choice(LazyBsp::Choice::Random);
+  tree.set_memory_budget(&budget);
+  FragmentList out;
+  bool stopped = false;
+  for (int q = 0; q < 2000 && !stopped; ++q) {
+    try {
+      tree.query(Vec3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0), out);
+    } catch (const MemoryBudgetExceeded&) {
+      stopped = true;
+    }
+  }
+  ASSERT_TRUE(stopped);
+  EXPECT_LE(tree.memory_bytes(), size_t(4) << 20);
+}
+
 TEST(PluckerBsp, HidesAllWhenOneOccluderCoversTheLight) {
   Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
   Occluder big, small;
