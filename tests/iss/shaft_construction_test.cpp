@@ -61,17 +61,17 @@ TEST(IssInitialCost, InitialShaftsCastByCostEqualBuiltOnesAndOracle) {
 TEST(IssDenseRays, DenseLightsCastEqualShaftsAndOracle) {
   // dense_rays (iss_solver.cpp): a light of a dense mesh with fewer than
   // dense_ray_relations relations per triangle of its root shaft casts every relation
-  // and builds no shaft. Scan 12k at 64 receivers x 8 samples: every light is so (512
-  // relations against about 12k triangles), and the solve builds no mesh preparation,
-  // hierarchy or tree. With a copy of light 0 at 512 samples (32k relations, 2.7 per
-  // triangle) that light keeps its shafts and the others are cast. The answers must be
+  // and builds no shaft. Scan 20k at 64 receivers x 8 samples: every light is so (512
+  // relations against about 20k triangles), and the solve builds no mesh preparation,
+  // hierarchy or tree. With a copy of light 0 at 1024 samples (65k relations, about 3
+  // per triangle) that light keeps its shafts and the others are cast. The answers must be
   // dense_rays=off's bits on every relation the oracle does not class as touching, and
   // the oracle's away from degeneracy.
   const double tau = 1e-5;
-  const Scene all = test_support::family("scan", 1, 12000, 64, 8);
+  const Scene all = test_support::family("scan", 1, 20000, 64, 8);
   Scene mixed = all;
   Light extra = all.lights[0];
-  extra.samples = 512;
+  extra.samples = 1024;
   mixed.lights.push_back(extra);
   ASSERT_TRUE(finish_scene(mixed).ok());
   ASSERT_GT(all.mesh.size(), 8192u);
