@@ -48,12 +48,15 @@ raycast::BuildQuality leaf_ray_build_quality(const std::string& opt, const Scene
 // quarter of the real meshes' under a wide light) and the boundaries of the clusters
 // it takes whole, and every shaft below it filters that band again: its cost grows with
 // the triangles in the root shaft, while the most it can save is its relations' rays.
-// Measured (callgrind, scan 75k, 10 lights of 65,536 relations): at 0.9 relations per
-// such triangle the shafts decided 21% of the relations for more than the rays of all
-// of them would cost; the real meshes (0.7-1.3) and scan 300k (0.2) the same; at 3.5
-// (1024 x 256) the shafts pay. So a light whose root shaft (the receivers' box to the
-// light's, apart, with a main axis) holds at least the clusters' threshold (8,192
-// triangles and an eighth of the mesh: a dense mesh) with fewer than
+// Measured (callgrind, scan 75k, 10 lights of 1024 receivers): at 0.9 relations per
+// such triangle (64 samples) the shafts decided 21% of the relations for more than the
+// rays of all of them cost (783M instructions against 642M), at 1.75 (128 samples)
+// 1,197M against 1,082M, at 3.5 (256 samples) the shafts pay (1,590M against 1,888M);
+// the real meshes (0.7-1.3) and scan 300k (0.2) are below. The crossover lies near 2.5,
+// and the rays' packets take less time per instruction than the shafts (scan 75k x 64:
+// 0.82 of the instructions, 0.75 of the seconds), so 3. A light whose root shaft (the
+// receivers' box to the light's, apart, with a main axis) holds at least the clusters'
+// threshold (8,192 triangles and an eighth of the mesh: a dense mesh) with fewer than
 // `relations_per_triangle` relations per triangle there casts every relation instead.
 // The count is estimated from at most kDenseRaySamples evenly spaced triangles of the
 // soup (their boxes against the root shaft, may_intersect_box as the hierarchy's query
@@ -269,14 +272,14 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cost_rays", "with auto_rays, also cast the relations of shafts of a size once subdividing them went through more blocker elements (raw edges, band entries) per relation decided below than cost_factor rays' worth (every 8th still subdivides): auto with the lazy band (dense meshes), on always, off never", {"auto", "on", "off"}},
       {"cost_initial", "with cost_rays, the same rule for initial shafts over the lights: once the initial shafts built so far went through more blocker elements per relation they decided than cost_factor rays' worth, a light's initial shaft is not built and its relations are cast (every 8th is still built)", {"on", "off"}},
       {"cost_initial_factor", "cost_initial casts once the initial shafts went through more than cost_initial_factor * 3 blocker elements per relation they decided (default 1)", {}},
-      {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 2)", {}},
+      {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 3)", {}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
       {"embree_quality", "build quality of the leaf rays' Embree BVH (raycast::BuildQuality): auto takes low when the scene has at most 7 relations per triangle, else medium", {"auto", "low", "medium", "high"}},
       {"split_auto_ray_relations", "auto_ray_relations for the shafts of split lights (default 16)", {}},
       {"dense_rays", "with auto_rays (Embree caster), cast every relation of a light whose root shaft holds a dense mesh (8192 triangles and an eighth of the mesh) with fewer than dense_ray_relations relations per triangle there, building no shaft for it; when every light is so, no mesh preparation, hierarchy or tree is built either", {"on", "off"}},
-      {"dense_ray_relations", "dense_rays casts a light with fewer relations than this many per triangle of its root shaft (default 2)", {}},
+      {"dense_ray_relations", "dense_rays casts a light with fewer relations than this many per triangle of its root shaft (default 3)", {}},
   };
 }
 
@@ -335,7 +338,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // Embree rays, or without automatic rays, every light keeps its shafts.
   const auto td = Clock::now();
   if (opt.get_bool("dense_rays", true) && p.auto_rays && !p.custom_rays) {
-    const double k = double(std::max(0L, opt.get_int("dense_ray_relations", 2)));
+    const double k = double(std::max(0L, opt.get_int("dense_ray_relations", 3)));
     p.dense_light = dense_ray_lights(scene, k, scale);
     p.rays_only = !p.dense_light.empty() &&
                   std::all_of(p.dense_light.begin(), p.dense_light.end(), [](uint8_t d) { return d != 0; });
