@@ -272,7 +272,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cost_rays", "with auto_rays, also cast the relations of shafts of a size once subdividing them went through more blocker elements (raw edges, band entries) per relation decided below than cost_factor rays' worth (every 8th still subdivides): auto with the lazy band (dense meshes), on always, off never", {"auto", "on", "off"}},
       {"cost_initial", "with cost_rays, the same rule for initial shafts over the lights: once the initial shafts built so far went through more blocker elements per relation they decided than cost_factor rays' worth, a light's initial shaft is not built and its relations are cast (every 8th is still built)", {"on", "off"}},
       {"cost_initial_factor", "cost_initial casts once the initial shafts went through more than cost_initial_factor * 3 blocker elements per relation they decided (default 1)", {}},
-      {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 3)", {}},
+      {"cost_factor", "cost_rays casts the shafts of a size once the shafts below its subdivisions went through more than cost_factor * 3 blocker elements per relation they decided (default 2)", {}},
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
