@@ -42,6 +42,56 @@ raycast::BuildQuality leaf_ray_build_quality(const std::string& opt, const Scene
   return few_rays ? raycast::BuildQuality::low : raycast::BuildQuality::medium;
 }
 
+// Lights whose shafts cannot pay (option dense_rays), decided from the scene alone
+// before anything is built. A light's initial shaft on a dense mesh holds the band of
+// Table 4.1's inconsistent triangles (about a tenth of a smooth closed surface, a
+// quarter of the real meshes' under a wide light) and the boundaries of the clusters
+// it takes whole, and every shaft below it filters that band again: its cost grows with
+// the triangles in the root shaft, while the most it can save is its relations' rays.
+// Measured (callgrind, scan 75k, 10 lights of 1024 receivers): at 0.9 relations per
+// such triangle (64 samples) the shafts decided 21% of the relations for more than the
+// rays of all of them cost (783M instructions against 642M), at 1.75 (128 samples)
+// 1,197M against 1,082M, at 3.5 (256 samples) the shafts pay (1,590M against 1,888M);
+// the real meshes (0.7-1.3) and scan 300k (0.2) are below. The crossover lies near 2.5,
+// and the rays' packets take less time per instruction than the shafts (scan 75k x 64:
+// 0.82 of the instructions, 0.75 of the seconds), so 3. A light whose root shaft (the
+// receivers' box to the light's, apart, with a main axis) holds at least the clusters'
+// threshold (8,192 triangles and an eighth of the mesh: a dense mesh) with fewer than
+// `relations_per_triangle` relations per triangle there casts every relation instead.
+// The count is estimated from at most kDenseRaySamples evenly spaced triangles of the
+// soup (their boxes against the root shaft, may_intersect_box as the hierarchy's query
+// tests them): a cost estimate, deterministic, which changes no guarantee (every
+// relation is still a verified leaf ray).
+constexpr size_t kDenseRaySamples = 4096;
+constexpr size_t kDenseRayMinTriangles = 8192;
+std::vector<uint8_t> dense_ray_lights(const Scene& scene, double relations_per_triangle, double scale) {
+  std::vector<uint8_t> dense(scene.lights.size(), 0);
+  const size_t n = scene.mesh.size();
+  if (scene.receivers.empty() || n < kDenseRayMinTriangles || relations_per_triangle <= 0) return dense;
+  AABB rbox;
+  for (const Receiver& r : scene.receivers) rbox.extend(r.p);
+  const size_t step = std::max<size_t>(1, n / kDenseRaySamples);
+  const double need = double(std::max(kDenseRayMinTriangles, n / 8));
+  for (size_t li = 0; li < scene.lights.size(); ++li) {
+    const Light& light = scene.lights[li];
+    AABB lbox;
+    for (const AABB& jb : light.jitter_boxes) lbox.extend(jb);
+    if (rbox.overlaps(lbox) || choose_main_axis(rbox, lbox).axis < 0) continue;
+    const ShaftGeometry g(rbox, lbox, MainAxis{}, scale);
+    size_t hits = 0, tested = 0;
+    for (size_t t = 0; t < n; t += step, ++tested) {
+      const auto& tri = scene.mesh.triangles[t];
+      AABB tb;
+      for (int k = 0; k < 3; ++k) tb.extend(scene.mesh.vertices[tri[k]]);
+      hits += g.may_intersect_box(to_double(tb));
+    }
+    const double in_shaft = double(hits) * double(n) / double(tested);
+    const double relations = double(scene.receivers.size()) * double(light.samples);
+    dense[li] = in_shaft >= need && relations < relations_per_triangle * in_shaft;
+  }
+  return dense;
+}
+
 // Lights decided at the roots, before the leaf caster's scene is built: the blocker
 // probe of Traversal::probe_blocked (shaft_construction.cpp) on the root shaft, and the
 // triangles the other lights' leaf rays can meet. A leaf ray runs from a receiver to a
@@ -228,7 +278,18 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
       {"embree_quality", "build quality of the leaf rays' Embree BVH (raycast::BuildQuality): auto takes low when the scene has at most 7 relations per triangle, else medium", {"auto", "low", "medium", "high"}},
       {"split_auto_ray_relations", "auto_ray_relations for the shafts of split lights (default 16)", {}},
+      {"dense_rays", "with auto_rays (Embree caster), cast every relation of a light whose root shaft holds a dense mesh (8192 triangles and an eighth of the mesh) with fewer than dense_ray_relations relations per triangle there, building no shaft for it; when every light is so, no mesh preparation, hierarchy or tree is built either", {"on", "off"}},
+      {"dense_ray_relations", "dense_rays casts a light with fewer relations than this many per triangle of its root shaft (default 3)", {}},
   };
+}
+
+// plan_roots' answer when nothing was walked: no light blocked, every triangle kept.
+RootPlan keep_everything(const Scene& scene) {
+  RootPlan plan;
+  plan.blocked.assign(scene.lights.size(), 0);
+  plan.keep.assign(scene.mesh.size(), 1);
+  plan.kept = scene.mesh.size();
+  return plan;
 }
 
 SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) {
@@ -266,16 +327,6 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.split_auto_ray_relations =
       double(std::max(0L, opt.get_int("split_auto_ray_relations", long(p.split_auto_ray_relations))));
 
-  auto tp0 = Clock::now();
-  mesh::PreparedMesh m = mesh::prepare_mesh(scene.mesh);
-  size_t paired = pair_nonmanifold_edges(m);  // radial_pairing.h: part of preparation
-  auto t0 = Clock::now();
-  const double faults0 = minor_faults();
-  SolveResult result = make_empty_result(scene);
-  // The Embree scene (robust flags) is needed for leaf rays, and by the custom caster
-  // only as a fallback next to removed surfaces; it holds the triangles those rays may
-  // meet (plan_roots).
-  double embree_build = 0;
   // The scale of Traversal (the largest coordinate magnitude), for the same shaft bits.
   double scale = 0;
   {
@@ -283,11 +334,37 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     for (int k = 0; k < 3; ++k) scale = std::max({scale, std::abs(double(b.lo[k])), std::abs(double(b.hi[k]))});
     scale = std::max(scale, 1e-30);
   }
+  // Lights cast whole (dense_ray_lights); with the custom caster, whose leaves are not
+  // Embree rays, or without automatic rays, every light keeps its shafts.
+  const auto td = Clock::now();
+  if (opt.get_bool("dense_rays", true) && p.auto_rays && !p.custom_rays) {
+    const double k = double(std::max(0L, opt.get_int("dense_ray_relations", 3)));
+    p.dense_light = dense_ray_lights(scene, k, scale);
+    p.rays_only = !p.dense_light.empty() &&
+                  std::all_of(p.dense_light.begin(), p.dense_light.end(), [](uint8_t d) { return d != 0; });
+  }
+  // Counted in the method's seconds (preparation is not).
+  const double dense_seconds = std::chrono::duration<double>(Clock::now() - td).count();
+  // Leaf rays alone need no prepared mesh (the Embree scene is the soup's).
+  auto tp0 = Clock::now();
+  mesh::PreparedMesh m;
+  size_t paired = 0;
+  if (!p.rays_only) {
+    m = mesh::prepare_mesh(scene.mesh);
+    paired = pair_nonmanifold_edges(m);  // radial_pairing.h: part of preparation
+  }
+  auto t0 = Clock::now();
+  const double faults0 = minor_faults();
+  SolveResult result = make_empty_result(scene);
+  // The Embree scene (robust flags) is needed for leaf rays, and by the custom caster
+  // only as a fallback next to removed surfaces; it holds the triangles those rays may
+  // meet (plan_roots).
+  double embree_build = 0;
   MemoryBudget budget("iss", opt.memory_budget_mb);  // outlives the traversal
   Traversal tr(scene, m, p, result);
   tr.set_memory_budget(&budget);
   auto tb = Clock::now();
-  const RootPlan plan = plan_roots(scene, m, tr, scale);
+  const RootPlan plan = p.rays_only ? keep_everything(scene) : plan_roots(scene, m, tr, scale);
   const double root_plan_seconds = std::chrono::duration<double>(Clock::now() - tb).count();
   // The leaf caster's mesh: the triangles a leaf ray may meet, when that leaves some out.
   TriangleSoup ray_mesh;
@@ -316,7 +393,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   add_root_plan_stats(plan, result.stats);
   result.stats.set("leaf_ray_triangles", double(leaf_mesh.size()));
   fractions_from_bits(scene, result);
-  result.seconds = std::chrono::duration<double>(t1 - t0).count();
+  result.seconds = std::chrono::duration<double>(t1 - t0).count() + dense_seconds;
   result.stats.set("prepare_seconds", std::chrono::duration<double>(t0 - tp0).count());
   result.stats.set("time_embree_build", embree_build);
   result.stats.set("time_root_plan", root_plan_seconds);

@@ -446,6 +446,17 @@ void Traversal::fan_rays(uint32_t i, const uint32_t* samples, size_t count) {
   n_rays_blocked_ += double(blocked);
 }
 
+void Traversal::cast_light(size_t li) {
+  ScopedTimer t(times_[kRays]);
+  light_ = &scene_.lights[li];
+  light_offset_ = scene_.light_offset(li);
+  light_samples_.resize(size_t(std::max(0, light_->samples)));
+  for (size_t j = 0; j < light_samples_.size(); ++j) light_samples_[j] = uint32_t(j);
+  for (size_t i = 0; i < scene_.receivers.size(); ++i) fan_rays(uint32_t(i), light_samples_.data(), light_samples_.size());
+  n_rays_ += double(scene_.receivers.size()) * double(light_samples_.size());
+  n_dense_lights_ += 1;
+}
+
 void Traversal::queue_rays(int r, int l) {
   const TreeNode& L = ln(l);
   PendingRays& p = pending_[r];

@@ -34,6 +34,7 @@ Traversal::Traversal(const Scene& scene, const mesh::PreparedMesh& m, const Para
   direct_ok_ = scale_ <= double(raycast::kEmbreeCoordinateBound);
   ctx_.mesh = &mesh_;
   ctx_.scale = scale_;
+  if (p.rays_only) return;  // every light by cast_light: no hierarchy, no trees
   ScopedTimer t(times_[kTree]);
   tri_boxes_.resize(m.triangles.size());
   for (size_t t2 = 0; t2 < m.triangles.size(); ++t2) {
@@ -88,6 +89,10 @@ void Traversal::probe_order(int a) {
 
 void Traversal::run_light(size_t li) {
   if (scene_.receivers.empty()) return;
+  if (p_.rays_only || (li < p_.dense_light.size() && p_.dense_light[li])) {
+    cast_light(li);
+    return;
+  }
   light_ = &scene_.lights[li];
   light_offset_ = scene_.light_offset(li);
   auto_buckets_ = {};
@@ -185,12 +190,14 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("shaft_work", n_shaft_work_);
   st.set("cost_ray_shafts", n_cost_ray_shafts_);
   st.set("cost_ray_initial_shafts", n_cost_ray_initial_);
+  st.set("dense_ray_lights", n_dense_lights_);
   st.set("light_split_trial_shafts", n_trial_shafts_);
-  double peak = double(peak_bytes_ + rtree_->memory_bytes() + light_tree_bytes_peak_ + bvh_->memory_bytes() +
+  double peak = double(peak_bytes_ + (rtree_ ? rtree_->memory_bytes() : 0) + light_tree_bytes_peak_ +
+                       (bvh_ ? bvh_->memory_bytes() : 0) +
                        (clusters_ ? clusters_->memory_bytes() : 0) + tri_pos_.capacity() * sizeof(uint32_t) +
                        tri_planes_.capacity() * sizeof(ConservativePlane) + tri_plane_ok_.capacity());
   st.set("peak_memory_mb", peak / (1024.0 * 1024.0));
-  st.set("receiver_tree_nodes", double(rtree_->node_count()));
+  st.set("receiver_tree_nodes", rtree_ ? double(rtree_->node_count()) : 0.0);
   double secs = std::chrono::duration<double>(Clock::now() - clock0_).count();
   double tick_count = double(ticks() - tick0_);
   double per_tick = tick_count > 0 ? secs / tick_count : 0.0;

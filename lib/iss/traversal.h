@@ -154,6 +154,12 @@ struct Params {
   // nothing before it can tell whether it will decide them. With cost_rays only.
   bool cost_initial = true;
   double cost_initial_factor = 1.0;
+  // Lights cast whole before any shaft (option dense_rays; decided by iss_solver.cpp's
+  // dense_ray_lights from the scene alone): per light, 1 when every relation of the
+  // light is a leaf ray. rays_only: every light is, so the traversal builds no
+  // triangle hierarchy and no receiver tree (and the prepared mesh is empty).
+  std::vector<uint8_t> dense_light;
+  bool rays_only = false;
 };
 
 // Automatic ray casting of shafts whose subdivision does not pay (option auto_rays;
@@ -270,6 +276,9 @@ class Traversal {
   void flush_rays(int r);
   void flush_all_rays();
   void fan_rays(uint32_t receiver, const uint32_t* samples, size_t n);
+  // Every relation of light `li` by leaf rays, receiver by receiver in index order,
+  // each receiver's samples in order as fans (Params::dense_light).
+  void cast_light(size_t li);
   // The leaf relations of shaft `sh` by the certified segment-triangle test of
   // leaf_rays.cpp against the triangles that may meet the shaft, Embree rays for the
   // relations it cannot certify; false (nothing cast) when there are more than
@@ -378,7 +387,7 @@ class Traversal {
   // Initial shafts over all lights (Params::cost_initial): their work and decided
   // relations (the shaft and every shaft below), and those cast instead.
   AutoRayBucket initial_bucket_;
-  double n_cost_ray_initial_ = 0;
+  double n_cost_ray_initial_ = 0, n_dense_lights_ = 0;
   std::vector<uint32_t> band_build_;
   // Per mesh triangle, built on the first use of the band (counted against the memory
   // budget as "band order and planes"): its position in the triangle hierarchy's leaf
@@ -411,6 +420,7 @@ class Traversal {
   };
   std::unordered_map<int, PendingRays> pending_;  // by receiver node, this light only
   std::vector<uint32_t> pending_samples_;
+  std::vector<uint32_t> light_samples_;  // 0 .. samples - 1 (cast_light)
   std::vector<uint32_t> probe_tris_, root_tris_;
   std::vector<Surface> probe_out_, temp_, band_split_;
   std::vector<std::vector<Surface>> surface_lists_;

@@ -9,6 +9,10 @@
 #include <limits>
 #include <string>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "lib/geom/error_bounds.h"
 #include "lib/geom/float_mode.h"
 #include "lib/geom/predicates.h"
@@ -206,6 +210,23 @@ TermsCache* bound_terms_cache(uint64_t id, const Vec3f& from) {
   return &cache;
 }
 
+// The lanes of a filter call with a candidate hit (valid[i] == -1), as bits; n <= 32.
+// Four lanes per compare where SSE2 is there: the lane-by-lane loop was a fifth of the
+// filter's instructions on scan (packets of 8, mostly one candidate each).
+uint32_t candidate_lanes(const int* valid, unsigned n) {
+  uint32_t lanes = 0;
+  unsigned i = 0;
+#if defined(__SSE2__)
+  const __m128i hit = _mm_set1_epi32(-1);
+  for (; i + 4 <= n; i += 4) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(valid + i));
+    lanes |= uint32_t(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v, hit)))) << i;
+  }
+#endif
+  for (; i < n; ++i) lanes |= uint32_t(valid[i] == -1) << i;
+  return lanes;
+}
+
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
 // precision test of the same query agrees (see embree_scene.h, "Hit verification"),
 // or, for segment queries, when certainly_crosses_interior proves it first.
@@ -217,9 +238,7 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
   // Lanes with a candidate hit, as bits (packets of 8 or 16 mostly carry one or two);
   // queries are single rays or packets of at most 16.
   VG_CHECK(args->N <= 32);
-  uint32_t lanes = 0;
-  for (unsigned i = 0; i < args->N; ++i) lanes |= uint32_t(args->valid[i] == -1) << (i & 31u);
-  for (; lanes; lanes &= lanes - 1) {
+  for (uint32_t lanes = candidate_lanes(args->valid, args->N); lanes; lanes &= lanes - 1) {
     const unsigned i = unsigned(__builtin_ctz(lanes));
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const auto& t = vc->soup->triangles[prim];

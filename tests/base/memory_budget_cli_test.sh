@@ -12,8 +12,12 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 "$visgate" gen scan --seed 1 --triangles 80000 --receivers 1024 --samples 4 -o "$work/scan.json" 2>/dev/null
 for m in iss ssv plucker-bsp; do
+  # iss would cast this scene's few relations per triangle as leaf rays (dense_rays),
+  # holding no growing structure; its shafts are what the budget bounds.
+  opt=()
+  [ "$m" = iss ] && opt=(--opt dense_rays=off)
   set +e
-  "$visgate" solve "$work/scan.json" --method "$m" --threads 1 --memory-budget 1 -o "$work/$m.json" 2>"$work/$m.log"
+  "$visgate" solve "$work/scan.json" --method "$m" "${opt[@]}" --threads 1 --memory-budget 1 -o "$work/$m.json" 2>"$work/$m.log"
   rc=$?
   set -e
   [ "$rc" = 3 ] || { cat "$work/$m.log" >&2; fail "$m exited $rc, expected 3"; }

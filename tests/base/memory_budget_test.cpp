@@ -61,6 +61,9 @@ TEST(MemoryBudget, ProductionMethodsStopUnderATinyBudget) {
     SolveOptions o;
     o.threads = 1;
     o.memory_budget_mb = 1;
+    // iss would cast this scene's few relations per triangle as leaf rays (dense_rays),
+    // holding no growing structure; its shafts are what the budget bounds.
+    if (std::string(m) == "iss") o.opts = {{"dense_rays", "off"}};
     try {
       solver->solve(*scene, o);
       ADD_FAILURE() << m << " finished within 1 MB";

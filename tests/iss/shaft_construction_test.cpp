@@ -57,3 +57,42 @@ TEST(IssInitialCost, InitialShaftsCastByCostEqualBuiltOnesAndOracle) {
     }
   }
 }
+
+TEST(IssDenseRays, DenseLightsCastEqualShaftsAndOracle) {
+  // dense_rays (iss_solver.cpp): a light of a dense mesh with fewer than
+  // dense_ray_relations relations per triangle of its root shaft casts every relation
+  // and builds no shaft. Scan 20k at 64 receivers x 8 samples: every light is so (512
+  // relations against about 20k triangles), and the solve builds no mesh preparation,
+  // hierarchy or tree. With a copy of light 0 at 1024 samples (65k relations, about 3
+  // per triangle) that light keeps its shafts and the others are cast. The answers must be
+  // dense_rays=off's bits on every relation the oracle does not class as touching, and
+  // the oracle's away from degeneracy.
+  const double tau = 1e-5;
+  const Scene all = test_support::family("scan", 1, 20000, 64, 8);
+  Scene mixed = all;
+  Light extra = all.lights[0];
+  extra.samples = 1024;
+  mixed.lights.push_back(extra);
+  ASSERT_TRUE(finish_scene(mixed).ok());
+  ASSERT_GT(all.mesh.size(), 8192u);
+  const Scene* const scenes[] = {&all, &mixed};
+  for (const Scene* s : scenes) {
+    oracle::RelationOracleResult ex = oracle::run_relation_oracle(*s, 2);
+    SolveResult off = run_iss(*s, {{"dense_rays", "off"}});
+    SolveResult on = run_iss(*s, {});
+    const OracleTally t = tally_against_oracle(*s, ex, tau, {&on, &off});
+    EXPECT_EQ(t.differ_any, 0u) << s->lights.size();
+    EXPECT_EQ(t.wrong, 0u) << s->lights.size();
+    EXPECT_GT(t.checked, 0u);
+    EXPECT_EQ(off.stats.get("dense_ray_lights"), 0.0);
+    EXPECT_GT(off.stats.get("shafts_built"), 0.0);
+    EXPECT_EQ(on.stats.get("dense_ray_lights"), double(all.lights.size())) << s->lights.size();
+    if (s == &all) {
+      EXPECT_EQ(on.stats.get("shafts_built"), 0.0);
+      EXPECT_EQ(on.stats.get("percent_ray_cast"), 100.0);
+      EXPECT_EQ(on.stats.get("receiver_tree_nodes"), 0.0);  // rays only: no tree
+    } else {
+      EXPECT_GT(on.stats.get("shafts_built"), 0.0);
+    }
+  }
+}
