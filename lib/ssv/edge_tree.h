@@ -98,7 +98,7 @@ class EdgeTree {
   void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
   size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) +
-           ends_.capacity() * sizeof(uint32_t);
+           ends_.capacity() * sizeof(uint32_t) + normals_.capacity() * sizeof(float);
   }
   size_t node_count() const { return nodes_.size(); }
 
@@ -127,6 +127,9 @@ class EdgeTree {
   // come from the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box:
   // fewer fresh pages per solve). The arrays are on populated mappings (populated.h).
   PopulatedVector<uint32_t> ends_;
+  // Per edge in leaf order, the unit normals of its two triangles (six floats, NaN for a
+  // single edge or a triangle without a plane): the leaves' per-edge facing test.
+  PopulatedVector<float> normals_;
   const std::vector<Vec3f>* vertices_ = nullptr;
   double M_ = 0.0;
 };
