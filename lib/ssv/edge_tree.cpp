@@ -154,7 +154,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     // triangle's corners and normal enter the node's bounds once (min and max are
     // idempotent, so the node is the same).
     int32_t done[2 * kLeaf];
-    Vec3f done_n[2 * kLeaf];
+    int16_t done_q[2 * kLeaf][3];
     size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
@@ -164,10 +164,11 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         nd.hi[c] = std::max(nd.hi[c], std::max(va[c], vb[c]));
       }
       if (ed.t2 < 0) nd.single = 1;
-      // The edge's two unit normals for the leaf's per-edge facing test; NaN (never
-      // proven weight 0) for a single edge or a triangle without a plane.
-      float* en = &normals_[6 * size_t(k)];
-      for (int q = 0; q < 6; ++q) en[q] = NAN;
+      // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
+      // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
+      // (never proven weight 0) for a single edge or a triangle without a plane.
+      int16_t* en = &normals_[6 * size_t(k)];
+      for (int q = 0; q < 6; ++q) en[q] = 0;
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
@@ -178,7 +179,10 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
           const TrianglePlane plane = triangle_plane(m, size_t(t));
           nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
           const Vec3f n(plane.unit());
-          done_n[at] = plane.nn > 0.0 ? n : Vec3f(NAN, NAN, NAN);
+          for (int c = 0; c < 3; ++c) {  // to nearest (half away from zero); |n| <= 1: no overflow
+            const float v = plane.nn > 0.0 ? n[c] * 32767.0f : 0.0f;
+            done_q[at][c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
+          }
           for (int v = 0; v < 3; ++v) {
             const Vec3f& x = m.corner(size_t(t), v);
             for (int c = 0; c < 3; ++c) {
@@ -192,7 +196,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
           }
         }
         if (ed.t2 >= 0)
-          for (int c = 0; c < 3; ++c) en[3 * side + c] = done_n[at][c];
+          for (int c = 0; c < 3; ++c) en[3 * side + c] = done_q[at][c];
       }
     }
   }
@@ -388,16 +392,20 @@ inline bool facing_prunes(const FloatFrustum& ff, const Node& nd, const float* N
 }
 
 // The leaf's per-edge facing test for one receiver r (edge_tree.h): both triangles of the
-// edge (unit normals n[0..3) and n[3..6), NaN when it has no pair) have r on one side,
-// beyond the margin, measured from the edge's endpoint a, which lies in both planes.
-// `ext` is the L1 extent of the leaf's triangle box: every vertex v of the two triangles
-// has |r - v| <= |r - a|_1 + ext. The same float operations as the lanes' form.
-inline bool edge_facing_prunes(const float* r, const Vec3f& a, const float* n, float ext, float abs_margin) {
+// edge (q[0..3) and q[3..6): unit normals times S = 32767, rounded; 0 when it has no
+// pair) have r on one side, beyond the margin, measured from the edge's endpoint a,
+// which lies in both planes. `ext` is the L1 extent of the leaf's triangle box: every
+// vertex v of the two triangles has |r - v| <= |r - a|_1 + ext. With f = q.(r - a) / S
+// the unit normal's value is f within (1/(2S) + 2^-21) |r - a|_1 (rounding of q and of
+// the float sums), so f > 2 (|r - a|_1 + ext) / S + abs_margin (about 2^-14) puts it
+// above 2^-20 (|r - a|_1 + ext) with room to spare: the doubt threshold of
+// ReceiverIntegrator::facing. The same float operations as the lanes' form.
+inline bool edge_facing_prunes(const float* r, const Vec3f& a, const int16_t* q, float ext, float abs_margin) {
   const float dx = r[0] - a.x, dy = r[1] - a.y, dz = r[2] - a.z;
-  const float f1 = (n[0] * dx + n[2] * dz) + n[1] * dy;
-  const float f2 = (n[3] * dx + n[5] * dz) + n[4] * dy;
+  const float f1 = (float(q[0]) * dx + float(q[2]) * dz) + float(q[1]) * dy;
+  const float f2 = (float(q[3]) * dx + float(q[5]) * dz) + float(q[4]) * dy;
   const float l1 = (std::abs(dx) + std::abs(dz)) + std::abs(dy);
-  const float margin = 0x1p-18f * (l1 + ext) + abs_margin;
+  const float margin = 2.0f * (l1 + ext) + 32767.0f * abs_margin;
   return (f1 > margin && f2 > margin) || (f1 < -margin && f2 < -margin);
 }
 
@@ -571,8 +579,9 @@ __attribute__((target("avx2"))) inline int facing_prunes8(const LaneFrusta& L, c
 }
 
 // Lanes edge_facing_prunes would prune: the same per-lane operations in the same order.
-__attribute__((target("avx2"))) inline int edge_facing_prunes8(const LaneFrusta& L, const Vec3f& a, const float* n,
+__attribute__((target("avx2"))) inline int edge_facing_prunes8(const LaneFrusta& L, const Vec3f& a, const int16_t* q,
                                                                float ext, float abs_margin) {
+  const float n[6] = {float(q[0]), float(q[1]), float(q[2]), float(q[3]), float(q[4]), float(q[5])};
   const __m256 sign = _mm256_set1_ps(-0.0f);
   const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(L.r[0]), _mm256_set1_ps(a.x));
   const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(L.r[1]), _mm256_set1_ps(a.y));
@@ -585,8 +594,8 @@ __attribute__((target("avx2"))) inline int edge_facing_prunes8(const LaneFrusta&
       _mm256_mul_ps(_mm256_set1_ps(n[4]), dy));
   const __m256 l1 = _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sign, dx), _mm256_andnot_ps(sign, dz)),
                                   _mm256_andnot_ps(sign, dy));
-  const __m256 margin = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(0x1p-18f), _mm256_add_ps(l1, _mm256_set1_ps(ext))),
-                                      _mm256_set1_ps(abs_margin));
+  const __m256 margin = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), _mm256_add_ps(l1, _mm256_set1_ps(ext))),
+                                      _mm256_set1_ps(32767.0f * abs_margin));
   const __m256 nmargin = _mm256_sub_ps(_mm256_setzero_ps(), margin);
   const __m256 pos = _mm256_and_ps(_mm256_cmp_ps(f1, margin, _CMP_GT_OQ), _mm256_cmp_ps(f2, margin, _CMP_GT_OQ));
   const __m256 neg = _mm256_and_ps(_mm256_cmp_ps(f1, nmargin, _CMP_LT_OQ), _mm256_cmp_ps(f2, nmargin, _CMP_LT_OQ));

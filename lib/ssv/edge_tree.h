@@ -25,10 +25,11 @@
 // The bound on n.(r - a) is interval arithmetic over the normal ranges and the box.
 // At a leaf each edge is also left on its own when its leaf's triangles are all active
 // and r lies on the same side of both its triangles' planes (a double edge), farther
-// than 2^-18 of (|r - a|_1 + the L1 extent of the leaf's triangle box) (plus 1e-9 M),
+// than 2/32767 of (|r - a|_1 + the L1 extent of the leaf's triangle box) (plus 1e-9 M),
 // measured from its endpoint a (in both planes; every vertex v of the two triangles has
-// |r - v| <= |r - a|_1 + that extent): weight 0 and neither triangle nearly edge-on, by
-// the argument above. On a noisy scanned surface, where the nodes' normal ranges are wide
+// |r - v| <= |r - a|_1 + that extent) with the normals stored in 16 bits per component
+// (rounding error 1/65534): weight 0 and neither triangle nearly edge-on, by the argument
+// above. On a noisy scanned surface, where the nodes' normal ranges are wide
 // and silhouettes are everywhere, this keeps the candidates near the edges that validate
 // (CGAL's armadillo: 3,164 per receiver before, 505 after, 505 validated).
 // Tests run in float: with coordinates below M the plane and box tests err by less than
@@ -107,7 +108,7 @@ class EdgeTree {
   void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
   size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) +
-           ends_.capacity() * sizeof(uint32_t) + normals_.capacity() * sizeof(float);
+           ends_.capacity() * sizeof(uint32_t) + normals_.capacity() * sizeof(int16_t);
   }
   size_t node_count() const { return nodes_.size(); }
 
@@ -136,9 +137,10 @@ class EdgeTree {
   // come from the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box:
   // fewer fresh pages per solve). The arrays are on populated mappings (populated.h).
   PopulatedVector<uint32_t> ends_;
-  // Per edge in leaf order, the unit normals of its two triangles (six floats, NaN for a
-  // single edge or a triangle without a plane): the leaves' per-edge facing test.
-  PopulatedVector<float> normals_;
+  // Per edge in leaf order, the unit normals of its two triangles times 32767, rounded
+  // (12 bytes; 0 for a single edge or a triangle without a plane): the leaves' per-edge
+  // facing test.
+  PopulatedVector<int16_t> normals_;
   const std::vector<Vec3f>* vertices_ = nullptr;
   double M_ = 0.0;
 };
