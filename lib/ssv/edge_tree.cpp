@@ -400,13 +400,20 @@ inline bool facing_prunes(const FloatFrustum& ff, const Node& nd, const float* N
 // the float sums), so f > 2 (|r - a|_1 + ext) / S + abs_margin (about 2^-14) puts it
 // above 2^-20 (|r - a|_1 + ext) with room to spare: the doubt threshold of
 // ReceiverIntegrator::facing. The same float operations as the lanes' form.
-inline bool edge_facing_prunes(const float* r, const Vec3f& a, const int16_t* q, float ext, float abs_margin) {
+// Returns 1 for weight 0 (leave the edge), and otherwise the edge with its weight when
+// the signs are proven the other way round (r in front of one triangle and behind the
+// other, both beyond the margin: EdgeTree::kWeightPlus2 or kWeightMinus2), else the plain
+// edge (the solver computes its weight).
+inline int edge_facing_class(const float* r, const Vec3f& a, const int16_t* q, float ext, float abs_margin) {
   const float dx = r[0] - a.x, dy = r[1] - a.y, dz = r[2] - a.z;
   const float f1 = (float(q[0]) * dx + float(q[2]) * dz) + float(q[1]) * dy;
   const float f2 = (float(q[3]) * dx + float(q[5]) * dz) + float(q[4]) * dy;
   const float l1 = (std::abs(dx) + std::abs(dz)) + std::abs(dy);
   const float margin = 2.0f * (l1 + ext) + 32767.0f * abs_margin;
-  return (f1 > margin && f2 > margin) || (f1 < -margin && f2 < -margin);
+  if ((f1 > margin && f2 > margin) || (f1 < -margin && f2 < -margin)) return 1;
+  if (f1 > margin && f2 < -margin) return 2;
+  if (f1 < -margin && f2 > margin) return 3;
+  return 0;
 }
 
 // The leaf's triangles all active (their box more than active_margin above the light
@@ -454,9 +461,10 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
           // The facing test first: on a noisy surface it leaves most edges (the result is
           // the same in either order).
           const Vec3f& a = (*vertices_)[ends_[2 * k]];
-          if (active && edge_facing_prunes(ff.rlo, a, &normals_[6 * size_t(k)], ext, abs_margin)) continue;
+          const int cls = active ? edge_facing_class(ff.rlo, a, &normals_[6 * size_t(k)], ext, abs_margin) : 0;
+          if (cls == 1) continue;
           if (ff.outside(a, (*vertices_)[ends_[2 * k + 1]], eps)) continue;
-          edges->push_back(order_[k]);
+          edges->push_back(order_[k] | (cls == 2 ? kWeightPlus2 : cls == 3 ? kWeightMinus2 : 0u));
         }
         continue;
       }
@@ -578,9 +586,10 @@ __attribute__((target("avx2"))) inline int facing_prunes8(const LaneFrusta& L, c
       _mm256_or_ps(_mm256_cmp_ps(flo, margin, _CMP_GT_OQ), _mm256_cmp_ps(fhi, nmargin, _CMP_LT_OQ)));
 }
 
-// Lanes edge_facing_prunes would prune: the same per-lane operations in the same order.
-__attribute__((target("avx2"))) inline int edge_facing_prunes8(const LaneFrusta& L, const Vec3f& a, const int16_t* q,
-                                                               float ext, float abs_margin) {
+// Lanes edge_facing_class gives 1 (returned), 2 (`plus`) and 3 (`minus`): the same
+// per-lane operations in the same order.
+__attribute__((target("avx2"))) inline int edge_facing_class8(const LaneFrusta& L, const Vec3f& a, const int16_t* q,
+                                                              float ext, float abs_margin, int& plus, int& minus) {
   const float n[6] = {float(q[0]), float(q[1]), float(q[2]), float(q[3]), float(q[4]), float(q[5])};
   const __m256 sign = _mm256_set1_ps(-0.0f);
   const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(L.r[0]), _mm256_set1_ps(a.x));
@@ -597,9 +606,13 @@ __attribute__((target("avx2"))) inline int edge_facing_prunes8(const LaneFrusta&
   const __m256 margin = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), _mm256_add_ps(l1, _mm256_set1_ps(ext))),
                                       _mm256_set1_ps(32767.0f * abs_margin));
   const __m256 nmargin = _mm256_sub_ps(_mm256_setzero_ps(), margin);
-  const __m256 pos = _mm256_and_ps(_mm256_cmp_ps(f1, margin, _CMP_GT_OQ), _mm256_cmp_ps(f2, margin, _CMP_GT_OQ));
-  const __m256 neg = _mm256_and_ps(_mm256_cmp_ps(f1, nmargin, _CMP_LT_OQ), _mm256_cmp_ps(f2, nmargin, _CMP_LT_OQ));
-  return _mm256_movemask_ps(_mm256_or_ps(pos, neg));
+  const int p1 = _mm256_movemask_ps(_mm256_cmp_ps(f1, margin, _CMP_GT_OQ));
+  const int n1 = _mm256_movemask_ps(_mm256_cmp_ps(f1, nmargin, _CMP_LT_OQ));
+  const int p2 = _mm256_movemask_ps(_mm256_cmp_ps(f2, margin, _CMP_GT_OQ));
+  const int n2 = _mm256_movemask_ps(_mm256_cmp_ps(f2, nmargin, _CMP_LT_OQ));
+  plus = p1 & n2;
+  minus = n1 & p2;
+  return (p1 & p2) | (n1 & n2);
 }
 
 }  // namespace
@@ -639,12 +652,13 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
         const float ext = l1_extent(nd);
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
           const Vec3f& a = (*vertices_)[ends_[2 * k]];
-          int keep = active ? m & ~edge_facing_prunes8(L, a, &normals_[6 * size_t(k)], ext, abs_margin) : m;
+          int plus = 0, minus = 0;
+          int keep = active ? m & ~edge_facing_class8(L, a, &normals_[6 * size_t(k)], ext, abs_margin, plus, minus) : m;
           if (keep) keep &= ~segment_outside8(L, a, (*vertices_)[ends_[2 * k + 1]], neps);
           while (keep) {
             const int lane = __builtin_ctz(unsigned(keep));
             keep &= keep - 1;
-            outs[lane].push_back(order_[k]);
+            outs[lane].push_back(order_[k] | ((plus >> lane) & 1 ? kWeightPlus2 : (minus >> lane) & 1 ? kWeightMinus2 : 0u));
           }
         }
         continue;

@@ -38,7 +38,8 @@
 // 2^-19.
 //
 // Guarantee: every edge of the mesh that meets the frustum (up to eps) and is not proven
-// weight 0 from r as above is returned, once, in the walk's order (depth first from the
+// weight 0 from r as above is returned (with its weight when the leaf test proves it,
+// kWeightPlus2 and kWeightMinus2 below), once, in the walk's order (depth first from the
 // starts; the integration's counts do not depend on the order). The solver then applies build_wedges'
 // edge filters (below the light plane, never a silhouette w.r.t. L') and the weight, so a
 // receiver integrates exactly the pieces the wedge indexes give it (the wedges contain
@@ -75,6 +76,12 @@ struct EdgeFrustum {
 
 class EdgeTree {
  public:
+  // A candidate is an edge index, with one of these bits set when the leaf's facing test
+  // proved r in front of one of its triangles and behind the other, both beyond its
+  // margin (no doubt either): the edge's weight sign(facing(T1)) - sign(facing(T2)) is
+  // then +2 or -2 (integrate.h) without the solver's double test. Edge indices stay below
+  // 2^30 (at most 1.5 edges per triangle, at most 5e7 triangles).
+  static constexpr uint32_t kWeightPlus2 = 1u << 31, kWeightMinus2 = 1u << 30, kEdgeMask = kWeightMinus2 - 1;
   EdgeTree() = default;
   // Over every edge of `edges` (index = edge index); `M` bounds every coordinate (the
   // solver's tolerance scale). `m` must outlive the tree (its vertices are read by the

@@ -405,7 +405,8 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   // r is harmless anyway: its edge's projection misses L' and is clipped away.
   st.valid.clear();
   if (ls.edge_tree) {
-    for (uint32_t ei : st.edge_candidates) {
+    for (const uint32_t cand : st.edge_candidates) {
+      const uint32_t ei = cand & EdgeTree::kEdgeMask;
       const Edge& edge = sc.edges[ei];
       // wedge_edge depends on the edge and the light only: memoised per thread and light.
       const size_t slot = ei & (kWedgeMemo - 1);
@@ -413,7 +414,10 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
       if (st.wedge_memo[slot] >> 1 != uint64_t(ei) + 1)
         st.wedge_memo[slot] = (uint64_t(ei) + 1) << 1 | uint64_t(wedge_edge(sc, st.integrator, ls.frame, edge));
       if (!(st.wedge_memo[slot] & 1)) continue;
-      int weight = st.integrator.edge_weight(edge);
+      // The weight the leaf test proved, or the double test's.
+      const int weight = cand & EdgeTree::kWeightPlus2    ? 2
+                         : cand & EdgeTree::kWeightMinus2 ? -2
+                                                          : st.integrator.edge_weight(edge);
       if (weight != 0) st.valid.emplace_back(ei, weight);
     }
   }

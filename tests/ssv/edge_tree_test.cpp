@@ -69,9 +69,11 @@ struct TreeSetup {
 // Whether edge e can add a piece or a doubt for receiver r: some incident triangle
 // active with r on its front side and another not (weight != 0), or r within twice the
 // doubt threshold of an active incident triangle's plane (ReceiverIntegrator::facing).
-bool may_count(const TreeSetup& st, const Edge& e, const Vec3d& r) {
-  int w = 0;
-  bool near = false;
+// The weight sign(facing(T1)) - sign(facing(T2)) of active triangles, and whether r lies
+// within twice the doubt threshold of an active triangle's plane.
+void weight_and_doubt(const TreeSetup& st, const Edge& e, const Vec3d& r, int& w, bool& near) {
+  w = 0;
+  near = false;
   for (int k = 0; k < 2; ++k) {
     const int32_t t = k == 0 ? e.t1 : e.t2;
     if (t < 0) continue;
@@ -85,13 +87,30 @@ bool may_count(const TreeSetup& st, const Edge& e, const Vec3d& r) {
     const int s = (f > 0.0) - (f < 0.0);
     w += k == 0 ? s : -s;
   }
+}
+int exact_weight(const TreeSetup& st, const Edge& e, const Vec3d& r) {
+  int w = 0;
+  bool near = false;
+  weight_and_doubt(st, e, r, w, near);
+  return w;
+}
+bool near_edge_on(const TreeSetup& st, const Edge& e, const Vec3d& r) {
+  int w = 0;
+  bool near = false;
+  weight_and_doubt(st, e, r, w, near);
+  return near;
+}
+bool may_count(const TreeSetup& st, const Edge& e, const Vec3d& r) {
+  int w = 0;
+  bool near = false;
+  weight_and_doubt(st, e, r, w, near);
   return w != 0 || near || e.t2 < 0;
 }
 
 // `culls`: also expect the tree to leave most (edge, receiver) pairs (dense meshes away
 // from the receivers; not loose triangles over them, nor far-origin's loose eps).
 void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool culls) {
-  size_t must = 0, candidates = 0, pairs = 0;
+  size_t must = 0, candidates = 0, pairs = 0, proven = 0;
   for (size_t l = 0; l < s.lights.size() && l < 3; ++l) {
     const TreeSetup st(s, l);
     const float eps = float(4e-6 * st.M);
@@ -116,9 +135,20 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
         const size_t i = batch[k];
         st.tree.query(EdgeFrustum(st.frame, s.receivers[i].p), st.frame, eps, starts, got);
         EXPECT_EQ(lists[k], got) << what << ": light " << l << " receiver " << i << " batched";
+        const Vec3d r = to_double(s.receivers[i].p), rl = st.frame.to_local(s.receivers[i].p);
+        // A weight the leaf proved is the exact one, with neither triangle near edge-on.
+        for (uint32_t& c : got) {
+          const uint32_t e = c & EdgeTree::kEdgeMask;
+          if (c != e) {
+            ++proven;
+            const int w = c & EdgeTree::kWeightPlus2 ? 2 : -2;
+            EXPECT_EQ(exact_weight(st, st.edges[e], r), w) << what << ": light " << l << " receiver " << i << " edge " << e;
+            EXPECT_FALSE(near_edge_on(st, st.edges[e], r)) << what << ": edge " << e;
+          }
+          c = e;
+        }
         std::sort(got.begin(), got.end());
         EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "an edge returned twice";
-        const Vec3d r = to_double(s.receivers[i].p), rl = st.frame.to_local(s.receivers[i].p);
         for (size_t e = 0; e < st.edges.size(); ++e) {
           const Edge& ed = st.edges[e];
           if (!meets_frustum(st.fp[ed.a], st.fp[ed.b], rl, st.frame) || !may_count(st, ed, r)) continue;
@@ -132,6 +162,9 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
     }
   }
   EXPECT_GT(must, 20u) << what;
+  if (culls) {
+    EXPECT_GT(proven, 0u) << what;
+  }
   // Batches of more than eight receivers (walked eight at a time) from the root.
   for (size_t l = 0; l < s.lights.size() && l < 2; ++l) {
     const TreeSetup st(s, l);
