@@ -802,8 +802,10 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // elephant: 153, 505 and 268 per receiver), where the wedges build and scatter a third
   // of the mesh's edges per light (docs/log/ssv-performance.md, ninth round).
   if (index == "auto") index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
-  const bool use_edges = index == "edges";
-  const bool use_scatter = index == "receivers";
+  // The edge index marks proven weights in its candidates' top bits (edge_tree.h): a mesh
+  // of more edges than those leave (2^30, far beyond any memory budget) takes the wedges.
+  const bool use_edges = index == "edges" && edges.size() <= size_t(EdgeTree::kEdgeMask);
+  const bool use_scatter = index == "receivers" || (index == "edges" && !use_edges);
   // The triangle planes as an array for the wedge indexes (build_wedges reads every
   // edge's per light); the edge index reads only its candidates' and computes them.
   TrianglePlanes tri_planes;
