@@ -400,10 +400,9 @@ inline bool facing_prunes(const FloatFrustum& ff, const Node& nd, const float* N
 // the float sums), so f > 2 (|r - a|_1 + ext) / S + abs_margin (about 2^-14) puts it
 // above 2^-20 (|r - a|_1 + ext) with room to spare: the doubt threshold of
 // ReceiverIntegrator::facing. The same float operations as the lanes' form.
-// Returns 1 for weight 0 (leave the edge), and otherwise the edge with its weight when
-// the signs are proven the other way round (r in front of one triangle and behind the
-// other, both beyond the margin: EdgeTree::kWeightPlus2 or kWeightMinus2), else the plain
-// edge (the solver computes its weight).
+// Returns 1 when the edge has weight 0 (leave it); 2 or 3 when its weight is proven +2 or
+// -2 (r in front of one triangle and behind the other, both beyond the margin: handed
+// out with EdgeTree::kWeightPlus2 or kWeightMinus2); else 0 (the solver computes it).
 inline int edge_facing_class(const float* r, const Vec3f& a, const int16_t* q, float ext, float abs_margin) {
   const float dx = r[0] - a.x, dy = r[1] - a.y, dz = r[2] - a.z;
   const float f1 = (float(q[0]) * dx + float(q[2]) * dz) + float(q[1]) * dy;
