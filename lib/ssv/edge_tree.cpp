@@ -128,6 +128,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     ends_[2 * k] = edges[order_[k]].a;
     ends_[2 * k + 1] = edges[order_[k]].b;
   }
+  normals_.resize(6 * E);
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
   size_t total = 0;
@@ -153,6 +154,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     // triangle's corners and normal enter the node's bounds once (min and max are
     // idempotent, so the node is the same).
     int32_t done[2 * kLeaf];
+    int16_t done_q[2 * kLeaf][3];
     size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
@@ -162,24 +164,39 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         nd.hi[c] = std::max(nd.hi[c], std::max(va[c], vb[c]));
       }
       if (ed.t2 < 0) nd.single = 1;
-      for (int32_t t : {ed.t1, ed.t2}) {
-        if (t < 0 || std::find(done, done + n_done, t) != done + n_done) continue;
-        done[n_done++] = t;
-        // Each triangle in about two leaves, from its corners: no fresh array.
-        const TrianglePlane plane = triangle_plane(m, size_t(t));
-        nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
-        const Vec3f n(plane.unit());
-        for (int v = 0; v < 3; ++v) {
-          const Vec3f& x = m.corner(size_t(t), v);
+      // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
+      // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
+      // (never proven weight 0) for a single edge or a triangle without a plane.
+      int16_t* en = &normals_[6 * size_t(k)];
+      for (int q = 0; q < 6; ++q) en[q] = 0;
+      for (int side = 0; side < 2; ++side) {
+        const int32_t t = side == 0 ? ed.t1 : ed.t2;
+        if (t < 0) continue;
+        const size_t at = size_t(std::find(done, done + n_done, t) - done);
+        if (at == n_done) {
+          done[n_done++] = t;
+          // Each triangle in about two leaves, from its corners: no fresh array.
+          const TrianglePlane plane = triangle_plane(m, size_t(t));
+          nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
+          const Vec3f n(plane.unit());
+          for (int c = 0; c < 3; ++c) {  // to nearest (half away from zero); |n| <= 1: no overflow
+            const float v = plane.nn > 0.0 ? n[c] * 32767.0f : 0.0f;
+            done_q[at][c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
+          }
+          for (int v = 0; v < 3; ++v) {
+            const Vec3f& x = m.corner(size_t(t), v);
+            for (int c = 0; c < 3; ++c) {
+              nd.tlo[c] = std::min(nd.tlo[c], x[c]);
+              nd.thi[c] = std::max(nd.thi[c], x[c]);
+            }
+          }
           for (int c = 0; c < 3; ++c) {
-            nd.tlo[c] = std::min(nd.tlo[c], x[c]);
-            nd.thi[c] = std::max(nd.thi[c], x[c]);
+            nd.nlo[c] = std::min(nd.nlo[c], n[c]);
+            nd.nhi[c] = std::max(nd.nhi[c], n[c]);
           }
         }
-        for (int c = 0; c < 3; ++c) {
-          nd.nlo[c] = std::min(nd.nlo[c], n[c]);
-          nd.nhi[c] = std::max(nd.nhi[c], n[c]);
-        }
+        if (ed.t2 >= 0)
+          for (int c = 0; c < 3; ++c) en[3 * side + c] = done_q[at][c];
       }
     }
   }
@@ -374,6 +391,44 @@ inline bool facing_prunes(const FloatFrustum& ff, const Node& nd, const float* N
   return flo > margin || fhi < -margin;
 }
 
+// The leaf's per-edge facing test for one receiver r (edge_tree.h): both triangles of the
+// edge (q[0..3) and q[3..6): unit normals times S = 32767, rounded; 0 when it has no
+// pair) have r on one side, beyond the margin, measured from the edge's endpoint a,
+// which lies in both planes. `ext` is the L1 extent of the leaf's triangle box: every
+// vertex v of the two triangles has |r - v| <= |r - a|_1 + ext. With f = q.(r - a) / S
+// the unit normal's value is f within (1/(2S) + 2^-21) |r - a|_1 (rounding of q and of
+// the float sums), so f > 2 (|r - a|_1 + ext) / S + abs_margin (about 2^-14) puts it
+// above 2^-20 (|r - a|_1 + ext) with room to spare: the doubt threshold of
+// ReceiverIntegrator::facing. The same float operations as the lanes' form.
+// Returns 1 when the edge has weight 0 (leave it); 2 or 3 when its weight is proven +2 or
+// -2 (r in front of one triangle and behind the other, both beyond the margin: handed
+// out with EdgeTree::kWeightPlus2 or kWeightMinus2); else 0 (the solver computes it).
+inline int edge_facing_class(const float* r, const Vec3f& a, const int16_t* q, float ext, float abs_margin) {
+  const float dx = r[0] - a.x, dy = r[1] - a.y, dz = r[2] - a.z;
+  const float f1 = (float(q[0]) * dx + float(q[2]) * dz) + float(q[1]) * dy;
+  const float f2 = (float(q[3]) * dx + float(q[5]) * dz) + float(q[4]) * dy;
+  const float l1 = (std::abs(dx) + std::abs(dz)) + std::abs(dy);
+  const float margin = 2.0f * (l1 + ext) + 32767.0f * abs_margin;
+  if ((f1 > margin && f2 > margin) || (f1 < -margin && f2 < -margin)) return 1;
+  if (f1 > margin && f2 < -margin) return 2;
+  if (f1 < -margin && f2 > margin) return 3;
+  return 0;
+}
+
+// The leaf's triangles all active (their box more than active_margin above the light
+// plane): facing_prunes' light-plane test.
+template <class Node>
+inline bool all_active(const Node& nd, const float* N, float h0, float active_margin) {
+  float hmin = -h0;
+  for (int c = 0; c < 3; ++c) hmin += N[c] * (N[c] >= 0.0f ? nd.tlo[c] : nd.thi[c]);
+  return hmin > active_margin;
+}
+
+template <class Node>
+inline float l1_extent(const Node& nd) {
+  return ((nd.thi[0] - nd.tlo[0]) + (nd.thi[2] - nd.tlo[2])) + (nd.thi[1] - nd.tlo[1]);
+}
+
 }  // namespace
 
 void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts,
@@ -399,8 +454,17 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
         continue;
       }
       if (nd.leaf) {
-        for (uint32_t k = nd.child; k < nd.child + nd.n; ++k)
-          if (!ff.outside((*vertices_)[ends_[2 * k]], (*vertices_)[ends_[2 * k + 1]], eps)) edges->push_back(order_[k]);
+        const bool active = all_active(nd, N, h0, active_margin);
+        const float ext = l1_extent(nd);
+        for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+          // The facing test first: on a noisy surface it leaves most edges (the result is
+          // the same in either order).
+          const Vec3f& a = (*vertices_)[ends_[2 * k]];
+          const int cls = active ? edge_facing_class(ff.rlo, a, &normals_[6 * size_t(k)], ext, abs_margin) : 0;
+          if (cls == 1) continue;
+          if (ff.outside(a, (*vertices_)[ends_[2 * k + 1]], eps)) continue;
+          edges->push_back(order_[k] | (cls == 2 ? kWeightPlus2 : cls == 3 ? kWeightMinus2 : 0u));
+        }
         continue;
       }
       for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
@@ -521,6 +585,35 @@ __attribute__((target("avx2"))) inline int facing_prunes8(const LaneFrusta& L, c
       _mm256_or_ps(_mm256_cmp_ps(flo, margin, _CMP_GT_OQ), _mm256_cmp_ps(fhi, nmargin, _CMP_LT_OQ)));
 }
 
+// Lanes edge_facing_class gives 1 (returned), 2 (`plus`) and 3 (`minus`): the same
+// per-lane operations in the same order.
+__attribute__((target("avx2"))) inline int edge_facing_class8(const LaneFrusta& L, const Vec3f& a, const int16_t* q,
+                                                              float ext, float abs_margin, int& plus, int& minus) {
+  const float n[6] = {float(q[0]), float(q[1]), float(q[2]), float(q[3]), float(q[4]), float(q[5])};
+  const __m256 sign = _mm256_set1_ps(-0.0f);
+  const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(L.r[0]), _mm256_set1_ps(a.x));
+  const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(L.r[1]), _mm256_set1_ps(a.y));
+  const __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(L.r[2]), _mm256_set1_ps(a.z));
+  const __m256 f1 = _mm256_add_ps(
+      _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(n[0]), dx), _mm256_mul_ps(_mm256_set1_ps(n[2]), dz)),
+      _mm256_mul_ps(_mm256_set1_ps(n[1]), dy));
+  const __m256 f2 = _mm256_add_ps(
+      _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(n[3]), dx), _mm256_mul_ps(_mm256_set1_ps(n[5]), dz)),
+      _mm256_mul_ps(_mm256_set1_ps(n[4]), dy));
+  const __m256 l1 = _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sign, dx), _mm256_andnot_ps(sign, dz)),
+                                  _mm256_andnot_ps(sign, dy));
+  const __m256 margin = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), _mm256_add_ps(l1, _mm256_set1_ps(ext))),
+                                      _mm256_set1_ps(32767.0f * abs_margin));
+  const __m256 nmargin = _mm256_sub_ps(_mm256_setzero_ps(), margin);
+  const int p1 = _mm256_movemask_ps(_mm256_cmp_ps(f1, margin, _CMP_GT_OQ));
+  const int n1 = _mm256_movemask_ps(_mm256_cmp_ps(f1, nmargin, _CMP_LT_OQ));
+  const int p2 = _mm256_movemask_ps(_mm256_cmp_ps(f2, margin, _CMP_GT_OQ));
+  const int n2 = _mm256_movemask_ps(_mm256_cmp_ps(f2, nmargin, _CMP_LT_OQ));
+  plus = p1 & n2;
+  minus = n1 & p2;
+  return (p1 & p2) | (n1 & n2);
+}
+
 }  // namespace
 
 // walk() for up to eight receivers at once: a node goes on with the lanes that did not
@@ -554,12 +647,17 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
         if (m == 0) continue;
       }
       if (nd.leaf) {
+        const bool active = all_active(nd, N, h0, active_margin);
+        const float ext = l1_extent(nd);
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
-          int keep = m & ~segment_outside8(L, (*vertices_)[ends_[2 * k]], (*vertices_)[ends_[2 * k + 1]], neps);
+          const Vec3f& a = (*vertices_)[ends_[2 * k]];
+          int plus = 0, minus = 0;
+          int keep = active ? m & ~edge_facing_class8(L, a, &normals_[6 * size_t(k)], ext, abs_margin, plus, minus) : m;
+          if (keep) keep &= ~segment_outside8(L, a, (*vertices_)[ends_[2 * k + 1]], neps);
           while (keep) {
             const int lane = __builtin_ctz(unsigned(keep));
             keep &= keep - 1;
-            outs[lane].push_back(order_[k]);
+            outs[lane].push_back(order_[k] | ((plus >> lane) & 1 ? kWeightPlus2 : (minus >> lane) & 1 ? kWeightMinus2 : 0u));
           }
         }
         continue;
@@ -578,7 +676,6 @@ void EdgeTree::query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& fr
     for (size_t k = 0; k < n; ++k) outs[k].clear();
     if (empty()) return;
     for (size_t first = 0; first < n; first += 8) walk8(fs + first, std::min<size_t>(8, n - first), frame, eps, starts, outs + first);
-    for (size_t k = 0; k < n; ++k) std::sort(outs[k].begin(), outs[k].end());
     return;
   }
 #endif
@@ -589,7 +686,6 @@ void EdgeTree::query(const EdgeFrustum& f, const LightFrame& frame, float eps, c
                      std::vector<uint32_t>& out) const {
   out.clear();
   if (!empty()) walk(f, frame, eps, starts.data(), starts.size(), 0, &out, nullptr);
-  std::sort(out.begin(), out.end());
 }
 
 void EdgeTree::frontier(const EdgeFrustum& f, const LightFrame& frame, float eps, uint32_t max_edges,

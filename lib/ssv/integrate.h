@@ -237,7 +237,7 @@ class FramePositions {
 
  private:
   [[gnu::noinline]] Vec3d fill(uint32_t v) const;  // computes v's position into its slot (off the hot path)
-  static constexpr size_t kCache = 2048;  // entries (56 KiB)
+  static constexpr size_t kCache = 8192;  // entries (224 KiB)
   const std::vector<Vec3d>* all_ = nullptr;
   const std::vector<Vec3f>* vertices_ = nullptr;
   const LightFrame* frame_ = nullptr;
@@ -384,7 +384,7 @@ class ReceiverIntegrator {
   bool side_lanes_ = false;      // at most four planes and AVX2: add_segment tests them at once
   mutable bool doubtful_ = false;  // set by add_segment and by facing (nearly edge-on)
   [[gnu::noinline]] const TrianglePlane& fill_plane(size_t t) const;  // into its slot (off the hot path)
-  static constexpr size_t kPlaneCache = 1024;        // entries of plane()'s cache (64 KiB)
+  static constexpr size_t kPlaneCache = 8192;        // entries of plane()'s cache (512 KiB)
   mutable std::vector<int64_t> plane_keys_;
   mutable std::vector<TrianglePlane> plane_cache_;
   std::vector<Vec2f> pieces_;    // projected pieces P, Q of this receiver (pairs)

@@ -68,19 +68,27 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
   // exact expressions (a dense mesh's triangles are mostly far below a light's area).
   const double nn_tri = 4.0 * min_area * min_area * (1.0 - 1e-6), nn_pair = 0.25 * nn_tri;
   std::vector<std::pair<double, size_t>> cand;
-  // Per triangle nn > 0 and nn >= nn_pair, for the pairs' prefilter: each plane is read
-  // (or computed) once here, and only the pairs that pass read theirs again.
-  std::vector<bool> has_plane(T), pair_size(T);
+  // Per triangle nn >= nn_pair, for the pairs' prefilter: each plane is read (or
+  // computed) once here, and only the pairs that pass read theirs again. A triangle whose
+  // float bound |b - a|^2 |c - a|^2 >= nn (with a relative slack of 1e-4, far above the
+  // float rounding) is below nn_pair has no plane computed at all: on a dense mesh
+  // nearly every triangle (the plane costs several times the bound).
+  std::vector<bool> pair_size(T);
   for (size_t t = 0; t < T; ++t) {
+    if (nn_pair > 0.0) {
+      const Vec3f &a = m.corner(t, 0), e1 = m.corner(t, 1) - a, e2 = m.corner(t, 2) - a;
+      const double bound = double(dot(e1, e1)) * double(dot(e2, e2)) * (1.0 + 1e-4);
+      if (bound < nn_pair) continue;
+    }
     const double nn = planes[t].nn;
-    has_plane[t] = nn > 0.0;
     pair_size[t] = nn >= nn_pair;
     if (nn > 0.0 && nn >= nn_tri && area_of(nn) >= min_area) cand.emplace_back(area_of(nn), t);
   }
   for (size_t i = 0; i < edges.size(); ++i) {
     const Edge& e = edges[i];
-    if (e.t2 < 0 || !has_plane[size_t(e.t1)]) continue;
+    if (e.t2 < 0) continue;
     if (!pair_size[size_t(e.t1)] && !pair_size[size_t(e.t2)]) continue;  // both below min_area / 2
+    if (!(planes[size_t(e.t1)].nn > 0.0)) continue;
     const double area = tri_area(size_t(e.t1)) + tri_area(size_t(e.t2));
     if (!(area >= min_area)) continue;
     const uint32_t c = third(e.t1, e), d = third(e.t2, e);

@@ -405,7 +405,8 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
   // r is harmless anyway: its edge's projection misses L' and is clipped away.
   st.valid.clear();
   if (ls.edge_tree) {
-    for (uint32_t ei : st.edge_candidates) {
+    for (const uint32_t cand : st.edge_candidates) {
+      const uint32_t ei = cand & EdgeTree::kEdgeMask;
       const Edge& edge = sc.edges[ei];
       // wedge_edge depends on the edge and the light only: memoised per thread and light.
       const size_t slot = ei & (kWedgeMemo - 1);
@@ -413,7 +414,10 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
       if (st.wedge_memo[slot] >> 1 != uint64_t(ei) + 1)
         st.wedge_memo[slot] = (uint64_t(ei) + 1) << 1 | uint64_t(wedge_edge(sc, st.integrator, ls.frame, edge));
       if (!(st.wedge_memo[slot] & 1)) continue;
-      int weight = st.integrator.edge_weight(edge);
+      // The weight the leaf test proved, or the double test's.
+      const int weight = cand & EdgeTree::kWeightPlus2    ? 2
+                         : cand & EdgeTree::kWeightMinus2 ? -2
+                                                          : st.integrator.edge_weight(edge);
       if (weight != 0) st.valid.emplace_back(ei, weight);
     }
   }
@@ -502,9 +506,8 @@ void solve_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls,
   st.c.t_ray += seconds_between(e, Clock::now());
 }
 
-// wedge_index=auto picks the edge hierarchy from this many mesh edges per receiver, unless
-// a probe of the first light finds more than kMaxProbeCandidates candidates per receiver.
-constexpr double kEdgesPerReceiver = 16.0, kMaxProbeCandidates = 256.0;
+// wedge_index=auto picks the edge hierarchy from this many mesh edges per receiver.
+constexpr double kEdgesPerReceiver = 16.0;
 
 // The edge tree's frontier per batch of at most kEdgeBatch receivers: nodes of at most
 // kFrontierEdges edges (measured on scan 75k: batches of 8 beat 4 and 32, frontiers of
@@ -731,37 +734,6 @@ struct Culling {
   }
 };
 
-// wedge_index=auto on a dense mesh: the mean number of candidate edges per receiver of
-// the first usable light, over up to 16 batches spread over the receiver tree (64 walks
-// or fewer). Only decides which index runs, never an answer.
-double probe_candidates(const Scene& scene, const ReceiverTree& tree, const EdgeTree& et, float eps) {
-  for (const Light& light : scene.lights) {
-    const LightFrame frame = make_light_frame(light);
-    if (!frame.usable || double(frame.max_jitter_h) > 1e-5 * frame.extent) continue;
-    const std::vector<int32_t> all = WedgeScatter::batches(tree, kEdgeBatch);
-    const size_t step = std::max<size_t>(1, all.size() / 16);
-    std::vector<uint32_t> starts, got;
-    double walks = 0, candidates = 0;
-    for (size_t k = 0; k < all.size(); k += step) {
-      const auto& nd = tree.nodes()[size_t(all[k])];
-      AABBd box;
-      for (uint32_t p = nd.begin; p < nd.end; ++p)
-        if (!grazing_receiver(frame, scene.receivers[tree.order()[p]].p)) box.extend(to_double(scene.receivers[tree.order()[p]].p));
-      if (box.empty()) continue;
-      et.frontier(EdgeFrustum(frame, box), frame, eps, kFrontierEdges, starts);
-      for (uint32_t p = nd.begin; p < nd.end; ++p) {
-        const Vec3f& r = scene.receivers[tree.order()[p]].p;
-        if (grazing_receiver(frame, r)) continue;
-        et.query(EdgeFrustum(frame, r), frame, eps, starts, got);
-        walks += 1;
-        candidates += double(got.size());
-      }
-    }
-    return walks > 0 ? candidates / walks : 0.0;
-  }
-  return 0.0;
-}
-
 // The light points of the occluder test: L' at the largest jitter height on both sides of
 // its plane, whose hull holds every sample (light_frame.h).
 std::vector<Vec3d> light_points(const LightFrame& frame) {
@@ -825,12 +797,15 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // receiver). Measured by callgrind instructions: scan 75k (110 edges per receiver)
   // 1,383M -> 593M with the edges, rooms (38) equal, foliage (12) +12% and columns
   // (0.9) 2.8x with them. Answers do not depend on the choice.
-  // A dense mesh whose receivers still get many candidates from the edges (a noisy scanned
-  // surface, silhouettes everywhere) takes the wedges too: see probe_candidates below.
-  const bool auto_index = index == "auto";
-  if (auto_index) index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
-  bool use_edges = index == "edges";
-  bool use_scatter = index == "receivers";
+  // Noisy scanned surfaces (silhouettes everywhere) take the edges too: the leaves' per-edge
+  // facing test hands out about the edges that validate (CGAL's bunny, armadillo and
+  // elephant: 153, 505 and 268 per receiver), where the wedges build and scatter a third
+  // of the mesh's edges per light (docs/log/ssv-performance.md, ninth round).
+  if (index == "auto") index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
+  // The edge index marks proven weights in its candidates' top bits (edge_tree.h): a mesh
+  // of more edges than those leave (2^30, far beyond any memory budget) takes the wedges.
+  const bool use_edges = index == "edges" && edges.size() <= size_t(EdgeTree::kEdgeMask);
+  const bool use_scatter = index == "receivers" || (index == "edges" && !use_edges);
   // The triangle planes as an array for the wedge indexes (build_wedges reads every
   // edge's per light); the edge index reads only its candidates' and computes them.
   TrianglePlanes tri_planes;
@@ -859,17 +834,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   auto tc0 = Clock::now();
   Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges,
                use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
-  // wedge_index=auto: more than kMaxProbeCandidates candidates per receiver (CGAL's
-  // scanned armadillo 3,164 and bunny 1,364 against 12.6 on scan 75k; the armadillo ran
-  // 1.4x slower with the edges, the bunny about the same) switch to the wedges.
-  if (auto_index && use_edges && probe_candidates(scene, cull.tree, cull.edge_tree, eps) > kMaxProbeCandidates) {
-    use_edges = false;
-    use_scatter = true;
-    cull.edge_tree = EdgeTree();
-    if (use_shafts) cull.build_shaft_bvh(pm, edges);
-    tri_planes = triangle_planes(pm);
-    planes.planes = &tri_planes;
-  }
   const SceneSetup sc{scene, embree, edges, eps, pm, tol};
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();

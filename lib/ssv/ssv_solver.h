@@ -8,10 +8,10 @@
 // Culling (docs/methods/ssv.md, "Culling"), each conservative: receivers a planar
 // occluder hides from a light are answered blocked without integration (occluders.h).
 // With wedge_index=edges (chosen by the default, auto, for meshes of at least 16 edges per
-// receiver whose first light's probe finds at most 256 candidates per receiver) no wedge
-// is built: each receiver's candidate edges come from a walk of the
+// receiver) no wedge is built: each receiver's candidate edges come from a walk of the
 // edge hierarchy (edge_tree.h) that leaves subtrees outside its frustum to L' or proven
-// weight 0 from it, and build_wedges' edge tests and the weight validate them. With
+// weight 0 from it, and edges its leaves prove weight 0, and build_wedges' edge tests
+// and the weight validate them. With
 // wedge_index=receivers (auto's choice otherwise), only edges inside the remaining
 // receivers' shafts to the light get wedges and the wedges are scattered through the
 // receiver tree (wedge_scatter.h); wedge_index=bsp keeps the lazy BSP of section 4.1.
@@ -92,7 +92,7 @@ class SsvSolver : public Solver {
     return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}},
             {"occluder_culling", "skip receivers a planar occluder hides from a light (occluders.h)", {"on", "off"}},
             {"shaft_culling", "build wedges only for edges inside the receivers' shafts to a light", {"on", "off"}},
-            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver and at most 256 candidates per receiver in a probe", {"auto", "edges", "receivers", "bsp"}}};
+            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver, else the scattered wedges", {"auto", "edges", "receivers", "bsp"}}};
   }
  protected:
   SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;
