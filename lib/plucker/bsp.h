@@ -83,7 +83,14 @@ struct Occluder {
 // order of the polygons is that of `polys`, not of `verts`.
 struct FragmentList {
   std::vector<Vec3d> verts;
-  std::vector<std::pair<uint32_t, uint32_t>> polys;  // (first vertex, count)
+  // A polygon's place in verts. Trivially copyable (std::pair is not: its assignment is
+  // user-provided), so moving and copying a list of them is a memmove.
+  struct Span {
+    uint32_t first = 0, second = 0;  // first vertex, count
+    Span() = default;
+    Span(uint32_t f, uint32_t n) : first(f), second(n) {}
+  };
+  std::vector<Span> polys;
   size_t garbage = 0;  // vertices in verts that no polygon uses
 
   void clear() { verts.clear(); polys.clear(); garbage = 0; }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <type_traits>
 
 #include "lib/base/check.h"
 
@@ -31,28 +32,30 @@ struct Replacement {
 };
 
 // Replaces, for each entry of `repl` (increasing f), fragment f of `frags` (and its box)
-// by the pieces [a, b) (and their boxes), keeping every other fragment, its vertices and
-// its box where they are: the same fragments in the same order as copying the list with
-// the pieces in place of each f, without the copy. The pieces' vertices go to the end of
-// frags.verts; the replaced fragments' stay there as garbage until more than half of the
-// vertices are, and then the list is written back to back again (same values, same order).
+// by the pieces [a, b) (and their boxes), keeping every other fragment's vertices where
+// they are: the same fragments in the same order as copying the list with the pieces in
+// place of each f, without copying the vertices. One for one, a fragment is overwritten;
+// else the spans and boxes are written anew in one pass (runs between the entries copied
+// at once: memmoves; per entry a moved tail cost more, on lists of thousands). The
+// pieces' vertices go to the end of frags.verts; the replaced fragments' stay there as
+// garbage until more than half of the vertices are, and then the list is written back to
+// back again (same values, same order).
 void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, const FragmentList& pieces,
                        const std::vector<UVBox>& piece_boxes, const std::vector<Replacement>& repl) {
+  static_assert(std::is_trivially_copyable_v<FragmentList::Span> && std::is_trivially_copyable_v<UVBox>);
   const uint32_t base = uint32_t(frags.verts.size());
   frags.verts.insert(frags.verts.end(), pieces.verts.begin(), pieces.verts.end());  // pieces: back to back
-  auto piece = [&](uint32_t j) {
-    return std::pair<uint32_t, uint32_t>(base + pieces.polys[j].first, pieces.polys[j].second);
-  };
+  auto piece = [&](uint32_t j) { return FragmentList::Span(base + pieces.polys[j].first, pieces.polys[j].second); };
   bool one_each = true;
   for (const Replacement& rp : repl) one_each &= rp.b == rp.a + 1;
-  if (one_each) {  // a fragment for a fragment: overwritten where it is
+  if (one_each) {
     for (const Replacement& rp : repl) {
       frags.garbage += frags.polys[rp.f].second;
       frags.polys[rp.f] = piece(rp.a);
       boxes[rp.f] = piece_boxes[rp.a];
     }
   } else {
-    thread_local std::vector<std::pair<uint32_t, uint32_t>> polys;
+    thread_local std::vector<FragmentList::Span> polys;
     thread_local std::vector<UVBox> nboxes;
     polys.clear();
     nboxes.clear();
@@ -61,10 +64,8 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, const Fra
       polys.insert(polys.end(), frags.polys.begin() + std::ptrdiff_t(f0), frags.polys.begin() + rp.f);
       nboxes.insert(nboxes.end(), boxes.begin() + std::ptrdiff_t(f0), boxes.begin() + rp.f);
       frags.garbage += frags.polys[rp.f].second;
-      for (uint32_t j = rp.a; j < rp.b; ++j) {
-        polys.push_back(piece(j));
-        nboxes.push_back(piece_boxes[j]);
-      }
+      for (uint32_t j = rp.a; j < rp.b; ++j) polys.push_back(piece(j));
+      nboxes.insert(nboxes.end(), piece_boxes.begin() + rp.a, piece_boxes.begin() + rp.b);
       f0 = size_t(rp.f) + 1;
     }
     polys.insert(polys.end(), frags.polys.begin() + std::ptrdiff_t(f0), frags.polys.end());
@@ -75,7 +76,7 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, const Fra
   if (frags.garbage > 1024 && 2 * frags.garbage > frags.verts.size()) {
     thread_local std::vector<Vec3d> verts;
     verts.clear();
-    for (auto& p : frags.polys) {
+    for (FragmentList::Span& p : frags.polys) {
       const uint32_t at = uint32_t(verts.size());
       verts.insert(verts.end(), frags.verts.begin() + p.first, frags.verts.begin() + p.first + p.second);
       p.first = at;
@@ -113,8 +114,16 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   // A fragment entirely on the negative side of one edge plane misses q: kept whole,
   // without the splits the walk below would make before reaching that edge. Tried
   // from the edge that separated the previous fragment (neighbours mostly share it).
-  auto misses = [&](size_t f) {
-    if (!qbox.overlaps(boxes[f])) return true;
+  // Fragments whose box misses q's shadow box are passed over in a loop of their own
+  // (on lists of thousands of fragments this scan is most of a call).
+  const size_t nf = frags.size();  // the list changes only after the loop below
+  const UVBox* bx = boxes.data();
+  auto next_met = [&](size_t f) {
+    while (f < nf && !qbox.overlaps(bx[f])) ++f;
+    return f;
+  };
+  // A fragment whose box meets it may still lie on the negative side of one edge plane.
+  auto edge_misses = [&](size_t f) {
     for (int mi = 0; mi < nq; ++mi) {
       const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
       if (skip[m]) continue;
@@ -127,16 +136,14 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     }
     return false;
   };
-  // The first fragment q's shadow may meet; none: nothing changes.
-  size_t first = 0;
-  while (first < frags.size() && misses(first)) ++first;
-  if (first == frags.size()) return false;
+  bool met = false;  // some fragment not missed
   pieces.clear();
   piece_boxes.clear();
   thread_local std::vector<Replacement> repl;
   repl.clear();
-  for (size_t f = first; f < frags.size(); ++f) {
-    if (f > first && misses(f)) continue;
+  for (size_t f = next_met(0); f < nf; f = next_met(f + 1)) {
+    if (edge_misses(f)) continue;
+    met = true;
     // The piece still walked: the fragment itself until the first split, then `cur`.
     // The pieces are written into pos and neg (room for 2n each, fragment.h); the
     // buffers only grow. The visible pieces split off go to `pieces`.
@@ -185,7 +192,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     repl.push_back({uint32_t(f), uint32_t(first_piece), uint32_t(pieces.size())});
   }
   if (!repl.empty()) replace_fragments(frags, boxes, pieces, piece_boxes, repl);
-  return true;
+  return met;
 }
 
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,
