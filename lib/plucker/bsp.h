@@ -46,6 +46,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "lib/base/check.h"
 #include "lib/base/memory_budget.h"
 #include "lib/geom/vec.h"
 #include "lib/plucker/fragment.h"
@@ -76,12 +77,23 @@ struct Occluder {
   bool two_sided = false;
 };
 
-// Convex polygons stored back to back.
+// Convex polygons, their vertices in `verts` (polys: first vertex, count). Written by
+// add() they are back to back; replace_in_place (subtract.h) may leave the vertices of
+// replaced fragments behind (`garbage` of them) and put new ones at the end, so the
+// order of the polygons is that of `polys`, not of `verts`.
 struct FragmentList {
   std::vector<Vec3d> verts;
-  std::vector<std::pair<uint32_t, uint32_t>> polys;  // (first vertex, count)
+  // A polygon's place in verts. Trivially copyable (std::pair is not: its assignment is
+  // user-provided), so moving and copying a list of them is a memmove.
+  struct Span {
+    uint32_t first = 0, second = 0;  // first vertex, count
+    Span() = default;
+    Span(uint32_t f, uint32_t n) : first(f), second(n) {}
+  };
+  std::vector<Span> polys;
+  size_t garbage = 0;  // vertices in verts that no polygon uses
 
-  void clear() { verts.clear(); polys.clear(); }
+  void clear() { verts.clear(); polys.clear(); garbage = 0; }
   size_t size() const { return polys.size(); }
   const Vec3d* data(size_t k) const { return verts.data() + polys[k].first; }
   int count(size_t k) const { return int(polys[k].second); }
@@ -89,17 +101,10 @@ struct FragmentList {
     polys.emplace_back(uint32_t(verts.size()), uint32_t(n));
     verts.insert(verts.end(), p, p + n);
   }
-  // Appends fragments [a, b) of `in` (its vertices are back to back, as add() writes
-  // them), in order: one copy of their vertices instead of b - a calls of add().
-  void append(const FragmentList& in, size_t a, size_t b) {
-    if (a >= b) return;
-    const uint32_t vb = in.polys[a].first, ve = in.polys[b - 1].first + in.polys[b - 1].second;
-    const uint32_t base = uint32_t(verts.size());
-    verts.insert(verts.end(), in.verts.begin() + vb, in.verts.begin() + ve);
-    for (size_t k = a; k < b; ++k) polys.emplace_back(base + (in.polys[k].first - vb), in.polys[k].second);
-  }
-  // Drops the fragments from the n-th on (n <= size()).
+  // Drops the fragments from the n-th on (n <= size()); the vertices must be back to
+  // back (no garbage).
   void truncate(size_t n) {
+    VG_DCHECK(garbage == 0);
     if (n >= polys.size()) return;
     verts.resize(polys[n].first);
     polys.resize(n);

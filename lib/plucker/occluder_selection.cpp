@@ -113,10 +113,10 @@ class Selection {
   struct Cover {
     int n = 0;
     EdgeFan light[kMaxOccluderVertices], region[kMaxOccluderVertices];
+    mutable int hint = 0;  // the edge that failed last (covered_by_interior, covered_box)
   };
   std::vector<Cover> covers_;
   int8_t keep_side_ = 0;  // NearPoly::keep_side of the triangle being selected
-  mutable int hint_ = 0;  // the cover edge that failed last (covered_by_interior, covered_box)
 };
 
 // Slab (DESIGN section 3): let g point towards the light with g . x > g . r for every
@@ -504,10 +504,10 @@ bool Selection::covered_by_interior(const Vec3d* pts, int n) const {
   for (const Cover& cv : covers_) {
     bool all = true;
     for (int mi = 0; mi < cv.n && all; ++mi) {
-      const int m = (hint_ + mi) % cv.n;  // from the edge that failed last: same answer, sooner
+      const int m = (cv.hint + mi) % cv.n;  // from the edge that failed last: same answer, sooner
       all = cv.light[m].orientation(pts, n, true) == Orientation::Positive ||
             (gs_.rloc_exact && cv.region[m].orientation(pts, n, false) == Orientation::Positive);
-      if (!all) hint_ = m;
+      if (!all) cv.hint = m;
     }
     if (all) return true;
   }
@@ -538,9 +538,9 @@ bool Selection::covered_box(const Vec3d& lo, const Vec3d& hi) const {
   for (const Cover& cv : covers_) {
     bool all = true;
     for (int mi = 0; mi < cv.n && all; ++mi) {
-      const int m = (hint_ + mi) % cv.n;
+      const int m = (cv.hint + mi) % cv.n;
       all = positive(cv.light[m], 1.0) || (gs_.rloc_exact && positive(cv.region[m], -1.0));
-      if (!all) hint_ = m;
+      if (!all) cv.hint = m;
     }
     if (all) return true;
   }

@@ -55,6 +55,12 @@ std::vector<uint8_t>& near_hint() {
   thread_local std::vector<uint8_t> h;
   return h;
 }
+// Per interior occluder of the group, the edge that failed last in covered() (a start,
+// as near_hint). Per thread; sized by cover_planes.
+std::vector<uint8_t>& cover_hint() {
+  thread_local std::vector<uint8_t> h;
+  return h;
+}
 
 class ReceiverShading {
  public:
@@ -70,7 +76,8 @@ class ReceiverShading {
         r_(gs.rloc[gk]),
         rmax_(max_component(vabs(r_))),
         pw_(pyramid_weights()),
-        near_hint_(near_hint()) {}
+        near_hint_(near_hint()),
+        cover_hint_(cover_hint()) {}
 
   void run();
 
@@ -83,6 +90,14 @@ class ReceiverShading {
   void bound_all() {
     all_ = UVBox{};
     for (const UVBox& b : gs_.boxes) all_.extend(b);
+  }
+  // After a subtraction in place: all_ grown by the new fragments' boxes (gs_.tmp_boxes)
+  // instead of made anew. It then holds every fragment's box, and it only rejects a
+  // polygon whose shadow box misses it (subtract_near, subtract_merged), which then misses
+  // every fragment's box: subtract_polygon would change nothing, so the larger union
+  // changes no answer, only how soon a polygon is let go.
+  void extend_all() {
+    for (const UVBox& b : gs_.tmp_boxes) all_.extend(b);
   }
   bool exact_once(uint32_t t);
   void cover_planes();
@@ -106,12 +121,14 @@ class ReceiverShading {
   const Receiver& rec_;
   const Vec3d& r_;  // local
   const double rmax_;
-  UVBox all_;        // the union of the fragments' boxes (bound_all)
+  UVBox all_;        // holds the fragments' boxes: their union (bound_all) or more (extend_all)
   Vec3d plo_{}, phi_{};  // the box of r's pyramid (r and the light), grown
-  int cover_hint_ = 0;   // covered(): the interior occluder edge that failed last
   uint32_t serial_ = 0;  // this receiver's mark in GroupState::near_done (0: no merging)
   PyramidWeights& pw_;           // this thread's (pyramid_weights)
   std::vector<uint8_t>& near_hint_;  // this thread's (near_hint)
+  // covered(): per interior occluder, the edge that failed last (cover_planes sizes it;
+  // this thread's, as near_hint_).
+  std::vector<uint8_t>& cover_hint_;
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -211,6 +228,7 @@ void ReceiverShading::pyramid_planes() {
 void ReceiverShading::cover_planes() {
   gs_.cover_n.clear();
   gs_.cover_err.clear();
+  cover_hint_.assign(gs_.interior.size(), 0);
   if (gs_.interior.empty() || !translates_exactly(rec_.p, lf_.origin)) return;
   for (const Occluder& o : gs_.interior)
     for (int m = 0; m < o.n; ++m) {
@@ -225,21 +243,24 @@ void ReceiverShading::cover_planes() {
 // it, from r's side, so the segment from r to the light passes through it (it lies
 // strictly between the group's receivers and the light) and the tree hides what the
 // triangle would. Signs det[x - r, a - r, b - r] decided against dot_err (lines.h).
-// The edges are tried from the one that failed last (cover_hint_): the polygons come
-// in spatial order, and near the silhouette most of them pass every edge but one.
+// The edges of each occluder are tried from the one that failed last for it
+// (cover_hint_): the polygons come in spatial order, and near the silhouette most of
+// them pass every edge but one.
 bool ReceiverShading::covered(const NearPoly& np) {
   size_t e = 0;
-  for (const Occluder& o : gs_.interior) {
+  for (size_t oi = 0; oi < gs_.interior.size(); ++oi) {
+    const Occluder& o = gs_.interior[oi];
+    uint8_t& hint = cover_hint_[oi];
     bool all = !gs_.cover_n.empty();
     for (int mi = 0; mi < o.n && all; ++mi) {
-      const int m = (cover_hint_ + mi) % o.n;
+      const int m = (hint + mi) % o.n;
       const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
       const Vec3d& err = gs_.cover_err[e + size_t(m)];
       for (int k = 0; k < 3 && all; ++k) {
         const Vec3d d = np.t[k] - nearest_base(r_, o.v[m], o.v[(m + 1) % o.n], np.t[k]);
         all = dot(d, nrm) > dot_err(d, nrm, err);
       }
-      if (!all) cover_hint_ = m;
+      if (!all) hint = uint8_t(m);
     }
     if (all) return true;
     e += size_t(o.n);
@@ -431,12 +452,9 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
   UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return;
-  if (!subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
-                        gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
-    return;
-  std::swap(gs_.frags, gs_.tmp);
-  std::swap(gs_.boxes, gs_.tmp_boxes);
-  bound_all();
+  if (subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
+                       gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+    extend_all();
 }
 
 // Near triangles of a closed surface glued along edges (ClosedSurfaces::neighbors)
@@ -524,12 +542,9 @@ bool ReceiverShading::subtract_merged(const NearPoly& np, uint32_t k, int side_r
   gs_.skip.assign(size_t(n), 0);
   const UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return true;
-  if (!subtract_polygon(r_, q.data(), n, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.tmp,
-                        gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
-    return true;
-  std::swap(gs_.frags, gs_.tmp);
-  std::swap(gs_.boxes, gs_.tmp_boxes);
-  bound_all();
+  if (subtract_polygon(r_, q.data(), n, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.tmp,
+                       gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+    extend_all();
   return true;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <type_traits>
 
 #include "lib/base/check.h"
 
@@ -25,12 +26,72 @@ void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first
   out_boxes.push_back(box);
 }
 
+// Fragment f replaced by fragments [a, b) of the pieces (subtract_polygon).
+struct Replacement {
+  uint32_t f, a, b;
+};
+
+// Replaces, for each entry of `repl` (increasing f), fragment f of `frags` (and its box)
+// by the pieces [a, b) (and their boxes), keeping every other fragment's vertices where
+// they are: the same fragments in the same order as copying the list with the pieces in
+// place of each f, without copying the vertices. One for one, a fragment is overwritten;
+// else the spans and boxes are written anew in one pass (runs between the entries copied
+// at once: memmoves; per entry a moved tail cost more, on lists of thousands). The
+// pieces' vertices go to the end of frags.verts; the replaced fragments' stay there as
+// garbage until more than half of the vertices are, and then the list is written back to
+// back again (same values, same order).
+void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, const FragmentList& pieces,
+                       const std::vector<UVBox>& piece_boxes, const std::vector<Replacement>& repl) {
+  static_assert(std::is_trivially_copyable_v<FragmentList::Span> && std::is_trivially_copyable_v<UVBox>);
+  const uint32_t base = uint32_t(frags.verts.size());
+  frags.verts.insert(frags.verts.end(), pieces.verts.begin(), pieces.verts.end());  // pieces: back to back
+  auto piece = [&](uint32_t j) { return FragmentList::Span(base + pieces.polys[j].first, pieces.polys[j].second); };
+  bool one_each = true;
+  for (const Replacement& rp : repl) one_each &= rp.b == rp.a + 1;
+  if (one_each) {
+    for (const Replacement& rp : repl) {
+      frags.garbage += frags.polys[rp.f].second;
+      frags.polys[rp.f] = piece(rp.a);
+      boxes[rp.f] = piece_boxes[rp.a];
+    }
+  } else {
+    thread_local std::vector<FragmentList::Span> polys;
+    thread_local std::vector<UVBox> nboxes;
+    polys.clear();
+    nboxes.clear();
+    size_t f0 = 0;
+    for (const Replacement& rp : repl) {
+      polys.insert(polys.end(), frags.polys.begin() + std::ptrdiff_t(f0), frags.polys.begin() + rp.f);
+      nboxes.insert(nboxes.end(), boxes.begin() + std::ptrdiff_t(f0), boxes.begin() + rp.f);
+      frags.garbage += frags.polys[rp.f].second;
+      for (uint32_t j = rp.a; j < rp.b; ++j) polys.push_back(piece(j));
+      nboxes.insert(nboxes.end(), piece_boxes.begin() + rp.a, piece_boxes.begin() + rp.b);
+      f0 = size_t(rp.f) + 1;
+    }
+    polys.insert(polys.end(), frags.polys.begin() + std::ptrdiff_t(f0), frags.polys.end());
+    nboxes.insert(nboxes.end(), boxes.begin() + std::ptrdiff_t(f0), boxes.end());
+    frags.polys.swap(polys);
+    boxes.swap(nboxes);
+  }
+  if (frags.garbage > 1024 && 2 * frags.garbage > frags.verts.size()) {
+    thread_local std::vector<Vec3d> verts;
+    verts.clear();
+    for (FragmentList::Span& p : frags.polys) {
+      const uint32_t at = uint32_t(verts.size());
+      verts.insert(verts.end(), frags.verts.begin() + p.first, frags.verts.begin() + p.first + p.second);
+      p.first = at;
+    }
+    frags.verts.swap(verts);
+    frags.garbage = 0;
+  }
+}
+
 }  // namespace
 
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
-                      const UVAxes& axes, const LightBounds& light, const FragmentList& in,
-                      const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
-                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
+                      const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
+                      FragmentList& pieces, std::vector<UVBox>& piece_boxes, std::vector<Vec3d>& cur,
+                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
   // each computed when first needed (a polygon whose shadow misses every fragment mostly
   // needs one: the edge that separates them all). Per thread rather than per call:
@@ -49,20 +110,24 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     }
     return planes[m];
   };
-  auto keep = [&](const Vec3d* p, size_t n) {
-    out.add(p, n);
-    out_boxes.push_back(UVBox::of(axes, p, int(n)));
-  };
   int hint = 0;
   // A fragment entirely on the negative side of one edge plane misses q: kept whole,
   // without the splits the walk below would make before reaching that edge. Tried
   // from the edge that separated the previous fragment (neighbours mostly share it).
-  auto misses = [&](size_t f) {
-    if (!qbox.overlaps(boxes[f])) return true;
+  // Fragments whose box misses q's shadow box are passed over in a loop of their own
+  // (on lists of thousands of fragments this scan is most of a call).
+  const size_t nf = frags.size();  // the list changes only after the loop below
+  const UVBox* bx = boxes.data();
+  auto next_met = [&](size_t f) {
+    while (f < nf && !qbox.overlaps(bx[f])) ++f;
+    return f;
+  };
+  // A fragment whose box meets it may still lie on the negative side of one edge plane.
+  auto edge_misses = [&](size_t f) {
     for (int mi = 0; mi < nq; ++mi) {
       const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
       if (skip[m]) continue;
-      SplitResult s = classify_fragment(plane(m), in.data(f), in.count(f));
+      SplitResult s = classify_fragment(plane(m), frags.data(f), frags.count(f));
       if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
       if (s == SplitResult::Negative || s == SplitResult::OnLine) {
         hint = m;
@@ -71,31 +136,21 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     }
     return false;
   };
-  // The first fragment q's shadow may meet; none: nothing changes.
-  size_t first = 0;
-  while (first < in.size() && misses(first)) ++first;
-  if (first == in.size()) return false;
-  out.clear();
-  out_boxes.clear();
-  // Fragments q misses are copied whole, each run of them at once (run_begin: the first
-  // of the run not yet copied), in their order.
-  size_t run_begin = 0;
-  auto flush = [&](size_t end) {
-    if (end <= run_begin) return;
-    out.append(in, run_begin, end);
-    out_boxes.insert(out_boxes.end(), boxes.begin() + std::ptrdiff_t(run_begin), boxes.begin() + std::ptrdiff_t(end));
-  };
-  for (size_t f = first; f < in.size(); ++f) {
-    if (f > first && misses(f)) continue;
-    flush(f);
-    run_begin = f + 1;
-    // The piece still walked: the input fragment itself until the first split, then
-    // `cur`. The pieces are written into pos and neg (room for 2n each, fragment.h); the
-    // buffers only grow.
-    const Vec3d* cp = in.data(f);
-    int cn = in.count(f);
-    const size_t first_piece = out.size();
-    bool alive = true;
+  bool met = false;  // some fragment not missed
+  pieces.clear();
+  piece_boxes.clear();
+  thread_local std::vector<Replacement> repl;
+  repl.clear();
+  for (size_t f = next_met(0); f < nf; f = next_met(f + 1)) {
+    if (edge_misses(f)) continue;
+    met = true;
+    // The piece still walked: the fragment itself until the first split, then `cur`.
+    // The pieces are written into pos and neg (room for 2n each, fragment.h); the
+    // buffers only grow. The visible pieces split off go to `pieces`.
+    const Vec3d* cp = frags.data(f);
+    int cn = frags.count(f);
+    const size_t first_piece = pieces.size();
+    bool alive = true, whole = false;
     for (int m = 0; m < nq && alive; ++m) {
       if (skip[m]) continue;
       if (pos.size() < size_t(2 * cn)) pos.resize(size_t(2 * cn));
@@ -106,13 +161,16 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
         case SplitResult::Positive: break;
         case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
         case SplitResult::Negative:  // what is left misses q: nothing of the fragment is hidden
-          keep_whole(in, f, boxes[f], first_piece, out, out_boxes);
+          whole = true;
           alive = false;
           break;
         case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
         case SplitResult::Both:
           ++c.splits;
-          if (nn != 0) keep(neg.data(), size_t(nn));
+          if (nn != 0) {
+            pieces.add(neg.data(), size_t(nn));
+            piece_boxes.push_back(UVBox::of(axes, neg.data(), nn));
+          }
           if (np == 0) {
             alive = false;
           } else {
@@ -123,10 +181,18 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
           break;
       }
     }
-    // A piece positive against every edge stabs q: blocked, dropped.
+    // Kept whole: the pieces split off it are taken back (a shadow beside a fragment
+    // still cuts it along the planes through q's edges). Else what is left after the
+    // last edge is positive against every edge, stabs q: blocked, dropped.
+    if (whole) {
+      pieces.truncate(first_piece);
+      piece_boxes.resize(first_piece);
+      continue;
+    }
+    repl.push_back({uint32_t(f), uint32_t(first_piece), uint32_t(pieces.size())});
   }
-  flush(in.size());
-  return true;
+  if (!repl.empty()) replace_fragments(frags, boxes, pieces, piece_boxes, repl);
+  return met;
 }
 
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,

@@ -15,20 +15,23 @@
 namespace visgate::plucker {
 
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
-// fragments: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is never stored).
-// `qbox` bounds q's shadow on the light (shadow_box); a fragment whose box misses it
-// is disjoint from the shadow and kept whole. `boxes` is parallel to `in`, `out_boxes`
-// to `out`.
-// Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows every
-// light line from r is on their inner side (the edge q has at r's own level, see the
-// near-polygon loop in shade_receiver.cpp).
-// Returns false, with `out` and `out_boxes` untouched, when q's shadow misses every
-// fragment (box or edge plane): the fragments stay as they are and nothing is copied
-// (about half of the calls on columns).
+// fragments, in place: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is
+// never stored). `qbox` bounds q's shadow on the light (shadow_box); a fragment whose
+// box misses it is disjoint from the shadow and kept whole. `boxes` is parallel to
+// `frags`. Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows
+// every light line from r is on their inner side (the edge q has at r's own level, see
+// the near-polygon loop in shade_receiver.cpp).
+// Each fragment q's shadow meets is replaced, where it is, by its visible pieces (none
+// when q hides all of it; the fragment itself, unsplit, when q hides none of it); the
+// other fragments, their vertices and boxes stay as they are, uncopied (FragmentList
+// may then hold garbage vertices). `pieces` and `piece_boxes` receive the pieces put in
+// (the boxes bound the new fragments: with the old ones, every current fragment's).
+// Returns false, with nothing changed, when q's shadow misses every fragment (box or
+// edge plane; about half of the calls on columns).
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
-                      const UVAxes& axes, const LightBounds& light, const FragmentList& in,
-                      const std::vector<UVBox>& boxes, FragmentList& out, std::vector<UVBox>& out_boxes,
-                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c);
+                      const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
+                      FragmentList& pieces, std::vector<UVBox>& piece_boxes, std::vector<Vec3d>& cur,
+                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c);
 
 // The exact near-plane path: removes from the fragments (local coordinates relative to
 // `origin`) the light points x whose open segment from rw crosses the triangle tw
