@@ -409,7 +409,36 @@ struct alignas(64) FanPacket {
       valid[k] = 0;
     }
     uint32_t active = 0;
-    for (int k = 0; k < n; ++k) {
+    int k0 = 0;
+#if defined(__SSE2__)
+    // Four lanes at a time while they are whole (a fan's end points are AoS Vec3f, 12
+    // bytes: three unaligned loads, transposed); the bound test and the float subtraction
+    // are those of the lane loop below, so the rays are the same bits. A group with a
+    // point outside the bound is left to the lane loop.
+    const __m128 fx = _mm_set1_ps(from.x), fy = _mm_set1_ps(from.y), fz = _mm_set1_ps(from.z);
+    const __m128 bound = _mm_set1_ps(kEmbreeCoordinateBound);
+    const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+    for (; k0 + 4 <= n; k0 += 4) {
+      const float* q = &to[k0].x;
+      static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be three packed floats");
+      const __m128 v0 = _mm_loadu_ps(q), v1 = _mm_loadu_ps(q + 4), v2 = _mm_loadu_ps(q + 8);
+      const __m128 x = _mm_shuffle_ps(v0, _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(1, 1, 2, 2)), _MM_SHUFFLE(2, 0, 3, 0));
+      const __m128 y = _mm_shuffle_ps(_mm_shuffle_ps(v0, v1, _MM_SHUFFLE(0, 0, 1, 1)),
+                                      _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(2, 2, 3, 3)), _MM_SHUFFLE(2, 0, 2, 0));
+      const __m128 z = _mm_shuffle_ps(_mm_shuffle_ps(v0, v1, _MM_SHUFFLE(1, 1, 2, 2)), v2, _MM_SHUFFLE(3, 0, 2, 0));
+      // |c| <= bound, false for NaN (within_embree_bound's test).
+      const __m128 in = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_and_ps(x, magnitude), bound),
+                                              _mm_cmple_ps(_mm_and_ps(y, magnitude), bound)),
+                                   _mm_cmple_ps(_mm_and_ps(z, magnitude), bound));
+      if (_mm_movemask_ps(in) != 0xF) break;
+      _mm_storeu_ps(ray.dir_x + k0, _mm_sub_ps(x, fx));
+      _mm_storeu_ps(ray.dir_y + k0, _mm_sub_ps(y, fy));
+      _mm_storeu_ps(ray.dir_z + k0, _mm_sub_ps(z, fz));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(valid + k0), _mm_set1_epi32(-1));
+      active |= 0xFu << k0;
+    }
+#endif
+    for (int k = k0; k < n; ++k) {
       if (!within_embree_bound(to[k])) continue;
       valid[k] = -1;
       active |= 1u << k;
@@ -424,8 +453,16 @@ struct alignas(64) FanPacket {
   uint32_t blocked(int n) const {
     constexpr float kHit = -std::numeric_limits<float>::infinity();
     uint32_t bits = 0;
+#if defined(__SSE2__)
+    static_assert(W % 4 == 0, "packets of whole SSE vectors");
+    const __m128 hit = _mm_set1_ps(kHit);
+    for (int k = 0; k < W; k += 4)
+      bits |= uint32_t(_mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(ray.tfar + k), hit))) << k;
+    return n >= 32 ? bits : bits & ((1u << n) - 1u);
+#else
     for (int k = 0; k < n; ++k) bits |= uint32_t(ray.tfar[k] == kHit) << k;
     return bits;
+#endif
   }
 };
 
