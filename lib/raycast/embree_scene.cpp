@@ -4,6 +4,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -595,7 +596,17 @@ struct alignas(64) FanPacket {
 
 void EmbreeScene::finish_lanes(const Vec3f& from, const Vec3f* to, int n, uint32_t active, uint32_t blocked,
                                uint32_t accepted, bool* out) const {
-  for (int k = 0; k < n; ++k) out[k] = (blocked >> k) & 1u;
+  // Eight lanes' bits to eight bools at a time (a bool is one byte, 0 or 1).
+  static constexpr auto kSpread = [] {
+    std::array<uint64_t, 256> t{};
+    for (unsigned b = 0; b < 256; ++b)
+      for (unsigned k = 0; k < 8; ++k) t[b] |= uint64_t((b >> k) & 1u) << (8 * k);
+    return t;
+  }();
+  static_assert(sizeof(bool) == 1, "bools of one byte");
+  int lane = 0;
+  for (; lane + 8 <= n; lane += 8) std::memcpy(out + lane, &kSpread[(blocked >> lane) & 0xFFu], 8);
+  for (; lane < n; ++lane) out[lane] = (blocked >> lane) & 1u;
   // Lanes outside Embree's domain: the fallback, one by one (rare).
   for (uint32_t rest = ((1u << n) - 1u) & ~active; rest; rest &= rest - 1) {
     const int k = __builtin_ctz(rest);
