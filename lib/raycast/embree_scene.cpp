@@ -4,6 +4,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -12,7 +13,11 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
+#include "lib/base/cpu_features.h"
 #include "lib/geom/error_bounds.h"
 #include "lib/geom/float_mode.h"
 #include "lib/geom/predicates.h"
@@ -95,28 +100,34 @@ namespace {
 // triangle, so the verification filter keeps the terms per origin (TermsCache; perf, columns:
 // the setup was two thirds of the 185 instructions of a proof). Splitting the function
 // changes no rounding: every product is the expression of the single-call form.
+// The cross products are kept as rows, row r holding coordinate r of B x C, C x A and
+// A x B in lanes 0-2 (lane 3 is 0), so that the AVX2 build forms w_a, w_b, w_c of a
+// query with three vector products; both builds evaluate every term with the same
+// operations in the same order, so their results are the same bits.
 struct CrossingTerms {
-  Vec3d bc, ca, ab;
+  double x[4] = {}, y[4] = {}, z[4] = {};  // unaligned loads and stores
   double det = 0.0, m = 0.0;
 };
 
 CrossingTerms crossing_terms(const Vec3d& p, const Vec3f& fa, const Vec3f& fb, const Vec3f& fc) {
   const Vec3d A = to_double(fa) - p, B = to_double(fb) - p, C = to_double(fc) - p;
+  const Vec3d bc = cross(B, C), ca = cross(C, A), ab = cross(A, B);
   CrossingTerms t;
-  t.bc = cross(B, C);
-  t.ca = cross(C, A);
-  t.ab = cross(A, B);
-  t.det = dot(A, t.bc);
+  t.x[0] = bc.x, t.y[0] = bc.y, t.z[0] = bc.z;
+  t.x[1] = ca.x, t.y[1] = ca.y, t.z[1] = ca.z;
+  t.x[2] = ab.x, t.y[2] = ab.y, t.z[2] = ab.z;
+  t.det = dot(A, bc);
   t.m = max_component(vmax(vabs(A), vmax(vabs(B), vabs(C))));
   return t;
 }
 
-bool certainly_crosses(const CrossingTerms& t, const Vec3d& d) {
-  const double wa = dot(d, t.bc), wb = dot(d, t.ca), wc = dot(d, t.ab);
+// The decision of certainly_crosses from the three triple products w = (w_a, w_b, w_c)
+// and n, the largest |coordinate| of d (the same in both builds).
+__attribute__((always_inline)) inline bool crossing_certain(const CrossingTerms& t, double wa, double wb, double wc, double n) {
   // One bound for all four products: with m the largest |coordinate| of A, B, C and
   // n that of d, each permanent is at most 6 n m^2 (det's: 6 m^3), so 8 eps of it is
   // below 48 eps n m^2.
-  const double m = t.m, n = max_component(vabs(d));
+  const double m = t.m;
   const double e = 48.0 * kUnitRoundoffD * n * m * m, edet = 48.0 * kUnitRoundoffD * m * m * m;
   const bool pos = wa > e && wb > e && wc > e, neg = wa < -e && wb < -e && wc < -e;
   if (!pos && !neg) return false;
@@ -127,9 +138,92 @@ bool certainly_crosses(const CrossingTerms& t, const Vec3d& d) {
   return std::abs(t.det) + edet < sum - 3.0 * e - 4.0 * kUnitRoundoffD * sum;
 }
 
+bool certainly_crosses(const CrossingTerms& t, const Vec3d& d) {
+  // w_a = dot(d, B x C), w_b = dot(d, C x A), w_c = dot(d, A x B).
+  const double wa = d.x * t.x[0] + d.y * t.y[0] + d.z * t.z[0];
+  const double wb = d.x * t.x[1] + d.y * t.y[1] + d.z * t.z[1];
+  const double wc = d.x * t.x[2] + d.y * t.y[2] + d.z * t.z[2];
+  return crossing_certain(t, wa, wb, wc, max_component(vabs(d)));
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+// The AVX2 build of crossing_terms and certainly_crosses: the same products, sums,
+// differences and maxima lane by lane (AVX2 alone has no fused multiply-add, and the
+// build has -ffp-contract=off), so the same bits; the three cross products and the three
+// triple products take one vector operation per coordinate instead of three.
+// Writes the terms into t (the filter's cache slot: no copy of the returned struct).
+__attribute__((target("avx2"))) void crossing_terms_avx2(const Vec3d& p, const Vec3f& fa,
+                                                                                const Vec3f& fb, const Vec3f& fc,
+                                                                                CrossingTerms& t) {
+  // Rows of A, B, C: lane i of xs is coordinate x of corner i less p.x (exact float to
+  // double conversion, one rounded subtraction, as to_double(fa) - p); lane 3 is 0.
+  // (Lane 3 is cleared by a blend: a (p, p, p, 0) constant hoisted by GCC becomes a
+  // register vmovq that valgrind 3.19 cannot decode, and callgrind measures this code.)
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d xs = _mm256_blend_pd(
+      _mm256_sub_pd(_mm256_cvtps_pd(_mm_setr_ps(fa.x, fb.x, fc.x, 0.0f)), _mm256_set1_pd(p.x)), zero, 0x8);
+  const __m256d ys = _mm256_blend_pd(
+      _mm256_sub_pd(_mm256_cvtps_pd(_mm_setr_ps(fa.y, fb.y, fc.y, 0.0f)), _mm256_set1_pd(p.y)), zero, 0x8);
+  const __m256d zs = _mm256_blend_pd(
+      _mm256_sub_pd(_mm256_cvtps_pd(_mm_setr_ps(fa.z, fb.z, fc.z, 0.0f)), _mm256_set1_pd(p.z)), zero, 0x8);
+  // U = (B, C, A, 0) and V = (C, A, B, 0) per coordinate: U x V is (B x C, C x A, A x B).
+  constexpr int kU = _MM_SHUFFLE(3, 0, 2, 1), kV = _MM_SHUFFLE(3, 1, 0, 2);
+  const __m256d ux = _mm256_permute4x64_pd(xs, kU), uy = _mm256_permute4x64_pd(ys, kU), uz = _mm256_permute4x64_pd(zs, kU);
+  const __m256d vx = _mm256_permute4x64_pd(xs, kV), vy = _mm256_permute4x64_pd(ys, kV), vz = _mm256_permute4x64_pd(zs, kV);
+  const __m256d X = _mm256_sub_pd(_mm256_mul_pd(uy, vz), _mm256_mul_pd(uz, vy));
+  const __m256d Y = _mm256_sub_pd(_mm256_mul_pd(uz, vx), _mm256_mul_pd(ux, vz));
+  const __m256d Z = _mm256_sub_pd(_mm256_mul_pd(ux, vy), _mm256_mul_pd(uy, vx));
+  _mm256_storeu_pd(t.x, X);
+  _mm256_storeu_pd(t.y, Y);
+  _mm256_storeu_pd(t.z, Z);
+  // det = dot(A, B x C): lane 0 of (xs X + ys Y) + zs Z.
+  t.det = _mm256_cvtsd_f64(
+      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(xs, X), _mm256_mul_pd(ys, Y)), _mm256_mul_pd(zs, Z)));
+  // m: the largest |coordinate| of A, B, C (lane 3's 0 cannot exceed it; no NaN here).
+  const __m256d magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFF));
+  __m256d mx = _mm256_max_pd(_mm256_max_pd(_mm256_and_pd(xs, magnitude), _mm256_and_pd(ys, magnitude)),
+                             _mm256_and_pd(zs, magnitude));
+  mx = _mm256_max_pd(mx, _mm256_permute4x64_pd(mx, _MM_SHUFFLE(1, 0, 3, 2)));
+  mx = _mm256_max_pd(mx, _mm256_permute4x64_pd(mx, _MM_SHUFFLE(2, 3, 0, 1)));
+  t.m = _mm256_cvtsd_f64(mx);
+}
+
+__attribute__((target("avx2"))) bool certainly_crosses_avx2(const CrossingTerms& t, const Vec3d& d) {
+  // Lane i: (d.x row_x[i] + d.y row_y[i]) + d.z row_z[i], the scalar build's w.
+  const __m256d w = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(d.x), _mm256_loadu_pd(t.x)),
+                                                _mm256_mul_pd(_mm256_set1_pd(d.y), _mm256_loadu_pd(t.y))),
+                                  _mm256_mul_pd(_mm256_set1_pd(d.z), _mm256_loadu_pd(t.z)));
+  const __m128d lo = _mm256_castpd256_pd128(w), hi = _mm256_extractf128_pd(w, 1);
+  return crossing_certain(t, _mm_cvtsd_f64(lo), _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)), _mm_cvtsd_f64(hi),
+                          max_component(vabs(d)));
+}
+
+__attribute__((target("avx2"))) bool certainly_crosses_interior_avx2(const Vec3d& p, const Vec3d& q, const Vec3f& fa,
+                                                                    const Vec3f& fb, const Vec3f& fc) {
+  CrossingTerms t;
+  crossing_terms_avx2(p, fa, fb, fc, t);
+  return certainly_crosses_avx2(t, q - p);
+}
+
+// VISGATE_ISS_NO_AVX2 in the environment selects the default build here too (the
+// verification filter serves ISS's leaf rays).
+bool filter_avx2() {
+  static const bool avx2 = avx2_enabled("VISGATE_ISS_NO_AVX2");
+  return avx2;
+}
+#endif
+
 }  // namespace
 
 bool certainly_crosses_interior(const Vec3d& p, const Vec3d& q, const Vec3f& fa, const Vec3f& fb, const Vec3f& fc) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (filter_avx2()) return certainly_crosses_interior_avx2(p, q, fa, fb, fc);
+#endif
+  return certainly_crosses_interior_default(p, q, fa, fb, fc);
+}
+
+bool certainly_crosses_interior_default(const Vec3d& p, const Vec3d& q, const Vec3f& fa, const Vec3f& fb,
+                                        const Vec3f& fc) {
   return certainly_crosses(crossing_terms(p, fa, fb, fc), q - p);
 }
 
@@ -192,16 +286,31 @@ struct TermsCache {
       std::fill(tag, tag + kSlots, 0u);
     }
   }
-  // Terms of triangle `prim_id` (corners a, b, c) from the bound origin p (in double).
+  // Terms of triangle `prim_id` (corners a, b, c) from the bound origin p (in double),
+  // by crossing_terms or its AVX2 build (the same bits).
+  template <bool kAvx2>
   const CrossingTerms& get(const Vec3d& p, unsigned prim_id, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
     const unsigned slot = prim_id % kSlots;
     if (tag[slot] != prim_id + 1u) {
-      terms[slot] = crossing_terms(p, a, b, c);
+#if defined(__GNUC__) && defined(__x86_64__)
+      if constexpr (kAvx2) crossing_terms_avx2(p, a, b, c, terms[slot]);
+      else
+#endif
+        terms[slot] = crossing_terms(p, a, b, c);
       tag[slot] = prim_id + 1u;
     }
     return terms[slot];
   }
 };
+
+// certainly_crosses, or its AVX2 build when kAvx2.
+template <bool kAvx2>
+__attribute__((always_inline)) inline bool proves_crossing(const CrossingTerms& t, const Vec3d& d) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if constexpr (kAvx2) return certainly_crosses_avx2(t, d);
+#endif
+  return certainly_crosses(t, d);
+}
 
 // This thread's cache bound to (scene id, from).
 TermsCache* bound_terms_cache(uint64_t id, const Vec3f& from) {
@@ -229,8 +338,10 @@ uint32_t candidate_lanes(const int* valid, unsigned n) {
 
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
 // precision test of the same query agrees (see embree_scene.h, "Hit verification"),
-// or, for segment queries, when certainly_crosses_interior proves it first.
-void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
+// or, for segment queries, when certainly_crosses_interior proves it first (kAvx2: its
+// AVX2 build, the same answers).
+template <bool kAvx2>
+__attribute__((always_inline)) inline void verify_hit_filter_body(const RTCFilterFunctionNArguments* args) {
   // The filter runs on the querying thread, which may be a TBB worker with FTZ/DAZ on.
   auto* vc = reinterpret_cast<VerifyContext*>(args->context);
   const IeeeFloatMode ieee(vc->csr);
@@ -246,7 +357,7 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
     const unsigned id = vc->fan_to ? RTCRayN_id(args->ray, args->N, i) : 0u;
     const Vec3f& to = vc->fan_to ? vc->fan_to[id] : vc->to;
     const bool confirmed =
-        (!vc->ranged && certainly_crosses(vc->cache->get(p, prim, a, b, c), to_double(to) - p)) ||
+        (!vc->ranged && proves_crossing<kAvx2>(vc->cache->get<kAvx2>(p, prim, a, b, c), to_double(to) - p)) ||
         (vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
                     : segment_hits_triangle(a, b, c, vc->from, to));
     if (confirmed) {
@@ -256,6 +367,21 @@ void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
       ++vc->rejected;
     }
   }
+}
+
+void verify_hit_filter(const RTCFilterFunctionNArguments* args) { verify_hit_filter_body<false>(args); }
+#if defined(__GNUC__) && defined(__x86_64__)
+__attribute__((target("avx2"))) void verify_hit_filter_avx2(const RTCFilterFunctionNArguments* args) {
+  verify_hit_filter_body<true>(args);
+}
+#endif
+
+// The filter of this CPU (filter_avx2).
+RTCFilterFunctionN verify_hit_filter_for_cpu() {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (filter_avx2()) return verify_hit_filter_avx2;
+#endif
+  return verify_hit_filter;
 }
 
 }  // namespace
@@ -287,7 +413,7 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits
                                                               3 * sizeof(uint32_t), soup.triangles.size()));
     std::memcpy(ib, soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
     rtcSetGeometryBuildQuality(geom, q);
-    if (verify_) rtcSetGeometryOccludedFilterFunction(geom, verify_hit_filter);
+    if (verify_) rtcSetGeometryOccludedFilterFunction(geom, verify_hit_filter_for_cpu());
     rtcCommitGeometry(geom);
     rtcAttachGeometry(scene, geom);
     rtcReleaseGeometry(geom);
@@ -409,7 +535,36 @@ struct alignas(64) FanPacket {
       valid[k] = 0;
     }
     uint32_t active = 0;
-    for (int k = 0; k < n; ++k) {
+    int k0 = 0;
+#if defined(__SSE2__)
+    // Four lanes at a time while they are whole (a fan's end points are AoS Vec3f, 12
+    // bytes: three unaligned loads, transposed); the bound test and the float subtraction
+    // are those of the lane loop below, so the rays are the same bits. A group with a
+    // point outside the bound is left to the lane loop.
+    const __m128 fx = _mm_set1_ps(from.x), fy = _mm_set1_ps(from.y), fz = _mm_set1_ps(from.z);
+    const __m128 bound = _mm_set1_ps(kEmbreeCoordinateBound);
+    const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+    for (; k0 + 4 <= n; k0 += 4) {
+      const float* q = &to[k0].x;
+      static_assert(sizeof(Vec3f) == 3 * sizeof(float), "Vec3f must be three packed floats");
+      const __m128 v0 = _mm_loadu_ps(q), v1 = _mm_loadu_ps(q + 4), v2 = _mm_loadu_ps(q + 8);
+      const __m128 x = _mm_shuffle_ps(v0, _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(1, 1, 2, 2)), _MM_SHUFFLE(2, 0, 3, 0));
+      const __m128 y = _mm_shuffle_ps(_mm_shuffle_ps(v0, v1, _MM_SHUFFLE(0, 0, 1, 1)),
+                                      _mm_shuffle_ps(v1, v2, _MM_SHUFFLE(2, 2, 3, 3)), _MM_SHUFFLE(2, 0, 2, 0));
+      const __m128 z = _mm_shuffle_ps(_mm_shuffle_ps(v0, v1, _MM_SHUFFLE(1, 1, 2, 2)), v2, _MM_SHUFFLE(3, 0, 2, 0));
+      // |c| <= bound, false for NaN (within_embree_bound's test).
+      const __m128 in = _mm_and_ps(_mm_and_ps(_mm_cmple_ps(_mm_and_ps(x, magnitude), bound),
+                                              _mm_cmple_ps(_mm_and_ps(y, magnitude), bound)),
+                                   _mm_cmple_ps(_mm_and_ps(z, magnitude), bound));
+      if (_mm_movemask_ps(in) != 0xF) break;
+      _mm_storeu_ps(ray.dir_x + k0, _mm_sub_ps(x, fx));
+      _mm_storeu_ps(ray.dir_y + k0, _mm_sub_ps(y, fy));
+      _mm_storeu_ps(ray.dir_z + k0, _mm_sub_ps(z, fz));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(valid + k0), _mm_set1_epi32(-1));
+      active |= 0xFu << k0;
+    }
+#endif
+    for (int k = k0; k < n; ++k) {
       if (!within_embree_bound(to[k])) continue;
       valid[k] = -1;
       active |= 1u << k;
@@ -424,8 +579,16 @@ struct alignas(64) FanPacket {
   uint32_t blocked(int n) const {
     constexpr float kHit = -std::numeric_limits<float>::infinity();
     uint32_t bits = 0;
+#if defined(__SSE2__)
+    static_assert(W % 4 == 0, "packets of whole SSE vectors");
+    const __m128 hit = _mm_set1_ps(kHit);
+    for (int k = 0; k < W; k += 4)
+      bits |= uint32_t(_mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(ray.tfar + k), hit))) << k;
+    return n >= 32 ? bits : bits & ((1u << n) - 1u);
+#else
     for (int k = 0; k < n; ++k) bits |= uint32_t(ray.tfar[k] == kHit) << k;
     return bits;
+#endif
   }
 };
 
@@ -433,7 +596,17 @@ struct alignas(64) FanPacket {
 
 void EmbreeScene::finish_lanes(const Vec3f& from, const Vec3f* to, int n, uint32_t active, uint32_t blocked,
                                uint32_t accepted, bool* out) const {
-  for (int k = 0; k < n; ++k) out[k] = (blocked >> k) & 1u;
+  // Eight lanes' bits to eight bools at a time (a bool is one byte, 0 or 1).
+  static constexpr auto kSpread = [] {
+    std::array<uint64_t, 256> t{};
+    for (unsigned b = 0; b < 256; ++b)
+      for (unsigned k = 0; k < 8; ++k) t[b] |= uint64_t((b >> k) & 1u) << (8 * k);
+    return t;
+  }();
+  static_assert(sizeof(bool) == 1, "bools of one byte");
+  int lane = 0;
+  for (; lane + 8 <= n; lane += 8) std::memcpy(out + lane, &kSpread[(blocked >> lane) & 0xFFu], 8);
+  for (; lane < n; ++lane) out[lane] = (blocked >> lane) & 1u;
   // Lanes outside Embree's domain: the fallback, one by one (rare).
   for (uint32_t rest = ((1u << n) - 1u) & ~active; rest; rest &= rest - 1) {
     const int k = __builtin_ctz(rest);

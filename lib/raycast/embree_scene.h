@@ -68,6 +68,11 @@ bool segment_hits_triangle(const Vec3f& a, const Vec3f& b, const Vec3f& c, const
 // double-precision test: no division and no branch on a projection axis, about a third
 // of that test's cost. Exact answer whenever it is true.
 bool certainly_crosses_interior(const Vec3d& p, const Vec3d& q, const Vec3f& a, const Vec3f& b, const Vec3f& c);
+// The same test in the default build (no AVX2 kernels), whatever the CPU: the AVX2 build,
+// which certainly_crosses_interior and the verification filter run where the CPU has it
+// (VISGATE_ISS_NO_AVX2 unset), gives the same answer bit for bit; tests compare the two.
+bool certainly_crosses_interior_default(const Vec3d& p, const Vec3d& q, const Vec3f& a, const Vec3f& b,
+                                        const Vec3f& c);
 
 // A committed Embree scene over a triangle soup, for methods that cast rays (ISS leaves,
 // SSV's reference ray) as well as for the baseline itself. Thread-safe queries. All

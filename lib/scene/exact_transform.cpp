@@ -167,8 +167,18 @@ int unit_scale_exponent(const Scene& scene) {
 Scene scaled_scene(const Scene& src, int exponent) {
   Scene s = src;
   if (exponent == 0) return s;
-  for_each_point(s, [&](Vec3f& v) { v = scale_vec(v, exponent); });
-  for_each_span(s, [&](Vec3f& v) { v = scale_vec(v, exponent); });
+  // While |exponent| <= 600 a float's value times 2^exponent neither overflows nor
+  // underflows in double (floats lie in [2^-149, 2^128)), so the product is exact, equal
+  // to ldexp's, and its one rounding to float is scale_float's: the same bits without a
+  // libm call per coordinate (perf: 6M of iss's instructions on scan 75k).
+  const bool by_factor = exponent >= -600 && exponent <= 600;
+  const double factor = std::ldexp(1.0, exponent);
+  auto scale = [&](Vec3f& v) {
+    v = by_factor ? Vec3f(float(double(v.x) * factor), float(double(v.y) * factor), float(double(v.z) * factor))
+                  : scale_vec(v, exponent);
+  };
+  for_each_point(s, scale);
+  for_each_span(s, scale);
   if (s.grid) s.grid->offset = scale_float(s.grid->offset, exponent);
   for (auto& l : s.lights) {
     l.area = std::ldexp(l.area, 2 * exponent);

@@ -251,6 +251,8 @@ TEST(Raycast, CertainCrossingsAreExactHits) {
       for (Vec3f* v : {&a, &b, &c, &p, &q}) *v = *v * s + (it % 2 ? Vec3f(3e6f, 0, 0) : Vec3f());
     }
     const bool cert = raycast::certainly_crosses_interior(to_double(p), to_double(q), a, b, c);
+    // The AVX2 build (where the CPU has it) and the default build: the same answer.
+    ASSERT_EQ(cert, raycast::certainly_crosses_interior_default(to_double(p), to_double(q), a, b, c)) << it;
     if (kind == 0) {
       ++general;
       general_certain += cert;
