@@ -720,13 +720,12 @@ struct Culling {
       }
       occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
     }
-    if (shafts_on) build_shaft_bvh(pm, edges);
+    if (shafts_on) {
+      std::vector<AABB> boxes(edges.size());
+      for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
+      edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+    }
     if (edges_on) edge_tree = EdgeTree(edges, pm, M);
-  }
-  void build_shaft_bvh(const mesh::PreparedMesh& pm, const std::vector<Edge>& edges) {
-    std::vector<AABB> boxes(edges.size());
-    for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
-    edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
   }
   double memory_bytes() const {
     return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes() +
