@@ -5,6 +5,7 @@
 #include "lib/geom/morton.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 
@@ -81,6 +82,41 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
 
 namespace {
 
+// The build's bounds, three floats in the low lanes of an SSE2 register (lane 3 is
+// don't-care): each min and max is the comparison of std::min(acc, x) and std::max(acc, x)
+// (x < acc ? x : acc and acc < x ? x : acc, NaNs included), so the nodes are the floats
+// the scalar form gives, with a third of its operations.
+#if defined(__SSE2__)
+using Lanes = __m128;
+inline Lanes lanes_load(const float* p) {
+  return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(p)), _mm_load_ss(p + 2));
+}
+inline Lanes lanes_set(float v) { return _mm_set1_ps(v); }
+inline Lanes lanes_min(Lanes acc, Lanes x) { return _mm_min_ps(x, acc); }
+inline Lanes lanes_max(Lanes acc, Lanes x) { return _mm_max_ps(x, acc); }
+inline void lanes_store(Lanes v, float* p) {
+  alignas(16) float t[4];
+  _mm_store_ps(t, v);
+  p[0] = t[0], p[1] = t[1], p[2] = t[2];
+}
+#else
+struct Lanes {
+  float v[3];
+};
+inline Lanes lanes_load(const float* p) { return {{p[0], p[1], p[2]}}; }
+inline Lanes lanes_set(float v) { return {{v, v, v}}; }
+inline Lanes lanes_min(Lanes acc, Lanes x) {
+  for (int c = 0; c < 3; ++c) acc.v[c] = std::min(acc.v[c], x.v[c]);
+  return acc;
+}
+inline Lanes lanes_max(Lanes acc, Lanes x) {
+  for (int c = 0; c < 3; ++c) acc.v[c] = std::max(acc.v[c], x.v[c]);
+  return acc;
+}
+inline void lanes_store(Lanes v, float* p) { p[0] = v.v[0], p[1] = v.v[1], p[2] = v.v[2]; }
+#endif
+inline Lanes lanes_load(const Vec3f& v) { return lanes_load(&v.x); }
+
 }  // namespace
 
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
@@ -100,6 +136,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   uint32_t* code = scratch.data();
   uint32_t* b = scratch.data() + E;
   uint32_t* src = a.data();
+  std::vector<std::array<uint32_t, 1025>> count(3);  // zeroed
   for (size_t e = 0; e < E; ++e) {
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
     uint32_t q[3];
@@ -107,17 +144,19 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       const float t = (s[c] - 2.0f * bounds.lo[c]) * scale[c];
       q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
     }
-    code[e] = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
+    const uint32_t cd = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
+    code[e] = cd;
     src[e] = uint32_t(e);
+    // The three passes' digit counts in this one pass (a pass permutes the codes, not
+    // their digits).
+    for (int pass = 0; pass < 3; ++pass) ++count[pass][((cd >> (10 * pass)) & 1023u) + 1];
   }
-  uint32_t count[1025];
   uint32_t* dst = b;
   for (int pass = 0; pass < 3; ++pass) {
-    std::fill(count, count + 1025, 0u);
+    uint32_t* cnt = count[pass].data();
     const int shift = 10 * pass;
-    for (size_t k = 0; k < E; ++k) ++count[((code[src[k]] >> shift) & 1023u) + 1];
-    for (size_t k = 1; k < 1025; ++k) count[k] += count[k - 1];
-    for (size_t k = 0; k < E; ++k) dst[count[(code[src[k]] >> shift) & 1023u]++] = src[k];
+    for (size_t k = 1; k < 1025; ++k) cnt[k] += cnt[k - 1];
+    for (size_t k = 0; k < E; ++k) dst[cnt[(code[src[k]] >> shift) & 1023u]++] = src[k];
     std::swap(src, dst);
   }
   if (src != a.data()) std::copy(src, src + E, a.data());
@@ -137,19 +176,14 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     if (n == 1) break;
   }
   nodes_.resize(total);
-  auto clear = [](Node& nd) {
-    for (int c = 0; c < 3; ++c) {
-      nd.lo[c] = nd.tlo[c] = nd.nlo[c] = INFINITY;
-      nd.hi[c] = nd.thi[c] = nd.nhi[c] = -INFINITY;
-    }
-  };
+  const Lanes inf = lanes_set(INFINITY), ninf = lanes_set(-INFINITY);
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
-    clear(nd);
     nd.leaf = 1;
     nd.child = uint32_t(j * kLeaf);
     nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
     nd.edges = nd.n;
+    Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
     // A leaf's edges share triangles (about half of the 16 references repeat): each
     // triangle's corners and normal enter the node's bounds once (min and max are
     // idempotent, so the node is the same).
@@ -158,11 +192,9 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
-      const Vec3f &va = m.vertex_pos[ed.a], &vb = m.vertex_pos[ed.b];
-      for (int c = 0; c < 3; ++c) {
-        nd.lo[c] = std::min(nd.lo[c], std::min(va[c], vb[c]));
-        nd.hi[c] = std::max(nd.hi[c], std::max(va[c], vb[c]));
-      }
+      const Lanes va = lanes_load(m.vertex_pos[ed.a]), vb = lanes_load(m.vertex_pos[ed.b]);
+      lo = lanes_min(lo, lanes_min(va, vb));
+      hi = lanes_max(hi, lanes_max(va, vb));
       if (ed.t2 < 0) nd.single = 1;
       // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
       // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
@@ -183,43 +215,40 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
             const float v = plane.nn > 0.0 ? n[c] * 32767.0f : 0.0f;
             done_q[at][c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
           }
+          const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
           for (int v = 0; v < 3; ++v) {
-            const Vec3f& x = m.corner(size_t(t), v);
-            for (int c = 0; c < 3; ++c) {
-              nd.tlo[c] = std::min(nd.tlo[c], x[c]);
-              nd.thi[c] = std::max(nd.thi[c], x[c]);
-            }
+            const Lanes x = lanes_load(m.vertex_pos[tri.v[v]]);
+            tlo = lanes_min(tlo, x);
+            thi = lanes_max(thi, x);
           }
-          for (int c = 0; c < 3; ++c) {
-            nd.nlo[c] = std::min(nd.nlo[c], n[c]);
-            nd.nhi[c] = std::max(nd.nhi[c], n[c]);
-          }
+          const Lanes nl = lanes_load(n);
+          nlo = lanes_min(nlo, nl);
+          nhi = lanes_max(nhi, nl);
         }
         if (ed.t2 >= 0)
           for (int c = 0; c < 3; ++c) en[3 * side + c] = done_q[at][c];
       }
     }
+    lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
+    lanes_store(nlo, nd.nlo), lanes_store(nhi, nd.nhi);
   }
   for (size_t first = 0, n = leaves; n > 1; first += n, n = (n + 1) / 2) {
     const size_t up = first + n;
     for (size_t j = 0; j < (n + 1) / 2; ++j) {
       Node& nd = nodes_[up + j];
-      clear(nd);
       nd.child = uint32_t(first + 2 * j);
       nd.n = uint8_t(2 * j + 1 < n ? 2 : 1);
+      Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
       for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
         const Node& o = nodes_[k];
-        for (int c = 0; c < 3; ++c) {
-          nd.lo[c] = std::min(nd.lo[c], o.lo[c]);
-          nd.hi[c] = std::max(nd.hi[c], o.hi[c]);
-          nd.tlo[c] = std::min(nd.tlo[c], o.tlo[c]);
-          nd.thi[c] = std::max(nd.thi[c], o.thi[c]);
-          nd.nlo[c] = std::min(nd.nlo[c], o.nlo[c]);
-          nd.nhi[c] = std::max(nd.nhi[c], o.nhi[c]);
-        }
+        lo = lanes_min(lo, lanes_load(o.lo)), hi = lanes_max(hi, lanes_load(o.hi));
+        tlo = lanes_min(tlo, lanes_load(o.tlo)), thi = lanes_max(thi, lanes_load(o.thi));
+        nlo = lanes_min(nlo, lanes_load(o.nlo)), nhi = lanes_max(nhi, lanes_load(o.nhi));
         nd.single |= o.single;
         nd.edges += o.edges;
       }
+      lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
+      lanes_store(nlo, nd.nlo), lanes_store(nhi, nd.nhi);
     }
   }
 }
@@ -725,6 +754,30 @@ void EdgeTree::crossing_triangles(const std::vector<Edge>& edges, const LightFra
   }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+void EdgeTree::large_triangle_edges(double nn, std::vector<uint32_t>& out) const {
+  out.clear();
+  if (empty()) return;
+  uint32_t stack[64];
+  size_t top = 0;
+  stack[top++] = uint32_t(nodes_.size() - 1);
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    // Exact but for the last bits of a double: the factor 2 covers them and the float
+    // rounding of the caller's bound.
+    double d2 = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      const double ext = double(nd.thi[c]) - double(nd.tlo[c]);
+      d2 += ext * ext;
+    }
+    if (2.0 * d2 * d2 < nn) continue;
+    if (nd.leaf) {
+      for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) out.push_back(order_[k]);
+      continue;
+    }
+    for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
+  }
 }
 
 }  // namespace visgate::ssv

@@ -113,6 +113,11 @@ class EdgeTree {
   // side), ascending: the candidates of light_plane_cuts. Every triangle is incident to
   // some edge of `edges` (the edges the tree was built over).
   void crossing_triangles(const std::vector<Edge>& edges, const LightFrame& frame, std::vector<uint32_t>& out) const;
+  // The edges of every leaf whose incident triangles' box has diagonal D with 2 D^4 >= nn
+  // (a superset of the edges of the triangles t with |b - a|^2 |c - a|^2 >= nn, corners
+  // a, b, c: those lie in the box of each leaf holding one of their edges), in leaf
+  // order: planar_occluders' candidates, found without a pass over every triangle.
+  void large_triangle_edges(double nn, std::vector<uint32_t>& out) const;
   size_t memory_bytes() const {
     return nodes_.capacity() * sizeof(Node) + order_.capacity() * sizeof(uint32_t) +
            ends_.capacity() * sizeof(uint32_t) + normals_.capacity() * sizeof(int16_t);

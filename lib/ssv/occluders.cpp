@@ -49,7 +49,8 @@ bool make_occluder(const Vec3d* v, int n, const Vec3d& unit, PlanarOccluder& o) 
 }  // namespace
 
 std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                             PlaneSource planes, size_t max_count, double min_area) {
+                                             PlaneSource planes, size_t max_count, double min_area,
+                                             const std::vector<uint32_t>* large) {
   std::vector<PlanarOccluder> out;
   if (max_count == 0) return out;
   // Candidates of at least min_area: triangle t as (area, t), the union of the two exactly
@@ -73,18 +74,34 @@ std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const 
   // float bound |b - a|^2 |c - a|^2 >= nn (with a relative slack of 1e-4, far above the
   // float rounding) is below nn_pair has no plane computed at all: on a dense mesh
   // nearly every triangle (the plane costs several times the bound).
-  std::vector<bool> pair_size(T);
-  for (size_t t = 0; t < T; ++t) {
+  // With `large`, only the triangles of those edges can pass the prefilter below, and
+  // only their edges can join two of them (each edge's leaf box holds both its triangles):
+  // the candidates are the same, found in another order (the selection below orders them
+  // totally).
+  std::vector<bool> pair_size(T), seen(large ? T : 0);
+  auto triangle = [&](size_t t) {
     if (nn_pair > 0.0) {
       const Vec3f &a = m.corner(t, 0), e1 = m.corner(t, 1) - a, e2 = m.corner(t, 2) - a;
       const double bound = double(dot(e1, e1)) * double(dot(e2, e2)) * (1.0 + 1e-4);
-      if (bound < nn_pair) continue;
+      if (bound < nn_pair) return;
     }
     const double nn = planes[t].nn;
     pair_size[t] = nn >= nn_pair;
     if (nn > 0.0 && nn >= nn_tri && area_of(nn) >= min_area) cand.emplace_back(area_of(nn), t);
+  };
+  if (large) {
+    for (uint32_t i : *large)
+      for (int32_t t : {edges[i].t1, edges[i].t2})
+        if (t >= 0 && !seen[size_t(t)]) {
+          seen[size_t(t)] = true;
+          triangle(size_t(t));
+        }
+  } else {
+    for (size_t t = 0; t < T; ++t) triangle(t);
   }
-  for (size_t i = 0; i < edges.size(); ++i) {
+  const size_t n_edges = large ? large->size() : edges.size();
+  for (size_t k = 0; k < n_edges; ++k) {
+    const size_t i = large ? (*large)[k] : k;
     const Edge& e = edges[i];
     if (e.t2 < 0) continue;
     if (!pair_size[size_t(e.t1)] && !pair_size[size_t(e.t2)]) continue;  // both below min_area / 2

@@ -58,9 +58,13 @@ struct PlanarOccluder {
 
 // The occluders of the prepared mesh (its triangles and coplanar convex quads) of area at
 // least min_area, largest first, at most max_count. `edges` and `planes` as built by
-// mesh_edges and triangle_planes.
+// mesh_edges and triangle_planes. `large` (optional): indices into `edges` that include
+// every edge of each triangle t with |b - a|^2 |c - a|^2 >= min_area^2 (corners a, b, c;
+// EdgeTree::large_triangle_edges); only their triangles and pairs are read, with the
+// same result.
 std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
-                                             PlaneSource planes, size_t max_count, double min_area = 0.0);
+                                             PlaneSource planes, size_t max_count, double min_area = 0.0,
+                                             const std::vector<uint32_t>* large = nullptr);
 inline std::vector<PlanarOccluder> planar_occluders(const mesh::PreparedMesh& m, const std::vector<Edge>& edges,
                                                     const TrianglePlanes& planes, size_t max_count,
                                                     double min_area = 0.0) {

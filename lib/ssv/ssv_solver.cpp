@@ -709,6 +709,9 @@ struct Culling {
       tree = ReceiverTree(points, 4);
       units = WedgeScatter::batches(tree, 32);
     }
+    // The edge tree first: it finds the occluder candidates without a pass over every
+    // triangle.
+    if (edges_on) edge_tree = EdgeTree(edges, pm, M);
     if (occluders_on) {
       double min_light = INFINITY;
       for (const Light& lt : scene.lights) {
@@ -718,14 +721,17 @@ struct Culling {
                             to_double(lt.polygon[k + 1]) - to_double(lt.polygon[0]));
         min_light = std::min(min_light, 0.5 * length(sum));
       }
-      occluders = planar_occluders(pm, edges, planes, 1024, std::isfinite(min_light) ? 0.25 * min_light : 0.0);
+      const double min_area = std::isfinite(min_light) ? 0.25 * min_light : 0.0;
+      std::vector<uint32_t> large;
+      const bool by_tree = edges_on && min_area > 0.0;
+      if (by_tree) edge_tree.large_triangle_edges(min_area * min_area, large);
+      occluders = planar_occluders(pm, edges, planes, 1024, min_area, by_tree ? &large : nullptr);
     }
     if (shafts_on) {
       std::vector<AABB> boxes(edges.size());
       for (size_t e = 0; e < edges.size(); ++e) boxes[e] = AABB(pm.vertex_pos[edges[e].a], pm.vertex_pos[edges[e].b]);
       edge_bvh = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
     }
-    if (edges_on) edge_tree = EdgeTree(edges, pm, M);
   }
   double memory_bytes() const {
     return double(occluders.capacity() * sizeof(PlanarOccluder) + tree.memory_bytes() + edge_bvh.memory_bytes() +
