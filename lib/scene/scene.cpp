@@ -7,15 +7,24 @@
 #include <numbers>
 
 #include "lib/geom/expansion.h"
+#include "lib/geom/lanes.h"
 #include "lib/geom/predicates.h"
 #include "lib/scene/rng.h"
 
 namespace visgate {
 
 AABB TriangleSoup::bounds() const {
-  AABB b;
+  // Three lanes at a time (lib/geom/lanes.h): the floats of AABB::extend per corner.
+  Lanes lo = lanes_set(INFINITY), hi = lanes_set(-INFINITY);
   for (const auto& t : triangles)
-    for (int k = 0; k < 3; ++k) b.extend(vertices[t[k]]);
+    for (int k = 0; k < 3; ++k) {
+      const Lanes x = lanes_load(vertices[t[k]]);
+      lo = lanes_min(lo, x);
+      hi = lanes_max(hi, x);
+    }
+  AABB b;
+  lanes_store(lo, &b.lo.x);
+  lanes_store(hi, &b.hi.x);
   return b;
 }
 

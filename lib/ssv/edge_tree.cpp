@@ -2,6 +2,7 @@
 #include "lib/ssv/edge_tree.h"
 
 #include "lib/base/cpu_features.h"
+#include "lib/geom/lanes.h"
 #include "lib/geom/morton.h"
 
 #include <algorithm>
@@ -80,44 +81,6 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
   }
 }
 
-namespace {
-
-// The build's bounds, three floats in the low lanes of an SSE2 register (lane 3 is
-// don't-care): each min and max is the comparison of std::min(acc, x) and std::max(acc, x)
-// (x < acc ? x : acc and acc < x ? x : acc, NaNs included), so the nodes are the floats
-// the scalar form gives, with a third of its operations.
-#if defined(__SSE2__)
-using Lanes = __m128;
-inline Lanes lanes_load(const float* p) {
-  return _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(p)), _mm_load_ss(p + 2));
-}
-inline Lanes lanes_set(float v) { return _mm_set1_ps(v); }
-inline Lanes lanes_min(Lanes acc, Lanes x) { return _mm_min_ps(x, acc); }
-inline Lanes lanes_max(Lanes acc, Lanes x) { return _mm_max_ps(x, acc); }
-inline void lanes_store(Lanes v, float* p) {
-  alignas(16) float t[4];
-  _mm_store_ps(t, v);
-  p[0] = t[0], p[1] = t[1], p[2] = t[2];
-}
-#else
-struct Lanes {
-  float v[3];
-};
-inline Lanes lanes_load(const float* p) { return {{p[0], p[1], p[2]}}; }
-inline Lanes lanes_set(float v) { return {{v, v, v}}; }
-inline Lanes lanes_min(Lanes acc, Lanes x) {
-  for (int c = 0; c < 3; ++c) acc.v[c] = std::min(acc.v[c], x.v[c]);
-  return acc;
-}
-inline Lanes lanes_max(Lanes acc, Lanes x) {
-  for (int c = 0; c < 3; ++c) acc.v[c] = std::max(acc.v[c], x.v[c]);
-  return acc;
-}
-inline void lanes_store(Lanes v, float* p) { p[0] = v.v[0], p[1] = v.v[1], p[2] = v.v[2]; }
-#endif
-inline Lanes lanes_load(const Vec3f& v) { return lanes_load(&v.x); }
-
-}  // namespace
 
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
