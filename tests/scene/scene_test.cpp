@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <set>
 
 #include "lib/scene/families.h"
@@ -74,4 +75,25 @@ TEST(Light, ExplicitSamplesAreUsedVerbatim) {
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(sample_position(r->lights[0], 0, 17), Vec3f(0.25f, 0.5f, 2));
   EXPECT_EQ(sample_position(r->lights[0], 1, 3), Vec3f(0.25f, -0.5f, 2));
+}
+
+// TriangleSoup::bounds (three lanes at a time) against AABB::extend corner by corner,
+// bit for bit: signed zeros, unreferenced vertices, an empty soup.
+TEST(TriangleSoup, BoundsAreTheCornersBoxBitForBit) {
+  std::mt19937_64 g(5);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  for (int trial = 0; trial < 20; ++trial) {
+    TriangleSoup s;
+    const int nv = 3 + trial * 7;
+    for (int v = 0; v < nv; ++v) s.vertices.push_back(v % 5 == 0 ? Vec3f(-0.0f, 0.0f, -0.0f) : Vec3f(u(g), u(g), u(g)));
+    s.vertices.push_back(Vec3f(1e6f, -1e6f, 1e6f));  // referenced by no triangle
+    for (int t = 0; t < nv; ++t) s.triangles.push_back({uint32_t(g() % nv), uint32_t(g() % nv), uint32_t(g() % nv)});
+    AABB want;
+    for (const auto& t : s.triangles)
+      for (int k = 0; k < 3; ++k) want.extend(s.vertices[t[k]]);
+    const AABB got = s.bounds();
+    EXPECT_EQ(std::memcmp(&got, &want, sizeof(AABB)), 0) << "trial " << trial;
+  }
+  const AABB empty = TriangleSoup{}.bounds(), none;
+  EXPECT_EQ(std::memcmp(&empty, &none, sizeof(AABB)), 0);
 }

@@ -366,10 +366,27 @@ TEST(SsvEdgeTree, OnUsePlanesAndFramePositionsEqualTheArrays) {
     const auto b = planar_occluders(m, edges, PlaneSource{&m, nullptr}, 1024, 0.01);
     ASSERT_EQ(a.size(), b.size()) << fam;
     EXPECT_GT(a.size(), 0u) << fam;
-    for (size_t i = 0; i < a.size(); ++i) {
-      EXPECT_EQ(a[i].n, b[i].n) << fam;
-      EXPECT_TRUE(same(a[i].normal, b[i].normal) && a[i].offset == b[i].offset) << fam << " occluder " << i;
-      for (int k = 0; k < a[i].n; ++k) EXPECT_TRUE(same(a[i].v[k], b[i].v[k])) << fam << " occluder " << i;
+    auto expect_same = [&](const std::vector<PlanarOccluder>& x, const std::vector<PlanarOccluder>& y, const char* what) {
+      ASSERT_EQ(x.size(), y.size()) << fam << " " << what;
+      for (size_t i = 0; i < x.size(); ++i) {
+        EXPECT_EQ(x[i].n, y[i].n) << fam << " " << what;
+        EXPECT_TRUE(same(x[i].normal, y[i].normal) && x[i].offset == y[i].offset) << fam << " " << what << " " << i;
+        for (int k = 0; k < x[i].n; ++k) EXPECT_TRUE(same(x[i].v[k], y[i].v[k])) << fam << " " << what << " " << i;
+      }
+    };
+    expect_same(a, b, "on use");
+    // And from the candidates of the edge tree's large leaves (the solver's path with the
+    // edge index): the same list, at thresholds that keep a few, many or every occluder.
+    const AABB fb = f.bounds();
+    const EdgeTree tree(edges, m, double(std::max(max_component(vabs(fb.lo)), max_component(vabs(fb.hi)))));
+    for (double min_area : {1.0, 0.01, 1e-4, 1e-8}) {
+      std::vector<uint32_t> large;
+      tree.large_triangle_edges(min_area * min_area, large);
+      if (min_area == 1.0 && fam[0] == 's') {  // a dense mesh: most leaves are left
+        EXPECT_LT(large.size(), edges.size() / 2) << fam;
+      }
+      expect_same(planar_occluders(m, edges, PlaneSource{&m, nullptr}, 1024, min_area),
+                  planar_occluders(m, edges, PlaneSource{&m, nullptr}, 1024, min_area, &large), "large leaves");
     }
   }
 }
