@@ -82,12 +82,61 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
 }
 
 
+namespace {
+
+// The position of t among a leaf's triangles so far (done[0..n), the other entries of
+// its 16 are -1), or n: std::find's answer, from four comparisons of four lanes.
+inline size_t find_triangle(const int32_t* done, size_t n, int32_t t) {
+#if defined(__SSE2__)
+  const __m128i x = _mm_set1_epi32(t);
+  const auto* d = reinterpret_cast<const __m128i*>(done);
+  const int m0 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d), x)));
+  const int m1 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 1), x)));
+  const int m2 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 2), x)));
+  const int m3 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 3), x)));
+  const unsigned m = unsigned(m0 | m1 << 4 | m2 << 8 | m3 << 12);
+  return m ? size_t(__builtin_ctz(m)) : n;
+#else
+  return size_t(std::find(done, done + n, t) - done);
+#endif
+}
+
+// The unit normal n times 32767, to nearest (half away from zero; |n| <= 1: no
+// overflow), 0 without a plane, into q[0..3) (q[3] is written too): the scalar
+// v >= 0 ? v + 0.5 : v - 0.5 truncated, four lanes at once.
+inline void quantize_normal(const Vec3f& n, bool has_plane, int16_t* q) {
+#if defined(__SSE2__)
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 v = has_plane ? _mm_mul_ps(lanes_load(n), _mm_set1_ps(32767.0f)) : zero;
+  const __m128 ge = _mm_cmpge_ps(v, zero);
+  const __m128 half = _mm_or_ps(_mm_and_ps(ge, _mm_set1_ps(0.5f)), _mm_andnot_ps(ge, _mm_set1_ps(-0.5f)));
+  const __m128i r = _mm_cvttps_epi32(_mm_add_ps(v, half));
+  _mm_storel_epi64(reinterpret_cast<__m128i*>(q), _mm_packs_epi32(r, r));
+#else
+  for (int c = 0; c < 3; ++c) {
+    const float v = has_plane ? n[c] * 32767.0f : 0.0f;
+    q[c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
+  }
+  q[3] = 0;
+#endif
+}
+
+// morton_spread10 of every 10-bit value (4 KiB): one load per coordinate.
+constexpr auto kSpread10 = [] {
+  std::array<uint32_t, 1024> t{};
+  for (uint32_t i = 0; i < 1024; ++i) t[i] = morton_spread10(i);
+  return t;
+}();
+
+}  // namespace
+
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
   const size_t E = edges.size();
   if (E == 0) return;
   // Morton order of the edges' midpoints (the sums of their float endpoints), by a
-  // stable LSD radix sort of three 10-bit digits: ties stay in index order.
+  // stable LSD radix sort of two 15-bit digits (counts of 128 KiB each, in cache): ties
+  // stay in index order.
   AABB bounds;
   for (const Vec3f& v : m.vertex_pos) bounds.extend(v);
   const Vec3f ext = bounds.extent();
@@ -99,7 +148,9 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   uint32_t* code = scratch.data();
   uint32_t* b = scratch.data() + E;
   uint32_t* src = a.data();
-  std::vector<std::array<uint32_t, 1025>> count(3);  // zeroed
+  constexpr int kDigit = 15;
+  constexpr uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
+  std::vector<uint32_t> count(2 * (kBuckets + 1));  // zeroed
   for (size_t e = 0; e < E; ++e) {
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
     uint32_t q[3];
@@ -107,22 +158,22 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       const float t = (s[c] - 2.0f * bounds.lo[c]) * scale[c];
       q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
     }
-    const uint32_t cd = morton_spread10(q[0]) | (morton_spread10(q[1]) << 1) | (morton_spread10(q[2]) << 2);
+    const uint32_t cd = kSpread10[q[0]] | (kSpread10[q[1]] << 1) | (kSpread10[q[2]] << 2);
     code[e] = cd;
     src[e] = uint32_t(e);
-    // The three passes' digit counts in this one pass (a pass permutes the codes, not
-    // their digits).
-    for (int pass = 0; pass < 3; ++pass) ++count[pass][((cd >> (10 * pass)) & 1023u) + 1];
+    // Both passes' digit counts in this one pass (a pass permutes the codes, not their
+    // digits).
+    ++count[(cd & kMask) + 1];
+    ++count[kBuckets + 1 + (cd >> kDigit) + 1];
   }
   uint32_t* dst = b;
-  for (int pass = 0; pass < 3; ++pass) {
-    uint32_t* cnt = count[pass].data();
-    const int shift = 10 * pass;
-    for (size_t k = 1; k < 1025; ++k) cnt[k] += cnt[k - 1];
-    for (size_t k = 0; k < E; ++k) dst[cnt[(code[src[k]] >> shift) & 1023u]++] = src[k];
+  for (int pass = 0; pass < 2; ++pass) {  // the second pass writes back into a
+    uint32_t* cnt = count.data() + pass * (kBuckets + 1);
+    const int shift = kDigit * pass;
+    for (size_t k = 1; k <= kBuckets; ++k) cnt[k] += cnt[k - 1];
+    for (size_t k = 0; k < E; ++k) dst[cnt[(code[src[k]] >> shift) & kMask]++] = src[k];
     std::swap(src, dst);
   }
-  if (src != a.data()) std::copy(src, src + E, a.data());
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
   ends_ = std::move(scratch);  // the codes and b are dead
@@ -150,8 +201,10 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     // A leaf's edges share triangles (about half of the 16 references repeat): each
     // triangle's corners and normal enter the node's bounds once (min and max are
     // idempotent, so the node is the same).
-    int32_t done[2 * kLeaf];
-    int16_t done_q[2 * kLeaf][3];
+    static_assert(2 * kLeaf == 16, "find_triangle compares 16 entries");
+    alignas(16) int32_t done[2 * kLeaf];
+    std::fill(done, done + 2 * kLeaf, -1);  // no triangle: never found
+    int16_t done_q[2 * kLeaf][4];  // quantize_normal's 4 lanes
     size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
@@ -167,17 +220,14 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
-        const size_t at = size_t(std::find(done, done + n_done, t) - done);
+        const size_t at = find_triangle(done, n_done, t);
         if (at == n_done) {
           done[n_done++] = t;
           // Each triangle in about two leaves, from its corners: no fresh array.
           const TrianglePlane plane = triangle_plane(m, size_t(t));
           nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
           const Vec3f n(plane.unit());
-          for (int c = 0; c < 3; ++c) {  // to nearest (half away from zero); |n| <= 1: no overflow
-            const float v = plane.nn > 0.0 ? n[c] * 32767.0f : 0.0f;
-            done_q[at][c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
-          }
+          quantize_normal(n, plane.nn > 0.0, done_q[at]);
           const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
           for (int v = 0; v < 3; ++v) {
             const Lanes x = lanes_load(m.vertex_pos[tri.v[v]]);
