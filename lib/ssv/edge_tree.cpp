@@ -176,11 +176,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   }
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
-  ends_ = std::move(scratch);  // the codes and b are dead
-  for (size_t k = 0; k < E; ++k) {
-    ends_[2 * k] = edges[order_[k]].a;
-    ends_[2 * k + 1] = edges[order_[k]].b;
-  }
+  ends_ = std::move(scratch);  // the codes and b are dead; written with the leaves
   normals_.resize(6 * E);
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
@@ -208,6 +204,8 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
+      ends_[2 * size_t(k)] = ed.a;
+      ends_[2 * size_t(k) + 1] = ed.b;
       const Lanes va = lanes_load(m.vertex_pos[ed.a]), vb = lanes_load(m.vertex_pos[ed.b]);
       lo = lanes_min(lo, lanes_min(va, vb));
       hi = lanes_max(hi, lanes_max(va, vb));
