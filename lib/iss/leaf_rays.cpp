@@ -373,7 +373,6 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
   // relations). The groups go sample by sample, then by jitter point, each holding its
   // receivers in tree order.
   const uint32_t nl = L.size(), jit = uint32_t(std::max(1, light_->jitter));
-  const Vec3f* jitter_base = light_->jitter_points.data();
   for (uint32_t c0 = R.begin, c1 = 0; c0 < R.end; c0 = c1) {
     c1 = std::min<uint32_t>(R.end, c0 + std::max<uint32_t>(1, uint32_t(kDirectChunk / nl)));
     const uint32_t nr = c1 - c0;
@@ -399,9 +398,7 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
       const uint32_t j = lo[b];
       direct_start_.assign(jit + 1, 0);
       for (uint32_t a = 0; a < nr; ++a) {
-        // The jitter point's index from its address (leaf_sample_at returns a reference
-        // into Light::jitter_points, sample-major).
-        const uint32_t jp = uint32_t(&leaf_sample_at(*light_, int(j), direct_prefix_[a]) - jitter_base) - j * jit;
+        const uint32_t jp = uint32_t(leaf_jitter_index(*light_, int(j), direct_prefix_[a]));
         direct_jp_[a] = jp;
         ++direct_start_[jp + 1];
       }
