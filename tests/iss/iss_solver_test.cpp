@@ -17,7 +17,8 @@ using namespace visgate::test_support;
 
 TEST(IssRays, LeafSamplePositionIsSamplePosition) {
   // The division-free jitter index of the leaf caster (and the direct test's index)
-  // against the one definition in lib/scene, for K = 1..8 (powers of two and not) and many receivers and samples.
+  // against the one definition in lib/scene, for K = 1..8 (powers of two and not) and
+  // many receivers and samples.
   for (int k = 1; k <= 8; ++k) {
     Light l = square_light(0, 0, 2, 1.0, 32, uint64_t(k) * 77);
     l.jitter = k;
