@@ -55,9 +55,13 @@ bool validate_all();
 // relation_hash chains three splitmix64 finalisers per relation, two of them the
 // receiver's (perf, columns: 4.5% of ISS's instructions). iss_test checks both against
 // sample_position.
-inline const Vec3f& leaf_sample_at(const Light& light, int j, uint64_t receiver_prefix) {
+// leaf_jitter_index: the index of that point among sample j's jitter points.
+inline int leaf_jitter_index(const Light& light, int j, uint64_t receiver_prefix) {
   uint64_t h = relation_hash_step(receiver_prefix, uint64_t(j)), k = uint64_t(light.jitter);
-  return light.jitter_point(j, int((k & (k - 1)) == 0 ? (h & (k - 1)) : h % k));
+  return int((k & (k - 1)) == 0 ? (h & (k - 1)) : h % k);
+}
+inline const Vec3f& leaf_sample_at(const Light& light, int j, uint64_t receiver_prefix) {
+  return light.jitter_point(j, leaf_jitter_index(light, j, receiver_prefix));
 }
 inline const Vec3f& leaf_sample_position(const Light& light, int j, size_t i) {
   return leaf_sample_at(light, j, relation_hash_prefix(i, light.seed));

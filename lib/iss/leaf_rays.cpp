@@ -6,6 +6,10 @@
 #include <cstdlib>
 #include <cstring>
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include "lib/base/cpu_features.h"
 #include "lib/iss/iss_solver.h"
 #include "lib/iss/traversal.h"
@@ -88,11 +92,25 @@ __attribute__((always_inline)) inline void direct_terms_body(const double* c, si
   }
 }
 
+// "Every lane set" of a lane mask, in the default build from the four lanes; in the
+// AVX2 build by one movemask (the lane extraction was a fifth of the test's
+// instructions). Only the test of the mask differs: the same answers.
+struct LanesDefault {
+  static bool all(M4 m) { return m[0] & m[1] & m[2] & m[3]; }
+};
+#if defined(__GNUC__) && defined(__x86_64__)
+struct LanesAvx2 {
+  // Not always_inline: the AVX2 wrapper (flatten) inlines it, and only it may.
+  __attribute__((target("avx2"))) static bool all(M4 m) { return _mm256_movemask_pd(__m256d(m)) == 15; }
+};
+#endif
+
 // Four segments from one origin (lane k: d = dx[k], dy[k], dz[k], n[k] = max |d_i|)
 // against the first `count` candidates: lanes certainly blocked (`hit`) and lanes that
 // every candidate certainly misses (`clear`), as lane masks. The candidate's terms are
 // scalars here, so det's sign (which side of the plane p lies) picks the tests once per
 // candidate instead of once per lane.
+template <class Lanes>
 __attribute__((always_inline)) inline void direct_classify_body(const double* t, size_t count, size_t kp,
                                                                 const double* d, int64_t* out) {
   const V4 dx = load4(d), dy = load4(d + 4), dz = load4(d + 8), n = load4(d + 12);
@@ -106,7 +124,7 @@ __attribute__((always_inline)) inline void direct_classify_body(const double* t,
     const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
     M4 miss = (wmax > e) & (wmin < -e);
     // Lines passing beside the triangle (the common case) need nothing else.
-    if (miss[0] & miss[1] & miss[2] & miss[3]) continue;
+    if (Lanes::all(miss)) continue;
     if (det > edet) {
       const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
       hit |= (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs);
@@ -120,7 +138,7 @@ __attribute__((always_inline)) inline void direct_classify_body(const double* t,
     }
     clear &= miss;
     // Every lane blocked: the rest cannot change the answer.
-    if ((k & 3) == 3 && (hit[0] & hit[1] & hit[2] & hit[3])) break;
+    if ((k & 3) == 3 && Lanes::all(hit)) break;
   }
   for (int k = 0; k < 4; ++k) {
     out[k] = hit[k];
@@ -130,7 +148,7 @@ __attribute__((always_inline)) inline void direct_classify_body(const double* t,
 
 void direct_terms_default(const double* c, size_t kp, const double* p, double* t) { direct_terms_body(c, kp, p, t); }
 void direct_classify_default(const double* t, size_t count, size_t kp, const double* d, int64_t* out) {
-  direct_classify_body(t, count, kp, d, out);
+  direct_classify_body<LanesDefault>(t, count, kp, d, out);
 }
 #if defined(__GNUC__) && defined(__x86_64__)
 // The same operations four candidates per instruction; AVX2 alone has no fused
@@ -138,9 +156,10 @@ void direct_classify_default(const double* t, size_t count, size_t kp, const dou
 __attribute__((target("avx2"))) void direct_terms_avx2(const double* c, size_t kp, const double* p, double* t) {
   direct_terms_body(c, kp, p, t);
 }
-__attribute__((target("avx2"))) void direct_classify_avx2(const double* t, size_t count, size_t kp, const double* d,
-                                                          int64_t* out) {
-  direct_classify_body(t, count, kp, d, out);
+// flatten: LanesAvx2::all is inlined here, where AVX2 is enabled.
+__attribute__((target("avx2"), flatten)) void direct_classify_avx2(const double* t, size_t count, size_t kp,
+                                                                   const double* d, int64_t* out) {
+  direct_classify_body<LanesAvx2>(t, count, kp, d, out);
 }
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
@@ -312,73 +331,90 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
   const TreeNode& L = ln(l);
   const auto& ro = rtree_->order();
   const auto& lo = ltree_->order();
-  // The leaf's relations as (receiver, sample, light point), grouped by a shared origin
-  // of the test (its terms are computed once per group): each receiver, or each light
-  // point (a sample's jitter point: at most jitter per sample, whatever the receivers)
-  // when there are fewer of those. The test is symmetric in the segment's ends.
-  // Receivers in chunks of about kDirectChunk relations bound the scratch arrays
-  // (an automatic-ray shaft may hold millions of relations).
-  const uint32_t nl = L.size(), jit = uint32_t(std::max(1, light_->jitter));
   size_t blocked = 0, uncertain = 0;
+  // One group: the segments from the origin o to the `count` end points end(k), four
+  // lanes per test (a short block repeats its first lane); done(k, hit, clear) records
+  // relation k.
+  auto run_group = [&](const Vec3f& o, uint32_t count, auto&& end, auto&& done) {
+    const double od[3] = {double(o.x), double(o.y), double(o.z)};
+    if (k_count > 0) direct_terms(direct_corners_.data(), kp, od, direct_terms_.data());
+    for (uint32_t k0 = 0; k0 < count; k0 += 4) {
+      const uint32_t m = std::min<uint32_t>(4, count - k0);
+      double d[16];  // dx, dy, dz, n of the four lanes
+      for (uint32_t k = 0; k < 4; ++k) {
+        const Vec3f& e = end(k0 + (k < m ? k : 0));
+        d[k] = double(e.x) - od[0];
+        d[4 + k] = double(e.y) - od[1];
+        d[8 + k] = double(e.z) - od[2];
+        d[12 + k] = std::max({std::abs(d[k]), std::abs(d[4 + k]), std::abs(d[8 + k])});
+      }
+      // No candidate: no triangle meets a segment (every lane clear).
+      int64_t out[8] = {0, 0, 0, 0, -1, -1, -1, -1};
+      if (k_count > 0) direct_classify(direct_terms_.data(), k_count, kp, d, out);
+      for (uint32_t k = 0; k < m; ++k) done(k0 + k, out[k] != 0, out[4 + k] != 0);
+    }
+  };
+  // Relation (receiver i at p, sample j, light point q) from the test's lane masks.
+  auto record = [&](uint32_t i, const Vec3f& p, uint32_t j, const Vec3f* q, bool hit, bool clear) {
+    bool occ = hit;
+    if (!hit && !clear) {
+      // Not certified: the verified Embree ray of the other path, from the receiver.
+      embree_->occluded_fan(p, q, 1, &occ);
+      ++uncertain;
+    }
+    if (occ) ++blocked;  // bits start blocked: only visible ones are written
+    else result_.receivers[i].set_visible(light_offset_ + size_t(j), true);
+  };
+  // The leaf's relations grouped by a shared origin of the test (its terms are computed
+  // once per group): each receiver, or each light point (a sample's jitter point: at
+  // most jitter per sample, whatever the receivers) when there are fewer of those. The
+  // test is symmetric in the segment's ends. Receivers in chunks of about kDirectChunk
+  // relations bound the scratch arrays (an automatic-ray shaft may hold millions of
+  // relations). The groups go sample by sample, then by jitter point, each holding its
+  // receivers in tree order.
+  const uint32_t nl = L.size(), jit = uint32_t(std::max(1, light_->jitter));
   for (uint32_t c0 = R.begin, c1 = 0; c0 < R.end; c0 = c1) {
     c1 = std::min<uint32_t>(R.end, c0 + std::max<uint32_t>(1, uint32_t(kDirectChunk / nl)));
     const uint32_t nr = c1 - c0;
-    const bool by_light = size_t(nl) * jit < nr;
-    const size_t n_rel = size_t(nr) * nl, n_groups = by_light ? size_t(nl) * jit : nr;
-    direct_tmp_.resize(n_rel);
-    direct_rays_.resize(n_rel);
-    direct_group_start_.assign(n_groups + 1, 0);
-    direct_keys_.resize(n_rel);
-    size_t x = 0;
-    for (uint32_t a = c0; a < c1; ++a) {
-      const uint32_t i = ro[a];
-      const Vec3f* rp = &scene_.receivers[i].p;
-      const uint64_t prefix = relation_hash_prefix(i, light_->seed);
-      for (uint32_t b = L.begin; b < L.end; ++b, ++x) {
-        const uint32_t j = lo[b];
-        const Vec3f* q = &leaf_sample_at(*light_, int(j), prefix);
-        // The jitter point's index from its address (leaf_sample_at returns a reference
-        // into Light::jitter_points, sample-major).
-        const uint32_t jp = uint32_t(q - light_->jitter_points.data()) - j * jit;
-        direct_keys_[x] = by_light ? (b - L.begin) * jit + jp : a - c0;
-        ++direct_group_start_[direct_keys_[x] + 1];
-        direct_tmp_[x] = {rp, q, i, j};
+    if (size_t(nl) * jit >= nr) {  // by receiver: the group is the receiver's fan
+      direct_q_.resize(nl);
+      for (uint32_t a = c0; a < c1; ++a) {
+        const uint32_t i = ro[a];
+        const Vec3f& p = scene_.receivers[i].p;
+        const uint64_t prefix = relation_hash_prefix(i, light_->seed);
+        for (uint32_t b = 0; b < nl; ++b) direct_q_[b] = &leaf_sample_at(*light_, int(lo[L.begin + b]), prefix);
+        run_group(
+            p, nl, [&](uint32_t k) -> const Vec3f& { return *direct_q_[k]; },
+            [&](uint32_t k, bool hit, bool clear) { record(i, p, lo[L.begin + k], direct_q_[k], hit, clear); });
       }
+      continue;
     }
-    for (size_t g = 0; g < n_groups; ++g) direct_group_start_[g + 1] += direct_group_start_[g];
-    direct_fill_.assign(direct_group_start_.begin(), direct_group_start_.end() - 1);
-    for (x = 0; x < n_rel; ++x) direct_rays_[direct_fill_[direct_keys_[x]]++] = direct_tmp_[x];
-    for (size_t g = 0; g < n_groups; ++g) {
-      const uint32_t g0 = direct_group_start_[g], g1 = direct_group_start_[g + 1];
-      if (g0 == g1) continue;
-      const Vec3f& o = by_light ? *direct_rays_[g0].q : *direct_rays_[g0].p;  // the group's origin
-      const double od[3] = {double(o.x), double(o.y), double(o.z)};
-      if (k_count > 0) direct_terms(direct_corners_.data(), kp, od, direct_terms_.data());
-      for (uint32_t k0 = g0; k0 < g1; k0 += 4) {
-        const uint32_t m = std::min<uint32_t>(4, g1 - k0);
-        double d[16];  // dx, dy, dz, n of the four lanes (a short group repeats its first)
-        for (uint32_t k = 0; k < 4; ++k) {
-          const DirectRay& dr = direct_rays_[k0 + (k < m ? k : 0)];
-          const Vec3f& e = by_light ? *dr.p : *dr.q;
-          d[k] = double(e.x) - od[0];
-          d[4 + k] = double(e.y) - od[1];
-          d[8 + k] = double(e.z) - od[2];
-          d[12 + k] = std::max({std::abs(d[k]), std::abs(d[4 + k]), std::abs(d[8 + k])});
-        }
-        // No candidate: no triangle meets a segment (every lane clear).
-        int64_t out[8] = {0, 0, 0, 0, -1, -1, -1, -1};
-        if (k_count > 0) direct_classify(direct_terms_.data(), k_count, kp, d, out);
-        for (uint32_t k = 0; k < m; ++k) {
-          const DirectRay& dr = direct_rays_[k0 + k];
-          bool occ = out[k] != 0;
-          if (!occ && !out[4 + k]) {
-            // Not certified: the verified Embree ray of the other path, from the receiver.
-            embree_->occluded_fan(*dr.p, dr.q, 1, &occ);
-            ++uncertain;
-          }
-          if (occ) ++blocked;  // bits start blocked: only visible ones are written
-          else result_.receivers[dr.receiver].set_visible(light_offset_ + size_t(dr.sample), true);
-        }
+    // By light point: each sample's receivers sorted by the jitter point they take.
+    direct_prefix_.resize(nr);
+    direct_jp_.resize(nr);
+    direct_members_.resize(nr);
+    for (uint32_t a = 0; a < nr; ++a) direct_prefix_[a] = relation_hash_prefix(ro[c0 + a], light_->seed);
+    for (uint32_t b = L.begin; b < L.end; ++b) {
+      const uint32_t j = lo[b];
+      direct_start_.assign(jit + 1, 0);
+      for (uint32_t a = 0; a < nr; ++a) {
+        const uint32_t jp = uint32_t(leaf_jitter_index(*light_, int(j), direct_prefix_[a]));
+        direct_jp_[a] = jp;
+        ++direct_start_[jp + 1];
+      }
+      for (uint32_t g = 0; g < jit; ++g) direct_start_[g + 1] += direct_start_[g];
+      direct_fill_.assign(direct_start_.begin(), direct_start_.end() - 1);
+      for (uint32_t a = 0; a < nr; ++a) direct_members_[direct_fill_[direct_jp_[a]]++] = ro[c0 + a];
+      for (uint32_t g = 0; g < jit; ++g) {
+        const uint32_t g0 = direct_start_[g], g1 = direct_start_[g + 1];
+        if (g0 == g1) continue;
+        const Vec3f* q = &light_->jitter_point(int(j), int(g));
+        const uint32_t* members = direct_members_.data() + g0;
+        run_group(
+            *q, g1 - g0, [&](uint32_t k) -> const Vec3f& { return scene_.receivers[members[k]].p; },
+            [&](uint32_t k, bool hit, bool clear) {
+              record(members[k], scene_.receivers[members[k]].p, j, q, hit, clear);
+            });
       }
     }
   }

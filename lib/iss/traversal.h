@@ -352,14 +352,13 @@ class Traversal {
   std::vector<uint32_t> direct_query_, direct_cand_;
   std::vector<double> direct_corners_, direct_terms_, direct_query_box_;
   std::vector<int64_t> direct_keep_;
-  struct DirectRay {
-    const Vec3f *p, *q;  // receiver point, light point
-    uint32_t receiver, sample;
-  };
-  std::vector<DirectRay> direct_tmp_, direct_rays_;
-  std::vector<uint32_t> direct_group_start_, direct_keys_, direct_fill_;
+  // The direct test's grouping (direct_rays): light points of a receiver's fan; hash
+  // prefixes, jitter points and members of a chunk's receivers per sample.
+  std::vector<const Vec3f*> direct_q_;
+  std::vector<uint64_t> direct_prefix_;
+  std::vector<uint32_t> direct_jp_, direct_members_, direct_start_, direct_fill_;
   // Candidate lists of the shafts being subdivided, outermost first (direct_candidates).
-  // The direct test's scratch is bounded (kDirectChunk relations of about 50 bytes,
+  // The direct test's scratch is bounded (20 bytes per receiver of a kDirectChunk chunk,
   // lists of at most kCandQueryMax triangles per level of the recursion): a few MB, not
   // charged to the memory budget, like the other per-traversal scratch vectors.
   struct CandLevel {

@@ -16,8 +16,9 @@ using namespace visgate;
 using namespace visgate::test_support;
 
 TEST(IssRays, LeafSamplePositionIsSamplePosition) {
-  // The division-free jitter index of the leaf caster against the one definition in
-  // lib/scene, for K = 1..8 (powers of two and not) and many receivers and samples.
+  // The division-free jitter index of the leaf caster (and the direct test's index)
+  // against the one definition in lib/scene, for K = 1..8 (powers of two and not) and
+  // many receivers and samples.
   for (int k = 1; k <= 8; ++k) {
     Light l = square_light(0, 0, 2, 1.0, 32, uint64_t(k) * 77);
     l.jitter = k;
@@ -30,6 +31,9 @@ TEST(IssRays, LeafSamplePositionIsSamplePosition) {
       for (int j = 0; j < fl.samples; ++j) {
         ASSERT_EQ(&iss::leaf_sample_position(fl, j, i), &sample_position(fl, j, i)) << "K " << k << " i " << i << " j " << j;
         ASSERT_EQ(&iss::leaf_sample_at(fl, j, relation_hash_prefix(i, fl.seed)), &sample_position(fl, j, i))
+            << "K " << k << " i " << i << " j " << j;
+        ASSERT_EQ(&fl.jitter_point(j, iss::leaf_jitter_index(fl, j, relation_hash_prefix(i, fl.seed))),
+                  &sample_position(fl, j, i))
             << "K " << k << " i " << i << " j " << j;
       }
   }
