@@ -110,10 +110,44 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
   return o;
 }
 
-}  // namespace
+#if defined(__GNUC__) && defined(__x86_64__)
+#define VG_SSV_AVX2 1
+#endif
 
+bool use_avx2() {
+#if defined(VG_SSV_AVX2)
+  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
+  return avx2;
+#else
+  return false;
+#endif
+}
 
-namespace {
+#if defined(VG_SSV_AVX2)
+// DepthCounter::reset's copies with AVX2 gathers: uv[j] = jit[pick[j]] four at a time
+// (one 64-bit gather), and the picked points in the order `vorder` as separate u and v
+// arrays eight at a time. Requires 2 pick[j] + 1 < 2^31. Returns the positions done
+// (a multiple of eight, at most n); the caller copies the rest.
+__attribute__((target("avx2"))) size_t gather_picks_avx2(const Vec2f* jit, const uint32_t* pick, const int* vorder,
+                                                          size_t n, Vec2f* uv, float* vu, float* vv) {
+  static_assert(sizeof(Vec2f) == 2 * sizeof(float));
+  const float* base = &jit[0].u;
+  const auto* base64 = reinterpret_cast<const long long*>(jit);
+  size_t k = 0;
+  for (; k + 8 <= n; k += 8) {
+    const __m128i p0 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(pick + k));
+    const __m128i p1 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(pick + k + 4));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(uv + k), _mm256_i32gather_epi64(base64, p0, 8));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(uv + k + 4), _mm256_i32gather_epi64(base64, p1, 8));
+    const __m256i j = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(vorder + k));
+    const __m256i p = _mm256_i32gather_epi32(reinterpret_cast<const int*>(pick), j, 4);
+    const __m256i f = _mm256_add_epi32(p, p);  // float index of jit[p].u
+    _mm256_storeu_ps(vu + k, _mm256_i32gather_ps(base, f, 4));
+    _mm256_storeu_ps(vv + k, _mm256_i32gather_ps(base + 1, f, 4));
+  }
+  return k;
+}
+#endif
 
 }  // namespace
 
@@ -149,16 +183,22 @@ void DepthCounter::reset(const SampleStrips& strips, const std::vector<Vec2f>& j
                          double extent) {
   VG_CHECK(pick.size() == size_t(strips.n));
   strips_ = &strips;
-  // One pass fills the picked points in sample order and in v_lo order (what
-  // clear_counters would gather from uv_).
+  // The picked points in sample order and in v_lo order (what clear_counters would
+  // gather from uv_).
   const size_t n = pick.size();
   uv_.resize(n);
   vu_.resize(n + kRunPad);
   vv_.resize(n + kRunPad);
-  for (size_t k = 0; k < n; ++k) {
-    const size_t j = size_t(strips.vorder[k]);
-    const Vec2f a = jitter_uv[pick[j]];
-    uv_[j] = a;
+  size_t k = 0;
+#if defined(VG_SSV_AVX2)
+  // Eight picked points per step with AVX2 gathers (copies only: the same floats).
+  // The float index 2 pick of a jitter point must fit an int32.
+  if (use_avx2() && jitter_uv.size() < (size_t(1) << 30))
+    k = gather_picks_avx2(jitter_uv.data(), pick.data(), strips.vorder.data(), n, uv_.data(), vu_.data(), vv_.data());
+#endif
+  for (size_t j = k; j < n; ++j) uv_[j] = jitter_uv[pick[j]];
+  for (; k < n; ++k) {
+    const Vec2f a = jitter_uv[pick[size_t(strips.vorder[k])]];
     vu_[k] = a.u;
     vv_[k] = a.v;
   }
@@ -301,8 +341,7 @@ void count_run_sse2(const PieceTest& t, const float* u, const float* v, int32_t*
   }
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
-#define VG_SSV_AVX2 1
+#if defined(VG_SSV_AVX2)
 // The same test eight positions at a time (AVX2, chosen at run time): the same float
 // operations in the same order, and AVX2 alone has no fused multiply-add, so the
 // results are those of count_run_sse2.
@@ -391,15 +430,15 @@ __attribute__((target("avx2"))) int jitter_picks_avx2(uint64_t prefix, int sampl
 #if defined(VG_SSV_AVX2)
 // DepthCounter::finish_classes without the strip order, eight positions per step: each
 // lane keeps the lowest value it saw and the lowest value above that (the order of the
-// values does not matter for either), then one scatter into sample order. Integer
-// operations only: the same values, the same two lowest classes and the same unclear
-// count as the SSE2 and scalar form.
+// values does not matter for either), then into sample order (a gather through `vrank`,
+// the inverse of `vorder`, when given). Integer operations only: the same values, the
+// same two lowest classes and the same unclear count as the SSE2 and scalar form.
 // Rule 2's steps (at most kMaxLaneSteps) are added here per block, instead of by the
 // prefix sum of DepthCounter::fold_steps: +w at every position >= the step's.
 constexpr size_t kMaxLaneSteps = 4;
 __attribute__((target("avx2"))) DepthCounter::Classes classes_avx2(int32_t* x, const int32_t* f, size_t n,
                                                                    int32_t unclear_value, const int* vorder,
-                                                                   int32_t* out,
+                                                                   const int* vrank, int32_t* out,
                                                                    const std::pair<int32_t, int32_t>* steps,
                                                                    size_t n_steps) {
   const __m256i vu = _mm256_set1_epi32(unclear_value);
@@ -448,22 +487,24 @@ __attribute__((target("avx2"))) DepthCounter::Classes classes_avx2(int32_t* x, c
   for (int l = 0; l < 8; ++l) dmin = std::min(dmin, l1[l]);
   int32_t second = c.dmin > dmin ? c.dmin : c.second;
   for (int l = 0; l < 8; ++l) second = std::min(second, l1[l] > dmin ? l1[l] : l2[l]);
-  for (size_t q = 0; q < n; ++q) out[vorder[q]] = x[q];
+  size_t q = 0;
+  if (vrank) {
+    // The values into sample order by a gather through the inverse order (AVX2 has no
+    // scatter): out[j] = x[vrank[j]], the same integers.
+    for (; q + 8 <= n; q += 8) {
+      const __m256i r = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(vrank + q));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + q), _mm256_i32gather_epi32(x, r, 4));
+    }
+    for (; q < n; ++q) out[q] = x[vrank[q]];
+  } else {
+    for (; q < n; ++q) out[vorder[q]] = x[q];
+  }
   c.dmin = dmin;
   c.second = second;
   c.unclear = size_t(unclear);
   return c;
 }
 #endif
-
-bool use_avx2() {
-#if defined(VG_SSV_AVX2)
-  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
-  return avx2;
-#else
-  return false;
-#endif
-}
 
 #if defined(VG_SSV_AVX2)
 // The four side planes of L' (add_segment) at both ends of a segment in AVX2 lanes:
@@ -675,7 +716,8 @@ DepthCounter::Classes DepthCounter::finish_classes(std::vector<int32_t>& depth, 
     if (step_list_.size() > kMaxLaneSteps) fold_steps();
     const size_t n_steps = steps_ ? step_list_.size() : 0;
     const Classes lanes =
-        classes_avx2(dv_.data(), fv_.data(), n, unclear_value, vorder, depth.data(), step_list_.data(), n_steps);
+        classes_avx2(dv_.data(), fv_.data(), n, unclear_value, vorder, sorted_ ? nullptr : S.vrank.data(),
+                     depth.data(), step_list_.data(), n_steps);
     for (const auto& st : step_list_) diffv_[size_t(st.first)] = 0;
     step_list_.clear();
     steps_ = false;

@@ -96,6 +96,11 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
           }
           DepthCounter dc;
           dc.reset(strips, jitter, pick, 2.0);
+          // Each sample's point is its picked jitter point (gathered with AVX2 when available).
+          for (int j = 0; j < n; ++j) {
+            EXPECT_EQ(dc.sample_uv(size_t(j)).u, uv[size_t(j)].u);
+            EXPECT_EQ(dc.sample_uv(size_t(j)).v, uv[size_t(j)].v);
+          }
           // Every other receiver in the picked points' own v order (at most 512 samples).
           EXPECT_EQ(receiver % 2 == 1 && dc.use_sorted_order(), receiver % 2 == 1 && n <= 512);
           std::vector<int32_t> naive(size_t(n), 0);
