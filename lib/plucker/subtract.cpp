@@ -195,11 +195,15 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   // loop below).
   const UVBox* bx = boxes.data();
   // A fragment whose box meets it may still lie on the negative side of one edge plane.
+  // Else every edge's class is kept (positive[m]): split_fragment finds the same on the
+  // fragment itself (fragment.h), so the walk below skips those edges until its first split.
+  bool positive[std::size(planes)];
   auto edge_misses = [&](size_t f) {
     for (int mi = 0; mi < nq; ++mi) {
       const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
       if (skip[m]) continue;
       SplitResult s = classify_fragment(plane(m), frags.data(f), frags.count(f));
+      positive[m] = s == SplitResult::Positive;
       if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
       if (s == SplitResult::Negative || s == SplitResult::OnLine) {
         hint = m;
@@ -232,9 +236,9 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       const Vec3d* cp = frags.data(f);
       int cn = frags.count(f);
       const size_t first_piece = pieces.size();
-      bool alive = true, whole = false;
+      bool alive = true, whole = false, split = false;  // split: cp is a piece, not the fragment
       for (int m = 0; m < nq && alive; ++m) {
-        if (skip[m]) continue;
+        if (skip[m] || (!split && positive[m])) continue;
         if (pos.size() < size_t(2 * cn)) pos.resize(size_t(2 * cn));
         if (neg.size() < size_t(2 * cn)) neg.resize(size_t(2 * cn));
         int np = 0, nn = 0;
@@ -259,6 +263,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
               cur.swap(pos);
               cp = cur.data();
               cn = np;
+              split = true;
             }
             break;
         }
