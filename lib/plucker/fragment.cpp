@@ -283,18 +283,6 @@ UVBox UVBox::everything() {
   return UVBox{-inf, inf, -inf, inf};
 }
 
-void UVBox::extend(const UVBox& b) {
-  if (b.ulo > b.uhi) return;
-  if (ulo > uhi) {
-    *this = b;
-    return;
-  }
-  ulo = std::min(ulo, b.ulo);
-  uhi = std::max(uhi, b.uhi);
-  vlo = std::min(vlo, b.vlo);
-  vhi = std::max(vhi, b.vhi);
-}
-
 UVBox shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
   const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
   const double hr = dot(nd, rd) - lp.h0;

@@ -151,7 +151,18 @@ struct UVBox {
   static UVBox everything();
   bool overlaps(const UVBox& b) const { return ulo <= b.uhi && b.ulo <= uhi && vlo <= b.vhi && b.vlo <= vhi; }
   bool contains(double u, double v) const { return u >= ulo && u <= uhi && v >= vlo && v <= vhi; }
-  void extend(const UVBox& b);
+  // Inline: the fragment lists' indexes extend boxes per piece (subtract.h FragmentRuns).
+  void extend(const UVBox& b) {
+    if (b.ulo > b.uhi) return;
+    if (ulo > uhi) {
+      *this = b;
+      return;
+    }
+    ulo = std::min(ulo, b.ulo);
+    uhi = std::max(uhi, b.uhi);
+    vlo = std::min(vlo, b.vlo);
+    vhi = std::max(vhi, b.vhi);
+  }
 };
 
 // The light's plane in a local frame: n . x = 0 (the frame's origin is a light vertex),

@@ -19,6 +19,7 @@
 #include "lib/plucker/closed_surfaces.h"
 #include "lib/plucker/interior_occluders.h"
 #include "lib/plucker/local_light.h"
+#include "lib/plucker/subtract.h"
 #include "lib/plucker/triangle_tree.h"
 #include "lib/solver.h"
 
@@ -167,6 +168,7 @@ struct GroupState {
   std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;
   FragmentList frags, tmp;
   std::vector<UVBox> boxes, tmp_boxes;
+  FragmentRuns runs;  // over frags and boxes (subtract.h)
 
   void start(const SolveContext& c, size_t light, const LocalLight& l, const std::vector<uint32_t>& g_,
              float side) {

@@ -87,9 +87,11 @@ class ReceiverShading {
   void shade_exact();
   void shade_float();
   void pyramid_planes();
+  // all_ and the runs (FragmentRuns) made anew over the fragments' boxes.
   void bound_all() {
+    gs_.runs.build(gs_.boxes);
     all_ = UVBox{};
-    for (const UVBox& b : gs_.boxes) all_.extend(b);
+    for (const UVBox& b : gs_.runs.size() != 0 ? gs_.runs.box : gs_.boxes) all_.extend(b);
   }
   // After a subtraction in place: all_ grown by the new fragments' boxes (gs_.tmp_boxes)
   // instead of made anew. It then holds every fragment's box, and it only rejects a
@@ -453,7 +455,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return;
   if (subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
-                       gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+                       gs_.runs, gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
     extend_all();
 }
 
@@ -542,8 +544,8 @@ bool ReceiverShading::subtract_merged(const NearPoly& np, uint32_t k, int side_r
   gs_.skip.assign(size_t(n), 0);
   const UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
   if (!qbox.overlaps(all_)) return true;
-  if (subtract_polygon(r_, q.data(), n, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.tmp,
-                       gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
+  if (subtract_polygon(r_, q.data(), n, gs_.skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes, gs_.runs,
+                       gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
     extend_all();
   return true;
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <type_traits>
@@ -26,57 +27,131 @@ void keep_whole(const FragmentList& in, size_t f, const UVBox& box, size_t first
   out_boxes.push_back(box);
 }
 
-// Fragment f replaced by fragments [a, b) of the pieces (subtract_polygon).
+// Fragment f (in run `run`) replaced by fragments [a, b) of the pieces (subtract_polygon).
 struct Replacement {
-  uint32_t f, a, b;
+  uint32_t f, a, b, run;
 };
+
+// Runs of kRun of the fragments [lo, hi) appended to len and box, each with the union of
+// its fragments' boxes.
+void append_runs(const std::vector<UVBox>& boxes, size_t lo, size_t hi, std::vector<uint32_t>& len,
+                 std::vector<UVBox>& box) {
+  for (size_t c = lo; c < hi; c += FragmentRuns::kRun) {
+    const size_t e = std::min(hi, c + FragmentRuns::kRun);
+    UVBox u;
+    for (size_t f = c; f < e; ++f) u.extend(boxes[f]);
+    len.push_back(uint32_t(e - c));
+    box.push_back(u);
+  }
+}
+
+// The runs made anew where some grew past 2 kRun (`boxes` the list's): emptied runs
+// dropped, long ones cut into runs of kRun with their boxes' unions (a long run costs
+// every polygon that meets its box a scan of all of it), the others kept.
+void cut_long_runs(FragmentRuns& runs, const std::vector<UVBox>& boxes) {
+  thread_local std::vector<uint32_t> len;
+  thread_local std::vector<UVBox> box;
+  len.clear();
+  box.clear();
+  size_t f0 = 0;
+  for (size_t j = 0; j < runs.size(); f0 += runs.len[j], ++j) {
+    if (runs.len[j] == 0) continue;
+    if (runs.len[j] > 2 * FragmentRuns::kRun) {
+      append_runs(boxes, f0, f0 + runs.len[j], len, box);
+    } else {
+      len.push_back(runs.len[j]);
+      box.push_back(runs.box[j]);
+    }
+  }
+  runs.len.swap(len);
+  runs.box.swap(box);
+}
 
 // Replaces, for each entry of `repl` (increasing f), fragment f of `frags` (and its box)
 // by the pieces [a, b) (and their boxes), keeping every other fragment's vertices where
 // they are: the same fragments in the same order as copying the list with the pieces in
-// place of each f, without copying the vertices. One for one, a fragment is overwritten;
-// else the spans and boxes are written anew in one pass (runs between the entries copied
-// at once: memmoves; per entry a moved tail cost more, on lists of thousands). The
-// pieces' vertices go to the end of frags.verts; the replaced fragments' stay there as
-// garbage until more than half of the vertices are, and then the list is written back to
-// back again (same values, same order).
-void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, const FragmentList& pieces,
+// place of each f, without copying the vertices. The spans and boxes between the entries
+// are moved in place, each stretch by the pieces added and fragments dropped before it
+// (memmove; those before the first entry stay). The pieces' vertices go to the end of
+// frags.verts; the replaced fragments' stay there as garbage until more than half of the
+// vertices are, and then the list is written back to back again (same values, same
+// order). The runs follow: each replaced fragment's run grown by its pieces' boxes
+// (pieces of a fragment lie in it up to rounding, so it still holds its fragments') and
+// its length changed, runs grown long cut anew (cut_long_runs).
+void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, FragmentRuns& runs, const FragmentList& pieces,
                        const std::vector<UVBox>& piece_boxes, const std::vector<Replacement>& repl) {
-  static_assert(std::is_trivially_copyable_v<FragmentList::Span> && std::is_trivially_copyable_v<UVBox>);
+  using Span = FragmentList::Span;
+  static_assert(std::is_trivially_copyable_v<Span> && std::is_trivially_copyable_v<UVBox>);
   const uint32_t base = uint32_t(frags.verts.size());
   frags.verts.insert(frags.verts.end(), pieces.verts.begin(), pieces.verts.end());  // pieces: back to back
-  auto piece = [&](uint32_t j) { return FragmentList::Span(base + pieces.polys[j].first, pieces.polys[j].second); };
-  bool one_each = true;
-  for (const Replacement& rp : repl) one_each &= rp.b == rp.a + 1;
-  if (one_each) {
-    for (const Replacement& rp : repl) {
-      frags.garbage += frags.polys[rp.f].second;
-      frags.polys[rp.f] = piece(rp.a);
-      boxes[rp.f] = piece_boxes[rp.a];
-    }
-  } else {
-    thread_local std::vector<FragmentList::Span> polys;
-    thread_local std::vector<UVBox> nboxes;
-    polys.clear();
-    nboxes.clear();
-    size_t f0 = 0;
-    for (const Replacement& rp : repl) {
-      polys.insert(polys.end(), frags.polys.begin() + std::ptrdiff_t(f0), frags.polys.begin() + rp.f);
-      nboxes.insert(nboxes.end(), boxes.begin() + std::ptrdiff_t(f0), boxes.begin() + rp.f);
-      frags.garbage += frags.polys[rp.f].second;
-      for (uint32_t j = rp.a; j < rp.b; ++j) polys.push_back(piece(j));
-      nboxes.insert(nboxes.end(), piece_boxes.begin() + rp.a, piece_boxes.begin() + rp.b);
-      f0 = size_t(rp.f) + 1;
-    }
-    polys.insert(polys.end(), frags.polys.begin() + std::ptrdiff_t(f0), frags.polys.end());
-    nboxes.insert(nboxes.end(), boxes.begin() + std::ptrdiff_t(f0), boxes.end());
-    frags.polys.swap(polys);
-    boxes.swap(nboxes);
+  const size_t n = frags.polys.size();
+  size_t nn = n;  // the new size
+  const bool indexed = runs.size() != 0;
+  bool cut = false;
+  for (const Replacement& rp : repl) {
+    frags.garbage += frags.polys[rp.f].second;
+    nn = nn + (rp.b - rp.a) - 1;  // the replaced fragment is one of nn: no wrap
+    if (!indexed) continue;
+    for (uint32_t j = rp.a; j < rp.b; ++j) runs.box[rp.run].extend(piece_boxes[j]);
+    uint32_t& len = runs.len[rp.run];
+    len = len + (rp.b - rp.a) - 1;
+    cut |= len > 2 * FragmentRuns::kRun;
   }
+  if (nn > n) {
+    frags.polys.resize(nn);
+    boxes.resize(nn);
+  }
+  // Stretch k: the fragments after entry k - 1 (from 0 for k = 0) up to entry k (to n for
+  // the last), moved by its shift s_k: the pieces added minus the fragments replaced
+  // before it (d(k) per entry). Moving those that go left first, from the front, then
+  // those that go right, from the back, reads every stretch before anything is written
+  // over it: between stretches i < k the shift changes by at least -(entries between) =
+  // -(the gap between them).
+  const size_t ns = repl.size() + 1;
+  auto d = [&](size_t k) { return int64_t(repl[k].b) - int64_t(repl[k].a) - 1; };
+  auto move = [&](size_t k, int64_t sk) {
+    const size_t lo = k == 0 ? 0 : size_t(repl[k - 1].f) + 1, hi = k + 1 == ns ? n : size_t(repl[k].f);
+    if (hi <= lo) return;
+    const size_t to = size_t(int64_t(lo) + sk), len = hi - lo;
+    Span* sp = frags.polys.data();
+    UVBox* bp = boxes.data();
+    if (len > 8) {
+      std::memmove(sp + to, sp + lo, len * sizeof(Span));
+      std::memmove(bp + to, bp + lo, len * sizeof(UVBox));
+    } else if (to < lo) {  // a few: copied in the direction that reads before it writes
+      for (size_t i = 0; i < len; ++i) sp[to + i] = sp[lo + i], bp[to + i] = bp[lo + i];
+    } else {
+      for (size_t i = len; i-- > 0;) sp[to + i] = sp[lo + i], bp[to + i] = bp[lo + i];
+    }
+  };
+  int64_t sk = 0;
+  for (size_t k = 0; k < ns; ++k) {
+    if (sk < 0) move(k, sk);
+    if (k + 1 < ns) sk += d(k);
+  }
+  for (size_t k = ns; k-- > 0;) {  // sk: s_k, from the last stretch's (the total)
+    if (sk > 0) move(k, sk);
+    if (k > 0) sk -= d(k - 1);
+  }
+  for (const Replacement& rp : repl) {  // sk: the shift before rp, from 0
+    Span* sp = frags.polys.data() + (int64_t(rp.f) + sk);
+    UVBox* bp = boxes.data() + (int64_t(rp.f) + sk);
+    for (uint32_t j = rp.a; j < rp.b; ++j) {
+      *sp++ = Span(base + pieces.polys[j].first, pieces.polys[j].second);
+      *bp++ = piece_boxes[j];
+    }
+    sk += int64_t(rp.b) - int64_t(rp.a) - 1;
+  }
+  if (nn < n) {
+    frags.polys.resize(nn);
+    boxes.resize(nn);
+  }
+  if (cut) cut_long_runs(runs, boxes);
+  if (!indexed && nn > FragmentRuns::kIndexFrom) runs.build(boxes);
   if (frags.garbage > 1024 && 2 * frags.garbage > frags.verts.size()) {
     thread_local std::vector<Vec3d> verts;
     verts.clear();
-    for (FragmentList::Span& p : frags.polys) {
+    for (Span& p : frags.polys) {
       const uint32_t at = uint32_t(verts.size());
       verts.insert(verts.end(), frags.verts.begin() + p.first, frags.verts.begin() + p.first + p.second);
       p.first = at;
@@ -90,8 +165,9 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, const Fra
 
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
                       const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
-                      FragmentList& pieces, std::vector<UVBox>& piece_boxes, std::vector<Vec3d>& cur,
-                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
+                      FragmentRuns& runs, FragmentList& pieces, std::vector<UVBox>& piece_boxes,
+                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
+  VG_DCHECK((runs.size() == 0 || runs.count() == frags.size()) && boxes.size() == frags.size());
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
   // each computed when first needed (a polygon whose shadow misses every fragment mostly
   // needs one: the edge that separates them all). Per thread rather than per call:
@@ -114,20 +190,20 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   // A fragment entirely on the negative side of one edge plane misses q: kept whole,
   // without the splits the walk below would make before reaching that edge. Tried
   // from the edge that separated the previous fragment (neighbours mostly share it).
-  // Fragments whose box misses q's shadow box are passed over in a loop of their own
-  // (on lists of thousands of fragments this scan is most of a call).
-  const size_t nf = frags.size();  // the list changes only after the loop below
+  // Fragments whose box misses q's shadow box are passed over, whole runs of them at
+  // once where the run's box misses it (FragmentRuns; the list changes only after the
+  // loop below).
   const UVBox* bx = boxes.data();
-  auto next_met = [&](size_t f) {
-    while (f < nf && !qbox.overlaps(bx[f])) ++f;
-    return f;
-  };
   // A fragment whose box meets it may still lie on the negative side of one edge plane.
+  // Else every edge's class is kept (positive[m]): split_fragment finds the same on the
+  // fragment itself (fragment.h), so the walk below skips those edges until its first split.
+  bool positive[std::size(planes)];
   auto edge_misses = [&](size_t f) {
     for (int mi = 0; mi < nq; ++mi) {
       const int m = hint + mi < nq ? hint + mi : hint + mi - nq;
       if (skip[m]) continue;
       SplitResult s = classify_fragment(plane(m), frags.data(f), frags.count(f));
+      positive[m] = s == SplitResult::Positive;
       if (s == SplitResult::OnLine) ++c.on_line;  // undecided: the caller re-shades r exactly
       if (s == SplitResult::Negative || s == SplitResult::OnLine) {
         hint = m;
@@ -141,58 +217,82 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   piece_boxes.clear();
   thread_local std::vector<Replacement> repl;
   repl.clear();
-  for (size_t f = next_met(0); f < nf; f = next_met(f + 1)) {
-    if (edge_misses(f)) continue;
-    met = true;
-    // The piece still walked: the fragment itself until the first split, then `cur`.
-    // The pieces are written into pos and neg (room for 2n each, fragment.h); the
-    // buffers only grow. The visible pieces split off go to `pieces`.
-    const Vec3d* cp = frags.data(f);
-    int cn = frags.count(f);
-    const size_t first_piece = pieces.size();
-    bool alive = true, whole = false;
-    for (int m = 0; m < nq && alive; ++m) {
-      if (skip[m]) continue;
-      if (pos.size() < size_t(2 * cn)) pos.resize(size_t(2 * cn));
-      if (neg.size() < size_t(2 * cn)) neg.resize(size_t(2 * cn));
-      int np = 0, nn = 0;
-      SplitResult s = split_fragment(plane(m), cp, cn, pos.data(), np, neg.data(), nn);
-      switch (s) {
-        case SplitResult::Positive: break;
-        case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
-        case SplitResult::Negative:  // what is left misses q: nothing of the fragment is hidden
-          whole = true;
-          alive = false;
-          break;
-        case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
-        case SplitResult::Both:
-          ++c.splits;
-          if (nn != 0) {
-            pieces.add(neg.data(), size_t(nn));
-            piece_boxes.push_back(UVBox::of(axes, neg.data(), nn));
-          }
-          if (np == 0) {
+  // Without runs, one range of every fragment.
+  const bool indexed = runs.size() != 0;
+  const size_t nr = indexed ? runs.size() : 1;
+  size_t f_end = 0;
+  for (size_t j = 0; j < nr; ++j) {
+    const size_t f0 = f_end;  // run j's first fragment
+    f_end = indexed ? f0 + runs.len[j] : frags.size();
+    if (indexed && !qbox.overlaps(runs.box[j])) continue;
+    for (size_t f = f0;; ++f) {
+      while (f < f_end && !qbox.overlaps(bx[f])) ++f;  // a loop of its own: most boxes miss
+      if (f == f_end) break;
+      if (edge_misses(f)) continue;
+      met = true;
+      // The piece still walked: the fragment itself until the first split, then `cur`.
+      // The pieces are written into pos and neg (room for 2n each, fragment.h); the
+      // buffers only grow. The visible pieces split off go to `pieces`.
+      const Vec3d* cp = frags.data(f);
+      int cn = frags.count(f);
+      const size_t first_piece = pieces.size();
+      bool alive = true, whole = false, split = false;  // split: cp is a piece, not the fragment
+      for (int m = 0; m < nq && alive; ++m) {
+        if (skip[m] || (!split && positive[m])) continue;
+        if (pos.size() < size_t(2 * cn)) pos.resize(size_t(2 * cn));
+        if (neg.size() < size_t(2 * cn)) neg.resize(size_t(2 * cn));
+        int np = 0, nn = 0;
+        SplitResult s = split_fragment(plane(m), cp, cn, pos.data(), np, neg.data(), nn);
+        switch (s) {
+          case SplitResult::Positive: break;
+          case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
+          case SplitResult::Negative:  // what is left misses q: nothing of the fragment is hidden
+            whole = true;
             alive = false;
-          } else {
-            cur.swap(pos);
-            cp = cur.data();
-            cn = np;
-          }
-          break;
+            break;
+          case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
+          case SplitResult::Both:
+            ++c.splits;
+            if (nn != 0) {
+              pieces.add(neg.data(), size_t(nn));
+              piece_boxes.push_back(UVBox::of(axes, neg.data(), nn));
+            }
+            if (np == 0) {
+              alive = false;
+            } else {
+              cur.swap(pos);
+              cp = cur.data();
+              cn = np;
+              split = true;
+            }
+            break;
+        }
       }
+      // Kept whole: the pieces split off it are taken back (a shadow beside a fragment
+      // still cuts it along the planes through q's edges). Else what is left after the
+      // last edge is positive against every edge, stabs q: blocked, dropped.
+      if (whole) {
+        pieces.truncate(first_piece);
+        piece_boxes.resize(first_piece);
+        continue;
+      }
+      repl.push_back({uint32_t(f), uint32_t(first_piece), uint32_t(pieces.size()), uint32_t(j)});
     }
-    // Kept whole: the pieces split off it are taken back (a shadow beside a fragment
-    // still cuts it along the planes through q's edges). Else what is left after the
-    // last edge is positive against every edge, stabs q: blocked, dropped.
-    if (whole) {
-      pieces.truncate(first_piece);
-      piece_boxes.resize(first_piece);
-      continue;
-    }
-    repl.push_back({uint32_t(f), uint32_t(first_piece), uint32_t(pieces.size())});
   }
-  if (!repl.empty()) replace_fragments(frags, boxes, pieces, piece_boxes, repl);
+  if (!repl.empty()) replace_fragments(frags, boxes, runs, pieces, piece_boxes, repl);
   return met;
+}
+
+void FragmentRuns::build(const std::vector<UVBox>& boxes) {
+  len.clear();
+  box.clear();
+  if (boxes.size() > kIndexFrom) append_runs(boxes, 0, boxes.size(), len, box);
+}
+
+size_t FragmentRuns::count() const {
+  size_t n = 0;
+  for (uint32_t l : len) n += l;
+  return n;
 }
 
 void subtract_triangle_exact(const Vec3f& rw, const Vec3f tw[3], int sigma, const Vec3f& origin,

@@ -14,6 +14,27 @@
 
 namespace visgate::plucker {
 
+// An index over a fragment list for subtract_polygon: the list cut into runs of
+// consecutive fragments, each with a box that holds the boxes of its fragments (their
+// union when built, grown since, never shrunk: a superset). A shadow box that misses a
+// run's box misses every fragment box in it, so the run is passed over at once and the
+// fragments visited, in their order, are exactly those a scan of every box visits.
+// Lists of at most kIndexFrom fragments have no runs (size() == 0): every box is tested,
+// which costs less than keeping the runs (columns, scan).
+struct FragmentRuns {
+  static constexpr uint32_t kRun = 16;  // fragments per run when built
+  static constexpr size_t kIndexFrom = 2 * kRun;
+  // Run j holds len[j] fragments, those after the runs before it (kept as lengths: a
+  // replacement changes only its own run's).
+  std::vector<uint32_t> len;
+  std::vector<UVBox> box;
+  size_t size() const { return box.size(); }
+  size_t count() const;  // fragments in all runs
+  // Runs of kRun fragments over `boxes` (the list's boxes), each with their union; none
+  // for kIndexFrom boxes or fewer.
+  void build(const std::vector<UVBox>& boxes);
+};
+
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments, in place: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is
 // never stored). `qbox` bounds q's shadow on the light (shadow_box); a fragment whose
@@ -26,11 +47,15 @@ namespace visgate::plucker {
 // other fragments, their vertices and boxes stay as they are, uncopied (FragmentList
 // may then hold garbage vertices). `pieces` and `piece_boxes` receive the pieces put in
 // (the boxes bound the new fragments: with the old ones, every current fragment's).
+// `runs` indexes frags (built over `boxes`) and is kept so: runs whose box misses qbox
+// are passed over, replaced fragments' runs are grown by their pieces' boxes and their
+// lengths changed, and runs grown long are cut anew; a list without runs gets them when
+// it grows past kIndexFrom.
 // Returns false, with nothing changed, when q's shadow misses every fragment (box or
 // edge plane; about half of the calls on columns).
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
                       const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
-                      FragmentList& pieces, std::vector<UVBox>& piece_boxes, std::vector<Vec3d>& cur,
+                      FragmentRuns& runs, FragmentList& pieces, std::vector<UVBox>& piece_boxes, std::vector<Vec3d>& cur,
                       std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c);
 
 // The exact near-plane path: removes from the fragments (local coordinates relative to

@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "lib/plucker/lines.h"
 #include "lib/plucker/plucker_solver.h"
+#include "lib/plucker/subtract.h"
 #include "lib/solver.h"
 #include "oracle/region_oracle.h"
 #include "tests/support/plucker_scenes.h"
@@ -73,4 +75,96 @@ TEST(PluckerSolver, ShadowBesideAFragmentLeavesItWhole) {
     EXPECT_GE(r.stats.get("near_polygons"), 2.0);
     check(s, {{Vec3f(-1, -1, 2), Vec3f(1, -1, 2), Vec3f(1, 0, 2), Vec3f(0, 1, 2), Vec3f(-1, 1, 2)}}, "near");
   }
+}
+
+// The fragment list's run index (FragmentRuns) only passes over runs whose box misses a
+// shadow's: subtracting the same polygons with it and without it (runs cleared before
+// every call: every box tested) gives the same fragments, bit for bit and in order, while
+// the list grows to hundreds of fragments (runs cut anew, emptied, and the replacements'
+// stretches moved both ways). And the fragments are the light points no triangle hides:
+// seen from r at the origin, a triangle between z = 0.5 and 1.5 casts its vertices scaled
+// by 2 / z onto the light z = 2, tested at grid points away from every shadow edge.
+TEST(PluckerSubtract, RunIndexVisitsTheFragmentsEveryBoxScanVisits) {
+  const Vec3d r(0, 0, 0);
+  const std::vector<Vec3d> light = {Vec3d(-1, -1, 2), Vec3d(1, -1, 2), Vec3d(1, 1, 2), Vec3d(-1, 1, 2)};
+  const UVAxes axes = UVAxes::from_normal(Vec3f(0, 0, 1));
+  const LightBounds lb = LightBounds::of(light.data(), int(light.size()));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uc(-1.0, 1.0), uz(0.5, 1.5), ud(-0.12, 0.12);
+  struct Tri {
+    Vec3d v[3];
+    Vec3d s[3];  // shadow on the light
+  };
+  std::vector<Tri> tris;
+  for (int k = 0; k < 300; ++k) {
+    Tri t;
+    const double z = uz(rng), cx = uc(rng) * z / 2, cy = uc(rng) * z / 2;
+    for (Vec3d& v : t.v) v = Vec3d(cx + ud(rng) * z / 2, cy + ud(rng) * z / 2, z);
+    // r on the negative side of (v1 - v0) x (v2 - v0) (subtract.h)
+    if (dot(cross(t.v[1] - t.v[0], t.v[2] - t.v[0]), r - t.v[0]) > 0) std::swap(t.v[1], t.v[2]);
+    for (int i = 0; i < 3; ++i) t.s[i] = t.v[i] * (2.0 / z);
+    tris.push_back(t);
+  }
+  FragmentList with, without, pieces;
+  std::vector<UVBox> with_boxes, without_boxes, piece_boxes;
+  FragmentRuns runs, none;
+  std::vector<Vec3d> cur, pos, neg;
+  BspCounters c;
+  with.add(light.data(), light.size());
+  without.add(light.data(), light.size());
+  with_boxes.assign(1, UVBox::of(axes, light.data(), int(light.size())));
+  without_boxes = with_boxes;
+  runs.build(with_boxes);
+  size_t longest = 0, most_runs = 0;
+  const uint8_t skip[3] = {0, 0, 0};
+  for (const Tri& t : tris) {
+    UVBox qbox = UVBox::of(axes, t.s, 3);
+    qbox = UVBox{qbox.ulo - 1e-9, qbox.uhi + 1e-9, qbox.vlo - 1e-9, qbox.vhi + 1e-9};
+    const bool a = subtract_polygon(r, t.v, 3, skip, qbox, axes, lb, with, with_boxes, runs, pieces, piece_boxes, cur,
+                                    pos, neg, c);
+    none = FragmentRuns{};
+    const bool b = subtract_polygon(r, t.v, 3, skip, qbox, axes, lb, without, without_boxes, none, pieces,
+                                    piece_boxes, cur, pos, neg, c);
+    ASSERT_EQ(a, b);
+    ASSERT_EQ(with.size(), without.size());
+    ASSERT_EQ(runs.size() == 0 ? with.size() : runs.count(), with.size());
+    for (size_t f = 0; f < with.size(); ++f) {
+      ASSERT_EQ(with.count(f), without.count(f));
+      for (int i = 0; i < with.count(f); ++i) {
+        ASSERT_EQ(with.data(f)[i].x, without.data(f)[i].x);
+        ASSERT_EQ(with.data(f)[i].y, without.data(f)[i].y);
+      }
+    }
+    longest = std::max(longest, with.size());
+    most_runs = std::max(most_runs, runs.size());
+  }
+  EXPECT_GT(longest, 200u);
+  EXPECT_GT(most_runs, 8u);
+  EXPECT_EQ(c.on_line, 0u);
+  // Grid points: visible when outside every shadow triangle (2D, away from its edges by
+  // 1e-6), and then in exactly one fragment; hidden ones in none.
+  int visible = 0, hidden = 0;
+  for (int i = 0; i < 200; ++i)
+    for (int j = 0; j < 200; ++j) {
+      const Vec3d x(-0.9975 + 0.01 * i, -0.9975 + 0.01 * j, 2.0);
+      bool near_edge = false, in = false;
+      for (const Tri& t : tris) {
+        int inside = 0;
+        for (int e = 0; e < 3; ++e) {
+          const Vec3d &p = t.s[e], &q = t.s[(e + 1) % 3];
+          const double len = std::hypot(q.x - p.x, q.y - p.y);
+          const double d = ((q.x - p.x) * (x.y - p.y) - (q.y - p.y) * (x.x - p.x)) / len;
+          near_edge |= std::abs(d) < 1e-6;
+          inside += d > 0 ? 1 : -1;
+        }
+        in |= inside == 3 || inside == -3;
+      }
+      if (near_edge) continue;
+      int holders = 0;
+      for (size_t f = 0; f < with.size(); ++f) holders += point_in_fragment(axes, with.data(f), with.count(f), x);
+      EXPECT_EQ(holders, in ? 0 : 1) << x.x << " " << x.y;
+      ++(in ? hidden : visible);
+    }
+  EXPECT_GT(visible, 1000);
+  EXPECT_GT(hidden, 1000);
 }
