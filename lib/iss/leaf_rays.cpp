@@ -94,14 +94,15 @@ __attribute__((always_inline)) inline void direct_terms_body(const double* c, si
 
 // "Every lane set" of a lane mask, in the default build from the four lanes; in the
 // AVX2 build by one movemask (the lane extraction was a fifth of the test's
-// instructions). Only the test of the mask differs: the same answers.
+// instructions). Only the test of the mask differs: the same answers. By reference: a
+// 256-bit vector argument outside an AVX function changes the ABI (clang rejects it).
 struct LanesDefault {
-  static bool all(M4 m) { return m[0] & m[1] & m[2] & m[3]; }
+  static bool all(const M4& m) { return m[0] & m[1] & m[2] & m[3]; }
 };
 #if defined(__GNUC__) && defined(__x86_64__)
 struct LanesAvx2 {
   // Not always_inline: the AVX2 wrapper (flatten) inlines it, and only it may.
-  __attribute__((target("avx2"))) static bool all(M4 m) { return _mm256_movemask_pd(__m256d(m)) == 15; }
+  __attribute__((target("avx2"))) static bool all(const M4& m) { return _mm256_movemask_pd(__m256d(m)) == 15; }
 };
 #endif
 
