@@ -78,7 +78,7 @@ struct Occluder {
 };
 
 // Convex polygons, their vertices in `verts` (polys: first vertex, count). Written by
-// add() they are back to back; replace_in_place (subtract.h) may leave the vertices of
+// add() they are back to back; subtract_polygon (subtract.h) may leave the vertices of
 // replaced fragments behind (`garbage` of them) and put new ones at the end, so the
 // order of the polygons is that of `polys`, not of `verts`.
 struct FragmentList {

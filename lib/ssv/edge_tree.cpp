@@ -81,7 +81,6 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
   }
 }
 
-
 namespace {
 
 // The position of t among a leaf's triangles so far (done[0..n), the other entries of

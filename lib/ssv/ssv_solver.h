@@ -9,12 +9,12 @@
 // occluder hides from a light are answered blocked without integration (occluders.h).
 // With wedge_index=edges (chosen by the default, auto, for meshes of at least 16 edges per
 // receiver) no wedge is built: each receiver's candidate edges come from a walk of the
-// edge hierarchy (edge_tree.h) that leaves subtrees outside its frustum to L' or proven
-// weight 0 from it, and edges its leaves prove weight 0, and build_wedges' edge tests
-// and the weight validate them. With
-// wedge_index=receivers (auto's choice otherwise), only edges inside the remaining
-// receivers' shafts to the light get wedges and the wedges are scattered through the
-// receiver tree (wedge_scatter.h); wedge_index=bsp keeps the lazy BSP of section 4.1.
+// edge hierarchy (edge_tree.h) that leaves out the subtrees outside its frustum to L' or
+// proven weight 0 from it and the edges its leaves prove weight 0; build_wedges' edge
+// tests and the weight validate the rest. With wedge_index=receivers (auto's choice
+// otherwise), only edges inside the remaining receivers' shafts to the light get wedges
+// and the wedges are scattered through the receiver tree (wedge_scatter.h);
+// wedge_index=bsp keeps the lazy BSP of section 4.1.
 //
 // Each light is processed in turn with its own wedges. Per receiver and light:
 // the samples of minimum relative depth complexity are visible iff one ray to a point
