@@ -318,6 +318,7 @@ bool point_in_fragment(const UVAxes& f, const Vec3d* poly, int n, const Vec3d& p
     double pu = p.*mu - a.*mu, pv = p.*mv - a.*mv;
     double o = eu * pv - ev * pu;
     if (f.flip) o = -o;
+    if (o >= 0.0) continue;  // inside this edge whatever the bound (it is >= 0)
     double bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu)) +
                    slack * (2.0 * (std::abs(pu) + std::abs(pv)) + std::abs(eu) + std::abs(ev));
     if (o < -bound) return false;

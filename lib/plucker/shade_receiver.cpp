@@ -333,9 +333,9 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // (it rejects about three in four near polygons on columns, the slab almost none), from
   // the plane that rejected this polygon for the group's previous receiver (neighbouring
   // receivers are mostly rejected by the same plane).
-  double pmax = 0.0;
-  for (uint32_t k = 0; k < np.count; ++k) pmax = std::max(pmax, max_component(vabs(pv[k])));
+  const double pmax = np.pmax;
   {
+    const double reach = pmax + double(lf_.extent) + rmax_;
     const size_t m = lf_.poly.size();
     const PyramidWeights& pw = pw_;
     uint8_t& hint = near_hint_[idx];
@@ -347,7 +347,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
       // The margin and bound of block_outside's test, their per-receiver parts
       // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
       // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
-      const double shift = pw.c[j] * (pmax + double(lf_.extent) + rmax_);
+      const double shift = pw.c[j] * reach;
       const Vec3d& lj = lf_.poly[j];
       bool outside = true;
       for (uint32_t k = 0; k < np.count && outside; ++k) {
