@@ -418,14 +418,19 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
       return;
     }
   }
+  // The clip into grow-only buffers (room for 2 count vertices), its size kept in nq.
   std::vector<Vec3d>& q = gs_.q;
   std::vector<uint8_t>&on_level = gs_.on_level, &skip = gs_.skip;
-  clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
-  if (q.empty()) return;
+  const size_t room = 2 * size_t(np.count);
+  if (q.size() < room) q.resize(room);
+  if (on_level.size() < room) on_level.resize(room);
+  if (skip.size() < room) skip.resize(room);
+  const size_t nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+  if (nq == 0) return;
   // Oriented so that r is on the negative side (bsp.h Occluder).
   if (side_r > 0) {
-    std::reverse(q.begin(), q.end());
-    std::reverse(on_level.begin(), on_level.end());
+    std::reverse(q.begin(), q.begin() + std::ptrdiff_t(nq));
+    std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
   }
   // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies in the
   // level plane through r, so the plane through r and that edge is the level plane
@@ -433,16 +438,15 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // a light line away and is skipped. Testing it would be wrong near degeneracy: when r
   // is within rounding of the triangle's plane, the edge passes within rounding of r and
   // float calls r "on its line" (test ReceiverWithinRoundingOfAFace).
-  skip.assign(q.size(), 0);
-  for (size_t k = 0; k < q.size(); ++k) skip[k] = on_level[k] && on_level[(k + 1) % q.size()];
+  for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
   // The planes through r and q's edges are only as good as q's vertices: a vertex
   // rounded by u of its coordinates, at a distance d from r, turns such a plane by up to
   // u |q| / d. A vertex that close to r (the clip at r's level of an edge passing within
   // 2^-24 of the coordinates of r) sends the triangle to the exact path (test
   // NearPolygonClippedNextToTheReceiverGoesExact).
   bool too_close = false;
-  for (size_t k = 0; k < q.size() && !too_close; ++k) {
-    if (skip[k] && skip[(k + q.size() - 1) % q.size()]) continue;  // starts and ends no tested edge
+  for (size_t k = 0; k < nq && !too_close; ++k) {
+    if (skip[k] && skip[k == 0 ? nq - 1 : k - 1]) continue;  // starts and ends no tested edge
     const double d = max_component(vabs(q[k] - r_)), scale = std::max(max_component(vabs(q[k])), rmax_);
     too_close = !(d > 0x1p-24 * scale);
   }
@@ -452,9 +456,9 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   }
   if (serial_ != 0 && subtract_merged(np, idx, side_r)) return;
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
-  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
+  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), nq);
   if (!qbox.overlaps(all_)) return;
-  if (subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
+  if (subtract_polygon(r_, q.data(), int(nq), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
                        gs_.runs, gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
     extend_all();
 }
