@@ -36,13 +36,17 @@ int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
 // more than 29, else rounded at u_d: 4 u_d of the coordinates is far above it.
 constexpr double kUd = kUnitRoundoffD;
 
-// Per receiver, the parts of the near polygons' pyramid test that depend only on the
-// pyramid's side plane j (pyramid_planes): w[j] the weights of dot_err(d, pyramid[j],
-// pyramid_err[j]) = sum |d_i| w[j]_i and c[j] = 4 u_d |pyramid[j]|_1 of the shift.
-// Per thread, like the group's other scratch (one receiver at a time).
+// Per receiver, what the near polygons' pyramid test reads of the pyramid's side plane j
+// (pyramid_planes), side by side in one array: n = pyramid[j], its point l = light
+// vertex j, w the weights of dot_err(d, pyramid[j], pyramid_err[j]) = sum |d_i| w_i and
+// c = 4 u_d |pyramid[j]|_1 of the shift. Per thread, like the group's other scratch (one
+// receiver at a time).
 struct PyramidWeights {
-  std::vector<Vec3d> w;
-  std::vector<double> c;
+  struct Plane {
+    Vec3d n, l, w;
+    double c = 0.0;
+  };
+  std::vector<Plane> p;
 };
 PyramidWeights& pyramid_weights() {
   thread_local PyramidWeights pw;
@@ -202,8 +206,7 @@ void ReceiverShading::pyramid_planes() {
   gs_.pyramid.resize(m);
   gs_.pyramid_err.resize(m);
   PyramidWeights& pw = pw_;
-  pw.w.resize(m);
-  pw.c.resize(m);
+  pw.p.resize(m);
   for (size_t j = 0; j < m; ++j) {
     Vec3d err;
     Vec3d nrm = edge_plane_normal_err(r_, lf_.poly[j], lf_.poly[(j + 1) % m], err);
@@ -219,8 +222,11 @@ void ReceiverShading::pyramid_planes() {
     gs_.pyramid[j] = nrm;
     gs_.pyramid_err[j] = err;
     constexpr double k8 = 8.0 * kUnitRoundoffD;  // lines.h dot_err's factor
-    pw.w[j] = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
-    pw.c[j] = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
+    PyramidWeights::Plane& pp = pw.p[j];
+    pp.n = nrm;
+    pp.l = lf_.poly[j];
+    pp.w = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
+    pp.c = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
   }
 }
 
@@ -336,19 +342,18 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   const double pmax = np.pmax;
   {
     const double reach = pmax + double(lf_.extent) + rmax_;
+    const PyramidWeights::Plane* planes = pw_.p.data();
     const size_t m = lf_.poly.size();
-    const PyramidWeights& pw = pw_;
     uint8_t& hint = near_hint_[idx];
     const size_t first = hint < m ? hint : 0;
     for (size_t ji = 0; ji < m; ++ji) {
       const size_t j = first + ji < m ? first + ji : first + ji - m;
-      const Vec3d& pn = gs_.pyramid[j];
-      const Vec3d& w = pw.w[j];
+      const PyramidWeights::Plane& pp = planes[j];
+      const Vec3d &pn = pp.n, &w = pp.w, &lj = pp.l;
       // The margin and bound of block_outside's test, their per-receiver parts
       // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
       // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
-      const double shift = pw.c[j] * reach;
-      const Vec3d& lj = lf_.poly[j];
+      const double shift = pp.c * reach;
       bool outside = true;
       for (uint32_t k = 0; k < np.count && outside; ++k) {
         const Vec3d d = pv[k] - lj;
