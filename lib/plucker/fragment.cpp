@@ -210,40 +210,42 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const Vec3d* pol
 }
 
 namespace {
-// The clip into `out` (room for 2n: each vertex and each edge's crossing at most once)
-// and, when non-null, `on_plane`; returns the count, 0 when fewer than 3.
-template <class P>
-int clip_values_into(const P* poly, const double* values, int n, bool keep_nonneg, P* out, uint8_t* on_plane) {
-  int m = 0;
+// The clip's walk: emit(point, on the plane) for each output vertex in order (each input
+// vertex and each edge's crossing at most once: at most 2n).
+template <class P, class Emit>
+void clip_values_walk(const P* poly, const double* values, int n, bool keep_nonneg, Emit&& emit) {
   for (int k = 0; k < n; ++k) {
     int k1 = (k + 1 == n) ? 0 : k + 1;
     double s0 = keep_nonneg ? values[k] : -values[k];
     double s1 = keep_nonneg ? values[k1] : -values[k1];
-    if (s0 >= 0.0) {
-      if (on_plane) on_plane[m] = s0 == 0.0;
-      out[m++] = poly[k];
-    }
-    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
-      if (on_plane) on_plane[m] = 1;
-      out[m++] = P(edge_crossing(poly[k], poly[k1], s0, s1));
-    }
+    if (s0 >= 0.0) emit(poly[k], s0 == 0.0);
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) emit(P(edge_crossing(poly[k], poly[k1], s0, s1)), true);
   }
-  return m >= 3 ? m : 0;
 }
 
 template <class P>
 void clip_values_impl(const P* poly, const double* values, int n, bool keep_nonneg, std::vector<P>& out,
                       std::vector<uint8_t>* on_plane) {
-  out.resize(2 * size_t(std::max(n, 0)));
-  if (on_plane) on_plane->resize(out.size());
-  const int m = clip_values_into(poly, values, n, keep_nonneg, out.data(), on_plane ? on_plane->data() : nullptr);
-  out.resize(size_t(m));
-  if (on_plane) on_plane->resize(size_t(m));
+  out.clear();
+  if (on_plane) on_plane->clear();
+  clip_values_walk(poly, values, n, keep_nonneg, [&](const P& x, bool on) {
+    out.push_back(x);
+    if (on_plane) on_plane->push_back(on);
+  });
+  if (out.size() < 3) {
+    out.clear();
+    if (on_plane) on_plane->clear();
+  }
 }
 }  // namespace
 
 int clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, Vec3d* out, uint8_t* on_plane) {
-  return clip_values_into(poly, values, n, keep_nonneg, out, on_plane);
+  int m = 0;
+  clip_values_walk(poly, values, n, keep_nonneg, [&](const Vec3d& x, bool on) {
+    if (on_plane) on_plane[m] = on;
+    out[m++] = x;
+  });
+  return m >= 3 ? m : 0;
 }
 
 void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3d>& out,
