@@ -357,8 +357,13 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
       bool outside = true;
       for (uint32_t k = 0; k < np.count && outside; ++k) {
         const Vec3d d = pv[k] - lj;
+        const double s = dot(pn, d);
+        if (!(s < 0.0)) {  // not below -16 e - shift <= 0 whatever e: the bound is skipped
+          outside = false;
+          break;
+        }
         const double e = std::abs(d.x) * w.x + std::abs(d.y) * w.y + std::abs(d.z) * w.z;
-        outside = dot(pn, d) < -16.0 * e - shift;
+        outside = s < -16.0 * e - shift;
       }
       if (outside) {
         hint = uint8_t(j);
