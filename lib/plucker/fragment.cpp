@@ -210,30 +210,43 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const Vec3d* pol
 }
 
 namespace {
+// The clip's walk: emit(point, on the plane) for each output vertex in order (each input
+// vertex and each edge's crossing at most once: at most 2n).
+template <class P, class Emit>
+void clip_values_walk(const P* poly, const double* values, int n, bool keep_nonneg, Emit&& emit) {
+  for (int k = 0; k < n; ++k) {
+    int k1 = (k + 1 == n) ? 0 : k + 1;
+    double s0 = keep_nonneg ? values[k] : -values[k];
+    double s1 = keep_nonneg ? values[k1] : -values[k1];
+    if (s0 >= 0.0) emit(poly[k], s0 == 0.0);
+    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) emit(P(edge_crossing(poly[k], poly[k1], s0, s1)), true);
+  }
+}
+
 template <class P>
 void clip_values_impl(const P* poly, const double* values, int n, bool keep_nonneg, std::vector<P>& out,
                       std::vector<uint8_t>* on_plane) {
   out.clear();
   if (on_plane) on_plane->clear();
-  for (int k = 0; k < n; ++k) {
-    int k1 = (k + 1 == n) ? 0 : k + 1;
-    double s0 = keep_nonneg ? values[k] : -values[k];
-    double s1 = keep_nonneg ? values[k1] : -values[k1];
-    if (s0 >= 0.0) {
-      out.push_back(poly[k]);
-      if (on_plane) on_plane->push_back(s0 == 0.0);
-    }
-    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
-      out.push_back(P(edge_crossing(poly[k], poly[k1], s0, s1)));
-      if (on_plane) on_plane->push_back(1);
-    }
-  }
+  clip_values_walk(poly, values, n, keep_nonneg, [&](const P& x, bool on) {
+    out.push_back(x);
+    if (on_plane) on_plane->push_back(on);
+  });
   if (out.size() < 3) {
     out.clear();
     if (on_plane) on_plane->clear();
   }
 }
 }  // namespace
+
+int clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, Vec3d* out, uint8_t* on_plane) {
+  int m = 0;
+  clip_values_walk(poly, values, n, keep_nonneg, [&](const Vec3d& x, bool on) {
+    if (on_plane) on_plane[m] = on;
+    out[m++] = x;
+  });
+  return m >= 3 ? m : 0;
+}
 
 void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3d>& out,
                     std::vector<uint8_t>* on_plane) {
@@ -318,6 +331,7 @@ bool point_in_fragment(const UVAxes& f, const Vec3d* poly, int n, const Vec3d& p
     double pu = p.*mu - a.*mu, pv = p.*mv - a.*mv;
     double o = eu * pv - ev * pu;
     if (f.flip) o = -o;
+    if (o >= 0.0) continue;  // inside this edge whatever the bound (it is >= 0)
     double bound = bound_k * (std::abs(eu * pv) + std::abs(ev * pu)) +
                    slack * (2.0 * (std::abs(pu) + std::abs(pv)) + std::abs(eu) + std::abs(ev));
     if (o < -bound) return false;

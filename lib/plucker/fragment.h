@@ -125,6 +125,9 @@ void clip_by_values(const Vec3f* poly, const double* values, int n, bool keep_no
 // vertices are not rounded.
 void clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, std::vector<Vec3d>& out,
                     std::vector<uint8_t>* on_plane = nullptr);
+// The same into caller buffers with room for 2n entries (on_plane may be null): returns
+// the output's size, 0 when fewer than 3 vertices remain.
+int clip_by_values(const Vec3d* poly, const double* values, int n, bool keep_nonneg, Vec3d* out, uint8_t* on_plane);
 
 // Area of a planar polygon (Newell, double).
 double polygon_area(const Vec3d* poly, int n);

@@ -35,6 +35,9 @@ struct NearPoly {
   Vec3d lo, hi;
   Vec3d t[3], n, err;
   double e1 = 0, e2 = 0, tmax = 0;
+  // The largest |local coordinate| of the polygon's own vertices (max over lo and hi:
+  // the same value as over the vertices), for the per-receiver rejection margins.
+  double pmax = 0;
   // Of a closed surface's kept triangle (occluder_selection.cpp closed_surface_culling):
   // the side (+1, -1) of its plane a receiver must be on for a segment from it to cross
   // the triangle on the crossing side kept; a receiver strictly on the other side skips

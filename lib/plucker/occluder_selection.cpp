@@ -237,6 +237,7 @@ NearPoly Selection::make_near(uint32_t t, const Vec3d tri[3], double tmax, const
   np.count = uint32_t(part.size());
   np.lo = np.hi = part[0];
   for (const Vec3d& v : part) np.lo = vmin(np.lo, v), np.hi = vmax(np.hi, v);
+  np.pmax = max_component(vmax(vabs(np.lo), vabs(np.hi)));
   for (int k = 0; k < 3; ++k) np.t[k] = tri[k];
   np.n = edge_plane_normal_err(tri[0], tri[1], tri[2], np.err);
   Vec3d e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];

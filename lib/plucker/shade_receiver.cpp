@@ -36,13 +36,17 @@ int near_side(const NearPoly& np, const Vec3d& r, double rmax) {
 // more than 29, else rounded at u_d: 4 u_d of the coordinates is far above it.
 constexpr double kUd = kUnitRoundoffD;
 
-// Per receiver, the parts of the near polygons' pyramid test that depend only on the
-// pyramid's side plane j (pyramid_planes): w[j] the weights of dot_err(d, pyramid[j],
-// pyramid_err[j]) = sum |d_i| w[j]_i and c[j] = 4 u_d |pyramid[j]|_1 of the shift.
-// Per thread, like the group's other scratch (one receiver at a time).
+// Per receiver, what the near polygons' pyramid test reads of the pyramid's side plane j
+// (pyramid_planes), side by side in one array: n = pyramid[j], its point l = light
+// vertex j, w the weights of dot_err(d, pyramid[j], pyramid_err[j]) = sum |d_i| w_i and
+// c = 4 u_d |pyramid[j]|_1 of the shift. Per thread, like the group's other scratch (one
+// receiver at a time).
 struct PyramidWeights {
-  std::vector<Vec3d> w;
-  std::vector<double> c;
+  struct Plane {
+    Vec3d n, l, w;
+    double c = 0.0;
+  };
+  std::vector<Plane> p;
 };
 PyramidWeights& pyramid_weights() {
   thread_local PyramidWeights pw;
@@ -202,8 +206,7 @@ void ReceiverShading::pyramid_planes() {
   gs_.pyramid.resize(m);
   gs_.pyramid_err.resize(m);
   PyramidWeights& pw = pw_;
-  pw.w.resize(m);
-  pw.c.resize(m);
+  pw.p.resize(m);
   for (size_t j = 0; j < m; ++j) {
     Vec3d err;
     Vec3d nrm = edge_plane_normal_err(r_, lf_.poly[j], lf_.poly[(j + 1) % m], err);
@@ -219,8 +222,11 @@ void ReceiverShading::pyramid_planes() {
     gs_.pyramid[j] = nrm;
     gs_.pyramid_err[j] = err;
     constexpr double k8 = 8.0 * kUnitRoundoffD;  // lines.h dot_err's factor
-    pw.w[j] = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
-    pw.c[j] = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
+    PyramidWeights::Plane& pp = pw.p[j];
+    pp.n = nrm;
+    pp.l = lf_.poly[j];
+    pp.w = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
+    pp.c = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
   }
 }
 
@@ -333,27 +339,31 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // (it rejects about three in four near polygons on columns, the slab almost none), from
   // the plane that rejected this polygon for the group's previous receiver (neighbouring
   // receivers are mostly rejected by the same plane).
-  double pmax = 0.0;
-  for (uint32_t k = 0; k < np.count; ++k) pmax = std::max(pmax, max_component(vabs(pv[k])));
+  const double pmax = np.pmax;
   {
+    const double reach = pmax + double(lf_.extent) + rmax_;
+    const PyramidWeights::Plane* planes = pw_.p.data();
     const size_t m = lf_.poly.size();
-    const PyramidWeights& pw = pw_;
     uint8_t& hint = near_hint_[idx];
     const size_t first = hint < m ? hint : 0;
     for (size_t ji = 0; ji < m; ++ji) {
       const size_t j = first + ji < m ? first + ji : first + ji - m;
-      const Vec3d& pn = gs_.pyramid[j];
-      const Vec3d& w = pw.w[j];
+      const PyramidWeights::Plane& pp = planes[j];
+      const Vec3d &pn = pp.n, &w = pp.w, &lj = pp.l;
       // The margin and bound of block_outside's test, their per-receiver parts
       // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
       // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
-      const double shift = pw.c[j] * (pmax + double(lf_.extent) + rmax_);
-      const Vec3d& lj = lf_.poly[j];
+      const double shift = pp.c * reach;
       bool outside = true;
       for (uint32_t k = 0; k < np.count && outside; ++k) {
         const Vec3d d = pv[k] - lj;
+        const double s = dot(pn, d);
+        if (!(s < 0.0)) {  // not below -16 e - shift <= 0 whatever e: the bound is skipped
+          outside = false;
+          break;
+        }
         const double e = std::abs(d.x) * w.x + std::abs(d.y) * w.y + std::abs(d.z) * w.z;
-        outside = dot(pn, d) < -16.0 * e - shift;
+        outside = s < -16.0 * e - shift;
       }
       if (outside) {
         hint = uint8_t(j);
@@ -418,14 +428,19 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
       return;
     }
   }
+  // The clip into grow-only buffers (room for 2 count vertices), its size kept in nq.
   std::vector<Vec3d>& q = gs_.q;
   std::vector<uint8_t>&on_level = gs_.on_level, &skip = gs_.skip;
-  clip_by_values(pv, vals.data(), int(np.count), true, q, &on_level);
-  if (q.empty()) return;
+  const size_t room = 2 * size_t(np.count);
+  if (q.size() < room) q.resize(room);
+  if (on_level.size() < room) on_level.resize(room);
+  if (skip.size() < room) skip.resize(room);
+  const size_t nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+  if (nq == 0) return;
   // Oriented so that r is on the negative side (bsp.h Occluder).
   if (side_r > 0) {
-    std::reverse(q.begin(), q.end());
-    std::reverse(on_level.begin(), on_level.end());
+    std::reverse(q.begin(), q.begin() + std::ptrdiff_t(nq));
+    std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
   }
   // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies in the
   // level plane through r, so the plane through r and that edge is the level plane
@@ -433,16 +448,15 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // a light line away and is skipped. Testing it would be wrong near degeneracy: when r
   // is within rounding of the triangle's plane, the edge passes within rounding of r and
   // float calls r "on its line" (test ReceiverWithinRoundingOfAFace).
-  skip.assign(q.size(), 0);
-  for (size_t k = 0; k < q.size(); ++k) skip[k] = on_level[k] && on_level[(k + 1) % q.size()];
+  for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
   // The planes through r and q's edges are only as good as q's vertices: a vertex
   // rounded by u of its coordinates, at a distance d from r, turns such a plane by up to
   // u |q| / d. A vertex that close to r (the clip at r's level of an edge passing within
   // 2^-24 of the coordinates of r) sends the triangle to the exact path (test
   // NearPolygonClippedNextToTheReceiverGoesExact).
   bool too_close = false;
-  for (size_t k = 0; k < q.size() && !too_close; ++k) {
-    if (skip[k] && skip[(k + q.size() - 1) % q.size()]) continue;  // starts and ends no tested edge
+  for (size_t k = 0; k < nq && !too_close; ++k) {
+    if (skip[k] && skip[k == 0 ? nq - 1 : k - 1]) continue;  // starts and ends no tested edge
     const double d = max_component(vabs(q[k] - r_)), scale = std::max(max_component(vabs(q[k])), rmax_);
     too_close = !(d > 0x1p-24 * scale);
   }
@@ -452,9 +466,9 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   }
   if (serial_ != 0 && subtract_merged(np, idx, side_r)) return;
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
-  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), q.size());
+  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), nq);
   if (!qbox.overlaps(all_)) return;
-  if (subtract_polygon(r_, q.data(), int(q.size()), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
+  if (subtract_polygon(r_, q.data(), int(nq), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
                        gs_.runs, gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
     extend_all();
 }

@@ -263,6 +263,50 @@ TEST(PluckerFragment, SplitIntoBuffersStaysWithinTwiceTheVertexCount) {
   }
 }
 
+TEST(PluckerFragment, ClipIntoBuffersIsTheVectorFormsClip) {
+  // The caller-buffer form (shade_receiver.cpp's near polygons) gives the vector form's
+  // vertices and on-plane flags bit for bit, writes at most 2n entries (sentinels after
+  // them stay), and returns 0 where the vector form comes out empty; values exactly 0
+  // (vertices on the plane) and both kept sides included.
+  Rng rng(73);
+  const Vec3d sentinel(1e300, -1e300, 7);
+  int kept = 0, emptied = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int n = 3 + int(rng.below(6));
+    std::vector<Vec3d> poly;
+    std::vector<double> vals;
+    const double a = rng.uniform(-1, 1), b = rng.uniform(-1, 1), c = rng.uniform(-0.8, 0.8);
+    for (int k = 0; k < n; ++k) {
+      const double t = 2.0 * M_PI * (k + rng.uniform(0.0, 0.5)) / n;
+      poly.emplace_back(std::cos(t), std::sin(t), rng.uniform(-1, 1));
+      const double v = a * poly.back().x + b * poly.back().y + c;
+      vals.push_back(trial % 4 == 0 && k % 2 == 0 ? 0.0 : v);
+    }
+    const bool keep_nonneg = trial % 2 == 0;
+    std::vector<Vec3d> want;
+    std::vector<uint8_t> want_on;
+    clip_by_values(poly.data(), vals.data(), n, keep_nonneg, want, &want_on);
+    std::vector<Vec3d> out(size_t(2 * n) + 1, sentinel);
+    std::vector<uint8_t> on(size_t(2 * n) + 1, 7);
+    const int m = clip_by_values(poly.data(), vals.data(), n, keep_nonneg, out.data(), on.data());
+    EXPECT_EQ(out[size_t(2 * n)].x, sentinel.x);
+    EXPECT_EQ(on[size_t(2 * n)], 7);
+    ASSERT_EQ(size_t(m), want.size()) << trial;
+    (m == 0 ? emptied : kept) += 1;
+    for (int k = 0; k < m; ++k) {
+      EXPECT_EQ(out[size_t(k)].x, want[size_t(k)].x);
+      EXPECT_EQ(out[size_t(k)].y, want[size_t(k)].y);
+      EXPECT_EQ(out[size_t(k)].z, want[size_t(k)].z);
+      EXPECT_EQ(on[size_t(k)], want_on[size_t(k)]);
+    }
+    // Without flags: the same vertices.
+    std::vector<Vec3d> bare(size_t(2 * n));
+    EXPECT_EQ(clip_by_values(poly.data(), vals.data(), n, keep_nonneg, bare.data(), nullptr), m);
+  }
+  EXPECT_GT(kept, 500);
+  EXPECT_GT(emptied, 100);
+}
+
 TEST(PluckerFragment, NodePlaneNormalAndOnLineAreLinesEdgePlaneNormalErr) {
   // node_plane computes N and the on-line test itself (the error bounds component by
   // component, stopping at the first exceeded): the same N as lines.h
