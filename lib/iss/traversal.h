@@ -351,6 +351,7 @@ class Traversal {
   std::unique_ptr<PointTree> rtree_, ltree_;
   const Light* light_ = nullptr;
   size_t light_offset_ = 0;
+  std::vector<uint64_t> visible_masks_;  // record_visible's word masks of a light node
   const raycast::EmbreeScene* embree_ = nullptr;
   Workspace ws_;
   double times_[kTimerCount] = {};  // in ticks()
