@@ -1,19 +1,37 @@
 // Empty shafts (paper 000 section 4.12): an empty shaft between nodes free of triangles
 // is all visible; the extension for receivers on a floor or a sloped surface.
 #include <algorithm>
+#include <cstdint>
+#include <vector>
 
 #include "lib/iss/traversal.h"
 
 namespace visgate::iss {
 
+// The light node's bits are gathered once into word masks (over the words its samples
+// span), then ORed into each receiver's words: the same bits as setting each relation's
+// bit (section 4.13, avoid work; a bit per relation was 56M instructions on columns).
 void Traversal::record_visible(int r, int l) {
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
   const auto& ro = rtree_->order();
   const auto& lo = ltree_->order();
+  if (L.begin == L.end) return;
+  size_t first = SIZE_MAX, last = 0;
+  for (uint32_t b = L.begin; b < L.end; ++b) {
+    first = std::min(first, size_t(lo[b]));
+    last = std::max(last, size_t(lo[b]));
+  }
+  const size_t w0 = (light_offset_ + first) >> 6, nw = ((light_offset_ + last) >> 6) - w0 + 1;
+  std::vector<uint64_t>& masks = visible_masks_;
+  masks.assign(nw, 0);
+  for (uint32_t b = L.begin; b < L.end; ++b) {
+    const size_t bit = light_offset_ + lo[b];
+    masks[(bit >> 6) - w0] |= uint64_t(1) << (bit & 63);
+  }
   for (uint32_t a = R.begin; a < R.end; ++a) {
-    ReceiverResult& rr = result_.receivers[ro[a]];
-    for (uint32_t b = L.begin; b < L.end; ++b) rr.set_visible(light_offset_ + lo[b], true);
+    uint64_t* words = result_.receivers[ro[a]].visible_bits.data() + w0;
+    for (size_t w = 0; w < nw; ++w) words[w] |= masks[w];
   }
   n_empty_ += double(R.size()) * double(L.size());
 }

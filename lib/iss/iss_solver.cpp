@@ -72,19 +72,37 @@ std::vector<uint8_t> dense_ray_lights(const Scene& scene, double relations_per_t
   for (const Receiver& r : scene.receivers) rbox.extend(r.p);
   const size_t step = std::max<size_t>(1, n / kDenseRaySamples);
   const double need = double(std::max(kDenseRayMinTriangles, n / 8));
+  // The sampled triangles' boxes, built once for all lights as box arrays, and tested
+  // four per vector (direct_cull: may_intersect_box's test and arithmetic); building
+  // them per light was most of this estimate's cost (about 5% of rooms' solve at 1024
+  // receivers, 27 lights).
+  const size_t tested = (n + step - 1) / step, kp = std::max<size_t>(4, (tested + 3) & ~size_t(3));
+  std::vector<double> boxes(6 * kp, 0.0);  // padding lanes: a point box at the origin, never counted
+  for (size_t t = 0, k = 0; t < n; t += step, ++k) {
+    const auto& tri = scene.mesh.triangles[t];
+    AABB tb;
+    for (int c = 0; c < 3; ++c) tb.extend(scene.mesh.vertices[tri[c]]);
+    const AABBd b = to_double(tb);
+    for (int a = 0; a < 3; ++a) {
+      boxes[size_t(a) * kp + k] = b.lo[a];
+      boxes[size_t(3 + a) * kp + k] = b.hi[a];
+    }
+  }
+  std::vector<int64_t> keep(kp);
   for (size_t li = 0; li < scene.lights.size(); ++li) {
     const Light& light = scene.lights[li];
     AABB lbox;
     for (const AABB& jb : light.jitter_boxes) lbox.extend(jb);
     if (rbox.overlaps(lbox) || choose_main_axis(rbox, lbox).axis < 0) continue;
     const ShaftGeometry g(rbox, lbox, MainAxis{}, scale);
-    size_t hits = 0, tested = 0;
-    for (size_t t = 0; t < n; t += step, ++tested) {
-      const auto& tri = scene.mesh.triangles[t];
-      AABB tb;
-      for (int k = 0; k < 3; ++k) tb.extend(scene.mesh.vertices[tri[k]]);
-      hits += g.may_intersect_box(to_double(tb));
+    std::fill(keep.begin(), keep.end(), int64_t(-1));
+    for (int i = 0; i < g.plane_count(); ++i) {
+      const ConservativePlane pl = g.plane(i);
+      const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
+      direct_cull(boxes.data(), kp, plane, keep.data());
     }
+    size_t hits = 0;
+    for (size_t k = 0; k < tested; ++k) hits += keep[k] != 0;
     const double in_shaft = double(hits) * double(n) / double(tested);
     const double relations = double(scene.receivers.size()) * double(light.samples);
     dense[li] = in_shaft >= need && relations < relations_per_triangle * in_shaft;

@@ -213,14 +213,15 @@ __attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t 
   direct_cull_body(box, kp, plane, keep);
 }
 #endif
+
+}  // namespace
+
 void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep) {
 #if defined(__GNUC__) && defined(__x86_64__)
   if (have_avx2()) return direct_cull_avx2(box, kp, plane, keep);
 #endif
   direct_cull_default(box, kp, plane, keep);
 }
-
-}  // namespace
 
 // Candidates of a leaf shaft: the triangles whose box may meet it (a segment between the
 // node boxes lies in their hull, so a triangle it meets has a box that meets the hull).

@@ -42,16 +42,12 @@ ConservativePlane plane_through(const Vec3d& a, const Vec3d& b, const Vec3d& c, 
 }
 
 void ShaftGeometry::add_plane(const Vec3d& n, double d) {
-  ConservativePlane p;
-  p.n = n;
-  p.d = d;
-  p.tol = kTolFactor * l1(n) * scale_;
   soa_.v[0][count_] = n.x;
   soa_.v[1][count_] = n.y;
   soa_.v[2][count_] = n.z;
   soa_.v[3][count_] = d;
-  soa_.v[4][count_] = p.tol;
-  planes_[size_t(count_++)].p = p;
+  soa_.v[4][count_] = kTolFactor * l1(n) * scale_;
+  ++count_;
 }
 
 ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis axis, double scale)
@@ -120,10 +116,10 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
           // axis (the other two are differences of products with exact zeros).
           bool dup = false;
           for (int k = first_of_projection; k < count_; ++k) {
-            const ConservativePlane& o = planes_[size_t(k)].p;
+            const ConservativePlane o = plane(k);
             if (o.n[i] * ny - o.n[j] * nx == 0.0 && dot(o.n, n) > 0 && o.d * l1(n) == d * l1(o.n)) dup = true;
           }
-          if (!dup && count_ < int(planes_.size())) add_plane(n, d);
+          if (!dup && count_ < kMaxPlanes) add_plane(n, d);
         }
       }
     }
@@ -144,8 +140,10 @@ ShaftGeometry::ShaftGeometry(const AABB& receiver, const AABB& light, MainAxis a
 }
 
 bool ShaftGeometry::may_contain_point(const Vec3d& p) const {
-  for (int i = 0; i < count_; ++i)
-    if (planes_[size_t(i)].p.eval(p) > planes_[size_t(i)].p.tol) return false;
+  for (int i = 0; i < count_; ++i) {
+    const ConservativePlane pl = plane(i);
+    if (pl.eval(p) > pl.tol) return false;
+  }
   return true;
 }
 
@@ -375,7 +373,7 @@ double ShaftGeometry::boundary_distance(const Vec3d& p) const {
   double inside = 1e300, outside = 0.0;
   bool is_out = false;
   for (int i = 0; i < count_; ++i) {
-    const ConservativePlane& pl = planes_[size_t(i)].p;
+    const ConservativePlane pl = plane(i);
     double e = pl.eval(p) / length(pl.n);
     if (e > 0) {
       is_out = true;

@@ -73,7 +73,14 @@ class ShaftGeometry {
   double clip_hi() const { return clip_hi_; }
   double scale() const { return scale_; }
   int plane_count() const { return count_; }
-  const ConservativePlane& plane(int i) const { return planes_[size_t(i)].p; }
+  // Plane i, read from the plane arrays (the only copy of the planes).
+  ConservativePlane plane(int i) const {
+    ConservativePlane p;
+    p.n = Vec3d(soa_.v[0][i], soa_.v[1][i], soa_.v[2][i]);
+    p.d = soa_.v[3][i];
+    p.tol = soa_.v[4][i];
+    return p;
+  }
 
   bool may_contain_point(const Vec3d& p) const;
   bool may_intersect_segment(const Vec3d& a, const Vec3d& b) const;
@@ -98,25 +105,19 @@ class ShaftGeometry {
   void add_plane(const Vec3d& n, double d);
   bool prism_may_intersect(const AABBd& face_box, int away_sign, const Vec3d& a, const Vec3d& b, const Vec3d& c) const;
 
-  // One plane without a default value: a shaft is built per node pair (and several per
-  // split choice), and zero-filling all 18 planes (720 bytes, checked by ASan's memset in
-  // the fuzz build) cost more than the planes it fills. Only the first count_ are ever
-  // read; the constructor writes each before counting it.
-  union PlaneSlot {
-    PlaneSlot() {}
-    ConservativePlane p;
-  };
-
   AABBd r_, l_;
   MainAxis axis_;
   double scale_;
   double clip_lo_ = 0, clip_hi_ = 0;
-  std::array<PlaneSlot, 18> planes_;  // 6 box planes + at most 4 oblique per projection
+  static constexpr int kMaxPlanes = 18;  // 6 box planes + at most 4 oblique per projection
   int count_ = 0;
-  // The planes again as arrays of n.x, n.y, n.z, d and tol, so that
-  // may_intersect_segment evaluates four planes per vector. The slots from count_ up to
-  // the next multiple of 4 hold a plane that never separates (n = 0, d = 0, tol = +inf:
-  // every evaluation is -inf); the rest are never read and left unwritten, as planes_.
+  // The planes as arrays of n.x, n.y, n.z, d and tol, so that the predicates evaluate
+  // four planes per vector; plane(i) reads them back. The slots from count_ up to the
+  // next multiple of 4 hold a plane that never separates (n = 0, d = 0, tol = +inf:
+  // every evaluation is -inf). The rest are never read and left unwritten: a shaft is
+  // built per node pair (and four per split choice), and zero-filling the arrays cost
+  // more than the planes they hold. Kept only in this layout (not also as an array of
+  // planes), which halves the bytes a shaft writes and copies (section 4.13).
   static constexpr int kSoaSlots = 20;
   union SoaSlots {
     SoaSlots() {}

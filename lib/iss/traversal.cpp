@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 namespace visgate::iss {
 
@@ -217,9 +218,9 @@ void Traversal::finish_stats(Stats& st) const {
 // ---- section 4.9: traversal ------------------------------------------------------------
 // CHOOSE-SPLIT (section 4.9): the strategy whose two sub-shafts bring the combined
 // vertex centre closer to their boundaries on average. The four candidate geometries
-// are built in `cand` (receiver split left, right, light split left, right; empty when
-// not built), so that the two of the chosen split are not built again for the
-// sub-shafts: they were a third of all shaft constructions.
+// are built in `cand` (receiver split left, right, light split left, right; none when
+// choose_split returns before building them), so that the two of the chosen split are
+// not built again for the sub-shafts: they were a third of all shaft constructions.
 SplitMode Traversal::choose_split(const Shaft& sh, SplitGeometries& cand) {
   TreeNode& R = rn(sh.r);
   TreeNode& L = ln(sh.l);
@@ -242,13 +243,14 @@ SplitMode Traversal::choose_split(const Shaft& sh, SplitGeometries& cand) {
   MainAxis ax{sh.g.main_axis(), sh.g.dir()};
   {
     ScopedTimer t(times_[kShaftGeometry]);
-    cand[0].emplace(rn(R.left).box, L.box, ax, scale_);
-    cand[1].emplace(rn(R.right).box, L.box, ax, scale_);
-    cand[2].emplace(R.box, ln(L.left).box, ax, scale_);
-    cand[3].emplace(R.box, ln(L.right).box, ax, scale_);
+    new (&cand.g[0]) ShaftGeometry(rn(R.left).box, L.box, ax, scale_);
+    new (&cand.g[1]) ShaftGeometry(rn(R.right).box, L.box, ax, scale_);
+    new (&cand.g[2]) ShaftGeometry(R.box, ln(L.left).box, ax, scale_);
+    new (&cand.g[3]) ShaftGeometry(R.box, ln(L.right).box, ax, scale_);
+    cand.built = true;
   }
-  double dr = 0.5 * (cand[0]->boundary_distance(c) + cand[1]->boundary_distance(c));
-  double dl = 0.5 * (cand[2]->boundary_distance(c) + cand[3]->boundary_distance(c));
+  double dr = 0.5 * (cand.g[0].boundary_distance(c) + cand.g[1].boundary_distance(c));
+  double dl = 0.5 * (cand.g[2].boundary_distance(c) + cand.g[3].boundary_distance(c));
   return dr <= dl ? SplitMode::Receiver : SplitMode::Light;
 }
 
@@ -403,8 +405,8 @@ void Traversal::shaft_subdivide(Shaft& sh) {
     if (mode == SplitMode::Receiver) split = r = side == 0 ? rn(sh.r).left : rn(sh.r).right;
     else split = l = side == 0 ? ln(sh.l).left : ln(sh.l).right;
     const TreeNode& sn = mode == SplitMode::Receiver ? rn(split) : ln(split);
-    const std::optional<ShaftGeometry>& made = cand[size_t((mode == SplitMode::Receiver ? 0 : 2) + side)];
-    Shaft sub = construct_sub_shaft(r, l, sn, sh, side == 1, made ? &*made : nullptr);
+    const ShaftGeometry* made = cand.get(size_t((mode == SplitMode::Receiver ? 0 : 2) + side));
+    Shaft sub = construct_sub_shaft(r, l, sn, sh, side == 1, made);
     shaft_traverse(sub);
     release(sub);
   }

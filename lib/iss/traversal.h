@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 #if defined(__x86_64__) || defined(__i386__)
@@ -37,6 +38,12 @@ namespace visgate::iss {
 
 // validate() after every operation on every surface (iss_solver.h set_validate_all).
 extern bool g_validate;
+
+// ShaftGeometry::may_intersect_box's test of one plane (n.x, n.y, n.z, d, tol) over box
+// arrays (lo x, y, z, hi x, y, z, kp each, kp a multiple of 4), four boxes per vector,
+// the same arithmetic: keep[k] is cleared where box k lies beyond the plane
+// (leaf_rays.cpp). A box passes may_intersect_box iff no plane of the shaft clears it.
+void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep);
 
 using Clock = std::chrono::steady_clock;
 
@@ -317,7 +324,20 @@ class Traversal {
   bool node_triangles_face_away(int r, const AABB& light_box);
 
   // ---- sections 4.8, 4.9: traversal (traversal.cpp) --------------------------------------
-  using SplitGeometries = std::array<std::optional<ShaftGeometry>, 4>;
+  // CHOOSE-SPLIT's four candidate geometries (receiver split left, right, light split
+  // left, right), left unconstructed until choose_split builds all four: an array of
+  // std::optional was zero-filled in full (6.6 kB) for every subdivided shaft, 16% of
+  // shaft_subdivide's own instructions on columns (section 4.13, avoid work).
+  // ShaftGeometry is trivially destructible, so nothing is destroyed.
+  struct SplitGeometries {
+    SplitGeometries() {}
+    const ShaftGeometry* get(size_t k) const { return built ? &g[k] : nullptr; }
+    bool built = false;
+    union {
+      ShaftGeometry g[4];
+    };
+  };
+  static_assert(std::is_trivially_destructible_v<ShaftGeometry>);
   SplitMode choose_split(const Shaft& sh, SplitGeometries& cand);
   void shaft_traverse(Shaft& sh);
   void shaft_subdivide(Shaft& sh);  // lines 5-19 of Figure 4.33, after the tests
@@ -337,6 +357,7 @@ class Traversal {
   std::unique_ptr<PointTree> rtree_, ltree_;
   const Light* light_ = nullptr;
   size_t light_offset_ = 0;
+  std::vector<uint64_t> visible_masks_;  // record_visible's word masks of a light node
   const raycast::EmbreeScene* embree_ = nullptr;
   Workspace ws_;
   double times_[kTimerCount] = {};  // in ticks()

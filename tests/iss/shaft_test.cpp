@@ -1,12 +1,15 @@
-// lib/iss/shaft.h: the shaft hull, its oblique planes and the segment/triangle test (paper 000 section 4.4.1).
+// lib/iss/shaft.h: the shaft hull, its oblique planes and the segment/triangle test (paper 000 section 4.4.1);
+// direct_cull (traversal.h) against may_intersect_box.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 #include <utility>
+#include <vector>
 
 #include "lib/geom/haines_shaft.h"
 #include "lib/iss/shaft.h"
+#include "lib/iss/traversal.h"
 #include "tests/support/iss_fixtures.h"
 
 using namespace visgate;
@@ -201,6 +204,7 @@ TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
         }
         return p;
       };
+      std::vector<AABBd> boxes;
       for (int k = 0; k < 60; ++k) {
         const Vec3d a = point(), b = point();
         const bool ref = reference_segment(g, a, b);
@@ -212,7 +216,24 @@ TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
         const bool rb = reference_box(g, bx);
         ASSERT_EQ(g.may_intersect_box(bx), rb);
         (rb ? box_in : box_out) += 1;
+        boxes.push_back(bx);
       }
+      // The same boxes as box arrays through direct_cull, plane by plane (the cull of
+      // the direct test's candidate lists and of dense_ray_lights' estimate).
+      const size_t kp = (boxes.size() + 3) & ~size_t(3);
+      std::vector<double> arrays(6 * kp, 0.0);
+      for (size_t k = 0; k < boxes.size(); ++k)
+        for (int ax = 0; ax < 3; ++ax) {
+          arrays[size_t(ax) * kp + k] = boxes[k].lo[ax];
+          arrays[size_t(3 + ax) * kp + k] = boxes[k].hi[ax];
+        }
+      std::vector<int64_t> keep(kp, -1);
+      for (int i = 0; i < g.plane_count(); ++i) {
+        const iss::ConservativePlane pl = g.plane(i);
+        const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
+        iss::direct_cull(arrays.data(), kp, plane, keep.data());
+      }
+      for (size_t k = 0; k < boxes.size(); ++k) ASSERT_EQ(keep[k] != 0, g.may_intersect_box(boxes[k]));
       for (int k = 0; k < 60; ++k) {  // triangles: separated by a shaft plane / by their own plane
         Vec3d a = point(), b = point(), c = point();
         if (k % 4 == 0) c = a + (b - a) * 0.5;  // degenerate: zero normal
