@@ -162,7 +162,8 @@ struct GroupState {
     uint32_t begin, count;
   };
   std::vector<NearBlock> near_blocks;
-  std::vector<uint32_t> near_spatial, near_pick;
+  std::vector<uint32_t> near_spatial;
+  std::vector<uint64_t> near_pick_bits;  // per receiver: the near polygons of its blocks (shade_receiver.cpp)
   // Closed surfaces only: per input triangle its near polygon's index when that polygon
   // is the whole triangle's only part (-1 none, -2 several parts), reset at clear();
   // per near polygon the last receiver (near_serial) that subtracted it merged.
