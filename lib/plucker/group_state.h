@@ -151,6 +151,7 @@ struct GroupState {
   // Scratch of the phases.
   std::vector<Vec3d> poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;
   std::vector<Vec3d> cover_n, cover_err;  // per receiver: planes through r and the interior occluders' edges
+  std::vector<uint32_t> cover_at;         // per interior occluder: its first edge's plane in cover_n
   std::vector<NearPoly> near_sorted;
   std::vector<std::pair<double, uint32_t>> near_key;
   // The near polygons in blocks of nearby ones (occluder_selection.cpp sort_near): the

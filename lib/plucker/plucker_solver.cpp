@@ -70,6 +70,7 @@ void GroupState::clear() {
   cand_skipped.clear();
   cover_n.clear();
   cover_err.clear();
+  cover_at.clear();
   rloc_exact = false;
   for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
   vals.clear();

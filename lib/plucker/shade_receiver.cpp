@@ -140,6 +140,7 @@ class ReceiverShading {
   // covered(): per interior occluder, the edge that failed last (cover_planes sizes it;
   // this thread's, as near_hint_).
   std::vector<uint8_t>& cover_hint_;
+  size_t cover_last_ = 0;  // covered(): the interior occluder that covered the last polygon
 };
 
 // Extreme receivers: seen from r the light is at a grazing angle (r 2^20 times farther
@@ -239,14 +240,17 @@ void ReceiverShading::pyramid_planes() {
 void ReceiverShading::cover_planes() {
   gs_.cover_n.clear();
   gs_.cover_err.clear();
+  gs_.cover_at.clear();
   cover_hint_.assign(gs_.interior.size(), 0);
   if (gs_.interior.empty() || !translates_exactly(rec_.p, lf_.origin)) return;
-  for (const Occluder& o : gs_.interior)
+  for (const Occluder& o : gs_.interior) {
+    gs_.cover_at.push_back(uint32_t(gs_.cover_n.size()));
     for (int m = 0; m < o.n; ++m) {
       Vec3d err;
       gs_.cover_n.push_back(edge_plane_normal_err(r_, o.v[m], o.v[(m + 1) % o.n], err));
       gs_.cover_err.push_back(err);
     }
+  }
 }
 
 // True when every line from r through the near polygon's triangle (local, exact) is
@@ -256,13 +260,18 @@ void ReceiverShading::cover_planes() {
 // triangle would. Signs det[x - r, a - r, b - r] decided against dot_err (lines.h).
 // The edges of each occluder are tried from the one that failed last for it
 // (cover_hint_): the polygons come in spatial order, and near the silhouette most of
-// them pass every edge but one.
+// them pass every edge but one. For the same reason the occluders are tried from the one
+// that covered the last polygon (cover_last_; the answer is whether any covers it, so
+// the order changes nothing but the work: measured on the bunny, 11 occluders).
 bool ReceiverShading::covered(const NearPoly& np) {
-  size_t e = 0;
-  for (size_t oi = 0; oi < gs_.interior.size(); ++oi) {
+  if (gs_.cover_n.empty()) return false;  // no planes: nothing is taken as covered
+  const size_t no = gs_.interior.size();
+  for (size_t oj = 0; oj < no; ++oj) {
+    const size_t oi = cover_last_ + oj < no ? cover_last_ + oj : cover_last_ + oj - no;
     const Occluder& o = gs_.interior[oi];
+    const size_t e = gs_.cover_at[oi];
     uint8_t& hint = cover_hint_[oi];
-    bool all = !gs_.cover_n.empty();
+    bool all = true;
     for (int mi = 0; mi < o.n && all; ++mi) {
       const int m = (hint + mi) % o.n;
       const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
@@ -273,8 +282,10 @@ bool ReceiverShading::covered(const NearPoly& np) {
       }
       if (!all) hint = uint8_t(m);
     }
-    if (all) return true;
-    e += size_t(o.n);
+    if (all) {
+      cover_last_ = oi;
+      return true;
+    }
   }
   return false;
 }
