@@ -46,14 +46,14 @@ bool close_plane_points(const std::vector<Vec3d>& poly, const std::vector<uint8_
 // Side of the corners of the receivers' box (its distinct ones: GroupState::wcorners)
 // against the plane of the triangle t, in world coordinates (the inputs as given: the
 // local frame's rounding moves points by u |x - o|, enough to put a receiver just below
-// a face above it; test
-// ReceiverWithinRoundingOfAFace): per corner x the sign of orient3d(t0, t1, t2, x), in
-// float as (x - base) . N with N = edge_plane_normal_err(t0, t1, t2) (the cross product
-// of its two shortest edges, which keeps the plane of a sliver with a far vertex) and
-// base the vertex nearest to x (lines.h nearest_base), decided against dot_err;
-// undecided counts for neither side. +1 when every corner is strictly on the positive
-// side, -1 when every one is strictly negative, else 0; the normal and its bound are
-// computed once and the loop stops at the first corner that breaks the common sign.
+// a face above it; test ReceiverWithinRoundingOfAFace): per corner x the sign of
+// orient3d(t0, t1, t2, x), in float as (x - base) . N with N = edge_plane_normal_err(t0,
+// t1, t2) (the cross product of its two shortest edges, which keeps the plane of a
+// sliver with a far vertex) and base the vertex nearest to x (lines.h nearest_base),
+// decided against dot_err; undecided counts for neither side. +1 when every corner is
+// strictly on the positive side, -1 when every one is strictly negative, else 0; the
+// normal and its bound are computed once and the loop stops at the first corner that
+// breaks the common sign.
 int box_side(const Vec3f t[3], const Vec3f* corners, int ncorners) {
   Vec3f err;
   const Vec3f nrm = edge_plane_normal_err(t[0], t[1], t[2], err);
@@ -336,9 +336,10 @@ void Selection::candidates() {
 // box and from the light: w = 0 at every receiver and light point, so every segment in
 // general position that crosses the surface crosses it with r on the positive side of
 // the crossed triangle's plane and with r on the negative side. Per candidate the sides
-// of the receivers' box (its distinct corners) and of the light (points whose convex hull holds
-// it, below) are decided exactly; a crossing with r positive needs r's side not all
-// negative and l's side not all positive (l is on the other side), and symmetrically.
+// of the receivers' box (its distinct corners) and of the light (points whose convex
+// hull holds it, below) are decided exactly; a crossing with r positive needs r's side
+// not all negative and l's side not all positive (l is on the other side), and
+// symmetrically.
 // Per surface the side kept is where the segments enter it (r on the outer side, the
 // surface's faces towards the receivers: measured on scan 75k, 1.7x faster than keeping
 // the exits, with fewer developments), or, when the double signed volume cannot tell
@@ -582,7 +583,8 @@ bool Selection::select_patch(int32_t pid, std::span<const uint32_t> tris, const 
     if (gmx <= gs_.gmin - gs_.delta) return false;
   }
   const std::span<const Vec3f> wq = gs_.ctx->tree->patch_polygon(pid);
-  const int bside = box_side(wq.data(), gs_.wcorners, gs_.nwcorners);  // three corners of the polygon: its plane, in its orientation
+  // Three corners of the polygon: its plane, in its orientation.
+  const int bside = box_side(wq.data(), gs_.wcorners, gs_.nwcorners);
   std::vector<Vec3d>& q = gs_.patch;
   std::vector<double>& vals = gs_.vals;
   q.resize(wq.size());
