@@ -10,6 +10,7 @@
 #pragma once
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <utility>
@@ -119,8 +120,13 @@ struct GroupState {
   // g-values; a part beyond gcut = gmax + delta is between every receiver and the light.
   std::vector<Vec3d> rloc;       // the receivers, local
   Vec3d dlo{}, dhi{};            // their box (local, double)
-  Vec3f wcorners[8];             // its corners in world coordinates (float box)
-  Vec3d corners[8];              // its corners (local)
+  // Its corners in world coordinates (float box) and local: the distinct ones first
+  // (nwcorners, ncorners: 4 for a flat box such as a receiver grid, fewer for a line or
+  // a point), in the order of their first occurrence among the 8, the other slots
+  // repeating the first (distinct_corners).
+  Vec3f wcorners[8];
+  Vec3d corners[8];
+  int nwcorners = 8, ncorners = 8;
   Vec3d ref{}, g{};
   double gmin = 0, gmax = 0, delta = 0, gcut = 0;
   double light_width = 0;        // the light's longest side, or area over it when smaller
@@ -148,6 +154,7 @@ struct GroupState {
   // Scratch of the phases.
   std::vector<Vec3d> poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;
   std::vector<Vec3d> cover_n, cover_err;  // per receiver: planes through r and the interior occluders' edges
+  std::vector<uint32_t> cover_at;         // per interior occluder: its first edge's plane in cover_n
   std::vector<NearPoly> near_sorted;
   std::vector<std::pair<double, uint32_t>> near_key;
   // The near polygons in blocks of nearby ones (occluder_selection.cpp sort_near): the
@@ -159,7 +166,8 @@ struct GroupState {
     uint32_t begin, count;
   };
   std::vector<NearBlock> near_blocks;
-  std::vector<uint32_t> near_spatial, near_pick;
+  std::vector<uint32_t> near_spatial;
+  std::vector<uint64_t> near_pick_bits;  // per receiver: the near polygons of its blocks (shade_receiver.cpp)
   // Closed surfaces only: per input triangle its near polygon's index when that polygon
   // is the whole triangle's only part (-1 none, -2 several parts), reset at clear();
   // per near polygon the last receiver (near_serial) that subtracted it merged.
@@ -185,6 +193,23 @@ struct GroupState {
   }
   void clear();
 };
+
+// The corners of the box [lo, hi] without repeats: corner c (bit a of c set: hi on axis
+// a, else lo) unless some axis with lo == hi (the same bits) has its bit set, which
+// repeats the corner without it. Written to out[0..count) in increasing c, the other
+// slots a copy of out[0]; returns count. A sign test over the box's corners that asks
+// every corner for one common strict sign gives the same answer on these.
+template <class V>
+int distinct_corners(const V& lo, const V& hi, V out[8]) {
+  int flat = 0;
+  for (int a = 0; a < 3; ++a)
+    if (lo[a] == hi[a] && std::signbit(lo[a]) == std::signbit(hi[a])) flat |= 1 << a;
+  int n = 0;
+  for (int c = 0; c < 8; ++c)
+    if ((c & flat) == 0) out[n++] = V((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+  for (int k = n; k < 8; ++k) out[k] = out[0];
+  return n;
+}
 
 struct ThreadWork {
   GroupState state;

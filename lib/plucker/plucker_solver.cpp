@@ -63,13 +63,14 @@ void GroupState::clear() {
   near_key.clear();
   near_blocks.clear();
   near_spatial.clear();
-  near_pick.clear();
+  near_pick_bits.clear();
   occluders.clear();
   interior.clear();
   closed_keep.clear();
   cand_skipped.clear();
   cover_n.clear();
   cover_err.clear();
+  cover_at.clear();
   rloc_exact = false;
   for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
   vals.clear();
@@ -104,7 +105,8 @@ void shade_group(const SolveContext& ctx, size_t li, const LocalLight& lf, const
   auto live_bytes = [&]() {
     return int64_t(bsp.memory_bytes() + gs.near_verts.capacity() * sizeof(Vec3d) + gs.near.capacity() * sizeof(NearPoly) +
                    gs.near_blocks.capacity() * sizeof(GroupState::NearBlock) +
-                   (gs.near_spatial.capacity() + gs.near_pick.capacity() + gs.near_done.capacity()) * sizeof(uint32_t) +
+                   (gs.near_spatial.capacity() + gs.near_done.capacity()) * sizeof(uint32_t) +
+                   gs.near_pick_bits.capacity() * sizeof(uint64_t) +
                    gs.near_of_tri.capacity() * sizeof(int32_t));
   };
   int64_t reported = live_bytes();

@@ -5,12 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "lib/plucker/bsp.h"
 #include "lib/plucker/fragment.h"
+#include "lib/plucker/group_state.h"
 #include "lib/plucker/lines.h"
 #include "lib/plucker/plucker_solver.h"
 #include "lib/scene/scene_json.h"
@@ -22,6 +24,43 @@
 using namespace visgate;
 using namespace visgate::plucker;
 using namespace visgate::test_support;
+
+TEST(PluckerSelection, DistinctCornersOfAFlatBoxHoldEveryCornerOnce) {
+  // The receivers' box of a grid is flat: its 8 corners are 4 points, each twice. Every
+  // corner of the 8 must be among those returned, each returned one a corner, none twice,
+  // in the order of first occurrence; -0 and +0 count as different (their bits differ).
+  auto corner = [](const Vec3d& lo, const Vec3d& hi, int c) {
+    return Vec3d((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+  };
+  const struct {
+    Vec3d lo, hi;
+    int n;
+  } cases[] = {{Vec3d(0, 0, 0), Vec3d(1, 2, 3), 8},   {Vec3d(0, 0, 1), Vec3d(1, 2, 1), 4},
+               {Vec3d(5, 0, 1), Vec3d(5, 2, 1), 2},   {Vec3d(5, 2, 1), Vec3d(5, 2, 1), 1},
+               {Vec3d(-0.0, 0, 1), Vec3d(0.0, 2, 1), 4}};
+  for (const auto& cs : cases) {
+    Vec3d out[8];
+    const int n = distinct_corners(cs.lo, cs.hi, out);
+    ASSERT_EQ(n, cs.n);
+    int last = -1;
+    for (int k = 0; k < n; ++k) {
+      int first = -1;  // the first corner c equal to out[k], bit for bit
+      for (int c = 0; c < 8 && first < 0; ++c) {
+        const Vec3d x = corner(cs.lo, cs.hi, c);
+        if (std::memcmp(&x, &out[k], sizeof x) == 0) first = c;
+      }
+      EXPECT_GT(first, last);  // a corner, new, in increasing order
+      last = first;
+    }
+    for (int c = 0; c < 8; ++c) {
+      const Vec3d x = corner(cs.lo, cs.hi, c);
+      bool found = false;
+      for (int k = 0; k < n; ++k) found = found || std::memcmp(&x, &out[k], sizeof x) == 0;
+      EXPECT_TRUE(found) << c;
+    }
+    for (int k = n; k < 8; ++k) EXPECT_EQ(out[k], out[0]);
+  }
+}
 
 TEST(PluckerSolver, OccluderTouchingTheLightPlane) {
   // Triangle in the plane x = 0 with its edge y in [-3, 3] on the light plane z = 2 and
