@@ -1,6 +1,14 @@
 // Wedges scattered through the receiver tree (see wedge_scatter.h).
 #include "lib/ssv/wedge_scatter.h"
 
+#include <algorithm>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#include "lib/base/cpu_features.h"
+
 namespace visgate::ssv {
 
 namespace {
@@ -37,24 +45,121 @@ std::vector<int32_t> WedgeScatter::batches(const ReceiverTree& tree, uint32_t ma
   return out;
 }
 
+void WedgeScatter::float_boxes(const ReceiverTree& tree) {
+  const auto& nodes = tree.nodes();
+  if (boxes_.size() == nodes.size()) return;
+  boxes_.resize(nodes.size());
+  for (size_t k = 0; k < nodes.size(); ++k) boxes_[k] = to_float_box(nodes[k].box);
+}
+
+namespace {
+
+#if defined(__GNUC__) && defined(__x86_64__)
+// Eight boxes' coordinates in lanes (lo.x .. hi.z).
+struct BoxLanes {
+  alignas(32) float c[6][8];
+};
+
+// The box range of plane p over each of the eight boxes (box_range per lane): the corner
+// that minimises (maximises) n.x - d, chosen by the sign test n[k] >= 0 as there, then
+// ((x + y) + z) - d; AVX2 alone has no fused multiply-add, so the same floats.
+__attribute__((target("avx2"), always_inline)) inline void range_lanes(const Plane& p, const BoxLanes& b, __m256& lo,
+                                                                       __m256& hi) {
+  const __m256 nx = _mm256_set1_ps(p.n.x), ny = _mm256_set1_ps(p.n.y), nz = _mm256_set1_ps(p.n.z);
+  const int lx = p.n.x >= 0.0f ? 0 : 3, ly = p.n.y >= 0.0f ? 1 : 4, lz = p.n.z >= 0.0f ? 2 : 5;
+  const int hx = 3 - lx, hy = 5 - ly, hz = 7 - lz;  // the other corner's rows
+  const __m256 d = _mm256_set1_ps(p.d);
+  lo = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_load_ps(b.c[lx])),
+                                                 _mm256_mul_ps(ny, _mm256_load_ps(b.c[ly]))),
+                                   _mm256_mul_ps(nz, _mm256_load_ps(b.c[lz]))),
+                     d);
+  hi = _mm256_sub_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, _mm256_load_ps(b.c[hx])),
+                                                 _mm256_mul_ps(ny, _mm256_load_ps(b.c[hy]))),
+                                   _mm256_mul_ps(nz, _mm256_load_ps(b.c[hz]))),
+                     d);
+}
+
+// classify_box's Outside test from the root's state (every plane active, no region side
+// settled) for one wedge and eight boxes: bit i set when box i is Outside.
+__attribute__((target("avx2"))) uint32_t outside_lanes(const Wedge& w, const BoxLanes& b, float eps,
+                                                       bool use_region) {
+  const __m256 peps = _mm256_set1_ps(eps), neps = _mm256_set1_ps(-eps);
+  uint32_t out = 0;
+  if (use_region && w.has_region) {
+    // Section 4.2: front of both triangle planes or back of both (a side is front when
+    // lo >= eps, else back when hi <= -eps).
+    __m256 lo1, hi1, lo2, hi2;
+    range_lanes(w.tri[0], b, lo1, hi1);
+    range_lanes(w.tri[1], b, lo2, hi2);
+    const uint32_t pos1 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(lo1, peps, _CMP_GE_OQ)));
+    const uint32_t pos2 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(lo2, peps, _CMP_GE_OQ)));
+    const uint32_t neg1 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(hi1, neps, _CMP_LE_OQ))) & ~pos1;
+    const uint32_t neg2 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(hi2, neps, _CMP_LE_OQ))) & ~pos2;
+    out = (pos1 & pos2) | (neg1 & neg2);
+  }
+  for (int i = 0; i < w.plane_count && out != 0xFFu; ++i) {
+    __m256 lo, hi;
+    range_lanes(w.planes[size_t(i)], b, lo, hi);
+    out |= uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(hi, neps, _CMP_LT_OQ)));
+  }
+  return out;
+}
+#endif
+
+}  // namespace
+
+void WedgeScatter::pass_batches(const ReceiverTree& tree, const std::vector<int32_t>& batches, size_t first,
+                                const std::vector<Wedge>& wedges, float eps, bool use_region,
+                                std::vector<std::vector<uint32_t>>& lists) {
+  const size_t m = first < batches.size() ? std::min(kPassGroup, batches.size() - first) : 0;
+  lists.resize(m);
+  for (auto& list : lists) list.clear();
+  float_boxes(tree);
+#if defined(__GNUC__) && defined(__x86_64__)
+  static_assert(kPassGroup == 8, "one AVX2 lane per batch");
+  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
+  if (avx2 && m > 0) {
+    BoxLanes b;
+    for (size_t l = 0; l < 8; ++l) {
+      const AABB& box = boxes_[size_t(batches[first + (l < m ? l : 0)])];  // spare lanes repeat the first
+      for (int k = 0; k < 3; ++k) {
+        b.c[k][l] = box.lo[k];
+        b.c[k + 3][l] = box.hi[k];
+      }
+    }
+    for (uint32_t w = 0; w < wedges.size(); ++w) {
+      const uint32_t outside = outside_lanes(wedges[w], b, eps, use_region);
+      for (size_t l = 0; l < m; ++l)
+        if (!(outside & (1u << l))) lists[l].push_back(w);
+    }
+    return;
+  }
+#endif
+  (void)eps;
+  (void)use_region;
+  for (auto& list : lists) {
+    list.resize(wedges.size());
+    for (uint32_t w = 0; w < wedges.size(); ++w) list[w] = w;
+  }
+}
+
 void WedgeScatter::build(const ReceiverTree& tree, int32_t batch, const std::vector<Wedge>& wedges, float eps,
-                         bool use_region, const std::vector<uint8_t>& skip) {
+                         bool use_region, const std::vector<uint8_t>& skip, const std::vector<uint32_t>* passed) {
   const auto& nodes = tree.nodes();
   const auto& ord = tree.order();
   const auto& root = nodes[size_t(batch)];
   first_ = root.begin;
   const uint32_t n = root.end - root.begin;
   pairs_.clear();
-  if (boxes_.size() != nodes.size()) {  // the tree's float boxes, once
-    boxes_.resize(nodes.size());
-    for (size_t k = 0; k < nodes.size(); ++k) boxes_[k] = to_float_box(nodes[k].box);
-  }
+  float_boxes(tree);
   struct Item {
     int32_t node;
     WedgeState s;
   };
   std::vector<Item> work;
-  for (uint32_t w = 0; w < wedges.size(); ++w) {
+  const size_t count = passed ? passed->size() : wedges.size();
+  for (size_t q = 0; q < count; ++q) {
+    const uint32_t w = passed ? (*passed)[q] : uint32_t(q);
     WedgeState s0;
     s0.wedge = w;
     s0.mask = uint16_t((1u << wedges[w].plane_count) - 1u);

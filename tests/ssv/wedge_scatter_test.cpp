@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "lib/base/cpu_features.h"
 #include "lib/solver.h"
 #include "lib/ssv/occluders.h"
 #include "lib/ssv/wedge.h"
@@ -69,6 +70,52 @@ TEST(SsvWedgeScatter, EveryWedgeContainingAReceiverIsACandidate) {
       }
       EXPECT_GT(must, 100u);
     }
+  }
+}
+
+TEST(SsvWedgeScatter, PassedBatchesGiveTheSameCandidates) {
+  // build from pass_batches' lists against build over every wedge: the same candidates
+  // (wedge and mask, in order) for every receiver, batches of one leaf, of 16 receivers
+  // and one batch for the whole tree (seven spare lanes), silhouette regions on and off;
+  // the lists leave wedges out (with AVX2), so the test sees the eight-box test decide.
+  Scene s = random_scene(31, 16, 400);
+  auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
+  std::vector<Vec3d> pts;
+  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
+  ReceiverTree tree(pts, 4);
+  std::vector<uint8_t> skip(pts.size(), 0);
+  for (size_t i = 0; i < skip.size(); i += 5) skip[i] = 1;
+  const float eps = float(4e-6 * 4);
+  size_t dropped = 0;
+  for (uint32_t batch_size : {1u, 16u, 100000u})
+    for (bool regions : {true, false}) {
+      const auto batches = WedgeScatter::batches(tree, batch_size);
+      WedgeScatter all, passed;
+      std::vector<std::vector<uint32_t>> lists;
+      for (size_t b = 0; b < batches.size(); ++b) {
+        const size_t group = b % WedgeScatter::kPassGroup;
+        if (group == 0) {
+          passed.pass_batches(tree, batches, b, wedges, eps, regions, lists);
+          ASSERT_EQ(lists.size(), std::min(WedgeScatter::kPassGroup, batches.size() - b));
+        }
+        const std::vector<uint32_t>& list = lists[group];
+        EXPECT_TRUE(std::is_sorted(list.begin(), list.end()));
+        dropped += wedges.size() - list.size();
+        all.build(tree, batches[b], wedges, eps, regions, skip);
+        passed.build(tree, batches[b], wedges, eps, regions, skip, &list);
+        ASSERT_EQ(all.entries(), passed.entries()) << "batch " << b;
+        for (uint32_t p = tree.nodes()[size_t(batches[b])].begin; p < tree.nodes()[size_t(batches[b])].end; ++p) {
+          ASSERT_EQ(all.end(p) - all.begin(p), passed.end(p) - passed.begin(p)) << "position " << p;
+          for (const WedgeState *x = all.begin(p), *y = passed.begin(p); x != all.end(p); ++x, ++y) {
+            EXPECT_EQ(x->wedge, y->wedge);
+            EXPECT_EQ(x->mask, y->mask);
+            EXPECT_EQ(x->region, y->region);
+          }
+        }
+      }
+    }
+  if (avx2_enabled("VISGATE_SSV_NO_AVX2")) {
+    EXPECT_GT(dropped, 1000u);
   }
 }
 
