@@ -104,6 +104,42 @@ __attribute__((target("avx2"))) uint32_t outside_lanes(const Wedge& w, const Box
   }
   return out;
 }
+
+// classify_box from the root's state for one wedge and eight leaf boxes, every plane at
+// once: bit i of the result set when leaf i is Outside; for the others the state
+// classify_box leaves (mask[i]: the planes whose box minimum is not >= -eps; region[i]:
+// each triangle plane's side, front when lo >= eps, else back when hi <= -eps).
+__attribute__((target("avx2"))) uint32_t leaf_states(const Wedge& w, const BoxLanes& b, float eps, bool use_region,
+                                                     uint16_t* mask, uint8_t* region) {
+  const __m256 peps = _mm256_set1_ps(eps), neps = _mm256_set1_ps(-eps);
+  uint32_t out = 0, pos1 = 0, neg1 = 0, pos2 = 0, neg2 = 0;
+  if (use_region && w.has_region) {
+    __m256 lo1, hi1, lo2, hi2;
+    range_lanes(w.tri[0], b, lo1, hi1);
+    range_lanes(w.tri[1], b, lo2, hi2);
+    pos1 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(lo1, peps, _CMP_GE_OQ)));
+    pos2 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(lo2, peps, _CMP_GE_OQ)));
+    neg1 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(hi1, neps, _CMP_LE_OQ))) & ~pos1;
+    neg2 = uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(hi2, neps, _CMP_LE_OQ))) & ~pos2;
+    out = (pos1 & pos2) | (neg1 & neg2);
+  }
+  uint32_t keep[kMaxWedgePlanes];  // per plane, the leaves whose box it does not contain
+  for (int i = 0; i < w.plane_count && out != 0xFFu; ++i) {
+    __m256 lo, hi;
+    range_lanes(w.planes[size_t(i)], b, lo, hi);
+    out |= uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(hi, neps, _CMP_LT_OQ)));
+    keep[i] = ~uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(lo, neps, _CMP_GE_OQ)));
+  }
+  for (uint32_t in = ~out & 0xFFu; in != 0; in &= in - 1) {
+    const int l = __builtin_ctz(in);
+    uint32_t m = 0;
+    for (int i = 0; i < w.plane_count; ++i) m |= ((keep[i] >> l) & 1u) << i;
+    mask[l] = uint16_t(m);
+    region[l] = uint8_t(((pos1 >> l) & 1u ? kPos1 : 0) | ((neg1 >> l) & 1u ? kNeg1 : 0) | ((pos2 >> l) & 1u ? kPos2 : 0) |
+                        ((neg2 >> l) & 1u ? kNeg2 : 0));
+  }
+  return out;
+}
 #endif
 
 }  // namespace
@@ -157,7 +193,58 @@ void WedgeScatter::build(const ReceiverTree& tree, int32_t batch, const std::vec
     WedgeState s;
   };
   std::vector<Item> work;
-  const size_t count = passed ? passed->size() : wedges.size();
+  size_t count = passed ? passed->size() : wedges.size();
+#if defined(__GNUC__) && defined(__x86_64__)
+  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
+  if (passed && avx2 && eps > 0.0f) {
+    count = 0;  // no walks
+    // The walk's pairs depend on the leaves alone (eps > 0): a box range's float ends
+    // only move inwards with the box, so a node is Outside when its parent is, a plane
+    // that contains (or a region side settled for) the parent does so for the node, and
+    // a Contains node's leaves are all Contains with its state. So a receiver gets the
+    // wedge exactly when its leaf is not Outside, with the state classify_box leaves
+    // there from the root's state: eight leaves per AVX2 step, every plane at once.
+    std::vector<int32_t> leaves;
+    work.clear();
+    work.push_back({batch, WedgeState{}});
+    while (!work.empty()) {  // the batch's leaves in tree order
+      const int32_t id = work.back().node;
+      work.pop_back();
+      const auto& nd = nodes[size_t(id)];
+      if (nd.left < 0) {
+        leaves.push_back(id);
+        continue;
+      }
+      work.push_back({nd.right, WedgeState{}});
+      work.push_back({nd.left, WedgeState{}});
+    }
+    std::vector<BoxLanes> groups((leaves.size() + 7) / 8);
+    for (size_t k = 0; k < groups.size() * 8; ++k) {
+      const AABB& box = boxes_[size_t(leaves[k < leaves.size() ? k : 0])];  // spare lanes repeat the first
+      for (int a = 0; a < 3; ++a) {
+        groups[k / 8].c[a][k % 8] = box.lo[a];
+        groups[k / 8].c[a + 3][k % 8] = box.hi[a];
+      }
+    }
+    uint16_t mask[8];
+    uint8_t region[8];
+    for (const uint32_t w : *passed)
+      for (size_t g = 0; g < groups.size(); ++g) {
+        const size_t m = std::min<size_t>(8, leaves.size() - 8 * g);
+        const uint32_t outside = leaf_states(wedges[w], groups[g], eps, use_region, mask, region);
+        for (uint32_t in = ~outside & ((1u << m) - 1u); in != 0; in &= in - 1) {
+          const int l = __builtin_ctz(in);
+          WedgeState s;
+          s.wedge = w;
+          s.mask = mask[l];
+          s.region = region[l];
+          const auto& nd = nodes[size_t(leaves[8 * g + size_t(l)])];
+          for (uint32_t p = nd.begin; p < nd.end; ++p)
+            if (!skip[ord[p]]) pairs_.push_back({p, s});
+        }
+      }
+  }
+#endif
   for (size_t q = 0; q < count; ++q) {
     const uint32_t w = passed ? (*passed)[q] : uint32_t(q);
     WedgeState s0;

@@ -27,8 +27,10 @@ class WedgeScatter {
  public:
   // Candidates of the receivers under tree node `batch` (positions begin..end of the
   // tree's order); receivers with skip[i] != 0 get none. One tree per object.
-  // With `passed` (pass_batches' list for this batch), only those wedges are walked: the
-  // same candidates.
+  // With `passed` (pass_batches' list for this batch) only those wedges are tried, and
+  // with AVX2 and eps > 0 without walks: each against the batch's leaves, eight per step
+  // (a receiver's candidates depend on its leaf alone, see build). The same candidates
+  // with the same states.
   void build(const ReceiverTree& tree, int32_t batch, const std::vector<Wedge>& wedges, float eps, bool use_region,
              const std::vector<uint8_t>& skip, const std::vector<uint32_t>* passed = nullptr);
   // For batches[first] .. batches[first + kPassGroup - 1] (those that exist), lists[i]

@@ -74,10 +74,11 @@ TEST(SsvWedgeScatter, EveryWedgeContainingAReceiverIsACandidate) {
 }
 
 TEST(SsvWedgeScatter, PassedBatchesGiveTheSameCandidates) {
-  // build from pass_batches' lists against build over every wedge: the same candidates
-  // (wedge and mask, in order) for every receiver, batches of one leaf, of 16 receivers
-  // and one batch for the whole tree (seven spare lanes), silhouette regions on and off;
-  // the lists leave wedges out (with AVX2), so the test sees the eight-box test decide.
+  // build from pass_batches' lists (with AVX2: the leaves eight per step, no walks)
+  // against build's walks over every wedge: the same candidates (wedge, mask and region
+  // bits, in order) for every receiver, batches of one leaf, of 16 receivers and one
+  // batch for the whole tree (spare lanes), silhouette regions on and off; the lists
+  // leave wedges out (with AVX2), so the test sees the eight-box test decide.
   Scene s = random_scene(31, 16, 400);
   auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
   std::vector<Vec3d> pts;
