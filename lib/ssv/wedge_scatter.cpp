@@ -219,6 +219,9 @@ void WedgeScatter::build(const ReceiverTree& tree, int32_t batch, const std::vec
       work.push_back({nd.left, WedgeState{}});
     }
     std::vector<BoxLanes> groups((leaves.size() + 7) / 8);
+    // The boxes around each group's leaves, eight groups per step: a wedge whose
+    // Outside test excludes one excludes each of its leaves (same argument).
+    std::vector<BoxLanes> hulls((groups.size() + 7) / 8);
     for (size_t k = 0; k < groups.size() * 8; ++k) {
       const AABB& box = boxes_[size_t(leaves[k < leaves.size() ? k : 0])];  // spare lanes repeat the first
       for (int a = 0; a < 3; ++a) {
@@ -226,10 +229,25 @@ void WedgeScatter::build(const ReceiverTree& tree, int32_t batch, const std::vec
         groups[k / 8].c[a + 3][k % 8] = box.hi[a];
       }
     }
+    for (size_t g = 0; g < hulls.size() * 8; ++g) {
+      const size_t src = g < groups.size() ? g : 0;
+      for (int a = 0; a < 3; ++a) {
+        float lo = groups[src].c[a][0], hi = groups[src].c[a + 3][0];
+        for (int l = 1; l < 8; ++l) {
+          lo = std::min(lo, groups[src].c[a][l]);
+          hi = std::max(hi, groups[src].c[a + 3][l]);
+        }
+        hulls[g / 8].c[a][g % 8] = lo;
+        hulls[g / 8].c[a + 3][g % 8] = hi;
+      }
+    }
     uint16_t mask[8];
     uint8_t region[8];
+    uint32_t hull_out = 0;
     for (const uint32_t w : *passed)
       for (size_t g = 0; g < groups.size(); ++g) {
+        if (g % 8 == 0) hull_out = outside_lanes(wedges[w], hulls[g / 8], eps, use_region);
+        if (hull_out & (1u << (g % 8))) continue;
         const size_t m = std::min<size_t>(8, leaves.size() - 8 * g);
         const uint32_t outside = leaf_states(wedges[w], groups[g], eps, use_region, mask, region);
         for (uint32_t in = ~outside & ((1u << m) - 1u); in != 0; in &= in - 1) {
