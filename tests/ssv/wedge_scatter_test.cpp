@@ -16,17 +16,31 @@ using namespace visgate;
 using namespace visgate::ssv;
 using namespace visgate::test_support;
 
+namespace {
+
+// The receivers' points (the receiver tree's input) and a skip flag on every k-th one.
+std::vector<Vec3d> receiver_points(const Scene& s) {
+  std::vector<Vec3d> pts;
+  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
+  return pts;
+}
+std::vector<uint8_t> every_kth(size_t n, size_t k) {
+  std::vector<uint8_t> skip(n, 0);
+  for (size_t i = 0; i < n; i += k) skip[i] = 1;
+  return skip;
+}
+
+}  // namespace
+
 TEST(SsvWedgeScatter, EveryWedgeContainingAReceiverIsACandidate) {
   // Like the BSP's test: every wedge that clearly contains the receiver (and, with
   // silhouette regions, whose edge is clearly a silhouette from it) is among its
   // candidates, once; skipped receivers get none; batches tile the tree's order.
   Scene s = random_scene(12, 16, 400);
   auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
-  std::vector<Vec3d> pts;
-  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
+  const std::vector<Vec3d> pts = receiver_points(s);
   ReceiverTree tree(pts, 4);
-  std::vector<uint8_t> skip(pts.size(), 0);
-  for (size_t i = 0; i < skip.size(); i += 7) skip[i] = 1;
+  const std::vector<uint8_t> skip = every_kth(pts.size(), 7);
   const float eps = float(4e-6 * 4);
   for (uint32_t batch_size : {16u, 100000u}) {
     const auto batches = WedgeScatter::batches(tree, batch_size);
@@ -81,11 +95,8 @@ TEST(SsvWedgeScatter, PassedBatchesGiveTheSameCandidates) {
   // leave wedges out (with AVX2), so the test sees the eight-box test decide.
   Scene s = random_scene(31, 16, 400);
   auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
-  std::vector<Vec3d> pts;
-  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
-  ReceiverTree tree(pts, 4);
-  std::vector<uint8_t> skip(pts.size(), 0);
-  for (size_t i = 0; i < skip.size(); i += 5) skip[i] = 1;
+  ReceiverTree tree(receiver_points(s), 4);
+  const std::vector<uint8_t> skip = every_kth(s.receivers.size(), 5);
   const float eps = float(4e-6 * 4);
   size_t dropped = 0;
   for (uint32_t batch_size : {1u, 16u, 100000u})
@@ -140,9 +151,7 @@ TEST(SsvWedgeScatter, RegionPrefilterDropsOnlyWedgesEveryBoxExcludes) {
   // are built identically.
   Scene s = random_scene(21, 16, 400);
   auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
-  std::vector<Vec3d> pts;
-  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
-  ReceiverTree tree(pts, 4);
+  ReceiverTree tree(receiver_points(s), 4);
   RegionBoxes regions;
   regions.eps = float(4e-6 * 4);
   for (int32_t id : WedgeScatter::batches(tree, 32)) {
