@@ -47,6 +47,24 @@ int branchless_lower_bound(const T* a, int n, X x) {
   return int(base - a) + (*base < x ? 1 : 0);
 }
 
+// n buckets over [a min, a max] of the ascending `a` (about one value each when evenly
+// spread): first[b] is the first position whose value is not below the start of bucket
+// b, a.front() + b / scale. Returns the scale (0: all values equal).
+double bucket_index(const std::vector<float>& a, std::vector<int>& first) {
+  const int n = int(a.size());
+  const double span = n > 0 ? double(a.back()) - a.front() : 0.0;
+  const int buckets = std::max(1, n);
+  const double scale = span > 0.0 ? double(buckets) / span : 0.0;
+  first.assign(size_t(buckets) + 1, n);
+  if (scale > 0.0)
+    for (int b = 0, k = 0; b <= buckets; ++b) {
+      const double start = double(a.front()) + double(b) / scale;
+      while (k < n && double(a[size_t(k)]) < start) ++k;
+      first[size_t(b)] = k;
+    }
+  return scale;
+}
+
 // Strips of samples with boxes [u_lo, u_hi] x [v_lo, v_hi] (see integrate.h).
 SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
   SampleStrips o;
@@ -68,9 +86,13 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
   });
   o.vrank.resize(size_t(n));
   o.vlo_sorted.resize(size_t(n));
+  o.vhi_prefix.resize(size_t(n));
+  float vhi = -std::numeric_limits<float>::infinity();
   for (int k = 0; k < n; ++k) {
     o.vrank[size_t(o.vorder[size_t(k)])] = k;
     o.vlo_sorted[size_t(k)] = o.v_lo[size_t(o.vorder[size_t(k)])];
+    vhi = std::max(vhi, box[size_t(o.vorder[size_t(k)])][3]);
+    o.vhi_prefix[size_t(k)] = vhi;
   }
   // ceil(sqrt(N)) strips of equal count.
   const int strips = std::max(1, std::min(n, int(std::ceil(std::sqrt(double(n))))));
@@ -96,17 +118,8 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
     o.srank[size_t(o.sorder[size_t(k)])] = k;
     o.uhi_sorted[size_t(k)] = o.u_hi[size_t(o.sorder[size_t(k)])];
   }
-  // n buckets over [v_lo min, v_lo max] (about one sample each when evenly spread).
-  const double span = n > 0 ? double(o.vlo_sorted.back()) - o.vlo_sorted.front() : 0.0;
-  const int buckets = std::max(1, n);
-  o.bucket_scale = span > 0.0 ? double(buckets) / span : 0.0;
-  o.bucket_first.assign(size_t(buckets) + 1, n);
-  if (o.bucket_scale > 0.0)
-    for (int b = 0, k = 0; b <= buckets; ++b) {
-      const double start = double(o.vlo_sorted.front()) + double(b) / o.bucket_scale;
-      while (k < n && double(o.vlo_sorted[size_t(k)]) < start) ++k;
-      o.bucket_first[size_t(b)] = k;
-    }
+  o.bucket_scale = bucket_index(o.vlo_sorted, o.bucket_first);
+  o.vhi_bucket_scale = bucket_index(o.vhi_prefix, o.vhi_bucket_first);
   return o;
 }
 
@@ -604,9 +617,10 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
     return;
   }
   const double slope = double(du) / double(dv);
-  // Only samples with v_lo in [lo.v - max_height, hi.v) can have v in [lo.v, hi.v): a
-  // range [kb, ke) of the v_lo order, met by a run of consecutive strips.
-  kb = S.vlo_lower_bound(double(lo.v) - S.max_height);
+  // Only samples with v_lo < hi.v and v_hi >= lo.v can have v in [lo.v, hi.v): a range
+  // [kb, ke) of the v_lo order (kb the first position whose v_hi prefix maximum reaches
+  // lo.v), met by a run of consecutive strips.
+  kb = S.vhi_lower_bound(lo.v);
   ke = S.vlo_lower_bound(hi.v);
   if (kb >= ke) return;
   // Up to a few hundred samples in range, testing each one by one (four per SSE2 step)
@@ -656,13 +670,13 @@ void DepthCounter::add_step(float vc, int w) {
     return;
   }
   const SampleStrips& S = *strips_;
-  // Boxes with v_lo >= vc: a suffix of the v_lo order. Boxes below it with v_lo within
-  // the tallest box of vc may reach it: tested one by one.
+  // Boxes with v_lo >= vc: a suffix of the v_lo order. Boxes below it from the first
+  // position whose v_hi prefix maximum reaches vc may reach it: tested one by one.
   const int kb = S.vlo_lower_bound(vc);
   diffv_[size_t(kb)] += w;
   step_list_.emplace_back(kb, w);
   steps_ = true;
-  const int kr = S.vlo_lower_bound(double(vc) - S.max_height);
+  const int kr = S.vhi_lower_bound(vc);
   for (int k = kr; k < kb; ++k) dv_[size_t(k)] += vv_[size_t(k)] >= vc ? w : 0;
 }
 

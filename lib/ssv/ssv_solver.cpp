@@ -572,10 +572,14 @@ double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_t
   }
   double scatter_seconds = 0.0;
   const auto& ord = ls.tree.order();
-  for (int32_t b : batches) {
+  std::vector<std::vector<uint32_t>> passed;  // the batch nodes' own tests, a group at a time
+  for (size_t bi = 0; bi < batches.size(); ++bi) {
+    const int32_t b = batches[bi];
     const auto& nd = ls.tree.nodes()[size_t(b)];
     auto t0 = Clock::now();
-    ls.scatter->build(ls.tree, b, ls.wedges, eps, use_region, ls.occluded);
+    const size_t group = bi % WedgeScatter::kPassGroup;
+    if (group == 0) ls.scatter->pass_batches(ls.tree, batches, bi, ls.wedges, eps, use_region, passed);
+    ls.scatter->build(ls.tree, b, ls.wedges, eps, use_region, ls.occluded, &passed[group]);
     charge.set(ls.scatter->memory_bytes());
     scatter_seconds += seconds_between(t0, Clock::now());
     tbb::parallel_for(tbb::blocked_range<uint32_t>(nd.begin, nd.end, 8), [&](const tbb::blocked_range<uint32_t>& range) {

@@ -27,8 +27,22 @@ class WedgeScatter {
  public:
   // Candidates of the receivers under tree node `batch` (positions begin..end of the
   // tree's order); receivers with skip[i] != 0 get none. One tree per object.
+  // With `passed` (pass_batches' list for this batch) only those wedges are tried, and
+  // with AVX2 and eps > 0 without walks: each against the batch's leaves, eight per step
+  // (a receiver's candidates depend on its leaf alone, see build). The same candidates
+  // with the same states.
   void build(const ReceiverTree& tree, int32_t batch, const std::vector<Wedge>& wedges, float eps, bool use_region,
-             const std::vector<uint8_t>& skip);
+             const std::vector<uint8_t>& skip, const std::vector<uint32_t>* passed = nullptr);
+  // For batches[first] .. batches[first + kPassGroup - 1] (those that exist), lists[i]
+  // holds, in wedge order, the wedges that classify_box from the root's state does not
+  // call Outside at batch first + i's node: exactly the wedges whose walk in build goes
+  // past that node. The group's boxes in AVX2 lanes, with the same products and sums as
+  // classify_box's box ranges, so the same floats; without AVX2 (or with
+  // VISGATE_SSV_NO_AVX2 set) every wedge. A group at a time: at most kPassGroup lists.
+  static constexpr size_t kPassGroup = 8;
+  void pass_batches(const ReceiverTree& tree, const std::vector<int32_t>& batches, size_t first,
+                    const std::vector<Wedge>& wedges, float eps, bool use_region,
+                    std::vector<std::vector<uint32_t>>& lists);
   // The candidates of the receiver at tree-order position p of the batch.
   const WedgeState* begin(uint32_t p) const { return items_.data() + start_[p - first_]; }
   const WedgeState* end(uint32_t p) const { return items_.data() + start_[p - first_ + 1]; }
@@ -50,6 +64,7 @@ class WedgeScatter {
   std::vector<Pair> pairs_;
   std::vector<WedgeState> items_;
   std::vector<uint32_t> start_;
+  void float_boxes(const ReceiverTree& tree);  // boxes_, once per tree
   std::vector<AABB> boxes_;  // float boxes (outwards) of the tree's nodes
   size_t total_ = 0;
 };

@@ -20,7 +20,9 @@ using namespace visgate::test_support;
 namespace {
 
 // n samples of K jitter positions each in the light's [-1, 1]^2 frame: layout 0 a
-// stratified grid moved by up to +-spread/2, 1 uniform, 2 all coincident, 3 a few points.
+// stratified grid moved by up to +-spread/2, 1 uniform, 2 all coincident, 3 a few points,
+// 4 layout 0 with one jitter point of every fifth sample anywhere in v (tall boxes among
+// short ones, as the fan-mapped strata of a polygon light give).
 std::vector<Vec2f> jitter_layout(int layout, int n, int K, float spread, std::mt19937_64& g) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
   const int side = std::max(1, int(std::sqrt(double(n))));
@@ -33,6 +35,8 @@ std::vector<Vec2f> jitter_layout(int layout, int n, int K, float spread, std::mt
     if (layout == 1) jitter[q] = {u(g), u(g)};
     if (layout == 2) jitter[q] = {0.25f, -0.5f};
     if (layout == 3) jitter[q] = {0.5f * float(q % 3), 0.25f * float(q % 2)};
+    if (layout == 4)
+      jitter[q] = {cu + spread * (u01(g) - 0.5f), j % 5 == 0 && int(q) % K == 0 ? u(g) : cv + spread * (u01(g) - 0.5f)};
   }
   return jitter;
 }
@@ -80,66 +84,105 @@ TEST(SsvIntegration, JitterBoxStripsEqualNaiveRule) {
   // against the plain loop: small boxes (a stratified pattern), boxes as wide as the
   // light (a random pattern: everything is tested one by one) and K = 1, with pieces and
   // steps placed exactly on sample coordinates as well as at random.
+  // Layout 4 mixes tall boxes with short ones (the v-ranges' first positions from the
+  // prefix maxima of v_hi, not from the tallest box).
   std::mt19937_64 g(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  for (int K : {1, 4, 16})
-    for (float spread : {0.02f, 2.0f})
-      for (int n : {1, 7, 64, 256, 2048}) {
-        const std::vector<Vec2f> jitter = jitter_layout(0, n, K, spread, g);
-        const SampleStrips strips = make_sample_strips(jitter, n, K);
-        for (int receiver = 0; receiver < 3; ++receiver) {
-          std::vector<uint32_t> pick(static_cast<size_t>(n));
-          std::vector<Vec2f> uv(static_cast<size_t>(n));
-          for (int j = 0; j < n; ++j) {
-            pick[size_t(j)] = uint32_t(j * K + int(g() % uint64_t(K)));
-            uv[size_t(j)] = jitter[pick[size_t(j)]];
-          }
-          DepthCounter dc;
-          dc.reset(strips, jitter, pick, 2.0);
-          // Each sample's point is its picked jitter point (gathered with AVX2 when available).
-          for (int j = 0; j < n; ++j) {
-            EXPECT_EQ(dc.sample_uv(size_t(j)).u, uv[size_t(j)].u);
-            EXPECT_EQ(dc.sample_uv(size_t(j)).v, uv[size_t(j)].v);
-          }
-          // Every other receiver in the picked points' own v order (at most 512 samples).
-          EXPECT_EQ(receiver % 2 == 1 && dc.use_sorted_order(), receiver % 2 == 1 && n <= 512);
-          std::vector<int32_t> naive(size_t(n), 0);
-          std::vector<uint8_t> naive_unclear(size_t(n), 0);
-          for (int k = 0; k < 150; ++k) {
-            Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
-            float vc = 1.2f * u(g);
-            if (k % 3 == 0) {  // through samples exactly: v on a sample's v, u on another's
-              P.v = uv[g() % uv.size()].v;
-              Q = uv[g() % uv.size()];
-              vc = uv[g() % uv.size()].v;
-            }
-            const int w = int(g() % 5) - 2;
-            dc.add_piece(P, Q, w);
-            dc.add_step(vc, w);
+  for (int layout : {0, 4})
+    for (int K : {1, 4, 16})
+      for (float spread : {0.02f, 2.0f})
+        for (int n : {1, 7, 64, 256, 2048}) {
+          const std::vector<Vec2f> jitter = jitter_layout(layout, n, K, spread, g);
+          const SampleStrips strips = make_sample_strips(jitter, n, K);
+          for (int receiver = 0; receiver < 3; ++receiver) {
+            std::vector<uint32_t> pick(static_cast<size_t>(n));
+            std::vector<Vec2f> uv(static_cast<size_t>(n));
             for (int j = 0; j < n; ++j) {
-              const Vec2f& s = uv[size_t(j)];
-              if (P.v != Q.v) {
-                const bool up = Q.v > P.v;
-                const Vec2f lo = up ? P : Q, hi = up ? Q : P;
-                const float cr = cross2(Vec2f{hi.u - lo.u, hi.v - lo.v}, Vec2f{s.u - lo.u, s.v - lo.v});
-                if (s.v >= lo.v && s.v < hi.v && cr > 0.0f && w != 0) naive[size_t(j)] += up ? w : -w;
-                // Unclear: within 1e-6 of the magnitudes (extent 2) of the piece's line,
-                // in its v-range (DepthCounter::add_piece); pieces of weight 0 add nothing.
-                const double m = 1e-6 * (2.0 + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
-                const double du = double(hi.u - lo.u), dv = double(hi.v - lo.v);
-                const float near = float(m * std::sqrt(du * du + dv * dv));
-                if (w != 0 && s.v >= lo.v && s.v < hi.v && std::abs(cr) <= near) naive_unclear[size_t(j)] = 1;
-              }
-              if (s.v >= vc) naive[size_t(j)] += w;
+              pick[size_t(j)] = uint32_t(j * K + int(g() % uint64_t(K)));
+              uv[size_t(j)] = jitter[pick[size_t(j)]];
             }
+            DepthCounter dc;
+            dc.reset(strips, jitter, pick, 2.0);
+            // Each sample's point is its picked jitter point (gathered with AVX2 when available).
+            for (int j = 0; j < n; ++j) {
+              EXPECT_EQ(dc.sample_uv(size_t(j)).u, uv[size_t(j)].u);
+              EXPECT_EQ(dc.sample_uv(size_t(j)).v, uv[size_t(j)].v);
+            }
+            // Every other receiver in the picked points' own v order (at most 512 samples).
+            EXPECT_EQ(receiver % 2 == 1 && dc.use_sorted_order(), receiver % 2 == 1 && n <= 512);
+            std::vector<int32_t> naive(size_t(n), 0);
+            std::vector<uint8_t> naive_unclear(size_t(n), 0);
+            for (int k = 0; k < 150; ++k) {
+              Vec2f P{1.5f * u(g), 1.5f * u(g)}, Q{1.5f * u(g), 1.5f * u(g)};
+              float vc = 1.2f * u(g);
+              if (k % 3 == 0) {  // through samples exactly: v on a sample's v, u on another's
+                P.v = uv[g() % uv.size()].v;
+                Q = uv[g() % uv.size()];
+                vc = uv[g() % uv.size()].v;
+              }
+              const int w = int(g() % 5) - 2;
+              dc.add_piece(P, Q, w);
+              dc.add_step(vc, w);
+              for (int j = 0; j < n; ++j) {
+                const Vec2f& s = uv[size_t(j)];
+                if (P.v != Q.v) {
+                  const bool up = Q.v > P.v;
+                  const Vec2f lo = up ? P : Q, hi = up ? Q : P;
+                  const float cr = cross2(Vec2f{hi.u - lo.u, hi.v - lo.v}, Vec2f{s.u - lo.u, s.v - lo.v});
+                  if (s.v >= lo.v && s.v < hi.v && cr > 0.0f && w != 0) naive[size_t(j)] += up ? w : -w;
+                  // Unclear: within 1e-6 of the magnitudes (extent 2) of the piece's line,
+                  // in its v-range (DepthCounter::add_piece); pieces of weight 0 add nothing.
+                  const double m = 1e-6 * (2.0 + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
+                  const double du = double(hi.u - lo.u), dv = double(hi.v - lo.v);
+                  const float near = float(m * std::sqrt(du * du + dv * dv));
+                  if (w != 0 && s.v >= lo.v && s.v < hi.v && std::abs(cr) <= near) naive_unclear[size_t(j)] = 1;
+                }
+                if (s.v >= vc) naive[size_t(j)] += w;
+              }
+            }
+            std::vector<int32_t> got;
+            std::vector<uint8_t> unclear;
+            dc.finish(got, &unclear);
+            EXPECT_EQ(got, naive) << "layout " << layout << " K = " << K << " spread " << spread << " n = " << n;
+            // Exactly the samples the plain loop calls unclear are flagged: bulk decisions
+            // never skip a sample within the margin.
+            EXPECT_EQ(unclear, naive_unclear) << "layout " << layout << " K = " << K << " spread " << spread << " n = " << n;
           }
-          std::vector<int32_t> got;
-          std::vector<uint8_t> unclear;
-          dc.finish(got, &unclear);
-          EXPECT_EQ(got, naive) << "K = " << K << " spread " << spread << " n = " << n;
-          // Exactly the samples the plain loop calls unclear are flagged: bulk decisions
-          // never skip a sample within the margin.
-          EXPECT_EQ(unclear, naive_unclear) << "K = " << K << " spread " << spread << " n = " << n;
+        }
+}
+
+TEST(SsvIntegration, StripSearchesEqualLowerBound) {
+  // The strips' bucket searches against std::lower_bound, and vhi_prefix against the
+  // running maximum of the boxes' v_hi in v_lo order, for every layout: x on every value,
+  // its float neighbours, random and outside the range.
+  std::mt19937_64 g(12);
+  std::uniform_real_distribution<float> u(-1.5f, 1.5f);
+  for (int layout = 0; layout <= 4; ++layout)
+    for (int K : {1, 4})
+      for (int n : {1, 7, 256, 1000}) {
+        const std::vector<Vec2f> jitter = jitter_layout(layout, n, K, 0.1f, g);
+        const SampleStrips s = make_sample_strips(jitter, n, K);
+        float run = -std::numeric_limits<float>::infinity();
+        for (int k = 0; k < n; ++k) {
+          const int j = s.vorder[size_t(k)];
+          for (int q = 0; q < K; ++q) run = std::max(run, jitter[size_t(j * K + q)].v);
+          ASSERT_EQ(s.vhi_prefix[size_t(k)], run) << "layout " << layout << " n " << n << " k " << k;
+        }
+        std::vector<double> xs{-2.0, 2.0};
+        for (int k = 0; k < n; ++k)
+          for (float v : {s.vlo_sorted[size_t(k)], s.vhi_prefix[size_t(k)]}) {
+            xs.push_back(v);
+            xs.push_back(std::nextafter(v, -INFINITY));
+            xs.push_back(std::nextafter(v, INFINITY));
+          }
+        for (int r = 0; r < 50; ++r) xs.push_back(u(g));
+        auto lb = [](const std::vector<float>& a, double x) {
+          return int(std::lower_bound(a.begin(), a.end(), x, [](float e, double y) { return double(e) < y; }) -
+                     a.begin());
+        };
+        for (double x : xs) {
+          ASSERT_EQ(s.vlo_lower_bound(x), lb(s.vlo_sorted, x)) << "layout " << layout << " x " << x;
+          ASSERT_EQ(s.vhi_lower_bound(x), lb(s.vhi_prefix, x)) << "layout " << layout << " x " << x;
         }
       }
 }

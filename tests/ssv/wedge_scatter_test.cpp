@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "lib/base/cpu_features.h"
 #include "lib/solver.h"
 #include "lib/ssv/occluders.h"
 #include "lib/ssv/wedge.h"
@@ -15,17 +16,31 @@ using namespace visgate;
 using namespace visgate::ssv;
 using namespace visgate::test_support;
 
+namespace {
+
+// The receivers' points (the receiver tree's input) and a skip flag on every k-th one.
+std::vector<Vec3d> receiver_points(const Scene& s) {
+  std::vector<Vec3d> pts;
+  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
+  return pts;
+}
+std::vector<uint8_t> every_kth(size_t n, size_t k) {
+  std::vector<uint8_t> skip(n, 0);
+  for (size_t i = 0; i < n; i += k) skip[i] = 1;
+  return skip;
+}
+
+}  // namespace
+
 TEST(SsvWedgeScatter, EveryWedgeContainingAReceiverIsACandidate) {
   // Like the BSP's test: every wedge that clearly contains the receiver (and, with
   // silhouette regions, whose edge is clearly a silhouette from it) is among its
   // candidates, once; skipped receivers get none; batches tile the tree's order.
   Scene s = random_scene(12, 16, 400);
   auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
-  std::vector<Vec3d> pts;
-  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
+  const std::vector<Vec3d> pts = receiver_points(s);
   ReceiverTree tree(pts, 4);
-  std::vector<uint8_t> skip(pts.size(), 0);
-  for (size_t i = 0; i < skip.size(); i += 7) skip[i] = 1;
+  const std::vector<uint8_t> skip = every_kth(pts.size(), 7);
   const float eps = float(4e-6 * 4);
   for (uint32_t batch_size : {16u, 100000u}) {
     const auto batches = WedgeScatter::batches(tree, batch_size);
@@ -72,6 +87,50 @@ TEST(SsvWedgeScatter, EveryWedgeContainingAReceiverIsACandidate) {
   }
 }
 
+TEST(SsvWedgeScatter, PassedBatchesGiveTheSameCandidates) {
+  // build from pass_batches' lists (with AVX2: the leaves eight per step, no walks)
+  // against build's walks over every wedge: the same candidates (wedge, mask and region
+  // bits, in order) for every receiver, batches of one leaf, of 16 receivers and one
+  // batch for the whole tree (spare lanes), silhouette regions on and off; the lists
+  // leave wedges out (with AVX2), so the test sees the eight-box test decide.
+  Scene s = random_scene(31, 16, 400);
+  auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
+  ReceiverTree tree(receiver_points(s), 4);
+  const std::vector<uint8_t> skip = every_kth(s.receivers.size(), 5);
+  const float eps = float(4e-6 * 4);
+  size_t dropped = 0;
+  for (uint32_t batch_size : {1u, 16u, 100000u})
+    for (bool regions : {true, false}) {
+      const auto batches = WedgeScatter::batches(tree, batch_size);
+      WedgeScatter all, passed;
+      std::vector<std::vector<uint32_t>> lists;
+      for (size_t b = 0; b < batches.size(); ++b) {
+        const size_t group = b % WedgeScatter::kPassGroup;
+        if (group == 0) {
+          passed.pass_batches(tree, batches, b, wedges, eps, regions, lists);
+          ASSERT_EQ(lists.size(), std::min(WedgeScatter::kPassGroup, batches.size() - b));
+        }
+        const std::vector<uint32_t>& list = lists[group];
+        EXPECT_TRUE(std::is_sorted(list.begin(), list.end()));
+        dropped += wedges.size() - list.size();
+        all.build(tree, batches[b], wedges, eps, regions, skip);
+        passed.build(tree, batches[b], wedges, eps, regions, skip, &list);
+        ASSERT_EQ(all.entries(), passed.entries()) << "batch " << b;
+        for (uint32_t p = tree.nodes()[size_t(batches[b])].begin; p < tree.nodes()[size_t(batches[b])].end; ++p) {
+          ASSERT_EQ(all.end(p) - all.begin(p), passed.end(p) - passed.begin(p)) << "position " << p;
+          for (const WedgeState *x = all.begin(p), *y = passed.begin(p); x != all.end(p); ++x, ++y) {
+            EXPECT_EQ(x->wedge, y->wedge);
+            EXPECT_EQ(x->mask, y->mask);
+            EXPECT_EQ(x->region, y->region);
+          }
+        }
+      }
+    }
+  if (avx2_enabled("VISGATE_SSV_NO_AVX2")) {
+    EXPECT_GT(dropped, 1000u);
+  }
+}
+
 TEST(SsvWedgeScatter, SolverAnswersEqualTheBsp) {
   for (const char* fam : {"columns", "torus", "random-soup", "foliage", "sliver-soup", "grid-snapped", "scan"}) {
     Scene s = family(fam, 4, -1, 144, 16);
@@ -92,9 +151,7 @@ TEST(SsvWedgeScatter, RegionPrefilterDropsOnlyWedgesEveryBoxExcludes) {
   // are built identically.
   Scene s = random_scene(21, 16, 400);
   auto [pm, frame, fp, edges, counts, wedges] = make_wedges(s);
-  std::vector<Vec3d> pts;
-  for (const Receiver& rc : s.receivers) pts.push_back(to_double(rc.p));
-  ReceiverTree tree(pts, 4);
+  ReceiverTree tree(receiver_points(s), 4);
   RegionBoxes regions;
   regions.eps = float(4e-6 * 4);
   for (int32_t id : WedgeScatter::batches(tree, 32)) {
