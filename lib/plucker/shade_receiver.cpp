@@ -801,13 +801,23 @@ void ReceiverShading::sample_bits() {
       const double su = sp[lf_.axes.u], sv = sp[lf_.axes.v];
       if (grid > 0) {
         size_t c = size_t(cell(sv, gv0, gwv, grid)) * size_t(grid) + size_t(cell(su, gu0, gwu, grid));
-        for (uint32_t e = cell_start[c]; e < cell_start[c + 1] && !vis; ++e) {
-          uint32_t f = cell_items[e];
-          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack);
+        for (uint32_t e = cell_start[c]; e < cell_start[c + 1]; ++e) {
+          const uint32_t f = cell_items[e];
+          if (!boxes[f].contains(su, sv)) continue;
+          if (point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack)) {
+            vis = true;
+            break;
+          }
         }
       } else {
-        for (size_t f = 0; f < nf && !vis; ++f)
-          vis = boxes[f].contains(su, sv) && point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack);
+        // The box test alone in the loop (most fragments' boxes miss the sample).
+        for (size_t f = 0; f < nf; ++f) {
+          if (!boxes[f].contains(su, sv)) continue;
+          if (point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack)) {
+            vis = true;
+            break;
+          }
+        }
       }
     } else {
       // Off the light polygon (explicit samples): the segment r -> sample itself.
