@@ -374,27 +374,15 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, i
   // Each vertex's offset from r, its height over r's plane and its squared length are
   // computed once and carried to the next edge (the same values as computing them per
   // edge end).
-  // The edges' atan2 arguments are kept (up to kBatch at a time) and the terms summed in
-  // the same order after them: the library call then spills no vertex state (the sum and
-  // its terms are the same operations on the same values).
   const Vec3d nd = to_double(nr);
   double sum = 0.0;
-  constexpr int kBatch = 16;
-  double ty[kBatch], tx[kBatch], tw[kBatch];
-  int nt = 0;
-  auto flush = [&]() {
-    for (int k = 0; k < nt; ++k) sum += std::atan2(ty[k], tx[k]) * tw[k] / ty[k];
-    nt = 0;
-  };
   auto term = [&](const Vec3d& a, double aa, const Vec3d& b, double bb) {
     if (aa == 0.0 || bb == 0.0) return;  // length() == 0 exactly then, without the roots
     Vec3d c = cross(a, b);
     double lc = length(c);
     if (lc == 0.0) return;
-    // theta = atan2(lc, a . b); the term theta (nd . c) / lc
-    if (nt == kBatch) flush();
-    ty[nt] = lc, tx[nt] = dot(a, b), tw[nt] = dot(nd, c);
-    ++nt;
+    double theta = std::atan2(lc, dot(a, b));
+    sum += theta * dot(nd, c) / lc;
   };
   int qn = 0;
   Vec3d first, prev;
@@ -423,7 +411,6 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, i
   }
   if (qn < 3) return 0.0;
   term(prev, prev_sq, first, first_sq);
-  flush();
   return 0.5 * std::abs(sum);
 }
 
