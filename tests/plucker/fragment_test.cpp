@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -160,6 +162,87 @@ TEST(PluckerFragment, ShadowBoxHoldsTheCentralProjection) {
   Vec3d q[3] = {Vec3d(0.5, 0, -2), Vec3d(1, 0, -1), Vec3d(0, 1, -1)};
   UVBox b = shadow_box(lp, r, q, 3);
   EXPECT_TRUE(b.contains(1e30f, -1e30f));
+}
+
+namespace {
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_box(const UVBox& a, const UVBox& b) {
+  return same_bits(a.ulo, b.ulo) && same_bits(a.uhi, b.uhi) && same_bits(a.vlo, b.vlo) && same_bits(a.vhi, b.vhi);
+}
+}  // namespace
+
+TEST(PluckerFragment, UVBoxOfIsTheScalarMinAndMax) {
+  // UVBox::of (two lanes at a time where SSE2 is there) gives the bits of std::min and
+  // std::max over the vertices in order, for every axis pair, with repeated values,
+  // signed zeros and NaNs among the coordinates.
+  auto reference = [](const UVAxes& f, const std::vector<Vec3d>& poly) {
+    UVBox b;
+    if (poly.empty()) return b;
+    b.ulo = b.uhi = poly[0][f.u];
+    b.vlo = b.vhi = poly[0][f.v];
+    for (size_t k = 1; k < poly.size(); ++k) {
+      b.ulo = std::min(b.ulo, poly[k][f.u]), b.uhi = std::max(b.uhi, poly[k][f.u]);
+      b.vlo = std::min(b.vlo, poly[k][f.v]), b.vhi = std::max(b.vhi, poly[k][f.v]);
+    }
+    return b;
+  };
+  const double pick[] = {0.0, -0.0, 1.0, -1.0, 0.5, std::numeric_limits<double>::quiet_NaN()};
+  Rng rng(91);
+  for (int trial = 0; trial < 3000; ++trial) {
+    const UVAxes f = UVAxes::from_normal(trial % 3 == 0 ? Vec3f(1, 0, 0) : (trial % 3 == 1 ? Vec3f(0, -1, 0) : Vec3f(0, 0, 1)));
+    std::vector<Vec3d> poly(rng.below(8));
+    const bool nan = trial % 5 == 0;
+    for (Vec3d& p : poly)
+      for (int c = 0; c < 3; ++c) {
+        const uint64_t k = rng.below(nan ? 6 : 5);
+        p[c] = trial % 2 == 0 ? pick[k] : (k == 5 ? pick[5] : rng.uniform(-1e3, 1e3));
+      }
+    EXPECT_TRUE(same_box(UVBox::of(f, poly.data(), int(poly.size())), reference(f, poly))) << trial;
+  }
+}
+
+TEST(PluckerFragment, ShadowBoxIsThePerVertexForm) {
+  // shadow_box takes only the two coordinates of each projected vertex and divides the
+  // largest spread once: the same floats as projecting the whole vertex and dividing
+  // each spread (the form it replaced), on random lights (axis-aligned and Newell
+  // planes), receivers and polygons, vertices behind r included.
+  auto reference = [](const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
+    const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
+    const double hr = dot(nd, rd) - lp.h0;
+    if (!(std::abs(hr) > 0.0)) return UVBox::everything();
+    double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+      const Vec3d& p = q[k];
+      double hp = dot(nd, p) - lp.h0;
+      if (!(hp / hr <= 1.0 - 0x1p-10)) return UVBox::everything();
+      double t = hr / (hr - hp);
+      Vec3d x = rd + (p - rd) * t;
+      double u = x[lp.axes.u], v = x[lp.axes.v];
+      ulo = std::min(ulo, u), uhi = std::max(uhi, u), vlo = std::min(vlo, v), vhi = std::max(vhi, v);
+      spread = std::max(spread, (std::abs(u - rd[lp.axes.u]) + std::abs(v - rd[lp.axes.v])) / std::abs(hr));
+    }
+    double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
+    double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
+    return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+  };
+  Rng rng(92);
+  int bounded = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    LightPlane lp;
+    lp.n = Vec3f(float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)));
+    lp.plane_tol = float(rng.uniform(0, 1e-3));
+    lp.extent = float(rng.uniform(0.1, 10));
+    lp.axes = UVAxes::from_normal(lp.n);
+    if (trial % 2 == 0) lp.nd = normalize(to_double(lp.n)), lp.h0 = rng.uniform(-1, 1);
+    const double scale = std::pow(10.0, rng.uniform(-3, 3));
+    const Vec3d r(rng.uniform(-1, 1) * scale, rng.uniform(-1, 1) * scale, rng.uniform(-1, 1) * scale);
+    std::vector<Vec3d> q(rng.below(7));
+    for (Vec3d& v : q) v = r + (Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * scale);
+    const UVBox got = shadow_box(lp, r, q.data(), q.size());
+    EXPECT_TRUE(same_box(got, reference(lp, r, q.data(), q.size()))) << trial;
+    bounded += got.uhi < std::numeric_limits<double>::infinity();
+  }
+  EXPECT_GT(bounded, 200);
 }
 
 TEST(PluckerFragment, PointInFragmentToleratesANoiseEdge) {
