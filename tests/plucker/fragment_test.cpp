@@ -209,21 +209,26 @@ TEST(PluckerFragment, ShadowBoxIsThePerVertexForm) {
   auto reference = [](const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
     const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
     const double hr = dot(nd, rd) - lp.h0;
-    if (!(std::abs(hr) > 0.0)) return UVBox::everything();
-    double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
-    for (size_t k = 0; k < n; ++k) {
-      const Vec3d& p = q[k];
-      double hp = dot(nd, p) - lp.h0;
+    // The whole vertices projected first, then their box and spreads.
+    std::vector<Vec3d> x;
+    for (size_t k = 0; k < n && std::abs(hr) > 0.0; ++k) {
+      const double hp = dot(nd, q[k]) - lp.h0;
       if (!(hp / hr <= 1.0 - 0x1p-10)) return UVBox::everything();
-      double t = hr / (hr - hp);
-      Vec3d x = rd + (p - rd) * t;
-      double u = x[lp.axes.u], v = x[lp.axes.v];
-      ulo = std::min(ulo, u), uhi = std::max(uhi, u), vlo = std::min(vlo, v), vhi = std::max(vhi, v);
-      spread = std::max(spread, (std::abs(u - rd[lp.axes.u]) + std::abs(v - rd[lp.axes.v])) / std::abs(hr));
+      x.push_back(rd + (q[k] - rd) * (hr / (hr - hp)));
     }
-    double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
-    double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
-    return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+    if (!(std::abs(hr) > 0.0)) return UVBox::everything();
+    const int a = lp.axes.u, b = lp.axes.v;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    UVBox box{inf, -inf, inf, -inf};
+    double spread = 0.0;
+    for (const Vec3d& p : x) {
+      box.ulo = std::min(box.ulo, p[a]), box.uhi = std::max(box.uhi, p[a]);
+      box.vlo = std::min(box.vlo, p[b]), box.vhi = std::max(box.vhi, p[b]);
+      spread = std::max(spread, (std::abs(p[a] - rd[a]) + std::abs(p[b] - rd[b])) / std::abs(hr));
+    }
+    const double m = std::max({std::abs(box.ulo), std::abs(box.uhi), std::abs(box.vlo), std::abs(box.vhi), double(lp.extent)});
+    const double g = double(lp.plane_tol) * 4.0 * (1.0 + spread) + m * 0x1p-16;
+    return UVBox{float(box.ulo - g), float(box.uhi + g), float(box.vlo - g), float(box.vhi + g)};
   };
   Rng rng(92);
   int bounded = 0;
