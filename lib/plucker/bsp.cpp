@@ -11,6 +11,33 @@
 
 namespace visgate::plucker {
 
+namespace {
+// The box of the n points p, widened by e on every side; NaN for no point (box_side
+// then decides nothing, and the empty piece meets split_fragment as before).
+void widened_box(const Vec3d* p, int n, double e, Vec3d& lo, Vec3d& hi) {
+  if (n <= 0) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    lo = hi = Vec3d(nan, nan, nan);
+    return;
+  }
+  lo = hi = p[0];
+  for (int k = 1; k < n; ++k) {
+    lo.x = std::min(lo.x, p[k].x), lo.y = std::min(lo.y, p[k].y), lo.z = std::min(lo.z, p[k].z);
+    hi.x = std::max(hi.x, p[k].x), hi.y = std::max(hi.y, p[k].y), hi.z = std::max(hi.z, p[k].z);
+  }
+  lo = lo - Vec3d(e, e, e);
+  hi = hi + Vec3d(e, e, e);
+}
+
+// classify_fragment(pl, f, n), from the box [lo, hi] holding f's vertices when it lies
+// beyond the plane (box_side: the same answer without the vertex loop).
+SplitResult classify_in_box(const NodePlane& pl, const Vec3d& lo, const Vec3d& hi, const Vec3d* f, int n) {
+  const int side = box_side(pl, lo, hi);
+  if (side != 0) return side > 0 ? SplitResult::Positive : SplitResult::Negative;
+  return classify_fragment(pl, f, n);
+}
+}  // namespace
+
 LazyBsp::LazyBsp(const Vec3d* light, int m, std::vector<Occluder> occluders, uint64_t seed, const Vec3d* receivers,
                  int nr)
     : rng_(seed) {
@@ -37,6 +64,7 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   miss_edge_.clear();
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
   light_bounds_ = LightBounds::of(light_.data(), m);
+  widened_box(light_.data(), m, 0.0, light_lo_, light_hi_);
   vertex_dist_.resize(occ_.size() * size_t(kMaxOccluderVertices));
   for (size_t id = 0; id < occ_.size(); ++id)
     for (int k = 0; k < occ_[id].n; ++k)
@@ -232,7 +260,8 @@ void LazyBsp::compute_edge_plane(uint32_t id, int edge, size_t slot) {
   plane_stamp_[slot] = stamp_;
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox,
+                                      const Vec3d& lo, const Vec3d& hi) {
   if (have_plane_) {
     if (shadow_stamp_[id] != stamp_) {
       shadow_box_[id] = shadow_box(plane_, r, occ_[id].v, size_t(occ_[id].n));
@@ -240,17 +269,17 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
     }
     if (!shadow_box_[id].overlaps(fbox)) return Occlusion::Miss;
   }
-  return occlusion(id, r, f, n);
+  return occlusion(id, f, n, lo, hi);
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d* f, int n, const Vec3d& lo, const Vec3d& hi) {
   const Occluder& o = occ_[id];
   // One-sided: a line stabs o iff it is positive against every edge line (lines.h).
   // Two-sided: iff it is positive against every edge or negative against every edge;
   // it misses when one edge has the fragment on its non-positive side and another (or
   // the same, on-line) on its non-negative side.
   bool all_pos = true, all_neg = true, some_nonpos = false, some_nonneg = false;
-  (void)r;  // the edge planes are those of the current query point (begin_query)
+  // The edge planes are those of the current query point (begin_query).
   // Starting at the edge that last separated a fragment from this occluder: neighbouring
   // fragments and query points are mostly separated by the same edge, and a one-sided
   // occluder is missed at the first edge that separates (the answer does not depend on
@@ -258,7 +287,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
   const int first = miss_edge_[id] < o.n ? miss_edge_[id] : 0;
   for (int mi = 0; mi < o.n; ++mi) {
     const int m = first + mi < o.n ? first + mi : first + mi - o.n;
-    SplitResult s = classify_fragment(edge_plane(id, m), f, n);
+    const SplitResult s = classify_in_box(edge_plane(id, m), lo, hi, f, n);
     if (s == SplitResult::OnLine) ++counters_.on_line;  // undecided: the solver re-shades r exactly
     bool nonpos = s == SplitResult::Negative || s == SplitResult::OnLine;
     bool nonneg = s == SplitResult::Positive || s == SplitResult::OnLine;
@@ -287,7 +316,7 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     const Node& nd = nodes_[size_t(node)];
     if (nd.kind == kInvisible) return true;
     if (nd.kind == kInner) {
-      SplitResult s = classify_fragment(edge_plane(nd.occ, nd.edge), f, n);
+      const SplitResult s = classify_in_box(edge_plane(nd.occ, nd.edge), light_lo_, light_hi_, f, n);
       if (s == SplitResult::Positive) node = nd.left;
       else if (s == SplitResult::Negative) node = nd.right;
       else {
@@ -303,7 +332,7 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     for (uint32_t k = 0; k < nd.occ_count && cover < 0; ++k) {
       uint32_t id = lists_[nd.occ_begin + k];
       ++counters_.occlusion_tests;
-      if (occlusion(id, r, f, n, fbox) == Occlusion::Cover) cover = id;
+      if (occlusion(id, r, f, n, fbox, light_lo_, light_hi_) == Occlusion::Cover) cover = id;
     }
     if (cover < 0) return false;
     develop(node, cover);
@@ -315,25 +344,6 @@ void LazyBsp::query(const Vec3d& r, FragmentList& out) {
   whole.add(light_.data(), light_.size());
   query(r, whole, out);
 }
-
-namespace {
-// The box of the n points p, widened by e on every side; NaN for no point (box_side
-// then decides nothing, and the empty piece meets split_fragment as before).
-void widened_box(const Vec3d* p, int n, double e, Vec3d& lo, Vec3d& hi) {
-  if (n <= 0) {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    lo = hi = Vec3d(nan, nan, nan);
-    return;
-  }
-  lo = hi = p[0];
-  for (int k = 1; k < n; ++k) {
-    lo.x = std::min(lo.x, p[k].x), lo.y = std::min(lo.y, p[k].y), lo.z = std::min(lo.z, p[k].z);
-    hi.x = std::max(hi.x, p[k].x), hi.y = std::max(hi.y, p[k].y), hi.z = std::max(hi.z, p[k].z);
-  }
-  lo = lo - Vec3d(e, e, e);
-  hi = hi + Vec3d(e, e, e);
-}
-}  // namespace
 
 void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   begin_query(r);
@@ -466,7 +476,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       for (uint32_t k = 0; k < nd.occ_count; ++k) {
         uint32_t id = lists_[nd.occ_begin + k];
         ++counters_.occlusion_tests;
-        Occlusion oc = occlusion(id, r, cur, int(cn), fbox);
+        Occlusion oc = occlusion(id, r, cur, int(cn), fbox, blo, bhi);
         if (oc == Occlusion::Cover) {
           cover = id;
           break;

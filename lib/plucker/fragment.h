@@ -18,6 +18,10 @@
 
 #include "lib/geom/vec.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace visgate::plucker {
 
 // Result of classifying a fragment against the plane through r and the line a -> b,
@@ -77,8 +81,24 @@ NodePlane node_plane(const Vec3d& r, const Vec3d& a, const Vec3d& b, const Light
 // - base_i| <= d1 = max |x - base|_1 over fragment vertices (LightBounds), so t <= 3
 // |N|_inf d1 (1 + tiny), while pl.bound >= 8 u_d |N|_inf d1 (node_plane): the errors
 // stay below 4 bound, and computed L > 8 bound gives fl(s(x)) > bound at every vertex.
+// With SSE2 the x and y terms are taken two lanes at a time: the same products, minima,
+// maxima and sums in the same order (_mm_min_pd(b, a) is std::min(a, b), NaNs included),
+// so the same answer with about two thirds of the instructions (the walk's hottest test).
 inline int box_side(const NodePlane& pl, const Vec3d& lo, const Vec3d& hi) {
   if (pl.on_line) return 0;
+#if defined(__SSE2__)
+  static_assert(sizeof(Vec3d) == 3 * sizeof(double));
+  const __m128d n = _mm_loadu_pd(&pl.n.x), base = _mm_loadu_pd(&pl.base.x);
+  const __m128d a = _mm_mul_pd(n, _mm_sub_pd(_mm_loadu_pd(&lo.x), base));
+  const __m128d b = _mm_mul_pd(n, _mm_sub_pd(_mm_loadu_pd(&hi.x), base));
+  const double az = pl.n.z * (lo.z - pl.base.z), bz = pl.n.z * (hi.z - pl.base.z);
+  const double m = 8.0 * pl.bound;
+  const __m128d mn = _mm_min_pd(b, a);
+  if (_mm_cvtsd_f64(mn) + _mm_cvtsd_f64(_mm_unpackhi_pd(mn, mn)) + std::min(az, bz) > m) return 1;
+  const __m128d mx = _mm_max_pd(b, a);
+  if (_mm_cvtsd_f64(mx) + _mm_cvtsd_f64(_mm_unpackhi_pd(mx, mx)) + std::max(az, bz) < -m) return -1;
+  return 0;
+#else
   const double ax = pl.n.x * (lo.x - pl.base.x), bx = pl.n.x * (hi.x - pl.base.x);
   const double ay = pl.n.y * (lo.y - pl.base.y), by = pl.n.y * (hi.y - pl.base.y);
   const double az = pl.n.z * (lo.z - pl.base.z), bz = pl.n.z * (hi.z - pl.base.z);
@@ -86,6 +106,7 @@ inline int box_side(const NodePlane& pl, const Vec3d& lo, const Vec3d& hi) {
   if (std::min(ax, bx) + std::min(ay, by) + std::min(az, bz) > m) return 1;
   if (std::max(ax, bx) + std::max(ay, by) + std::max(az, bz) < -m) return -1;
   return 0;
+#endif
 }
 
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.

@@ -555,4 +555,7 @@ TEST(PluckerFragment, BoxSideOfAHandWorkedBox) {
   EXPECT_EQ(classify_fragment(pl, l, 4), left > 0 ? SplitResult::Positive : SplitResult::Negative);
   EXPECT_EQ(box_side(pl, Vec3d(1, 0, 2), Vec3d(3, 4, 2)), 0);  // straddles x = 2
   EXPECT_EQ(box_side(pl, Vec3d(0, 0, 2), Vec3d(2, 4, 2)), 0);  // touches it
+  // The walk's box of an empty piece is NaN (bsp.cpp widened_box): it decides nothing.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(box_side(pl, Vec3d(nan, nan, nan), Vec3d(nan, nan, nan)), 0);
 }
