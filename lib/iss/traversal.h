@@ -378,6 +378,9 @@ class Traversal {
   std::vector<const Vec3f*> direct_q_;
   std::vector<uint64_t> direct_prefix_;
   std::vector<uint32_t> direct_jp_, direct_members_, direct_start_, direct_fill_;
+  // A group's segments (dx, dy, dz, n each) and their answers (direct_rays).
+  std::vector<double> direct_d_;
+  std::vector<uint8_t> direct_out_;
   // Candidate lists of the shafts being subdivided, outermost first (direct_candidates).
   // The direct test's scratch is bounded (20 bytes per receiver of a kDirectChunk chunk,
   // lists of at most kCandQueryMax triangles per level of the recursion): a few MB, not
