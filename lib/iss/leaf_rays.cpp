@@ -189,40 +189,45 @@ void direct_classify(const double* t, size_t kp, const double* d, size_t count, 
 }
 
 // Box-against-plane culling of candidate boxes (SoA: lo x, y, z, hi x, y, z of kp each),
-// four boxes per vector: keep[k] stays -1 while box k is not beyond the plane, by the
-// test and the arithmetic of ShaftGeometry::may_intersect_box (the box corner nearest
-// to the plane's inside, eval = dot(n, q) - d against the plane's tolerance).
-__attribute__((always_inline)) inline void direct_cull_body(const double* box, size_t kp, const double* plane,
-                                                            int64_t* keep) {
-  const double nx = plane[0], ny = plane[1], nz = plane[2], d = plane[3], tol = plane[4];
-  const double* X = box + (nx > 0 ? 0 : 3) * kp;
-  const double* Y = box + (ny > 0 ? 1 : 4) * kp;
-  const double* Z = box + (nz > 0 ? 2 : 5) * kp;
-  for (size_t k = 0; k < kp; k += 4) {
-    const V4 e = (nx * load4(X + k) + ny * load4(Y + k) + nz * load4(Z + k)) - d;
-    M4 m;
-    std::memcpy(&m, keep + k, sizeof m);
-    m &= ~(e > tol);
-    std::memcpy(keep + k, &m, sizeof m);
+// four boxes per vector, plane after plane (one call for all of a shaft's planes): keep[k]
+// stays -1 while box k is not beyond a plane, by the test and the arithmetic of
+// ShaftGeometry::may_intersect_box (the box corner nearest to the plane's inside, eval =
+// dot(n, q) - d against the plane's tolerance). pl: the plane arrays (plane_array).
+__attribute__((always_inline)) inline void direct_cull_body(const double* box, size_t kp, const double* const* pl,
+                                                            int count, int64_t* keep) {
+  for (int i = 0; i < count; ++i) {
+    const double nx = pl[0][i], ny = pl[1][i], nz = pl[2][i], d = pl[3][i], tol = pl[4][i];
+    const double* X = box + (nx > 0 ? 0 : 3) * kp;
+    const double* Y = box + (ny > 0 ? 1 : 4) * kp;
+    const double* Z = box + (nz > 0 ? 2 : 5) * kp;
+    for (size_t k = 0; k < kp; k += 4) {
+      const V4 e = (nx * load4(X + k) + ny * load4(Y + k) + nz * load4(Z + k)) - d;
+      M4 m;
+      std::memcpy(&m, keep + k, sizeof m);
+      m &= ~(e > tol);
+      std::memcpy(keep + k, &m, sizeof m);
+    }
   }
 }
-void direct_cull_default(const double* box, size_t kp, const double* plane, int64_t* keep) {
-  direct_cull_body(box, kp, plane, keep);
+void direct_cull_default(const double* box, size_t kp, const double* const* pl, int count, int64_t* keep) {
+  direct_cull_body(box, kp, pl, count, keep);
 }
 #if defined(__GNUC__) && defined(__x86_64__)
-__attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t kp, const double* plane,
-                                                      int64_t* keep) {
-  direct_cull_body(box, kp, plane, keep);
+__attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t kp, const double* const* pl,
+                                                      int count, int64_t* keep) {
+  direct_cull_body(box, kp, pl, count, keep);
 }
 #endif
 
 }  // namespace
 
-void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep) {
+void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep) {
+  const double* const pl[5] = {g.plane_array(0), g.plane_array(1), g.plane_array(2), g.plane_array(3),
+                               g.plane_array(4)};
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) return direct_cull_avx2(box, kp, plane, keep);
+  if (have_avx2()) return direct_cull_avx2(box, kp, pl, g.plane_count(), keep);
 #endif
-  direct_cull_default(box, kp, plane, keep);
+  direct_cull_default(box, kp, pl, g.plane_count(), keep);
 }
 
 // Candidates of a leaf shaft: the triangles whose box may meet it (a segment between the
@@ -239,11 +244,7 @@ bool Traversal::direct_candidates(const ShaftGeometry& g) {
                     std::vector<uint32_t>& to, std::vector<double>* to_box) {
     const size_t n = from.size(), kp = padded(n);
     direct_keep_.assign(kp, -1);
-    for (int i = 0; i < sg.plane_count(); ++i) {
-      const ConservativePlane& pl = sg.plane(i);
-      const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
-      direct_cull(from_box.data(), kp, plane, direct_keep_.data());
-    }
+    direct_cull(from_box.data(), kp, sg, direct_keep_.data());
     to.clear();
     for (size_t k = 0; k < n; ++k)
       if (direct_keep_[k]) to.push_back(from[k]);
