@@ -398,12 +398,15 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
     direct_prefix_.resize(nr);
     direct_jp_.resize(nr);
     direct_members_.resize(nr);
-    for (uint32_t a = 0; a < nr; ++a) direct_prefix_[a] = relation_hash_prefix(ro[c0 + a], light_->seed);
+    // The seed as a local: the stores below could alias light_->seed, which kept the
+    // compiler from hoisting its half of relation_hash_prefix out of the loop.
+    const uint64_t seed = light_->seed;
+    for (uint32_t a = 0; a < nr; ++a) direct_prefix_[a] = relation_hash_prefix(ro[c0 + a], seed);
     for (uint32_t b = L.begin; b < L.end; ++b) {
       const uint32_t j = lo[b];
       direct_start_.assign(jit + 1, 0);
       for (uint32_t a = 0; a < nr; ++a) {
-        const uint32_t jp = uint32_t(leaf_jitter_index(*light_, int(j), direct_prefix_[a]));
+        const uint32_t jp = uint32_t(leaf_jitter_index(jit, int(j), direct_prefix_[a]));
         direct_jp_[a] = jp;
         ++direct_start_[jp + 1];
       }
