@@ -96,11 +96,7 @@ std::vector<uint8_t> dense_ray_lights(const Scene& scene, double relations_per_t
     if (rbox.overlaps(lbox) || choose_main_axis(rbox, lbox).axis < 0) continue;
     const ShaftGeometry g(rbox, lbox, MainAxis{}, scale);
     std::fill(keep.begin(), keep.end(), int64_t(-1));
-    for (int i = 0; i < g.plane_count(); ++i) {
-      const ConservativePlane pl = g.plane(i);
-      const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
-      direct_cull(boxes.data(), kp, plane, keep.data());
-    }
+    direct_cull(boxes.data(), kp, g, keep.data());
     size_t hits = 0;
     for (size_t k = 0; k < tested; ++k) hits += keep[k] != 0;
     const double in_shaft = double(hits) * double(n) / double(tested);

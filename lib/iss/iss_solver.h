@@ -56,9 +56,13 @@ bool validate_all();
 // receiver's (perf, columns: 4.5% of ISS's instructions). iss_test checks both against
 // sample_position.
 // leaf_jitter_index: the index of that point among sample j's jitter points.
-inline int leaf_jitter_index(const Light& light, int j, uint64_t receiver_prefix) {
-  uint64_t h = relation_hash_step(receiver_prefix, uint64_t(j)), k = uint64_t(light.jitter);
+// The form with the jitter count k = light.jitter lets a loop keep k in a register.
+inline int leaf_jitter_index(uint64_t k, int j, uint64_t receiver_prefix) {
+  uint64_t h = relation_hash_step(receiver_prefix, uint64_t(j));
   return int((k & (k - 1)) == 0 ? (h & (k - 1)) : h % k);
+}
+inline int leaf_jitter_index(const Light& light, int j, uint64_t receiver_prefix) {
+  return leaf_jitter_index(uint64_t(light.jitter), j, receiver_prefix);
 }
 inline const Vec3f& leaf_sample_at(const Light& light, int j, uint64_t receiver_prefix) {
   return light.jitter_point(j, leaf_jitter_index(light, j, receiver_prefix));

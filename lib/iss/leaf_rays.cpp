@@ -92,64 +92,67 @@ __attribute__((always_inline)) inline void direct_terms_body(const double* c, si
   }
 }
 
-// "Every lane set" of a lane mask, in the default build from the four lanes; in the
-// AVX2 build by one movemask (the lane extraction was a fifth of the test's
-// instructions). Only the test of the mask differs: the same answers. By reference: a
-// 256-bit vector argument outside an AVX function changes the ABI (clang rejects it).
+// "Every lane set" and "some lane set" of a lane mask, in the default build from the
+// four lanes; in the AVX2 build by one movemask (the lane extraction was a fifth of the
+// test's instructions). Only the test of the mask differs: the same answers. By
+// reference: a 256-bit vector argument outside an AVX function changes the ABI (clang
+// rejects it).
 struct LanesDefault {
   static bool all(const M4& m) { return m[0] & m[1] & m[2] & m[3]; }
+  static bool any(const M4& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
 };
 #if defined(__GNUC__) && defined(__x86_64__)
 struct LanesAvx2 {
-  // Not always_inline: the AVX2 wrapper (flatten) inlines it, and only it may.
+  // Not always_inline: the AVX2 wrapper (flatten) inlines them, and only it may.
   __attribute__((target("avx2"))) static bool all(const M4& m) { return _mm256_movemask_pd(__m256d(m)) == 15; }
+  __attribute__((target("avx2"))) static bool any(const M4& m) { return _mm256_movemask_pd(__m256d(m)) != 0; }
 };
 #endif
 
-// Four segments from one origin (lane k: d = dx[k], dy[k], dz[k], n[k] = max |d_i|)
-// against the first `count` candidates: lanes certainly blocked (`hit`) and lanes that
-// every candidate certainly misses (`clear`), as lane masks. The candidate's terms are
-// scalars here, so det's sign (which side of the plane p lies) picks the tests once per
-// candidate instead of once per lane.
+// The `count` segments of one origin (segment s: d[4s..4s+3] = dx, dy, dz and n = max
+// |d_i|) against the candidates, four candidates per vector (the term arrays are SoA
+// over the kp candidates; lanes past the candidates repeat the last one, which changes
+// no answer): out[s] = 1 when some candidate certainly blocks segment s, 2 when every
+// candidate certainly misses it, 0 otherwise. Each (segment, candidate) pair takes the
+// operations of the tests above in the same order, so the same lane answers; a segment
+// stops at its first blocking candidate (the answer is an OR of the blocks, an AND of
+// the misses).
 template <class Lanes>
-__attribute__((always_inline)) inline void direct_classify_body(const double* t, size_t count, size_t kp,
-                                                                const double* d, int64_t* out) {
-  const V4 dx = load4(d), dy = load4(d + 4), dz = load4(d + 8), n = load4(d + 12);
-  M4 hit = {0, 0, 0, 0}, clear = {-1, -1, -1, -1};
-  for (size_t k = 0; k < count; ++k) {
-    const V4 wa = dx * t[kBcx * kp + k] + dy * t[kBcy * kp + k] + dz * t[kBcz * kp + k];
-    const V4 wb = dx * t[kCax * kp + k] + dy * t[kCay * kp + k] + dz * t[kCaz * kp + k];
-    const V4 wc = dx * t[kAbx * kp + k] + dy * t[kAby * kp + k] + dz * t[kAbz * kp + k];
-    const double det = t[kDet * kp + k], edet = t[kEdet * kp + k];
-    const V4 e = n * t[kEm * kp + k];
-    const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
-    M4 miss = (wmax > e) & (wmin < -e);
-    // Lines passing beside the triangle (the common case) need nothing else.
-    if (Lanes::all(miss)) continue;
-    if (det > edet) {
+__attribute__((always_inline)) inline void direct_classify_body(const double* t, size_t kp, const double* d,
+                                                                size_t count, uint8_t* out) {
+  for (size_t s = 0; s < count; ++s) {
+    const double dx = d[4 * s], dy = d[4 * s + 1], dz = d[4 * s + 2], n = d[4 * s + 3];
+    uint8_t res = 2;
+    for (size_t k = 0; k < kp; k += 4) {
+      const V4 wa = dx * load4(t + kBcx * kp + k) + dy * load4(t + kBcy * kp + k) + dz * load4(t + kBcz * kp + k);
+      const V4 wb = dx * load4(t + kCax * kp + k) + dy * load4(t + kCay * kp + k) + dz * load4(t + kCaz * kp + k);
+      const V4 wc = dx * load4(t + kAbx * kp + k) + dy * load4(t + kAby * kp + k) + dz * load4(t + kAbz * kp + k);
+      const V4 e = n * load4(t + kEm * kp + k);
+      const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
+      M4 miss = (wmax > e) & (wmin < -e);
+      // Lines passing beside the triangles (the common case) need nothing else.
+      if (Lanes::all(miss)) continue;
+      const V4 det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
+      const M4 pos = det > edet, neg = det < -edet;
       const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
-      hit |= (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs);
+      const M4 hit = (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
+                     (neg & (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs));
+      if (Lanes::any(hit)) {
+        res = 1;
+        break;
+      }
       const V4 dq = det - (wa + wb + wc);
-      miss |= dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det);
-    } else if (det < -edet) {
-      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
-      hit |= (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs);
-      const V4 dq = det - (wa + wb + wc);
-      miss |= dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det));
+      miss |= (pos & (dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det))) |
+              (neg & (dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det))));
+      if (!Lanes::all(miss)) res = 0;
     }
-    clear &= miss;
-    // Every lane blocked: the rest cannot change the answer.
-    if ((k & 3) == 3 && Lanes::all(hit)) break;
-  }
-  for (int k = 0; k < 4; ++k) {
-    out[k] = hit[k];
-    out[4 + k] = clear[k];
+    out[s] = res;
   }
 }
 
 void direct_terms_default(const double* c, size_t kp, const double* p, double* t) { direct_terms_body(c, kp, p, t); }
-void direct_classify_default(const double* t, size_t count, size_t kp, const double* d, int64_t* out) {
-  direct_classify_body<LanesDefault>(t, count, kp, d, out);
+void direct_classify_default(const double* t, size_t kp, const double* d, size_t count, uint8_t* out) {
+  direct_classify_body<LanesDefault>(t, kp, d, count, out);
 }
 #if defined(__GNUC__) && defined(__x86_64__)
 // The same operations four candidates per instruction; AVX2 alone has no fused
@@ -158,9 +161,9 @@ __attribute__((target("avx2"))) void direct_terms_avx2(const double* c, size_t k
   direct_terms_body(c, kp, p, t);
 }
 // flatten: LanesAvx2::all is inlined here, where AVX2 is enabled.
-__attribute__((target("avx2"), flatten)) void direct_classify_avx2(const double* t, size_t count, size_t kp,
-                                                                   const double* d, int64_t* out) {
-  direct_classify_body<LanesAvx2>(t, count, kp, d, out);
+__attribute__((target("avx2"), flatten)) void direct_classify_avx2(const double* t, size_t kp, const double* d,
+                                                                   size_t count, uint8_t* out) {
+  direct_classify_body<LanesAvx2>(t, kp, d, count, out);
 }
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
@@ -176,51 +179,55 @@ void direct_terms(const double* c, size_t kp, const double* p, double* t) {
 #endif
   direct_terms_default(c, kp, p, t);
 }
-// d: the four lanes' dx, dy, dz and n, four doubles each; out: the hit mask, then the
-// clear mask. Arrays, not vector arguments: a 32-byte vector passed by value between
-// the AVX2 and the default function would not travel in the same registers.
-void direct_classify(const double* t, size_t count, size_t kp, const double* d, int64_t* out) {
+// Arrays, not vector arguments: a 32-byte vector passed by value between the AVX2 and
+// the default function would not travel in the same registers.
+void direct_classify(const double* t, size_t kp, const double* d, size_t count, uint8_t* out) {
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) return direct_classify_avx2(t, count, kp, d, out);
+  if (have_avx2()) return direct_classify_avx2(t, kp, d, count, out);
 #endif
-  direct_classify_default(t, count, kp, d, out);
+  direct_classify_default(t, kp, d, count, out);
 }
 
 // Box-against-plane culling of candidate boxes (SoA: lo x, y, z, hi x, y, z of kp each),
-// four boxes per vector: keep[k] stays -1 while box k is not beyond the plane, by the
-// test and the arithmetic of ShaftGeometry::may_intersect_box (the box corner nearest
-// to the plane's inside, eval = dot(n, q) - d against the plane's tolerance).
-__attribute__((always_inline)) inline void direct_cull_body(const double* box, size_t kp, const double* plane,
-                                                            int64_t* keep) {
-  const double nx = plane[0], ny = plane[1], nz = plane[2], d = plane[3], tol = plane[4];
-  const double* X = box + (nx > 0 ? 0 : 3) * kp;
-  const double* Y = box + (ny > 0 ? 1 : 4) * kp;
-  const double* Z = box + (nz > 0 ? 2 : 5) * kp;
-  for (size_t k = 0; k < kp; k += 4) {
-    const V4 e = (nx * load4(X + k) + ny * load4(Y + k) + nz * load4(Z + k)) - d;
-    M4 m;
-    std::memcpy(&m, keep + k, sizeof m);
-    m &= ~(e > tol);
-    std::memcpy(keep + k, &m, sizeof m);
+// four boxes per vector, plane after plane (one call for all of a shaft's planes): keep[k]
+// stays -1 while box k is not beyond a plane, by the test and the arithmetic of
+// ShaftGeometry::may_intersect_box (the box corner nearest to the plane's inside, eval =
+// dot(n, q) - d against the plane's tolerance). pl: the plane arrays (plane_array).
+__attribute__((always_inline)) inline void direct_cull_body(const double* box, size_t kp, const double* const* pl,
+                                                            int count, int64_t* keep) {
+  for (int i = 0; i < count; ++i) {
+    const double nx = pl[0][i], ny = pl[1][i], nz = pl[2][i], d = pl[3][i], tol = pl[4][i];
+    const double* X = box + (nx > 0 ? 0 : 3) * kp;
+    const double* Y = box + (ny > 0 ? 1 : 4) * kp;
+    const double* Z = box + (nz > 0 ? 2 : 5) * kp;
+    for (size_t k = 0; k < kp; k += 4) {
+      const V4 e = (nx * load4(X + k) + ny * load4(Y + k) + nz * load4(Z + k)) - d;
+      M4 m;
+      std::memcpy(&m, keep + k, sizeof m);
+      m &= ~(e > tol);
+      std::memcpy(keep + k, &m, sizeof m);
+    }
   }
 }
-void direct_cull_default(const double* box, size_t kp, const double* plane, int64_t* keep) {
-  direct_cull_body(box, kp, plane, keep);
+void direct_cull_default(const double* box, size_t kp, const double* const* pl, int count, int64_t* keep) {
+  direct_cull_body(box, kp, pl, count, keep);
 }
 #if defined(__GNUC__) && defined(__x86_64__)
-__attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t kp, const double* plane,
-                                                      int64_t* keep) {
-  direct_cull_body(box, kp, plane, keep);
+__attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t kp, const double* const* pl,
+                                                      int count, int64_t* keep) {
+  direct_cull_body(box, kp, pl, count, keep);
 }
 #endif
 
 }  // namespace
 
-void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep) {
+void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep) {
+  const double* const pl[5] = {g.plane_array(0), g.plane_array(1), g.plane_array(2), g.plane_array(3),
+                               g.plane_array(4)};
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (have_avx2()) return direct_cull_avx2(box, kp, plane, keep);
+  if (have_avx2()) return direct_cull_avx2(box, kp, pl, g.plane_count(), keep);
 #endif
-  direct_cull_default(box, kp, plane, keep);
+  direct_cull_default(box, kp, pl, g.plane_count(), keep);
 }
 
 // Candidates of a leaf shaft: the triangles whose box may meet it (a segment between the
@@ -237,11 +244,7 @@ bool Traversal::direct_candidates(const ShaftGeometry& g) {
                     std::vector<uint32_t>& to, std::vector<double>* to_box) {
     const size_t n = from.size(), kp = padded(n);
     direct_keep_.assign(kp, -1);
-    for (int i = 0; i < sg.plane_count(); ++i) {
-      const ConservativePlane& pl = sg.plane(i);
-      const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
-      direct_cull(from_box.data(), kp, plane, direct_keep_.data());
-    }
+    direct_cull(from_box.data(), kp, sg, direct_keep_.data());
     to.clear();
     for (size_t k = 0; k < n; ++k)
       if (direct_keep_[k]) to.push_back(from[k]);
@@ -334,27 +337,27 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
   const auto& ro = rtree_->order();
   const auto& lo = ltree_->order();
   size_t blocked = 0, uncertain = 0;
-  // One group: the segments from the origin o to the `count` end points end(k), four
-  // lanes per test (a short block repeats its first lane); done(k, hit, clear) records
-  // relation k.
+  // One group: the segments from the origin o to the `count` end points end(k), one
+  // test call for the group; done(k, hit, clear) records relation k.
   auto run_group = [&](const Vec3f& o, uint32_t count, auto&& end, auto&& done) {
     const double od[3] = {double(o.x), double(o.y), double(o.z)};
-    if (k_count > 0) direct_terms(direct_corners_.data(), kp, od, direct_terms_.data());
-    for (uint32_t k0 = 0; k0 < count; k0 += 4) {
-      const uint32_t m = std::min<uint32_t>(4, count - k0);
-      double d[16];  // dx, dy, dz, n of the four lanes
-      for (uint32_t k = 0; k < 4; ++k) {
-        const Vec3f& e = end(k0 + (k < m ? k : 0));
-        d[k] = double(e.x) - od[0];
-        d[4 + k] = double(e.y) - od[1];
-        d[8 + k] = double(e.z) - od[2];
-        d[12 + k] = std::max({std::abs(d[k]), std::abs(d[4 + k]), std::abs(d[8 + k])});
-      }
-      // No candidate: no triangle meets a segment (every lane clear).
-      int64_t out[8] = {0, 0, 0, 0, -1, -1, -1, -1};
-      if (k_count > 0) direct_classify(direct_terms_.data(), k_count, kp, d, out);
-      for (uint32_t k = 0; k < m; ++k) done(k0 + k, out[k] != 0, out[4 + k] != 0);
+    if (k_count == 0) {  // no candidate: no triangle meets a segment (every one clear)
+      for (uint32_t k = 0; k < count; ++k) done(k, false, true);
+      return;
     }
+    direct_terms(direct_corners_.data(), kp, od, direct_terms_.data());
+    direct_d_.resize(4 * size_t(count));
+    direct_out_.resize(count);
+    for (uint32_t k = 0; k < count; ++k) {
+      const Vec3f& e = end(k);
+      double* d = direct_d_.data() + 4 * size_t(k);  // dx, dy, dz, n
+      d[0] = double(e.x) - od[0];
+      d[1] = double(e.y) - od[1];
+      d[2] = double(e.z) - od[2];
+      d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+    }
+    direct_classify(direct_terms_.data(), kp, direct_d_.data(), count, direct_out_.data());
+    for (uint32_t k = 0; k < count; ++k) done(k, direct_out_[k] == 1, direct_out_[k] == 2);
   };
   // Relation (receiver i at p, sample j, light point q) from the test's lane masks.
   auto record = [&](uint32_t i, const Vec3f& p, uint32_t j, const Vec3f* q, bool hit, bool clear) {
@@ -395,12 +398,15 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
     direct_prefix_.resize(nr);
     direct_jp_.resize(nr);
     direct_members_.resize(nr);
-    for (uint32_t a = 0; a < nr; ++a) direct_prefix_[a] = relation_hash_prefix(ro[c0 + a], light_->seed);
+    // The seed as a local: the stores below could alias light_->seed, which kept the
+    // compiler from hoisting its half of relation_hash_prefix out of the loop.
+    const uint64_t seed = light_->seed;
+    for (uint32_t a = 0; a < nr; ++a) direct_prefix_[a] = relation_hash_prefix(ro[c0 + a], seed);
     for (uint32_t b = L.begin; b < L.end; ++b) {
       const uint32_t j = lo[b];
       direct_start_.assign(jit + 1, 0);
       for (uint32_t a = 0; a < nr; ++a) {
-        const uint32_t jp = uint32_t(leaf_jitter_index(*light_, int(j), direct_prefix_[a]));
+        const uint32_t jp = uint32_t(leaf_jitter_index(jit, int(j), direct_prefix_[a]));
         direct_jp_[a] = jp;
         ++direct_start_[jp + 1];
       }

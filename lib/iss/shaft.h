@@ -81,6 +81,9 @@ class ShaftGeometry {
     p.tol = soa_.v[4][i];
     return p;
   }
+  // Component c (0..4: n.x, n.y, n.z, d, tol) of planes 0..plane_count() - 1, the
+  // arrays plane(i) reads.
+  const double* plane_array(int c) const { return soa_.v[c]; }
 
   bool may_contain_point(const Vec3d& p) const;
   bool may_intersect_segment(const Vec3d& a, const Vec3d& b) const;

@@ -39,11 +39,11 @@ namespace visgate::iss {
 // validate() after every operation on every surface (iss_solver.h set_validate_all).
 extern bool g_validate;
 
-// ShaftGeometry::may_intersect_box's test of one plane (n.x, n.y, n.z, d, tol) over box
-// arrays (lo x, y, z, hi x, y, z, kp each, kp a multiple of 4), four boxes per vector,
-// the same arithmetic: keep[k] is cleared where box k lies beyond the plane
-// (leaf_rays.cpp). A box passes may_intersect_box iff no plane of the shaft clears it.
-void direct_cull(const double* box, size_t kp, const double* plane, int64_t* keep);
+// ShaftGeometry::may_intersect_box's test by every plane of `g` over box arrays (lo x, y,
+// z, hi x, y, z, kp each, kp a multiple of 4), four boxes per vector, the same
+// arithmetic: keep[k] is cleared where box k lies beyond a plane (leaf_rays.cpp). With
+// keep set on entry, box k passes may_intersect_box iff keep[k] stays set.
+void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep);
 
 using Clock = std::chrono::steady_clock;
 
@@ -378,6 +378,9 @@ class Traversal {
   std::vector<const Vec3f*> direct_q_;
   std::vector<uint64_t> direct_prefix_;
   std::vector<uint32_t> direct_jp_, direct_members_, direct_start_, direct_fill_;
+  // A group's segments (dx, dy, dz, n each) and their answers (direct_rays).
+  std::vector<double> direct_d_;
+  std::vector<uint8_t> direct_out_;
   // Candidate lists of the shafts being subdivided, outermost first (direct_candidates).
   // The direct test's scratch is bounded (20 bytes per receiver of a kDirectChunk chunk,
   // lists of at most kCandQueryMax triangles per level of the recursion): a few MB, not

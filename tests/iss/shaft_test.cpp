@@ -218,8 +218,8 @@ TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
         (rb ? box_in : box_out) += 1;
         boxes.push_back(bx);
       }
-      // The same boxes as box arrays through direct_cull, plane by plane (the cull of
-      // the direct test's candidate lists and of dense_ray_lights' estimate).
+      // The same boxes as box arrays through direct_cull (the cull of the direct test's
+      // candidate lists and of dense_ray_lights' estimate).
       const size_t kp = (boxes.size() + 3) & ~size_t(3);
       std::vector<double> arrays(6 * kp, 0.0);
       for (size_t k = 0; k < boxes.size(); ++k)
@@ -228,11 +228,7 @@ TEST(IssShaft, VectorAndCornerPickingTestsAnswerAsTheScalarLoops) {
           arrays[size_t(3 + ax) * kp + k] = boxes[k].hi[ax];
         }
       std::vector<int64_t> keep(kp, -1);
-      for (int i = 0; i < g.plane_count(); ++i) {
-        const iss::ConservativePlane pl = g.plane(i);
-        const double plane[5] = {pl.n.x, pl.n.y, pl.n.z, pl.d, pl.tol};
-        iss::direct_cull(arrays.data(), kp, plane, keep.data());
-      }
+      iss::direct_cull(arrays.data(), kp, g, keep.data());
       for (size_t k = 0; k < boxes.size(); ++k) ASSERT_EQ(keep[k] != 0, g.may_intersect_box(boxes[k]));
       for (int k = 0; k < 60; ++k) {  // triangles: separated by a shaft plane / by their own plane
         Vec3d a = point(), b = point(), c = point();
