@@ -49,6 +49,15 @@ struct PyramidWeights {
   };
   std::vector<Plane> p;
 };
+// d = x - l strictly outside side plane pp by the pyramid test's margin: dot(n, d) <
+// -16 dot_err(d, n, err) - shift. Shared by block_outside and subtract_near; a value
+// not below 0 cannot be below -16 e - shift <= 0, so the bound is skipped there.
+inline bool outside_side(const PyramidWeights::Plane& pp, const Vec3d& d, double shift) {
+  const double s = dot(pp.n, d);
+  if (!(s < 0.0)) return false;
+  const double e = std::abs(d.x) * pp.w.x + std::abs(d.y) * pp.w.y + std::abs(d.z) * pp.w.z;
+  return s < -16.0 * e - shift;
+}
 PyramidWeights& pyramid_weights() {
   thread_local PyramidWeights pw;
   return pw;
@@ -333,16 +342,12 @@ bool ReceiverShading::block_outside(const GroupState::NearBlock& b, uint8_t& hin
   const size_t first = hint < m ? hint : 0;
   for (size_t ji = 0; ji < m; ++ji) {
     const size_t j = first + ji < m ? first + ji : first + ji - m;
-    const Vec3d& pn = gs_.pyramid[j];
-    const Vec3d& w = pw_.p[j].w;
-    const double shift = pw_.p[j].c * (b.pmax + double(lf_.extent) + rmax_);
-    const Vec3d dl = b.lo - lf_.poly[j], dh = b.hi - lf_.poly[j];  // corner - l_j, per component
+    const PyramidWeights::Plane& pp = pw_.p[j];
+    const double shift = pp.c * (b.pmax + double(lf_.extent) + rmax_);
+    const Vec3d dl = b.lo - pp.l, dh = b.hi - pp.l;  // corner - l_j, per component
     bool outside = true;
-    for (int c = 0; c < 8 && outside; ++c) {
-      const Vec3d d((c & 1) ? dh.x : dl.x, (c & 2) ? dh.y : dl.y, (c & 4) ? dh.z : dl.z);
-      const double e = std::abs(d.x) * w.x + std::abs(d.y) * w.y + std::abs(d.z) * w.z;
-      outside = dot(pn, d) < -16.0 * e - shift;
-    }
+    for (int c = 0; c < 8 && outside; ++c)
+      outside = outside_side(pp, Vec3d((c & 1) ? dh.x : dl.x, (c & 2) ? dh.y : dl.y, (c & 4) ? dh.z : dl.z), shift);
     if (outside) {
       hint = uint8_t(j);
       return true;
@@ -378,22 +383,12 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
     for (size_t ji = 0; ji < m; ++ji) {
       const size_t j = first + ji < m ? first + ji : first + ji - m;
       const PyramidWeights::Plane& pp = planes[j];
-      const Vec3d &pn = pp.n, &w = pp.w, &lj = pp.l;
-      // The margin and bound of block_outside's test, their per-receiver parts
+      // block_outside's test and margin (outside_side), their per-receiver parts
       // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
       // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
       const double shift = pp.c * reach;
       bool outside = true;
-      for (uint32_t k = 0; k < np.count && outside; ++k) {
-        const Vec3d d = pv[k] - lj;
-        const double s = dot(pn, d);
-        if (!(s < 0.0)) {  // not below -16 e - shift <= 0 whatever e: the bound is skipped
-          outside = false;
-          break;
-        }
-        const double e = std::abs(d.x) * w.x + std::abs(d.y) * w.y + std::abs(d.z) * w.z;
-        outside = s < -16.0 * e - shift;
-      }
+      for (uint32_t k = 0; k < np.count && outside; ++k) outside = outside_side(pp, pv[k] - pp.l, shift);
       if (outside) {
         hint = uint8_t(j);
         return;
