@@ -77,7 +77,6 @@ SampleStrips strips_from_boxes(const std::vector<std::array<float, 4>>& box) {
     o.u_hi[size_t(j)] = b[1];
     o.v_lo[size_t(j)] = b[2];
     o.max_width = std::max(o.max_width, double(b[1]) - double(b[0]));
-    o.max_height = std::max(o.max_height, double(b[3]) - double(b[2]));
   }
   o.vorder.resize(size_t(n));
   std::iota(o.vorder.begin(), o.vorder.end(), 0);
@@ -229,7 +228,7 @@ bool DepthCounter::use_sorted_order() {
     // Few samples: no piece ever uses the strips (add_piece tests at most kOneByOne
     // positions one by one), so order the picked points by their own v instead of their
     // boxes' v_lo. A piece's v-range is then exactly a range of positions, without the
-    // tallest box's slack. Insertion sort from the v_lo order: each point lies in its
+    // slack of boxes reaching above their v_lo neighbours (vhi_prefix). Insertion sort from the v_lo order: each point lies in its
     // box, so only samples with overlapping boxes are out of order.
     order_.assign(strips_->vorder.begin(), strips_->vorder.end());
     for (size_t k = 1; k < n; ++k) {

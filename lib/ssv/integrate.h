@@ -111,7 +111,7 @@ namespace visgate::ssv {
 struct SampleStrips {
   int n = 0;                               // samples
   std::vector<float> u_hi, v_lo;           // per sample: its box's u_hi and v_lo
-  double max_width = 0.0, max_height = 0.0;  // largest box extent in u and in v (exact)
+  double max_width = 0.0;                  // largest box extent in u (exact)
   std::vector<int> vorder, vrank;          // samples sorted by v_lo; position of each
   std::vector<float> vlo_sorted;           // v_lo in that order
   // The largest v_hi of positions 0..k of the v_lo order (nondecreasing): the samples
