@@ -69,6 +69,8 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   for (size_t id = 0; id < occ_.size(); ++id)
     for (int k = 0; k < occ_[id].n; ++k)
       vertex_dist_[id * size_t(kMaxOccluderVertices) + size_t(k)] = light_bounds_.dist1(occ_[id].v[k]);
+  orient_block_.assign(occ_.size(), kNoBlock);
+  orient_.clear();
   reset();
   counters_.nodes_created = 1;
 }
@@ -81,6 +83,20 @@ Orientation LazyBsp::orientation(uint32_t id, int edge) const {
   Orientation s = light_fans_[size_t(edge)].orientation(q.v, q.n, true);
   if (s != Orientation::Mixed || recv_.empty()) return s;
   return region_fans_[size_t(edge)].orientation(q.v, q.n, false);
+}
+
+void LazyBsp::set_fans(int edge) {
+  const Occluder& o = *fan_occ_;
+  const Vec3d& a = o.v[edge];
+  const Vec3d& b = o.v[edge + 1 == o.n ? 0 : edge + 1];
+  light_fans_[size_t(edge)].set(a, b, light_.data(), int(light_.size()));
+  if (!recv_.empty()) region_fans_[size_t(edge)].set(a, b, recv_.data(), int(recv_.size()));
+  fans_ready_ |= uint32_t(1) << edge;
+}
+
+Orientation LazyBsp::fresh_orientation(uint32_t id, int edge) {
+  if (!(fans_ready_ >> edge & 1u)) set_fans(edge);
+  return orientation(id, edge);
 }
 
 void LazyBsp::reset() {
@@ -98,7 +114,8 @@ void LazyBsp::reset() {
 size_t LazyBsp::memory_bytes() const {
   return nodes_.capacity() * sizeof(Node) + lists_.capacity() * sizeof(uint32_t) + occ_.capacity() * sizeof(Occluder) +
          work_.capacity() * sizeof(Vec3d) +
-         stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + shadow_stamp_.capacity() * sizeof(uint32_t) +
+         stack_.capacity() * sizeof(Work) + splits_.capacity() * sizeof(Split) + out_spans_.capacity() * sizeof(FragmentList::Span) +
+         shadow_stamp_.capacity() * sizeof(uint32_t) +
          shadow_box_.capacity() * sizeof(UVBox) + miss_edge_.capacity() + plane_stamp_.capacity() * sizeof(uint32_t) +
          plane_cache_.capacity() * sizeof(NodePlane) + vertex_dist_.capacity() * sizeof(double);
 }
@@ -166,10 +183,18 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
   // 1-13): positive goes left, negative right, mixed both; leaves store q unless
   // invisible. bsp(ro) is at most 2k - 1 nodes deep; walked with an explicit stack.
   for (size_t s = 0; s < new_leaves_.size(); ++s) leaf_lists_[s].clear();
-  for (int m = 0; m < k; ++m) {
-    light_fans_[size_t(m)].set(o.v[m], o.v[(m + 1) % k], light_.data(), int(light_.size()));
-    if (!recv_.empty()) region_fans_[size_t(m)].set(o.v[m], o.v[(m + 1) % k], recv_.data(), int(recv_.size()));
+  fan_occ_ = &o;
+  fans_ready_ = 0;
+  uint32_t block = orient_block_[ro];
+  const size_t block_size = occ_.size() * size_t(kMaxOccluderVertices);
+  if (block == kNoBlock && orient_.size() + block_size <= orient_cache_bytes_) {
+    block = uint32_t(orient_.size());
+    orient_block_[ro] = block;
+    if (orient_.capacity() < orient_.size() + block_size)  // never past the cap (no doubling beyond it)
+      orient_.reserve(std::min(orient_cache_bytes_, std::max(2 * orient_.capacity(), orient_.size() + block_size)));
+    orient_.resize(orient_.size() + block_size, 0);
   }
+  uint8_t* const block_data = block != kNoBlock ? orient_.data() + block : nullptr;
   int32_t walk[4 * kMaxOccluderVertices];
   for (uint32_t id : list_scratch_) {
     if (id == ro) continue;
@@ -183,7 +208,15 @@ void LazyBsp::develop(int32_t leaf, int64_t forced) {
         continue;
       }
       ++counters_.insert_tests;
-      Orientation s = orientation(id, nd.edge);
+      uint8_t* kept = block_data != nullptr ? block_data + size_t(id) * size_t(kMaxOccluderVertices) + nd.edge : nullptr;
+      Orientation s;
+      if (kept != nullptr && *kept != 0) {
+        s = Orientation(*kept - 1);
+        ++counters_.insert_reused;
+      } else {
+        s = fresh_orientation(id, nd.edge);
+        if (kept != nullptr) *kept = uint8_t(1 + uint8_t(s));
+      }
       if (s != Orientation::Negative) walk[top++] = nd.left;
       if (s != Orientation::Positive) walk[top++] = nd.right;
     }
@@ -348,6 +381,7 @@ void LazyBsp::query(const Vec3d& r, FragmentList& out) {
 void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   begin_query(r);
   out.clear();
+  out_spans_.clear();
   stack_.clear();
   splits_.clear();
   // Every fragment of the query lives in work_ up to wtop (used as a buffer: its size only
@@ -384,8 +418,8 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       sp.visible &= visible;
       if (--sp.pending > 0) return;
       if (sp.visible) {
-        out.truncate(sp.out_mark);
-        out.add(work_.data() + sp.begin, sp.count);
+        out_spans_.resize(sp.out_mark);
+        out_spans_.emplace_back(sp.begin, sp.count);
         ++counters_.merged;
       }
       visible = sp.visible;
@@ -435,7 +469,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
             break;
           }
           const uint32_t id = uint32_t(splits_.size());
-          Split sp{split, cb, cn, uint32_t(out.size()), 0, true};
+          Split sp{split, cb, cn, uint32_t(out_spans_.size()), 0, true};
           if (nneg == 0 || npos == 0) {  // a piece of zero area dropped: no undoing
             ++counters_.zero_area;
             sp.visible = false;
@@ -459,7 +493,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
         break;
       }
       if (nd.occ_count == 0) {  // line 29: visible class, returned
-        out.add(cur, cn);
+        out_spans_.emplace_back(cb, cn);
         finish(split, true);
         break;
       }
@@ -485,13 +519,26 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       }
       if (cover < 0 && candidates_.empty()) {
         ++counters_.lazy_visible;
-        out.add(cur, cn);
+        out_spans_.emplace_back(cb, cn);
         finish(split, true);
         break;
       }
       if (cover < 0) cover = have_plane_ ? largest_overlap(fbox) : candidates_[size_t(rng_.below(candidates_.size()))];
       develop(node, cover);
     }
+  }
+  // The visible fragments, copied once (the walk keeps them in work_ as spans, so an
+  // undone split drops its pieces' spans instead of copies).
+  size_t total = 0;
+  for (const FragmentList::Span& sp : out_spans_) total += sp.second;
+  out.verts.resize(total);
+  out.polys.resize(out_spans_.size());
+  size_t w = 0;
+  for (size_t k = 0; k < out_spans_.size(); ++k) {
+    const FragmentList::Span sp = out_spans_[k];
+    out.polys[k] = FragmentList::Span(uint32_t(w), sp.second);
+    std::copy(work_.data() + sp.first, work_.data() + sp.first + sp.second, out.verts.data() + w);
+    w += sp.second;
   }
 }
 

@@ -262,6 +262,48 @@ TEST(PluckerBsp, ARebuiltTreeAnswersAsAFreshOne) {
   }
 }
 
+TEST(PluckerBsp, KeptInsertionOrientationsGiveTheSameTree) {
+  // develop() keeps each insertion test's orientation for later merges of the same
+  // occluder at other leaves (bsp.h orient_): a tree keeping them and one keeping none
+  // (set_orient_cache_bytes(0)) make the same tests' answers, so the same developments,
+  // nodes and fragments, vertex for vertex; with a receiver region (the second fan) and
+  // with random and relevant choices; and the kept answers are read.
+  Rng rng(41);
+  Vec3d light[4] = {Vec3d(-1, -1, 2), Vec3d(-1, 1, 2), Vec3d(1, 1, 2), Vec3d(1, -1, 2)};
+  const Vec3d region[4] = {Vec3d(-0.5, -0.5, 0), Vec3d(0.5, -0.5, 0), Vec3d(0.5, 0.5, 0), Vec3d(-0.5, 0.5, 0)};
+  for (int round = 0; round < 2; ++round) {
+    const std::vector<Occluder> occ = random_occluders(rng, 40);
+    LazyBsp kept(light, 4, occ, 3, region, 4), none(light, 4, occ, 3, region, 4);
+    none.set_orient_cache_bytes(0);
+    if (round == 0) {
+      kept.set_choice(LazyBsp::Choice::Random);
+      none.set_choice(LazyBsp::Choice::Random);
+    } else {
+      kept.set_light_plane(plane_at(2.0, 2.0f));
+      none.set_light_plane(plane_at(2.0, 2.0f));
+    }
+    FragmentList a, b;
+    for (int q = 0; q < 60; ++q) {
+      const Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
+      kept.query(r, a);
+      none.query(r, b);
+      ASSERT_EQ(a.size(), b.size());
+      ASSERT_EQ(a.verts.size(), b.verts.size());
+      for (size_t k = 0; k < a.verts.size(); ++k) {
+        EXPECT_EQ(a.verts[k].x, b.verts[k].x);
+        EXPECT_EQ(a.verts[k].y, b.verts[k].y);
+        EXPECT_EQ(a.verts[k].z, b.verts[k].z);
+      }
+    }
+    EXPECT_EQ(kept.node_count(), none.node_count());
+    EXPECT_EQ(kept.counters().developments, none.counters().developments);
+    EXPECT_EQ(kept.counters().insert_tests, none.counters().insert_tests);
+    EXPECT_EQ(kept.counters().splits, none.counters().splits);
+    EXPECT_GT(kept.counters().insert_reused, 0u);
+    EXPECT_EQ(none.counters().insert_reused, 0u);
+  }
+}
+
 TEST(PluckerBsp, CompactedListArenaAnswersAsTheOccluders) {
   // The leaves' occluder lists share one arena that grow_lists compacts when half of it is
   // dead (bsp.h). After many developments and compactions every query still answers as
