@@ -29,10 +29,10 @@ void widened_box(const Vec3d* p, int n, double e, Vec3d& lo, Vec3d& hi) {
   hi = hi + Vec3d(e, e, e);
 }
 
-// classify_fragment(pl, f, n), from the box [lo, hi] holding f's vertices when it lies
-// beyond the plane (box_side: the same answer without the vertex loop).
-SplitResult classify_in_box(const NodePlane& pl, const Vec3d& lo, const Vec3d& hi, const Vec3d* f, int n) {
-  const int side = box_side(pl, lo, hi);
+// classify_fragment(pl, f, n), from a box holding f's vertices when it lies beyond the
+// plane (box_side: the same answer without the vertex loop).
+SplitResult classify_in_box(const NodePlane& pl, const CenterBox& box, const Vec3d* f, int n) {
+  const int side = box_side(pl, box);
   if (side != 0) return side > 0 ? SplitResult::Positive : SplitResult::Negative;
   return classify_fragment(pl, f, n);
 }
@@ -64,7 +64,11 @@ void LazyBsp::rebuild(const Vec3d* light, int m, std::vector<Occluder>& occluder
   miss_edge_.clear();
   for (const Occluder& o : occ_) VG_CHECK(o.n >= 3 && o.n <= kMaxOccluderVertices);
   light_bounds_ = LightBounds::of(light_.data(), m);
-  widened_box(light_.data(), m, 0.0, light_lo_, light_hi_);
+  {
+    Vec3d lo, hi;
+    widened_box(light_.data(), m, 0.0, lo, hi);
+    light_box_ = CenterBox::of(lo, hi, 0x1p-40 * light_bounds_.mag);
+  }
   vertex_dist_.resize(occ_.size() * size_t(kMaxOccluderVertices));
   for (size_t id = 0; id < occ_.size(); ++id)
     for (int k = 0; k < occ_[id].n; ++k)
@@ -294,7 +298,7 @@ void LazyBsp::compute_edge_plane(uint32_t id, int edge, size_t slot) {
 }
 
 LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox,
-                                      const Vec3d& lo, const Vec3d& hi) {
+                                      const CenterBox& box) {
   if (have_plane_) {
     if (shadow_stamp_[id] != stamp_) {
       shadow_box_[id] = shadow_box(plane_, r, occ_[id].v, size_t(occ_[id].n));
@@ -302,10 +306,10 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d& r, const Vec3d* 
     }
     if (!shadow_box_[id].overlaps(fbox)) return Occlusion::Miss;
   }
-  return occlusion(id, f, n, lo, hi);
+  return occlusion(id, f, n, box);
 }
 
-LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d* f, int n, const Vec3d& lo, const Vec3d& hi) {
+LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d* f, int n, const CenterBox& box) {
   const Occluder& o = occ_[id];
   // One-sided: a line stabs o iff it is positive against every edge line (lines.h).
   // Two-sided: iff it is positive against every edge or negative against every edge;
@@ -320,7 +324,7 @@ LazyBsp::Occlusion LazyBsp::occlusion(uint32_t id, const Vec3d* f, int n, const 
   const int first = miss_edge_[id] < o.n ? miss_edge_[id] : 0;
   for (int mi = 0; mi < o.n; ++mi) {
     const int m = first + mi < o.n ? first + mi : first + mi - o.n;
-    const SplitResult s = classify_in_box(edge_plane(id, m), lo, hi, f, n);
+    const SplitResult s = classify_in_box(edge_plane(id, m), box, f, n);
     if (s == SplitResult::OnLine) ++counters_.on_line;  // undecided: the solver re-shades r exactly
     bool nonpos = s == SplitResult::Negative || s == SplitResult::OnLine;
     bool nonneg = s == SplitResult::Positive || s == SplitResult::OnLine;
@@ -349,7 +353,7 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     const Node& nd = nodes_[size_t(node)];
     if (nd.kind == kInvisible) return true;
     if (nd.kind == kInner) {
-      const SplitResult s = classify_in_box(edge_plane(nd.occ, nd.edge), light_lo_, light_hi_, f, n);
+      const SplitResult s = classify_in_box(edge_plane(nd.occ, nd.edge), light_box_, f, n);
       if (s == SplitResult::Positive) node = nd.left;
       else if (s == SplitResult::Negative) node = nd.right;
       else {
@@ -365,7 +369,7 @@ bool LazyBsp::hides_all(const Vec3d& r) {
     for (uint32_t k = 0; k < nd.occ_count && cover < 0; ++k) {
       uint32_t id = lists_[nd.occ_begin + k];
       ++counters_.occlusion_tests;
-      if (occlusion(id, r, f, n, fbox, light_lo_, light_hi_) == Occlusion::Cover) cover = id;
+      if (occlusion(id, r, f, n, fbox, light_box_) == Occlusion::Cover) cover = id;
     }
     if (cover < 0) return false;
     develop(node, cover);
@@ -396,10 +400,13 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
     reserve(size_t(in.count(f)));
     // The piece's box, kept by every fragment split from it (box_side): a split piece's
     // vertices are interpolated on its edges, so they leave the box by rounding only,
-    // about 3 u_d mag per split on their path; widened by 2^-40 mag, the box holds them
-    // for paths of over two thousand splits, far more than a tree is deep.
-    stack_.push_back(Work{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit, {}, {}});
-    widened_box(in.data(f), in.count(f), 0x1p-40 * light_bounds_.mag, stack_.back().lo, stack_.back().hi);
+    // about 3 u_d mag per split on their path; widened by 2^-40 mag (CenterBox::of with
+    // twice that), the box holds them for paths of over two thousand splits, far more
+    // than a tree is deep.
+    Vec3d lo, hi;
+    widened_box(in.data(f), in.count(f), 0.0, lo, hi);
+    stack_.push_back(Work{0, uint32_t(wtop), uint32_t(in.count(f)), kNoSplit,
+                          CenterBox::of(lo, hi, 0x1p-39 * light_bounds_.mag)});
     std::copy(in.data(f), in.data(f) + in.count(f), work_.begin() + std::ptrdiff_t(wtop));
     wtop += size_t(in.count(f));
   }
@@ -432,14 +439,14 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
     uint32_t cb = w.begin, cn = w.count;  // the fragment being walked: work_[cb, cb + cn)
     int32_t node = w.node;
     uint32_t split = w.split;
-    const Vec3d blo = w.lo, bhi = w.hi;  // a box holding the fragment: its input piece's
+    const CenterBox bbox = w.box;  // a box holding the fragment: its input piece's
     for (;;) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.kind == kInner) {
         // Lines 17-27: position of the fragment against makePlane(xyz, hyperplane).
         ++counters_.visits;
         const NodePlane& pl = edge_plane(nd.occ, nd.edge);
-        if (const int side = box_side(pl, blo, bhi)) {  // split_fragment's answer, from the box
+        if (const int side = box_side(pl, bbox)) {  // split_fragment's answer, from the box
           node = side > 0 ? nd.left : nd.right;
           continue;
         }
@@ -478,7 +485,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
           splits_.push_back(sp);
           const uint32_t nb = uint32_t(wtop), pb = uint32_t(wtop + 2 * size_t(cn));
           wtop = size_t(pb) + size_t(npos);
-          if (nneg != 0) stack_.push_back(Work{nd.right, nb, uint32_t(nneg), id, blo, bhi});
+          if (nneg != 0) stack_.push_back(Work{nd.right, nb, uint32_t(nneg), id, bbox});
           if (npos == 0) break;
           cb = pb;
           cn = uint32_t(npos);
@@ -510,7 +517,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       for (uint32_t k = 0; k < nd.occ_count; ++k) {
         uint32_t id = lists_[nd.occ_begin + k];
         ++counters_.occlusion_tests;
-        Occlusion oc = occlusion(id, r, cur, int(cn), fbox, blo, bhi);
+        Occlusion oc = occlusion(id, r, cur, int(cn), fbox, bbox);
         if (oc == Occlusion::Cover) {
           cover = id;
           break;

@@ -233,7 +233,7 @@ class LazyBsp {
     int32_t node;
     uint32_t begin, count;  // fragment vertices in work_
     uint32_t split;         // the split it is a piece of (splits_), or kNoSplit
-    Vec3d lo, hi;           // a box holding the fragment: its input piece's, widened (box_side)
+    CenterBox box;          // a box holding the fragment: its input piece's, widened (box_side)
   };
   // A split of one query (line 25) whose pieces are still being walked. When every piece
   // has come out visible, the pieces' output is replaced by the fragment that was split
@@ -256,12 +256,11 @@ class LazyBsp {
   // stabs it properly), Cover (every edge has the fragment on its stabbing side: every
   // line stabs its closure) or Partial. Signs from classify_fragment (fragment.h).
   enum class Occlusion : uint8_t { Miss, Partial, Cover };
-  // [lo, hi] is a box holding the fragment's vertices (box_side, fragment.h): an edge
-  // whose plane it lies beyond is decided without the vertex loop (the same sign).
-  Occlusion occlusion(uint32_t id, const Vec3d* f, int n, const Vec3d& lo, const Vec3d& hi);
+  // `box` holds the fragment's vertices (box_side, fragment.h): an edge whose plane it
+  // lies beyond is decided without the vertex loop (the same sign).
+  Occlusion occlusion(uint32_t id, const Vec3d* f, int n, const CenterBox& box);
   // occlusion() preceded by the shadow-box test against the fragment's box `fbox`.
-  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox, const Vec3d& lo,
-                      const Vec3d& hi);
+  Occlusion occlusion(uint32_t id, const Vec3d& r, const Vec3d* f, int n, const UVBox& fbox, const CenterBox& box);
   // Among candidates_ (occluders hiding part of a fragment with box fbox, their shadow
   // boxes valid for this query): the one whose shadow box overlaps fbox the most, the
   // first of equal ones (Choice::Relevant with the light's plane known).
@@ -345,7 +344,7 @@ class LazyBsp {
   std::vector<uint32_t> plane_stamp_;   // per occluder edge: stamp_ when plane_cache_ is valid
   std::vector<NodePlane> plane_cache_;
   LightBounds light_bounds_;  // every query fragment is a piece of the light (node_plane)
-  Vec3d light_lo_, light_hi_;  // the light polygon's box (hides_all's occlusion tests)
+  CenterBox light_box_;  // the light polygon's box, widened by 2^-41 mag (hides_all's tests)
   // light_bounds_.dist1 of every occluder vertex (slot id * kMaxOccluderVertices + k) and
   // of the query point: node_plane's base choice, computed once per tree and query.
   std::vector<double> vertex_dist_;

@@ -109,6 +109,51 @@ inline int box_side(const NodePlane& pl, const Vec3d& lo, const Vec3d& hi) {
 #endif
 }
 
+// A box as centre c and half-widths h: the points x with |x_i - c_i| <= h_i (the stored
+// doubles taken exactly). The BSP walk's per-piece box (bsp.cpp): box_side below needs
+// one product a coordinate for the centre and one for the half-width, against two and a
+// minimum and maximum for the corners.
+struct CenterBox {
+  Vec3d c, h;
+  // [lo, hi] widened by at least w / 2 on every side, for w >= 2^-48 (|lo|_inf + |hi|_inf):
+  // the roundings of c and h are below 2 u_d (|lo_i| + |hi_i|) + u_d w per side. NaN lo or
+  // hi (the box of no point) give a NaN box, which box_side decides nothing with.
+  static CenterBox of(const Vec3d& lo, const Vec3d& hi, double w) {
+    return CenterBox{(lo + hi) * 0.5, (hi - lo) * 0.5 + Vec3d(w, w, w)};
+  }
+};
+
+// box_side's answer from a CenterBox: +1 / -1 only when split_fragment(pl, ...) would
+// return Positive / Negative for every fragment with its vertices in the box.
+// Why it holds: for x in the box s(x) = (x - base) . N >= L = sum_i N_i (c_i - base_i) -
+// sum_i |N_i| h_i. Computed, the first sum errs by < 4.01 u_d sum_i |N_i| |c_i - base_i|
+// (a difference, a product, two sums), the second by < 3.01 u_d sum_i |N_i| h_i, and
+// their difference is rounded once; |c_i - base_i| + h_i is the largest |x_i - base_i|
+// over the box, at most d1 (1 + tiny) for a box around fragment vertices widened by far
+// less than d1 (as for box_side above), so the errors stay below 12.1 u_d |N|_inf d1 <=
+// 1.52 bound (node_plane: bound >= 8 u_d |N|_inf d1), and computed L > 8 bound gives
+// s(x) > 6.4 bound, so fl(s(x)) > bound at every vertex (its error is < 0.51 bound).
+// Symmetric for -1 with the upper value. With SSE2 the x and y terms two lanes at a time,
+// summed in the scalar form's order.
+inline int box_side(const NodePlane& pl, const CenterBox& b) {
+  if (pl.on_line) return 0;
+#if defined(__SSE2__)
+  const __m128d n = _mm_loadu_pd(&pl.n.x);
+  const __m128d s = _mm_mul_pd(n, _mm_sub_pd(_mm_loadu_pd(&b.c.x), _mm_loadu_pd(&pl.base.x)));
+  const __m128d r = _mm_mul_pd(_mm_andnot_pd(_mm_set1_pd(-0.0), n), _mm_loadu_pd(&b.h.x));
+  const __m128d t = _mm_add_pd(_mm_unpacklo_pd(s, r), _mm_unpackhi_pd(s, r));  // (s_x + s_y, r_x + r_y)
+  const double sc = _mm_cvtsd_f64(t) + pl.n.z * (b.c.z - pl.base.z);
+  const double rr = _mm_cvtsd_f64(_mm_unpackhi_pd(t, t)) + std::abs(pl.n.z) * b.h.z;
+#else
+  const double sc = pl.n.x * (b.c.x - pl.base.x) + pl.n.y * (b.c.y - pl.base.y) + pl.n.z * (b.c.z - pl.base.z);
+  const double rr = std::abs(pl.n.x) * b.h.x + std::abs(pl.n.y) * b.h.y + std::abs(pl.n.z) * b.h.z;
+#endif
+  const double m = 8.0 * pl.bound;
+  if (sc - rr > m) return 1;
+  if (sc + rr < -m) return -1;
+  return 0;
+}
+
 // Splits the convex polygon `poly` (n vertices) by the plane through r and a -> b.
 // With Both, `pos` and `neg` are overwritten with the pieces (each >= 3 vertices, or
 // empty when rounding leaves fewer; a piece of fewer than 3 vertices has zero area).

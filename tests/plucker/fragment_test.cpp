@@ -494,9 +494,10 @@ TEST(PluckerFragment, BoxSideAgreesWithSplitFragmentOnEveryPieceInTheBox) {
   // box_side's answer for a box must be split_fragment's for every fragment inside it:
   // pieces of random lights (far from the origin too) made by random splits, so their
   // vertices are interpolated; the boxes are the light's own (widened by 2^-40 mag, as the
-  // BSP walk keeps an input piece's box for all its split pieces) and each piece's.
+  // BSP walk keeps an input piece's box for all its split pieces) and each piece's, as
+  // corners and as the walk's CenterBox (CenterBox::of widening by 2^-40 mag and 2^-44 mag).
   Rng rng(91);
-  int decided = 0, undecided = 0;
+  int decided = 0, undecided = 0, decided_center = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const RandomSquareLight sq(rng, trial);
     const std::vector<Vec3d>& light = sq.light;
@@ -516,16 +517,20 @@ TEST(PluckerFragment, BoxSideAgreesWithSplitFragmentOnEveryPieceInTheBox) {
     for (int k = 0; k < 6; ++k) {
       pieces = split_all(node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb), pieces);
     }
-    Vec3d llo, lhi;
+    Vec3d llo, lhi, tlo, thi;
     box_of(light, 0x1p-40 * lb.mag, llo, lhi);
+    box_of(light, 0.0, tlo, thi);
+    const CenterBox lcb = CenterBox::of(tlo, thi, 0x1p-39 * lb.mag);
     for (int q = 0; q < 20; ++q) {
       const NodePlane pl = node_plane(random_point(-2, 0), random_point(0.5, 1.5), random_point(0.5, 1.5), lb);
       const int light_side = box_side(pl, llo, lhi);
+      const int light_center = box_side(pl, lcb);
       for (const auto& pc : pieces) {
         Vec3d plo, phi;
         box_of(pc, 0.0, plo, phi);
         const SplitResult sr = split_fragment(pl, pc.data(), int(pc.size()), pos, neg);
-        for (const int side : {light_side, box_side(pl, plo, phi)}) {
+        const int piece_center = box_side(pl, CenterBox::of(plo, phi, 0x1p-44 * lb.mag));
+        for (const int side : {light_side, box_side(pl, plo, phi), light_center, piece_center}) {
           if (side == 0) {
             ++undecided;
             continue;
@@ -533,10 +538,12 @@ TEST(PluckerFragment, BoxSideAgreesWithSplitFragmentOnEveryPieceInTheBox) {
           ++decided;
           EXPECT_EQ(sr, side > 0 ? SplitResult::Positive : SplitResult::Negative);
         }
+        decided_center += (light_center != 0) + (piece_center != 0);
       }
     }
   }
   EXPECT_GT(decided, 5000);
+  EXPECT_GT(decided_center, 2500);
   EXPECT_GT(undecided, 1000);
 }
 
@@ -558,4 +565,14 @@ TEST(PluckerFragment, BoxSideOfAHandWorkedBox) {
   // The walk's box of an empty piece is NaN (bsp.cpp widened_box): it decides nothing.
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(box_side(pl, Vec3d(nan, nan, nan), Vec3d(nan, nan, nan)), 0);
+  // The same boxes as centre and half-widths (the walk's form), widened by 2^-30.
+  auto center = [&](const Vec3d& lo, const Vec3d& hi) { return box_side(pl, CenterBox::of(lo, hi, 0x1p-30)); };
+  EXPECT_EQ(center(Vec3d(0, 0, 2), Vec3d(1, 4, 2)), left);
+  EXPECT_EQ(center(Vec3d(3, 0, 2), Vec3d(4, 4, 2)), right);
+  EXPECT_EQ(center(Vec3d(1, 0, 2), Vec3d(3, 4, 2)), 0);
+  EXPECT_EQ(center(Vec3d(0, 0, 2), Vec3d(2, 4, 2)), 0);
+  EXPECT_EQ(center(Vec3d(nan, nan, nan), Vec3d(nan, nan, nan)), 0);
+  const CenterBox cb = CenterBox::of(Vec3d(0, 0, 2), Vec3d(1, 4, 2), 0x1p-30);
+  EXPECT_EQ(cb.c.x, 0.5);
+  EXPECT_EQ(cb.h.y, 2.0 + 0x1p-30);
 }
