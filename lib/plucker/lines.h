@@ -183,6 +183,10 @@ struct EdgeFan {
   Vec3d a{};
   std::vector<Vec3d> w;       // W_k
   std::vector<double> scale;  // 12 u_d |p_k - a|_1 |b - a|_1
+  // The same W_k and scale_k as separate coordinate arrays, padded to an even count by
+  // repeating the last entry (it decides as the entry it repeats): orientation takes two
+  // entries at a time with SSE2.
+  std::vector<double> wx, wy, wz, ws;
   void set(const Vec3d& a, const Vec3d& b, const Vec3d* p, int m);
   // The light's vertices as points.
   void set(const Vec3d& a, const Vec3d& b, const Vec3f* p, int m);

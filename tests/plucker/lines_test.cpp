@@ -75,6 +75,52 @@ TEST(PluckerGeometry, Theorem1OrientationBoundsEveryStabbingLine) {
   EXPECT_GT(mixed, 50);
 }
 
+TEST(PluckerGeometry, EdgeFanOrientationIsTheRuleOverEveryEntry) {
+  // EdgeFan::orientation (two entries at a time with SSE2, an odd fan padded by its last
+  // entry) equals the rule it states, evaluated here entry by entry from w and scale:
+  // Mixed when some value sign * (x_i - a) . W_k is within scale_k |x_i - a|_1 or both
+  // signs occur, else the one sign. Fans of 1 to 9 points, 0 to 6 points x, both
+  // directions; a third of the cases with a point in the plane of the line and one fan
+  // point.
+  Rng rng(23);
+  int counts[3] = {0, 0, 0};
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int m = 1 + trial % 9, n = trial % 7;
+    std::vector<Vec3d> p(static_cast<size_t>(m)), x(static_cast<size_t>(n));
+    for (auto& v : p) v = Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(1.5, 2.5));
+    for (auto& v : x) v = Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 0));
+    const Vec3d a(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.5, 1));
+    const Vec3d b(rng.uniform(-1, 1), rng.uniform(-1, 1), 1);
+    // A point in the plane of a, b and one fan point: that entry's value is undecided,
+    // the others mostly not (so one lane of a pair decides and the other does not).
+    if (trial % 3 == 0 && n > 0) x[0] = a + (p[size_t(trial % m)] - a) * -0.5 + (b - a) * 0.3;
+    EdgeFan fan;
+    fan.set(a, b, p.data(), m);
+    for (const bool toward : {true, false}) {
+      bool pos = false, neg = false, mixed = false;
+      for (int i = 0; i < n && !mixed; ++i) {
+        const Vec3d d = x[size_t(i)] - a;
+        const double nd = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+        for (int k = 0; k < m; ++k) {
+          const double s = (toward ? 1.0 : -1.0) * dot(d, fan.w[size_t(k)]);
+          const double bound = fan.scale[size_t(k)] * nd;
+          if (s > bound) pos = true;
+          else if (s < -bound) neg = true;
+          else mixed = true;
+        }
+      }
+      const Orientation want =
+          mixed || (pos && neg) ? Orientation::Mixed : (pos ? Orientation::Positive : Orientation::Negative);
+      const Orientation got = fan.orientation(x.data(), n, toward);
+      EXPECT_EQ(got, want) << "trial " << trial;
+      ++counts[int(want)];
+    }
+  }
+  EXPECT_GT(counts[int(Orientation::Positive)], 500);
+  EXPECT_GT(counts[int(Orientation::Negative)], 500);
+  EXPECT_GT(counts[int(Orientation::Mixed)], 500);
+}
+
 TEST(PluckerGeometry, EdgeFanAgreesWithTheVvsetOrientation) {
   // EdgeFan (lines.h) evaluates side(x -> p_k, a -> b) as (x - a) . ((p_k - a) x (b - a)):
   // checked against the determinant in double, and its decided orientations against
