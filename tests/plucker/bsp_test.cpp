@@ -43,6 +43,30 @@ std::vector<Occluder> random_occluders(Rng& rng, int count) {
   }
   return occ;
 }
+// `queries` random query points (z = 0, |x|, |y| <= 0.5) on trees x and y: the same
+// fragments vertex for vertex, then the same nodes, developments, insertion tests and
+// splits.
+void expect_same_answers(LazyBsp& x, LazyBsp& y, Rng& rng, int queries) {
+  FragmentList a, b;
+  for (int q = 0; q < queries; ++q) {
+    const Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
+    x.query(r, a);
+    y.query(r, b);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_EQ(a.verts.size(), b.verts.size());
+    for (size_t k = 0; k < a.verts.size(); ++k) {
+      EXPECT_EQ(a.verts[k].x, b.verts[k].x);
+      EXPECT_EQ(a.verts[k].y, b.verts[k].y);
+      EXPECT_EQ(a.verts[k].z, b.verts[k].z);
+    }
+  }
+  EXPECT_EQ(x.node_count(), y.node_count());
+  EXPECT_EQ(x.counters().nodes_created, y.counters().nodes_created);
+  EXPECT_EQ(x.counters().developments, y.counters().developments);
+  EXPECT_EQ(x.counters().insert_tests, y.counters().insert_tests);
+  EXPECT_EQ(x.counters().splits, y.counters().splits);
+}
+
 // The plane z = height in the tests' frame, as the solver gives it to a tree
 // (fragment.h LightPlane: nd . x = h0, positive towards the receivers below).
 LightPlane plane_at(double height, float extent) {
@@ -242,23 +266,7 @@ TEST(PluckerBsp, ARebuiltTreeAnswersAsAFreshOne) {
     }
     EXPECT_EQ(reused.node_count(), 1u);
     EXPECT_EQ(reused.occluder_count(), occ.size());
-    FragmentList a, b;
-    for (int q = 0; q < 10; ++q) {
-      const Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
-      reused.query(r, a);
-      fresh.query(r, b);
-      ASSERT_EQ(a.size(), b.size());
-      EXPECT_EQ(a.verts.size(), b.verts.size());
-      for (size_t k = 0; k < a.verts.size() && k < b.verts.size(); ++k) {
-        EXPECT_EQ(a.verts[k].x, b.verts[k].x);
-        EXPECT_EQ(a.verts[k].y, b.verts[k].y);
-        EXPECT_EQ(a.verts[k].z, b.verts[k].z);
-      }
-    }
-    EXPECT_EQ(reused.node_count(), fresh.node_count());
-    EXPECT_EQ(reused.counters().developments, fresh.counters().developments);
-    EXPECT_EQ(reused.counters().splits, fresh.counters().splits);
-    EXPECT_EQ(reused.counters().nodes_created, fresh.counters().nodes_created);
+    expect_same_answers(reused, fresh, rng, 10);
   }
 }
 
@@ -282,23 +290,7 @@ TEST(PluckerBsp, KeptInsertionOrientationsGiveTheSameTree) {
       kept.set_light_plane(plane_at(2.0, 2.0f));
       none.set_light_plane(plane_at(2.0, 2.0f));
     }
-    FragmentList a, b;
-    for (int q = 0; q < 60; ++q) {
-      const Vec3d r(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), 0);
-      kept.query(r, a);
-      none.query(r, b);
-      ASSERT_EQ(a.size(), b.size());
-      ASSERT_EQ(a.verts.size(), b.verts.size());
-      for (size_t k = 0; k < a.verts.size(); ++k) {
-        EXPECT_EQ(a.verts[k].x, b.verts[k].x);
-        EXPECT_EQ(a.verts[k].y, b.verts[k].y);
-        EXPECT_EQ(a.verts[k].z, b.verts[k].z);
-      }
-    }
-    EXPECT_EQ(kept.node_count(), none.node_count());
-    EXPECT_EQ(kept.counters().developments, none.counters().developments);
-    EXPECT_EQ(kept.counters().insert_tests, none.counters().insert_tests);
-    EXPECT_EQ(kept.counters().splits, none.counters().splits);
+    expect_same_answers(kept, none, rng, 60);
     EXPECT_GT(kept.counters().insert_reused, 0u);
     EXPECT_EQ(none.counters().insert_reused, 0u);
   }
