@@ -143,7 +143,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
   // Fresh memory is what this build costs (populated.h): the codes and the sort's second
   // buffer share one block, which then holds the leaves' endpoints.
-  PopulatedVector<uint32_t> scratch(2 * E), a(E);
+  PopulatedArray<uint32_t> scratch(2 * E), a(E);
   uint32_t* code = scratch.data();
   uint32_t* b = scratch.data() + E;
   uint32_t* src = a.data();
@@ -176,7 +176,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
   ends_ = std::move(scratch);  // the codes and b are dead; written with the leaves
-  normals_.resize(6 * E);
+  normals_ = PopulatedArray<int16_t>(6 * E);
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
   size_t total = 0;
@@ -184,7 +184,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     total += n;
     if (n == 1) break;
   }
-  nodes_.resize(total);
+  nodes_ = PopulatedArray<Node>(total);
   const Lanes inf = lanes_set(INFINITY), ninf = lanes_set(-INFINITY);
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
