@@ -186,6 +186,18 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   }
   nodes_ = PopulatedArray<Node>(total);
   const Lanes inf = lanes_set(INFINITY), ninf = lanes_set(-INFINITY);
+  // Each triangle is in about two leaves, mostly near each other in the Morton order: a
+  // direct-mapped cache of what a leaf reads of a triangle (its corners, float normal,
+  // quantized normal and whether it has a plane), keyed by the triangle, spares the
+  // second triangle_plane. An entry holds the very values computed on its first use.
+  struct Met {
+    Lanes c[3], n;
+    int32_t t;
+    uint8_t no_plane;
+    int16_t q[4];
+  };
+  std::vector<Met> met(kMetEntries);
+  for (Met& e : met) e.t = -1;
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     nd.leaf = 1;
@@ -220,20 +232,25 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         const size_t at = find_triangle(done, n_done, t);
         if (at == n_done) {
           done[n_done++] = t;
-          // Each triangle in about two leaves, from its corners: no fresh array.
-          const TrianglePlane plane = triangle_plane(m, size_t(t));
-          nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
-          const Vec3f n(plane.unit());
-          quantize_normal(n, plane.nn > 0.0, done_q[at]);
-          const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
-          for (int v = 0; v < 3; ++v) {
-            const Lanes x = lanes_load(m.vertex_pos[tri.v[v]]);
-            tlo = lanes_min(tlo, x);
-            thi = lanes_max(thi, x);
+          Met& e = met[uint32_t(t) & (kMetEntries - 1)];
+          if (e.t != t) {  // from its corners: no fresh per-triangle array
+            const TrianglePlane plane = triangle_plane(m, size_t(t));
+            e.t = t;
+            e.no_plane = uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
+            const Vec3f n(plane.unit());
+            quantize_normal(n, plane.nn > 0.0, e.q);
+            e.n = lanes_load(n);
+            const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
+            for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
           }
-          const Lanes nl = lanes_load(n);
-          nlo = lanes_min(nlo, nl);
-          nhi = lanes_max(nhi, nl);
+          nd.single |= e.no_plane;
+          for (int c = 0; c < 3; ++c) done_q[at][c] = e.q[c];
+          for (int v = 0; v < 3; ++v) {
+            tlo = lanes_min(tlo, e.c[v]);
+            thi = lanes_max(thi, e.c[v]);
+          }
+          nlo = lanes_min(nlo, e.n);
+          nhi = lanes_max(nhi, e.n);
         }
         if (ed.t2 >= 0)
           for (int c = 0; c < 3; ++c) en[3 * side + c] = done_q[at][c];

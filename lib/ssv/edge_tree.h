@@ -129,6 +129,7 @@ class EdgeTree {
   // one) consecutive nodes of the level below. Box of the edges first: what every visit
   // reads.
   static constexpr uint32_t kLeaf = 8;
+  static constexpr uint32_t kMetEntries = 1024;  // the build's triangle cache (a power of two)
   // Zero bytes are Node{} (every default member initialiser is 0): a PopulatedArray.
   struct Node {
     float lo[3], hi[3];    // box of the edges below
