@@ -11,6 +11,7 @@
 #include <cstddef>
 
 #include <cstdlib>
+#include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -150,13 +151,26 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   constexpr int kDigit = 15;
   constexpr uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
   std::vector<uint32_t> count(2 * (kBuckets + 1));  // zeroed
+#if defined(__SSE2__)
+  // The scalar cells below three lanes at a time: the same sums, differences and
+  // products; min(t, 1023) then truncation where t > 0 (NaN: 0), 0 elsewhere.
+  const __m128 lo2 = _mm_mul_ps(_mm_set1_ps(2.0f), lanes_load(bounds.lo)), sc = lanes_load(scale);
+  const __m128 cell_max = _mm_set1_ps(1023.0f);
+#endif
   for (size_t e = 0; e < E; ++e) {
+    alignas(16) uint32_t q[4];
+#if defined(__SSE2__)
+    const Lanes s = _mm_add_ps(lanes_load(m.vertex_pos[edges[e].a]), lanes_load(m.vertex_pos[edges[e].b]));
+    const __m128 t = _mm_mul_ps(_mm_sub_ps(s, lo2), sc);
+    const __m128i cell = _mm_cvttps_epi32(_mm_min_ps(t, cell_max));
+    _mm_store_si128(reinterpret_cast<__m128i*>(q), _mm_and_si128(cell, _mm_castps_si128(_mm_cmpgt_ps(t, _mm_setzero_ps()))));
+#else
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
-    uint32_t q[3];
     for (int c = 0; c < 3; ++c) {  // NaN (an extent or sum overflowed to infinity) goes to 0
       const float t = (s[c] - 2.0f * bounds.lo[c]) * scale[c];
       q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
     }
+#endif
     const uint32_t cd = kSpread10[q[0]] | (kSpread10[q[1]] << 1) | (kSpread10[q[2]] << 2);
     code[e] = cd;
     src[e] = uint32_t(e);
@@ -224,8 +238,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
       // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
       // (never proven weight 0) for a single edge or a triangle without a plane.
-      int16_t* en = &normals_[6 * size_t(k)];
-      for (int q = 0; q < 6; ++q) en[q] = 0;
+      int16_t* en = &normals_[6 * size_t(k)];  // zero from the PopulatedArray
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
@@ -244,7 +257,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
             for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
           }
           nd.single |= e.no_plane;
-          for (int c = 0; c < 3; ++c) done_q[at][c] = e.q[c];
+          std::memcpy(done_q[at], e.q, sizeof e.q);
           for (int v = 0; v < 3; ++v) {
             tlo = lanes_min(tlo, e.c[v]);
             thi = lanes_max(thi, e.c[v]);
@@ -252,8 +265,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
           nlo = lanes_min(nlo, e.n);
           nhi = lanes_max(nhi, e.n);
         }
-        if (ed.t2 >= 0)
-          for (int c = 0; c < 3; ++c) en[3 * side + c] = done_q[at][c];
+        if (ed.t2 >= 0) std::memcpy(en + 3 * side, done_q[at], 3 * sizeof(int16_t));
       }
     }
     lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
