@@ -84,23 +84,6 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
 
 namespace {
 
-// The position of t among a leaf's triangles so far (done[0..n), the other entries of
-// its 16 are -1), or n: std::find's answer, from four comparisons of four lanes.
-inline size_t find_triangle(const int32_t* done, size_t n, int32_t t) {
-#if defined(__SSE2__)
-  const __m128i x = _mm_set1_epi32(t);
-  const auto* d = reinterpret_cast<const __m128i*>(done);
-  const int m0 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d), x)));
-  const int m1 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 1), x)));
-  const int m2 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 2), x)));
-  const int m3 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 3), x)));
-  const unsigned m = unsigned(m0 | m1 << 4 | m2 << 8 | m3 << 12);
-  return m ? size_t(__builtin_ctz(m)) : n;
-#else
-  return size_t(std::find(done, done + n, t) - done);
-#endif
-}
-
 // The unit normal n times 32767, to nearest (half away from zero; |n| <= 1: no
 // overflow), 0 without a plane, into q[0..3) (q[3] is written too): the scalar
 // v >= 0 ? v + 0.5 : v - 0.5 truncated, four lanes at once.
@@ -203,10 +186,12 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   // Each triangle is in about two leaves, mostly near each other in the Morton order: a
   // direct-mapped cache of what a leaf reads of a triangle (its corners, float normal,
   // quantized normal and whether it has a plane), keyed by the triangle, spares the
-  // second triangle_plane. An entry holds the very values computed on its first use.
+  // second triangle_plane. An entry holds the very values computed on its first use, and
+  // the last leaf that folded them into its bounds.
   struct Met {
     Lanes c[3], n;
     int32_t t;
+    uint32_t leaf;
     uint8_t no_plane;
     int16_t q[4];
   };
@@ -219,14 +204,6 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
     nd.edges = nd.n;
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
-    // A leaf's edges share triangles (about half of the 16 references repeat): each
-    // triangle's corners and normal enter the node's bounds once (min and max are
-    // idempotent, so the node is the same).
-    static_assert(2 * kLeaf == 16, "find_triangle compares 16 entries");
-    alignas(16) int32_t done[2 * kLeaf];
-    std::fill(done, done + 2 * kLeaf, -1);  // no triangle: never found
-    int16_t done_q[2 * kLeaf][4];  // quantize_normal's 4 lanes
-    size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
       ends_[2 * size_t(k)] = ed.a;
@@ -242,22 +219,26 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
-        const size_t at = find_triangle(done, n_done, t);
-        if (at == n_done) {
-          done[n_done++] = t;
-          Met& e = met[uint32_t(t) & (kMetEntries - 1)];
-          if (e.t != t) {  // from its corners: no fresh per-triangle array
-            const TrianglePlane plane = triangle_plane(m, size_t(t));
-            e.t = t;
-            e.no_plane = uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
-            const Vec3f n(plane.unit());
-            quantize_normal(n, plane.nn > 0.0, e.q);
-            e.n = lanes_load(n);
-            const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
-            for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
-          }
+        Met& e = met[uint32_t(t) & (kMetEntries - 1)];
+        if (e.t != t) {  // from its corners: no fresh per-triangle array
+          const TrianglePlane plane = triangle_plane(m, size_t(t));
+          e.t = t;
+          e.leaf = uint32_t(-1);
+          e.no_plane = uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
+          const Vec3f n(plane.unit());
+          quantize_normal(n, plane.nn > 0.0, e.q);
+          e.n = lanes_load(n);
+          const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
+          for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
+        }
+        // A leaf's edges share triangles (about half of its 16 references repeat): each
+        // triangle's corners and normal enter its bounds at their first reference, in
+        // reference order. One evicted and met again in the same leaf is folded again,
+        // which changes nothing: after x is folded, acc <= x, and lanes_min keeps acc on
+        // ties (lanes_max likewise).
+        if (e.leaf != uint32_t(j)) {
+          e.leaf = uint32_t(j);
           nd.single |= e.no_plane;
-          std::memcpy(done_q[at], e.q, sizeof e.q);
           for (int v = 0; v < 3; ++v) {
             tlo = lanes_min(tlo, e.c[v]);
             thi = lanes_max(thi, e.c[v]);
@@ -265,7 +246,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
           nlo = lanes_min(nlo, e.n);
           nhi = lanes_max(nhi, e.n);
         }
-        if (ed.t2 >= 0) std::memcpy(en + 3 * side, done_q[at], 3 * sizeof(int16_t));
+        if (ed.t2 >= 0) std::memcpy(en + 3 * side, e.q, 3 * sizeof(int16_t));
       }
     }
     lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
