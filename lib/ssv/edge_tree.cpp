@@ -11,6 +11,7 @@
 #include <cstddef>
 
 #include <cstdlib>
+#include <cstring>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -83,23 +84,6 @@ EdgeFrustum::EdgeFrustum(const LightFrame& frame, const AABBd& receivers) : rlo(
 
 namespace {
 
-// The position of t among a leaf's triangles so far (done[0..n), the other entries of
-// its 16 are -1), or n: std::find's answer, from four comparisons of four lanes.
-inline size_t find_triangle(const int32_t* done, size_t n, int32_t t) {
-#if defined(__SSE2__)
-  const __m128i x = _mm_set1_epi32(t);
-  const auto* d = reinterpret_cast<const __m128i*>(done);
-  const int m0 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d), x)));
-  const int m1 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 1), x)));
-  const int m2 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 2), x)));
-  const int m3 = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(d + 3), x)));
-  const unsigned m = unsigned(m0 | m1 << 4 | m2 << 8 | m3 << 12);
-  return m ? size_t(__builtin_ctz(m)) : n;
-#else
-  return size_t(std::find(done, done + n, t) - done);
-#endif
-}
-
 // The unit normal n times 32767, to nearest (half away from zero; |n| <= 1: no
 // overflow), 0 without a plane, into q[0..3) (q[3] is written too): the scalar
 // v >= 0 ? v + 0.5 : v - 0.5 truncated, four lanes at once.
@@ -143,20 +127,33 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
   // Fresh memory is what this build costs (populated.h): the codes and the sort's second
   // buffer share one block, which then holds the leaves' endpoints.
-  PopulatedVector<uint32_t> scratch(2 * E), a(E);
+  PopulatedArray<uint32_t> scratch(2 * E), a(E);
   uint32_t* code = scratch.data();
   uint32_t* b = scratch.data() + E;
   uint32_t* src = a.data();
   constexpr int kDigit = 15;
   constexpr uint32_t kBuckets = 1u << kDigit, kMask = kBuckets - 1;
   std::vector<uint32_t> count(2 * (kBuckets + 1));  // zeroed
+#if defined(__SSE2__)
+  // The scalar cells below three lanes at a time: the same sums, differences and
+  // products; min(t, 1023) then truncation where t > 0 (NaN: 0), 0 elsewhere.
+  const __m128 lo2 = _mm_mul_ps(_mm_set1_ps(2.0f), lanes_load(bounds.lo)), sc = lanes_load(scale);
+  const __m128 cell_max = _mm_set1_ps(1023.0f);
+#endif
   for (size_t e = 0; e < E; ++e) {
+    alignas(16) uint32_t q[4];
+#if defined(__SSE2__)
+    const Lanes s = _mm_add_ps(lanes_load(m.vertex_pos[edges[e].a]), lanes_load(m.vertex_pos[edges[e].b]));
+    const __m128 t = _mm_mul_ps(_mm_sub_ps(s, lo2), sc);
+    const __m128i cell = _mm_cvttps_epi32(_mm_min_ps(t, cell_max));
+    _mm_store_si128(reinterpret_cast<__m128i*>(q), _mm_and_si128(cell, _mm_castps_si128(_mm_cmpgt_ps(t, _mm_setzero_ps()))));
+#else
     const Vec3f s = m.vertex_pos[edges[e].a] + m.vertex_pos[edges[e].b];
-    uint32_t q[3];
     for (int c = 0; c < 3; ++c) {  // NaN (an extent or sum overflowed to infinity) goes to 0
       const float t = (s[c] - 2.0f * bounds.lo[c]) * scale[c];
       q[c] = t > 0.0f ? uint32_t(std::min(t, 1023.0f)) : 0u;
     }
+#endif
     const uint32_t cd = kSpread10[q[0]] | (kSpread10[q[1]] << 1) | (kSpread10[q[2]] << 2);
     code[e] = cd;
     src[e] = uint32_t(e);
@@ -176,7 +173,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
   ends_ = std::move(scratch);  // the codes and b are dead; written with the leaves
-  normals_.resize(6 * E);
+  normals_ = PopulatedArray<int16_t>(6 * E);
   // Leaves, then each level above, bottom-up.
   const size_t leaves = (E + kLeaf - 1) / kLeaf;
   size_t total = 0;
@@ -184,8 +181,22 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     total += n;
     if (n == 1) break;
   }
-  nodes_.resize(total);
+  nodes_ = PopulatedArray<Node>(total);
   const Lanes inf = lanes_set(INFINITY), ninf = lanes_set(-INFINITY);
+  // Each triangle is in about two leaves, mostly near each other in the Morton order: a
+  // direct-mapped cache of what a leaf reads of a triangle (its corners, float normal,
+  // quantized normal and whether it has a plane), keyed by the triangle, spares the
+  // second triangle_plane. An entry holds the very values computed on its first use, and
+  // the last leaf that folded them into its bounds.
+  struct Met {
+    Lanes c[3], n;
+    int32_t t;
+    uint32_t leaf;
+    uint8_t no_plane;
+    int16_t q[4];
+  };
+  std::vector<Met> met(kMetEntries);
+  for (Met& e : met) e.t = -1;
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     nd.leaf = 1;
@@ -193,14 +204,6 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
     nd.edges = nd.n;
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
-    // A leaf's edges share triangles (about half of the 16 references repeat): each
-    // triangle's corners and normal enter the node's bounds once (min and max are
-    // idempotent, so the node is the same).
-    static_assert(2 * kLeaf == 16, "find_triangle compares 16 entries");
-    alignas(16) int32_t done[2 * kLeaf];
-    std::fill(done, done + 2 * kLeaf, -1);  // no triangle: never found
-    int16_t done_q[2 * kLeaf][4];  // quantize_normal's 4 lanes
-    size_t n_done = 0;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
       const Edge& ed = edges[order_[k]];
       ends_[2 * size_t(k)] = ed.a;
@@ -212,31 +215,38 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
       // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
       // (never proven weight 0) for a single edge or a triangle without a plane.
-      int16_t* en = &normals_[6 * size_t(k)];
-      for (int q = 0; q < 6; ++q) en[q] = 0;
+      int16_t* en = &normals_[6 * size_t(k)];  // zero from the PopulatedArray
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
-        const size_t at = find_triangle(done, n_done, t);
-        if (at == n_done) {
-          done[n_done++] = t;
-          // Each triangle in about two leaves, from its corners: no fresh array.
+        Met& e = met[uint32_t(t) & (kMetEntries - 1)];
+        if (e.t != t) {  // from its corners: no fresh per-triangle array
           const TrianglePlane plane = triangle_plane(m, size_t(t));
-          nd.single |= uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
+          e.t = t;
+          e.leaf = uint32_t(-1);
+          e.no_plane = uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
           const Vec3f n(plane.unit());
-          quantize_normal(n, plane.nn > 0.0, done_q[at]);
+          quantize_normal(n, plane.nn > 0.0, e.q);
+          e.n = lanes_load(n);
           const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
-          for (int v = 0; v < 3; ++v) {
-            const Lanes x = lanes_load(m.vertex_pos[tri.v[v]]);
-            tlo = lanes_min(tlo, x);
-            thi = lanes_max(thi, x);
-          }
-          const Lanes nl = lanes_load(n);
-          nlo = lanes_min(nlo, nl);
-          nhi = lanes_max(nhi, nl);
+          for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
         }
-        if (ed.t2 >= 0)
-          for (int c = 0; c < 3; ++c) en[3 * side + c] = done_q[at][c];
+        // A leaf's edges share triangles (about half of its 16 references repeat): each
+        // triangle's corners and normal enter its bounds at their first reference, in
+        // reference order. One evicted and met again in the same leaf is folded again,
+        // which changes nothing: after x is folded, acc <= x, and lanes_min keeps acc on
+        // ties (lanes_max likewise).
+        if (e.leaf != uint32_t(j)) {
+          e.leaf = uint32_t(j);
+          nd.single |= e.no_plane;
+          for (int v = 0; v < 3; ++v) {
+            tlo = lanes_min(tlo, e.c[v]);
+            thi = lanes_max(thi, e.c[v]);
+          }
+          nlo = lanes_min(nlo, e.n);
+          nhi = lanes_max(nhi, e.n);
+        }
+        if (ed.t2 >= 0) std::memcpy(en + 3 * side, e.q, 3 * sizeof(int16_t));
       }
     }
     lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);

@@ -129,6 +129,8 @@ class EdgeTree {
   // one) consecutive nodes of the level below. Box of the edges first: what every visit
   // reads.
   static constexpr uint32_t kLeaf = 8;
+  static constexpr uint32_t kMetEntries = 1024;  // the build's triangle cache (a power of two)
+  // Zero bytes are Node{} (every default member initialiser is 0): a PopulatedArray.
   struct Node {
     float lo[3], hi[3];    // box of the edges below
     float tlo[3], thi[3];  // box of their incident triangles' vertices
@@ -143,16 +145,16 @@ class EdgeTree {
             uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes) const;
   void walk8(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
              std::vector<uint32_t>* outs) const;
-  PopulatedVector<Node> nodes_;      // leaves first, level by level, the root last
-  PopulatedVector<uint32_t> order_;  // edges in leaf order
+  PopulatedArray<Node> nodes_;       // leaves first, level by level, the root last
+  PopulatedArray<uint32_t> order_;  // edges in leaf order
   // Their endpoints (vertex indices), two per edge in leaf order: the leaves' item boxes
   // come from the prepared mesh's vertices (8 bytes an edge instead of a 24-byte box:
   // fewer fresh pages per solve). The arrays are on populated mappings (populated.h).
-  PopulatedVector<uint32_t> ends_;
+  PopulatedArray<uint32_t> ends_;
   // Per edge in leaf order, the unit normals of its two triangles times 32767, rounded
   // (12 bytes; 0 for a single edge or a triangle without a plane): the leaves' per-edge
   // facing test.
-  PopulatedVector<int16_t> normals_;
+  PopulatedArray<int16_t> normals_;
   const std::vector<Vec3f>* vertices_ = nullptr;
   double M_ = 0.0;
 };

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "lib/solver.h"
@@ -417,5 +418,43 @@ TEST(SsvPopulated, VectorsBehaveAsStdVector) {
     other.clear();
     other.shrink_to_fit();
     EXPECT_TRUE(other.empty());
+  }
+}
+
+// PopulatedArray: zero bytes from both allocations (mmap'ed and memset), which for a
+// scalar and for an aggregate with zero default member initialisers are the
+// value-initialised element; moves hand the block over and leave the source empty.
+TEST(SsvPopulated, ArraysStartValueInitialisedAndMove) {
+  struct Item {
+    float f[3];
+    uint32_t a = 0;
+    uint8_t b = 0;
+  };
+  std::mt19937 rng(9);
+  for (size_t n : {size_t(0), size_t(1), size_t(1000), kPopulateBytes / sizeof(uint32_t) - 1,
+                   kPopulateBytes / sizeof(uint32_t), size_t(300000)}) {
+    PopulatedArray<uint32_t> p(n);
+    ASSERT_EQ(p.size(), n);
+    EXPECT_EQ(p.empty(), n == 0);
+    const std::vector<uint32_t> zeros(n);
+    EXPECT_TRUE(std::equal(p.data(), p.data() + n, zeros.begin()));
+    PopulatedArray<Item> items(n);
+    const Item init{};
+    EXPECT_TRUE(std::all_of(items.data(), items.data() + n, [&](const Item& it) {
+      return it.f[0] == init.f[0] && it.f[1] == init.f[1] && it.f[2] == init.f[2] && it.a == init.a && it.b == init.b &&
+             !std::signbit(it.f[0]);
+    }));
+    std::vector<uint32_t> s(n);
+    for (size_t k = 0; k < n; ++k) p[k] = s[k] = uint32_t(rng());
+    PopulatedArray<uint32_t> moved(std::move(p));
+    EXPECT_EQ(p.size(), 0u);
+    EXPECT_EQ(p.data(), nullptr);
+    ASSERT_EQ(moved.size(), n);
+    EXPECT_TRUE(std::equal(moved.data(), moved.data() + n, s.begin()));
+    PopulatedArray<uint32_t> other(5);
+    other = std::move(moved);
+    EXPECT_TRUE(moved.empty());
+    ASSERT_EQ(other.size(), n);
+    EXPECT_TRUE(std::equal(other.data(), other.data() + n, s.begin()));
   }
 }
