@@ -419,6 +419,13 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits
     rtcReleaseGeometry(geom);
   }
   rtcCommitScene(scene);
+  // A build Embree refused (out of memory, an unsupported VISGATE_EMBREE_CONFIG) would
+  // otherwise answer every ray from an empty or partial scene.
+  if (const RTCError err = rtcGetDeviceError(device); err != RTC_ERROR_NONE) {
+    rtcReleaseScene(scene);
+    throw InternalError("Embree could not build the scene of " + std::to_string(soup.size()) +
+                        " triangles (RTCError " + std::to_string(int(err)) + ")");
+  }
   scene_ = scene;
 }
 
