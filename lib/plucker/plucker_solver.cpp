@@ -50,7 +50,7 @@ void Totals::merge(const Totals& o) {
   bsp.occlusion_tests += o.bsp.occlusion_tests; bsp.lazy_visible += o.bsp.lazy_visible;
   bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area; bsp.merged += o.bsp.merged; bsp.visits += o.bsp.visits;
   bsp.list_compactions += o.bsp.list_compactions;
-  sil.groups += o.sil.groups; sil.edges += o.sil.edges; sil.receiver_edges += o.sil.receiver_edges;
+  sil.groups += o.sil.groups; sil.declined += o.sil.declined; sil.edges += o.sil.edges; sil.receiver_edges += o.sil.receiver_edges;
   sil.pieces += o.sil.pieces; sil.blocked += o.sil.blocked; sil.undecided += o.sil.undecided; sil.dropped += o.sil.dropped;
 }
 
@@ -351,6 +351,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
   st.set("silhouette_groups", double(totals.sil.groups));
+  st.set("silhouette_declined", double(totals.sil.declined));
   st.set("silhouette_edges", double(totals.sil.edges));
   st.set("silhouette_receiver_edges", double(totals.sil.receiver_edges));
   st.set("silhouette_pieces", double(totals.sil.pieces));

@@ -146,7 +146,8 @@ void SilhouetteGroup::clear() {
 
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
                             const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
-                            float sigma, const Vec3f& origin, SilhouetteGroup& g, std::vector<uint8_t>& drop,
+                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+                            const std::vector<Vec3d>& lpoly, SilhouetteGroup& g, std::vector<uint8_t>& drop,
                             SilhouetteCounters& c) {
   g.clear();
   drop.assign(cand.size(), 0);
@@ -227,7 +228,49 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     g.edge_boxes.push_back(b);
   }
   g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
-  if (!g.surfaces.empty()) ++c.groups;
+  if (g.surfaces.empty()) return;
+  // The estimate at five receivers spread over the group (its first, quarters and last):
+  // the candidate edges whose box meets the box of the receiver's pyramid and whose
+  // faces' double sides from it differ.
+  const Vec3d od = to_double(origin);
+  size_t most = 0;
+  thread_local std::vector<Vec3d> side;
+  for (size_t q = 0; q < 5 && most <= kMaxSampledEdges; ++q) {
+    const Vec3d& rl = rloc[(rloc.size() - 1) * q / 4];
+    Vec3d lo = rl, hi = rl;
+    for (const Vec3d& l : lpoly) lo = vmin(lo, l), hi = vmax(hi, l);
+    const Vec3d rwd = rl + od;
+    // The pyramid's side planes through r, the light's centroid on their positive side.
+    Vec3d cen(0, 0, 0);
+    for (const Vec3d& l : lpoly) cen = cen + l;
+    cen = cen * (1.0 / double(lpoly.size()));
+    side.clear();
+    for (size_t j = 0; j < lpoly.size(); ++j) {
+      Vec3d nj = cross(lpoly[j] - rl, lpoly[(j + 1) % lpoly.size()] - rl);
+      if (dot(cen - rl, nj) < 0.0) nj = -nj;
+      side.push_back(nj);
+    }
+    size_t n = 0;
+    g.edge_tree.query_if(
+        [&](const AABBd& b) {
+          return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
+        },
+        [&](uint32_t e) {
+          const FacePlane &f0 = g.faces[g.fi0[e]], &f1 = g.faces[g.fi1[e]];
+          if ((dot(rwd - f0.a, f0.n) > 0.0) == (dot(rwd - f1.a, f1.n) > 0.0)) return;
+          for (size_t j = 0; j < side.size(); ++j)
+            if (dot(g.edges[e].la - rl, side[j]) < 0.0 && dot(g.edges[e].lb - rl, side[j]) < 0.0) return;
+          ++n;
+        });
+    most = std::max(most, n);
+  }
+  if (most > kMaxSampledEdges) {
+    ++c.declined;
+    g.clear();
+    drop.assign(cand.size(), 0);
+    return;
+  }
+  ++c.groups;
   c.edges += g.edges.size();
 }
 

@@ -118,16 +118,24 @@ struct SilhouetteGroup {
 
 // Counters (plucker_solver.h stats).
 struct SilhouetteCounters {
-  uint64_t groups = 0, edges = 0, receiver_edges = 0, pieces = 0, blocked = 0, undecided = 0, dropped = 0;
+  uint64_t groups = 0, declined = 0, edges = 0, receiver_edges = 0, pieces = 0, blocked = 0, undecided = 0, dropped = 0;
 };
 
 // Group level: fills g.surfaces and g.edges from the shaft's candidates `cand` (sorted;
 // `drop` receives 1 for each candidate of a region surface). rbox: the receivers' world
 // box and its distinct corners; light: the light's float polygon; sigma: the receivers'
 // side of its Newell plane; origin: the light's local frame.
+// rloc: the group's receivers and lpoly the light's vertices, local. A group where a few
+// spread receivers each see more than kMaxSampledEdges candidate edges turning near
+// their pyramid keeps its surfaces on the triangle path (a float estimate: it chooses
+// the path, never an answer): each piece costs an exact point test, and where many
+// silhouette edges cross the light (a light large next to a detailed surface: CGAL's
+// meshes) their pieces outnumber the triangles' shadows.
+constexpr size_t kMaxSampledEdges = 64;
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
                             const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
-                            float sigma, const Vec3f& origin, SilhouetteGroup& g, std::vector<uint8_t>& drop,
+                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+                            const std::vector<Vec3d>& lpoly, SilhouetteGroup& g, std::vector<uint8_t>& drop,
                             SilhouetteCounters& c);
 
 // Per receiver: removes the region surfaces' shadows from `frags` (local coordinates
