@@ -102,6 +102,7 @@ struct SolveContext {
   bool near_merge = true;   // glued near triangles subtracted as one convex polygon (shade_receiver.cpp)
   // Closed surfaces' shadows as silhouette regions (silhouette_region.h); null: off.
   const SurfaceTrees* surface_trees = nullptr;
+  bool silhouette_estimate = true;  // auto: groups whose receivers see many turning edges decline
 };
 
 // One group and one light: the inputs, what occluder selection finds, and the working

@@ -265,7 +265,9 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   // Per closed surface a hierarchy for the silhouette regions' segment tests, once per solve.
   std::optional<SurfaceTrees> surface_trees;
   MemoryCharge surface_charge;
-  if (ctx.closed && opt.get("silhouette_regions", "auto") != "off") {
+  const std::string regions = opt.get("silhouette_regions", "auto");
+  ctx.silhouette_estimate = regions != "on";
+  if (ctx.closed && regions != "off") {
     tt = Clock::now();
     surface_trees.emplace(scene.mesh, *closed);
     tree_s += seconds_since(tt);
@@ -393,9 +395,11 @@ std::vector<OptionSpec> PluckerSolver::options() const {
                           "occluder; off: the covered test per candidate only", {"on", "off"}},
           {"near_merge", "on: glued near triangles of a closed surface that a receiver sees as one convex polygon "
                          "are subtracted as that polygon; off: one by one", {"on", "off"}},
-          {"silhouette_regions", "auto: a closed surface apart from a group's receivers and wholly before the "
+          {"silhouette_regions", "on: a closed surface apart from a group's receivers and wholly before the "
                                  "light's plane is shaded per receiver as one region cut along its silhouette "
-                                 "edges (silhouette_region.h); off: triangle by triangle", {"auto", "off"}}};
+                                 "edges (silhouette_region.h); auto: the same where a few receivers of the group "
+                                 "see few turning edges near their light; off: triangle by triangle",
+           {"auto", "on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

@@ -147,8 +147,8 @@ void SilhouetteGroup::clear() {
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
                             const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
                             float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
-                            const std::vector<Vec3d>& lpoly, SilhouetteGroup& g, std::vector<uint8_t>& drop,
-                            SilhouetteCounters& c) {
+                            const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
+                            std::vector<uint8_t>& drop, SilhouetteCounters& c) {
   g.clear();
   drop.assign(cand.size(), 0);
   if (g.face_slot.size() != mesh.size()) g.face_slot.assign(mesh.size(), -1);
@@ -235,7 +235,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
   const Vec3d od = to_double(origin);
   size_t most = 0;
   thread_local std::vector<Vec3d> side;
-  for (size_t q = 0; q < 5 && most <= kMaxSampledEdges; ++q) {
+  for (size_t q = 0; q < 5 && estimate && most <= kMaxSampledEdges; ++q) {
     const Vec3d& rl = rloc[(rloc.size() - 1) * q / 4];
     Vec3d lo = rl, hi = rl;
     for (const Vec3d& l : lpoly) lo = vmin(lo, l), hi = vmax(hi, l);

@@ -125,7 +125,8 @@ struct SilhouetteCounters {
 // `drop` receives 1 for each candidate of a region surface). rbox: the receivers' world
 // box and its distinct corners; light: the light's float polygon; sigma: the receivers'
 // side of its Newell plane; origin: the light's local frame.
-// rloc: the group's receivers and lpoly the light's vertices, local. A group where a few
+// rloc: the group's receivers and lpoly the light's vertices, local. With `estimate`, a
+// group where a few
 // spread receivers each see more than kMaxSampledEdges candidate edges turning near
 // their pyramid keeps its surfaces on the triangle path (a float estimate: it chooses
 // the path, never an answer): each piece costs an exact point test, and where many
@@ -135,8 +136,8 @@ constexpr size_t kMaxSampledEdges = 64;
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
                             const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
                             float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
-                            const std::vector<Vec3d>& lpoly, SilhouetteGroup& g, std::vector<uint8_t>& drop,
-                            SilhouetteCounters& c);
+                            const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
+                            std::vector<uint8_t>& drop, SilhouetteCounters& c);
 
 // Per receiver: removes the region surfaces' shadows from `frags` (local coordinates
 // about `origin`). rw: the receiver (world), r: local. pyramid, pyramid_err: the

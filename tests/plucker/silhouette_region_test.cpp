@@ -1,6 +1,6 @@
 // Silhouette regions (lib/plucker/silhouette_region.h): the exact segment test on a
-// hand-worked case, and solves with the regions (silhouette_regions=auto, the default)
-// against the triangle path (off) and the region oracle on a sphere, a torus (segments
+// hand-worked case, and solves with the regions (silhouette_regions=on, and auto, the
+// default) against the triangle path (off) and the region oracle on a sphere, a torus (segments
 // crossing it twice: two front faces, c = 2, over part of the light), a box with faces
 // edge-on to some receivers and the scan family.
 #include "lib/plucker/silhouette_region.h"
@@ -39,16 +39,20 @@ TEST(PluckerSilhouetteRegion, TriangleMeetsHandWorked) {
   EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 1), Vec3d(0, 0, -1e-20))), 0);
 }
 
-// The regions on and off: the same bits and fractions (up to the rounding of the pieces'
-// areas), and the region oracle; `regions` says whether some group took the new path.
+// The regions on, auto (the default) and off: the same bits and fractions (up to the
+// rounding of the pieces' areas), and the region oracle; `regions` says whether some
+// group took the new path with "on".
 void expect_regions_match(const Scene& s, bool regions = true) {
-  const SolveResult on = run(s), off = run(s, {{"silhouette_regions", "off"}});
+  const SolveResult on = run(s, {{"silhouette_regions", "on"}}), dflt = run(s),
+                    off = run(s, {{"silhouette_regions", "off"}});
   EXPECT_EQ(off.stats.get("silhouette_groups"), 0.0);
+  EXPECT_EQ(on.stats.get("silhouette_declined"), 0.0);
   if (regions) {
     EXPECT_GT(on.stats.get("silhouette_groups"), 0.0);
     EXPECT_GT(on.stats.get("silhouette_pieces"), 0.0);
   }
   expect_same_answers(s, on, off);
+  expect_same_answers(s, dflt, off);
   expect_region_oracle(s, on);
 }
 
@@ -95,7 +99,7 @@ TEST(PluckerSilhouetteRegion, SurfaceThroughTheLightPlaneStaysOnTheTrianglePath)
   Scene s = light_scene(receiver_square(6, -1.5f, 0.6f), 16, Vec3d(0.1, -0.05, 2.0));
   shapes::add_sphere(s.mesh, Vec3d(1.2, 0.0, 1.9), 0.3, 16, 8);
   ASSERT_TRUE(finish_scene(s).ok());
-  const SolveResult on = run(s);
+  const SolveResult on = run(s, {{"silhouette_regions", "on"}});
   EXPECT_EQ(on.stats.get("silhouette_groups"), 0.0);
   expect_regions_match(s, false);
 }
