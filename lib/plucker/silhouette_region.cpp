@@ -163,6 +163,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
   // S's box strictly on the receivers' side of the light's exact plane (so are S's
   // vertices, and the light, on that plane, is outside S's box).
   auto qualifies = [&](int32_t s) {
+    if (estimate && cs.triangles(s) < kMinRegionTriangles) return false;
     const AABB& b = cs.box(s);
     if (!apart(b, rbox)) return false;
     for (int k = 0; k < 8; ++k) {
