@@ -231,8 +231,9 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
   g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
   if (g.surfaces.empty()) return;
   // The estimate at five receivers spread over the group (its first, quarters and last):
-  // the candidate edges whose box meets the box of the receiver's pyramid and whose
-  // faces' double sides from it differ.
+  // the candidate edges whose box meets the box of the receiver's pyramid, whose faces'
+  // double sides from it differ and whose ends are not both outside one of the pyramid's
+  // side planes (in double, unbounded: it only picks the path).
   const Vec3d od = to_double(origin);
   size_t most = 0;
   thread_local std::vector<Vec3d> side;
