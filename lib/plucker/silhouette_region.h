@@ -1,21 +1,23 @@
 // Silhouette regions of closed surfaces (paper 002 section 4.4 leaves the occluder set
 // open; this replaces a closed surface's triangles by one region per receiver).
 //
-// Let S be a closed surface (closed_surfaces.h), r a receiver outside S's box and the
-// light strictly on r's side of nothing of S: every vertex of S strictly before the
-// light's plane (the region oracle's Newell plane, exact), so a segment r -> l, l on
-// the light, meets S iff the ray from r through l does. Let c(l) count the triangles of
-// S that the segment r -> l crosses with r strictly on the positive side of their plane.
-// Since w(r) = w(l) = 0 (both outside S's convex hull), a segment in general position
-// that crosses S crosses it at least once with r on each side, so r -> l is blocked iff
-// c(l) >= 1. As l moves, c changes only where the segment passes an edge whose two faces
-// do not both have r strictly on one side: across an edge between two faces with r
-// positive one crossing is traded for the other, across one with r negative on both
-// none counts. So c, and with it the blocked set, is constant on every connected part of
-// the light that no plane through r and such a "silhouette" edge cuts (a face with r in
-// its plane counts for both: conservative). Within such a part a point touching S (an
-// edge or vertex) has blocked points around it, so the closed segment test at one
-// interior point classifies the whole part.
+// Let S be a closed surface (closed_surfaces.h), r a receiver outside S's box, and every
+// vertex of S strictly on r's side of the light's plane (the region oracle's Newell
+// plane, exact), so a segment r -> l, l on the light, meets S iff the ray from r through
+// l does. Let c(l) count the triangles of S that the segment r -> l crosses with r
+// strictly on the positive side of their plane. Since w(r) = w(l) = 0 (both outside S's
+// convex hull), a segment in general position that crosses S crosses it at least once
+// with r on each side, so r -> l is blocked iff c(l) >= 1. As l moves, c changes only
+// where the segment passes an edge whose two faces do not both have r strictly on one
+// side: across an edge between two faces with r positive one crossing is traded for the
+// other, across one with r negative on both none counts. So c, and with it the blocked
+// set, is constant on every connected part of the light that the projections of these
+// "silhouette" edges do not cut (a face with r in its plane counts for both:
+// conservative). Within such a part a point touching S (an edge or vertex) has blocked
+// points around it, so the closed segment test at one interior point classifies the
+// whole part. Edges the selection leaves out as covered by an interior polygon
+// (interior_occluders.h) need no cut: every line through them stabs a polygon inside S,
+// so c >= 1 on both sides of their projection and the blocked set does not change there.
 //
 // Per group and light (select_region_surfaces): the surfaces that meet these conditions
 // for every receiver of the group, their candidate triangles left out of the selection,
@@ -23,14 +25,15 @@
 // faces do not have one common strict side for every corner of the receivers' box.
 // Per receiver (subtract_silhouette_regions): the edges whose faces have different exact
 // sides from r (or one with r in its plane) and that may meet the pyramid of r and the
-// light; the fragments split by the planes through r and those edges (split_fragment,
-// full planes); each piece classified by its vertex average p, accepted only when the
-// exact orientation of p against every plane used agrees with the piece's side there
-// (strict), and the exact closed segment test r -> p against the surfaces' triangles
-// (SurfaceTrees). Blocked pieces are dropped. A plane that float cannot place (r within
-// rounding of an edge's line), a piece on no strict side of a plane or whose point the
-// exact tests do not confirm, and a segment lying in a triangle's plane leave the
-// decision open: the caller shades that receiver again by the exact path.
+// light; each cuts the fragments that reach its projection, first at the planes through
+// r and its ends (a fragment wholly beyond one is left whole), then at the plane through
+// r and the edge (split_fragment); each piece classified by its vertex average p,
+// accepted only when the exact orientation of p against every edge plane the piece lies
+// on one side of agrees with that side (strict), and by the exact closed segment test
+// r -> p against the surfaces' triangles (SurfaceTrees). Blocked pieces are dropped. A
+// plane that float cannot place (r within rounding of an edge's line), a piece whose
+// point the exact tests do not confirm, and a segment lying in a triangle's plane leave
+// the decision open: the caller shades that receiver again by the exact path.
 // Precision: the pieces are cut in double with split_fragment's bounds (fragment.h), as
 // every other subtraction; every classification is exact.
 #pragma once
