@@ -20,6 +20,7 @@
 #include "lib/plucker/closed_surfaces.h"
 #include "lib/plucker/interior_occluders.h"
 #include "lib/plucker/local_light.h"
+#include "lib/plucker/silhouette_region.h"
 #include "lib/plucker/subtract.h"
 #include "lib/plucker/triangle_tree.h"
 #include "lib/solver.h"
@@ -68,6 +69,7 @@ struct Totals {
   uint64_t near_merged = 0;  // per receiver: near triangles subtracted within another's polygon (shade_receiver.cpp)
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
+  SilhouetteCounters sil;  // silhouette regions (silhouette_region.h)
   void merge(const Totals& o);
 };
 
@@ -98,6 +100,9 @@ struct SolveContext {
   const InteriorOccluders* interior = nullptr;  // null: none added (interior_occluders.h)
   bool cover_nodes = true;  // the covered test on whole tree nodes (occluder_selection.cpp)
   bool near_merge = true;   // glued near triangles subtracted as one convex polygon (shade_receiver.cpp)
+  // Closed surfaces' shadows as silhouette regions (silhouette_region.h); null: off.
+  const SurfaceTrees* surface_trees = nullptr;
+  bool silhouette_estimate = true;  // auto: groups whose receivers see many turning edges decline
 };
 
 // One group and one light: the inputs, what occluder selection finds, and the working
@@ -150,6 +155,10 @@ struct GroupState {
   std::vector<int32_t> closed_slot;
   std::vector<uint32_t> closed_count;  // per slot: candidates crossable with r positive, negative
   std::vector<int32_t> closed_used;    // the surfaces with a slot
+  // The group's region surfaces and silhouette edges (silhouette_region.h); per candidate
+  // 1 when it is a region surface's (left out of the selection), else 0 (or empty).
+  SilhouetteGroup sil;
+  std::vector<uint8_t> region_drop;
 
   // Scratch of the phases.
   std::vector<Vec3d> poly0, lower, upper, region, pyramid, pyramid_err, cur, pos, neg, q, patch;

@@ -88,6 +88,7 @@ class Selection {
   void working_scale();
   void candidates();
   void closed_surface_culling();
+  void region_surfaces();
   void interior_occluders();
   bool covered_by_interior(const Vec3d* pts, int n) const;
   bool covered_box(const Vec3d& lo, const Vec3d& hi) const;
@@ -266,12 +267,14 @@ void Selection::candidates() {
                     [&](const Vec3d& lo, const Vec3d& hi) { return covered_box(lo, hi); });
     for (const TriangleTree::Range& r : gs_.cand_skipped) tot_.interior_skipped += r.count;
   }
+  region_surfaces();
   closed_surface_culling();
   std::vector<uint8_t>& merged = gs_.merged;  // per candidate: shaded as part of a patch
   merged.assign(cand.size(), 0);
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
     if (merged[ci]) continue;
+    if (!gs_.region_drop.empty() && gs_.region_drop[ci]) continue;  // its surface's region, per receiver
     if (!gs_.closed_drop.empty() && gs_.closed_drop[ci]) {
       ++tot_.closed_dropped;
       continue;
@@ -302,6 +305,21 @@ void Selection::candidates() {
     keep_side_ = gs_.closed_keep.empty() ? 0 : gs_.closed_keep[ci];
     select_triangle(t, tri);
   }
+}
+
+// The closed surfaces shaded per receiver as silhouette regions (silhouette_region.h):
+// their candidates are left out here (region_drop), their silhouette edges kept.
+void Selection::region_surfaces() {
+  gs_.region_drop.clear();
+  gs_.sil.surfaces.clear();
+  if (!gs_.ctx->closed || !gs_.ctx->surface_trees) return;
+  AABB rbox;
+  for (uint32_t i : *gs_.group) rbox.extend(scene_.receivers[i].p);
+  const Light& light = scene_.lights[gs_.li];
+  select_region_surfaces(scene_.mesh, *gs_.ctx->closed, gs_.cand, rbox, gs_.wcorners, gs_.nwcorners,
+                         light.polygon.data(), int(light.polygon.size()), sigma_, lf_.origin, gs_.rloc, lf_.poly,
+                         gs_.ctx->silhouette_estimate, gs_.sil, gs_.region_drop, tot_.sil);
+  if (gs_.sil.surfaces.empty()) gs_.region_drop.clear();
 }
 
 // Strict side of every point of pts against the plane of the triangle a, b, c (world
@@ -401,7 +419,7 @@ void Selection::closed_surface_culling() {
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
     const int32_t s = cs->surface(t);
-    if (s < 0) continue;
+    if (s < 0 || (!gs_.region_drop.empty() && gs_.region_drop[ci])) continue;
     if (slot[size_t(s)] == -1) {
       const bool usable = apart(cs->box(s), rbox) && apart(cs->box(s), lbox);
       slot[size_t(s)] = usable ? int32_t(used.size()) : -2;

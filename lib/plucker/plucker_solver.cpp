@@ -50,6 +50,8 @@ void Totals::merge(const Totals& o) {
   bsp.occlusion_tests += o.bsp.occlusion_tests; bsp.lazy_visible += o.bsp.lazy_visible;
   bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area; bsp.merged += o.bsp.merged; bsp.visits += o.bsp.visits;
   bsp.list_compactions += o.bsp.list_compactions;
+  sil.groups += o.sil.groups; sil.declined += o.sil.declined; sil.edges += o.sil.edges; sil.receiver_edges += o.sil.receiver_edges;
+  sil.pieces += o.sil.pieces; sil.blocked += o.sil.blocked; sil.undecided += o.sil.undecided; sil.dropped += o.sil.dropped;
 }
 
 void GroupState::clear() {
@@ -67,6 +69,8 @@ void GroupState::clear() {
   occluders.clear();
   interior.clear();
   closed_keep.clear();
+  region_drop.clear();
+  sil.surfaces.clear();
   cand_skipped.clear();
   cover_n.clear();
   cover_err.clear();
@@ -258,6 +262,20 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   }
   ctx.cover_nodes = opt.get_bool("cover_nodes", true);
   ctx.near_merge = opt.get_bool("near_merge", true);
+  // Per closed surface a hierarchy for the silhouette regions' segment tests, once per solve.
+  std::optional<SurfaceTrees> surface_trees;
+  MemoryCharge surface_charge;
+  const std::string regions = opt.get("silhouette_regions", "auto");
+  ctx.silhouette_estimate = regions != "on";
+  if (ctx.closed && regions != "off") {
+    tt = Clock::now();
+    surface_trees.emplace(scene.mesh, *closed);
+    tree_s += seconds_since(tt);
+    memory.change(int64_t(surface_trees->memory_bytes()));
+    surface_charge.bind(&budget, "silhouette regions");
+    surface_charge.set(surface_trees->memory_bytes());
+    ctx.surface_trees = &*surface_trees;
+  }
   if (tile <= 0) tile = default_tile(scene, ctx.closed, ctx.interior);
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;
@@ -334,6 +352,13 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
+  st.set("silhouette_groups", double(totals.sil.groups));
+  st.set("silhouette_declined", double(totals.sil.declined));
+  st.set("silhouette_edges", double(totals.sil.edges));
+  st.set("silhouette_receiver_edges", double(totals.sil.receiver_edges));
+  st.set("silhouette_pieces", double(totals.sil.pieces));
+  st.set("silhouette_blocked", double(totals.sil.blocked));
+  st.set("silhouette_undecided", double(totals.sil.undecided));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
   st.set("occluder_selection_seconds", totals.select_s);
@@ -369,7 +394,12 @@ std::vector<OptionSpec> PluckerSolver::options() const {
           {"cover_nodes", "on: occluder selection leaves out whole triangle-tree nodes covered by an interior "
                           "occluder; off: the covered test per candidate only", {"on", "off"}},
           {"near_merge", "on: glued near triangles of a closed surface that a receiver sees as one convex polygon "
-                         "are subtracted as that polygon; off: one by one", {"on", "off"}}};
+                         "are subtracted as that polygon; off: one by one", {"on", "off"}},
+          {"silhouette_regions", "on: a closed surface apart from a group's receivers and wholly before the "
+                                 "light's plane is shaded per receiver as one region cut along its silhouette "
+                                 "edges (silhouette_region.h); auto: the same where a few receivers of the group "
+                                 "see few turning edges near their light; off: triangle by triangle",
+           {"auto", "on", "off"}}};
 }
 
 SolveResult PluckerSolver::solve_scene(const Scene& scene, const SolveOptions& opt) { return solve_plucker(scene, opt, nullptr); }

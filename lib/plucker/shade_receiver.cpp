@@ -602,6 +602,14 @@ void ReceiverShading::shade_float() {
   tot_.tree_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - th).count();
   if (!hidden) frags.add(lf_.poly.data(), lf_.poly.size());
   pyramid_planes();
+  // The region surfaces' shadows first, on the whole light (silhouette_region.h); an
+  // undecided one counts as an undecided plane: run() shades r again exactly.
+  if (!gs_.sil.surfaces.empty() && frags.size() != 0 &&
+      !subtract_silhouette_regions(scene_.mesh, *gs_.ctx->surface_trees, gs_.sil, rec_.p, r_, lf_.origin, lf_.poly,
+                                   gs_.pyramid, gs_.pyramid_err, lf_.bounds, lf_.plane, frags, tot_.sil)) {
+    ++nc_.on_line;
+    return;
+  }
   if (near_hint_.size() < gs_.near.size()) near_hint_.resize(gs_.near.size(), 0);
   gs_.boxes.clear();
   for (size_t f = 0; f < frags.size(); ++f) gs_.boxes.push_back(UVBox::of(lf_.axes, frags.data(f), frags.count(f)));

@@ -1,0 +1,548 @@
+// Silhouette regions of closed surfaces; see silhouette_region.h.
+#include "lib/plucker/silhouette_region.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "lib/plucker/exact_orient.h"
+#include "lib/plucker/lines.h"
+#include "lib/plucker/local_light.h"
+
+namespace visgate::plucker {
+
+namespace {
+
+// The double filter of exact_side with the plane's normal given: (p - a) . n with p - a
+// = (hi - a) + lo, against 2^-40 of |p - a|_1 |b - a|_1 |c - a|_1 (far above the
+// rounding of the differences, of n and of the dot product; occluder_selection.cpp
+// strict_side uses the same filter). 0: undecided.
+inline int filtered_side(const Vec3d& a, const Vec3d& n, double s12, const SumPoint& p) {
+  const Vec3d h = to_double(p.hi) - a;
+  const double v = dot(h + p.lo, n), bound = 0x1p-40 * (norm1(h) + norm1(p.lo)) * s12;
+  if (!(bound > 0x1p-900)) return 0;  // underflow may have taken digits: undecided
+  return v > bound ? 1 : (v < -bound ? -1 : 0);
+}
+
+int exact_rest(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p) {
+  Sign sg = orient3d_filtered(a, b, c, p);
+  if (sg == Sign::Uncertain) sg = sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), p).sign);
+  return sg == Sign::Positive ? 1 : (sg == Sign::Negative ? -1 : 0);
+}
+
+FacePlane face_plane(const TriangleSoup& mesh, uint32_t t) {
+  FacePlane f;
+  f.t = t;
+  f.a = to_double(mesh.corner(t, 0));
+  const Vec3d e1 = to_double(mesh.corner(t, 1)) - f.a, e2 = to_double(mesh.corner(t, 2)) - f.a;
+  f.n = cross(e1, e2);
+  f.s12 = norm1(e1) * norm1(e2);
+  return f;
+}
+
+int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
+  const int s = filtered_side(f.a, f.n, f.s12, p);
+  return s != 0 ? s : exact_rest(mesh.corner(f.t, 0), mesh.corner(f.t, 1), mesh.corner(f.t, 2), p);
+}
+
+}  // namespace
+
+int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p) {
+  const Vec3d ad = to_double(a), e1 = to_double(b) - ad, e2 = to_double(c) - ad;
+  const int s = filtered_side(ad, cross(e1, e2), norm1(e1) * norm1(e2), p);
+  return s != 0 ? s : exact_rest(a, b, c, p);
+}
+
+SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
+  tris_.resize(cs.count());
+  for (uint32_t t = 0; t < mesh.size(); ++t)
+    if (const int32_t s = cs.surface(t); s >= 0) tris_[size_t(s)].push_back(t);
+  bvh_.reserve(cs.count());
+  std::vector<AABB> boxes;
+  for (const std::vector<uint32_t>& tris : tris_) {
+    boxes.clear();
+    for (uint32_t t : tris) {
+      AABB b;
+      for (int k = 0; k < 3; ++k) b.extend(mesh.corner(t, k));
+      boxes.push_back(b);
+    }
+    bvh_.emplace_back(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
+  }
+}
+
+size_t SurfaceTrees::memory_bytes() const {
+  size_t n = 0;
+  for (size_t s = 0; s < bvh_.size(); ++s) n += bvh_[s].memory_bytes() + tris_[s].capacity() * sizeof(uint32_t);
+  return n;
+}
+
+// The boxes are tested against the segment in double, each widened by 2^-20 of the
+// largest coordinate met (far above the rounding of pd and of the slab arithmetic): a
+// box the segment meets is never passed over. Then per triangle the closed test on
+// exact signs: r and p not strictly on one side of its plane, and the line r -> p not
+// strictly outside any of its edges (orient3d(r, t_k, t_k+1, p) never of r's sign).
+int SurfaceTrees::segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f& r, const SumPoint& p,
+                                const Vec3d& pd) const {
+  const accel::Bvh<float>& bvh = bvh_[size_t(s)];
+  if (bvh.empty()) return 0;
+  const Vec3d rd = to_double(r), d = pd - rd;
+  const AABB& root = bvh.node(0).box;
+  const double mag = std::max({max_component(vabs(rd)), max_component(vabs(pd)), max_component(vabs(to_double(root.lo))),
+                               max_component(vabs(to_double(root.hi)))});
+  const double eps = 0x1p-20 * mag;
+  auto meets_box = [&](const AABB& b) {
+    double t0 = 0.0, t1 = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double lo = double(b.lo[a]) - eps, hi = double(b.hi[a]) + eps;
+      if (d[a] == 0.0) {
+        if (rd[a] < lo || rd[a] > hi) return false;
+        continue;
+      }
+      double ta = (lo - rd[a]) / d[a], tb = (hi - rd[a]) / d[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      if (t0 > t1) return false;
+    }
+    return true;
+  };
+  std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
+  size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const uint32_t i = stack[--top];
+    const auto& nd = bvh.node(i);
+    if (!meets_box(nd.box)) continue;
+    if (!bvh.is_leaf(nd)) {
+      stack[top++] = bvh.left(i);
+      stack[top++] = bvh.right(i);
+      continue;
+    }
+    for (uint32_t item : bvh.leaf_items(nd))
+      if (const int m = triangle_meets(mesh, tris_[size_t(s)][item], r, p); m != 0) return m;
+  }
+  return 0;
+}
+
+int SurfaceTrees::triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p) {
+  const Vec3f tv[3] = {mesh.corner(t, 0), mesh.corner(t, 1), mesh.corner(t, 2)};
+  const int sr = exact_side(tv[0], tv[1], tv[2], SumPoint(r)), sp = exact_side(tv[0], tv[1], tv[2], p);
+  if (sr == 0 && sp == 0) return -1;  // the segment in the triangle's plane
+  if (sr == 0 || sp == sr) return 0;  // r in its plane (not on it: outside the box), or p beside r
+  for (int k = 0; k < 3; ++k)
+    if (exact_side(r, tv[k], tv[(k + 1) % 3], p) == sr) return 0;
+  return 1;
+}
+
+void SilhouetteGroup::clear() {
+  for (const FacePlane& f : faces) face_slot[f.t] = -1;
+  surfaces.clear();
+  edges.clear();
+  faces.clear();
+  fi0.clear();
+  fi1.clear();
+}
+
+void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
+                            const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
+                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+                            const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
+                            std::vector<uint8_t>& drop, SilhouetteCounters& c) {
+  g.clear();
+  drop.assign(cand.size(), 0);
+  if (g.face_slot.size() != mesh.size()) g.face_slot.assign(mesh.size(), -1);
+  // Per surface met: 1 region surface, 2 not (the other surfaces stay on the present path).
+  thread_local std::vector<uint8_t> status;
+  status.assign(cs.count(), 0);
+  auto apart = [](const AABB& a, const AABB& b) {
+    return a.hi.x < b.lo.x || b.hi.x < a.lo.x || a.hi.y < b.lo.y || b.hi.y < a.lo.y || a.hi.z < b.lo.z ||
+           b.hi.z < a.lo.z;
+  };
+  // r outside S's box for every receiver (float comparisons: exact), and every corner of
+  // S's box strictly on the receivers' side of the light's exact plane (so are S's
+  // vertices, and the light, on that plane, is outside S's box).
+  auto qualifies = [&](int32_t s) {
+    if (estimate && cs.triangles(s) < kMinRegionTriangles) return false;
+    const AABB& b = cs.box(s);
+    if (!apart(b, rbox)) return false;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3f x((k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z);
+      if (!(double(sigma) * newell_side_exact(light, m, x) > 0.0)) return false;
+    }
+    return true;
+  };
+  // A face's common strict side over the receivers' box corners (0: none), cached.
+  thread_local std::vector<int8_t> box_sides;
+  auto face = [&](uint32_t t) -> uint32_t {
+    int32_t& slot = g.face_slot[t];
+    if (slot >= 0) return uint32_t(slot);
+    slot = int32_t(g.faces.size());
+    g.faces.push_back(face_plane(mesh, t));
+    int side = 0;
+    for (int k = 0; k < nrcorners; ++k) {
+      const int sd = face_side(mesh, g.faces.back(), SumPoint(rcorners[k]));
+      if (sd == 0 || (k > 0 && sd != side)) {
+        side = 0;
+        break;
+      }
+      side = sd;
+    }
+    box_sides.push_back(int8_t(side));
+    return uint32_t(slot);
+  };
+  box_sides.clear();
+  for (size_t ci = 0; ci < cand.size(); ++ci) {
+    const uint32_t t = cand[ci];
+    const int32_t s = cs.surface(t);
+    if (s < 0) continue;
+    uint8_t& st = status[size_t(s)];
+    if (st == 0) {
+      st = qualifies(s) ? 1 : 2;
+      if (st == 1) g.surfaces.push_back(s);
+    }
+    if (st != 1) continue;
+    drop[ci] = 1;
+    const std::array<int32_t, 3>& nb = cs.neighbors(t);
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t u = uint32_t(nb[size_t(k)]);
+      // Each edge once: from its lower face when both are candidates.
+      if (u < t && std::binary_search(cand.begin(), cand.end(), u)) continue;
+      const uint32_t f0 = face(t), f1 = face(u);
+      if (box_sides[f0] != 0 && box_sides[f0] == box_sides[f1]) continue;
+      SilEdge e;
+      e.a = mesh.corner(t, k);
+      e.b = mesh.corner(t, (k + 1) % 3);
+      e.la = to_local_d(e.a, origin);
+      e.lb = to_local_d(e.b, origin);
+      e.f0 = t;
+      e.f1 = u;
+      g.edges.push_back(e);
+      g.fi0.push_back(f0);
+      g.fi1.push_back(f1);
+    }
+  }
+  g.edge_boxes.clear();
+  for (const SilEdge& e : g.edges) {
+    AABBd b{e.la, e.la};
+    b.extend(e.lb);
+    g.edge_boxes.push_back(b);
+  }
+  g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+  if (g.surfaces.empty()) return;
+  // The estimate at five receivers spread over the group (its first, quarters and last):
+  // the candidate edges whose box meets the box of the receiver's pyramid, whose faces'
+  // double sides from it differ and whose ends are not both outside one of the pyramid's
+  // side planes (in double, unbounded: it only picks the path).
+  const Vec3d od = to_double(origin);
+  size_t most = 0;
+  thread_local std::vector<Vec3d> side;
+  for (size_t q = 0; q < 5 && estimate && most <= kMaxSampledEdges; ++q) {
+    const Vec3d& rl = rloc[(rloc.size() - 1) * q / 4];
+    Vec3d lo = rl, hi = rl;
+    for (const Vec3d& l : lpoly) lo = vmin(lo, l), hi = vmax(hi, l);
+    const Vec3d rwd = rl + od;
+    // The pyramid's side planes through r, the light's centroid on their positive side.
+    Vec3d cen(0, 0, 0);
+    for (const Vec3d& l : lpoly) cen = cen + l;
+    cen = cen * (1.0 / double(lpoly.size()));
+    side.clear();
+    for (size_t j = 0; j < lpoly.size(); ++j) {
+      Vec3d nj = cross(lpoly[j] - rl, lpoly[(j + 1) % lpoly.size()] - rl);
+      if (dot(cen - rl, nj) < 0.0) nj = -nj;
+      side.push_back(nj);
+    }
+    size_t n = 0;
+    g.edge_tree.query_if(
+        [&](const AABBd& b) {
+          return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
+        },
+        [&](uint32_t e) {
+          const FacePlane &f0 = g.faces[g.fi0[e]], &f1 = g.faces[g.fi1[e]];
+          if ((dot(rwd - f0.a, f0.n) > 0.0) == (dot(rwd - f1.a, f1.n) > 0.0)) return;
+          for (size_t j = 0; j < side.size(); ++j)
+            if (dot(g.edges[e].la - rl, side[j]) < 0.0 && dot(g.edges[e].lb - rl, side[j]) < 0.0) return;
+          ++n;
+        });
+    most = std::max(most, n);
+  }
+  if (most > kMaxSampledEdges) {
+    ++c.declined;
+    g.clear();
+    drop.assign(cand.size(), 0);
+    return;
+  }
+  ++c.groups;
+  c.edges += g.edges.size();
+}
+
+bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& trees, SilhouetteGroup& g,
+                                 const Vec3f& rw, const Vec3d& r, const Vec3f& origin,
+                                 const std::vector<Vec3d>& light, const std::vector<Vec3d>& pyramid,
+                                 const std::vector<Vec3d>& pyramid_err, const LightBounds& bounds,
+                                 const LightPlane& lp, FragmentList& frags, SilhouetteCounters& c) {
+  // The edges whose faces r does not see from one strict side, and that may meet the
+  // pyramid of r and the light: an edge whose box lies strictly outside one side plane
+  // of it (by 16 times the plane's error bound plus 2^-30 of the scale, far above the
+  // rounding of the local coordinates) has no point on a segment from r to the light.
+  // Per face its side from r, computed once per receiver (stamped, not cleared).
+  thread_local std::vector<int8_t> side;
+  thread_local std::vector<uint32_t> stamp;
+  thread_local uint32_t serial = 0;
+  if (stamp.size() < g.faces.size()) stamp.resize(g.faces.size(), 0), side.resize(g.faces.size(), 0);
+  if (++serial == 0) {
+    std::fill(stamp.begin(), stamp.end(), 0u);
+    serial = 1;
+  }
+  const SumPoint rs(rw);
+  auto face_side_r = [&](uint32_t f) {
+    if (stamp[f] != serial) stamp[f] = serial, side[f] = int8_t(face_side(mesh, g.faces[f], rs));
+    return int(side[f]);
+  };
+  // A box wholly outside one side plane: its largest value there below the margin taken
+  // with the box's largest |x - l| per axis (which bounds every point's dot_err) and
+  // largest coordinate; the rounding of the centre and half sides (a few ulps of the
+  // coordinates) is far inside the 2^-30 term.
+  // First against the pyramid's own box (r and the light, grown by 2^-20 of its size):
+  // a box apart from it is apart from the pyramid.
+  Vec3d plo = r, phi = r;
+  for (const Vec3d& l : light) plo = vmin(plo, l), phi = vmax(phi, l);
+  {
+    const double grow = 0x1p-20 * (max_component(phi - plo) + max_component(vmax(vabs(plo), vabs(phi))));
+    plo = plo - Vec3d(grow, grow, grow);
+    phi = phi + Vec3d(grow, grow, grow);
+  }
+  // Per side plane: n, its point l and the weights of the margin, |d_i| w_i summed (16
+  // times dot_err's weights plus 2^-30 |n|_1), plus 2^-30 |n|_1 of the box's largest
+  // coordinate. The box's largest value n . (x - l) is n . c + |n| . h (c its centre
+  // less l, h its half sides), and every |x_i - l_i| in it is at most |c_i| + h_i.
+  struct SidePlane {
+    Vec3d n, l, w;
+    double k = 0.0;
+  };
+  thread_local std::vector<SidePlane> sp;
+  sp.resize(pyramid.size());
+  for (size_t j = 0; j < pyramid.size(); ++j) {
+    const Vec3d& n = pyramid[j];
+    const Vec3d& e = pyramid_err[j];
+    constexpr double k8 = 8.0 * kUnitRoundoffD;  // lines.h dot_err's factor
+    const double k = 0x1p-30 * norm1(n);
+    sp[j] = {n, light[j], Vec3d(16.0 * (e.x + k8 * std::abs(n.x)) + k, 16.0 * (e.y + k8 * std::abs(n.y)) + k,
+                                16.0 * (e.z + k8 * std::abs(n.z)) + k), k};
+  }
+  size_t hint = 0;  // the plane that rejected the last box (any order gives the same answer)
+  auto box_outside = [&](const AABBd& b) {
+    if (b.hi.x < plo.x || b.hi.y < plo.y || b.hi.z < plo.z || b.lo.x > phi.x || b.lo.y > phi.y || b.lo.z > phi.z)
+      return true;
+    const Vec3d h = (b.hi - b.lo) * 0.5, mid = (b.hi + b.lo) * 0.5;
+    const double mag = std::max(max_component(vabs(b.lo)), max_component(vabs(b.hi)));
+    for (size_t jj = 0; jj < sp.size(); ++jj) {
+      const size_t j = hint + jj < sp.size() ? hint + jj : hint + jj - sp.size();
+      const SidePlane& q = sp[j];
+      const Vec3d c = mid - q.l;
+      const double top = dot(q.n, c) + std::abs(q.n.x) * h.x + std::abs(q.n.y) * h.y + std::abs(q.n.z) * h.z;
+      if (!(top < 0.0)) continue;
+      const double m = (std::abs(c.x) + h.x) * q.w.x + (std::abs(c.y) + h.y) * q.w.y + (std::abs(c.z) + h.z) * q.w.z;
+      if (top < -m - q.k * mag) {
+        hint = j;
+        return true;
+      }
+    }
+    return false;
+  };
+  g.used.clear();
+  g.edge_tree.query_if([&](const AABBd& b) { return !box_outside(b); },
+                       [&](uint32_t e) {
+                         const int s0 = face_side_r(g.fi0[e]), s1 = face_side_r(g.fi1[e]);
+                         if (s0 == 0 || s0 != s1) g.used.push_back(e);
+                       });
+  std::sort(g.used.begin(), g.used.end());  // the tree's order is the traversal's
+  c.receiver_edges += g.used.size();
+  // The fragments split by the planes through r and those edges.
+  g.planes.clear();
+  const Vec3d dn = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
+  std::vector<Vec3d>& cur = g.cur;
+  for (uint32_t e : g.used) {
+    const NodePlane pl = node_plane(r, g.edges[e].la, g.edges[e].lb, bounds);
+    if (pl.on_line) {
+      ++c.undecided;
+      return false;
+    }
+    g.planes.push_back(pl);
+    // The edge's projection lies between the planes through r and each of its ends that
+    // hold the light's normal direction D ("vertex planes", shared by the edges that
+    // share the end: the same plane, computed from the same point). A fragment wholly on
+    // the far side of one of them (away from the other end, which is strictly on the near
+    // side, else the edge has no such planes) does not meet the projection and is kept
+    // whole: c does not change inside it across this edge; one that straddles one is cut
+    // there first and its far part kept whole. So a chain of edges across the light cuts
+    // it into sectors between its vertices' planes, each cut by its own edge's plane,
+    // not into the arrangement of every edge's full line. Inexact planes only refine:
+    // any plane through r and the end will do.
+    const SilEdge& se = g.edges[e];
+    auto vertex_plane = [&](const Vec3d& x) { return node_plane(r, x, x + dn * norm1(x - r), bounds); };
+    NodePlane vp[2] = {vertex_plane(se.la), vertex_plane(se.lb)};
+    int near[2] = {0, 0};  // the other end's side of each vertex plane (0: no wedge)
+    for (int k = 0; k < 2; ++k) {
+      if (vp[k].on_line) continue;
+      const Vec3d d = (k == 0 ? se.lb : se.la) - r;
+      const double v = dot(d, vp[k].n), m = 0x1p-20 * norm1(d) * norm1(vp[k].n);
+      near[k] = v > m ? 1 : (v < -m ? -1 : 0);
+    }
+    if (near[0] == 0 || near[1] == 0) near[0] = near[1] = 0;
+    FragmentList& out = g.out;
+    out.clear();
+    for (size_t f = 0; f < frags.size(); ++f) {
+      cur.assign(frags.data(f), frags.data(f) + frags.count(f));
+      bool done = false;
+      for (int k = 0; k < 2 && near[k] != 0 && !done; ++k) {
+        const SplitResult far_class = near[k] > 0 ? SplitResult::Negative : SplitResult::Positive;
+        const SplitResult s = split_fragment(vp[k], cur.data(), int(cur.size()), g.pos, g.neg);
+        if (s == far_class) {
+          out.add(cur.data(), cur.size());
+          done = true;
+        } else if (s == SplitResult::Both) {
+          std::vector<Vec3d>& far_part = near[k] > 0 ? g.neg : g.pos;
+          std::vector<Vec3d>& near_part = near[k] > 0 ? g.pos : g.neg;
+          if (far_part.size() >= 3) out.add(far_part.data(), far_part.size());
+          cur.swap(near_part);
+          if (cur.size() < 3) done = true;
+        } else if (s == SplitResult::ZeroArea) {
+          ++c.dropped;
+          done = true;
+        }  // near side or OnLine (impossible here: checked above): on to the edge's plane
+      }
+      if (done) continue;
+      switch (split_fragment(pl, cur.data(), int(cur.size()), g.pos, g.neg)) {
+        case SplitResult::Positive:
+        case SplitResult::Negative: out.add(cur.data(), cur.size()); break;
+        case SplitResult::Both:
+          if (g.pos.size() >= 3) out.add(g.pos.data(), g.pos.size());
+          if (g.neg.size() >= 3) out.add(g.neg.data(), g.neg.size());
+          break;
+        case SplitResult::ZeroArea: ++c.dropped; break;  // within rounding of the plane: no area
+        case SplitResult::OnLine: ++c.undecided; return false;
+      }
+    }
+    std::swap(frags, out);
+  }
+  // With several pieces, the triangles whose shadow box may hold a piece's point, found
+  // once: each piece's test then reads their boxes instead of walking the hierarchy (the
+  // segment r -> p meets a triangle only where p lies in its shadow).
+  const bool listed = frags.size() > 16;
+  g.shadows.clear();
+  int grid = 0;
+  double gu0 = 0, gv0 = 0, gwu = 1, gwv = 1;
+  auto cell = [&](double x, double x0, double w) {
+    const double cc = std::floor((x - x0) / w);
+    return cc < 0.0 ? 0 : (cc >= double(grid - 1) ? grid - 1 : int(cc));
+  };
+  if (listed) {
+    UVBox all;
+    for (size_t f = 0; f < frags.size(); ++f) all.extend(UVBox::of(lp.axes, frags.data(f), frags.count(f)));
+    const Vec3d od = to_double(origin);
+    // A float world box in local coordinates, widened by 2^-40 of its coordinates (the
+    // translation rounds once per corner).
+    auto local_box = [&](const AABB& b) {
+      AABBd d{to_double(b.lo) - od, to_double(b.hi) - od};
+      const double w = 0x1p-40 * (max_component(vabs(d.lo)) + max_component(vabs(d.hi)));
+      d.lo = d.lo - Vec3d(w, w, w);
+      d.hi = d.hi + Vec3d(w, w, w);
+      return d;
+    };
+    for (int32_t s : g.surfaces)
+      trees.for_each(
+          s, [&](const AABB& b) { return !box_outside(local_box(b)); },
+          [&](uint32_t t) {
+            const Vec3d q[3] = {to_local_d(mesh.corner(t, 0), origin), to_local_d(mesh.corner(t, 1), origin),
+                                to_local_d(mesh.corner(t, 2), origin)};
+            const UVBox sb = shadow_box(lp, r, q, 3);
+            if (sb.overlaps(all)) g.shadows.emplace_back(sb, t);
+          });
+    // Bucketed by a G x G grid over `all` (as sample_bits buckets fragments): a point
+    // reads only the boxes of its cell, which hold every box that contains it (cell
+    // indices are monotone in the coordinates, clamped).
+    grid = std::clamp(int(std::sqrt(double(g.shadows.size()) / 4.0)), 1, 16);
+    gu0 = all.ulo, gv0 = all.vlo;
+    gwu = (all.uhi - all.ulo) / grid, gwv = (all.vhi - all.vlo) / grid;
+    if (!(gwu > 0.0) || !(gwv > 0.0)) grid = 1, gwu = gwv = 1.0;
+    g.cell_start.assign(size_t(grid) * size_t(grid) + 1, 0u);
+    for (int pass = 0; pass < 2; ++pass) {
+      for (uint32_t k = 0; k < g.shadows.size(); ++k) {
+        const UVBox& b = g.shadows[k].first;
+        const int u0 = cell(b.ulo, gu0, gwu), u1 = cell(b.uhi, gu0, gwu), v0 = cell(b.vlo, gv0, gwv),
+                  v1 = cell(b.vhi, gv0, gwv);
+        for (int cv = v0; cv <= v1; ++cv)
+          for (int cu = u0; cu <= u1; ++cu) {
+            const size_t ci = size_t(cv) * size_t(grid) + size_t(cu);
+            if (pass == 0) ++g.cell_start[ci + 1];
+            else g.cell_items[g.cell_fill[ci]++] = k;
+          }
+      }
+      if (pass == 0) {
+        for (size_t ci = 1; ci < g.cell_start.size(); ++ci) g.cell_start[ci] += g.cell_start[ci - 1];
+        g.cell_items.resize(g.cell_start.back());
+        g.cell_fill.assign(g.cell_start.begin(), g.cell_start.end() - 1);
+      }
+    }
+  }
+  // Each piece by one point strictly inside its cell, confirmed exactly.
+  FragmentList& out = g.out;
+  out.clear();
+  const Vec3d od = to_double(origin);
+  for (size_t f = 0; f < frags.size(); ++f) {
+    const Vec3d* poly = frags.data(f);
+    const int n = frags.count(f);
+    Vec3d p(0, 0, 0);
+    for (int k = 0; k < n; ++k) p = p + poly[k];
+    p = p * (1.0 / double(n));
+    const SumPoint ps(origin, p);
+    bool ok = true, zero = false;
+    for (size_t j = 0; j < g.planes.size() && ok; ++j) {
+      const SplitResult cls = classify_fragment(g.planes[j], poly, n);
+      if (cls == SplitResult::ZeroArea) {
+        zero = true;
+        break;
+      }
+      // Both: a piece beside the edge's projection, never split by its plane (above).
+      if (cls == SplitResult::Both) continue;
+      const int want = cls == SplitResult::Positive ? 1 : (cls == SplitResult::Negative ? -1 : 0);
+      const SilEdge& se = g.edges[g.used[j]];
+      ok = want != 0 && exact_side(rw, se.a, se.b, ps) == want;
+    }
+    if (zero) {
+      ++c.dropped;
+      continue;
+    }
+    if (!ok) {
+      ++c.undecided;
+      return false;
+    }
+    ++c.pieces;
+    int blocked = 0;
+    if (listed) {
+      const double pu = p[lp.axes.u], pv = p[lp.axes.v];
+      const size_t ci = size_t(cell(pv, gv0, gwv)) * size_t(grid) + size_t(cell(pu, gu0, gwu));
+      for (uint32_t e = g.cell_start[ci]; e < g.cell_start[ci + 1] && blocked == 0; ++e) {
+        const auto& [box, t] = g.shadows[g.cell_items[e]];
+        if (box.contains(pu, pv)) blocked = SurfaceTrees::triangle_meets(mesh, t, rw, ps);
+      }
+    } else {
+      for (size_t si = 0; si < g.surfaces.size() && blocked == 0; ++si)
+        blocked = trees.segment_meets(g.surfaces[si], mesh, rw, ps, od + p);
+    }
+    if (blocked < 0) {
+      ++c.undecided;
+      return false;
+    }
+    if (blocked > 0) {
+      ++c.blocked;
+      continue;
+    }
+    out.add(poly, size_t(n));
+  }
+  std::swap(frags, out);
+  return true;
+}
+
+}  // namespace visgate::plucker

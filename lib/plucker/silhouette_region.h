@@ -1,0 +1,160 @@
+// Silhouette regions of closed surfaces (paper 002 section 4.4 leaves the occluder set
+// open; this replaces a closed surface's triangles by one region per receiver).
+//
+// Let S be a closed surface (closed_surfaces.h), r a receiver outside S's box, and every
+// vertex of S strictly on r's side of the light's plane (the region oracle's Newell
+// plane, exact), so a segment r -> l, l on the light, meets S iff the ray from r through
+// l does. Let c(l) count the triangles of S that the segment r -> l crosses with r
+// strictly on the positive side of their plane. Since w(r) = w(l) = 0 (both outside S's
+// convex hull), a segment in general position that crosses S crosses it at least once
+// with r on each side, so r -> l is blocked iff c(l) >= 1. As l moves, c changes only
+// where the segment passes an edge whose two faces do not both have r strictly on one
+// side: across an edge between two faces with r positive one crossing is traded for the
+// other, across one with r negative on both none counts. So c, and with it the blocked
+// set, is constant on every connected part of the light that the projections of these
+// "silhouette" edges do not cut (a face with r in its plane counts for both:
+// conservative). Within such a part a point touching S (an edge or vertex) has blocked
+// points around it, so the closed segment test at one interior point classifies the
+// whole part. Edges the selection leaves out as covered by an interior polygon
+// (interior_occluders.h) need no cut: every line through them stabs a polygon inside S,
+// so c >= 1 on both sides of their projection and the blocked set does not change there.
+//
+// Per group and light (select_region_surfaces): the surfaces that meet these conditions
+// for every receiver of the group, their candidate triangles left out of the selection,
+// and their candidate silhouette edges: the edges of their shaft candidates whose two
+// faces do not have one common strict side for every corner of the receivers' box.
+// Per receiver (subtract_silhouette_regions): the edges whose faces have different exact
+// sides from r (or one with r in its plane) and that may meet the pyramid of r and the
+// light; each cuts the fragments that reach its projection, first at the planes through
+// r and its ends (a fragment wholly beyond one is left whole), then at the plane through
+// r and the edge (split_fragment); each piece classified by its vertex average p,
+// accepted only when the exact orientation of p against every edge plane the piece lies
+// on one side of agrees with that side (strict), and by the exact closed segment test
+// r -> p against the surfaces' triangles (SurfaceTrees). Blocked pieces are dropped. A
+// plane that float cannot place (r within rounding of an edge's line), a piece whose
+// point the exact tests do not confirm, and a segment lying in a triangle's plane leave
+// the decision open: the caller shades that receiver again by the exact path.
+// Precision: the pieces are cut in double with split_fragment's bounds (fragment.h), as
+// every other subtraction; every classification is exact.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lib/accel/bvh.h"
+#include "lib/geom/predicates.h"
+#include "lib/plucker/bsp.h"
+#include "lib/plucker/closed_surfaces.h"
+#include "lib/plucker/fragment.h"
+#include "lib/scene/scene.h"
+
+namespace visgate::plucker {
+
+// The exact side (+1, -1, 0) of p against the plane of the float triangle a, b, c
+// (orient3d(a, b, c, p)): a double filter, then orient3d_filtered, then exact.
+int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p);
+
+// Per closed surface, a hierarchy over its triangles for the exact segment test.
+class SurfaceTrees {
+ public:
+  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs);
+  // +1 when the closed segment r -> p meets a triangle of surface s (touching counts),
+  // 0 when it meets none, -1 when undecided (r and p both in a triangle's plane). r is
+  // outside the surface's box. pd: p rounded to double (world), for the box tests.
+  int segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f& r, const SumPoint& p, const Vec3d& pd) const;
+  // The same for one triangle t.
+  static int triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p);
+  // f(t) for every triangle of surface s in a leaf reached through boxes (float, world)
+  // that may_meet accepts.
+  template <class Pred, class F>
+  void for_each(int32_t s, Pred&& may_meet, F&& f) const {
+    const std::vector<uint32_t>& tris = tris_[size_t(s)];
+    bvh_[size_t(s)].for_each_leaf(may_meet, [&](const accel::Bvh<float>::Node& nd) {
+      for (uint32_t item : bvh_[size_t(s)].leaf_items(nd)) f(tris[item]);
+    });
+  }
+  size_t memory_bytes() const;
+
+ private:
+  std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
+  std::vector<std::vector<uint32_t>> tris_;     // per surface: its input triangles
+};
+
+// A candidate silhouette edge of a group: a -> b (world floats, as in face f0; local
+// la, lb), shared by faces f0 and f1 (input triangles).
+struct SilEdge {
+  Vec3f a, b;
+  Vec3d la, lb;
+  uint32_t f0 = 0, f1 = 0;
+};
+
+// One face's plane for the per-receiver sides: corner a, normal n = (b - a) x (c - a) in
+// double and the product of its edges' 1-norms (the filter's scale).
+struct FacePlane {
+  Vec3d a, n;
+  double s12 = 0.0;
+  uint32_t t = 0;
+};
+
+// A group's silhouette data (GroupState::sil).
+struct SilhouetteGroup {
+  std::vector<int32_t> surfaces;  // the region surfaces of the group
+  std::vector<SilEdge> edges;
+  std::vector<FacePlane> faces;   // by the edges' f0, f1 (indices into faces: fi0, fi1)
+  std::vector<uint32_t> fi0, fi1;
+  // Over the edges' local boxes: a receiver visits only the edges whose box its pyramid
+  // may meet (the edges' count follows the group's shaft, a receiver's the window).
+  accel::Bvh<double> edge_tree;
+  std::vector<AABBd> edge_boxes;
+  // Scratch: per input triangle its slot in faces (or -1), reset after each group.
+  std::vector<int32_t> face_slot;
+  std::vector<uint32_t> used;  // per receiver: the edges used
+  std::vector<NodePlane> planes;
+  // Per receiver with several pieces: the region surfaces' triangles that may meet its
+  // pyramid, with the boxes of their shadows on the light (shadow_box).
+  std::vector<std::pair<UVBox, uint32_t>> shadows;
+  std::vector<uint32_t> cell_start, cell_items, cell_fill;  // their grid (silhouette_region.cpp)
+  FragmentList out;
+  std::vector<Vec3d> pos, neg, cur;
+  void clear();
+};
+
+// Counters (plucker_solver.h stats).
+struct SilhouetteCounters {
+  uint64_t groups = 0, declined = 0, edges = 0, receiver_edges = 0, pieces = 0, blocked = 0, undecided = 0, dropped = 0;
+};
+
+// Group level: fills g.surfaces and g.edges from the shaft's candidates `cand` (sorted;
+// `drop` receives 1 for each candidate of a region surface). rbox: the receivers' world
+// box and its distinct corners; light: the light's float polygon; sigma: the receivers'
+// side of its Newell plane; origin: the light's local frame.
+// rloc: the group's receivers and lpoly the light's vertices, local. With `estimate`, a
+// group where a few
+// spread receivers each see more than kMaxSampledEdges candidate edges turning near
+// their pyramid keeps its surfaces on the triangle path (a float estimate: it chooses
+// the path, never an answer): each piece costs an exact point test, and where many
+// silhouette edges cross the light (a light large next to a detailed surface: CGAL's
+// meshes) their pieces outnumber the triangles' shadows.
+constexpr size_t kMaxSampledEdges = 64;
+// Also with `estimate`, only surfaces of at least this many triangles: a small solid's
+// triangles cost the triangle path little per receiver, less than the regions' walks
+// and point tests (columns' cylinders and rooms' boxes: 1.7x and 2.9x the time).
+constexpr uint32_t kMinRegionTriangles = 1024;
+void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
+                            const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
+                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+                            const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
+                            std::vector<uint8_t>& drop, SilhouetteCounters& c);
+
+// Per receiver: removes the region surfaces' shadows from `frags` (local coordinates
+// about `origin`). rw: the receiver (world), r: local. pyramid, pyramid_err: the
+// pyramid's side planes (shade_receiver.cpp pyramid_planes) through light[j]. False when
+// undecided (frags then unchanged in meaning but possibly split): the caller shades the
+// receiver exactly.
+bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& trees, SilhouetteGroup& g,
+                                 const Vec3f& rw, const Vec3d& r, const Vec3f& origin,
+                                 const std::vector<Vec3d>& light, const std::vector<Vec3d>& pyramid,
+                                 const std::vector<Vec3d>& pyramid_err, const LightBounds& bounds,
+                                 const LightPlane& lp, FragmentList& frags, SilhouetteCounters& c);
+
+}  // namespace visgate::plucker

@@ -1,0 +1,108 @@
+// Silhouette regions (lib/plucker/silhouette_region.h): the exact segment test on a
+// hand-worked case, and solves with the regions (silhouette_regions=on, and auto, the
+// default) against the triangle path (off) and the region oracle on a sphere, a torus (segments
+// crossing it twice: two front faces, c = 2, over part of the light), a box with faces
+// edge-on to some receivers and the scan family.
+#include "lib/plucker/silhouette_region.h"
+
+#include <gtest/gtest.h>
+
+#include "lib/plucker/plucker_solver.h"
+#include "lib/scene/shapes.h"
+#include "tests/support/plucker_scenes.h"
+
+namespace visgate {
+namespace {
+
+using test_support::expect_region_oracle;
+using test_support::expect_same_answers;
+using test_support::family_scene;
+using test_support::light_scene;
+using test_support::receiver_square;
+using test_support::run;
+
+TEST(PluckerSilhouetteRegion, TriangleMeetsHandWorked) {
+  TriangleSoup m;
+  m.vertices = {Vec3f(0, 0, 1), Vec3f(1, 0, 1), Vec3f(0, 1, 1)};
+  m.triangles = {{0, 1, 2}};
+  const Vec3f r(0.25f, 0.25f, 0);
+  // Through the interior, beside it, through a vertex and along an edge (touching counts),
+  // stopping before its plane, and r in its plane with p too (undecided).
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 2))), 1);
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(3, 3, 2))), 0);
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, Vec3f(0, 0, 0), SumPoint(Vec3f(0, 0, 2))), 1);
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, Vec3f(0.5f, 0, 0), SumPoint(Vec3f(0.5f, 0, 2))), 1);
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 0.5f))), 0);
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, Vec3f(2, 2, 1), SumPoint(Vec3f(3, 2, 1))), -1);
+  // The double part of a sum point counts: p just beyond the plane along the ray.
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 1), Vec3d(0, 0, 1e-20))), 1);
+  EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 1), Vec3d(0, 0, -1e-20))), 0);
+}
+
+// The regions on, auto (the default) and off: the same bits and fractions (up to the
+// rounding of the pieces' areas), and the region oracle; `regions` says whether some
+// group took the new path with "on".
+void expect_regions_match(const Scene& s, bool regions = true) {
+  const SolveResult on = run(s, {{"silhouette_regions", "on"}}), dflt = run(s),
+                    off = run(s, {{"silhouette_regions", "off"}});
+  EXPECT_EQ(off.stats.get("silhouette_groups"), 0.0);
+  EXPECT_EQ(on.stats.get("silhouette_declined"), 0.0);
+  if (regions) {
+    EXPECT_GT(on.stats.get("silhouette_groups"), 0.0);
+    EXPECT_GT(on.stats.get("silhouette_pieces"), 0.0);
+  }
+  expect_same_answers(s, on, off);
+  expect_same_answers(s, dflt, off);
+  expect_region_oracle(s, on);
+}
+
+TEST(PluckerSilhouetteRegion, SphereAsTheTrianglePath) {
+  Scene s = light_scene(receiver_square(8, -1.8f, 0.5f), 32, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_sphere(s.mesh, Vec3d(0.05, 0.02, 1.4), 0.5, 32, 16);
+  ASSERT_TRUE(finish_scene(s).ok());
+  expect_regions_match(s);
+}
+
+// A torus tilted towards the light: segments through both tubes cross two faces with r
+// on the positive side (c = 2), and the silhouettes of the tubes cross each other.
+TEST(PluckerSilhouetteRegion, TorusCrossedTwiceAsTheTrianglePath) {
+  Scene s = light_scene(receiver_square(8, -1.8f, 0.5f), 32, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_torus(s.mesh, Vec3d(0, 0, 1.4), 0.6, 0.2, 40, 16);
+  shapes::rotate(s.mesh, 0, Vec3d(0, 0, 1.4), normalize(Vec3d(1, 0.3, 0)), 1.2);
+  ASSERT_TRUE(finish_scene(s).ok());
+  expect_regions_match(s);
+}
+
+// A box whose side faces lie in the planes x = const of two receiver columns of the grid
+// and whose front face lies in the plane y = const of a receiver row (those faces are
+// edge-on to those receivers: the planes of their edges through r are the face's plane).
+TEST(PluckerSilhouetteRegion, EdgeOnFacesAsTheTrianglePath) {
+  const std::vector<Vec3f> rec = receiver_square(7, -1.8f, 0.6f);
+  Scene s = light_scene(rec, 32, Vec3d(0.1, -0.05, 3.0));
+  // Receiver (a, b) is rec[7 a + b]: x from a, y from b.
+  shapes::add_box(s.mesh, Vec3d(rec[2 * 7].x, rec[2].y, 1.0), Vec3d(rec[4 * 7].x, 0.5, 1.5));
+  ASSERT_TRUE(finish_scene(s).ok());
+  expect_regions_match(s);
+}
+
+TEST(PluckerSilhouetteRegion, ScanAsTheTrianglePath) {
+  for (uint64_t seed : {1, 4}) {
+    auto s = family_scene("scan", seed, 4000, 144, 8);
+    ASSERT_TRUE(s.ok());
+    expect_regions_match(*s);
+  }
+}
+
+// A closed surface reaching behind the light's plane is not a region surface there: the
+// triangle path, the same answers.
+TEST(PluckerSilhouetteRegion, SurfaceThroughTheLightPlaneStaysOnTheTrianglePath) {
+  Scene s = light_scene(receiver_square(6, -1.5f, 0.6f), 16, Vec3d(0.1, -0.05, 2.0));
+  shapes::add_sphere(s.mesh, Vec3d(1.2, 0.0, 1.9), 0.3, 16, 8);
+  ASSERT_TRUE(finish_scene(s).ok());
+  const SolveResult on = run(s, {{"silhouette_regions", "on"}});
+  EXPECT_EQ(on.stats.get("silhouette_groups"), 0.0);
+  expect_regions_match(s, false);
+}
+
+}  // namespace
+}  // namespace visgate
