@@ -339,10 +339,10 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     for (size_t jj = 0; jj < sp.size(); ++jj) {
       const size_t j = hint + jj < sp.size() ? hint + jj : hint + jj - sp.size();
       const SidePlane& q = sp[j];
-      const Vec3d c = mid - q.l;
-      const double top = dot(q.n, c) + std::abs(q.n.x) * h.x + std::abs(q.n.y) * h.y + std::abs(q.n.z) * h.z;
+      const Vec3d d = mid - q.l;
+      const double top = dot(q.n, d) + std::abs(q.n.x) * h.x + std::abs(q.n.y) * h.y + std::abs(q.n.z) * h.z;
       if (!(top < 0.0)) continue;
-      const double m = (std::abs(c.x) + h.x) * q.w.x + (std::abs(c.y) + h.y) * q.w.y + (std::abs(c.z) + h.z) * q.w.z;
+      const double m = (std::abs(d.x) + h.x) * q.w.x + (std::abs(d.y) + h.y) * q.w.y + (std::abs(d.z) + h.z) * q.w.z;
       if (top < -m - q.k * mag) {
         hint = j;
         return true;
