@@ -150,6 +150,71 @@ __attribute__((always_inline)) inline void direct_classify_body(const double* t,
   }
 }
 
+// Cell shafts (Traversal::cell_rays): the segments from one origin p to every point of
+// a box Q of light points, against the candidates, by the tests above at Q's corners
+// q_1..q_nc (corner c: d[4c..4c+3] = dx, dy, dz, n). Each w is linear in q and det does
+// not depend on q, so a sign the test certifies at every corner holds exactly over Q,
+// the corners' hull: a candidate certified to block every corner segment (every w of
+// det's strict sign, and det - sum w of the opposite sign: the crossing parameter
+// det / sum w inside (0, 1)) blocks every segment from p into Q; one with the same pair
+// of strictly opposite w at every corner, or with det - sum w strictly of det's sign at
+// every corner (Q strictly on p's side of its plane), misses every such segment.
+// Returns true when some candidate blocks all of Q (out is then incomplete); else bit
+// k & 3 of out[k / 4] is set for the candidates k that miss all of Q.
+template <class Lanes>
+__attribute__((always_inline)) inline bool cell_classify_body(const double* t, size_t kp, const double* d, int nc,
+                                                              uint8_t* out) {
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
+    const V4 tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
+    const V4 tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
+    const V4 em = load4(t + kEm * kp + k), det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
+    const M4 pos = det > edet, neg = det < -edet;
+    M4 apos = pos | ~pos, aneg = apos, bpos = apos, bneg = apos, cpos = apos, cneg = apos, side = apos;
+    // First the misses (the common answer, and all that most candidates need).
+    for (int c = 0; c < nc; ++c) {
+      const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
+      const V4 wa = dx * tbx + dy * tby + dz * tbz;
+      const V4 wb = dx * tcx + dy * tcy + dz * tcz;
+      const V4 wc = dx * tax + dy * tay + dz * taz;
+      const V4 e = n * em;
+      apos &= wa > e;
+      aneg &= wa < -e;
+      bpos &= wb > e;
+      bneg &= wb < -e;
+      cpos &= wc > e;
+      cneg &= wc < -e;
+      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+      const V4 dq = det - (wa + wb + wc);
+      side &= (pos & (dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det))) |
+              (neg & (dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det))));
+    }
+    const M4 miss = (apos & (bneg | cneg)) | (bpos & (aneg | cneg)) | (cpos & (aneg | bneg)) | side;
+    // A block needs only be certified where every w has det's strict sign at every corner.
+    const M4 maybe = (pos & apos & bpos & cpos) | (neg & aneg & bneg & cneg);
+    if (Lanes::any(maybe)) {
+      M4 hit = maybe;
+      for (int c = 0; c < nc; ++c) {
+        const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
+        const V4 wa = dx * tbx + dy * tby + dz * tbz;
+        const V4 wb = dx * tcx + dy * tcy + dz * tcz;
+        const V4 wc = dx * tax + dy * tay + dz * taz;
+        const V4 e = n * em;
+        const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
+        const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+        hit &= (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
+               (neg & (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs));
+      }
+      if (Lanes::any(hit)) return true;
+    }
+    out[k >> 2] = uint8_t((miss[0] & 1) | (miss[1] & 2) | (miss[2] & 4) | (miss[3] & 8));
+  }
+  return false;
+}
+bool cell_classify_default(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
+  return cell_classify_body<LanesDefault>(t, kp, d, nc, out);
+}
+
 void direct_terms_default(const double* c, size_t kp, const double* p, double* t) { direct_terms_body(c, kp, p, t); }
 void direct_classify_default(const double* t, size_t kp, const double* d, size_t count, uint8_t* out) {
   direct_classify_body<LanesDefault>(t, kp, d, count, out);
@@ -164,6 +229,10 @@ __attribute__((target("avx2"))) void direct_terms_avx2(const double* c, size_t k
 __attribute__((target("avx2"), flatten)) void direct_classify_avx2(const double* t, size_t kp, const double* d,
                                                                    size_t count, uint8_t* out) {
   direct_classify_body<LanesAvx2>(t, kp, d, count, out);
+}
+__attribute__((target("avx2"), flatten)) bool cell_classify_avx2(const double* t, size_t kp, const double* d, int nc,
+                                                                  uint8_t* out) {
+  return cell_classify_body<LanesAvx2>(t, kp, d, nc, out);
 }
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
@@ -186,6 +255,13 @@ void direct_classify(const double* t, size_t kp, const double* d, size_t count, 
   if (have_avx2()) return direct_classify_avx2(t, kp, d, count, out);
 #endif
   direct_classify_default(t, kp, d, count, out);
+}
+
+bool cell_classify(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_classify_avx2(t, kp, d, nc, out);
+#endif
+  return cell_classify_default(t, kp, d, nc, out);
 }
 
 // Box-against-plane culling of candidate boxes (SoA: lo x, y, z, hi x, y, z of kp each),
@@ -236,7 +312,7 @@ void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* 
 // parent's: the lists of the shafts above the leaf (cand_stack_, pushed by
 // shaft_subdivide) are made on first need, the highest one looked at, kCandUp levels
 // up, by a query of the whole triangle hierarchy. Every list is complete for its shaft.
-bool Traversal::direct_candidates(const ShaftGeometry& g) {
+bool Traversal::direct_candidates(const ShaftGeometry& g, bool query_leaf) {
   // The triangles of `from` (boxes `from_box`, SoA of kp(from) each) that may meet
   // `sg`, with their boxes when `to_box` is given.
   auto padded = [](size_t n) { return std::max<size_t>(4, (n + 3) & ~size_t(3)); };
@@ -305,8 +381,12 @@ bool Traversal::direct_candidates(const ShaftGeometry& g) {
     if (!c.too_many) filter(direct_query_, direct_query_box_, *c.g, c.tris, &c.box);
   }
   // Every leaf that looks up to this list gives up too (a deeper leaf, whose look-up
-  // ends below it, may query again).
-  if (cand_stack_[src].too_many) return false;
+  // ends below it, may query again), unless it asks for its own query (cell_rays).
+  if (cand_stack_[src].too_many) {
+    if (!query_leaf || !query(g)) return false;
+    filter(direct_query_, direct_query_box_, g, direct_cand_, nullptr);
+    return true;
+  }
   for (size_t k = src + 1; k < top; ++k) {
     filter(cand_stack_[k - 1].tris, cand_stack_[k - 1].box, *cand_stack_[k].g, cand_stack_[k].tris,
            &cand_stack_[k].box);
@@ -317,14 +397,12 @@ bool Traversal::direct_candidates(const ShaftGeometry& g) {
   return true;
 }
 
-bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
-  if (!direct_candidates(sh.g)) return false;
-  const size_t k_count = direct_cand_.size();
-  if (k_count > size_t(p_.direct_max_candidates)) return false;
-  const size_t kp = std::max<size_t>(4, (k_count + 3) & ~size_t(3));
+// The corners of direct_cand_ into direct_corners_ (9 SoA arrays ax..cz of kp each);
+// returns kp, the count padded to a multiple of 4 (at least 4). Lanes past the
+// candidates repeat the last one: a repeated triangle changes no answer.
+size_t Traversal::direct_load_corners() {
+  const size_t k_count = direct_cand_.size(), kp = std::max<size_t>(4, (k_count + 3) & ~size_t(3));
   direct_corners_.resize(9 * kp);
-  direct_terms_.resize(kTermCount * kp);
-  // Lanes past the candidates repeat the last one: a repeated triangle changes no answer.
   for (size_t k = 0; k < kp && k_count > 0; ++k) {
     const uint32_t t = direct_cand_[std::min(k, k_count - 1)];
     for (int v = 0; v < 3; ++v) {
@@ -332,6 +410,18 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
       for (int a = 0; a < 3; ++a) direct_corners_[size_t(3 * v + a) * kp + k] = double(x[a]);
     }
   }
+  return kp;
+}
+
+bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
+  return direct_candidates(sh.g) && direct_rays_cands(r, l);
+}
+
+bool Traversal::direct_rays_cands(int r, int l) {
+  const size_t k_count = direct_cand_.size();
+  if (k_count > size_t(p_.direct_max_candidates)) return false;
+  const size_t kp = direct_load_corners();
+  direct_terms_.resize(kTermCount * kp);
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
   const auto& ro = rtree_->order();
@@ -434,6 +524,135 @@ bool Traversal::direct_rays(int r, int l, const Shaft& sh) {
   return true;
 }
 
+// Cell shafts: see traversal.h (cell_rays). Per receiver p of R, the candidates' terms
+// from p once; then the light subtree of L from the top, each node Q a shaft from the
+// point p to Q's box, decided by cell_classify against the candidates its parent left
+// mixed (a candidate missing the parent's box misses Q's, a subset). Blocked: one
+// candidate blocks every segment from p into the box (the relations' light points lie
+// in it: each sample's jitter box is in its node's box); visible: every candidate
+// misses every such segment, and the candidates are every triangle that may meet the
+// shaft sh, which holds these segments. A light-tree leaf left mixed gets the direct
+// test per relation against its mixed candidates (those its cells did not clear), and
+// Embree for what that test cannot certify.
+bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
+  if (!direct_candidates(sh.g, true)) return false;
+  const size_t k_count = direct_cand_.size();
+  if (k_count > size_t(p_.cell_max_candidates)) return direct_rays_cands(r, l);
+  const size_t kp = direct_load_corners();
+  if (cell_levels_.empty()) cell_levels_.emplace_back();
+  cell_levels_[0].terms.resize(kTermCount * kp);
+  cell_levels_[0].count = k_count;
+  cell_levels_[0].kp = kp;
+  const TreeNode& R = rn(r);
+  const auto& ro = rtree_->order();
+  for (uint32_t a = R.begin; a < R.end; ++a) {
+    const uint32_t i = ro[a];
+    const Vec3f& p = scene_.receivers[i].p;
+    const double od[3] = {double(p.x), double(p.y), double(p.z)};
+    if (k_count > 0) direct_terms(direct_corners_.data(), kp, od, cell_levels_[0].terms.data());
+    cell_uncertain_.clear();
+    cell_descend(l, 0, i, od, relation_hash_prefix(i, light_->seed));
+    if (!cell_uncertain_.empty()) fan_rays(i, cell_uncertain_.data(), cell_uncertain_.size());
+  }
+  return true;
+}
+
+void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, uint64_t prefix) {
+  const auto& lo = ltree_->order();
+  CellLevel& lev = cell_levels_[depth];
+  const size_t kc = lev.count, kp = lev.kp;
+  // The node box's corners (one value on an axis where the box is flat).
+  const AABB& box = ln(c).box;
+  double cd[4 * 8];
+  int nc = 0;
+  if (kc > 0) {
+    const int nx = box.lo.x < box.hi.x ? 2 : 1, ny = box.lo.y < box.hi.y ? 2 : 1, nz = box.lo.z < box.hi.z ? 2 : 1;
+    for (int x = 0; x < nx; ++x)
+      for (int y = 0; y < ny; ++y)
+        for (int z = 0; z < nz; ++z) {
+          double* d = cd + 4 * nc++;
+          d[0] = double(x ? box.hi.x : box.lo.x) - od[0];
+          d[1] = double(y ? box.hi.y : box.lo.y) - od[1];
+          d[2] = double(z ? box.hi.z : box.lo.z) - od[2];
+          d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+        }
+  }
+  const TreeNode& Q = ln(c);
+  n_cells_ += 1;
+  cell_out_.resize(kp / 4);
+  if (kc > 0 && cell_classify(lev.terms.data(), kp, cd, nc, cell_out_.data())) {
+    n_blocked_shaft_ += double(Q.size());  // bits start blocked
+    n_cell_decided_ += double(Q.size());
+    return;
+  }
+  auto is_mixed = [&](size_t k) { return ((cell_out_[k >> 2] >> (k & 3)) & 1) == 0; };
+  size_t mixed = 0;
+  for (size_t k = 0; k < kc; ++k) mixed += is_mixed(k);
+  if (mixed == 0) {
+    ReceiverResult& rr = result_.receivers[i];
+    for (uint32_t b = Q.begin; b < Q.end; ++b) rr.set_visible(light_offset_ + size_t(lo[b]), true);
+    n_empty_ += double(Q.size());
+    n_cell_decided_ += double(Q.size());
+    return;
+  }
+  // The mixed candidates' terms, compacted for the level below (padding lanes repeat
+  // the last one).
+  if (cell_levels_.size() <= depth + 1) cell_levels_.emplace_back();
+  CellLevel& next = cell_levels_[depth + 1];
+  CellLevel& cur = cell_levels_[depth];  // emplace_back may have moved it
+  const size_t np = (mixed + 3) & ~size_t(3);
+  next.terms.resize(kTermCount * np);
+  next.count = mixed;
+  next.kp = np;
+  for (size_t k = 0, o = 0; k < kc; ++k) {
+    if (!is_mixed(k)) continue;
+    for (size_t f = 0; f < kTermCount; ++f) next.terms[f * np + o] = cur.terms[f * kp + k];
+    ++o;
+  }
+  for (size_t o = mixed; o < np; ++o)
+    for (size_t f = 0; f < kTermCount; ++f) next.terms[f * np + o] = next.terms[f * np + mixed - 1];
+  const bool descend = int(depth) < p_.cell_depth;
+  if (descend && !Q.is_leaf) {
+    ScopedTimer t(times_[kTree]);
+    ltree_->split(c);
+  }
+  if (descend && ln(c).split_done()) {
+    const int left = ln(c).left, right = ln(c).right;
+    cell_descend(left, depth + 1, i, od, prefix);
+    cell_descend(right, depth + 1, i, od, prefix);
+    return;
+  }
+  // A light-tree leaf left mixed: each relation by the direct test against the mixed
+  // candidates (the others miss every segment into the leaf's box), Embree where the
+  // test cannot certify.
+  const TreeNode& QL = ln(c);
+  const uint32_t count = QL.size();
+  direct_d_.resize(4 * size_t(count));
+  direct_out_.resize(count);
+  for (uint32_t k = 0; k < count; ++k) {
+    const Vec3f& e = leaf_sample_at(*light_, int(lo[QL.begin + k]), prefix);
+    double* d = direct_d_.data() + 4 * size_t(k);
+    d[0] = double(e.x) - od[0];
+    d[1] = double(e.y) - od[1];
+    d[2] = double(e.z) - od[2];
+    d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+  }
+  direct_classify(next.terms.data(), np, direct_d_.data(), count, direct_out_.data());
+  ReceiverResult& rr = result_.receivers[i];
+  size_t blocked = 0;
+  const size_t uncertain0 = cell_uncertain_.size();
+  for (uint32_t k = 0; k < count; ++k) {
+    const uint32_t j = lo[QL.begin + k];
+    if (direct_out_[k] == 1) ++blocked;
+    else if (direct_out_[k] == 2) rr.set_visible(light_offset_ + size_t(j), true);
+    else cell_uncertain_.push_back(j);  // fan_rays counts their blocked ones
+  }
+  n_rays_ += double(count);
+  n_rays_blocked_ += double(blocked);
+  n_direct_ += double(count);
+  n_direct_uncertain_ += double(cell_uncertain_.size() - uncertain0);
+}
+
 // CAST-SHADOW-RAYS. With the custom caster (section 4.10) the shaft's blockers, the
 // leaf nodes' inside triangles (Figure 4.35) and, in pre-traversal, the pruned
 // triangle list decide the ray.
@@ -441,7 +660,11 @@ void Traversal::cast_rays(int r, int l, const Shaft* sh, const std::vector<uint3
   ScopedTimer t(times_[kRays]);
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
-  if (!p_.custom_rays && p_.direct_rays && direct_ok_ && sh && direct_rays(r, l, *sh)) return;
+  // Cell shafts where the light node has a subtree (a whole-light leaf); they hand a
+  // shaft with more candidates than theirs to the direct test.
+  if (!p_.custom_rays && p_.direct_rays && direct_ok_ && sh) {
+    if (p_.cell_shafts && !L.is_leaf ? cell_rays(r, l, *sh) : direct_rays(r, l, *sh)) return;
+  }
   if (!p_.custom_rays && p_.ray_queue && L.size() < kFanWidth) {
     queue_rays(r, l);
     return;
