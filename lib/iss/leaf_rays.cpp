@@ -189,13 +189,17 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
     const V4 em = load4(t + kEm * kp + k), det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
     const M4 pos = det > edet, neg = det < -edet;
     M4 apos = pos | ~pos, aneg = apos, bpos = apos, bneg = apos, cpos = apos, cneg = apos, side = apos;
+    V4 wa, wb, wc, e;
+    auto corner = [&](int c) {  // w and their bound at corner c
+      const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
+      wa = dx * tbx + dy * tby + dz * tbz;
+      wb = dx * tcx + dy * tcy + dz * tcz;
+      wc = dx * tax + dy * tay + dz * taz;
+      e = n * em;
+    };
     // First the misses (the common answer, and all that most candidates need).
     for (int c = 0; c < nc; ++c) {
-      const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
-      const V4 wa = dx * tbx + dy * tby + dz * tbz;
-      const V4 wb = dx * tcx + dy * tcy + dz * tcz;
-      const V4 wc = dx * tax + dy * tay + dz * taz;
-      const V4 e = n * em;
+      corner(c);
       apos &= wa > e;
       aneg &= wa < -e;
       bpos &= wb > e;
@@ -215,9 +219,9 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
       const V4 cx = load4(t + kVcx * kp + k), cy = load4(t + kVcy * kp + k), cz = load4(t + kVcz * kp + k);
       for (int f = 0; f < 4; ++f) {
         const double* pl = pyr + 4 * f;
-        const V4 e = m * pl[3];
-        miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -e) & ((bx * pl[0] + by * pl[1] + bz * pl[2]) < -e) &
-                ((cx * pl[0] + cy * pl[1] + cz * pl[2]) < -e);
+        const V4 ep = m * pl[3];
+        miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
+                ((cx * pl[0] + cy * pl[1] + cz * pl[2]) < -ep);
       }
     }
     // A block needs only be certified where every w has det's strict sign at every corner.
@@ -225,11 +229,7 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
     if (Lanes::any(maybe)) {
       M4 hit = maybe;
       for (int c = 0; c < nc; ++c) {
-        const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
-        const V4 wa = dx * tbx + dy * tby + dz * tbz;
-        const V4 wb = dx * tcx + dy * tcy + dz * tcz;
-        const V4 wc = dx * tax + dy * tay + dz * taz;
-        const V4 e = n * em;
+        corner(c);
         const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
         const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
         hit &= (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
