@@ -182,6 +182,8 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("auto_ray_relations", n_auto_relations_);
   st.set("direct_ray_relations", n_direct_);
   st.set("direct_rays_uncertified", n_direct_uncertain_);
+  st.set("cell_shafts", n_cells_);
+  st.set("cell_shaft_relations", n_cell_decided_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
   st.set("band_triangles_extracted", n_band_extracted_);
@@ -307,7 +309,7 @@ void Traversal::shaft_traverse(Shaft& sh) {
   if (light_mode_ == LightMode::Trial && !in_trial_ && !L.is_leaf && L.size() <= uint32_t(p_.leaf_samples) &&
       R.size() <= uint32_t(p_.split_receivers)) {
     const int way = trial_.shafts[0] >= kSplitTrialEarly && trial_.shafts[1] < trial_.shafts[0] ? 1 : 0;
-    const double shafts0 = n_shafts_, rays0 = n_rays_;
+    const double shafts0 = n_shafts_, rays0 = leaf_relations();
     in_trial_ = true;
     split_now_ = way == 1;
     shaft_subdivide(sh);
@@ -316,7 +318,7 @@ void Traversal::shaft_traverse(Shaft& sh) {
     n_trial_shafts_ += 1;
     trial_.shafts[way] += 1;
     trial_.relations[way] += double(R.size()) * double(L.size());
-    trial_.cost[way] += (n_shafts_ - shafts0) * kShaftRayCost + (n_rays_ - rays0);
+    trial_.cost[way] += (n_shafts_ - shafts0) * kShaftRayCost + (leaf_relations() - rays0);
     // Cost per relation of each way, cross-multiplied; decided early when one way costs
     // less than half the other after kSplitTrialEarly shafts each (the trial's own cost
     // was 8% of rooms' traversal instructions with all 2 x 8 shafts on every light).
@@ -372,7 +374,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
     cast_rays(sh.r, sh.l, &sh, nullptr);
     return;
   }
-  const double shafts0 = n_shafts_, decided0 = n_blocked_shaft_ + n_empty_, work0 = light_work_;
+  const double shafts0 = n_shafts_, decided0 = shaft_decided(), work0 = light_work_;
   SplitMode mode;
   SplitGeometries cand;
   if (receiver_leaf(R)) mode = SplitMode::Light;
@@ -413,7 +415,7 @@ void Traversal::shaft_subdivide(Shaft& sh) {
   --cand_depth_;
   ab.subdivided += 1;  // auto_buckets_ is a fixed array: `ab` outlives the recursion
   ab.shafts_below += n_shafts_ - shafts0;
-  ab.decided_below += n_blocked_shaft_ + n_empty_ - decided0;
+  ab.decided_below += shaft_decided() - decided0;
   ab.work_below += light_work_ - work0;
 }
 
@@ -448,13 +450,13 @@ void Traversal::pre_traverse(int r, int l, const std::vector<uint32_t>& tris, bo
         return;
       }
       if (initial_shaft_by_rays(r, l)) return;
-      const double work0 = light_work_, decided0 = n_blocked_shaft_ + n_empty_;
+      const double work0 = light_work_, decided0 = shaft_decided();
       Shaft sh = construct_initial_shaft(r, l, ax, tris);
       shaft_traverse(sh);
       release(sh);
       initial_bucket_.subdivided += 1;
       initial_bucket_.work_below += light_work_ - work0;
-      initial_bucket_.decided_below += n_blocked_shaft_ + n_empty_ - decided0;
+      initial_bucket_.decided_below += shaft_decided() - decided0;
       return;
     }
   }

@@ -125,6 +125,16 @@ struct Params {
   // (direct_rays, leaf_rays.cpp) when a shaft has at most direct_max_candidates of them.
   bool direct_rays = true;
   int direct_max_candidates = 48;
+  // Cell shafts (cell_rays, leaf_rays.cpp; option cell_shafts, with direct_rays): the
+  // leaf relations of a whole-light leaf with at most cell_max_candidates candidates,
+  // receiver by receiver, by shafts from the receiver point to the light node's box and
+  // to its subtree's boxes down to cell_depth levels below it. Defaults measured on rooms
+  // at 1024 receivers (docs/log/iss-performance.md, tenth round): deeper cells and more
+  // candidates decide more relations but cost more than the direct test and the rays they
+  // replace (a light cell was left mixed about three times in four at every level).
+  bool cell_shafts = true;
+  int cell_max_candidates = 128;
+  int cell_depth = 0;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -270,6 +280,12 @@ class Traversal {
   void release(Shaft& sh);
   void init_shaft(Shaft& sh);
 
+  // The traversal's own rules (automatic rays, the light-split trial, the initial-shaft
+  // cost rule) count a leaf's relations as leaf relations however the leaf decides them:
+  // cell shafts (cell_rays) change how a leaf is decided, never which shafts are built.
+  double shaft_decided() const { return n_blocked_shaft_ + n_empty_ - n_cell_decided_; }
+  double leaf_relations() const { return n_rays_ + n_cell_decided_; }
+
   void record_blocked(int r, int l) { n_blocked_shaft_ += double(rn(r).size()) * double(ln(l).size()); }
 
   // ---- section 4.10: leaf rays (leaf_rays.cpp) -------------------------------------------
@@ -291,8 +307,24 @@ class Traversal {
   // relations it cannot certify; false (nothing cast) when there are more than
   // Params::direct_max_candidates candidates.
   bool direct_rays(int r, int l, const Shaft& sh);
-  // Into direct_cand_; false when an ancestor's list was too long to gather.
-  bool direct_candidates(const ShaftGeometry& g);
+  bool direct_rays_cands(int r, int l);  // direct_rays with direct_cand_ gathered
+  // Into direct_cand_; false when an ancestor's list was too long to gather (with
+  // query_leaf, only when g's own list is: then the hierarchy is queried for g).
+  bool direct_candidates(const ShaftGeometry& g, bool query_leaf = false);
+  size_t direct_load_corners();
+  // Cell shafts (section 4.9's light splits, specialised to a one-point receiver node
+  // below a leaf): in the penumbra of a whole light most of a leaf's relations are rays,
+  // and a full sub-shaft per light split (about 54k instructions on rooms) costs more
+  // than the rays it decides. Per receiver of R, the light subtree of L is descended
+  // with a shaft from the receiver point to each node box, decided against the leaf
+  // shaft's candidate triangles by the direct test's certified predicates at the box
+  // corners (leaf_rays.cpp cell_classify): blocked when one candidate blocks every
+  // segment into the box, visible when every candidate misses them all, split while
+  // mixed, the mixed light-tree leaves by the direct test per relation and Embree.
+  // Shafts with more than cell_max_candidates go to direct_rays. False (nothing
+  // decided) when the candidates are too many to gather or test.
+  bool cell_rays(int r, int l, const Shaft& sh);
+  void cell_descend(int c, size_t depth, uint32_t i, const double* od, uint64_t prefix);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
 
@@ -370,6 +402,15 @@ class Traversal {
   double n_auto_shafts_ = 0, n_auto_relations_ = 0;
   double n_direct_ = 0, n_direct_uncertain_ = 0;  // relations given to direct_rays / left to Embree by it
   bool direct_ok_ = false;  // every coordinate within raycast::kEmbreeCoordinateBound
+  double n_cells_ = 0, n_cell_decided_ = 0;  // cell shafts classified / relations they decided
+  // Per level of cell_descend: the candidates left mixed (count, padded kp) and their terms.
+  struct CellLevel {
+    std::vector<double> terms;
+    size_t count = 0, kp = 0;
+  };
+  std::vector<CellLevel> cell_levels_;
+  std::vector<uint8_t> cell_out_;
+  std::vector<uint32_t> cell_uncertain_;  // samples of the current receiver left to Embree
   std::vector<uint32_t> direct_query_, direct_cand_;
   std::vector<double> direct_corners_, direct_terms_, direct_query_box_;
   std::vector<int64_t> direct_keep_;

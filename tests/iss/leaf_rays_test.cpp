@@ -76,6 +76,34 @@ Wrong wrong_against_oracle(const Scene& s, const oracle::RelationOracleResult& e
   return w;
 }
 
+// A leaf path that only adds certified answers (`on`) against the answers without it
+// (`off`): no answer wrong above tau, no more wrong answers at any margin, and every
+// relation where the two differ answered as the exact oracle answers (a certified answer
+// is exact; an Embree ray can be wrong only within its float rounding of an edge, and a
+// degenerate relation has no single answer).
+void expect_exact_where_they_differ(const Scene& s, const SolveResult& on, const SolveResult& off, double tau,
+                                    const std::string& what) {
+  oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
+  const Wrong w_on = wrong_against_oracle(s, ex, on, tau), w_off = wrong_against_oracle(s, ex, off, tau);
+  EXPECT_GT(w_on.checked, s.relation_count() / 4) << what;
+  EXPECT_EQ(w_on.above_tau, 0u) << what;
+  EXPECT_LE(w_on.any, w_off.any) << what;
+  size_t differ_wrong = 0;
+  for (size_t i = 0; i < s.receivers.size(); ++i)
+    for (size_t k = 0; k < ex.classes[i].size(); ++k) {
+      const char cls = ex.classes[i][k];
+      if (cls != 'd' && on.receivers[i].visible(k) != off.receivers[i].visible(k))
+        differ_wrong += on.receivers[i].visible(k) != (cls == 'v');
+    }
+  EXPECT_EQ(differ_wrong, 0u) << what;
+}
+
+struct LeafCase {
+  const char* fam;
+  long tris, recv, samples;
+  std::map<std::string, std::string> opts;
+};
+
 }  // namespace
 
 TEST(IssLeafRays, DirectTestAnswersLikeEmbreeRaysAndTheOracle) {
@@ -84,12 +112,7 @@ TEST(IssLeafRays, DirectTestAnswersLikeEmbreeRaysAndTheOracle) {
   // two differ the direct answer is the exact one (a certified answer is exact; the
   // Embree ray can be wrong only within its float rounding of a triangle edge).
   const double tau = 1e-5;
-  struct Case {
-    const char* fam;
-    long tris, recv, samples;
-    std::map<std::string, std::string> opts;
-  };
-  const Case cases[] = {
+  const LeafCase cases[] = {
       // Light splits (64-receiver x 4-sample leaves): tests grouped by light point.
       {"columns", 2500, 4096, 64, {}},
       // Whole-light leaves of 8 receivers x 64 samples: tests grouped by receiver.
@@ -104,10 +127,11 @@ TEST(IssLeafRays, DirectTestAnswersLikeEmbreeRaysAndTheOracle) {
       {"grid-snapped", -1, 256, 16, {{"leaf_receivers", "8"}, {"auto_rays", "off"}}},
   };
   double direct_total = 0, uncertified_total = 0;
-  for (const Case& c : cases) {
+  for (const LeafCase& c : cases) {
     Scene s = family(c.fam, 5, c.tris, c.recv, c.samples);
     ASSERT_FALSE(s.receivers.empty()) << c.fam;
     std::map<std::string, std::string> o = c.opts;
+    o["cell_shafts"] = "off";  // cells decide some leaf relations without a test (tested below)
     SolveResult on = run_iss(s, o);
     o["direct_rays"] = "off";
     SolveResult off = run_iss(s, o);
@@ -118,23 +142,56 @@ TEST(IssLeafRays, DirectTestAnswersLikeEmbreeRaysAndTheOracle) {
     if (std::string(c.fam) == "columns") {
       EXPECT_GT(on.stats.get("direct_ray_relations"), 0.0) << describe(c.opts);
     }
-    oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 2);
-    const Wrong w_on = wrong_against_oracle(s, ex, on, tau), w_off = wrong_against_oracle(s, ex, off, tau);
-    EXPECT_GT(w_on.checked, s.relation_count() / 4) << c.fam;
-    EXPECT_EQ(w_on.above_tau, 0u) << c.fam << " " << describe(c.opts);
-    EXPECT_LE(w_on.any, w_off.any) << c.fam << " " << describe(c.opts);
-    // Differences only where the Embree ray was wrong (or the relation is degenerate,
-    // where the oracle has no single answer).
-    size_t differ_wrong = 0;
-    for (size_t i = 0; i < s.receivers.size(); ++i)
-      for (size_t k = 0; k < ex.classes[i].size(); ++k) {
-        const char cls = ex.classes[i][k];
-        if (cls != 'd' && on.receivers[i].visible(k) != off.receivers[i].visible(k))
-          differ_wrong += on.receivers[i].visible(k) != (cls == 'v');
-      }
-    EXPECT_EQ(differ_wrong, 0u) << c.fam << " " << describe(c.opts);
+    expect_exact_where_they_differ(s, on, off, tau, std::string(c.fam) + " " + describe(c.opts));
   }
   EXPECT_GT(direct_total, 0.0);
   // Some relations of these scenes lie on a triangle's plane or edge and cannot be certified.
   EXPECT_GT(uncertified_total, 0.0);
+}
+
+TEST(IssLeafRays, CellShaftsAnswerAsWithoutThemAndTheOracle) {
+  // Cell shafts (cell_shafts) decide whole light cells of a leaf receiver by certified
+  // predicates at the cell's corners; they change how a leaf is decided, never which
+  // shafts are built. Every answer they give is the exact one, so it differs from the
+  // leaf answers without them only where those (Embree rays) were wrong. Both the
+  // default (the light node's box only) and the full descent to the light-tree leaves.
+  const double tau = 1e-5;
+  const std::map<std::string, std::string> deep = {{"cell_depth", "16"}, {"cell_candidates", "1024"}};
+  const LeafCase cases[] = {
+      {"rooms", -1, 256, 64, {}},
+      {"rooms", -1, 256, 64, deep},
+      // Columns: the light trial keeps some lights whole at these sizes (with
+      // light_split=off the whole light is a light-tree leaf: no cells below it).
+      {"columns", 1000, 1024, 64, {}},
+      {"columns", 1000, 1024, 64, deep},
+      {"random-soup", -1, 256, 16, deep},
+      {"torus", -1, 256, 16, deep},
+      {"on-surface", -1, 256, 16, deep},
+      {"shared-edge-fan", -1, 256, 16, deep},
+      {"grid-snapped", -1, 256, 16, deep},
+  };
+  double cell_total = 0;
+  for (const LeafCase& c : cases) {
+    Scene s = family(c.fam, 5, c.tris, c.recv, c.samples);
+    ASSERT_FALSE(s.receivers.empty()) << c.fam;
+    std::map<std::string, std::string> o = c.opts;
+    SolveResult on = run_iss(s, o);
+    o["cell_shafts"] = "off";
+    SolveResult off = run_iss(s, o);
+    const std::string what = std::string(c.fam) + " " + describe(c.opts);
+    EXPECT_EQ(on.stats.get("shafts_built"), off.stats.get("shafts_built")) << what;
+    EXPECT_EQ(off.stats.get("cell_shafts"), 0.0) << what;
+    // Every relation decided once: by a shaft, a cell or a leaf test.
+    EXPECT_EQ(on.stats.get("relations_blocked_by_shaft") + on.stats.get("relations_visible_by_empty_shaft") +
+                  on.stats.get("relations_ray_cast"),
+              double(s.relation_count()))
+        << what;
+    EXPECT_LE(on.stats.get("relations_ray_cast"), off.stats.get("relations_ray_cast")) << what;
+    cell_total += on.stats.get("cell_shaft_relations");
+    if (std::string(c.fam) == "rooms") {
+      EXPECT_GT(on.stats.get("cell_shaft_relations"), 0.0) << what;
+    }
+    expect_exact_where_they_differ(s, on, off, tau, what);
+  }
+  EXPECT_GT(cell_total, 0.0);
 }
