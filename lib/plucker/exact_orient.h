@@ -15,6 +15,7 @@
 #include "lib/geom/expansion.h"
 #include "lib/geom/predicates.h"
 #include "lib/geom/vec.h"
+#include "lib/plucker/lines.h"
 
 namespace visgate::plucker {
 
@@ -107,5 +108,26 @@ int newell_side_exact(const Vec3f* poly, int m, const Vec3f& x);
 // normal cannot tell components that differ by less than its rounding (test
 // NonPlanarLightIsLiftedAlongTheOraclesAxis).
 int newell_dominant_axis(const Vec3f* poly, int m);
+
+// The side of p against the plane of the float triangle a, b, c (the sign of
+// orient3d(a, b, c, p)) in double, from ad = a, the normal n = (b - a) x (c - a) and
+// s12 = |b - a|_1 |c - a|_1 (shared over many points): the differences are exact or
+// rounded once, n's components carry at most 2 u_d s12, and (p - a) . n, with p - a =
+// (hi - a) + lo rounded by u_d of |hi - a|_1 + |lo|_1 =: D, errs by less than 16 u_d D
+// s12; a value beyond 2^-40 of D s12 (2^9 times the error) has the exact sign. 0: open
+// (also when that bound is so small that underflow may have taken digits).
+inline int plane_side_filtered(const Vec3d& ad, const Vec3d& n, double s12, const SumPoint& p) {
+  const Vec3d h = to_double(p.hi) - ad;
+  const double v = dot(h + p.lo, n), bound = 0x1p-40 * (norm1(h) + norm1(p.lo)) * s12;
+  if (!(bound > 0x1p-900)) return 0;
+  return v > bound ? 1 : (v < -bound ? -1 : 0);
+}
+
+// The same side where plane_side_filtered left it open: orient3d_filtered, then exact.
+inline int plane_side_rest(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p) {
+  Sign sg = orient3d_filtered(a, b, c, p);
+  if (sg == Sign::Uncertain) sg = sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), p).sign);
+  return sg == Sign::Positive ? 1 : (sg == Sign::Negative ? -1 : 0);
+}
 
 }  // namespace visgate::plucker

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "lib/geom/vec.h"
@@ -231,6 +232,61 @@ struct UVBox {
     uhi = std::max(uhi, b.uhi);
     vlo = std::min(vlo, b.vlo);
     vhi = std::max(vhi, b.vhi);
+  }
+};
+
+// Boxes bucketed by a g x g grid over a box that holds them all, so that a point reads
+// only its cell's list: cell indices floor((x - x0) / w), clamped, are monotone in x, so
+// a point inside a box falls in a cell of the box's cell range; a cell lists every box
+// that meets it, in increasing index. A flat `all` gives one cell holding every box.
+struct UVBoxGrid {
+  int grid = 0;
+  double u0 = 0, v0 = 0, wu = 1, wv = 1;
+  std::vector<uint32_t> start, items, fill;
+
+  // box(k) for k < n: the boxes; g >= 1.
+  template <class BoxAt>
+  void build(const UVBox& all, int g, size_t n, BoxAt&& box) {
+    grid = g;
+    u0 = all.ulo, v0 = all.vlo;
+    wu = (all.uhi - all.ulo) / g, wv = (all.vhi - all.vlo) / g;
+    if (!(wu > 0.0) || !(wv > 0.0)) grid = 1, wu = wv = 1.0;
+    start.assign(size_t(grid) * size_t(grid) + 1, 0u);
+    for (int pass = 0; pass < 2; ++pass) {
+      for (size_t k = 0; k < n; ++k) {
+        const UVBox& b = box(k);
+        const int cu0 = cell(b.ulo, u0, wu), cu1 = cell(b.uhi, u0, wu), cv0 = cell(b.vlo, v0, wv),
+                  cv1 = cell(b.vhi, v0, wv);
+        for (int cv = cv0; cv <= cv1; ++cv)
+          for (int cu = cu0; cu <= cu1; ++cu) {
+            const size_t ci = size_t(cv) * size_t(grid) + size_t(cu);
+            if (pass == 0) ++start[ci + 1];
+            else items[fill[ci]++] = uint32_t(k);
+          }
+      }
+      if (pass == 0) {
+        for (size_t ci = 1; ci < start.size(); ++ci) start[ci] += start[ci - 1];
+        items.resize(start.back());
+        fill.assign(start.begin(), start.end() - 1);
+      }
+    }
+  }
+  // The indices of the boxes that may contain (u, v).
+  std::span<const uint32_t> at(double u, double v) const {
+    const size_t ci = size_t(cell(v, v0, wv)) * size_t(grid) + size_t(cell(u, u0, wu));
+    return {items.data() + start[ci], start[ci + 1] - start[ci]};
+  }
+  void clear() {
+    grid = 0;
+    start.clear();
+    items.clear();
+    fill.clear();
+  }
+
+ private:
+  int cell(double x, double x0, double w) const {
+    const double c = std::floor((x - x0) / w);
+    return c < 0.0 ? 0 : (c >= double(grid - 1) ? grid - 1 : int(c));
   }
 };
 

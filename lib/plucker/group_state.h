@@ -185,7 +185,8 @@ struct GroupState {
   uint32_t near_serial = 0;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
   std::vector<double> vals;
-  std::vector<uint32_t> exact_done, cell_start, cell_items, cell_fill, patch_at;
+  std::vector<uint32_t> exact_done, patch_at;
+  UVBoxGrid sample_grid;  // sample_bits' fragments by cell
   FragmentList frags, tmp;
   std::vector<UVBox> boxes, tmp_boxes;
   FragmentRuns runs;  // over frags and boxes (subtract.h)

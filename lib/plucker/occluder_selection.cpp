@@ -13,6 +13,7 @@
 
 #include "lib/base/check.h"
 #include "lib/geom/morton.h"
+#include "lib/plucker/exact_orient.h"
 #include "lib/plucker/group_state.h"
 #include "lib/plucker/shaft.h"
 
@@ -323,13 +324,9 @@ void Selection::region_surfaces() {
 }
 
 // Strict side of every point of pts against the plane of the triangle a, b, c (world
-// floats): +1 / -1 when orient3d(a, b, c, p) has that sign for every p, else 0. First a
-// filter sharing the triangle's normal N = (b - a) x (c - a) over the points, in double:
-// the differences are exact or rounded once, N's components carry at most 2 u_d
-// |b - a|_1 |c - a|_1, and (p - a) . N, with p - a = (hi - a) + lo rounded by u_d of
-// |hi - a|_1 + |lo|_1 =: D, errs by less than 16 u_d D |b - a|_1 |c - a|_1; a value beyond
-// 2^-40 of that product (2^9 times the error) has the exact sign. Else orient3d_filtered,
-// then exact (a product that small may have lost digits to underflow: also those).
+// floats): +1 / -1 when orient3d(a, b, c, p) has that sign for every p, else 0. First the
+// double filter sharing the triangle's normal over the points (exact_orient.h
+// plane_side_filtered), else orient3d_filtered, then exact.
 // Inlined into closed_surface_culling, which calls it once or twice per candidate
 // (measured: 1.5% fewer selection instructions on scan 75k than the call).
 [[gnu::always_inline]] inline int strict_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint* pts,
@@ -338,13 +335,8 @@ void Selection::region_surfaces() {
   const double s12 = norm1(e1) * norm1(e2);
   int side = 0;
   for (size_t k = 0; k < n; ++k) {
-    const Vec3d h = to_double(pts[k].hi) - ad;
-    const double v = dot(h + pts[k].lo, nrm), bound = 0x1p-40 * (norm1(h) + norm1(pts[k].lo)) * s12;
-    Sign sg = Sign::Uncertain;
-    if (bound > 0x1p-900) sg = v > bound ? Sign::Positive : (v < -bound ? Sign::Negative : Sign::Uncertain);
-    if (sg == Sign::Uncertain) sg = orient3d_filtered(a, b, c, pts[k]);
-    if (sg == Sign::Uncertain) sg = sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), pts[k]).sign);
-    const int sd = sg == Sign::Positive ? 1 : (sg == Sign::Negative ? -1 : 0);
+    int sd = plane_side_filtered(ad, nrm, s12, pts[k]);
+    if (sd == 0) sd = plane_side_rest(a, b, c, pts[k]);
     if (sd == 0 || (k > 0 && sd != side)) return 0;
     side = sd;
   }

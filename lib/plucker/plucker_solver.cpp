@@ -78,7 +78,8 @@ void GroupState::clear() {
   rloc_exact = false;
   for (auto* v : {&on_plane0, &on_level, &skip, &merged}) v->clear();
   vals.clear();
-  for (auto* v : {&exact_tris, &cand, &cand_all, &exact_done, &cell_start, &cell_items, &cell_fill, &patch_at}) v->clear();
+  for (auto* v : {&exact_tris, &cand, &cand_all, &exact_done, &patch_at}) v->clear();
+  sample_grid.clear();
   frags.clear();
   tmp.clear();
   boxes.clear();

@@ -745,56 +745,26 @@ void ReceiverShading::report_fragments(double& area, double& irr) {
 // 2^13 ulps of the coordinates, far above the rounding of the interpolated vertices and
 // far below tau). The box bounds what the slack accepts near short edges; together they
 // accept exactly the points within about 2^-38 of the extent of a fragment.
-// Many samples and fragments: the fragments bucketed by a G x G grid over their boxes,
-// so a sample tests only the fragments whose (grown) box overlaps its cell. The same
-// test on a subset that contains every fragment whose box holds the sample: cell indices
-// floor((x - x0) / w), clamped, are monotone in x, so a point inside a box falls in a
-// cell of the box's cell range.
+// Many samples and fragments: the fragments bucketed by their grown boxes (UVBoxGrid),
+// so a sample tests only its cell's fragments, a subset holding every fragment whose box
+// holds the sample: the same test.
 void ReceiverShading::sample_bits() {
   const Light& light = scene_.lights[gs_.li];
   const FragmentList& frags = gs_.frags;
   std::vector<UVBox>& boxes = gs_.boxes;
-  std::vector<uint32_t>&cell_start = gs_.cell_start, &cell_items = gs_.cell_items, &cell_fill = gs_.cell_fill;
+  UVBoxGrid& cells = gs_.sample_grid;
   ReceiverResult& rr = gs_.ctx->result->receivers[i_];
   const size_t off = gs_.light_offset;
   const double grow = double(lf_.extent) * 0x1p-38;
   const double slack = double(lf_.extent) * 0x1p-40;
   for (UVBox& b : boxes) b = UVBox{b.ulo - grow, b.uhi + grow, b.vlo - grow, b.vhi + grow};
   const size_t nf = frags.size();
-  int grid = 0;
-  double gu0 = 0, gv0 = 0, gwu = 0, gwv = 0;
-  if (nf > 8 && light.samples > 32) {
+  const bool bucketed = nf > 8 && light.samples > 32;
+  if (bucketed) {
     UVBox gb;
     for (const UVBox& b : boxes) gb.extend(b);
-    grid = std::clamp(int(std::sqrt(double(nf))), 2, 16);
-    gu0 = gb.ulo, gv0 = gb.vlo;
-    gwu = (gb.uhi - gb.ulo) / grid, gwv = (gb.vhi - gb.vlo) / grid;
-    if (!(gwu > 0.0) || !(gwv > 0.0)) grid = 0;
-  }
-  auto cell = [](double x, double x0, double w, int n) {
-    double c = std::floor((x - x0) / w);
-    return c < 0.0 ? 0 : (c >= double(n - 1) ? n - 1 : int(c));
-  };
-  if (grid > 0) {
-    cell_start.assign(size_t(grid) * size_t(grid) + 1, 0u);
-    for (int pass = 0; pass < 2; ++pass) {
-      for (size_t f = 0; f < nf; ++f) {
-        const UVBox& b = boxes[f];
-        int u0 = cell(b.ulo, gu0, gwu, grid), u1 = cell(b.uhi, gu0, gwu, grid);
-        int v0 = cell(b.vlo, gv0, gwv, grid), v1 = cell(b.vhi, gv0, gwv, grid);
-        for (int cv = v0; cv <= v1; ++cv)
-          for (int cu = u0; cu <= u1; ++cu) {
-            size_t c = size_t(cv) * size_t(grid) + size_t(cu);
-            if (pass == 0) ++cell_start[c + 1];
-            else cell_items[cell_fill[c]++] = uint32_t(f);
-          }
-      }
-      if (pass == 0) {
-        for (size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
-        cell_items.resize(cell_start.back());
-        cell_fill.assign(cell_start.begin(), cell_start.end() - 1);
-      }
-    }
+    cells.build(gb, std::clamp(int(std::sqrt(double(nf))), 2, 16), nf,
+                [&](size_t f) -> const UVBox& { return boxes[f]; });
   }
   for (int j = 0; j < light.samples; ++j) {
     size_t k = sample_index(light, j, i_);
@@ -802,10 +772,8 @@ void ReceiverShading::sample_bits() {
     if (lf_.on_light[k]) {
       const Vec3d& sp = lf_.samples[k];
       const double su = sp[lf_.axes.u], sv = sp[lf_.axes.v];
-      if (grid > 0) {
-        size_t c = size_t(cell(sv, gv0, gwv, grid)) * size_t(grid) + size_t(cell(su, gu0, gwu, grid));
-        for (uint32_t e = cell_start[c]; e < cell_start[c + 1]; ++e) {
-          const uint32_t f = cell_items[e];
+      if (bucketed) {
+        for (const uint32_t f : cells.at(su, sv)) {
           if (!boxes[f].contains(su, sv)) continue;
           if (point_in_fragment(lf_.axes, frags.data(f), frags.count(f), sp, slack)) {
             vis = true;

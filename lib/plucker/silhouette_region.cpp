@@ -14,23 +14,6 @@ namespace visgate::plucker {
 
 namespace {
 
-// The double filter of exact_side with the plane's normal given: (p - a) . n with p - a
-// = (hi - a) + lo, against 2^-40 of |p - a|_1 |b - a|_1 |c - a|_1 (far above the
-// rounding of the differences, of n and of the dot product; occluder_selection.cpp
-// strict_side uses the same filter). 0: undecided.
-inline int filtered_side(const Vec3d& a, const Vec3d& n, double s12, const SumPoint& p) {
-  const Vec3d h = to_double(p.hi) - a;
-  const double v = dot(h + p.lo, n), bound = 0x1p-40 * (norm1(h) + norm1(p.lo)) * s12;
-  if (!(bound > 0x1p-900)) return 0;  // underflow may have taken digits: undecided
-  return v > bound ? 1 : (v < -bound ? -1 : 0);
-}
-
-int exact_rest(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p) {
-  Sign sg = orient3d_filtered(a, b, c, p);
-  if (sg == Sign::Uncertain) sg = sign_of_int(orient3d_exact_value(SumPoint(a), SumPoint(b), SumPoint(c), p).sign);
-  return sg == Sign::Positive ? 1 : (sg == Sign::Negative ? -1 : 0);
-}
-
 FacePlane face_plane(const TriangleSoup& mesh, uint32_t t) {
   FacePlane f;
   f.t = t;
@@ -42,16 +25,16 @@ FacePlane face_plane(const TriangleSoup& mesh, uint32_t t) {
 }
 
 int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
-  const int s = filtered_side(f.a, f.n, f.s12, p);
-  return s != 0 ? s : exact_rest(mesh.corner(f.t, 0), mesh.corner(f.t, 1), mesh.corner(f.t, 2), p);
+  const int s = plane_side_filtered(f.a, f.n, f.s12, p);
+  return s != 0 ? s : plane_side_rest(mesh.corner(f.t, 0), mesh.corner(f.t, 1), mesh.corner(f.t, 2), p);
 }
 
 }  // namespace
 
 int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p) {
   const Vec3d ad = to_double(a), e1 = to_double(b) - ad, e2 = to_double(c) - ad;
-  const int s = filtered_side(ad, cross(e1, e2), norm1(e1) * norm1(e2), p);
-  return s != 0 ? s : exact_rest(a, b, c, p);
+  const int s = plane_side_filtered(ad, cross(e1, e2), norm1(e1) * norm1(e2), p);
+  return s != 0 ? s : plane_side_rest(a, b, c, p);
 }
 
 SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
@@ -431,12 +414,6 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   // segment r -> p meets a triangle only where p lies in its shadow).
   const bool listed = frags.size() > 16;
   g.shadows.clear();
-  int grid = 0;
-  double gu0 = 0, gv0 = 0, gwu = 1, gwv = 1;
-  auto cell = [&](double x, double x0, double w) {
-    const double cc = std::floor((x - x0) / w);
-    return cc < 0.0 ? 0 : (cc >= double(grid - 1) ? grid - 1 : int(cc));
-  };
   if (listed) {
     UVBox all;
     for (size_t f = 0; f < frags.size(); ++f) all.extend(UVBox::of(lp.axes, frags.data(f), frags.count(f)));
@@ -459,32 +436,9 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
             const UVBox sb = shadow_box(lp, r, q, 3);
             if (sb.overlaps(all)) g.shadows.emplace_back(sb, t);
           });
-    // Bucketed by a G x G grid over `all` (as sample_bits buckets fragments): a point
-    // reads only the boxes of its cell, which hold every box that contains it (cell
-    // indices are monotone in the coordinates, clamped).
-    grid = std::clamp(int(std::sqrt(double(g.shadows.size()) / 4.0)), 1, 16);
-    gu0 = all.ulo, gv0 = all.vlo;
-    gwu = (all.uhi - all.ulo) / grid, gwv = (all.vhi - all.vlo) / grid;
-    if (!(gwu > 0.0) || !(gwv > 0.0)) grid = 1, gwu = gwv = 1.0;
-    g.cell_start.assign(size_t(grid) * size_t(grid) + 1, 0u);
-    for (int pass = 0; pass < 2; ++pass) {
-      for (uint32_t k = 0; k < g.shadows.size(); ++k) {
-        const UVBox& b = g.shadows[k].first;
-        const int u0 = cell(b.ulo, gu0, gwu), u1 = cell(b.uhi, gu0, gwu), v0 = cell(b.vlo, gv0, gwv),
-                  v1 = cell(b.vhi, gv0, gwv);
-        for (int cv = v0; cv <= v1; ++cv)
-          for (int cu = u0; cu <= u1; ++cu) {
-            const size_t ci = size_t(cv) * size_t(grid) + size_t(cu);
-            if (pass == 0) ++g.cell_start[ci + 1];
-            else g.cell_items[g.cell_fill[ci]++] = k;
-          }
-      }
-      if (pass == 0) {
-        for (size_t ci = 1; ci < g.cell_start.size(); ++ci) g.cell_start[ci] += g.cell_start[ci - 1];
-        g.cell_items.resize(g.cell_start.back());
-        g.cell_fill.assign(g.cell_start.begin(), g.cell_start.end() - 1);
-      }
-    }
+    // Bucketed as sample_bits buckets fragments (UVBoxGrid).
+    g.grid.build(all, std::clamp(int(std::sqrt(double(g.shadows.size()) / 4.0)), 1, 16), g.shadows.size(),
+                 [&](size_t k) -> const UVBox& { return g.shadows[k].first; });
   }
   // Each piece by one point strictly inside its cell, confirmed exactly.
   FragmentList& out = g.out;
@@ -522,10 +476,10 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     int blocked = 0;
     if (listed) {
       const double pu = p[lp.axes.u], pv = p[lp.axes.v];
-      const size_t ci = size_t(cell(pv, gv0, gwv)) * size_t(grid) + size_t(cell(pu, gu0, gwu));
-      for (uint32_t e = g.cell_start[ci]; e < g.cell_start[ci + 1] && blocked == 0; ++e) {
-        const auto& [box, t] = g.shadows[g.cell_items[e]];
+      for (const uint32_t k : g.grid.at(pu, pv)) {
+        const auto& [box, t] = g.shadows[k];
         if (box.contains(pu, pv)) blocked = SurfaceTrees::triangle_meets(mesh, t, rw, ps);
+        if (blocked != 0) break;
       }
     } else {
       for (size_t si = 0; si < g.surfaces.size() && blocked == 0; ++si)

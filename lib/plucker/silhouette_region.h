@@ -113,7 +113,7 @@ struct SilhouetteGroup {
   // Per receiver with several pieces: the region surfaces' triangles that may meet its
   // pyramid, with the boxes of their shadows on the light (shadow_box).
   std::vector<std::pair<UVBox, uint32_t>> shadows;
-  std::vector<uint32_t> cell_start, cell_items, cell_fill;  // their grid (silhouette_region.cpp)
+  UVBoxGrid grid;  // their boxes by cell
   FragmentList out;
   std::vector<Vec3d> pos, neg, cur;
   void clear();
