@@ -11,6 +11,7 @@
 #endif
 
 #include "lib/base/cpu_features.h"
+#include "lib/geom/predicates.h"
 #include "lib/iss/iss_solver.h"
 #include "lib/iss/traversal.h"
 
@@ -241,6 +242,53 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
   }
   return false;
 }
+// The connected-surface certificate of a mixed cell (Traversal::cell_patch_blocks): per
+// candidate k, out[k] has bit 0 when the candidate's plane certainly separates p from
+// every corner of Q (det of one strict sign, det - sum w of the other at every corner);
+// bit 1 + e (edge e from vertex e to e + 1: ab, bc, ca) when that closed edge certainly
+// misses every segment from p into Q: the w of the plane through p and the edge (w_c, w_a,
+// w_b) of one strict sign at every corner (Q strictly on one side of that plane, which the
+// segments meet only at p, and p is off the edge when bit 0 is set); bit 4 when some
+// corner segment certainly crosses the open triangle (the hit test of cell_classify).
+// Linear signs again: what holds at the corners holds over Q. Only the first kTermCount
+// term arrays are read.
+__attribute__((always_inline)) inline void cell_patch_flags_body(const double* t, size_t kp, const double* d, int nc,
+                                                                 uint8_t* out) {
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
+    const V4 tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
+    const V4 tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
+    const V4 em = load4(t + kEm * kp + k), det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
+    const M4 pos = det > edet, neg = det < -edet;
+    M4 apos = pos | ~pos, aneg = apos, bpos = apos, bneg = apos, cpos = apos, cneg = apos, sep = apos, hit = ~apos;
+    for (int c = 0; c < nc; ++c) {
+      const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
+      const V4 wa = dx * tbx + dy * tby + dz * tbz;
+      const V4 wb = dx * tcx + dy * tcy + dz * tcz;
+      const V4 wc = dx * tax + dy * tay + dz * taz;
+      const V4 e = n * em;
+      apos &= wa > e;
+      aneg &= wa < -e;
+      bpos &= wb > e;
+      bneg &= wb < -e;
+      cpos &= wc > e;
+      cneg &= wc < -e;
+      const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
+      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+      const V4 dq = det - (wa + wb + wc);
+      sep &= (pos & (dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det)))) |
+             (neg & (dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det)));
+      hit |= (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
+             (neg & (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs));
+    }
+    const M4 eab = cpos | cneg, ebc = apos | aneg, eca = bpos | bneg;
+    for (int j = 0; j < 4; ++j)
+      out[k + size_t(j)] = uint8_t((sep[j] & 1) | (eab[j] & 2) | (ebc[j] & 4) | (eca[j] & 8) | (hit[j] & 16));
+  }
+}
+void cell_patch_flags_default(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
+  cell_patch_flags_body(t, kp, d, nc, out);
+}
 bool cell_classify_default(const double* t, size_t kp, const double* d, int nc, const double* pyr, uint8_t* out) {
   return cell_classify_body<LanesDefault>(t, kp, d, nc, pyr, out);
 }
@@ -269,6 +317,10 @@ __attribute__((target("avx2"), flatten)) void direct_classify_avx2(const double*
 __attribute__((target("avx2"), flatten)) bool cell_classify_avx2(const double* t, size_t kp, const double* d, int nc,
                                                                   const double* pyr, uint8_t* out) {
   return cell_classify_body<LanesAvx2>(t, kp, d, nc, pyr, out);
+}
+__attribute__((target("avx2"))) void cell_patch_flags_avx2(const double* t, size_t kp, const double* d, int nc,
+                                                            uint8_t* out) {
+  cell_patch_flags_body(t, kp, d, nc, out);
 }
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
@@ -305,6 +357,13 @@ bool cell_classify(const double* t, size_t kp, const double* d, int nc, const do
   if (have_avx2()) return cell_classify_avx2(t, kp, d, nc, pyr, out);
 #endif
   return cell_classify_default(t, kp, d, nc, pyr, out);
+}
+
+void cell_patch_flags(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_patch_flags_avx2(t, kp, d, nc, out);
+#endif
+  cell_patch_flags_default(t, kp, d, nc, out);
 }
 
 // Box-against-plane culling of candidate boxes (SoA: lo x, y, z, hi x, y, z of kp each),
@@ -586,6 +645,11 @@ bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
   cell_levels_[0].terms.resize(kCellTermCount * kp);
   cell_levels_[0].count = k_count;
   cell_levels_[0].kp = kp;
+  cell_levels_[0].tris = direct_cand_;
+  if (p_.cell_patches && patch_of_.empty()) {
+    patch_of_.assign(mesh_.triangles.size(), kPatchUnknown);
+    patch_edges_.assign(mesh_.triangles.size(), 7);
+  }
   const TreeNode& R = rn(r);
   const auto& ro = rtree_->order();
   for (uint32_t a = R.begin; a < R.end; ++a) {
@@ -666,7 +730,9 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
     return;
   }
   // The mixed candidates' terms, compacted for the level below (padding lanes repeat
-  // the last one).
+  // the last one): all of them for cells below, the direct test's alone for a leaf.
+  const bool descend = int(depth) < p_.cell_depth;
+  const size_t nterms = descend && !Q.is_leaf ? size_t(kCellTermCount) : size_t(kTermCount);
   if (cell_levels_.size() <= depth + 1) cell_levels_.emplace_back();
   CellLevel& next = cell_levels_[depth + 1];
   CellLevel& cur = cell_levels_[depth];  // emplace_back may have moved it
@@ -674,14 +740,21 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   next.terms.resize(kCellTermCount * np);
   next.count = mixed;
   next.kp = np;
+  next.tris.clear();
   for (size_t k = 0, o = 0; k < kc; ++k) {
     if (!is_mixed(k)) continue;
-    for (size_t f = 0; f < kCellTermCount; ++f) next.terms[f * np + o] = cur.terms[f * kp + k];
+    next.tris.push_back(cur.tris[k]);
+    for (size_t f = 0; f < nterms; ++f) next.terms[f * np + o] = cur.terms[f * kp + k];
     ++o;
   }
   for (size_t o = mixed; o < np; ++o)
-    for (size_t f = 0; f < kCellTermCount; ++f) next.terms[f * np + o] = next.terms[f * np + mixed - 1];
-  const bool descend = int(depth) < p_.cell_depth;
+    for (size_t f = 0; f < nterms; ++f) next.terms[f * np + o] = next.terms[f * np + mixed - 1];
+  if (mixed > 1 && p_.cell_patches && cell_patch_blocks(next, cd, nc)) {
+    n_blocked_shaft_ += double(Q.size());
+    n_cell_decided_ += double(Q.size());
+    n_cell_patch_decided_ += double(Q.size());
+    return;
+  }
   if (descend && !Q.is_leaf) {
     ScopedTimer t(times_[kTree]);
     ltree_->split(c);
@@ -720,6 +793,106 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   n_rays_ += double(count);
   n_rays_blocked_ += double(blocked);
   n_direct_ += double(count);
+}
+
+// Planar patches of the mesh for cell_patch_blocks, on first need of a triangle: its
+// whole patch by a flood over its interior edges (patch_of_, patch_edges_), so once per
+// solve and only where cells look. An edge is interior when exactly two triangles use it
+// (mesh::PreparedTriangle::neighbors), their four vertices are exactly coplanar and the
+// two third vertices lie strictly on opposite sides of it in that plane (orient2d_exact
+// in a projection where the first triangle is not flat): near it the two closed
+// triangles cover the plane on both sides. Every other edge is a boundary edge (bit e of
+// patch_edges_). A triangle alone in its patch gets kNoPatch.
+bool Traversal::patch_interior_edge(uint32_t t, int e) const {
+  const mesh::PreparedTriangle& T = mesh_.triangles[t];
+  const int32_t u = T.neighbors[size_t(e)];
+  if (u < 0) return false;
+  const mesh::PreparedTriangle& U = mesh_.triangles[size_t(u)];
+  const uint32_t va = T.v[size_t(e)], vb = T.v[size_t((e + 1) % 3)];
+  int f = -1;
+  for (int g = 0; g < 3; ++g)
+    if (U.v[size_t(g)] == vb && U.v[size_t((g + 1) % 3)] == va) f = g;
+  if (f < 0) return false;
+  const Vec3f &a = mesh_.vertex_pos[va], &b = mesh_.vertex_pos[vb];
+  const Vec3f c1 = mesh_.corner(t, (e + 2) % 3), c2 = mesh_.corner(size_t(u), (f + 2) % 3);
+  // An axis on which all four agree (a box's face) makes them coplanar; otherwise only
+  // a pair whose double determinant is zero gets the exact test (its expansion
+  // arithmetic is slow on nearly planar quads, such as a sphere's). A coplanar pair left
+  // apart only leaves a smaller patch.
+  bool flat = false;
+  for (int ax = 0; ax < 3; ++ax) flat |= a[ax] == b[ax] && a[ax] == c1[ax] && a[ax] == c2[ax];
+  if (!flat && (orient3d(to_double(a), to_double(b), to_double(c1), to_double(c2)) != 0.0 ||
+                orient3d_exact(a, b, c1, c2) != Sign::Zero))
+    return false;
+  for (int ax = 0; ax < 3; ++ax) {
+    const int i = (ax + 1) % 3, j = (ax + 2) % 3;
+    const Sign s1 = orient2d_exact(a[i], a[j], b[i], b[j], c1[i], c1[j]);
+    if (s1 == Sign::Zero) continue;
+    return to_int(s1) == -to_int(orient2d_exact(a[i], a[j], b[i], b[j], c2[i], c2[j]));
+  }
+  return false;
+}
+
+void Traversal::flood_cell_patch(uint32_t t0) {
+  patch_stack_.assign(1, t0);
+  patch_of_[t0] = t0;
+  size_t size = 0;
+  while (!patch_stack_.empty()) {
+    const uint32_t t = patch_stack_.back();
+    patch_stack_.pop_back();
+    ++size;
+    uint8_t boundary = 7;
+    for (int e = 0; e < 3; ++e) {
+      if (!patch_interior_edge(t, e)) continue;
+      boundary &= uint8_t(~(1u << e));
+      const uint32_t u = uint32_t(mesh_.triangles[t].neighbors[size_t(e)]);
+      if (patch_of_[u] == kPatchUnknown) {
+        patch_of_[u] = t0;
+        patch_stack_.push_back(u);
+      }
+    }
+    patch_edges_[t] = boundary;
+  }
+  if (size == 1) patch_of_[t0] = kNoPatch;
+}
+
+// The connected-surface certificate of a mixed cell (paper 000 section 4.8's merged
+// patches, for a point-to-box shaft): the mixed candidates of one planar patch block
+// every segment from p into Q when the patch's plane separates p from Q, none of their
+// boundary edges meets a segment, and one corner segment crosses one of them inside
+// (cell_patch_flags); lev: the mixed candidates (those cell_classify did not clear). The
+// segments' crossings with the plane form a convex, connected
+// set P'. Every patch triangle meeting P' is a mixed candidate (the others miss every
+// segment or lie outside the leaf shaft), so no boundary edge of the patch meets P';
+// around a point of P' in a patch triangle, the interior edges' triangle pairs then
+// cover the plane, so the covered part of P' is open and closed in P', and not empty: it
+// is all of P'. Each segment crosses the closed patch strictly between its ends.
+bool Traversal::cell_patch_blocks(const CellLevel& lev, const double* cd, int nc) {
+  cell_members_.clear();
+  for (size_t k = 0; k < lev.count; ++k) {
+    if (patch_of_[lev.tris[k]] == kPatchUnknown) flood_cell_patch(lev.tris[k]);
+    const uint32_t pt = patch_of_[lev.tris[k]];
+    if (pt != kNoPatch) cell_members_.emplace_back(pt, uint32_t(k));
+  }
+  std::sort(cell_members_.begin(), cell_members_.end());
+  // One mixed triangle of a patch certifies nothing that cell_classify did not.
+  bool pair = false;
+  for (size_t g = 1; g < cell_members_.size() && !pair; ++g) pair = cell_members_[g].first == cell_members_[g - 1].first;
+  if (!pair) return false;
+  cell_flags_.resize(lev.kp);
+  cell_patch_flags(lev.terms.data(), lev.kp, cd, nc, cell_flags_.data());
+  for (size_t g0 = 0, g1 = 0; g0 < cell_members_.size(); g0 = g1) {
+    bool sep = false, hit = false, edges = true;
+    for (g1 = g0; g1 < cell_members_.size() && cell_members_[g1].first == cell_members_[g0].first; ++g1) {
+      const uint32_t k = cell_members_[g1].second;
+      const uint8_t f = cell_flags_[k];
+      sep |= (f & 1) != 0;
+      hit |= (f & 16) != 0;
+      edges &= (uint8_t(patch_edges_[lev.tris[k]] << 1) & ~f) == 0;
+    }
+    if (sep && hit && edges) return true;
+  }
+  return false;
 }
 
 // CAST-SHADOW-RAYS. With the custom caster (section 4.10) the shaft's blockers, the

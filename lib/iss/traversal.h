@@ -135,6 +135,10 @@ struct Params {
   bool cell_shafts = true;
   int cell_max_candidates = 128;
   int cell_depth = 0;
+  // Cell shafts also blocked by planar patches of exactly coplanar neighbours (a wall's
+  // face split in two triangles covers a cell that neither covers alone;
+  // cell_patch_blocks).
+  bool cell_patches = true;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -325,6 +329,8 @@ class Traversal {
   // decided) when the candidates are too many to gather or test.
   bool cell_rays(int r, int l, const Shaft& sh);
   void cell_descend(int c, size_t depth, uint32_t i, const double* od, uint64_t prefix);
+  bool patch_interior_edge(uint32_t t, int e) const;
+  void flood_cell_patch(uint32_t t);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
 
@@ -407,7 +413,18 @@ class Traversal {
   struct CellLevel {
     std::vector<double> terms;
     size_t count = 0, kp = 0;
+    std::vector<uint32_t> tris;  // the candidates' triangles (count of them)
   };
+  // Planar patches (flood_cell_patch): per triangle its patch, kNoPatch when alone or
+  // kPatchUnknown before its first need, and its boundary edges (bit e: edge e, vertex e
+  // to e + 1).
+  static constexpr uint32_t kNoPatch = ~uint32_t(0), kPatchUnknown = ~uint32_t(1);
+  std::vector<uint32_t> patch_of_, patch_stack_;
+  std::vector<uint8_t> patch_edges_;
+  std::vector<std::pair<uint32_t, uint32_t>> cell_members_;  // (patch, candidate)
+  std::vector<uint8_t> cell_flags_;
+  double n_cell_patch_decided_ = 0;  // relations blocked by cell_patch_blocks
+  bool cell_patch_blocks(const CellLevel& lev, const double* cd, int nc);
   std::vector<CellLevel> cell_levels_;
   std::vector<uint8_t> cell_out_;
   std::vector<uint32_t> cell_uncertain_;  // samples of the current receiver left to Embree
