@@ -129,11 +129,11 @@ struct Params {
   // leaf relations of a whole-light leaf with at most cell_max_candidates candidates,
   // receiver by receiver, by shafts from the receiver point to the light node's box and
   // to its subtree's boxes down to cell_depth levels below it. Defaults measured on rooms
-  // at 1024 receivers (docs/log/iss-performance.md, tenth round): deeper cells and more
+  // at 1024 receivers (docs/log/iss-performance.md, tenth and eleventh rounds): deeper cells and more
   // candidates decide more relations but cost more than the direct test and the rays they
   // replace (a light cell was left mixed about three times in four at every level).
   bool cell_shafts = true;
-  int cell_max_candidates = 128;
+  int cell_max_candidates = 192;
   int cell_depth = 0;
   // Cell shafts also blocked by planar patches of exactly coplanar neighbours (a wall's
   // face split in two triangles covers a cell that neither covers alone;
