@@ -180,39 +180,68 @@ __attribute__((always_inline)) inline void direct_classify_body(const double* t,
 // candidate also misses all of Q when its three vertices (the cell terms) are certainly
 // negative for one plane. Returns true when some candidate blocks all of Q (out is then
 // incomplete); else bit k & 3 of out[k / 4] is set for the candidates k that miss all of Q.
+// Four candidates' terms (lanes k..k+3) against the corners of a cell, shared by
+// cell_classify and cell_patch_flags: at(c) sets the triple products w and their bound e
+// at corner c and keeps which w had one strict sign at every corner so far.
+struct CellLanes {
+  V4 tbx, tby, tbz, tcx, tcy, tcz, tax, tay, taz, em, det, edet, wa, wb, wc, e;
+  M4 pos, neg, apos, aneg, bpos, bneg, cpos, cneg;
+  __attribute__((always_inline)) CellLanes(const double* t, size_t kp, size_t k) {
+    tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
+    tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
+    tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
+    em = load4(t + kEm * kp + k), det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
+    pos = det > edet, neg = det < -edet;
+    apos = pos | ~pos, aneg = apos, bpos = apos, bneg = apos, cpos = apos, cneg = apos;
+  }
+  __attribute__((always_inline)) void at(const double* d, int c) {
+    const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
+    wa = dx * tbx + dy * tby + dz * tbz;
+    wb = dx * tcx + dy * tcy + dz * tcz;
+    wc = dx * tax + dy * tay + dz * taz;
+    e = n * em;
+  }
+  __attribute__((always_inline)) void keep_signs() {
+    apos &= wa > e;
+    aneg &= wa < -e;
+    bpos &= wb > e;
+    bneg &= wb < -e;
+    cpos &= wc > e;
+    cneg &= wc < -e;
+  }
+  // at(c) and keep_signs(), and corner c on p's side of the triangle's plane (same) or
+  // strictly beyond it (beyond), certified.
+  __attribute__((always_inline)) void step(const double* d, int c, M4& same, M4& beyond) {
+    at(d, c);
+    keep_signs();
+    const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+    const V4 dq = det - (wa + wb + wc);
+    const V4 bp = edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det), bn = edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det);
+    same = (pos & (dq > bp)) | (neg & (dq < -bn));
+    beyond = (pos & (dq < -bp)) | (neg & (dq > bn));
+  }
+  // The corner's segment certainly crosses the open triangle strictly inside (0, 1).
+  __attribute__((always_inline)) M4 hit() const {
+    const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
+    const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
+    return (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
+           (neg & (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs));
+  }
+};
+
 template <class Lanes>
 __attribute__((always_inline)) inline bool cell_classify_body(const double* t, size_t kp, const double* d, int nc,
                                                               const double* pyr, uint8_t* out) {
   for (size_t k = 0; k < kp; k += 4) {
-    const V4 tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
-    const V4 tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
-    const V4 tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
-    const V4 em = load4(t + kEm * kp + k), det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
-    const M4 pos = det > edet, neg = det < -edet;
-    M4 apos = pos | ~pos, aneg = apos, bpos = apos, bneg = apos, cpos = apos, cneg = apos, side = apos;
-    V4 wa, wb, wc, e;
-    auto corner = [&](int c) {  // w and their bound at corner c
-      const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
-      wa = dx * tbx + dy * tby + dz * tbz;
-      wb = dx * tcx + dy * tcy + dz * tcz;
-      wc = dx * tax + dy * tay + dz * taz;
-      e = n * em;
-    };
+    CellLanes L(t, kp, k);
+    M4 side = L.apos;
     // First the misses (the common answer, and all that most candidates need).
     for (int c = 0; c < nc; ++c) {
-      corner(c);
-      apos &= wa > e;
-      aneg &= wa < -e;
-      bpos &= wb > e;
-      bneg &= wb < -e;
-      cpos &= wc > e;
-      cneg &= wc < -e;
-      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
-      const V4 dq = det - (wa + wb + wc);
-      side &= (pos & (dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det))) |
-              (neg & (dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det))));
+      M4 same, beyond;
+      L.step(d, c, same, beyond);
+      side &= same;
     }
-    M4 miss = (apos & (bneg | cneg)) | (bpos & (aneg | cneg)) | (cpos & (aneg | bneg)) | side;
+    M4 miss = (L.apos & (L.bneg | L.cneg)) | (L.bpos & (L.aneg | L.cneg)) | (L.cpos & (L.aneg | L.bneg)) | side;
     if (pyr && !Lanes::all(miss)) {
       const V4 m = load4(t + kM * kp + k);
       const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
@@ -226,15 +255,12 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
       }
     }
     // A block needs only be certified where every w has det's strict sign at every corner.
-    const M4 maybe = (pos & apos & bpos & cpos) | (neg & aneg & bneg & cneg);
+    const M4 maybe = (L.pos & L.apos & L.bpos & L.cpos) | (L.neg & L.aneg & L.bneg & L.cneg);
     if (Lanes::any(maybe)) {
       M4 hit = maybe;
       for (int c = 0; c < nc; ++c) {
-        corner(c);
-        const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
-        const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
-        hit &= (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
-               (neg & (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs));
+        L.at(d, c);
+        hit &= L.hit();
       }
       if (Lanes::any(hit)) return true;
     }
@@ -255,33 +281,15 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
 __attribute__((always_inline)) inline void cell_patch_flags_body(const double* t, size_t kp, const double* d, int nc,
                                                                  uint8_t* out) {
   for (size_t k = 0; k < kp; k += 4) {
-    const V4 tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
-    const V4 tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
-    const V4 tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
-    const V4 em = load4(t + kEm * kp + k), det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
-    const M4 pos = det > edet, neg = det < -edet;
-    M4 apos = pos | ~pos, aneg = apos, bpos = apos, bneg = apos, cpos = apos, cneg = apos, sep = apos, hit = ~apos;
+    CellLanes L(t, kp, k);
+    M4 sep = L.apos, hit = ~L.apos;
     for (int c = 0; c < nc; ++c) {
-      const double dx = d[4 * c], dy = d[4 * c + 1], dz = d[4 * c + 2], n = d[4 * c + 3];
-      const V4 wa = dx * tbx + dy * tby + dz * tbz;
-      const V4 wb = dx * tcx + dy * tcy + dz * tcz;
-      const V4 wc = dx * tax + dy * tay + dz * taz;
-      const V4 e = n * em;
-      apos &= wa > e;
-      aneg &= wa < -e;
-      bpos &= wb > e;
-      bneg &= wb < -e;
-      cpos &= wc > e;
-      cneg &= wc < -e;
-      const V4 wmax = max4(max4(wa, wb), wc), wmin = min4(min4(wa, wb), wc);
-      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc);
-      const V4 dq = det - (wa + wb + wc);
-      sep &= (pos & (dq < -(edet + 3.0 * e + (4.0 * kEps) * (sum_abs + det)))) |
-             (neg & (dq > edet + 3.0 * e + (4.0 * kEps) * (sum_abs - det)));
-      hit |= (pos & (wmin > e) & ((det + edet) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs)) |
-             (neg & (wmax < -e) & ((edet - det) + 3.0 * e < sum_abs - (4.0 * kEps) * sum_abs));
+      M4 same, beyond;
+      L.step(d, c, same, beyond);
+      sep &= beyond;
+      hit |= L.hit();
     }
-    const M4 eab = cpos | cneg, ebc = apos | aneg, eca = bpos | bneg;
+    const M4 eab = L.cpos | L.cneg, ebc = L.apos | L.aneg, eca = L.bpos | L.bneg;
     for (int j = 0; j < 4; ++j)
       out[k + size_t(j)] = uint8_t((sep[j] & 1) | (eab[j] & 2) | (ebc[j] & 4) | (eca[j] & 8) | (hit[j] & 16));
   }

@@ -3,6 +3,10 @@
 // test (direct_rays) answers like the Embree leaf rays and the exact oracle.
 #include <gtest/gtest.h>
 
+#include <map>
+#include <string>
+#include <vector>
+
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "oracle/relation_oracle.h"
@@ -99,11 +103,50 @@ void expect_exact_where_they_differ(const Scene& s, const SolveResult& on, const
   EXPECT_EQ(differ_wrong, 0u) << what;
 }
 
+// An option that changes only how leaf relations are decided (`on` with it, `off`
+// without): the same shafts, `stat` zero without it, every relation decided once (by a
+// shaft, a cell or a leaf test) and no more rays.
+void expect_same_shafts_no_more_rays(const Scene& s, const SolveResult& on, const SolveResult& off, const char* stat,
+                                     const std::string& what) {
+  EXPECT_EQ(on.stats.get("shafts_built"), off.stats.get("shafts_built")) << what;
+  EXPECT_EQ(off.stats.get(stat), 0.0) << what;
+  EXPECT_EQ(on.stats.get("relations_blocked_by_shaft") + on.stats.get("relations_visible_by_empty_shaft") +
+                on.stats.get("relations_ray_cast"),
+            double(s.relation_count()))
+      << what;
+  EXPECT_LE(on.stats.get("relations_ray_cast"), off.stats.get("relations_ray_cast")) << what;
+}
+
 struct LeafCase {
   const char* fam;
   long tris, recv, samples;
   std::map<std::string, std::string> opts;
 };
+
+// Each case solved with `option` on (its options as given) and off: the checks of
+// expect_same_shafts_no_more_rays (`off_stat` zero without it) and
+// expect_exact_where_they_differ; on rooms `stat` above zero. Returns `stat` summed.
+double expect_option_cases(const std::vector<LeafCase>& cases, const char* option, const char* off_stat,
+                           const char* stat) {
+  double total = 0;
+  for (const LeafCase& c : cases) {
+    Scene s = family(c.fam, 5, c.tris, c.recv, c.samples);
+    EXPECT_FALSE(s.receivers.empty()) << c.fam;
+    if (s.receivers.empty()) continue;
+    std::map<std::string, std::string> o = c.opts;
+    SolveResult on = run_iss(s, o);
+    o[option] = "off";
+    SolveResult off = run_iss(s, o);
+    const std::string what = std::string(c.fam) + " " + describe(c.opts);
+    expect_same_shafts_no_more_rays(s, on, off, off_stat, what);
+    total += on.stats.get(stat);
+    if (std::string(c.fam) == "rooms") {
+      EXPECT_GT(on.stats.get(stat), 0.0) << what;
+    }
+    expect_exact_where_they_differ(s, on, off, 1e-5, what);
+  }
+  return total;
+}
 
 }  // namespace
 
@@ -156,9 +199,8 @@ TEST(IssLeafRays, CellShaftsAnswerAsWithoutThemAndTheOracle) {
   // shafts are built. Every answer they give is the exact one, so it differs from the
   // leaf answers without them only where those (Embree rays) were wrong. Both the
   // default (the light node's box only) and the full descent to the light-tree leaves.
-  const double tau = 1e-5;
   const std::map<std::string, std::string> deep = {{"cell_depth", "16"}, {"cell_candidates", "1024"}};
-  const LeafCase cases[] = {
+  const std::vector<LeafCase> cases = {
       {"rooms", -1, 256, 64, {}},
       {"rooms", -1, 256, 64, deep},
       // Columns: the light trial keeps some lights whole at these sizes (with
@@ -171,30 +213,7 @@ TEST(IssLeafRays, CellShaftsAnswerAsWithoutThemAndTheOracle) {
       {"shared-edge-fan", -1, 256, 16, deep},
       {"grid-snapped", -1, 256, 16, deep},
   };
-  double cell_total = 0;
-  for (const LeafCase& c : cases) {
-    Scene s = family(c.fam, 5, c.tris, c.recv, c.samples);
-    ASSERT_FALSE(s.receivers.empty()) << c.fam;
-    std::map<std::string, std::string> o = c.opts;
-    SolveResult on = run_iss(s, o);
-    o["cell_shafts"] = "off";
-    SolveResult off = run_iss(s, o);
-    const std::string what = std::string(c.fam) + " " + describe(c.opts);
-    EXPECT_EQ(on.stats.get("shafts_built"), off.stats.get("shafts_built")) << what;
-    EXPECT_EQ(off.stats.get("cell_shafts"), 0.0) << what;
-    // Every relation decided once: by a shaft, a cell or a leaf test.
-    EXPECT_EQ(on.stats.get("relations_blocked_by_shaft") + on.stats.get("relations_visible_by_empty_shaft") +
-                  on.stats.get("relations_ray_cast"),
-              double(s.relation_count()))
-        << what;
-    EXPECT_LE(on.stats.get("relations_ray_cast"), off.stats.get("relations_ray_cast")) << what;
-    cell_total += on.stats.get("cell_shaft_relations");
-    if (std::string(c.fam) == "rooms") {
-      EXPECT_GT(on.stats.get("cell_shaft_relations"), 0.0) << what;
-    }
-    expect_exact_where_they_differ(s, on, off, tau, what);
-  }
-  EXPECT_GT(cell_total, 0.0);
+  EXPECT_GT(expect_option_cases(cases, "cell_shafts", "cell_shafts", "cell_shaft_relations"), 0.0);
 }
 
 TEST(IssLeafRays, CellPatchesAnswerAsWithoutThemAndTheOracle) {
@@ -202,9 +221,8 @@ TEST(IssLeafRays, CellPatchesAnswerAsWithoutThemAndTheOracle) {
   // together (a box face's two triangles, a tessellated plane). They change only how a
   // cell is decided: the same shafts, every relation once, no more rays, and every
   // answer where on and off differ the exact one.
-  const double tau = 1e-5;
   const std::map<std::string, std::string> deep = {{"cell_depth", "16"}, {"cell_candidates", "1024"}};
-  const LeafCase cases[] = {
+  const std::vector<LeafCase> cases = {
       {"rooms", -1, 256, 64, {}},
       {"rooms", -1, 256, 64, deep},
       {"columns", 1000, 1024, 64, deep},
@@ -213,26 +231,7 @@ TEST(IssLeafRays, CellPatchesAnswerAsWithoutThemAndTheOracle) {
       {"grid-snapped", -1, 256, 16, deep},
       {"random-soup", -1, 256, 16, deep},
   };
-  for (const LeafCase& c : cases) {
-    Scene s = family(c.fam, 5, c.tris, c.recv, c.samples);
-    ASSERT_FALSE(s.receivers.empty()) << c.fam;
-    std::map<std::string, std::string> o = c.opts;
-    SolveResult on = run_iss(s, o);
-    o["cell_patches"] = "off";
-    SolveResult off = run_iss(s, o);
-    const std::string what = std::string(c.fam) + " " + describe(c.opts);
-    EXPECT_EQ(on.stats.get("shafts_built"), off.stats.get("shafts_built")) << what;
-    EXPECT_EQ(off.stats.get("cell_patch_relations"), 0.0) << what;
-    EXPECT_EQ(on.stats.get("relations_blocked_by_shaft") + on.stats.get("relations_visible_by_empty_shaft") +
-                  on.stats.get("relations_ray_cast"),
-              double(s.relation_count()))
-        << what;
-    EXPECT_LE(on.stats.get("relations_ray_cast"), off.stats.get("relations_ray_cast")) << what;
-    if (std::string(c.fam) == "rooms") {
-      EXPECT_GT(on.stats.get("cell_patch_relations"), 0.0) << what;
-    }
-    expect_exact_where_they_differ(s, on, off, tau, what);
-  }
+  expect_option_cases(cases, "cell_patches", "cell_patch_relations", "cell_patch_relations");
 }
 
 TEST(IssLeafRays, CellPatchesCoverOnlyWhereTheirTrianglesDo) {
@@ -273,7 +272,7 @@ TEST(IssLeafRays, CellPatchesCoverOnlyWhereTheirTrianglesDo) {
     o["cell_patches"] = "off";
     SolveResult off = run_iss(s, o);
     const std::string what = "variant " + std::to_string(variant);
-    EXPECT_EQ(on.stats.get("shafts_built"), off.stats.get("shafts_built")) << what;
+    expect_same_shafts_no_more_rays(s, on, off, "cell_patch_relations", what);
     if (variant == 0) {
       EXPECT_EQ(count_visible(s, on), 0.0) << what;
     } else {  // the hole's neighbourhood is left to the cells (the shafts see it)
