@@ -10,6 +10,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "lib/plucker/group_state.h"
 #include "lib/plucker/subtract.h"
 
@@ -46,6 +50,10 @@ struct PyramidWeights {
   struct Plane {
     Vec3d n, l, w;
     double c = 0.0;
+#if defined(__SSE2__)
+    // n, l and w, each coordinate in both lanes (all_outside).
+    __m128d nx, ny, nz, lx, ly, lz, wx, wy, wz;
+#endif
   };
   std::vector<Plane> p;
 };
@@ -57,6 +65,31 @@ inline bool outside_side(const PyramidWeights::Plane& pp, const Vec3d& d, double
   if (!(s < 0.0)) return false;
   const double e = std::abs(d.x) * pp.w.x + std::abs(d.y) * pp.w.y + std::abs(d.z) * pp.w.z;
   return s < -16.0 * e - shift;
+}
+// Every vertex of pv[0, n) outside side plane pp (outside_side at each). With SSE2 two
+// vertices at a time: per lane the scalar test's value s = dot(n, v - l), its bound e
+// and the comparison s < -16 e - shift, the same operations in the same order (the
+// scalar test's s < 0 first only skips e: where s >= 0, -16 e - shift <= 0 rejects it
+// too, NaN included); the answer, all vertices outside, does not depend on their order.
+// The near polygons have about four vertices (columns: 784k vertex tests, 135k rejected
+// polygons of 3.98 vertices).
+inline bool all_outside(const PyramidWeights::Plane& pp, const Vec3d* pv, uint32_t n, double shift) {
+  uint32_t k = 0;
+#if defined(__SSE2__)
+  const __m128d sh = _mm_set1_pd(shift), m16 = _mm_set1_pd(-16.0), sgn = _mm_set1_pd(-0.0);
+  for (; k + 2 <= n; k += 2) {
+    const __m128d dx = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(&pv[k].x), &pv[k + 1].x), pp.lx);
+    const __m128d dy = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(&pv[k].y), &pv[k + 1].y), pp.ly);
+    const __m128d dz = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(&pv[k].z), &pv[k + 1].z), pp.lz);
+    const __m128d sv = _mm_add_pd(_mm_add_pd(_mm_mul_pd(pp.nx, dx), _mm_mul_pd(pp.ny, dy)), _mm_mul_pd(pp.nz, dz));
+    const __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_andnot_pd(sgn, dx), pp.wx), _mm_mul_pd(_mm_andnot_pd(sgn, dy), pp.wy)),
+                                 _mm_mul_pd(_mm_andnot_pd(sgn, dz), pp.wz));
+    if (_mm_movemask_pd(_mm_cmplt_pd(sv, _mm_sub_pd(_mm_mul_pd(m16, e), sh))) != 3) return false;
+  }
+#endif
+  for (; k < n; ++k)
+    if (!outside_side(pp, pv[k] - pp.l, shift)) return false;
+  return true;
 }
 PyramidWeights& pyramid_weights() {
   thread_local PyramidWeights pw;
@@ -246,6 +279,11 @@ void ReceiverShading::pyramid_planes() {
     pp.l = lf_.poly[j];
     pp.w = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
     pp.c = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
+#if defined(__SSE2__)
+    pp.nx = _mm_set1_pd(pp.n.x), pp.ny = _mm_set1_pd(pp.n.y), pp.nz = _mm_set1_pd(pp.n.z);
+    pp.lx = _mm_set1_pd(pp.l.x), pp.ly = _mm_set1_pd(pp.l.y), pp.lz = _mm_set1_pd(pp.l.z);
+    pp.wx = _mm_set1_pd(pp.w.x), pp.wy = _mm_set1_pd(pp.w.y), pp.wz = _mm_set1_pd(pp.w.z);
+#endif
   }
 }
 
@@ -386,10 +424,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
       // block_outside's test and margin (outside_side), their per-receiver parts
       // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
       // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
-      const double shift = pp.c * reach;
-      bool outside = true;
-      for (uint32_t k = 0; k < np.count && outside; ++k) outside = outside_side(pp, pv[k] - pp.l, shift);
-      if (outside) {
+      if (all_outside(pp, pv, np.count, pp.c * reach)) {
         hint = uint8_t(j);
         return;
       }
