@@ -698,9 +698,11 @@ void ReceiverShading::shade_float() {
   // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
   if (tree_first) tree_query();
   if (gs_.near_blocks.empty()) {
-    for (uint32_t k = 0; k < gs_.near.size(); ++k) {
+    const NearPoly* near = gs_.near.data();  // the list does not change while r is shaded
+    const uint32_t nn = uint32_t(gs_.near.size());
+    for (uint32_t k = 0; k < nn; ++k) {
       if (gs_.frags.size() == 0) break;
-      subtract_near(gs_.near[k], k);
+      subtract_near(near[k], k);
     }
   } else {
     // The polygons of the blocks this receiver's pyramid may meet, in the list's order:
@@ -748,15 +750,21 @@ void ReceiverShading::report_fragments(double& area, double& irr) {
   for (size_t f = 0; f < frags.size(); ++f) {
     area += polygon_area(frags.data(f), frags.count(f));
     irr += lambert_irradiance(r_, rec_.n, frags.data(f), frags.count(f));
-    Polygon3f wf;
-    wf.reserve(size_t(frags.count(f)));
-    for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
+    const Vec3d* fv = frags.data(f);
+    const size_t fn = size_t(frags.count(f));
+    Polygon3f wf(fn);
+    for (size_t k = 0; k < fn; ++k) wf[k] = Vec3f(fv[k] + od);
     double best = 0.0;
     Vec3d inside{};
-    for (size_t k = 1; k + 1 < wf.size(); ++k) {
-      Vec3d a = to_double(wf[0]), b = to_double(wf[k]), c = to_double(wf[k + 1]);
-      double ar = length(cross(b - a, c - a));
-      if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+    if (fn >= 3) {  // the fan (wf[0], wf[k], wf[k + 1]), each vertex widened to double once
+      const Vec3d a = to_double(wf[0]);
+      Vec3d b = to_double(wf[1]);
+      for (size_t k = 1; k + 1 < fn; ++k) {
+        const Vec3d c = to_double(wf[k + 1]);
+        double ar = length(cross(b - a, c - a));
+        if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+        b = c;
+      }
     }
     // The comparator's segment runs from r to that rounded point, which rounding also
     // moved off the light's plane (by up to half the spacing): its test is the point
