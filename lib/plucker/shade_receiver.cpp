@@ -10,11 +10,8 @@
 #include <cmath>
 #include <limits>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "lib/plucker/group_state.h"
+#include "lib/plucker/pyramid_side.h"
 #include "lib/plucker/subtract.h"
 
 namespace visgate::plucker {
@@ -47,50 +44,9 @@ constexpr double kUd = kUnitRoundoffD;
 // c = 4 u_d |pyramid[j]|_1 of the shift. Per thread, like the group's other scratch (one
 // receiver at a time).
 struct PyramidWeights {
-  struct Plane {
-    Vec3d n, l, w;
-    double c = 0.0;
-#if defined(__SSE2__)
-    // n, l and w, each coordinate in both lanes (all_outside).
-    __m128d nx, ny, nz, lx, ly, lz, wx, wy, wz;
-#endif
-  };
+  using Plane = PyramidPlane;
   std::vector<Plane> p;
 };
-// d = x - l strictly outside side plane pp by the pyramid test's margin: dot(n, d) <
-// -16 dot_err(d, n, err) - shift. Shared by block_outside and subtract_near; a value
-// not below 0 cannot be below -16 e - shift <= 0, so the bound is skipped there.
-inline bool outside_side(const PyramidWeights::Plane& pp, const Vec3d& d, double shift) {
-  const double s = dot(pp.n, d);
-  if (!(s < 0.0)) return false;
-  const double e = std::abs(d.x) * pp.w.x + std::abs(d.y) * pp.w.y + std::abs(d.z) * pp.w.z;
-  return s < -16.0 * e - shift;
-}
-// Every vertex of pv[0, n) outside side plane pp (outside_side at each). With SSE2 two
-// vertices at a time: per lane the scalar test's value s = dot(n, v - l), its bound e
-// and the comparison s < -16 e - shift, the same operations in the same order (the
-// scalar test's s < 0 first only skips e: where s >= 0, -16 e - shift <= 0 rejects it
-// too, NaN included); the answer, all vertices outside, does not depend on their order.
-// The near polygons have about four vertices (columns: 784k vertex tests, 135k rejected
-// polygons of 3.98 vertices).
-inline bool all_outside(const PyramidWeights::Plane& pp, const Vec3d* pv, uint32_t n, double shift) {
-  uint32_t k = 0;
-#if defined(__SSE2__)
-  const __m128d sh = _mm_set1_pd(shift), m16 = _mm_set1_pd(-16.0), sgn = _mm_set1_pd(-0.0);
-  for (; k + 2 <= n; k += 2) {
-    const __m128d dx = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(&pv[k].x), &pv[k + 1].x), pp.lx);
-    const __m128d dy = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(&pv[k].y), &pv[k + 1].y), pp.ly);
-    const __m128d dz = _mm_sub_pd(_mm_loadh_pd(_mm_load_sd(&pv[k].z), &pv[k + 1].z), pp.lz);
-    const __m128d sv = _mm_add_pd(_mm_add_pd(_mm_mul_pd(pp.nx, dx), _mm_mul_pd(pp.ny, dy)), _mm_mul_pd(pp.nz, dz));
-    const __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_andnot_pd(sgn, dx), pp.wx), _mm_mul_pd(_mm_andnot_pd(sgn, dy), pp.wy)),
-                                 _mm_mul_pd(_mm_andnot_pd(sgn, dz), pp.wz));
-    if (_mm_movemask_pd(_mm_cmplt_pd(sv, _mm_sub_pd(_mm_mul_pd(m16, e), sh))) != 3) return false;
-  }
-#endif
-  for (; k < n; ++k)
-    if (!outside_side(pp, pv[k] - pp.l, shift)) return false;
-  return true;
-}
 PyramidWeights& pyramid_weights() {
   thread_local PyramidWeights pw;
   return pw;
@@ -279,11 +235,7 @@ void ReceiverShading::pyramid_planes() {
     pp.l = lf_.poly[j];
     pp.w = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
     pp.c = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
-#if defined(__SSE2__)
-    pp.nx = _mm_set1_pd(pp.n.x), pp.ny = _mm_set1_pd(pp.n.y), pp.nz = _mm_set1_pd(pp.n.z);
-    pp.lx = _mm_set1_pd(pp.l.x), pp.ly = _mm_set1_pd(pp.l.y), pp.lz = _mm_set1_pd(pp.l.z);
-    pp.wx = _mm_set1_pd(pp.w.x), pp.wy = _mm_set1_pd(pp.w.y), pp.wz = _mm_set1_pd(pp.w.z);
-#endif
+    pp.set_lanes();
   }
 }
 
