@@ -392,6 +392,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   }
   const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
   if (maxv < -4.0 * kUd * gn1 * (pmax + rmax_)) return;
+  bool all_above = false;  // every vertex above r's level beyond rounding (set below)
   // The side of r against the triangle's plane (near_side: decided on the local double
   // coordinates with a bound that covers their rounding, so it is the side in the
   // inputs as given). A receiver within rounding of the plane (but not on it) sees the
@@ -428,9 +429,11 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
     const bool above = maxv > 0.0;
     bool near_level = false;
     maxv = 0.0;
+    all_above = true;
     for (double& v : vals) {
       if (std::abs(v) <= on_tol) v = 0.0;
       near_level |= v > 0.0 && v <= near_tol;
+      all_above &= v > 0.0;
       maxv = std::max(maxv, v);
     }
     if (maxv <= 0.0 && !above) return;  // float path: at or behind r's g-plane
@@ -446,7 +449,17 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   if (q.size() < room) q.resize(room);
   if (on_level.size() < room) on_level.resize(room);
   if (skip.size() < room) skip.resize(room);
-  const size_t nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+  // Every vertex above r's level: the clip keeps the polygon as it is, none on the level.
+  size_t nq = 0;
+  if (all_above) {
+    if (np.count >= 3) {
+      std::copy(pv, pv + np.count, q.begin());
+      std::fill(on_level.begin(), on_level.begin() + std::ptrdiff_t(np.count), uint8_t(0));
+      nq = np.count;
+    }
+  } else {
+    nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+  }
   if (nq == 0) return;
   // Oriented so that r is on the negative side (bsp.h Occluder).
   if (side_r > 0) {
