@@ -449,12 +449,12 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   if (q.size() < room) q.resize(room);
   if (on_level.size() < room) on_level.resize(room);
   if (skip.size() < room) skip.resize(room);
-  // Every vertex above r's level: the clip keeps the polygon as it is, none on the level.
+  // Every vertex above r's level: the clip keeps the polygon as it is, none on the level
+  // (on_level is left unwritten; the skips below are all 0 then).
   size_t nq = 0;
   if (all_above) {
     if (np.count >= 3) {
       std::copy(pv, pv + np.count, q.begin());
-      std::fill(on_level.begin(), on_level.begin() + std::ptrdiff_t(np.count), uint8_t(0));
       nq = np.count;
     }
   } else {
@@ -464,7 +464,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // Oriented so that r is on the negative side (bsp.h Occluder).
   if (side_r > 0) {
     std::reverse(q.begin(), q.begin() + std::ptrdiff_t(nq));
-    std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
+    if (!all_above) std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
   }
   // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies in the
   // level plane through r, so the plane through r and that edge is the level plane
@@ -472,7 +472,10 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // a light line away and is skipped. Testing it would be wrong near degeneracy: when r
   // is within rounding of the triangle's plane, the edge passes within rounding of r and
   // float calls r "on its line" (test ReceiverWithinRoundingOfAFace).
-  for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
+  // (None on the level when every vertex is above it: on_level was not written then.)
+  if (all_above) std::fill(skip.begin(), skip.begin() + std::ptrdiff_t(nq), uint8_t(0));
+  else
+    for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
   // The planes through r and q's edges are only as good as q's vertices: a vertex
   // rounded by u of its coordinates, at a distance d from r, turns such a plane by up to
   // u |q| / d. A vertex that close to r (the clip at r's level of an edge passing within
