@@ -364,6 +364,59 @@ bool point_in_fragment(const UVAxes& f, const Vec3d* poly, int n, const Vec3d& p
   return true;
 }
 
+// atan2(y, x) for y >= 0 (fragment.h). The quotient t = min(y, |x|) / max(y, |x|) in
+// [0, 1] is reduced about the nearest c = i / 16 (atan t = atan c + atan u, u = (t - c) /
+// (1 + t c), |u| <= 1/32; t - c is exact by Sterbenz for i >= 1) and atan u is its series
+// to u^11 (the next term, u^13 / 13 < 2^-68, is far below an ulp of the result); the
+// octant's constant (atan c, pi/2 - atan c, pi - atan c or pi/2 + atan c, each rounded
+// once from a 200-bit value) is added last. NaN or two infinite inputs take std::atan2.
+namespace {
+// edge_angle's body, inlined into lambert_irradiance's edge loop.
+[[gnu::always_inline]] inline double edge_angle_inline(double y, double x) {
+  static constexpr double kBase[4][17] = {{
+      // atan c
+      0x0.0p+0, 0x1.ff55bb72cfdeap-5, 0x1.fd5ba9aac2f6ep-4, 0x1.7b97b4bce5b02p-3,
+      0x1.f5b75f92c80ddp-3, 0x1.362773707ebccp-2, 0x1.6f61941e4def1p-2, 0x1.a64eec3cc23fdp-2,
+      0x1.dac670561bb4fp-2, 0x1.0657e94db30d0p-1, 0x1.1e00babdefeb4p-1, 0x1.345f01cce37bbp-1,
+      0x1.4978fa3269ee1p-1, 0x1.5d58987169b18p-1, 0x1.700a7c5784634p-1, 0x1.819d0b7158a4dp-1,
+      0x1.921fb54442d18p-1}, {
+      // pi/2 - atan c
+      0x1.921fb54442d18p+0, 0x1.82250768ac529p+0, 0x1.7249faa996a21p+0, 0x1.62acbeaca61b8p+0,
+      0x1.5368c951e9cfdp+0, 0x1.4495d86823225p+0, 0x1.3647503caf55cp+0, 0x1.288bfa3512419p+0,
+      0x1.1b6e192ebbe44p+0, 0x1.0ef3c09d694b0p+0, 0x1.031f57e54adbep+0, 0x1.efe068bba2275p-1,
+      0x1.dac670561bb4fp-1, 0x1.c6e6d2171bf18p-1, 0x1.b434ee31013fdp-1, 0x1.a2a25f172cfe4p-1,
+      0x1.921fb54442d18p-1}, {
+      // pi - atan c
+      0x1.921fb54442d18p+1, 0x1.8a225e5677921p+1, 0x1.8234d7f6ecb9dp+1, 0x1.7a6639f874768p+1,
+      0x1.72c43f4b1650ap+1, 0x1.6b5ac6d632f9fp+1, 0x1.643382c07913ap+1, 0x1.5d55d7bcaa899p+1,
+      0x1.56c6e7397f5aep+1, 0x1.5089baf0d60e4p+1, 0x1.4a9f8694c6d6bp+1, 0x1.4507f4d109f29p+1,
+      0x1.3fc176b7a8560p+1, 0x1.3ac98f27e8652p+1, 0x1.361d162e61b8bp+1, 0x1.31b87267eca85p+1,
+      0x1.2d97c7f3321d2p+1}, {
+      // pi/2 + atan c
+      0x1.921fb54442d18p+0, 0x1.a21a631fd9508p+0, 0x1.b1f56fdeef00fp+0, 0x1.c192abdbdf879p+0,
+      0x1.d0d6a1369bd34p+0, 0x1.dfa992206280bp+0, 0x1.edf81a4bd64d4p+0, 0x1.fbb3705373617p+0,
+      0x1.0468a8ace4df6p+1, 0x1.0aa5d4f58e2c0p+1, 0x1.109009519d639p+1, 0x1.16279b155a47bp+1,
+      0x1.1b6e192ebbe44p+1, 0x1.206600be7bd52p+1, 0x1.251279b802819p+1, 0x1.29771d7e7791fp+1,
+      0x1.2d97c7f3321d2p+1}};
+  const double ax = std::abs(x);
+  const bool steep = y > ax;  // within pi/4 of pi/2: the quotient the other way up
+  const double t = steep ? ax / y : y / ax;
+  if (!(t >= 0.0 && t <= 1.0)) return std::atan2(y, x);
+  const int i = int(t * 16.0 + 0.5);
+  const double c = double(i) * 0.0625;
+  const double u = (t - c) / (1.0 + t * c);
+  const double u2 = u * u;
+  const double p =
+      u + u * u2 * (-1.0 / 3.0 + u2 * (1.0 / 5.0 + u2 * (-1.0 / 7.0 + u2 * (1.0 / 9.0 + u2 * (-1.0 / 11.0)))));
+  // x >= 0: atan c + p, or pi/2 - (atan c + p) when steep; x < 0: pi - (atan c + p), or
+  // pi/2 + atan c + p when steep.
+  const int o = x < 0.0 ? (steep ? 3 : 2) : (steep ? 1 : 0);
+  return (o == 0 || o == 3) ? kBase[o][i] + p : kBase[o][i] - p;
+}
+}  // namespace
+
+double edge_angle(double y, double x) { return edge_angle_inline(y, x); }
+
 double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, int n) {
   // Clip to the receiver's upper half-space, in double relative to r, and sum the edge
   // terms of the clipped polygon as its vertices come out (no buffer: a stack array of
@@ -381,7 +434,7 @@ double lambert_irradiance(const Vec3d& rd, const Vec3f& nr, const Vec3d* poly, i
     Vec3d c = cross(a, b);
     double lc = length(c);
     if (lc == 0.0) return;
-    double theta = std::atan2(lc, dot(a, b));
+    double theta = edge_angle_inline(lc, dot(a, b));
     sum += theta * dot(nd, c) / lc;
   };
   int qn = 0;

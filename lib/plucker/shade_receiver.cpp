@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "lib/plucker/group_state.h"
+#include "lib/plucker/pyramid_side.h"
 #include "lib/plucker/subtract.h"
 
 namespace visgate::plucker {
@@ -43,21 +44,9 @@ constexpr double kUd = kUnitRoundoffD;
 // c = 4 u_d |pyramid[j]|_1 of the shift. Per thread, like the group's other scratch (one
 // receiver at a time).
 struct PyramidWeights {
-  struct Plane {
-    Vec3d n, l, w;
-    double c = 0.0;
-  };
+  using Plane = PyramidPlane;
   std::vector<Plane> p;
 };
-// d = x - l strictly outside side plane pp by the pyramid test's margin: dot(n, d) <
-// -16 dot_err(d, n, err) - shift. Shared by block_outside and subtract_near; a value
-// not below 0 cannot be below -16 e - shift <= 0, so the bound is skipped there.
-inline bool outside_side(const PyramidWeights::Plane& pp, const Vec3d& d, double shift) {
-  const double s = dot(pp.n, d);
-  if (!(s < 0.0)) return false;
-  const double e = std::abs(d.x) * pp.w.x + std::abs(d.y) * pp.w.y + std::abs(d.z) * pp.w.z;
-  return s < -16.0 * e - shift;
-}
 PyramidWeights& pyramid_weights() {
   thread_local PyramidWeights pw;
   return pw;
@@ -246,6 +235,7 @@ void ReceiverShading::pyramid_planes() {
     pp.l = lf_.poly[j];
     pp.w = Vec3d(err.x + k8 * std::abs(nrm.x), err.y + k8 * std::abs(nrm.y), err.z + k8 * std::abs(nrm.z));
     pp.c = 4.0 * kUd * (std::abs(nrm.x) + std::abs(nrm.y) + std::abs(nrm.z));
+    pp.set_lanes();
   }
 }
 
@@ -386,10 +376,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
       // block_outside's test and margin (outside_side), their per-receiver parts
       // precomputed (pyramid_planes): shift = 4 u_d |pn|_1 (pmax + extent + r_max),
       // dot_err(d, pn, err) = sum |d_i| (err_i + 8 u_d |pn_i|), bit for bit.
-      const double shift = pp.c * reach;
-      bool outside = true;
-      for (uint32_t k = 0; k < np.count && outside; ++k) outside = outside_side(pp, pv[k] - pp.l, shift);
-      if (outside) {
+      if (all_outside(pp, pv, np.count, pp.c * reach)) {
         hint = uint8_t(j);
         return;
       }
@@ -405,6 +392,7 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   }
   const double gn1 = std::abs(gd.x) + std::abs(gd.y) + std::abs(gd.z);
   if (maxv < -4.0 * kUd * gn1 * (pmax + rmax_)) return;
+  bool all_above = false;  // every vertex above r's level beyond rounding (set below)
   // The side of r against the triangle's plane (near_side: decided on the local double
   // coordinates with a bound that covers their rounding, so it is the side in the
   // inputs as given). A receiver within rounding of the plane (but not on it) sees the
@@ -441,9 +429,11 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
     const bool above = maxv > 0.0;
     bool near_level = false;
     maxv = 0.0;
+    all_above = true;
     for (double& v : vals) {
       if (std::abs(v) <= on_tol) v = 0.0;
       near_level |= v > 0.0 && v <= near_tol;
+      all_above &= v > 0.0;
       maxv = std::max(maxv, v);
     }
     if (maxv <= 0.0 && !above) return;  // float path: at or behind r's g-plane
@@ -459,12 +449,22 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   if (q.size() < room) q.resize(room);
   if (on_level.size() < room) on_level.resize(room);
   if (skip.size() < room) skip.resize(room);
-  const size_t nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+  // Every vertex above r's level: the clip keeps the polygon as it is, none on the level
+  // (on_level is left unwritten; the skips below are all 0 then).
+  size_t nq = 0;
+  if (all_above) {
+    if (np.count >= 3) {
+      std::copy(pv, pv + np.count, q.begin());
+      nq = np.count;
+    }
+  } else {
+    nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+  }
   if (nq == 0) return;
   // Oriented so that r is on the negative side (bsp.h Occluder).
   if (side_r > 0) {
     std::reverse(q.begin(), q.begin() + std::ptrdiff_t(nq));
-    std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
+    if (!all_above) std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
   }
   // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies in the
   // level plane through r, so the plane through r and that edge is the level plane
@@ -472,7 +472,10 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // a light line away and is skipped. Testing it would be wrong near degeneracy: when r
   // is within rounding of the triangle's plane, the edge passes within rounding of r and
   // float calls r "on its line" (test ReceiverWithinRoundingOfAFace).
-  for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
+  // (None on the level when every vertex is above it: on_level was not written then.)
+  if (all_above) std::fill(skip.begin(), skip.begin() + std::ptrdiff_t(nq), uint8_t(0));
+  else
+    for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
   // The planes through r and q's edges are only as good as q's vertices: a vertex
   // rounded by u of its coordinates, at a distance d from r, turns such a plane by up to
   // u |q| / d. A vertex that close to r (the clip at r's level of an edge passing within
@@ -663,9 +666,11 @@ void ReceiverShading::shade_float() {
   // it goes first and the near polygons (the silhouette's band) cut only what it leaves.
   if (tree_first) tree_query();
   if (gs_.near_blocks.empty()) {
-    for (uint32_t k = 0; k < gs_.near.size(); ++k) {
+    const NearPoly* near = gs_.near.data();  // the list does not change while r is shaded
+    const uint32_t nn = uint32_t(gs_.near.size());
+    for (uint32_t k = 0; k < nn; ++k) {
       if (gs_.frags.size() == 0) break;
-      subtract_near(gs_.near[k], k);
+      subtract_near(near[k], k);
     }
   } else {
     // The polygons of the blocks this receiver's pyramid may meet, in the list's order:
@@ -713,15 +718,21 @@ void ReceiverShading::report_fragments(double& area, double& irr) {
   for (size_t f = 0; f < frags.size(); ++f) {
     area += polygon_area(frags.data(f), frags.count(f));
     irr += lambert_irradiance(r_, rec_.n, frags.data(f), frags.count(f));
-    Polygon3f wf;
-    wf.reserve(size_t(frags.count(f)));
-    for (int k = 0; k < frags.count(f); ++k) wf.push_back(Vec3f(frags.data(f)[k] + od));
+    const Vec3d* fv = frags.data(f);
+    const size_t fn = size_t(frags.count(f));
+    Polygon3f wf(fn);
+    for (size_t k = 0; k < fn; ++k) wf[k] = Vec3f(fv[k] + od);
     double best = 0.0;
     Vec3d inside{};
-    for (size_t k = 1; k + 1 < wf.size(); ++k) {
-      Vec3d a = to_double(wf[0]), b = to_double(wf[k]), c = to_double(wf[k + 1]);
-      double ar = length(cross(b - a, c - a));
-      if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+    if (fn >= 3) {  // the fan (wf[0], wf[k], wf[k + 1]), each vertex widened to double once
+      const Vec3d a = to_double(wf[0]);
+      Vec3d b = to_double(wf[1]);
+      for (size_t k = 1; k + 1 < fn; ++k) {
+        const Vec3d c = to_double(wf[k + 1]);
+        double ar = length(cross(b - a, c - a));
+        if (ar > best) best = ar, inside = to_double(Vec3f((a + b + c) / 3.0));
+        b = c;
+      }
     }
     // The comparator's segment runs from r to that rounded point, which rounding also
     // moved off the light's plane (by up to half the spacing): its test is the point
