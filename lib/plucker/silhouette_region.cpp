@@ -71,6 +71,27 @@ void node_normal_boxes(SilhouetteGroup& g) {
   }
 }
 
+// item(k) for every leaf-order position k of a leaf of tree reached through nodes that
+// enter(i) accepts.
+template <class Enter, class Item>
+void walk_tree(const accel::Bvh<double>& tree, Enter&& enter, Item&& item) {
+  if (tree.empty()) return;
+  std::array<uint32_t, accel::Bvh<double>::kMaxStack> stack;
+  size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const uint32_t i = stack[--top];
+    const auto& nd = tree.node(i);
+    if (!enter(i)) continue;
+    if (!tree.is_leaf(nd)) {
+      stack[top++] = tree.left(i);
+      stack[top++] = tree.right(i);
+      continue;
+    }
+    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) item(k);
+  }
+}
+
 }  // namespace
 
 // With d = r - x over the box and u over the normals' box, u . d lies within the sums of
@@ -297,11 +318,17 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
       side.push_back(nj);
     }
     size_t n = 0;
-    g.edge_tree.query_if(
-        [&](const AABBd& b) {
-          return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
-        },
-        [&](uint32_t e) {
+    auto meets = [&](const AABBd& b) {
+      return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
+    };
+    // Nodes whose faces all have r strictly on one side (faces_one_side) hold no edge
+    // counted here but one whose double sides are wrong (the estimate is float anyway).
+    walk_tree(
+        g.edge_tree,
+        [&](uint32_t i) { return meets(g.edge_tree.node(i).box) && !faces_one_side(g.edge_tree.node(i).box, g.node_normals[i], rl); },
+        [&](uint32_t k) {
+          if (!meets(g.edge_tree.item_box(k))) return;
+          const uint32_t e = g.edge_tree.item(k);
           const FacePlane &f0 = g.faces[g.fi0[e]], &f1 = g.faces[g.fi1[e]];
           if ((dot(rwd - f0.a, f0.n) > 0.0) == (dot(rwd - f1.a, f1.n) > 0.0)) return;
           for (size_t j = 0; j < side.size(); ++j)
@@ -397,28 +424,15 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   // A node whose faces all have r strictly on one common side (normal cones) holds no
   // edge the exact sides below would take: faces_one_side only skips their tests.
   g.used.clear();
-  if (!g.edge_tree.empty()) {
-    const accel::Bvh<double>& tree = g.edge_tree;
-    std::array<uint32_t, accel::Bvh<double>::kMaxStack> stack;
-    size_t top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const uint32_t i = stack[--top];
-      const auto& nd = tree.node(i);
-      if (box_outside(nd.box) || faces_one_side(nd.box, g.node_normals[i], r)) continue;
-      if (!tree.is_leaf(nd)) {
-        stack[top++] = tree.left(i);
-        stack[top++] = tree.right(i);
-        continue;
-      }
-      for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
-        if (box_outside(tree.item_box(k))) continue;
+  const accel::Bvh<double>& tree = g.edge_tree;
+  walk_tree(
+      tree, [&](uint32_t i) { return !box_outside(tree.node(i).box) && !faces_one_side(tree.node(i).box, g.node_normals[i], r); },
+      [&](uint32_t k) {
+        if (box_outside(tree.item_box(k))) return;
         const uint32_t e = tree.item(k);
         const int s0 = face_side_r(g.fi0[e]), s1 = face_side_r(g.fi1[e]);
         if (s0 == 0 || s0 != s1) g.used.push_back(e);
-      }
-    }
-  }
+      });
   std::sort(g.used.begin(), g.used.end());  // the tree's order is the traversal's
   c.receiver_edges += g.used.size();
   // The fragments split by the planes through r and those edges.
