@@ -256,6 +256,12 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     return uint32_t(slot);
   };
   box_sides.clear();
+  // The candidates marked per triangle (stamped with the group's serial, not cleared).
+  thread_local std::vector<uint32_t> in_cand;
+  thread_local uint32_t cand_serial = 0;
+  if (in_cand.size() != mesh.size()) in_cand.assign(mesh.size(), 0u), cand_serial = 0;
+  if (++cand_serial == 0) std::fill(in_cand.begin(), in_cand.end(), 0u), cand_serial = 1;
+  for (uint32_t t : cand) in_cand[t] = cand_serial;
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
     const int32_t s = cs.surface(t);
@@ -271,7 +277,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     for (int k = 0; k < 3; ++k) {
       const uint32_t u = uint32_t(nb[size_t(k)]);
       // Each edge once: from its lower face when both are candidates.
-      if (u < t && std::binary_search(cand.begin(), cand.end(), u)) continue;
+      if (u < t && in_cand[u] == cand_serial) continue;
       const uint32_t f0 = face(t), f1 = face(u);
       if (box_sides[f0] != 0 && box_sides[f0] == box_sides[f1]) continue;
       SilEdge e;
@@ -292,7 +298,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     b.extend(e.lb);
     g.edge_boxes.push_back(b);
   }
-  g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+  g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 8, true});
   node_normal_boxes(g);
   if (g.surfaces.empty()) return;
   // The estimate at five receivers spread over the group (its first, quarters and last):
