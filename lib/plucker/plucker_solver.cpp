@@ -51,7 +51,7 @@ void Totals::merge(const Totals& o) {
   bsp.on_line += o.bsp.on_line; bsp.zero_area += o.bsp.zero_area; bsp.merged += o.bsp.merged; bsp.visits += o.bsp.visits;
   bsp.list_compactions += o.bsp.list_compactions;
   sil.groups += o.sil.groups; sil.declined += o.sil.declined; sil.edges += o.sil.edges; sil.receiver_edges += o.sil.receiver_edges;
-  sil.pieces += o.sil.pieces; sil.blocked += o.sil.blocked; sil.undecided += o.sil.undecided; sil.dropped += o.sil.dropped;
+  sil.pieces += o.sil.pieces; sil.blocked += o.sil.blocked; sil.undecided += o.sil.undecided; sil.dropped += o.sil.dropped; sil.listed += o.sil.listed;
 }
 
 void GroupState::clear() {
@@ -360,6 +360,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("silhouette_pieces", double(totals.sil.pieces));
   st.set("silhouette_blocked", double(totals.sil.blocked));
   st.set("silhouette_undecided", double(totals.sil.undecided));
+  st.set("silhouette_listed", double(totals.sil.listed));
   st.set("peak_memory_bytes", double(memory.peak.load()));
   st.set("peak_memory_kb", double(memory.peak.load()) / 1024.0);
   st.set("occluder_selection_seconds", totals.select_s);

@@ -29,7 +29,88 @@ int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
   return s != 0 ? s : plane_side_rest(mesh.corner(f.t, 0), mesh.corner(f.t, 1), mesh.corner(f.t, 2), p);
 }
 
+// The box of the unit normals of the faces of every node's edges (SilhouetteGroup::
+// node_normals), children before parents (pre-order: both children follow their parent).
+// A face whose computed normal n is small next to s12 (|n|_1 <= 2^-20 s12, where n's
+// rounding, a few ulps of s12, could turn it) bounds nothing: its node gets [-1, 1]^3.
+void node_normal_boxes(SilhouetteGroup& g) {
+  const accel::Bvh<double>& tree = g.edge_tree;
+  thread_local std::vector<Vec3d> unit;
+  thread_local std::vector<uint8_t> bad;
+  unit.resize(g.faces.size());
+  bad.assign(g.faces.size(), 0);
+  for (size_t f = 0; f < g.faces.size(); ++f) {
+    const FacePlane& fp = g.faces[f];
+    const double n1 = norm1(fp.n);
+    if (!(n1 > 0x1p-20 * fp.s12)) {
+      bad[f] = 1;
+      continue;
+    }
+    unit[f] = fp.n * (1.0 / length(fp.n));
+  }
+  const AABBd full{Vec3d(-1, -1, -1), Vec3d(1, 1, 1)};
+  g.node_normals.assign(tree.node_count(), AABBd());
+  for (size_t i = tree.node_count(); i-- > 0;) {
+    const auto& nd = tree.node(uint32_t(i));
+    AABBd& b = g.node_normals[i];
+    if (!tree.is_leaf(nd)) {
+      b = g.node_normals[tree.left(uint32_t(i))];
+      b.extend(g.node_normals[tree.right(uint32_t(i))]);
+      continue;
+    }
+    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+      const uint32_t e = tree.item(k);
+      for (const uint32_t f : {g.fi0[e], g.fi1[e]}) {
+        if (bad[f]) {
+          b = full;
+          break;
+        }
+        b.extend(unit[f]);
+      }
+    }
+  }
+}
+
+// item(k) for every leaf-order position k of a leaf of tree reached through nodes that
+// enter(i) accepts.
+template <class Enter, class Item>
+void walk_tree(const accel::Bvh<double>& tree, Enter&& enter, Item&& item) {
+  if (tree.empty()) return;
+  std::array<uint32_t, accel::Bvh<double>::kMaxStack> stack;
+  size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const uint32_t i = stack[--top];
+    const auto& nd = tree.node(i);
+    if (!enter(i)) continue;
+    if (!tree.is_leaf(nd)) {
+      stack[top++] = tree.left(i);
+      stack[top++] = tree.right(i);
+      continue;
+    }
+    for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) item(k);
+  }
+}
+
 }  // namespace
+
+// With d = r - x over the box and u over the normals' box, u . d lies within the sums of
+// the per-axis interval products' extremes. The margin covers a unit normal off by 2^-25
+// per component (times |d|_1 <= dm) and the rounding of local coordinates and of the
+// sums (2^-30 of the largest coordinate; a few ulps of dm).
+bool faces_one_side(const AABBd& box, const AABBd& normals, const Vec3d& r) {
+  double lo = 0.0, hi = 0.0, dm = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const double d0 = r[a] - box.hi[a], d1 = r[a] - box.lo[a];
+    const double p0 = normals.lo[a] * d0, p1 = normals.lo[a] * d1, p2 = normals.hi[a] * d0, p3 = normals.hi[a] * d1;
+    lo += std::min(std::min(p0, p1), std::min(p2, p3));
+    hi += std::max(std::max(p0, p1), std::max(p2, p3));
+    dm += std::max(std::abs(d0), std::abs(d1));
+  }
+  const double mag = std::max({max_component(vabs(r)), max_component(vabs(box.lo)), max_component(vabs(box.hi))});
+  const double m = 0x1p-24 * dm + 0x1p-30 * mag;
+  return lo > m || hi < -m;
+}
 
 int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p) {
   const Vec3d ad = to_double(a), e1 = to_double(b) - ad, e2 = to_double(c) - ad;
@@ -175,6 +256,12 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     return uint32_t(slot);
   };
   box_sides.clear();
+  // The candidates marked per triangle (stamped with the group's serial, not cleared).
+  thread_local std::vector<uint32_t> in_cand;
+  thread_local uint32_t cand_serial = 0;
+  if (in_cand.size() != mesh.size()) in_cand.assign(mesh.size(), 0u), cand_serial = 0;
+  if (++cand_serial == 0) std::fill(in_cand.begin(), in_cand.end(), 0u), cand_serial = 1;
+  for (uint32_t t : cand) in_cand[t] = cand_serial;
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
     const int32_t s = cs.surface(t);
@@ -190,7 +277,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     for (int k = 0; k < 3; ++k) {
       const uint32_t u = uint32_t(nb[size_t(k)]);
       // Each edge once: from its lower face when both are candidates.
-      if (u < t && std::binary_search(cand.begin(), cand.end(), u)) continue;
+      if (u < t && in_cand[u] == cand_serial) continue;
       const uint32_t f0 = face(t), f1 = face(u);
       if (box_sides[f0] != 0 && box_sides[f0] == box_sides[f1]) continue;
       SilEdge e;
@@ -211,7 +298,8 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     b.extend(e.lb);
     g.edge_boxes.push_back(b);
   }
-  g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 4, true});
+  g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 8, true});
+  node_normal_boxes(g);
   if (g.surfaces.empty()) return;
   // The estimate at five receivers spread over the group (its first, quarters and last):
   // the candidate edges whose box meets the box of the receiver's pyramid, whose faces'
@@ -236,11 +324,17 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
       side.push_back(nj);
     }
     size_t n = 0;
-    g.edge_tree.query_if(
-        [&](const AABBd& b) {
-          return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
-        },
-        [&](uint32_t e) {
+    auto meets = [&](const AABBd& b) {
+      return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
+    };
+    // Nodes whose faces all have r strictly on one side (faces_one_side) hold no edge
+    // counted here but one whose double sides are wrong (the estimate is float anyway).
+    walk_tree(
+        g.edge_tree,
+        [&](uint32_t i) { return meets(g.edge_tree.node(i).box) && !faces_one_side(g.edge_tree.node(i).box, g.node_normals[i], rl); },
+        [&](uint32_t k) {
+          if (!meets(g.edge_tree.item_box(k))) return;
+          const uint32_t e = g.edge_tree.item(k);
           const FacePlane &f0 = g.faces[g.fi0[e]], &f1 = g.faces[g.fi1[e]];
           if ((dot(rwd - f0.a, f0.n) > 0.0) == (dot(rwd - f1.a, f1.n) > 0.0)) return;
           for (size_t j = 0; j < side.size(); ++j)
@@ -333,12 +427,18 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     }
     return false;
   };
+  // A node whose faces all have r strictly on one common side (normal cones) holds no
+  // edge the exact sides below would take: faces_one_side only skips their tests.
   g.used.clear();
-  g.edge_tree.query_if([&](const AABBd& b) { return !box_outside(b); },
-                       [&](uint32_t e) {
-                         const int s0 = face_side_r(g.fi0[e]), s1 = face_side_r(g.fi1[e]);
-                         if (s0 == 0 || s0 != s1) g.used.push_back(e);
-                       });
+  const accel::Bvh<double>& tree = g.edge_tree;
+  walk_tree(
+      tree, [&](uint32_t i) { return !box_outside(tree.node(i).box) && !faces_one_side(tree.node(i).box, g.node_normals[i], r); },
+      [&](uint32_t k) {
+        if (box_outside(tree.item_box(k))) return;
+        const uint32_t e = tree.item(k);
+        const int s0 = face_side_r(g.fi0[e]), s1 = face_side_r(g.fi1[e]);
+        if (s0 == 0 || s0 != s1) g.used.push_back(e);
+      });
   std::sort(g.used.begin(), g.used.end());  // the tree's order is the traversal's
   c.receiver_edges += g.used.size();
   // The fragments split by the planes through r and those edges.
@@ -409,42 +509,15 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     }
     std::swap(frags, out);
   }
-  // With several pieces, the triangles whose shadow box may hold a piece's point, found
-  // once: each piece's test then reads their boxes instead of walking the hierarchy (the
-  // segment r -> p meets a triangle only where p lies in its shadow).
-  const bool listed = frags.size() > 16;
-  g.shadows.clear();
-  if (listed) {
-    UVBox all;
-    for (size_t f = 0; f < frags.size(); ++f) all.extend(UVBox::of(lp.axes, frags.data(f), frags.count(f)));
-    const Vec3d od = to_double(origin);
-    // A float world box in local coordinates, widened by 2^-40 of its coordinates (the
-    // translation rounds once per corner).
-    auto local_box = [&](const AABB& b) {
-      AABBd d{to_double(b.lo) - od, to_double(b.hi) - od};
-      const double w = 0x1p-40 * (max_component(vabs(d.lo)) + max_component(vabs(d.hi)));
-      d.lo = d.lo - Vec3d(w, w, w);
-      d.hi = d.hi + Vec3d(w, w, w);
-      return d;
-    };
-    for (int32_t s : g.surfaces)
-      trees.for_each(
-          s, [&](const AABB& b) { return !box_outside(local_box(b)); },
-          [&](uint32_t t) {
-            const Vec3d q[3] = {to_local_d(mesh.corner(t, 0), origin), to_local_d(mesh.corner(t, 1), origin),
-                                to_local_d(mesh.corner(t, 2), origin)};
-            const UVBox sb = shadow_box(lp, r, q, 3);
-            if (sb.overlaps(all)) g.shadows.emplace_back(sb, t);
-          });
-    // Bucketed as sample_bits buckets fragments (UVBoxGrid).
-    g.grid.build(all, std::clamp(int(std::sqrt(double(g.shadows.size()) / 4.0)), 1, 16), g.shadows.size(),
-                 [&](size_t k) -> const UVBox& { return g.shadows[k].first; });
-  }
-  // Each piece by one point strictly inside its cell, confirmed exactly.
-  FragmentList& out = g.out;
-  out.clear();
+  // Each piece by one point strictly inside its cell (the vertex average p), confirmed
+  // exactly against every edge plane the piece lies on one side of; the first piece
+  // the exact tests do not confirm leaves the receiver undecided, and only the pieces
+  // before it are tested against the surfaces.
   const Vec3d od = to_double(origin);
-  for (size_t f = 0; f < frags.size(); ++f) {
+  g.pts.clear();
+  g.zero.clear();
+  bool bad = false;
+  for (size_t f = 0; f < frags.size() && !bad; ++f) {
     const Vec3d* poly = frags.data(f);
     const int n = frags.count(f);
     Vec3d p(0, 0, 0);
@@ -464,27 +537,98 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
       const SilEdge& se = g.edges[g.used[j]];
       ok = want != 0 && exact_side(rw, se.a, se.b, ps) == want;
     }
-    if (zero) {
+    if (!zero && !ok) bad = true;
+    g.pts.push_back(p);
+    g.zero.push_back(uint8_t(zero ? 1 : (ok ? 0 : 2)));
+  }
+  // With several pieces, the segment tests run triangle by triangle over those whose
+  // shadow box (shadow_box) may hold a piece's point, each against the pieces' points
+  // in its box (sorted by u): the segment r -> p meets a triangle only where p lies in
+  // its shadow. A piece keeps the first nonzero result in the triangles' walk order,
+  // and the walk stops once every piece has one: the results of one walk per piece.
+  const bool listed = frags.size() > 16;
+  g.meet.assign(g.pts.size(), 0);
+  if (listed) {
+    ++c.listed;
+    const size_t np = g.pts.size() - (bad ? 1 : 0);
+    g.order.clear();
+    for (size_t k = 0; k < np; ++k)
+      if (g.zero[k] == 0) g.order.push_back(uint32_t(k));
+    const int au = lp.axes.u, av = lp.axes.v;
+    std::sort(g.order.begin(), g.order.end(),
+              [&](uint32_t x, uint32_t y) { return g.pts[x][au] < g.pts[y][au] || (g.pts[x][au] == g.pts[y][au] && x < y); });
+    g.order_u.clear();
+    UVBox all;
+    for (uint32_t k : g.order) {
+      g.order_u.push_back(g.pts[k][au]);
+      all.extend(UVBox{g.pts[k][au], g.pts[k][au], g.pts[k][av], g.pts[k][av]});
+    }
+    size_t open = g.order.size();
+    // A float world box in local coordinates, widened by 2^-40 of its coordinates (the
+    // translation rounds once per corner).
+    auto local_box = [&](const AABB& b) {
+      AABBd d{to_double(b.lo) - od, to_double(b.hi) - od};
+      const double w = 0x1p-40 * (max_component(vabs(d.lo)) + max_component(vabs(d.hi)));
+      d.lo = d.lo - Vec3d(w, w, w);
+      d.hi = d.hi + Vec3d(w, w, w);
+      return d;
+    };
+    // The first open piece whose point lies in sb, from x on (g.order's size: none).
+    auto next_in = [&](const UVBox& sb, size_t x) {
+      for (; x < g.order_u.size() && g.order_u[x] <= sb.uhi; ++x) {
+        const uint32_t k = g.order[x];
+        if (g.meet[k] == 0 && sb.contains(g.pts[k][au], g.pts[k][av])) return x;
+      }
+      return g.order.size();
+    };
+    auto first_in = [&](const UVBox& sb) {
+      return next_in(sb, size_t(std::lower_bound(g.order_u.begin(), g.order_u.end(), sb.ulo) - g.order_u.begin()));
+    };
+    // A node is entered only when the shadow box of its box's corners (that of every
+    // triangle in it: the central projection of a convex set is the hull of its corners'
+    // projections, shadow_box's margin covering it as any polygon's) holds an open point.
+    for (size_t si = 0; si < g.surfaces.size() && open > 0; ++si)
+      trees.for_each(
+          g.surfaces[si],
+          [&](const AABB& b) {
+            if (open == 0) return false;
+            const AABBd lb = local_box(b);
+            if (box_outside(lb)) return false;
+            Vec3d q[8];
+            for (int k = 0; k < 8; ++k)
+              q[k] = Vec3d((k & 1) ? lb.hi.x : lb.lo.x, (k & 2) ? lb.hi.y : lb.lo.y, (k & 4) ? lb.hi.z : lb.lo.z);
+            return first_in(shadow_box(lp, r, q, 8)) < g.order.size();
+          },
+          [&](uint32_t t) {
+            if (open == 0) return;
+            const Vec3d q[3] = {to_local_d(mesh.corner(t, 0), origin), to_local_d(mesh.corner(t, 1), origin),
+                                to_local_d(mesh.corner(t, 2), origin)};
+            const UVBox sb = shadow_box(lp, r, q, 3);
+            if (!sb.overlaps(all)) return;
+            for (size_t x = first_in(sb); x < g.order.size(); x = next_in(sb, x + 1)) {
+              const uint32_t k = g.order[x];
+              g.meet[k] = int8_t(SurfaceTrees::triangle_meets(mesh, t, rw, SumPoint(origin, g.pts[k])));
+              if (g.meet[k] != 0) --open;
+            }
+          });
+  }
+  FragmentList& out = g.out;
+  out.clear();
+  for (size_t f = 0; f < g.pts.size(); ++f) {
+    if (g.zero[f] == 1) {
       ++c.dropped;
       continue;
     }
-    if (!ok) {
+    if (g.zero[f] == 2) {
       ++c.undecided;
       return false;
     }
     ++c.pieces;
-    int blocked = 0;
-    if (listed) {
-      const double pu = p[lp.axes.u], pv = p[lp.axes.v];
-      for (const uint32_t k : g.grid.at(pu, pv)) {
-        const auto& [box, t] = g.shadows[k];
-        if (box.contains(pu, pv)) blocked = SurfaceTrees::triangle_meets(mesh, t, rw, ps);
-        if (blocked != 0) break;
-      }
-    } else {
+    const Vec3d& p = g.pts[f];
+    int blocked = g.meet[f];
+    if (!listed)
       for (size_t si = 0; si < g.surfaces.size() && blocked == 0; ++si)
-        blocked = trees.segment_meets(g.surfaces[si], mesh, rw, ps, od + p);
-    }
+        blocked = trees.segment_meets(g.surfaces[si], mesh, rw, SumPoint(origin, p), od + p);
     if (blocked < 0) {
       ++c.undecided;
       return false;
@@ -493,7 +637,7 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
       ++c.blocked;
       continue;
     }
-    out.add(poly, size_t(n));
+    out.add(frags.data(f), size_t(frags.count(f)));
   }
   std::swap(frags, out);
   return true;

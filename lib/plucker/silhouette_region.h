@@ -106,14 +106,23 @@ struct SilhouetteGroup {
   // may meet (the edges' count follows the group's shaft, a receiver's the window).
   accel::Bvh<double> edge_tree;
   std::vector<AABBd> edge_boxes;
+  // Per node of edge_tree, the box of the unit normals of its edges' faces ([-1, 1]^3
+  // when one is too ill-conditioned to bound): a receiver whose side of every such face
+  // is provably one strict sign uses none of the node's edges (normal cones: the walk
+  // follows its silhouette instead of the group's band).
+  std::vector<AABBd> node_normals;
   // Scratch: per input triangle its slot in faces (or -1), reset after each group.
   std::vector<int32_t> face_slot;
   std::vector<uint32_t> used;  // per receiver: the edges used
   std::vector<NodePlane> planes;
-  // Per receiver with several pieces: the region surfaces' triangles that may meet its
-  // pyramid, with the boxes of their shadows on the light (shadow_box).
-  std::vector<std::pair<UVBox, uint32_t>> shadows;
-  UVBoxGrid grid;  // their boxes by cell
+  // Per receiver: each piece's point, 1 when the piece has no area, 2 when its point is
+  // unconfirmed (else 0), its segment test's result; with several pieces, those to test
+  // sorted by the point's u, and their u.
+  std::vector<Vec3d> pts;
+  std::vector<uint8_t> zero;
+  std::vector<int8_t> meet;
+  std::vector<uint32_t> order;
+  std::vector<double> order_u;
   FragmentList out;
   std::vector<Vec3d> pos, neg, cur;
   void clear();
@@ -122,7 +131,15 @@ struct SilhouetteGroup {
 // Counters (plucker_solver.h stats).
 struct SilhouetteCounters {
   uint64_t groups = 0, declined = 0, edges = 0, receiver_edges = 0, pieces = 0, blocked = 0, undecided = 0, dropped = 0;
+  uint64_t listed = 0;  // receivers whose pieces were tested triangle by triangle (more than 16)
 };
+
+// Normal cones: true only when u . (r - x) is of one strict sign for every u in
+// `normals` and x in `box` (interval bounds beyond a margin of 2^-24 of |r - x|'s bound
+// plus 2^-30 of the largest coordinate), so that every plane through a point of box
+// whose unit normal, rounded by less than 2^-25, lies in normals has r strictly on
+// that sign's side.
+bool faces_one_side(const AABBd& box, const AABBd& normals, const Vec3d& r);
 
 // Group level: fills g.surfaces and g.edges from the shaft's candidates `cand` (sorted;
 // `drop` receives 1 for each candidate of a region surface). rbox: the receivers' world

@@ -7,6 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <random>
+#include <vector>
+
 #include "lib/plucker/plucker_solver.h"
 #include "lib/scene/shapes.h"
 #include "tests/support/plucker_scenes.h"
@@ -37,6 +41,46 @@ TEST(PluckerSilhouetteRegion, TriangleMeetsHandWorked) {
   // The double part of a sum point counts: p just beyond the plane along the ray.
   EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 1), Vec3d(0, 0, 1e-20))), 1);
   EXPECT_EQ(plucker::SurfaceTrees::triangle_meets(m, 0, r, SumPoint(Vec3f(0.25f, 0.25f, 1), Vec3d(0, 0, -1e-20))), 0);
+}
+
+// Normal cones (faces_one_side): over nearly flat patches of random triangles, with r
+// above, below or beside them, a true answer means every triangle has r exactly on
+// that one strict side (exact_side); some answers are true.
+TEST(PluckerSilhouetteRegion, NormalConesOnlyWhereEveryFaceAgrees) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> xy(-1.0f, 1.0f), jitter(-0.05f, 0.05f), far(-4.0f, 4.0f);
+  int decided = 0;
+  for (int patch = 0; patch < 200; ++patch) {
+    std::vector<std::array<Vec3f, 3>> tris;
+    AABBd box, normals;
+    const float tilt = jitter(rng) * float(patch % 7);  // some patches far from flat
+    for (int k = 0; k < 6; ++k) {
+      std::array<Vec3f, 3> t;
+      for (Vec3f& v : t) v = Vec3f(xy(rng), xy(rng), 0.0f), v.z = jitter(rng) + tilt * v.x;
+      const Vec3d a = to_double(t[0]);
+      Vec3d n = cross(to_double(t[1]) - a, to_double(t[2]) - a);
+      if (!(length(n) > 1e-3)) continue;
+      if (n.z < 0.0) std::swap(t[1], t[2]), n = -n;  // one orientation, as a surface's
+      tris.push_back(t);
+      for (const Vec3f& v : t) box.extend(to_double(v));
+      normals.extend(n * (1.0 / length(n)));
+    }
+    for (int q = 0; q < 20; ++q) {
+      const Vec3f r(far(rng), far(rng), far(rng));
+      if (!plucker::faces_one_side(box, normals, to_double(r))) continue;
+      ++decided;
+      int side = 0;
+      for (const auto& t : tris) {
+        const int sd = plucker::exact_side(t[0], t[1], t[2], SumPoint(r));
+        ASSERT_NE(sd, 0);
+        if (side != 0) {
+          ASSERT_EQ(sd, side);
+        }
+        side = sd;
+      }
+    }
+  }
+  EXPECT_GT(decided, 100);
 }
 
 // The regions on, auto (the default) and off: the same bits and fractions (up to the
