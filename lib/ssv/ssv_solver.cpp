@@ -142,8 +142,11 @@ std::optional<TriangleSoup> without_slivers(const TriangleSoup& soup, size_t& dr
 class Caster {
  public:
   // Embree's low-quality (Morton) build: SSV casts about one reference ray per receiver
-  // and light, so the build dominates the caster's cost (answers do not depend on it).
-  explicit Caster(const TriangleSoup& soup) : robust_(soup, true, true, raycast::BuildQuality::low) {}
+  // and light, so the build dominates the caster's cost (answers do not depend on it);
+  // paired quads halve its primitives (embree_scene.h; `embree_quads`).
+  Caster(const TriangleSoup& soup, bool quads)
+      : robust_(soup, true, true, raycast::BuildQuality::low,
+                quads ? raycast::Primitives::paired_quads : raycast::Primitives::triangles) {}
   bool occluded(const Vec3f& from, const Vec3f& to) const { return robust_.occluded(from, to); }
   bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
     return robust_.occluded(from, to, tnear, tfar);
@@ -794,7 +797,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const mesh::PreparedMesh pm = mesh::prepare_mesh(blockers);
   auto t0 = Clock::now();
 
-  Caster embree(blockers);
+  Caster embree(blockers, opt.get_bool("embree_quads", true));
   auto t1 = Clock::now();
 
   SolveResult result = make_empty_result(scene);
