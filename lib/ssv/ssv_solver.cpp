@@ -20,6 +20,7 @@
 #include "lib/accel/bvh.h"
 #include "lib/base/memory_budget.h"
 #include "lib/geom/float_mode.h"
+#include "lib/geom/lanes.h"
 #include "lib/mesh/prepare.h"
 #include "lib/raycast/embree_scene.h"
 #include "lib/ssv/edge_tree.h"
@@ -129,6 +130,28 @@ std::optional<TriangleSoup> without_slivers(const TriangleSoup& soup, size_t& dr
     out.triangles.push_back(soup.triangles[k]);
   }
   return out;
+}
+
+// Scene::bounds() without its pass over every triangle corner (900k at scan 300k): when
+// `pm` was prepared from the scene's own mesh, its vertices are the positions of that
+// mesh's corners (prepare_mesh welds equal positions, -0 with +0, and drops unused
+// vertices), so their box holds the same floats, up to the sign of a zero bound, which no
+// use below reads (M takes magnitudes; grow, min_node and the root box differences).
+AABB scene_bounds(const Scene& scene, const mesh::PreparedMesh& pm, bool pm_of_scene_mesh) {
+  if (!pm_of_scene_mesh) return scene.bounds();
+  Lanes lo = lanes_set(INFINITY), hi = lanes_set(-INFINITY);
+  for (const Vec3f& v : pm.vertex_pos) {
+    const Lanes x = lanes_load(v);
+    lo = lanes_min(lo, x);
+    hi = lanes_max(hi, x);
+  }
+  AABB b;
+  lanes_store(lo, &b.lo.x);
+  lanes_store(hi, &b.hi.x);
+  for (const auto& l : scene.lights)
+    for (const auto& p : l.polygon) b.extend(p);
+  for (const auto& r : scene.receivers) b.extend(r.p);
+  return b;
 }
 
 // Rays. Every ray SSV casts (references, checks, the rays of doubtful and unclear
@@ -831,7 +854,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // of a scene-sized root classify every wedge of the light, most of which never reach
   // a receiver (rooms: 27 lights on several storeys over a grid of receivers on the
   // ground floor). The minimum node size stays 1/200 of the scene's longest side.
-  const AABB scene_box = scene.bounds();
+  const AABB scene_box = scene_bounds(scene, pm, !kept);
   const float grow = float(1e-3 * scene_box.diagonal()) + std::numeric_limits<float>::min();
   const float min_node = max_component(scene_box.extent()) / 200.0f;
   // Tolerances. M bounds the magnitude of every coordinate. A float plane test n.x - d
