@@ -255,10 +255,8 @@ struct VerifyContext {
   bool ranged = false;       // false: the segment test, t in (0, 1]
   const Vec3f* fan_to = nullptr;  // a packet from `from`: lane k (ray id k) ends at fan_to[k]
   const TriangleSoup* soup = nullptr;
-  // Primitives::paired_quads: the soup triangles of the quads' and singles' primitive ids
-  // (EmbreeScene::quad_first_, single_).
+  // Primitives::paired_quads: the soup triangles of the quads (EmbreeScene::quad_first_).
   const uint32_t* quad_first = nullptr;
-  const uint32_t* single = nullptr;
   unsigned csr = IeeeFloatMode::current_csr();  // the querying thread's MXCSR (the filter runs on it)
   size_t rejected = 0;
   // Bit k: the filter let a hit of ray id k stand (fan ids are below 16, a single query's
@@ -340,9 +338,11 @@ uint32_t candidate_lanes(const int* valid, unsigned n) {
   return lanes;
 }
 
-// What a filter's primitive ids are: the soup's triangles (Primitives::triangles), or
-// under Primitives::paired_quads the quads (quad_first) or the unpaired triangles (single).
-enum class PrimKind { triangle, quad, single };
+// What a filter's primitive ids are: the soup's triangles (Primitives::triangles) or the
+// quads of Primitives::paired_quads (quad_first).
+enum class PrimKind { triangle, quad };
+// EmbreeScene::quad_first_'s mark of a quad holding one triangle.
+constexpr uint32_t kSingleQuad = 0x80000000u;
 
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
 // precision test of the same query agrees (see embree_scene.h, "Hit verification"),
@@ -372,10 +372,8 @@ __attribute__((always_inline)) inline void verify_hit_filter_body(const RTCFilte
     };
     bool confirmed;
     if constexpr (kKind == PrimKind::quad) {
-      const unsigned first = vc->quad_first[prim];
-      confirmed = confirms(first) || confirms(first + 1u);
-    } else if constexpr (kKind == PrimKind::single) {
-      confirmed = confirms(vc->single[prim]);
+      const uint32_t q = vc->quad_first[prim], first = q & ~kSingleQuad;
+      confirmed = confirms(first) || (!(q & kSingleQuad) && confirms(first + 1u));
     } else {
       confirmed = confirms(prim);
     }
@@ -469,36 +467,37 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits
     rtcAttachGeometryByID(scene, geom, geom_id);
     rtcReleaseGeometry(geom);
   };
-  if (primitives == Primitives::paired_quads && soup.size() > 1) {
-    // Quads first, then the unpaired triangles (geometry ids 0 and 1). The quads' corners
-    // are written in place into the index buffer Embree shares: at most size / 2 quads.
+  if (primitives == Primitives::paired_quads && soup.size() > 1 && soup.size() < kSingleQuad) {
+    // One geometry of quads (one BVH for every ray to traverse): a triangle left unpaired
+    // is the quad (a, b, c, c), Embree's encoding of a triangle as a quad, whose second
+    // half (c, c, b) has no area and is never hit. The corners are written in place into
+    // the index buffer Embree shares.
     const size_t n = soup.size();
-    quad_index_.reset(new uint32_t[4 * (n / 2)]);  // the first 4 x quads entries are written
-    quad_first_.reserve(n / 2);
+    quad_index_.reset(new uint32_t[4 * n]);  // the first 4 x quads entries are written
+    quad_first_.reserve(n);
     uint32_t* quad = quad_index_.get();
-    for (size_t k = 0; k < n;) {
+    for (size_t k = 0; k < n; quad += 4) {
       if (k + 1 < n && pair_quad(soup.triangles[k], soup.triangles[k + 1], quad)) {
         quad_first_.push_back(uint32_t(k));
-        quad += 4;
+        ++pairs_;
         k += 2;
       } else {
-        single_.push_back(uint32_t(k));
+        const auto& t = soup.triangles[k];
+        quad[0] = t[0], quad[1] = t[1], quad[2] = t[2], quad[3] = t[2];
+        quad_first_.push_back(uint32_t(k) | kSingleQuad);
         ++k;
       }
     }
-    if (!quad_first_.empty()) {
-      RTCGeometry geom = geometry(RTC_GEOMETRY_TYPE_QUAD, verify_hit_filter_for_cpu<PrimKind::quad>());
-      rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, quad_index_.get(), 0,
-                                 4 * sizeof(uint32_t), quad_first_.size());
-      attach(geom, 0);
+    if (pairs_ == 0) {
+      quad_first_ = {};
+      quad_index_.reset();
     }
-    if (!single_.empty()) {
-      RTCGeometry geom = geometry(RTC_GEOMETRY_TYPE_TRIANGLE, verify_hit_filter_for_cpu<PrimKind::single>());
-      uint32_t* ib = triangle_index(geom, single_.size());
-      for (size_t k = 0; k < single_.size(); ++k)
-        std::memcpy(ib + 3 * k, soup.triangles[single_[k]].data(), 3 * sizeof(uint32_t));
-      attach(geom, 1);
-    }
+  }
+  if (pairs_ > 0) {
+    RTCGeometry geom = geometry(RTC_GEOMETRY_TYPE_QUAD, verify_hit_filter_for_cpu<PrimKind::quad>());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, quad_index_.get(), 0,
+                               4 * sizeof(uint32_t), quad_first_.size());
+    attach(geom, 0);
   } else if (soup.size() > 0) {
     RTCGeometry geom = geometry(RTC_GEOMETRY_TYPE_TRIANGLE, verify_hit_filter_for_cpu<PrimKind::triangle>());
     std::memcpy(triangle_index(geom, soup.size()), soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
@@ -560,7 +559,6 @@ bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnea
   vc.ranged = ranged;
   vc.soup = soup_;
   vc.quad_first = quad_first_.data();
-  vc.single = single_.data();
   if (!ranged) vc.cache = bound_terms_cache(id_, from);
   RTCRay ray;
   ray.org_x = from.x;
@@ -733,7 +731,6 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
   vc.fan_to = to;
   vc.soup = soup_;
   vc.quad_first = quad_first_.data();
-  vc.single = single_.data();
   vc.cache = bound_terms_cache(id_, from);
   if (native_packet_width() == 16) {
     thread_local FanPacket<16, RTCRay16> pk;
