@@ -255,6 +255,8 @@ struct VerifyContext {
   bool ranged = false;       // false: the segment test, t in (0, 1]
   const Vec3f* fan_to = nullptr;  // a packet from `from`: lane k (ray id k) ends at fan_to[k]
   const TriangleSoup* soup = nullptr;
+  // Primitives::paired_quads: the soup triangles of the quads (EmbreeScene::quad_first_).
+  const uint32_t* quad_first = nullptr;
   unsigned csr = IeeeFloatMode::current_csr();  // the querying thread's MXCSR (the filter runs on it)
   size_t rejected = 0;
   // Bit k: the filter let a hit of ray id k stand (fan ids are below 16, a single query's
@@ -336,11 +338,18 @@ uint32_t candidate_lanes(const int* valid, unsigned n) {
   return lanes;
 }
 
+// What a filter's primitive ids are: the soup's triangles (Primitives::triangles) or the
+// quads of Primitives::paired_quads (quad_first).
+enum class PrimKind { triangle, quad };
+// EmbreeScene::quad_first_'s mark of a quad holding one triangle.
+constexpr uint32_t kSingleQuad = 0x80000000u;
+
 // Occlusion filter of a verified scene: a candidate hit stands only when the double-
 // precision test of the same query agrees (see embree_scene.h, "Hit verification"),
 // or, for segment queries, when certainly_crosses_interior proves it first (kAvx2: its
-// AVX2 build, the same answers).
-template <bool kAvx2>
+// AVX2 build, the same answers). A quad's candidate stands when either of its two
+// triangles is confirmed.
+template <bool kAvx2, PrimKind kKind>
 __attribute__((always_inline)) inline void verify_hit_filter_body(const RTCFilterFunctionNArguments* args) {
   // The filter runs on the querying thread, which may be a TBB worker with FTZ/DAZ on.
   auto* vc = reinterpret_cast<VerifyContext*>(args->context);
@@ -352,14 +361,22 @@ __attribute__((always_inline)) inline void verify_hit_filter_body(const RTCFilte
   for (uint32_t lanes = candidate_lanes(args->valid, args->N); lanes; lanes &= lanes - 1) {
     const unsigned i = unsigned(__builtin_ctz(lanes));
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
-    const auto& t = vc->soup->triangles[prim];
-    const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
     const unsigned id = vc->fan_to ? RTCRayN_id(args->ray, args->N, i) : 0u;
     const Vec3f& to = vc->fan_to ? vc->fan_to[id] : vc->to;
-    const bool confirmed =
-        (!vc->ranged && proves_crossing<kAvx2>(vc->cache->get<kAvx2>(p, prim, a, b, c), to_double(to) - p)) ||
-        (vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
-                    : segment_hits_triangle(a, b, c, vc->from, to));
+    auto confirms = [&](unsigned tri) {
+      const auto& t = vc->soup->triangles[tri];
+      const Vec3f &a = vc->soup->vertices[t[0]], &b = vc->soup->vertices[t[1]], &c = vc->soup->vertices[t[2]];
+      return (!vc->ranged && proves_crossing<kAvx2>(vc->cache->get<kAvx2>(p, tri, a, b, c), to_double(to) - p)) ||
+             (vc->ranged ? line_range_hits_triangle(a, b, c, vc->from, to, vc->t0, vc->t1)
+                         : segment_hits_triangle(a, b, c, vc->from, to));
+    };
+    bool confirmed;
+    if constexpr (kKind == PrimKind::quad) {
+      const uint32_t q = vc->quad_first[prim], first = q & ~kSingleQuad;
+      confirmed = confirms(first) || (!(q & kSingleQuad) && confirms(first + 1u));
+    } else {
+      confirmed = confirms(prim);
+    }
     if (confirmed) {
       vc->accepted |= 1u << (id & 31u);
     } else {
@@ -369,19 +386,45 @@ __attribute__((always_inline)) inline void verify_hit_filter_body(const RTCFilte
   }
 }
 
-void verify_hit_filter(const RTCFilterFunctionNArguments* args) { verify_hit_filter_body<false>(args); }
+template <PrimKind kKind>
+void verify_hit_filter(const RTCFilterFunctionNArguments* args) {
+  verify_hit_filter_body<false, kKind>(args);
+}
 #if defined(__GNUC__) && defined(__x86_64__)
+template <PrimKind kKind>
 __attribute__((target("avx2"))) void verify_hit_filter_avx2(const RTCFilterFunctionNArguments* args) {
-  verify_hit_filter_body<true>(args);
+  verify_hit_filter_body<true, kKind>(args);
 }
 #endif
 
-// The filter of this CPU (filter_avx2).
+// The filter of this CPU (filter_avx2) for primitives of kind kKind.
+template <PrimKind kKind>
 RTCFilterFunctionN verify_hit_filter_for_cpu() {
 #if defined(__GNUC__) && defined(__x86_64__)
-  if (filter_avx2()) return verify_hit_filter_avx2;
+  if (filter_avx2()) return verify_hit_filter_avx2<kKind>;
 #endif
-  return verify_hit_filter;
+  return verify_hit_filter<kKind>;
+}
+
+// Primitives::paired_quads: triangles a and b pair when they share an edge in opposite
+// orientations. Writes the quad (v0, v1, v2, v3) whose triangles (v0, v1, v3) and
+// (v2, v3, v1) are a and b, each listed from another corner (repeated corners
+// included: the two triangles are a's and b's corners whatever they are).
+__attribute__((always_inline)) inline bool pair_quad(const std::array<uint32_t, 3>& a,
+                                                     const std::array<uint32_t, 3>& b, uint32_t* quad) {
+  const uint32_t b0 = b[0], b1 = b[1], b2 = b[2];
+  // a listed as (p, q, r) pairs when b is a rotation of (s, r, q): its edge r -> q.
+  auto from = [&](uint32_t p, uint32_t q, uint32_t r) {
+    uint32_t s;
+    if (b1 == r && b2 == q) s = b0;
+    else if (b0 == r && b1 == q) s = b2;
+    else if (b2 == r && b0 == q) s = b1;
+    else return false;
+    quad[0] = p, quad[1] = q, quad[2] = s, quad[3] = r;
+    return true;
+  };
+  const uint32_t a0 = a[0], a1 = a[1], a2 = a[2];
+  return from(a0, a1, a2) || from(a1, a2, a0) || from(a2, a0, a1);
 }
 
 }  // namespace
@@ -389,7 +432,8 @@ RTCFilterFunctionN verify_hit_filter_for_cpu() {
 // Scene ids for TermsCache: distinct for every scene of the process, never 0.
 std::atomic<uint64_t> next_scene_id{1};
 
-EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits, BuildQuality quality)
+EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits, BuildQuality quality,
+                         Primitives primitives)
     : soup_(&soup), verify_(verify_hits), id_(next_scene_id.fetch_add(1, std::memory_order_relaxed)) {
   for (const Vec3f& v : soup.vertices)
     if (!within_embree_bound(v)) {
@@ -403,20 +447,61 @@ EmbreeScene::EmbreeScene(const TriangleSoup& soup, bool robust, bool verify_hits
                             : quality == BuildQuality::high ? RTC_BUILD_QUALITY_HIGH
                                                             : RTC_BUILD_QUALITY_MEDIUM;
   rtcSetSceneBuildQuality(scene, q);
-  if (soup.size() > 0) {
-    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    // Embree-allocated buffers have the tail padding its SIMD loads need.
+  // A geometry of `type` over the soup's vertices (Embree-allocated buffers have the
+  // tail padding its SIMD loads need); the caller sets its index buffer and attaches it.
+  auto geometry = [&](RTCGeometryType type, RTCFilterFunctionN filter) {
+    RTCGeometry geom = rtcNewGeometry(device, type);
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                            3 * sizeof(float), soup.vertices.size()));
     std::memcpy(vb, soup.vertices.data(), soup.vertices.size() * 3 * sizeof(float));
-    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(uint32_t), soup.triangles.size()));
-    std::memcpy(ib, soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
     rtcSetGeometryBuildQuality(geom, q);
-    if (verify_) rtcSetGeometryOccludedFilterFunction(geom, verify_hit_filter_for_cpu());
+    if (verify_) rtcSetGeometryOccludedFilterFunction(geom, filter);
+    return geom;
+  };
+  auto triangle_index = [&](RTCGeometry geom, size_t count) {
+    return static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                          3 * sizeof(uint32_t), count));
+  };
+  auto attach = [&](RTCGeometry geom, unsigned geom_id) {
     rtcCommitGeometry(geom);
-    rtcAttachGeometry(scene, geom);
+    rtcAttachGeometryByID(scene, geom, geom_id);
     rtcReleaseGeometry(geom);
+  };
+  if (primitives == Primitives::paired_quads && soup.size() > 1 && soup.size() < kSingleQuad) {
+    // One geometry of quads (one BVH for every ray to traverse): a triangle left unpaired
+    // is the quad (a, b, c, c), Embree's encoding of a triangle as a quad, whose second
+    // half (c, c, b) has no area and is never hit. The corners are written in place into
+    // the index buffer Embree shares.
+    const size_t n = soup.size();
+    quad_index_.reset(new uint32_t[4 * n]);  // the first 4 x quads entries are written
+    quad_first_.reserve(n);
+    uint32_t* quad = quad_index_.get();
+    for (size_t k = 0; k < n; quad += 4) {
+      if (k + 1 < n && pair_quad(soup.triangles[k], soup.triangles[k + 1], quad)) {
+        quad_first_.push_back(uint32_t(k));
+        ++pairs_;
+        k += 2;
+      } else {
+        const auto& t = soup.triangles[k];
+        quad[0] = t[0], quad[1] = t[1], quad[2] = t[2], quad[3] = t[2];
+        quad_first_.push_back(uint32_t(k) | kSingleQuad);
+        ++k;
+      }
+    }
+    if (pairs_ == 0) {
+      quad_first_ = {};
+      quad_index_.reset();
+    }
+  }
+  if (pairs_ > 0) {
+    RTCGeometry geom = geometry(RTC_GEOMETRY_TYPE_QUAD, verify_hit_filter_for_cpu<PrimKind::quad>());
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, quad_index_.get(), 0,
+                               4 * sizeof(uint32_t), quad_first_.size());
+    attach(geom, 0);
+  } else if (soup.size() > 0) {
+    RTCGeometry geom = geometry(RTC_GEOMETRY_TYPE_TRIANGLE, verify_hit_filter_for_cpu<PrimKind::triangle>());
+    std::memcpy(triangle_index(geom, soup.size()), soup.triangles.data(), soup.triangles.size() * 3 * sizeof(uint32_t));
+    attach(geom, 0);
   }
   rtcCommitScene(scene);
   // A build Embree refused (out of memory, an unsupported VISGATE_EMBREE_CONFIG) would
@@ -473,6 +558,7 @@ bool EmbreeScene::occluded_embree(const Vec3f& from, const Vec3f& to, float tnea
   vc.t1 = tfar;
   vc.ranged = ranged;
   vc.soup = soup_;
+  vc.quad_first = quad_first_.data();
   if (!ranged) vc.cache = bound_terms_cache(id_, from);
   RTCRay ray;
   ray.org_x = from.x;
@@ -644,6 +730,7 @@ void EmbreeScene::occluded_fan(const Vec3f& from, const Vec3f* to, int n, bool* 
   vc.from = from;
   vc.fan_to = to;
   vc.soup = soup_;
+  vc.quad_first = quad_first_.data();
   vc.cache = bound_terms_cache(id_, from);
   if (native_packet_width() == 16) {
     thread_local FanPacket<16, RTCRay16> pk;

@@ -92,7 +92,8 @@ class SsvSolver : public Solver {
     return {{"silhouette_regions", "cull wedges outside their silhouette regions in the BSP (section 4.2)", {"on", "off"}},
             {"occluder_culling", "skip receivers a planar occluder hides from a light (occluders.h)", {"on", "off"}},
             {"shaft_culling", "build wedges only for edges inside the receivers' shafts to a light", {"on", "off"}},
-            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver, else the scattered wedges", {"auto", "edges", "receivers", "bsp"}}};
+            {"wedge_index", "find candidate edges per receiver in the edge hierarchy (edge_tree.h, no wedges), or candidate wedges by scattering them through the receiver tree or by the lazy BSP (section 4.1); auto: the edges for meshes of at least 16 edges per receiver, else the scattered wedges", {"auto", "edges", "receivers", "bsp"}},
+            {"embree_quads", "pair triangles that share an edge into Embree quads for the rays' scene: half the primitives to build, the same answers (embree_scene.h); auto: for meshes of at least one triangle per receiver and light", {"auto", "on", "off"}}};
   }
  protected:
   SolveResult solve_scene(const Scene& scene, const SolveOptions& opt) override;

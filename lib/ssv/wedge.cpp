@@ -18,20 +18,21 @@ TrianglePlanes triangle_planes(const mesh::PreparedMesh& m) {
 }
 
 std::vector<Edge> mesh_edges(const mesh::PreparedMesh& m) {
+  // Each label is taken at its first incidence in triangle order: a single edge's label
+  // has one incidence, a double edge's two, in the triangle and its neighbour across it
+  // (prepare.h), so the first is in the lower-numbered of the two: no flag per label.
   std::vector<Edge> edges(m.edge_count());
-  std::vector<uint8_t> seen(m.edge_count(), 0);
   for (size_t t = 0; t < m.triangles.size(); ++t) {
     const auto& tri = m.triangles[t];
     for (int k = 0; k < 3; ++k) {
-      uint32_t label = tri.edge_labels[k];
-      if (seen[label]) continue;
-      seen[label] = 1;
-      Edge e;
+      const uint32_t label = tri.edge_labels[k];
+      const bool twin = m.is_double_edge[label];
+      if (twin && tri.neighbors[k] < int32_t(t)) continue;
+      Edge& e = edges[label];
       e.a = tri.v[k];
-      e.b = tri.v[(k + 1) % 3];
+      e.b = tri.v[k == 2 ? 0 : k + 1];
       e.t1 = int32_t(t);
-      e.t2 = m.is_double_edge[label] ? tri.neighbors[k] : -1;
-      edges[label] = e;
+      e.t2 = twin ? tri.neighbors[k] : -1;
     }
   }
   return edges;

@@ -481,3 +481,48 @@ TEST(Raycast, EveryBuildQualityGivesTheDoublePrecisionAnswers) {
     }
   }
 }
+
+TEST(Raycast, PairedQuadsGiveTheTrianglesAnswers) {
+  // Primitives::paired_quads changes Embree's primitives, not the triangles a segment
+  // meets: single rays (plain, ranged with their disputes) and packets against the
+  // triangle scene and fallback_occluded, on scan (every triangle paired), scan without
+  // its first triangle (pairs across the cells, unpaired ones between) and a soup in
+  // general position (no pairs: triangles only).
+  for (int variant = 0; variant < 3; ++variant) {
+    Scene s = family(variant == 2 ? "random-soup" : "scan", 3, variant == 2 ? -1 : 4000, 48, 8);
+    ASSERT_FALSE(s.receivers.empty());
+    if (variant == 1) s.mesh.triangles.erase(s.mesh.triangles.begin());
+    raycast::EmbreeScene tri(s.mesh, true, true, raycast::BuildQuality::low);
+    raycast::EmbreeScene quad(s.mesh, true, true, raycast::BuildQuality::low, raycast::Primitives::paired_quads);
+    EXPECT_EQ(tri.quad_count(), 0u);
+    const size_t paired = 2 * quad.quad_count();
+    EXPECT_EQ(paired == s.mesh.size(), variant == 0) << variant;
+    EXPECT_EQ(paired > 0, variant != 2) << variant;
+    size_t blocked = 0, lanes = 0;
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      const Light& l = s.lights[i % s.lights.size()];
+      const Vec3f& r = s.receivers[i].p;
+      Vec3f to[8];
+      bool out[8];
+      for (int k = 0; k < 8; ++k) to[k] = sample_position(l, k, i);
+      quad.occluded_fan(r, to, 8, out);
+      for (int k = 0; k < 8; ++k) {
+        const bool ref = raycast::fallback_occluded(s.mesh, r, to[k]);
+        EXPECT_EQ(out[k], ref) << variant << " receiver " << i << " lane " << k;
+        EXPECT_EQ(quad.occluded(r, to[k]), ref) << variant << " receiver " << i << " lane " << k;
+        EXPECT_EQ(tri.occluded(r, to[k]), ref) << variant << " receiver " << i << " lane " << k;
+        for (auto [t0, t1] : {std::pair(0.0f, 1.0f + 0x1p-18f), std::pair(0x1p-18f, 1.0f - 0x1p-18f)}) {
+          bool dq = false, dt = false;
+          EXPECT_EQ(quad.occluded(r, to[k], t0, t1, dq), tri.occluded(r, to[k], t0, t1, dt)) << variant << " " << i;
+          EXPECT_EQ(dq, dt) << variant << " receiver " << i << " lane " << k;
+        }
+        blocked += ref;
+        ++lanes;
+      }
+    }
+    EXPECT_GT(blocked, 0u) << variant;
+    EXPECT_LT(blocked, lanes) << variant;
+    EXPECT_EQ(quad.unverified_hits(), 0u);
+    EXPECT_EQ(quad.fallback_rays(), 0u);
+  }
+}
