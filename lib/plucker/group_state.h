@@ -184,6 +184,7 @@ struct GroupState {
   std::vector<uint32_t> near_done;
   uint32_t near_serial = 0;
   std::vector<uint8_t> on_plane0, on_level, skip, merged;
+  std::vector<uint8_t> no_skip;  // all 0, grow-only: the skips of a near polygon with no edge on r's level
   std::vector<double> vals;
   std::vector<uint32_t> exact_done, patch_at;
   UVBoxGrid sample_grid;  // sample_bits' fragments by cell

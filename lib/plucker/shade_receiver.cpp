@@ -451,21 +451,25 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   if (skip.size() < room) skip.resize(room);
   // Every vertex above r's level: the clip keeps the polygon as it is, none on the level
   // (on_level is left unwritten; the skips below are all 0 then).
+  // Oriented so that r is on the negative side (bsp.h Occluder): the polygon read in
+  // place when it is its own clip and already so oriented, else q (reversed when r is
+  // on its positive side).
   size_t nq = 0;
+  const Vec3d* qp = q.data();
   if (all_above) {
     if (np.count >= 3) {
-      std::copy(pv, pv + np.count, q.begin());
       nq = np.count;
+      if (side_r > 0) std::reverse_copy(pv, pv + nq, q.begin());
+      else qp = pv;
     }
   } else {
     nq = size_t(clip_by_values(pv, vals.data(), int(np.count), true, q.data(), on_level.data()));
+    if (side_r > 0) {
+      std::reverse(q.begin(), q.begin() + std::ptrdiff_t(nq));
+      std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
+    }
   }
   if (nq == 0) return;
-  // Oriented so that r is on the negative side (bsp.h Occluder).
-  if (side_r > 0) {
-    std::reverse(q.begin(), q.begin() + std::ptrdiff_t(nq));
-    if (!all_above) std::reverse(on_level.begin(), on_level.begin() + std::ptrdiff_t(nq));
-  }
   // An edge of q at r's own level (both ends on the clip plane g . p = g . r) lies in the
   // level plane through r, so the plane through r and that edge is the level plane
   // itself, and every light point is strictly beyond it, on q's side: the edge cannot cut
@@ -473,9 +477,13 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // is within rounding of the triangle's plane, the edge passes within rounding of r and
   // float calls r "on its line" (test ReceiverWithinRoundingOfAFace).
   // (None on the level when every vertex is above it: on_level was not written then.)
-  if (all_above) std::fill(skip.begin(), skip.begin() + std::ptrdiff_t(nq), uint8_t(0));
-  else
+  const uint8_t* sp = skip.data();
+  if (all_above) {
+    if (gs_.no_skip.size() < nq) gs_.no_skip.resize(nq, 0);
+    sp = gs_.no_skip.data();
+  } else {
     for (size_t k = 0; k < nq; ++k) skip[k] = on_level[k] && on_level[k + 1 == nq ? 0 : k + 1];
+  }
   // The planes through r and q's edges are only as good as q's vertices: a vertex
   // rounded by u of its coordinates, at a distance d from r, turns such a plane by up to
   // u |q| / d. A vertex that close to r (the clip at r's level of an edge passing within
@@ -483,8 +491,8 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   // NearPolygonClippedNextToTheReceiverGoesExact).
   bool too_close = false;
   for (size_t k = 0; k < nq && !too_close; ++k) {
-    if (skip[k] && skip[k == 0 ? nq - 1 : k - 1]) continue;  // starts and ends no tested edge
-    const double d = max_component(vabs(q[k] - r_)), scale = std::max(max_component(vabs(q[k])), rmax_);
+    if (sp[k] && sp[k == 0 ? nq - 1 : k - 1]) continue;  // starts and ends no tested edge
+    const double d = max_component(vabs(qp[k] - r_)), scale = std::max(max_component(vabs(qp[k])), rmax_);
     too_close = !(d > 0x1p-24 * scale);
   }
   if (too_close) {
@@ -493,9 +501,9 @@ void ReceiverShading::subtract_near(const NearPoly& np, uint32_t idx) {
   }
   if (serial_ != 0 && subtract_merged(np, idx, side_r)) return;
   // Its shadow's box against the fragments' boxes: disjoint boxes, nothing to cut.
-  UVBox qbox = shadow_box(lf_.plane, r_, q.data(), nq);
+  UVBox qbox = shadow_box(lf_.plane, r_, qp, nq);
   if (!qbox.overlaps(all_)) return;
-  if (subtract_polygon(r_, q.data(), int(nq), skip.data(), qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
+  if (subtract_polygon(r_, qp, int(nq), sp, qbox, lf_.axes, lf_.bounds, gs_.frags, gs_.boxes,
                        gs_.runs, gs_.tmp, gs_.tmp_boxes, gs_.cur, gs_.pos, gs_.neg, nc_))
     extend_all();
 }
