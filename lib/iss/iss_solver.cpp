@@ -280,6 +280,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cell_shafts", "with direct_rays, the leaf relations of a whole-light leaf with at most cell_candidates candidate triangles, receiver by receiver, first by a shaft from the receiver point to the light node's box (blocked or visible by the direct test's certified predicates at the box corners), then to its subtree's boxes down to cell_depth levels, the direct test against the candidates left and Embree for the relations still undecided", {"on", "off"}},
       {"cell_depth", "cell_shafts: light-tree levels below the leaf's light node that cells descend while mixed (default 0: the light node's box only)", {}},
       {"cell_patches", "cell_shafts: a cell is also blocked by a planar patch of exactly coplanar neighbouring triangles whose plane separates the receiver from the cell, with no boundary edge meeting the cell's segments and one segment through its inside", {"on", "off"}},
+      {"cell_backfaces", "cell_shafts: a leaf shaft with more than cell_candidates candidates still gets cells when at most that many are left without the faces of closed star-shaped surfaces turned strictly away from the whole receiver node (a segment from outside such a surface that meets it first crosses a face turned towards its start)", {"on", "off"}},
       {"cell_candidates", "cell_shafts: most candidate triangles of a leaf shaft that cells take (default 192; more go to the direct test or Embree rays)", {}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
@@ -329,6 +330,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.cell_depth = int(std::max(0L, opt.get_int("cell_depth", p.cell_depth)));
   p.cell_max_candidates = int(std::max(0L, opt.get_int("cell_candidates", p.cell_max_candidates)));
   p.cell_patches = opt.get_bool("cell_patches", true);
+  p.cell_backfaces = opt.get_bool("cell_backfaces", true);
   p.clusters = opt.get("clusters", "auto") != "off";
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
   p.cluster_exact_max = size_t(std::max(0L, opt.get_int("cluster_exact", long(p.cluster_exact_max))));

@@ -647,29 +647,168 @@ bool Traversal::direct_rays_cands(int r, int l) {
 bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
   if (!direct_candidates(sh.g, true)) return false;
   const size_t k_count = direct_cand_.size();
-  if (k_count > size_t(p_.cell_max_candidates)) return direct_rays_cands(r, l);
-  const size_t kp = direct_load_corners();
+  const bool cull = k_count > size_t(p_.cell_max_candidates);
+  if (cull && (!p_.cell_backfaces || k_count <= size_t(p_.direct_max_candidates))) return direct_rays_cands(r, l);
   if (cell_levels_.empty()) cell_levels_.emplace_back();
-  cell_levels_[0].terms.resize(kCellTermCount * kp);
-  cell_levels_[0].count = k_count;
-  cell_levels_[0].kp = kp;
-  cell_levels_[0].tris = direct_cand_;
   if (p_.cell_patches && patch_of_.empty()) {
     patch_of_.assign(mesh_.triangles.size(), kPatchUnknown);
     patch_edges_.assign(mesh_.triangles.size(), 7);
   }
   const TreeNode& R = rn(r);
-  const auto& ro = rtree_->order();
-  for (uint32_t a = R.begin; a < R.end; ++a) {
-    const uint32_t i = ro[a];
-    const Vec3f& p = scene_.receivers[i].p;
-    const double od[3] = {double(p.x), double(p.y), double(p.z)};
-    if (k_count > 0) cell_terms(direct_corners_.data(), kp, od, cell_levels_[0].terms.data());
-    cell_uncertain_.clear();
-    cell_descend(l, 0, i, od, relation_hash_prefix(i, light_->seed));
-    if (!cell_uncertain_.empty()) fan_rays(i, cell_uncertain_.data(), cell_uncertain_.size());
+  if (cull) {
+    // Too many candidates: without the faces of closed star-shaped surfaces turned
+    // strictly away from every receiver (cull_back_faces at the receiver node box's
+    // corners, one value on a flat axis), cells when few enough are left, else the
+    // direct test or Embree rays as before. A segment from a receiver that meets a
+    // dropped face also meets a kept candidate strictly inside it, so every certificate
+    // over the kept candidates holds over all of them. A planar patch (cell_patch_blocks)
+    // lies on one plane with one orientation and in one neighbour component: its
+    // triangles are dropped all or none.
+    cull_prepare();
+    Vec3f corners[8];
+    int nc = 0;
+    const AABB& b = R.box;
+    const int nx = b.lo.x < b.hi.x ? 2 : 1, ny = b.lo.y < b.hi.y ? 2 : 1, nz = b.lo.z < b.hi.z ? 2 : 1;
+    for (int x = 0; x < nx; ++x)
+      for (int y = 0; y < ny; ++y)
+        for (int z = 0; z < nz; ++z) corners[nc++] = Vec3f(x ? b.hi.x : b.lo.x, y ? b.hi.y : b.lo.y, z ? b.hi.z : b.lo.z);
+    direct_cand_ = cull_all_;
+    cull_back_faces(corners, nc, b);
+    if (direct_cand_.size() > size_t(p_.cell_max_candidates)) return direct_rays_cands(r, l);
+    n_cull_decided_ += double(R.size()) * double(ln(l).size());
   }
+  const size_t kp = direct_load_corners();
+  cell_levels_[0].terms.resize(kCellTermCount * kp);
+  cell_levels_[0].count = direct_cand_.size();
+  cell_levels_[0].kp = kp;
+  cell_levels_[0].tris = direct_cand_;
+  const auto& ro = rtree_->order();
+  for (uint32_t a = R.begin; a < R.end; ++a) cell_receiver(l, ro[a], kp);
   return true;
+}
+
+void Traversal::cell_receiver(int l, uint32_t i, size_t kp) {
+  const Vec3f& p = scene_.receivers[i].p;
+  const double od[3] = {double(p.x), double(p.y), double(p.z)};
+  if (cell_levels_[0].count > 0) cell_terms(direct_corners_.data(), kp, od, cell_levels_[0].terms.data());
+  cell_uncertain_.clear();
+  cell_descend(l, 0, i, od, relation_hash_prefix(i, light_->seed));
+  if (!cell_uncertain_.empty()) fan_rays(i, cell_uncertain_.data(), cell_uncertain_.size());
+}
+
+// The leaf's candidates (direct_cand_) on closed star-shaped surfaces, with their
+// planes, into cull_faces_; the others into cull_all_.
+void Traversal::cull_prepare() {
+  if (closed_of_.empty()) closed_of_.assign(mesh_.triangles.size(), kPatchUnknown);
+  cull_all_.clear();
+  cull_faces_.clear();
+  for (uint32_t t : direct_cand_) {
+    if (closed_of_[t] == kPatchUnknown) flood_closed_surface(t);
+    if (closed_of_[t] == kNoPatch) {
+      cull_all_.push_back(t);
+      continue;
+    }
+    const Vec3d a = to_double(mesh_.corner(t, 0)), A = to_double(mesh_.corner(t, 1)) - a,
+                C = to_double(mesh_.corner(t, 2)) - a;
+    CullFace f;
+    f.t = t;
+    f.surface = closed_of_[t];
+    f.a = a;
+    f.n = cross(A, C);
+    f.perm = Vec3d(std::abs(A.y * C.z) + std::abs(A.z * C.y), std::abs(A.z * C.x) + std::abs(A.x * C.z),
+                   std::abs(A.x * C.y) + std::abs(A.y * C.x));
+    cull_faces_.push_back(f);
+  }
+}
+
+// Closed star-shaped surfaces: the triangles reached from t0 over neighbour pairs
+// (mesh::PreparedTriangle::neighbors, each pair traversing its edge in opposite
+// directions and naming each other) form one when every edge of every one of them has
+// such a pair, so their sum is an oriented 2-cycle without boundary, and its vertices'
+// centroid c (rounded to float) lies strictly behind every face's plane (exact
+// orientation). Then the winding number w of the cycle is >= 0 off the surface: along
+// a generic ray from a point y away from c every crossing leaves a face's plane on the
+// side away from c, so each lowers w by one on the way to w = 0 far away, and w(y) is
+// their count. Where it fails, the triangles get kNoPatch.
+void Traversal::flood_closed_surface(uint32_t t0) {
+  const uint32_t id = uint32_t(closed_.size());
+  closed_stack_.assign(1, t0);
+  cull_members_.clear();
+  closed_of_[t0] = id;
+  bool closed = true;
+  AABB box;
+  Vec3d sum(0, 0, 0);
+  while (!closed_stack_.empty()) {
+    const uint32_t t = closed_stack_.back();
+    closed_stack_.pop_back();
+    cull_members_.push_back(t);
+    const mesh::PreparedTriangle& T = mesh_.triangles[t];
+    for (int e = 0; e < 3; ++e) {
+      box.extend(mesh_.corner(t, e));
+      sum = sum + to_double(mesh_.corner(t, e));
+      const int32_t u = T.neighbors[size_t(e)];
+      bool paired = false;
+      if (u >= 0) {
+        const mesh::PreparedTriangle& U = mesh_.triangles[size_t(u)];
+        const uint32_t va = T.v[size_t(e)], vb = T.v[size_t((e + 1) % 3)];
+        for (int g = 0; g < 3; ++g)
+          paired |= U.v[size_t(g)] == vb && U.v[size_t((g + 1) % 3)] == va && U.neighbors[size_t(g)] == int32_t(t);
+      }
+      if (!paired) {
+        closed = false;
+        continue;
+      }
+      if (closed_of_[size_t(u)] == kPatchUnknown) {
+        closed_of_[size_t(u)] = id;
+        closed_stack_.push_back(uint32_t(u));
+      }
+    }
+  }
+  const double n = 3.0 * double(cull_members_.size());
+  const Vec3f c(float(sum.x / n), float(sum.y / n), float(sum.z / n));
+  for (size_t k = 0; k < cull_members_.size() && closed; ++k) {
+    const uint32_t t = cull_members_[k];
+    const Vec3f &a = mesh_.corner(t, 0), &b = mesh_.corner(t, 1), &d = mesh_.corner(t, 2);
+    Sign s = orient3d_filtered(a, b, d, SumPoint(c));
+    if (s == Sign::Uncertain) s = orient3d_exact(a, b, d, c);
+    closed = s == Sign::Negative;
+  }
+  if (!closed) {
+    for (uint32_t t : cull_members_) closed_of_[t] = kNoPatch;
+    return;
+  }
+  closed_.push_back(ClosedSurface{box});
+}
+
+// Appends to direct_cand_ the faces of cull_faces_ except those whose surface's box
+// `box` lies strictly outside and whose plane every point of pts lies strictly behind
+// (exact orientation), so every point p of the hull of pts. Why no answer changes for
+// a segment from such a p: let a dropped face F
+// meet the segment s = p q at a parameter t0 in (0, 1). p is strictly behind F's plane,
+// so s crosses it transversally. Shift [p, p + t1 (q - p)] (t1 just above t0)
+// slightly and generically: it still starts where the winding number w is 0 (outside
+// the box), crosses F, and meets only faces that s meets transversally, each at an
+// inner point, where w changes by one. As w >= 0, its first crossing raises w: p is
+// strictly in front of that face. Faces s misses stay at a positive distance, so some
+// face with p strictly in front meets s transversally at a parameter in (0, t0]: a kept
+// candidate (its box meets the shaft) that blocks s whenever F does.
+void Traversal::cull_back_faces(const Vec3f* pts, int np, const AABB& box) {
+  for (const CullFace& f : cull_faces_) {
+    const AABB& b = closed_[f.surface].box;
+    bool drop = box.hi.x < b.lo.x || box.lo.x > b.hi.x || box.hi.y < b.lo.y || box.lo.y > b.hi.y ||
+                box.hi.z < b.lo.z || box.lo.z > b.hi.z;
+    for (int k = 0; k < np && drop; ++k) {
+      // orient3d(a, b, c, p) = n.(p - a) in Shewchuk's operations, within twice his
+      // errboundA (7 + 56 eps) eps of the permanent; the exact sign where that is unsure.
+      const Vec3d D = to_double(pts[k]) - f.a;
+      const double v = dot(f.n, D);
+      const double bound = 2.0 * (7.0 + 56.0 * kEps) * kEps *
+                           (std::abs(D.x) * f.perm.x + std::abs(D.y) * f.perm.y + std::abs(D.z) * f.perm.z);
+      drop = v < -bound || (v <= bound && orient3d_exact(mesh_.corner(f.t, 0), mesh_.corner(f.t, 1),
+                                                         mesh_.corner(f.t, 2), pts[k]) == Sign::Negative);
+    }
+    if (!drop) direct_cand_.push_back(f.t);
+  }
 }
 
 void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, uint64_t prefix) {

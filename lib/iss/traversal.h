@@ -139,6 +139,10 @@ struct Params {
   // face split in two triangles covers a cell that neither covers alone;
   // cell_patch_blocks).
   bool cell_patches = true;
+  // A leaf shaft with more than cell_max_candidates candidates still gets cells when,
+  // without the faces of closed star-shaped surfaces turned strictly away from every
+  // point of the receiver node's box (cull_back_faces), at most that many are left.
+  bool cell_backfaces = true;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -330,6 +334,12 @@ class Traversal {
   bool cell_rays(int r, int l, const Shaft& sh);
   void cell_descend(int c, size_t depth, uint32_t i, const double* od, uint64_t prefix);
   bool patch_interior_edge(uint32_t t, int e) const;
+  // The per-receiver part of cell_rays: cells of receiver i against cell_levels_[0]
+  // (kp lanes, the corners in direct_corners_).
+  void cell_receiver(int l, uint32_t i, size_t kp);
+  void flood_closed_surface(uint32_t t0);
+  void cull_prepare();
+  void cull_back_faces(const Vec3f* pts, int np, const AABB& box);
   void flood_cell_patch(uint32_t t);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
@@ -426,6 +436,20 @@ class Traversal {
   double n_cell_patch_decided_ = 0;  // relations blocked by cell_patch_blocks
   bool cell_patch_blocks(const CellLevel& lev, const double* cd, int nc);
   std::vector<CellLevel> cell_levels_;
+  // Closed star-shaped surfaces (flood_closed_surface): per triangle its surface's index
+  // in closed_, kNoPatch when it is on none, kPatchUnknown before its first need.
+  struct ClosedSurface {
+    AABB box;
+  };
+  std::vector<uint32_t> closed_of_, closed_stack_, cull_members_;
+  std::vector<ClosedSurface> closed_;
+  std::vector<uint32_t> cull_all_;  // a culled leaf's candidates on no closed surface
+  struct CullFace {  // a culled leaf's candidate on a closed surface
+    uint32_t t = 0, surface = 0;
+    Vec3d a, n, perm;  // its first corner, (b - a) x (c - a), and that cross product's permanent
+  };
+  std::vector<CullFace> cull_faces_;
+  double n_cull_decided_ = 0;  // relations of leaves that took cells only after cull_back_faces
   std::vector<uint8_t> cell_out_;
   std::vector<uint32_t> cell_uncertain_;  // samples of the current receiver left to Embree
   std::vector<uint32_t> direct_query_, direct_cand_;

@@ -285,3 +285,21 @@ TEST(IssLeafRays, CellPatchesCoverOnlyWhereTheirTrianglesDo) {
         EXPECT_EQ(on.receivers[i].visible(k), off.receivers[i].visible(k)) << what << " receiver " << i;
   }
 }
+
+TEST(IssLeafRays, CellBackfacesAnswerAsWithoutThemAndTheOracle) {
+  // Dropping the faces of closed star-shaped surfaces turned strictly away from a
+  // receiver node (cell_backfaces) lets leaves with too many candidates take cells. It
+  // changes only how a leaf is decided: the same shafts, every relation once, no more
+  // rays, and every answer where on and off differ the exact one. A small
+  // cell_candidates makes the scenes' closed surfaces (rooms' spheres, the torus, which
+  // is not star-shaped) exceed it.
+  const std::vector<LeafCase> cases = {
+      {"rooms", -1, 256, 64, {{"cell_candidates", "64"}}},
+      {"rooms", -1, 256, 64, {{"cell_candidates", "64"}, {"cell_depth", "16"}}},
+      {"columns", 1000, 1024, 64, {{"cell_candidates", "8"}}},
+      {"torus", -1, 256, 16, {{"cell_candidates", "8"}, {"cell_depth", "16"}}},
+      {"random-soup", -1, 256, 16, {{"cell_candidates", "8"}}},
+      {"shared-edge-fan", -1, 256, 16, {{"cell_candidates", "8"}}},
+  };
+  expect_option_cases(cases, "cell_backfaces", "cell_backface_relations", "cell_backface_relations");
+}
