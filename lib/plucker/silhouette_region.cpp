@@ -34,7 +34,7 @@ int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
 // A face whose computed normal n is small next to s12 (|n|_1 <= 2^-20 s12, where n's
 // rounding, a few ulps of s12, could turn it) bounds nothing: its node gets [-1, 1]^3.
 void node_normal_boxes(SilhouetteGroup& g) {
-  const accel::Bvh<double>& tree = g.edge_tree;
+  const EdgeTree& tree = g.edge_tree;
   thread_local std::vector<Vec3d> unit;
   thread_local std::vector<uint8_t> bad;
   unit.resize(g.faces.size());
@@ -74,9 +74,9 @@ void node_normal_boxes(SilhouetteGroup& g) {
 // item(k) for every leaf-order position k of a leaf of tree reached through nodes that
 // enter(i) accepts.
 template <class Enter, class Item>
-void walk_tree(const accel::Bvh<double>& tree, Enter&& enter, Item&& item) {
+void walk_tree(const EdgeTree& tree, Enter&& enter, Item&& item) {
   if (tree.empty()) return;
-  std::array<uint32_t, accel::Bvh<double>::kMaxStack> stack;
+  std::array<uint32_t, accel::Bvh<double>::kMaxStack> stack;  // halving: the same depth bound
   size_t top = 0;
   stack[top++] = 0;
   while (top > 0) {
@@ -118,6 +118,55 @@ int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p
   return s != 0 ? s : plane_side_rest(a, b, c, p);
 }
 
+void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key) {
+  nodes.clear();
+  order.clear();
+  item_boxes.clear();
+  const uint32_t n = uint32_t(boxes.size());
+  if (n == 0) return;
+  // Stable LSD radix sort of the edges by key, 11 bits a pass.
+  thread_local std::vector<uint32_t> tmp;
+  thread_local std::vector<uint32_t> count;
+  order.resize(n);
+  for (uint32_t e = 0; e < n; ++e) order[e] = e;
+  uint32_t top = 0;
+  for (uint32_t k : key) top = std::max(top, k);
+  tmp.resize(n);
+  for (int shift = 0; shift < 32 && (top >> shift) != 0; shift += 11) {
+    count.assign(2049, 0u);
+    for (uint32_t e : order) ++count[((key[e] >> shift) & 2047u) + 1];
+    for (size_t b = 1; b < count.size(); ++b) count[b] += count[b - 1];
+    for (uint32_t e : order) tmp[count[(key[e] >> shift) & 2047u]++] = e;
+    order.swap(tmp);
+  }
+  item_boxes.resize(n);
+  for (uint32_t k = 0; k < n; ++k) item_boxes[k] = boxes[order[k]];
+  nodes.reserve(2 * (n / kLeaf) + 2);
+  build_node(0, n);
+}
+
+// Node over order[begin, end) and its subtree (left half floor(m / 2)); returns its id.
+uint32_t EdgeTree::build_node(uint32_t begin, uint32_t end) {
+  const uint32_t id = uint32_t(nodes.size());
+  nodes.emplace_back();
+  nodes[id].count = end - begin;
+  if (end - begin <= kLeaf) {
+    AABBd b = item_boxes[begin];
+    for (uint32_t k = begin + 1; k < end; ++k) b.extend(item_boxes[k]);
+    nodes[id].box = b;
+    nodes[id].first = begin;
+    return id;
+  }
+  const uint32_t mid = begin + (end - begin) / 2;
+  build_node(begin, mid);
+  const uint32_t right = build_node(mid, end);
+  AABBd b = nodes[id + 1].box;
+  b.extend(nodes[right].box);
+  nodes[id].box = b;
+  nodes[id].first = right;
+  return id;
+}
+
 SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
   tris_.resize(cs.count());
   for (uint32_t t = 0; t < mesh.size(); ++t)
@@ -133,12 +182,16 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
     }
     bvh_.emplace_back(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
   }
+  rank_.assign(mesh.size(), 0u);
+  uint32_t pos = 0;
+  for (size_t s = 0; s < bvh_.size(); ++s)
+    for (uint32_t item : bvh_[s].order()) rank_[tris_[s][item]] = pos++;
 }
 
 size_t SurfaceTrees::memory_bytes() const {
   size_t n = 0;
   for (size_t s = 0; s < bvh_.size(); ++s) n += bvh_[s].memory_bytes() + tris_[s].capacity() * sizeof(uint32_t);
-  return n;
+  return n + rank_.capacity() * sizeof(uint32_t);
 }
 
 // The boxes are tested against the segment in double, each widened by 2^-20 of the
@@ -203,14 +256,15 @@ void SilhouetteGroup::clear() {
   for (const FacePlane& f : faces) face_slot[f.t] = -1;
   surfaces.clear();
   edges.clear();
+  edge_key.clear();
   faces.clear();
   fi0.clear();
   fi1.clear();
 }
 
-void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
-                            const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
-                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
+                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* rcorners,
+                            int nrcorners, const Vec3f* light, int m, float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
                             const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
                             std::vector<uint8_t>& drop, SilhouetteCounters& c) {
   g.clear();
@@ -288,6 +342,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
       e.f0 = t;
       e.f1 = u;
       g.edges.push_back(e);
+      g.edge_key.push_back(trees.rank(t));
       g.fi0.push_back(f0);
       g.fi1.push_back(f1);
     }
@@ -298,7 +353,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     b.extend(e.lb);
     g.edge_boxes.push_back(b);
   }
-  g.edge_tree = g.edges.empty() ? accel::Bvh<double>() : accel::Bvh<double>(g.edge_boxes, accel::BuildRule{accel::Split::MortonHalves, 8, true});
+  g.edge_tree.build(g.edge_boxes, g.edge_key);
   node_normal_boxes(g);
   if (g.surfaces.empty()) return;
   // The estimate at five receivers spread over the group (its first, quarters and last):
@@ -430,7 +485,7 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   // A node whose faces all have r strictly on one common side (normal cones) holds no
   // edge the exact sides below would take: faces_one_side only skips their tests.
   g.used.clear();
-  const accel::Bvh<double>& tree = g.edge_tree;
+  const EdgeTree& tree = g.edge_tree;
   walk_tree(
       tree, [&](uint32_t i) { return !box_outside(tree.node(i).box) && !faces_one_side(tree.node(i).box, g.node_normals[i], r); },
       [&](uint32_t k) {

@@ -73,11 +73,45 @@ class SurfaceTrees {
       for (uint32_t item : bvh_[size_t(s)].leaf_items(nd)) f(tris[item]);
     });
   }
+  // Per input triangle of a surface its position in the surfaces' leaf orders, surface
+  // after surface (a spatial order, for the groups' edge trees).
+  uint32_t rank(uint32_t t) const { return rank_[t]; }
   size_t memory_bytes() const;
 
  private:
   std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
   std::vector<std::vector<uint32_t>> tris_;     // per surface: its input triangles
+  std::vector<uint32_t> rank_;                  // per input triangle (0 off the surfaces)
+};
+
+// A group's edge tree: the edges in the order of their faces' rank (SurfaceTrees::rank),
+// halved down to leaves of at most kLeaf edges; pre-order nodes as accel::Bvh's (the
+// left child of node i is i + 1). A receiver's walk only prunes by it, so the edges it
+// uses do not depend on the tree's shape (the estimate's float count may, by an edge
+// whose double sides are wrong in a node the cones skip: a path choice, never an answer).
+struct EdgeTree {
+  static constexpr uint32_t kLeaf = 8;
+  struct Node {
+    AABBd box;
+    uint32_t first = 0;  // leaf: first position in order; inner: the right child
+    uint32_t count = 0;  // edges below (a leaf iff count <= kLeaf)
+  };
+  std::vector<Node> nodes;
+  std::vector<uint32_t> order;      // leaf order -> edge
+  std::vector<AABBd> item_boxes;    // leaf order
+  bool empty() const { return nodes.empty(); }
+  size_t node_count() const { return nodes.size(); }
+  const Node& node(uint32_t i) const { return nodes[i]; }
+  bool is_leaf(const Node& n) const { return n.count <= kLeaf; }
+  uint32_t left(uint32_t i) const { return i + 1; }
+  uint32_t right(uint32_t i) const { return nodes[i].first; }
+  uint32_t item(uint32_t pos) const { return order[pos]; }
+  const AABBd& item_box(uint32_t pos) const { return item_boxes[pos]; }
+  // Over boxes[e], edges ordered by key[e] (stable: equal keys in index order).
+  void build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key);
+
+ private:
+  uint32_t build_node(uint32_t begin, uint32_t end);
 };
 
 // A candidate silhouette edge of a group: a -> b (world floats, as in face f0; local
@@ -104,7 +138,8 @@ struct SilhouetteGroup {
   std::vector<uint32_t> fi0, fi1;
   // Over the edges' local boxes: a receiver visits only the edges whose box its pyramid
   // may meet (the edges' count follows the group's shaft, a receiver's the window).
-  accel::Bvh<double> edge_tree;
+  EdgeTree edge_tree;
+  std::vector<uint32_t> edge_key;  // per edge its face's rank (the tree's order)
   std::vector<AABBd> edge_boxes;
   // Per node of edge_tree, the box of the unit normals of its edges' faces ([-1, 1]^3
   // when one is too ill-conditioned to bound): a receiver whose side of every such face
@@ -144,7 +179,8 @@ bool faces_one_side(const AABBd& box, const AABBd& normals, const Vec3d& r);
 // Group level: fills g.surfaces and g.edges from the shaft's candidates `cand` (sorted;
 // `drop` receives 1 for each candidate of a region surface). rbox: the receivers' world
 // box and its distinct corners; light: the light's float polygon; sigma: the receivers'
-// side of its Newell plane; origin: the light's local frame.
+// side of its Newell plane; origin: the light's local frame; trees: the surfaces' ranks
+// (the edge tree's order).
 // rloc: the group's receivers and lpoly the light's vertices, local. With `estimate`, a
 // group where a few
 // spread receivers each see more than kMaxSampledEdges candidate edges turning near
@@ -157,9 +193,9 @@ constexpr size_t kMaxSampledEdges = 64;
 // triangles cost the triangle path little per receiver, less than the regions' walks
 // and point tests (columns' cylinders and rooms' boxes: 1.7x and 2.9x the time).
 constexpr uint32_t kMinRegionTriangles = 1024;
-void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const std::vector<uint32_t>& cand,
-                            const AABB& rbox, const Vec3f* rcorners, int nrcorners, const Vec3f* light, int m,
-                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
+                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* rcorners,
+                            int nrcorners, const Vec3f* light, int m, float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
                             const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
                             std::vector<uint8_t>& drop, SilhouetteCounters& c);
 

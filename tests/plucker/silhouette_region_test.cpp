@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <random>
 #include <vector>
@@ -81,6 +82,77 @@ TEST(PluckerSilhouetteRegion, NormalConesOnlyWhereEveryFaceAgrees) {
     }
   }
   EXPECT_GT(decided, 100);
+}
+
+// The groups' edge tree: its leaf order is the edges stably sorted by key, every node's
+// box holds its items' boxes, and a walk pruned by box overlap finds exactly the edges
+// whose own box meets the query (against a scan of every edge).
+TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> xy(-10.0, 10.0), len(0.0, 1.0);
+  for (const uint32_t n : {0u, 1u, 8u, 9u, 100u, 5000u}) {
+    std::vector<AABBd> boxes;
+    std::vector<uint32_t> key;
+    for (uint32_t e = 0; e < n; ++e) {
+      const Vec3d a(xy(rng), xy(rng), xy(rng));
+      AABBd b{a, a};
+      b.extend(a + Vec3d(len(rng), len(rng), len(rng)));
+      boxes.push_back(b);
+      key.push_back(uint32_t(rng() % (n / 3 + 1)) * 977u);  // repeated keys, above 2^11 too
+    }
+    plucker::EdgeTree tree;
+    tree.build(boxes, key);
+    ASSERT_EQ(tree.order.size(), size_t(n));
+    ASSERT_EQ(tree.empty(), n == 0);
+    for (uint32_t k = 1; k < n; ++k) {
+      const uint32_t x = tree.item(k - 1), y = tree.item(k);
+      ASSERT_TRUE(key[x] < key[y] || (key[x] == key[y] && x < y));
+    }
+    auto holds = [](const AABBd& outer, const AABBd& inner) {
+      return outer.lo.x <= inner.lo.x && outer.lo.y <= inner.lo.y && outer.lo.z <= inner.lo.z &&
+             outer.hi.x >= inner.hi.x && outer.hi.y >= inner.hi.y && outer.hi.z >= inner.hi.z;
+    };
+    for (uint32_t i = 0; i < tree.node_count(); ++i) {
+      const auto& nd = tree.node(i);
+      if (tree.is_leaf(nd)) {
+        for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+          ASSERT_TRUE(holds(nd.box, tree.item_box(k)));
+          ASSERT_EQ(tree.item_box(k).lo, boxes[tree.item(k)].lo);
+        }
+      } else {
+        ASSERT_EQ(tree.node(tree.left(i)).count + tree.node(tree.right(i)).count, nd.count);
+        ASSERT_TRUE(holds(nd.box, tree.node(tree.left(i)).box));
+        ASSERT_TRUE(holds(nd.box, tree.node(tree.right(i)).box));
+      }
+    }
+    for (int q = 0; q < 20 && n > 0; ++q) {
+      const Vec3d c(xy(rng), xy(rng), xy(rng));
+      const AABBd query{c, c + Vec3d(3, 3, 3)};
+      auto meets = [&](const AABBd& b) {
+        return !(b.hi.x < query.lo.x || b.hi.y < query.lo.y || b.hi.z < query.lo.z || b.lo.x > query.hi.x ||
+                 b.lo.y > query.hi.y || b.lo.z > query.hi.z);
+      };
+      std::vector<uint32_t> found, want;
+      std::vector<uint32_t> stack{0};
+      while (!stack.empty()) {
+        const uint32_t i = stack.back();
+        stack.pop_back();
+        const auto& nd = tree.node(i);
+        if (!meets(nd.box)) continue;
+        if (!tree.is_leaf(nd)) {
+          stack.push_back(tree.left(i));
+          stack.push_back(tree.right(i));
+          continue;
+        }
+        for (uint32_t k = nd.first; k < nd.first + nd.count; ++k)
+          if (meets(tree.item_box(k))) found.push_back(tree.item(k));
+      }
+      for (uint32_t e = 0; e < n; ++e)
+        if (meets(boxes[e])) want.push_back(e);
+      std::sort(found.begin(), found.end());
+      EXPECT_EQ(found, want);
+    }
+  }
 }
 
 // The regions on, auto (the default) and off: the same bits and fractions (up to the
