@@ -546,7 +546,8 @@ constexpr uint32_t kFrontierEdges = 64, kEdgeBatch = 8;
 // them all while each receiver's walk below them is about as long (scan 300k, 439 edges
 // per receiver: 64 / 128 / 256 / 512 / 1,024 gave `solve_scene` 930.3M / 925.3M / 923.8M
 // / 924.2M / 925.5M; 75k, 110 per receiver: 64 / 128 / 256 gave 357.8M / 358.5M /
-// 359.7M). Only where the walks start changes: the candidates are the same (edge_tree.h).
+// 359.7M). Only where the receivers' walks start changes: from any frontier they return
+// every edge that may count (edge_tree.h; the same candidate lists on the scenes measured).
 uint32_t frontier_edges(size_t edges, size_t receivers) {
   uint32_t f = kFrontierEdges;
   while (f < (1u << 30) && double(2 * uint64_t(f)) <= double(edges) / double(std::max<size_t>(receivers, 1))) f *= 2;
