@@ -540,6 +540,20 @@ constexpr double kEdgesPerReceiver = 16.0;
 // 64 edges beat 16 and 128, by callgrind instructions).
 constexpr uint32_t kFrontierEdges = 64, kEdgeBatch = 8;
 
+// The frontier's node size for `edges` mesh edges and `receivers` receivers: the largest
+// power of two not above the edges per receiver, at least kFrontierEdges. A denser mesh
+// puts more nodes of a given size in one batch's frustum, and the frontier walk visits
+// them all while each receiver's walk below them is about as long (scan 300k, 439 edges
+// per receiver: 64 / 128 / 256 / 512 / 1,024 gave `solve_scene` 930.3M / 925.3M / 923.8M
+// / 924.2M / 925.5M; 75k, 110 per receiver: 64 / 128 / 256 gave 357.8M / 358.5M /
+// 359.7M). Only where the receivers' walks start changes: from any frontier they return
+// every edge that may count (edge_tree.h; the same candidate lists on the scenes measured).
+uint32_t frontier_edges(size_t edges, size_t receivers) {
+  uint32_t f = kFrontierEdges;
+  while (f < (1u << 30) && double(2 * uint64_t(f)) <= double(edges) / double(std::max<size_t>(receivers, 1))) f *= 2;
+  return f;
+}
+
 // Every receiver of one light (paper 001 section 2.1), in parallel. With the scattered
 // candidates, batch by batch of the receiver tree (the scatter of a batch is serial);
 // returns the scatter's seconds.
@@ -550,6 +564,7 @@ double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_t
     // Batch by batch of the receiver tree: the walk down to the frontier of the batch's
     // receivers is shared by their queries (edge_tree.h).
     const auto& ord = ls.tree.order();
+    const uint32_t frontier = frontier_edges(sc.edges.size(), sc.scene.receivers.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, batches.size(), 1), [&](const tbb::blocked_range<size_t>& range) {
       const IeeeFloatMode range_float_mode;
       ThreadState& st = states.local();
@@ -560,7 +575,7 @@ double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_t
           if (!ls.occluded[ord[p]]) box.extend(to_double(sc.scene.receivers[ord[p]].p));
         if (box.empty()) continue;  // every receiver occluded: nothing to answer
         auto a = Clock::now();
-        ls.edge_tree->frontier(EdgeFrustum(ls.frame, box), ls.frame, sc.eps, kFrontierEdges, st.edge_starts);
+        ls.edge_tree->frontier(EdgeFrustum(ls.frame, box), ls.frame, sc.eps, frontier, st.edge_starts);
         // The candidates of every receiver solve_receiver will integrate, in one walk
         // (the same lists as one query each).
         st.batch_frusta.clear();

@@ -115,7 +115,9 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
   for (size_t l = 0; l < s.lights.size() && l < 3; ++l) {
     const TreeSetup st(s, l);
     const float eps = float(4e-6 * st.M);
-    // Batches of 8 receivers in index order: the frontier of their box, then each query.
+    // Batches of 8 receivers in index order: the frontier of their box (nodes of at most
+    // 64 edges, and 256 as the solver takes on denser meshes), then each query.
+    for (const uint32_t frontier_edges : {64u, 256u})
     for (size_t b0 = 0; b0 < s.receivers.size(); b0 += 8) {
       AABBd box;
       std::vector<size_t> batch;
@@ -126,7 +128,7 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
       }
       if (batch.empty()) continue;
       std::vector<uint32_t> starts, got;
-      st.tree.frontier(EdgeFrustum(st.frame, box), st.frame, eps, 64, starts);
+      st.tree.frontier(EdgeFrustum(st.frame, box), st.frame, eps, frontier_edges, starts);
       // The batched walk gives each receiver exactly its own query's list.
       std::vector<EdgeFrustum> fs;
       for (size_t i : batch) fs.emplace_back(st.frame, s.receivers[i].p);
