@@ -6,7 +6,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 
+#include "lib/geom/aabb.h"
 #include "lib/geom/vec.h"
 
 #if defined(__SSE2__)
@@ -47,5 +49,22 @@ inline Lanes lanes_max(Lanes acc, Lanes x) {
 inline void lanes_store(Lanes v, float* p) { p[0] = v.v[0], p[1] = v.v[1], p[2] = v.v[2]; }
 #endif
 inline Lanes lanes_load(const Vec3f& v) { return lanes_load(&v.x); }
+
+// A box accumulated a point at a time in lanes: box() has the floats of AABB::extend
+// over the same points in the same order.
+struct LanesBox {
+  Lanes lo = lanes_set(INFINITY), hi = lanes_set(-INFINITY);
+  void add(const Vec3f& v) {
+    const Lanes x = lanes_load(v);
+    lo = lanes_min(lo, x);
+    hi = lanes_max(hi, x);
+  }
+  AABB box() const {
+    AABB b;
+    lanes_store(lo, &b.lo.x);
+    lanes_store(hi, &b.hi.x);
+    return b;
+  }
+};
 
 }  // namespace visgate

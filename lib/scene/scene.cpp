@@ -15,17 +15,10 @@ namespace visgate {
 
 AABB TriangleSoup::bounds() const {
   // Three lanes at a time (lib/geom/lanes.h): the floats of AABB::extend per corner.
-  Lanes lo = lanes_set(INFINITY), hi = lanes_set(-INFINITY);
+  LanesBox b;
   for (const auto& t : triangles)
-    for (int k = 0; k < 3; ++k) {
-      const Lanes x = lanes_load(vertices[t[k]]);
-      lo = lanes_min(lo, x);
-      hi = lanes_max(hi, x);
-    }
-  AABB b;
-  lanes_store(lo, &b.lo.x);
-  lanes_store(hi, &b.hi.x);
-  return b;
+    for (int k = 0; k < 3; ++k) b.add(vertices[t[k]]);
+  return b.box();
 }
 
 void TriangleSoup::append(const TriangleSoup& other) {
@@ -46,8 +39,10 @@ size_t Scene::light_offset(size_t light) const {
   return n;
 }
 
-AABB Scene::bounds() const {
-  AABB b = mesh.bounds();
+AABB Scene::bounds() const { return bounds(mesh.bounds()); }
+
+AABB Scene::bounds(const AABB& mesh_box) const {
+  AABB b = mesh_box;
   for (const auto& l : lights)
     for (const auto& p : l.polygon) b.extend(p);
   for (const auto& r : receivers) b.extend(r.p);

@@ -78,6 +78,8 @@ struct Scene {
   size_t relation_count() const { return receivers.size() * samples_per_receiver(); }
   // Bounds of blockers, light polygons and receivers.
   AABB bounds() const;
+  // The same with the blockers' box given (mesh.bounds() or the same floats from elsewhere).
+  AABB bounds(const AABB& mesh_box) const;
 };
 
 // The fixed hash h(i, j, seed) of DESIGN section 3: splitmix64 finalisers chained over

@@ -139,19 +139,9 @@ std::optional<TriangleSoup> without_slivers(const TriangleSoup& soup, size_t& dr
 // use below reads (M takes magnitudes; grow, min_node and the root box differences).
 AABB scene_bounds(const Scene& scene, const mesh::PreparedMesh& pm, bool pm_of_scene_mesh) {
   if (!pm_of_scene_mesh) return scene.bounds();
-  Lanes lo = lanes_set(INFINITY), hi = lanes_set(-INFINITY);
-  for (const Vec3f& v : pm.vertex_pos) {
-    const Lanes x = lanes_load(v);
-    lo = lanes_min(lo, x);
-    hi = lanes_max(hi, x);
-  }
-  AABB b;
-  lanes_store(lo, &b.lo.x);
-  lanes_store(hi, &b.hi.x);
-  for (const auto& l : scene.lights)
-    for (const auto& p : l.polygon) b.extend(p);
-  for (const auto& r : scene.receivers) b.extend(r.p);
-  return b;
+  LanesBox b;
+  for (const Vec3f& v : pm.vertex_pos) b.add(v);
+  return scene.bounds(b.box());
 }
 
 // Rays. Every ray SSV casts (references, checks, the rays of doubtful and unclear
