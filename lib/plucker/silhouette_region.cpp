@@ -29,38 +29,26 @@ int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
   return s != 0 ? s : plane_side_rest(mesh.corner(f.t, 0), mesh.corner(f.t, 1), mesh.corner(f.t, 2), p);
 }
 
-// The box of the unit normals of the faces of every node's edges (SilhouetteGroup::
-// node_normals), children before parents (pre-order: both children follow their parent).
-// A face whose computed normal n is small next to s12 (|n|_1 <= 2^-20 s12, where n's
-// rounding, a few ulps of s12, could turn it) bounds nothing: its node gets [-1, 1]^3.
-void node_normal_boxes(SilhouetteGroup& g) {
-  const EdgeTree& tree = g.edge_tree;
-  thread_local std::vector<Vec3d> unit;
-  thread_local std::vector<uint8_t> bad;
-  unit.resize(g.faces.size());
-  bad.assign(g.faces.size(), 0);
-  for (size_t f = 0; f < g.faces.size(); ++f) {
-    const FacePlane& fp = g.faces[f];
-    const double n1 = norm1(fp.n);
-    if (!(n1 > 0x1p-20 * fp.s12)) {
-      bad[f] = 1;
-      continue;
-    }
-    unit[f] = fp.n * (1.0 / length(fp.n));
-  }
+// The box of the unit normals of the faces of every node's edges (SurfaceEdges::
+// node_normals; item e's faces: unit[fi0[e]], unit[fi1[e]]), children before parents
+// (pre-order: both children follow their parent). A face whose computed normal n is
+// small next to s12 (|n|_1 <= 2^-20 s12, where n's rounding, a few ulps of s12, could
+// turn it) bounds nothing (bad): its node gets [-1, 1]^3.
+void node_normal_boxes(const EdgeTree& tree, const std::vector<Vec3d>& unit, const std::vector<uint8_t>& bad,
+                       const std::vector<uint32_t>& fi0, const std::vector<uint32_t>& fi1, std::vector<AABBd>& out) {
   const AABBd full{Vec3d(-1, -1, -1), Vec3d(1, 1, 1)};
-  g.node_normals.assign(tree.node_count(), AABBd());
+  out.assign(tree.node_count(), AABBd());
   for (size_t i = tree.node_count(); i-- > 0;) {
     const auto& nd = tree.node(uint32_t(i));
-    AABBd& b = g.node_normals[i];
+    AABBd& b = out[i];
     if (!tree.is_leaf(nd)) {
-      b = g.node_normals[tree.left(uint32_t(i))];
-      b.extend(g.node_normals[tree.right(uint32_t(i))]);
+      b = out[tree.left(uint32_t(i))];
+      b.extend(out[tree.right(uint32_t(i))]);
       continue;
     }
     for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
       const uint32_t e = tree.item(k);
-      for (const uint32_t f : {g.fi0[e], g.fi1[e]}) {
+      for (const uint32_t f : {fi0[e], fi1[e]}) {
         if (bad[f]) {
           b = full;
           break;
@@ -91,6 +79,40 @@ void walk_tree(const EdgeTree& tree, Enter&& enter, Item&& item) {
     for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) item(k);
   }
 }
+
+// item(t, k, u) for every edge of the group's region surfaces in a leaf reached through
+// nodes that enter(world box, normal box) accepts and with a face among the group's
+// candidates: the edge from corner k to k + 1 of face t, its other face u. Each edge is
+// taken as the group's collection takes it, from its lower face when both faces are
+// candidates, else from the candidate face (the half (t, k) with neighbour u exactly
+// when t is a candidate and not both u < t and u a candidate).
+template <class Enter, class Item>
+void walk_group_edges(const SurfaceTrees& trees, const SilhouetteGroup& g, Enter&& enter, Item&& item) {
+  for (const int32_t s : g.surfaces) {
+    const SurfaceEdges& se = trees.edges(s);
+    walk_tree(
+        se.tree, [&](uint32_t i) { return enter(se.tree.node(i).box, se.node_normals[i]); },
+        [&](uint32_t k) {
+          const SurfaceEdges::Edge& e = se.edges[se.tree.item(k)];
+          const bool c0 = g.in_cand[e.t0] == g.serial, c1 = g.in_cand[e.t1] == g.serial;
+          if (c0 && !(e.t1 < e.t0 && c1))
+            item(e.t0, uint32_t(e.k0), e.t1);
+          else if (e.k1 < 3 && c1 && !(e.t0 < e.t1 && c0))
+            item(e.t1, uint32_t(e.k1), e.t0);
+        });
+  }
+}
+
+// The local box of the edge a -> b (to_local_d of its ends).
+AABBd local_edge_box(const Vec3d& la, const Vec3d& lb) {
+  AABBd b{la, la};
+  b.extend(lb);
+  return b;
+}
+
+// A world box (double) in local coordinates: the rounded differences keep every local
+// point of the box's world points inside (rounding is monotone).
+AABBd to_local_box(const AABBd& w, const Vec3d& od) { return AABBd{w.lo - od, w.hi - od}; }
 
 }  // namespace
 
@@ -186,11 +208,85 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
   uint32_t pos = 0;
   for (size_t s = 0; s < bvh_.size(); ++s)
     for (uint32_t item : bvh_[s].order()) rank_[tris_[s][item]] = pos++;
+  // Each surface's edges: the halves (t, k) and (u, j) between the same two faces paired
+  // in the order of k and j (any pairing: each half is taken with its own corners, and
+  // the box holds both), a half left unpaired as an edge of its own.
+  edges_.resize(bvh_.size());
+  std::vector<uint32_t> local(mesh.size(), 0u);
+  std::vector<Vec3d> unit;
+  std::vector<uint8_t> bad;
+  std::vector<uint32_t> fi0, fi1, key;
+  std::vector<AABBd> ebox;
+  for (size_t s = 0; s < bvh_.size(); ++s) {
+    const std::vector<uint32_t>& tris = tris_[s];
+    SurfaceEdges& se = edges_[s];
+    unit.assign(tris.size(), Vec3d(0, 0, 0));
+    bad.assign(tris.size(), 0);
+    for (uint32_t i = 0; i < tris.size(); ++i) {
+      local[tris[i]] = i;
+      const FacePlane fp = face_plane(mesh, tris[i]);
+      if (!(norm1(fp.n) > 0x1p-20 * fp.s12))
+        bad[i] = 1;
+      else
+        unit[i] = fp.n * (1.0 / length(fp.n));
+    }
+    fi0.clear();
+    fi1.clear();
+    key.clear();
+    ebox.clear();
+    // The m-th half of t toward u (m counted over t's k from 0), or 3.
+    auto nth_half = [&](uint32_t t, uint32_t u, int m) -> int {
+      for (int j = 0; j < 3; ++j)
+        if (cs.neighbors(t)[size_t(j)] == int32_t(u) && m-- == 0) return j;
+      return 3;
+    };
+    for (uint32_t t : tris) {
+      const std::array<int32_t, 3>& nb = cs.neighbors(t);
+      for (int k = 0; k < 3; ++k) {
+        if (nb[size_t(k)] < 0) continue;
+        const uint32_t u = uint32_t(nb[size_t(k)]);
+        int m = 0;  // t's halves toward u before k
+        for (int j = 0; j < k; ++j) m += nb[size_t(j)] == nb[size_t(k)] ? 1 : 0;
+        SurfaceEdges::Edge e;
+        e.t0 = t;
+        e.k0 = uint8_t(k);
+        e.t1 = u;
+        if (u > t) {
+          e.k1 = uint8_t(nth_half(u, t, m));
+        } else if (u < t && nth_half(u, t, m) < 3) {
+          continue;  // paired from u's side
+        }
+        AABBd b{to_double(mesh.corner(t, k)), to_double(mesh.corner(t, k))};
+        b.extend(to_double(mesh.corner(t, (k + 1) % 3)));
+        if (e.k1 < 3) {
+          b.extend(to_double(mesh.corner(u, e.k1)));
+          b.extend(to_double(mesh.corner(u, (e.k1 + 1) % 3)));
+        }
+        se.edges.push_back(e);
+        ebox.push_back(b);
+        key.push_back(rank_[t]);
+        fi0.push_back(local[t]);
+        fi1.push_back(local[u]);
+      }
+    }
+    se.tree.build(ebox, key);
+    node_normal_boxes(se.tree, unit, bad, fi0, fi1, se.node_normals);
+    // The walks take each edge's local box from its taken face's corners (the same box
+    // in any tree), never item_box: its storage goes.
+    se.tree.item_boxes = std::vector<AABBd>();
+  }
+}
+
+size_t SurfaceEdges::memory_bytes() const {
+  return edges.capacity() * sizeof(Edge) + tree.nodes.capacity() * sizeof(EdgeTree::Node) +
+         tree.order.capacity() * sizeof(uint32_t) + tree.item_boxes.capacity() * sizeof(AABBd) +
+         node_normals.capacity() * sizeof(AABBd);
 }
 
 size_t SurfaceTrees::memory_bytes() const {
   size_t n = 0;
-  for (size_t s = 0; s < bvh_.size(); ++s) n += bvh_[s].memory_bytes() + tris_[s].capacity() * sizeof(uint32_t);
+  for (size_t s = 0; s < bvh_.size(); ++s)
+    n += bvh_[s].memory_bytes() + tris_[s].capacity() * sizeof(uint32_t) + edges_[s].memory_bytes();
   return n + rank_.capacity() * sizeof(uint32_t);
 }
 
@@ -253,23 +349,18 @@ int SurfaceTrees::triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec
 }
 
 void SilhouetteGroup::clear() {
-  for (const FacePlane& f : faces) face_slot[f.t] = -1;
   surfaces.clear();
   edges.clear();
-  edge_key.clear();
-  faces.clear();
-  fi0.clear();
-  fi1.clear();
+  edge_keys.clear();
 }
 
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
-                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* rcorners,
-                            int nrcorners, const Vec3f* light, int m, float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
-                            const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
-                            std::vector<uint8_t>& drop, SilhouetteCounters& c) {
+                            const std::vector<uint32_t>& cand, const AABB& rbox, [[maybe_unused]] const Vec3f* rcorners,
+                            [[maybe_unused]] int nrcorners, const Vec3f* light, int m, float sigma, const Vec3f& origin,
+                            const std::vector<Vec3d>& rloc, const std::vector<Vec3d>& lpoly, bool estimate,
+                            SilhouetteGroup& g, std::vector<uint8_t>& drop, SilhouetteCounters& c) {
   g.clear();
   drop.assign(cand.size(), 0);
-  if (g.face_slot.size() != mesh.size()) g.face_slot.assign(mesh.size(), -1);
   // Per surface met: 1 region surface, 2 not (the other surfaces stay on the present path).
   thread_local std::vector<uint8_t> status;
   status.assign(cs.count(), 0);
@@ -290,32 +381,16 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     }
     return true;
   };
-  // A face's common strict side over the receivers' box corners (0: none), cached.
-  thread_local std::vector<int8_t> box_sides;
-  auto face = [&](uint32_t t) -> uint32_t {
-    int32_t& slot = g.face_slot[t];
-    if (slot >= 0) return uint32_t(slot);
-    slot = int32_t(g.faces.size());
-    g.faces.push_back(face_plane(mesh, t));
-    int side = 0;
-    for (int k = 0; k < nrcorners; ++k) {
-      const int sd = face_side(mesh, g.faces.back(), SumPoint(rcorners[k]));
-      if (sd == 0 || (k > 0 && sd != side)) {
-        side = 0;
-        break;
-      }
-      side = sd;
-    }
-    box_sides.push_back(int8_t(side));
-    return uint32_t(slot);
-  };
-  box_sides.clear();
-  // The candidates marked per triangle (stamped with the group's serial, not cleared).
-  thread_local std::vector<uint32_t> in_cand;
-  thread_local uint32_t cand_serial = 0;
-  if (in_cand.size() != mesh.size()) in_cand.assign(mesh.size(), 0u), cand_serial = 0;
-  if (++cand_serial == 0) std::fill(in_cand.begin(), in_cand.end(), 0u), cand_serial = 1;
-  for (uint32_t t : cand) in_cand[t] = cand_serial;
+  // The candidates marked per triangle (stamped with the group's serial, not cleared);
+  // the receivers' walks read the marks (walk_group_edges).
+  if (g.in_cand.size() != mesh.size()) g.in_cand.assign(mesh.size(), 0u), g.serial = 0;
+  if (++g.serial == 0) std::fill(g.in_cand.begin(), g.in_cand.end(), 0u), g.serial = 1;
+  for (uint32_t t : cand) g.in_cand[t] = g.serial;
+  // The group's edges (silhouette_edges): each edge of a region surface's candidate once.
+  // A receiver uses those whose faces it does not see from one strict side; a face with
+  // one strict side at every corner of the receivers' box has it at every receiver (a
+  // plane's side is linear), so no box-side filter is needed here.
+  uint64_t edges = 0;
   for (size_t ci = 0; ci < cand.size(); ++ci) {
     const uint32_t t = cand[ci];
     const int32_t s = cs.surface(t);
@@ -327,34 +402,9 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     }
     if (st != 1) continue;
     drop[ci] = 1;
-    const std::array<int32_t, 3>& nb = cs.neighbors(t);
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t u = uint32_t(nb[size_t(k)]);
-      // Each edge once: from its lower face when both are candidates.
-      if (u < t && in_cand[u] == cand_serial) continue;
-      const uint32_t f0 = face(t), f1 = face(u);
-      if (box_sides[f0] != 0 && box_sides[f0] == box_sides[f1]) continue;
-      SilEdge e;
-      e.a = mesh.corner(t, k);
-      e.b = mesh.corner(t, (k + 1) % 3);
-      e.la = to_local_d(e.a, origin);
-      e.lb = to_local_d(e.b, origin);
-      e.f0 = t;
-      e.f1 = u;
-      g.edges.push_back(e);
-      g.edge_key.push_back(trees.rank(t));
-      g.fi0.push_back(f0);
-      g.fi1.push_back(f1);
-    }
+    for (const int32_t u : cs.neighbors(t))
+      if (!(uint32_t(u) < t && g.in_cand[uint32_t(u)] == g.serial)) ++edges;
   }
-  g.edge_boxes.clear();
-  for (const SilEdge& e : g.edges) {
-    AABBd b{e.la, e.la};
-    b.extend(e.lb);
-    g.edge_boxes.push_back(b);
-  }
-  g.edge_tree.build(g.edge_boxes, g.edge_key);
-  node_normal_boxes(g);
   if (g.surfaces.empty()) return;
   // The estimate at five receivers spread over the group (its first, quarters and last):
   // the candidate edges whose box meets the box of the receiver's pyramid, whose faces'
@@ -382,18 +432,32 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     auto meets = [&](const AABBd& b) {
       return !(b.hi.x < lo.x || b.hi.y < lo.y || b.hi.z < lo.z || b.lo.x > hi.x || b.lo.y > hi.y || b.lo.z > hi.z);
     };
+    // A node wholly outside one side plane, beyond a margin far above the rounding of the
+    // edges' own tests below (2^-20 of the terms' bound), holds only edges they reject.
+    auto outside_side = [&](const AABBd& b) {
+      const Vec3d h = (b.hi - b.lo) * 0.5, d = (b.hi + b.lo) * 0.5 - rl;
+      for (const Vec3d& sj : side) {
+        const Vec3d a = vabs(sj);
+        const double top = dot(d, sj) + a.x * h.x + a.y * h.y + a.z * h.z;
+        if (top < -0x1p-20 * max_component(a) * norm1(vabs(d) + h)) return true;
+      }
+      return false;
+    };
     // Nodes whose faces all have r strictly on one side (faces_one_side) hold no edge
     // counted here but one whose double sides are wrong (the estimate is float anyway).
-    walk_tree(
-        g.edge_tree,
-        [&](uint32_t i) { return meets(g.edge_tree.node(i).box) && !faces_one_side(g.edge_tree.node(i).box, g.node_normals[i], rl); },
-        [&](uint32_t k) {
-          if (!meets(g.edge_tree.item_box(k))) return;
-          const uint32_t e = g.edge_tree.item(k);
-          const FacePlane &f0 = g.faces[g.fi0[e]], &f1 = g.faces[g.fi1[e]];
+    walk_group_edges(
+        trees, g,
+        [&](const AABBd& wb, const AABBd& normals) {
+          const AABBd lb = to_local_box(wb, od);
+          return meets(lb) && !outside_side(lb) && !faces_one_side(wb, normals, rwd);
+        },
+        [&](uint32_t t, uint32_t k, uint32_t u) {
+          const Vec3d la = to_local_d(mesh.corner(t, int(k)), origin), lb = to_local_d(mesh.corner(t, int(k + 1) % 3), origin);
+          if (!meets(local_edge_box(la, lb))) return;
+          const FacePlane f0 = face_plane(mesh, t), f1 = face_plane(mesh, u);
           if ((dot(rwd - f0.a, f0.n) > 0.0) == (dot(rwd - f1.a, f1.n) > 0.0)) return;
           for (size_t j = 0; j < side.size(); ++j)
-            if (dot(g.edges[e].la - rl, side[j]) < 0.0 && dot(g.edges[e].lb - rl, side[j]) < 0.0) return;
+            if (dot(la - rl, side[j]) < 0.0 && dot(lb - rl, side[j]) < 0.0) return;
           ++n;
         });
     most = std::max(most, n);
@@ -405,7 +469,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     return;
   }
   ++c.groups;
-  c.edges += g.edges.size();
+  c.edges += edges;
 }
 
 bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& trees, SilhouetteGroup& g,
@@ -417,19 +481,20 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   // pyramid of r and the light: an edge whose box lies strictly outside one side plane
   // of it (by 16 times the plane's error bound plus 2^-30 of the scale, far above the
   // rounding of the local coordinates) has no point on a segment from r to the light.
-  // Per face its side from r, computed once per receiver (stamped, not cleared).
+  // Per face (input triangle) its side from r, computed once per receiver (stamped, not
+  // cleared).
   thread_local std::vector<int8_t> side;
   thread_local std::vector<uint32_t> stamp;
   thread_local uint32_t serial = 0;
-  if (stamp.size() < g.faces.size()) stamp.resize(g.faces.size(), 0), side.resize(g.faces.size(), 0);
+  if (stamp.size() < mesh.size()) stamp.resize(mesh.size(), 0), side.resize(mesh.size(), 0);
   if (++serial == 0) {
     std::fill(stamp.begin(), stamp.end(), 0u);
     serial = 1;
   }
   const SumPoint rs(rw);
-  auto face_side_r = [&](uint32_t f) {
-    if (stamp[f] != serial) stamp[f] = serial, side[f] = int8_t(face_side(mesh, g.faces[f], rs));
-    return int(side[f]);
+  auto face_side_r = [&](uint32_t t) {
+    if (stamp[t] != serial) stamp[t] = serial, side[t] = int8_t(face_side(mesh, face_plane(mesh, t), rs));
+    return int(side[t]);
   };
   // A box wholly outside one side plane: its largest value there below the margin taken
   // with the box's largest |x - l| per axis (which bounds every point's dot_err) and
@@ -483,18 +548,28 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     return false;
   };
   // A node whose faces all have r strictly on one common side (normal cones) holds no
-  // edge the exact sides below would take: faces_one_side only skips their tests.
-  g.used.clear();
-  const EdgeTree& tree = g.edge_tree;
-  walk_tree(
-      tree, [&](uint32_t i) { return !box_outside(tree.node(i).box) && !faces_one_side(tree.node(i).box, g.node_normals[i], r); },
-      [&](uint32_t k) {
-        if (box_outside(tree.item_box(k))) return;
-        const uint32_t e = tree.item(k);
-        const int s0 = face_side_r(g.fi0[e]), s1 = face_side_r(g.fi1[e]);
-        if (s0 == 0 || s0 != s1) g.used.push_back(e);
+  // edge the exact sides below would take: faces_one_side only skips their tests. The
+  // used edges are then sorted into the group's edge order (by the face each is taken
+  // from, then k), whatever the trees' order.
+  g.edges.clear();
+  g.edge_keys.clear();
+  const Vec3d rwd = to_double(rw), od = to_double(origin);
+  walk_group_edges(
+      trees, g, [&](const AABBd& wb, const AABBd& normals) { return !faces_one_side(wb, normals, rwd) && !box_outside(to_local_box(wb, od)); },
+      [&](uint32_t t, uint32_t k, uint32_t u) {
+        // The faces' sides first: they reject most edges of a leaf the walk reaches, and
+        // each face's side serves its three edges.
+        const int s0 = face_side_r(t), s1 = face_side_r(u);
+        if (s0 != 0 && s0 == s1) return;
+        const Vec3f a = mesh.corner(t, int(k)), b = mesh.corner(t, int(k + 1) % 3);
+        const Vec3d la = to_local_d(a, origin), lb = to_local_d(b, origin);
+        if (box_outside(local_edge_box(la, lb))) return;
+        g.edges.push_back(SilEdge{a, b, la, lb, t, u});
+        g.edge_keys.push_back(uint64_t(t) << 2 | k);
       });
-  std::sort(g.used.begin(), g.used.end());  // the tree's order is the traversal's
+  g.used.resize(g.edges.size());
+  for (uint32_t e = 0; e < g.used.size(); ++e) g.used[e] = e;
+  std::sort(g.used.begin(), g.used.end(), [&](uint32_t x, uint32_t y) { return g.edge_keys[x] < g.edge_keys[y]; });
   c.receiver_edges += g.used.size();
   // The fragments split by the planes through r and those edges.
   g.planes.clear();
@@ -568,7 +643,6 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   // exactly against every edge plane the piece lies on one side of; the first piece
   // the exact tests do not confirm leaves the receiver undecided, and only the pieces
   // before it are tested against the surfaces.
-  const Vec3d od = to_double(origin);
   g.pts.clear();
   g.zero.clear();
   bool bad = false;

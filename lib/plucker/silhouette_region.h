@@ -20,12 +20,12 @@
 // so c >= 1 on both sides of their projection and the blocked set does not change there.
 //
 // Per group and light (select_region_surfaces): the surfaces that meet these conditions
-// for every receiver of the group, their candidate triangles left out of the selection,
-// and their candidate silhouette edges: the edges of their shaft candidates whose two
-// faces do not have one common strict side for every corner of the receivers' box.
-// Per receiver (subtract_silhouette_regions): the edges whose faces have different exact
-// sides from r (or one with r in its plane) and that may meet the pyramid of r and the
-// light; each cuts the fragments that reach its projection, first at the planes through
+// for every receiver of the group, their candidate triangles left out of the selection
+// and marked (the group's edges are the surface edges with a candidate face).
+// Per receiver (subtract_silhouette_regions): the group's edges whose faces have
+// different exact sides from r (or one with r in its plane) and that may meet the
+// pyramid of r and the light, found in the surfaces' edge trees built once per solve
+// (SurfaceEdges); each cuts the fragments that reach its projection, first at the planes through
 // r and its ends (a fragment wholly beyond one is left whole), then at the plane through
 // r and the edge (split_fragment); each piece classified by its vertex average p,
 // accepted only when the exact orientation of p against every edge plane the piece lies
@@ -54,43 +54,14 @@ namespace visgate::plucker {
 // (orient3d(a, b, c, p)): a double filter, then orient3d_filtered, then exact.
 int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p);
 
-// Per closed surface, a hierarchy over its triangles for the exact segment test.
-class SurfaceTrees {
- public:
-  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs);
-  // +1 when the closed segment r -> p meets a triangle of surface s (touching counts),
-  // 0 when it meets none, -1 when undecided (r and p both in a triangle's plane). r is
-  // outside the surface's box. pd: p rounded to double (world), for the box tests.
-  int segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f& r, const SumPoint& p, const Vec3d& pd) const;
-  // The same for one triangle t.
-  static int triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p);
-  // f(t) for every triangle of surface s in a leaf reached through boxes (float, world)
-  // that may_meet accepts.
-  template <class Pred, class F>
-  void for_each(int32_t s, Pred&& may_meet, F&& f) const {
-    const std::vector<uint32_t>& tris = tris_[size_t(s)];
-    bvh_[size_t(s)].for_each_leaf(may_meet, [&](const accel::Bvh<float>::Node& nd) {
-      for (uint32_t item : bvh_[size_t(s)].leaf_items(nd)) f(tris[item]);
-    });
-  }
-  // Per input triangle of a surface its position in the surfaces' leaf orders, surface
-  // after surface (a spatial order, for the groups' edge trees).
-  uint32_t rank(uint32_t t) const { return rank_[t]; }
-  size_t memory_bytes() const;
-
- private:
-  std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
-  std::vector<std::vector<uint32_t>> tris_;     // per surface: its input triangles
-  std::vector<uint32_t> rank_;                  // per input triangle (0 off the surfaces)
-};
-
-// A group's edge tree: the edges in the order of their faces' rank (SurfaceTrees::rank),
-// halved down to leaves of at most kLeaf edges; pre-order nodes as accel::Bvh's (the
-// left child of node i is i + 1). A receiver's walk only prunes by it, so the edges it
-// uses do not depend on the tree's shape (the estimate's float count may, by an edge
-// whose double sides are wrong in a node the cones skip: a path choice, never an answer).
+// A surface's edge tree (SurfaceEdges): the edges in the order of their lower face's rank
+// (SurfaceTrees::rank), halved down to leaves of at most kLeaf edges; pre-order nodes as
+// accel::Bvh's (the left child of node i is i + 1). A receiver's walk only prunes by it,
+// so the edges it uses do not depend on the tree's shape (the estimate's float count may,
+// by an edge whose double sides are wrong in a node the cones skip: a path choice, never
+// an answer).
 struct EdgeTree {
-  static constexpr uint32_t kLeaf = 8;
+  static constexpr uint32_t kLeaf = 4;
   struct Node {
     AABBd box;
     uint32_t first = 0;  // leaf: first position in order; inner: the right child
@@ -114,6 +85,57 @@ struct EdgeTree {
   uint32_t build_node(uint32_t begin, uint32_t end);
 };
 
+// Per closed surface, its edges once each, built once per solve (world coordinates, so
+// one tree serves every light and group): edge i is traversed as (t0, k0), the edge from
+// corner k0 to k0 + 1 of triangle t0, and, when k1 < 3, in the opposite direction as
+// (t1, k1); k1 == 3 when t1's matching edge was not found (t1 = t0's neighbour there).
+// Paired edges have t0 < t1. The tree's boxes hold both faces' corners of the edge, its
+// node_normals the box of the unit normals of the nodes' edges' faces ([-1, 1]^3 when one
+// is too ill-conditioned to bound; normal cones, faces_one_side).
+struct SurfaceEdges {
+  struct Edge {
+    uint32_t t0 = 0, t1 = 0;
+    uint8_t k0 = 0, k1 = 3;
+  };
+  std::vector<Edge> edges;
+  EdgeTree tree;
+  std::vector<AABBd> node_normals;
+  size_t memory_bytes() const;
+};
+
+// Per closed surface, a hierarchy over its triangles for the exact segment test.
+class SurfaceTrees {
+ public:
+  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs);
+  // +1 when the closed segment r -> p meets a triangle of surface s (touching counts),
+  // 0 when it meets none, -1 when undecided (r and p both in a triangle's plane). r is
+  // outside the surface's box. pd: p rounded to double (world), for the box tests.
+  int segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f& r, const SumPoint& p, const Vec3d& pd) const;
+  // The same for one triangle t.
+  static int triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p);
+  // f(t) for every triangle of surface s in a leaf reached through boxes (float, world)
+  // that may_meet accepts.
+  template <class Pred, class F>
+  void for_each(int32_t s, Pred&& may_meet, F&& f) const {
+    const std::vector<uint32_t>& tris = tris_[size_t(s)];
+    bvh_[size_t(s)].for_each_leaf(may_meet, [&](const accel::Bvh<float>::Node& nd) {
+      for (uint32_t item : bvh_[size_t(s)].leaf_items(nd)) f(tris[item]);
+    });
+  }
+  // Per input triangle of a surface its position in the surfaces' leaf orders, surface
+  // after surface (a spatial order, for the groups' edge trees).
+  uint32_t rank(uint32_t t) const { return rank_[t]; }
+  // Surface s's edges (the groups' silhouette edges are those of their candidates).
+  const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
+  size_t memory_bytes() const;
+
+ private:
+  std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
+  std::vector<std::vector<uint32_t>> tris_;     // per surface: its input triangles
+  std::vector<uint32_t> rank_;                  // per input triangle (0 off the surfaces)
+  std::vector<SurfaceEdges> edges_;             // per surface
+};
+
 // A candidate silhouette edge of a group: a -> b (world floats, as in face f0; local
 // la, lb), shared by faces f0 and f1 (input triangles).
 struct SilEdge {
@@ -133,22 +155,15 @@ struct FacePlane {
 // A group's silhouette data (GroupState::sil).
 struct SilhouetteGroup {
   std::vector<int32_t> surfaces;  // the region surfaces of the group
+  // The group's candidates, marked per input triangle with `serial` (not cleared): a
+  // surface edge is the group's when a face of it is a candidate (SurfaceEdges).
+  std::vector<uint32_t> in_cand;
+  uint32_t serial = 0;
+  // Per receiver: the edges used, in the group's edge order (by the face each is taken
+  // from, then its k), and their keys (t << 2 | k).
   std::vector<SilEdge> edges;
-  std::vector<FacePlane> faces;   // by the edges' f0, f1 (indices into faces: fi0, fi1)
-  std::vector<uint32_t> fi0, fi1;
-  // Over the edges' local boxes: a receiver visits only the edges whose box its pyramid
-  // may meet (the edges' count follows the group's shaft, a receiver's the window).
-  EdgeTree edge_tree;
-  std::vector<uint32_t> edge_key;  // per edge its face's rank (the tree's order)
-  std::vector<AABBd> edge_boxes;
-  // Per node of edge_tree, the box of the unit normals of its edges' faces ([-1, 1]^3
-  // when one is too ill-conditioned to bound): a receiver whose side of every such face
-  // is provably one strict sign uses none of the node's edges (normal cones: the walk
-  // follows its silhouette instead of the group's band).
-  std::vector<AABBd> node_normals;
-  // Scratch: per input triangle its slot in faces (or -1), reset after each group.
-  std::vector<int32_t> face_slot;
-  std::vector<uint32_t> used;  // per receiver: the edges used
+  std::vector<uint64_t> edge_keys;
+  std::vector<uint32_t> used;  // per receiver: the edges used (indices into edges)
   std::vector<NodePlane> planes;
   // Per receiver: each piece's point, 1 when the piece has no area, 2 when its point is
   // unconfirmed (else 0), its segment test's result; with several pieces, those to test
@@ -176,11 +191,12 @@ struct SilhouetteCounters {
 // that sign's side.
 bool faces_one_side(const AABBd& box, const AABBd& normals, const Vec3d& r);
 
-// Group level: fills g.surfaces and g.edges from the shaft's candidates `cand` (sorted;
-// `drop` receives 1 for each candidate of a region surface). rbox: the receivers' world
-// box and its distinct corners; light: the light's float polygon; sigma: the receivers'
-// side of its Newell plane; origin: the light's local frame; trees: the surfaces' ranks
-// (the edge tree's order).
+// Group level: fills g.surfaces and marks the shaft's candidates `cand` (sorted; `drop`
+// receives 1 for each candidate of a region surface). rbox: the receivers' world box
+// (rcorners, nrcorners: its distinct corners, unused: a face with one strict side at
+// every corner has it at every receiver, which the receivers' exact sides find);
+// light: the light's float polygon; sigma: the receivers' side of its Newell plane;
+// origin: the light's local frame; trees: the surfaces' edge trees.
 // rloc: the group's receivers and lpoly the light's vertices, local. With `estimate`, a
 // group where a few
 // spread receivers each see more than kMaxSampledEdges candidate edges turning near

@@ -155,6 +155,63 @@ TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
   }
 }
 
+// The surfaces' edge trees (SurfaceEdges, built once per solve): every half-edge (t, k) of
+// every surface triangle is one edge's (t0, k0) or (t1, k1) exactly once, a pair joins
+// two neighbours across the same two corners in opposite directions with t0 < t1, the
+// leaf order is a permutation of the edges, and every leaf's box and normal box hold
+// its edges' corners and their faces' unit normals (a sphere and a tilted torus, two
+// surfaces in one mesh).
+TEST(PluckerSilhouetteRegion, SurfaceEdgesHoldEveryHalfOnce) {
+  TriangleSoup m;
+  shapes::add_sphere(m, Vec3d(0.05, 0.02, 1.4), 0.5, 24, 12);
+  shapes::add_torus(m, Vec3d(2, 0, 1.4), 0.6, 0.2, 20, 10);
+  shapes::rotate(m, 0, Vec3d(2, 0, 1.4), normalize(Vec3d(1, 0.3, 0)), 1.2);
+  const plucker::ClosedSurfaces cs(m);
+  ASSERT_EQ(cs.count(), 2u);
+  const plucker::SurfaceTrees trees(m, cs);
+  std::vector<int> seen(m.size() * 3, 0);
+  auto holds = [](const AABBd& b, const Vec3d& p) {
+    return b.lo.x <= p.x && b.lo.y <= p.y && b.lo.z <= p.z && b.hi.x >= p.x && b.hi.y >= p.y && b.hi.z >= p.z;
+  };
+  for (int32_t s = 0; s < int32_t(cs.count()); ++s) {
+    const plucker::SurfaceEdges& se = trees.edges(s);
+    std::vector<uint32_t> order = se.tree.order;
+    std::sort(order.begin(), order.end());
+    for (uint32_t k = 0; k < order.size(); ++k) ASSERT_EQ(order[k], k);
+    ASSERT_EQ(order.size(), se.edges.size());
+    for (const plucker::SurfaceEdges::Edge& e : se.edges) {
+      ASSERT_EQ(cs.surface(e.t0), s);
+      ++seen[3 * e.t0 + e.k0];
+      ASSERT_EQ(cs.neighbors(e.t0)[e.k0], int32_t(e.t1));
+      ASSERT_LT(e.k1, 3);  // welded closed meshes: every half paired
+      ++seen[3 * e.t1 + e.k1];
+      EXPECT_LT(e.t0, e.t1);
+      EXPECT_EQ(cs.neighbors(e.t1)[e.k1], int32_t(e.t0));
+      EXPECT_EQ(m.corner(e.t0, e.k0), m.corner(e.t1, (e.k1 + 1) % 3));
+      EXPECT_EQ(m.corner(e.t1, e.k1), m.corner(e.t0, (e.k0 + 1) % 3));
+    }
+    for (uint32_t i = 0; i < se.tree.node_count(); ++i) {
+      const auto& nd = se.tree.node(i);
+      if (!se.tree.is_leaf(nd)) continue;
+      for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+        const plucker::SurfaceEdges::Edge& e = se.edges[se.tree.item(k)];
+        for (const uint32_t t : {e.t0, e.t1}) {
+          for (int c = 0; c < 3; ++c) {
+            if (m.corner(t, c) == m.corner(e.t0, e.k0) || m.corner(t, c) == m.corner(e.t0, (e.k0 + 1) % 3)) {
+              EXPECT_TRUE(holds(nd.box, to_double(m.corner(t, c))));
+            }
+          }
+          const Vec3d a = to_double(m.corner(t, 0));
+          const Vec3d n = cross(to_double(m.corner(t, 1)) - a, to_double(m.corner(t, 2)) - a);
+          EXPECT_TRUE(holds(se.node_normals[i], n * (1.0 / length(n))));
+        }
+      }
+    }
+  }
+  for (uint32_t t = 0; t < m.size(); ++t)
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(seen[3 * t + k], cs.surface(t) >= 0 ? 1 : 0) << t << " " << k;
+}
+
 // The regions on, auto (the default) and off: the same bits and fractions (up to the
 // rounding of the pieces' areas), and the region oracle; `regions` says whether some
 // group took the new path with "on".
