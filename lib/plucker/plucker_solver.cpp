@@ -270,7 +270,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   ctx.silhouette_estimate = regions != "on";
   if (ctx.closed && regions != "off") {
     tt = Clock::now();
-    surface_trees.emplace(scene.mesh, *closed);
+    surface_trees.emplace(scene.mesh, *closed, ctx.silhouette_estimate ? kMinRegionTriangles : 0u);
     tree_s += seconds_since(tt);
     memory.change(int64_t(surface_trees->memory_bytes()));
     surface_charge.bind(&budget, "silhouette regions");

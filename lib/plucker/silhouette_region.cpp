@@ -189,7 +189,7 @@ uint32_t EdgeTree::build_node(uint32_t begin, uint32_t end) {
   return id;
 }
 
-SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
+SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles) {
   tris_.resize(cs.count());
   for (uint32_t t = 0; t < mesh.size(); ++t)
     if (const int32_t s = cs.surface(t); s >= 0) tris_[size_t(s)].push_back(t);
@@ -220,6 +220,7 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs) {
   for (size_t s = 0; s < bvh_.size(); ++s) {
     const std::vector<uint32_t>& tris = tris_[s];
     SurfaceEdges& se = edges_[s];
+    if (cs.triangles(int32_t(s)) < min_edge_triangles) continue;
     unit.assign(tris.size(), Vec3d(0, 0, 0));
     bad.assign(tris.size(), 0);
     for (uint32_t i = 0; i < tris.size(); ++i) {

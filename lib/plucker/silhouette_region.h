@@ -106,7 +106,9 @@ struct SurfaceEdges {
 // Per closed surface, a hierarchy over its triangles for the exact segment test.
 class SurfaceTrees {
  public:
-  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs);
+  // Edge trees (edges(s)) only for surfaces of at least min_edge_triangles triangles: the
+  // others are never region surfaces (kMinRegionTriangles with the estimate).
+  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles = 0);
   // +1 when the closed segment r -> p meets a triangle of surface s (touching counts),
   // 0 when it meets none, -1 when undecided (r and p both in a triangle's plane). r is
   // outside the surface's box. pd: p rounded to double (world), for the box tests.
