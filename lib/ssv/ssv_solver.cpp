@@ -63,8 +63,6 @@ struct Counts {
   }
 };
 
-constexpr size_t kWedgeMemo = 4096;
-
 struct ThreadState {
   ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions fp, const LightFrame& f)
       : integrator(m, planes, std::move(fp), f) {}
@@ -79,9 +77,11 @@ struct ThreadState {
   std::vector<std::vector<uint32_t>> batch_lists;
   std::vector<uint32_t>* batched = nullptr;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
-  // wedge_index=edges: wedge_edge's answers of this light by edge, direct-mapped: entry
-  // (edge + 1) << 1 | answer, 0 empty.
-  std::vector<uint64_t> wedge_memo;
+  // wedge_index=edges: wedge_edge's answers of this light, one byte per mesh edge (0 not
+  // yet asked, 1 false, 2 true): a dense scanned mesh hands each thread tens of
+  // thousands of distinct candidates per light, which a small direct-mapped memo
+  // recomputed about one time in four (CGAL's armadillo).
+  std::vector<uint8_t> wedge_memo;
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
   DepthCounter::Classes classes{};  // of `depth` (DepthCounter::finish_classes)
@@ -425,11 +425,10 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
       const uint32_t ei = cand & EdgeTree::kEdgeMask;
       const Edge& edge = sc.edges[ei];
       // wedge_edge depends on the edge and the light only: memoised per thread and light.
-      const size_t slot = ei & (kWedgeMemo - 1);
-      if (st.wedge_memo.empty()) st.wedge_memo.assign(kWedgeMemo, 0);
-      if (st.wedge_memo[slot] >> 1 != uint64_t(ei) + 1)
-        st.wedge_memo[slot] = (uint64_t(ei) + 1) << 1 | uint64_t(wedge_edge(sc, st.integrator, ls.frame, edge));
-      if (!(st.wedge_memo[slot] & 1)) continue;
+      if (st.wedge_memo.empty()) st.wedge_memo.assign(sc.edges.size(), 0);
+      uint8_t& known = st.wedge_memo[ei];
+      if (known == 0) known = wedge_edge(sc, st.integrator, ls.frame, edge) ? 2 : 1;
+      if (known == 1) continue;
       // The weight the leaf test proved, or the double test's.
       const int weight = cand & EdgeTree::kWeightPlus2    ? 2
                          : cand & EdgeTree::kWeightMinus2 ? -2
