@@ -1062,6 +1062,24 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const FrameP
   return cuts_among(m, fp, f, candidates);
 }
 
+inline bool ReceiverIntegrator::project(const Vec3d& x, Vec2f& out) const {
+  const double den = r_.z - x.z;
+  if (!(den > 0.0)) return false;
+  const double s = r_.z / den;
+  out = {float(r_.x + (x.x - r_.x) * s), float(r_.y + (x.y - r_.y) * s)};
+  return std::isfinite(out.u) && std::isfinite(out.v);
+}
+
+inline bool ReceiverIntegrator::inside_sides(const Vec3d& x) const {
+#if defined(VG_SSV_AVX2)
+  if (side_lanes_) return side_inside_avx2(sx_, sy_, sz_, x - r_);
+#endif
+  for (const Vec3d& n : side_) {
+    if (!(dot(n, x - r_) > 0.0)) return false;
+  }
+  return true;
+}
+
 ReceiverIntegrator::VertexProjection ReceiverIntegrator::fill_vertex(uint32_t v) {
   VertexProjection& slot = vertex_slots_[v & (kVertexSlots - 1)];
   const Vec3d x = fp_[v];
@@ -1166,24 +1184,6 @@ bool ReceiverIntegrator::add_segment(const Vec3d& a, const Vec3d& b, int w) {
   pieces_.push_back(Q);
   if (enter >= 0 && frame_.right_chain[size_t(enter)]) counter_.add_step(P.v, -w);
   if (exit >= 0 && frame_.right_chain[size_t(exit)]) counter_.add_step(Q.v, w);
-  return true;
-}
-
-bool ReceiverIntegrator::project(const Vec3d& x, Vec2f& out) const {
-  const double den = r_.z - x.z;
-  if (!(den > 0.0)) return false;
-  const double s = r_.z / den;
-  out = {float(r_.x + (x.x - r_.x) * s), float(r_.y + (x.y - r_.y) * s)};
-  return std::isfinite(out.u) && std::isfinite(out.v);
-}
-
-bool ReceiverIntegrator::inside_sides(const Vec3d& x) const {
-#if defined(VG_SSV_AVX2)
-  if (side_lanes_) return side_inside_avx2(sx_, sy_, sz_, x - r_);
-#endif
-  for (const Vec3d& n : side_) {
-    if (!(dot(n, x - r_) > 0.0)) return false;
-  }
   return true;
 }
 
