@@ -176,7 +176,7 @@ class DepthCounter {
   // After use_sorted_order() returned true: the position of the first picked point with
   // v >= x in their own v order (a sample's v is in [lo.v, hi.v) iff its position is in
   // [rank(lo.v), rank(hi.v))). The same for the same x until the next reset.
-  int rank(float x) const { return sorted_lower_bound(x); }
+  int rank(float x) const;
   // add_piece with kP = rank(P.v) and kQ = rank(Q.v) given (after use_sorted_order()
   // returned true): the same counts and flags. Pieces sharing an endpoint share its rank.
   void add_piece_ranked(const Vec2f& P, const Vec2f& Q, int w, int kP, int kQ);
