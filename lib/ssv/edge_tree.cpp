@@ -638,7 +638,13 @@ __attribute__((target("avx2"))) inline int facing_prunes8(const LaneFrusta& L, c
 // per-lane operations in the same order.
 __attribute__((target("avx2"))) inline int edge_facing_class8(const LaneFrusta& L, const Vec3f& a, const int16_t* q,
                                                               float ext, float abs_margin, int& plus, int& minus) {
-  const float n[6] = {float(q[0]), float(q[1]), float(q[2]), float(q[3]), float(q[4]), float(q[5])};
+  // The six components to float (exact) four and two at a time, reading no further than
+  // q[5].
+  alignas(16) float n[8];
+  int32_t q45;
+  std::memcpy(&q45, q + 4, sizeof(q45));
+  _mm_store_ps(n, _mm_cvtepi32_ps(_mm_cvtepi16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(q)))));
+  _mm_store_ps(n + 4, _mm_cvtepi32_ps(_mm_cvtepi16_epi32(_mm_cvtsi32_si128(q45))));
   const __m256 sign = _mm256_set1_ps(-0.0f);
   const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(L.r[0]), _mm256_set1_ps(a.x));
   const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(L.r[1]), _mm256_set1_ps(a.y));

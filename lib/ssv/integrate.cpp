@@ -544,6 +544,17 @@ __attribute__((target("avx2"))) int side_class_avx2(const double* sx, const doub
   return in == 15 ? 1 : 2;
 }
 
+// Whether d = x - r has every lane's dot(side, d) > 0: side_class_avx2(d, d) == 1, with
+// the same products and sums.
+__attribute__((target("avx2"))) bool side_inside_avx2(const double* sx, const double* sy, const double* sz,
+                                                      const Vec3d& d) {
+  const __m256d nx = _mm256_loadu_pd(sx), ny = _mm256_loadu_pd(sy), nz = _mm256_loadu_pd(sz);
+  const __m256d f = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(d.x)), _mm256_mul_pd(ny, _mm256_set1_pd(d.y))),
+      _mm256_mul_pd(nz, _mm256_set1_pd(d.z)));
+  return _mm256_movemask_pd(_mm256_cmp_pd(f, _mm256_setzero_pd(), _CMP_GT_OQ)) == 15;
+}
+
 // Set once at start-up: count_run runs once per piece, a guarded local static cost a
 // check per call.
 const bool kCountRunAvx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
@@ -559,7 +570,9 @@ inline void count_run(const PieceTest& t, const float* u, const float* v, int32_
 
 }  // namespace
 
-int DepthCounter::sorted_lower_bound(float x) const {
+// Inline: fill_vertex ranks every vertex it projects (about a twentieth of the
+// armadillo's integration in the call alone). Only this file calls it.
+inline int DepthCounter::sorted_lower_bound(float x) const {
   // std::lower_bound on the sorted picked v's: start at x's bucket, step forward over
   // the points below x. The start is checked (the point before it lies below x), so a
   // bucket misjudged by rounding costs a search, never a wrong position.
@@ -571,6 +584,40 @@ int DepthCounter::sorted_lower_bound(float x) const {
   if (k > 0 && !(vv_[size_t(k - 1)] < x)) return branchless_lower_bound(vv_.data(), n, x);
   while (k < n && vv_[size_t(k)] < x) ++k;
   return k;
+}
+
+namespace {
+
+// The one-by-one test of the piece lo -> hi (lo.v < hi.v) with weight c (DepthCounter::
+// add_piece), with its margin and the line's length.
+PieceTest piece_test(const Vec2f& lo, const Vec2f& hi, int c, double extent, double& margin, double& dlen) {
+  const float du = hi.u - lo.u, dv = hi.v - lo.v;
+  // Margin. The float cross product below errs only for samples within a few float32
+  // ulps (about 1e-7 relative to the coordinates' magnitude) of the line; `margin`, 1e-6
+  // of the magnitudes (a distance), is well beyond that band. Samples within `margin` of
+  // the line are marked unclear (answered by their own ray: their count may be off by
+  // the piece's weight, and the relation may still be decided, far from degenerate, by
+  // another triangle). Every sample
+  // classified in bulk lies further than `margin` from the line.
+  margin = 1e-6 * (extent + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
+  dlen = std::sqrt(double(du) * du + double(dv) * dv);
+  const float near_cross = float(margin * dlen);  // |cross| below it: within margin of the line
+  return PieceTest{lo.u, lo.v, hi.v, du, dv, near_cross, c};
+}
+
+}  // namespace
+
+int DepthCounter::rank(float x) const { return sorted_lower_bound(x); }
+
+void DepthCounter::add_piece_ranked(const Vec2f& P, const Vec2f& Q, int w, int kP, int kQ) {
+  if (P.v == Q.v || w == 0) return;
+  const bool up = Q.v > P.v;
+  // Positions [kb, ke): the samples with v in [lo.v, hi.v), as in add_piece.
+  const int kb = up ? kP : kQ, ke = up ? kQ : kP;
+  if (kb >= ke) return;
+  double margin, dlen;
+  const PieceTest pt = piece_test(up ? P : Q, up ? Q : P, up ? w : -w, extent_, margin, dlen);
+  count_run(pt, vu_.data(), vv_.data(), dv_.data(), fv_.data(), kb, ke, true);
 }
 
 void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
@@ -590,23 +637,13 @@ void DepthCounter::add_piece(const Vec2f& P, const Vec2f& Q, int w) {
     while (ke < n && vv_[size_t(ke)] < hi.v) ++ke;
     if (kb >= ke) return;
   }
-  const float du = hi.u - lo.u, dv = hi.v - lo.v;
-  // Margin. The float cross product below errs only for samples within a few float32
-  // ulps (about 1e-7 relative to the coordinates' magnitude) of the line; `margin`, 1e-6
-  // of the magnitudes (a distance), is well beyond that band. Samples within `margin` of
-  // the line are marked unclear (answered by their own ray: their count may be off by
-  // the piece's weight, and the relation may still be decided, far from degenerate, by
-  // another triangle). Every sample
-  // classified in bulk lies further than `margin` from the line.
-  const double margin =
-      1e-6 * (extent_ + std::abs(lo.u) + std::abs(lo.v) + std::abs(hi.u) + std::abs(hi.v));
-  const double dlen = std::sqrt(double(du) * du + double(dv) * dv);
-  const float near_cross = float(margin * dlen);  // |cross| below it: within margin of the line
   // The one-by-one test, cross2(hi - lo, s - lo) > 0 (strictly left of the line), over
   // positions [k0, k1) of one order; with the v-range [lo.v, hi.v) where the position's
   // box may lie partly outside it. Four positions at a time with SSE2 (the same float
   // operations in the same order as the scalar tail: identical results).
-  const PieceTest pt{lo.u, lo.v, hi.v, du, dv, near_cross, c};
+  double margin, dlen;
+  const PieceTest pt = piece_test(lo, hi, c, extent_, margin, dlen);
+  const float du = pt.du, dv = pt.dv;
   auto run = [&pt](const float* u, const float* v, int32_t* out, int32_t* flag, int k0, int k1, bool v_range) {
     count_run(pt, u, v, out, flag, k0, k1, v_range);
   };
@@ -813,7 +850,7 @@ void ReceiverIntegrator::expect_edges(size_t edges) {
   // The sort and its buckets cost about 5,000 instructions at 64 samples and more than
   // 20,000 at 256 (many boxes overlap), an exact v-range saves about 100-200 per piece
   // (callgrind on foliage, scan, rooms and columns): sort from two edges per sample.
-  if (edges >= 16 && edges >= 2 * counter_.size()) counter_.use_sorted_order();
+  if (edges >= 16 && edges >= 2 * counter_.size()) vertex_reuse_ = counter_.use_sorted_order() && vertex_reuse_on_;
 }
 
 void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
@@ -822,6 +859,14 @@ void ReceiverIntegrator::set_receiver(const Vec3f& receiver) {
   VG_CHECK(r_.z > 0.0);
   pieces_.clear();
   doubtful_ = false;
+  vertex_reuse_ = false;
+  reused_edges_ = 0;
+  // A new stamp empties every vertex slot (a stamp that no longer fits 32 bits restarts
+  // from 1 with the slots cleared).
+  if (++stamp_ >= (uint64_t(1) << 32) || vertex_slots_.empty()) {
+    vertex_slots_.assign(kVertexSlots, VertexProjection{});
+    stamp_ = 1;
+  }
   // Clearance threshold. The pieces are clipped and projected in double from unrounded
   // frame coordinates and rounded once to float, like the samples' (u, v): with |u|, |v|
   // below 2E on L' (E the light's extent) each is within 2^-23 E of its exact value, and
@@ -1021,7 +1066,47 @@ std::vector<uint32_t> light_plane_cuts(const mesh::PreparedMesh& m, const FrameP
   return cuts_among(m, fp, f, candidates);
 }
 
+inline bool ReceiverIntegrator::project(const Vec3d& x, Vec2f& out) const {
+  const double den = r_.z - x.z;
+  if (!(den > 0.0)) return false;
+  const double s = r_.z / den;
+  out = {float(r_.x + (x.x - r_.x) * s), float(r_.y + (x.y - r_.y) * s)};
+  return std::isfinite(out.u) && std::isfinite(out.v);
+}
+
+inline bool ReceiverIntegrator::inside_sides(const Vec3d& x) const {
+#if defined(VG_SSV_AVX2)
+  if (side_lanes_) return side_inside_avx2(sx_, sy_, sz_, x - r_);
+#endif
+  for (const Vec3d& n : side_) {
+    if (!(dot(n, x - r_) > 0.0)) return false;
+  }
+  return true;
+}
+
+ReceiverIntegrator::VertexProjection ReceiverIntegrator::fill_vertex(uint32_t v) {
+  VertexProjection& slot = vertex_slots_[v & (kVertexSlots - 1)];
+  const Vec3d x = fp_[v];
+  slot.key = stamp_ << 32 | v;
+  slot.ok = x.z >= 0.0 && inside_sides(x) && project(x, slot.p);
+  slot.rank = slot.ok ? counter_.rank(slot.p.v) : 0;
+  return slot;
+}
+
 bool ReceiverIntegrator::add_edge(const Edge& e, int w) {
+  if (vertex_reuse_) {
+    // Both ends at h >= 0 and strictly inside every side plane: add_segment would keep
+    // them unclipped and project each (the same doubles, the same floats), with no step.
+    // The copy: both ends may share a slot.
+    const VertexProjection a = vertex_projection(e.a), b = vertex_projection(e.b);
+    if (a.ok && b.ok) {
+      counter_.add_piece_ranked(a.p, b.p, w, a.rank, b.rank);
+      pieces_.push_back(a.p);
+      pieces_.push_back(b.p);
+      ++reused_edges_;
+      return true;
+    }
+  }
   auto from = [&](const auto& fp) {  // an array (read in place) or FramePositions
     const Vec3d& a = fp[e.a];
     const Vec3d& b = fp[e.b];
@@ -1090,16 +1175,9 @@ bool ReceiverIntegrator::add_segment(const Vec3d& a, const Vec3d& b, int w) {
   if (!(t0 < t1)) return false;
   const Vec3d a2 = enter >= 0 ? a + (b - a) * t0 : a;
   const Vec3d b2 = exit >= 0 ? a + (b - a) * t1 : b;
-  // Central projection from r onto h = 0. Inside the pyramid only its apex r reaches the
-  // receiver's height, so a point at or above it is an edge through (within rounding of)
-  // the receiver: the projection is undefined and the receiver is marked doubtful.
-  auto project = [&](const Vec3d& x, Vec2f& out) {
-    const double den = r_.z - x.z;
-    if (!(den > 0.0)) return false;
-    const double s = r_.z / den;
-    out = {float(r_.x + (x.x - r_.x) * s), float(r_.y + (x.y - r_.y) * s)};
-    return std::isfinite(out.u) && std::isfinite(out.v);
-  };
+  // Inside the pyramid only its apex r reaches the receiver's height, so a point at or
+  // above it is an edge through (within rounding of) the receiver: the projection is
+  // undefined and the receiver is marked doubtful.
   Vec2f P, Q;
   if (!project(a2, P) || !project(b2, Q)) {
     doubtful_ = true;

@@ -173,6 +173,13 @@ class DepthCounter {
              double extent);
   // Rule 1 for the piece P -> Q with weight w.
   void add_piece(const Vec2f& P, const Vec2f& Q, int w);
+  // After use_sorted_order() returned true: the position of the first picked point with
+  // v >= x in their own v order (a sample's v is in [lo.v, hi.v) iff its position is in
+  // [rank(lo.v), rank(hi.v))). The same for the same x until the next reset.
+  int rank(float x) const;
+  // add_piece with kP = rank(P.v) and kQ = rank(Q.v) given (after use_sorted_order()
+  // returned true): the same counts and flags. Pieces sharing an endpoint share its rank.
+  void add_piece_ranked(const Vec2f& P, const Vec2f& Q, int w, int kP, int kQ);
   // Rule 2: +w to every sample with v >= vc.
   void add_step(float vc, int w);
   // The counters per sample (index as given to reset), and optionally per sample whether
@@ -333,6 +340,14 @@ class ReceiverIntegrator {
   }
   // Edge weight of section "Side of a projected edge" (0: not a silhouette from r).
   int edge_weight(const Edge& e) const;
+  // Whether add_edge may project each vertex once per receiver (default on): after
+  // expect_edges put the counter in its sorted order, a vertex strictly inside every
+  // side plane with h >= 0 keeps its projection and its rank (DepthCounter::rank), and
+  // an edge between two such vertices needs no clipping (add_segment would keep both
+  // ends as they are). The same pieces and counts either way; off for the test of that.
+  void set_vertex_reuse(bool on) { vertex_reuse_on_ = on; }
+  // Edges added through the reused projections since begin().
+  size_t reused_edges() const { return reused_edges_; }
   // Clips the edge to h >= 0 and to the pyramid from r over L', projects and integrates
   // it with weight w. Returns false when nothing of it projects into L'.
   bool add_edge(const Edge& e, int w);
@@ -369,6 +384,32 @@ class ReceiverIntegrator {
 
  private:
   bool add_segment(const Vec3d& a, const Vec3d& b, int w);
+  // Central projection from r onto h = 0 (false: x at or above r's height, or the result
+  // not finite).
+  bool project(const Vec3d& x, Vec2f& out) const;
+  // Every side plane has x strictly inside (dot(side_i, x - r) > 0, the values
+  // add_segment computes).
+  bool inside_sides(const Vec3d& x) const;
+  // Vertex v's projection and rank for this receiver (set_vertex_reuse): `ok` when v has
+  // h >= 0, lies strictly inside every side plane and projects; otherwise its edges take
+  // add_segment. Direct-mapped by v, keyed by v and the receiver's stamp.
+  struct VertexProjection {
+    uint64_t key = 0;  // stamp << 32 | v (stamp 0: empty)
+    Vec2f p{};
+    int32_t rank = 0;
+    int32_t ok = 0;
+  };
+  VertexProjection vertex_projection(uint32_t v) {
+    const VertexProjection& slot = vertex_slots_[v & (kVertexSlots - 1)];
+    return slot.key == (stamp_ << 32 | v) ? slot : fill_vertex(v);
+  }
+  [[gnu::noinline]] VertexProjection fill_vertex(uint32_t v);  // into v's slot
+  static constexpr size_t kVertexSlots = 4096;
+  std::vector<VertexProjection> vertex_slots_;
+  uint64_t stamp_ = 0;           // this receiver's (set_receiver)
+  bool vertex_reuse_ = false;    // in use for this receiver (expect_edges)
+  bool vertex_reuse_on_ = true;  // set_vertex_reuse
+  size_t reused_edges_ = 0;
   void set_receiver(const Vec3f& receiver);
   // facing with both sources arrays (kArrays: the wedge indexes, read directly) or not.
   template <bool kArrays>

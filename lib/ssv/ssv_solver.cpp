@@ -63,7 +63,25 @@ struct Counts {
   }
 };
 
-constexpr size_t kWedgeMemo = 4096;
+// wedge_index=edges: wedge_edge's answers by mesh edge, one byte each, kept by a thread
+// across the lights of a solve: entry tag << 1 | answer, where the tag (1 to 127) names
+// the light within its cycle of 127 lights; a thread zeroes the bytes when it starts a
+// light of a new cycle, so an entry of another light never matches. A dense scanned mesh
+// hands each thread tens of thousands of distinct candidates per light, which a small
+// direct-mapped memo recomputed about one time in four (CGAL's armadillo); zeroing once
+// per cycle instead of once per light keeps the scan family's ten lights of 450k edges
+// from paying ten fills.
+struct WedgeMemo {
+  std::vector<uint8_t> known;
+  size_t cycle = SIZE_MAX;
+  // Ready for light `l` of a mesh of `edges` edges; returns the light's tag.
+  uint8_t start(size_t l, size_t edges) {
+    if (cycle != l / kLights || known.size() != edges) known.assign(edges, 0);
+    cycle = l / kLights;
+    return uint8_t(l % kLights + 1);
+  }
+  static constexpr size_t kLights = 127;
+};
 
 struct ThreadState {
   ThreadState(const mesh::PreparedMesh& m, PlaneSource planes, FramePositions fp, const LightFrame& f)
@@ -79,9 +97,10 @@ struct ThreadState {
   std::vector<std::vector<uint32_t>> batch_lists;
   std::vector<uint32_t>* batched = nullptr;
   std::vector<std::pair<uint32_t, int>> valid;  // edge, weight
-  // wedge_index=edges: wedge_edge's answers of this light by edge, direct-mapped: entry
-  // (edge + 1) << 1 | answer, 0 empty.
-  std::vector<uint64_t> wedge_memo;
+  // wedge_index=edges: this thread's WedgeMemo and this light's tag in it (set on the
+  // thread's first receiver of the light).
+  WedgeMemo* wedge_memo = nullptr;
+  uint8_t wedge_tag = 0;
   std::vector<uint32_t> pick;  // DepthCounter::reset
   std::vector<int32_t> depth;
   DepthCounter::Classes classes{};  // of `depth` (DepthCounter::finish_classes)
@@ -425,11 +444,10 @@ void integrate_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup&
       const uint32_t ei = cand & EdgeTree::kEdgeMask;
       const Edge& edge = sc.edges[ei];
       // wedge_edge depends on the edge and the light only: memoised per thread and light.
-      const size_t slot = ei & (kWedgeMemo - 1);
-      if (st.wedge_memo.empty()) st.wedge_memo.assign(kWedgeMemo, 0);
-      if (st.wedge_memo[slot] >> 1 != uint64_t(ei) + 1)
-        st.wedge_memo[slot] = (uint64_t(ei) + 1) << 1 | uint64_t(wedge_edge(sc, st.integrator, ls.frame, edge));
-      if (!(st.wedge_memo[slot] & 1)) continue;
+      uint8_t& known = st.wedge_memo->known[ei];
+      if (known >> 1 != st.wedge_tag)
+        known = uint8_t(st.wedge_tag << 1 | (wedge_edge(sc, st.integrator, ls.frame, edge) ? 1 : 0));
+      if (!(known & 1)) continue;
       // The weight the leaf test proved, or the double test's.
       const int weight = cand & EdgeTree::kWeightPlus2    ? 2
                          : cand & EdgeTree::kWeightMinus2 ? -2
@@ -910,6 +928,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   occluder_charge.set(size_t(occluder_bytes));
   WedgeBuildCounts counts;
   Counts total;
+  tbb::enumerable_thread_specific<WedgeMemo> wedge_memos;
 
   for (size_t l = 0; l < scene.lights.size(); ++l) {
     const Light& light = scene.lights[l];
@@ -980,7 +999,13 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                         cut_triangles, bsp ? &*bsp : nullptr, &scatter,
                         receiver_tree, strips, occluded, use_edges ? &cull.edge_tree : nullptr};
     tbb::enumerable_thread_specific<ThreadState> states([&] {
-      return ThreadState(pm, planes, use_edges ? FramePositions(pm.vertex_pos, frame) : FramePositions(frame_pos), frame);
+      ThreadState st(pm, planes, use_edges ? FramePositions(pm.vertex_pos, frame) : FramePositions(frame_pos), frame);
+      if (use_edges) {
+        // Built on the thread that asks for it: that thread's memo.
+        st.wedge_memo = &wedge_memos.local();
+        st.wedge_tag = st.wedge_memo->start(l, edges.size());
+      }
+      return st;
     });
     total.t_query += solve_light(sc, ls, states, result, batches, eps, use_region, scatter_charge);
     for (const ThreadState& st : states) total += st.c;

@@ -381,3 +381,54 @@ TEST(SsvIntegration, RelativeDepthEqualsDirectCounting) {
   }
   EXPECT_GT(compared, 3000u);
 }
+
+TEST(SsvIntegration, VertexReuseEqualsPerEdgeClipping) {
+  // add_edge with each vertex projected once per receiver (set_vertex_reuse, the
+  // default) against every edge clipped and projected on its own: the same counts,
+  // unclear flags, classes, doubt and clearances, with the shared projections in use.
+  const int32_t kU = std::numeric_limits<int32_t>::max();
+  size_t reused = 0, receivers = 0;
+  for (uint64_t seed = 1; seed <= 8; ++seed)
+    for (int samples : {16, 64}) {
+      Scene s = random_scene(seed, samples, 24);
+      mesh::PreparedMesh pm = mesh::prepare_mesh(s.mesh);
+      const Light& light = s.lights[0];
+      LightFrame frame = make_light_frame(light);
+      std::vector<Vec3d> fp = frame_positions(pm, frame);
+      std::vector<Edge> edges = mesh_edges(pm);
+      const SampleStrips strips = make_sample_strips(frame.jitter_uv, light.samples, light.jitter);
+      ReceiverIntegrator on(pm, fp, frame), off(pm, fp, frame);
+      off.set_vertex_reuse(false);
+      std::vector<uint32_t> pick;
+      for (size_t i = 0; i < s.receivers.size(); ++i) {
+        if (!(frame.to_local(s.receivers[i].p).z > 0.0)) continue;
+        jitter_picks(relation_hash_prefix(i, light.seed), light.samples, light.jitter, pick);
+        std::vector<int32_t> depth[2];
+        DepthCounter::Classes classes[2];
+        ReceiverIntegrator* integ[2] = {&on, &off};
+        for (int k = 0; k < 2; ++k) {
+          integ[k]->begin(s.receivers[i].p, strips, pick);
+          integ[k]->expect_edges(edges.size());
+          for (const Edge& e : edges) {
+            const int w = integ[k]->edge_weight(e);
+            if (w != 0) integ[k]->add_edge(e, w);
+          }
+          for (size_t t = 0; t < pm.triangles.size(); ++t) integ[k]->add_cut(t);
+          classes[k] = integ[k]->finish_classes(depth[k], kU);
+        }
+        const std::string where = "seed " + std::to_string(seed) + " receiver " + std::to_string(i);
+        EXPECT_EQ(depth[0], depth[1]) << where;
+        EXPECT_EQ(classes[0].dmin, classes[1].dmin) << where;
+        EXPECT_EQ(classes[0].second, classes[1].second) << where;
+        EXPECT_EQ(classes[0].unclear, classes[1].unclear) << where;
+        EXPECT_EQ(on.doubtful(), off.doubtful()) << where;
+        for (int j = 0; j < light.samples; ++j)
+          EXPECT_EQ(on.clearance(size_t(j)), off.clearance(size_t(j))) << where << " sample " << j;
+        EXPECT_EQ(off.reused_edges(), 0u);
+        reused += on.reused_edges();
+        ++receivers;
+      }
+    }
+  EXPECT_GT(receivers, 100u);
+  EXPECT_GT(reused, 10 * receivers);
+}
