@@ -67,6 +67,7 @@ struct Totals {
   uint64_t interior_covered = 0;  // candidates left out: every line through them stabs one
   uint64_t interior_skipped = 0;  // triangles of whole tree nodes left out that way (cover_nodes)
   uint64_t near_merged = 0;  // per receiver: near triangles subtracted within another's polygon (shade_receiver.cpp)
+  uint64_t closed_near = 0;  // one-sided triangles of dense closed surfaces put in the near list (closed_near)
   uint64_t bsp_nodes_max = 0;
   BspCounters bsp;
   SilhouetteCounters sil;  // silhouette regions (silhouette_region.h)
@@ -100,6 +101,7 @@ struct SolveContext {
   const InteriorOccluders* interior = nullptr;  // null: none added (interior_occluders.h)
   bool cover_nodes = true;  // the covered test on whole tree nodes (occluder_selection.cpp)
   bool near_merge = true;   // glued near triangles subtracted as one convex polygon (shade_receiver.cpp)
+  bool closed_near = true;  // dense closed surfaces' one-sided triangles per receiver (occluder_selection.cpp)
   // Closed surfaces' shadows as silhouette regions (silhouette_region.h); null: off.
   const SurfaceTrees* surface_trees = nullptr;
   bool silhouette_estimate = true;  // auto: groups whose receivers see many turning edges decline

@@ -32,6 +32,7 @@ void Totals::merge(const Totals& o) {
   interior_covered += o.interior_covered;
   interior_skipped += o.interior_skipped;
   near_merged += o.near_merged;
+  closed_near += o.closed_near;
   exact_triangles += o.exact_triangles;
   far_triangles += o.far_triangles;
   band_triangles += o.band_triangles;
@@ -263,6 +264,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   }
   ctx.cover_nodes = opt.get_bool("cover_nodes", true);
   ctx.near_merge = opt.get_bool("near_merge", true);
+  ctx.closed_near = opt.get_bool("closed_near", true);
   // Per closed surface a hierarchy for the silhouette regions' segment tests, once per solve.
   std::optional<SurfaceTrees> surface_trees;
   MemoryCharge surface_charge;
@@ -350,6 +352,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   st.set("interior_covered", double(totals.interior_covered));
   st.set("interior_skipped", double(totals.interior_skipped));
   st.set("near_merged", double(totals.near_merged));
+  st.set("closed_near_triangles", double(totals.closed_near));
   st.set("exact_receivers", double(totals.exact_receivers));
   st.set("undecided_receivers", double(totals.undecided_receivers));
   st.set("unreported_slivers", double(totals.unreported_slivers));
@@ -397,6 +400,9 @@ std::vector<OptionSpec> PluckerSolver::options() const {
                           "occluder; off: the covered test per candidate only", {"on", "off"}},
           {"near_merge", "on: glued near triangles of a closed surface that a receiver sees as one convex polygon "
                          "are subtracted as that polygon; off: one by one", {"on", "off"}},
+          {"closed_near", "on: with interior occluders in the group's tree, the one-sided triangles of closed "
+                          "surfaces of at least 1024 triangles are near polygons (per receiver, glued ones merged) "
+                          "instead of tree occluders; off: in the tree", {"on", "off"}},
           {"silhouette_regions", "on: a closed surface apart from a group's receivers and wholly before the "
                                  "light's plane is shaded per receiver as one region cut along its silhouette "
                                  "edges (silhouette_region.h); auto: the same where a few receivers of the group "

@@ -189,6 +189,31 @@ TEST(PluckerInteriorOccluders, ScanAnswersMatchThePreviousPathAndTheOracle) {
   expect_same_answers(*s, on, single);
 }
 
+// A dense closed surface's one-sided triangles as near polygons (closed_near, the
+// default) against tree occluders (off): the same answers, the region oracle's, with the
+// triangle path throughout (silhouette regions off). Fine tori (3,072 and 2,304
+// triangles) under the square light, receivers on a grid below; columns' small solids
+// (under 1024 triangles each) keep their tree occluders.
+TEST(PluckerInteriorOccluders, ClosedNearMatchesTheTreeAndTheOracle) {
+  const std::vector<Vec3f> rec = receiver_square(8, -1.4f, 0.4f);
+  for (int variant = 0; variant < 2; ++variant) {
+    Scene s = light_scene(rec, 32, Vec3d(0.1, -0.05, 3.0));
+    if (variant == 0) shapes::add_torus(s.mesh, Vec3d(0.05, 0.02, 1.2), 0.6, 0.2, 64, 24);
+    if (variant == 1) shapes::add_torus(s.mesh, Vec3d(0.4, -0.3, 1.0), 0.5, 0.25, 48, 24);
+    ASSERT_TRUE(finish_scene(s).ok());
+    const SolveResult on = run(s, {{"silhouette_regions", "off"}}),
+                      off = run(s, {{"silhouette_regions", "off"}, {"closed_near", "off"}});
+    EXPECT_GT(on.stats.get("closed_near_triangles"), 0.0) << variant;
+    EXPECT_EQ(off.stats.get("closed_near_triangles"), 0.0) << variant;
+    EXPECT_LT(on.stats.get("occluders"), off.stats.get("occluders")) << variant;
+    expect_same_answers(s, on, off);
+    expect_region_oracle(s, on);
+  }
+  auto c = family_scene("columns", 3, 2000, 64, 4);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(run(*c).stats.get("closed_near_triangles"), 0.0);
+}
+
 // Under the square light, receivers on a grid below (some right under the surfaces,
 // 1e-3 below the lowest point of the sphere): a fine sphere, a torus (its centre is in
 // the hole: no first polygon there, further ones on the ring), two interpenetrating spheres (each closed, their union
