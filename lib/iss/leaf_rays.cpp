@@ -892,7 +892,7 @@ void Traversal::cull_back_faces(const Vec3f* pts, int np, const AABB& box) {
 // from the receiver p over the light node's box (box_outside_pyramid) are left out too.
 // Such a box holds the whole surface, so each of its faces misses every segment from p
 // into the box, and every certificate over the others holds over all of them. With at
-// most cell_max_candidates left, p's cells (cell_receiver); else p's relations by
+// most cell_surface_candidates left, p's cells (cell_receiver); else p's relations by
 // Embree rays, as the leaf's were.
 void Traversal::cell_surface_receivers(int r, int l) {
   const TreeNode& R = rn(r);
@@ -916,7 +916,7 @@ void Traversal::cell_surface_receivers(int r, int l) {
       if (use_pyr && box_outside_pyramid(closed_[cull_group_[g0].first].box, od, pyr)) continue;
       for (size_t k = g0; k < g1; ++k) direct_cand_.push_back(cull_group_[k].second);
     }
-    if (direct_cand_.size() > size_t(p_.cell_max_candidates)) {
+    if (direct_cand_.size() > size_t(p_.cell_surface_candidates)) {
       fan_rays(i, lo.data() + L.begin, L.size());
       n_rays_ += double(L.size());
       continue;

@@ -145,8 +145,12 @@ struct Params {
   bool cell_backfaces = true;
   // A culled leaf still over cell_max_candidates takes cells receiver by receiver where,
   // without the closed surfaces whose box lies outside the pyramid from the receiver
-  // over the light node's box, at most that many are left (cell_surface_receivers).
+  // over the light node's box, at most cell_surface_candidates are left
+  // (cell_surface_receivers). Measured on rooms at 1024 receivers (docs/log/
+  // iss-performance.md, thirteenth round): above about 96 candidates a receiver's cells
+  // cost more than its Embree rays.
   bool cell_surfaces = true;
+  int cell_surface_candidates = 96;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes

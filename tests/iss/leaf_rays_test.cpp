@@ -313,8 +313,8 @@ TEST(IssLeafRays, CellSurfacesAnswerAsWithoutThemAndTheOracle) {
   // surfaces exceed it after the node-box cull.
   const std::vector<LeafCase> cases = {
       {"rooms", -1, 256, 64, {{"cell_candidates", "64"}}},
-      {"rooms", -1, 256, 64, {{"cell_candidates", "32"}, {"cell_depth", "16"}}},
-      {"rooms", 60000, 256, 64, {{"cell_candidates", "96"}}},
+      {"rooms", -1, 256, 64, {{"cell_candidates", "32"}, {"cell_surface_candidates", "32"}, {"cell_depth", "16"}}},
+      {"rooms", 60000, 256, 64, {{"cell_candidates", "96"}, {"cell_surface_candidates", "192"}}},
       {"columns", 1000, 1024, 64, {{"cell_candidates", "8"}}},
       {"torus", -1, 256, 16, {{"cell_candidates", "8"}, {"cell_depth", "16"}}},
       {"random-soup", -1, 256, 16, {{"cell_candidates", "8"}}},
