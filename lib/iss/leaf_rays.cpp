@@ -529,7 +529,7 @@ bool Traversal::direct_candidates(const ShaftGeometry& g, bool query_leaf) {
     if (over) return false;
     std::sort(direct_query_.begin(), direct_query_.end());
     const size_t n = direct_query_.size(), kp = padded(n);
-    direct_query_box_.assign(6 * kp, 0.0);
+    direct_query_box_.resize(6 * kp);
     for (size_t k = 0; k < n; ++k) {
       const AABB& b = tri_boxes_[direct_query_[k]];
       for (int c = 0; c < 3; ++c) {
@@ -537,6 +537,8 @@ bool Traversal::direct_candidates(const ShaftGeometry& g, bool query_leaf) {
         direct_query_box_[size_t(3 + c) * kp + k] = double(b.hi[c]);
       }
     }
+    for (size_t k = n; k < kp; ++k)  // padding lanes: a box the filter reads and never keeps
+      for (int c = 0; c < 6; ++c) direct_query_box_[size_t(c) * kp + k] = 0.0;
     return true;
   };
   const size_t top = cand_depth_;
