@@ -109,6 +109,13 @@ __attribute__((always_inline)) inline void direct_terms_body(const double* c, si
   }
 }
 
+// Term arrays are read at the stride of the current candidate count: a longer array
+// serves a shorter list, so they only grow (resize would zero-fill again whatever a
+// smaller list had given up).
+inline void grow_to(std::vector<double>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
 // "Every lane set" and "some lane set" of a lane mask, in the default build from the
 // four lanes; in the AVX2 build by one movemask (the lane extraction was a fifth of the
 // test's instructions). Only the test of the mask differs: the same answers. By
@@ -602,7 +609,7 @@ bool Traversal::direct_rays_cands(int r, int l) {
   const size_t k_count = direct_cand_.size();
   if (k_count > size_t(p_.direct_max_candidates)) return false;
   const size_t kp = direct_load_corners();
-  direct_terms_.resize(kTermCount * kp);
+  grow_to(direct_terms_, kTermCount * kp);
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
   const auto& ro = rtree_->order();
@@ -753,7 +760,7 @@ bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
     n_cull_decided_ += double(R.size()) * double(ln(l).size());
   }
   const size_t kp = direct_load_corners();
-  cell_levels_[0].terms.resize(kCellTermCount * kp);
+  grow_to(cell_levels_[0].terms, kCellTermCount * kp);
   cell_levels_[0].count = direct_cand_.size();
   cell_levels_[0].kp = kp;
   cell_levels_[0].tris = direct_cand_;
@@ -925,7 +932,7 @@ void Traversal::cell_surface_receivers(int r, int l) {
     }
     const size_t kp = direct_load_corners();
     CellLevel& top = cell_levels_[0];
-    top.terms.resize(kCellTermCount * kp);
+    grow_to(top.terms, kCellTermCount * kp);
     top.count = direct_cand_.size();
     top.kp = kp;
     top.tris = direct_cand_;
@@ -970,7 +977,7 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   CellLevel& next = cell_levels_[depth + 1];
   CellLevel& cur = cell_levels_[depth];  // emplace_back may have moved it
   const size_t np = (mixed + 3) & ~size_t(3);
-  next.terms.resize(kCellTermCount * np);
+  grow_to(next.terms, kCellTermCount * np);
   next.count = mixed;
   next.kp = np;
   next.tris.clear();
