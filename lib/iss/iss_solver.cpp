@@ -281,6 +281,8 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cell_depth", "cell_shafts: light-tree levels below the leaf's light node that cells descend while mixed (default 0: the light node's box only)", {}},
       {"cell_patches", "cell_shafts: a cell is also blocked by a planar patch of exactly coplanar neighbouring triangles whose plane separates the receiver from the cell, with no boundary edge meeting the cell's segments and one segment through its inside", {"on", "off"}},
       {"cell_backfaces", "cell_shafts: a leaf shaft with more than cell_candidates candidates still gets cells when at most that many are left without the faces of closed star-shaped surfaces turned strictly away from the whole receiver node (a segment from outside such a surface that meets it first crosses a face turned towards its start)", {"on", "off"}},
+      {"cell_surfaces", "cell_backfaces: a leaf still over cell_candidates after that takes cells receiver by receiver where at most cell_surface_candidates are left without the closed surfaces whose box lies outside the pyramid from the receiver over the light node's box", {"on", "off"}},
+      {"cell_surface_candidates", "cell_surfaces: the most candidates a receiver takes cells on after that (default 96; more go to Embree rays)", {}},
       {"cell_candidates", "cell_shafts: most candidate triangles of a leaf shaft that cells take (default 192; more go to the direct test or Embree rays)", {}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
       {"light_split", "per light, split the light into 4-sample leaves (with 64-receiver leaves) when a trial of its first shafts shows it pays; on: every light; off: leaf_samples is the light leaf", {"auto", "on", "off"}},
@@ -331,6 +333,9 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.cell_max_candidates = int(std::max(0L, opt.get_int("cell_candidates", p.cell_max_candidates)));
   p.cell_patches = opt.get_bool("cell_patches", true);
   p.cell_backfaces = opt.get_bool("cell_backfaces", true);
+  p.cell_surfaces = opt.get_bool("cell_surfaces", true);
+  p.cell_surface_candidates =
+      int(std::max(0L, opt.get_int("cell_surface_candidates", p.cell_surface_candidates)));
   p.clusters = opt.get("clusters", "auto") != "off";
   if (opt.get("clusters", "auto") == "on") p.cluster_min_triangles = 0;
   p.cluster_exact_max = size_t(std::max(0L, opt.get_int("cluster_exact", long(p.cluster_exact_max))));

@@ -109,6 +109,13 @@ __attribute__((always_inline)) inline void direct_terms_body(const double* c, si
   }
 }
 
+// Term arrays are read at the stride of the current candidate count: a longer array
+// serves a shorter list, so they only grow (resize would zero-fill again whatever a
+// smaller list had given up).
+inline void grow_to(std::vector<double>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
 // "Every lane set" and "some lane set" of a lane mask, in the default build from the
 // four lanes; in the AVX2 build by one movemask (the lane extraction was a fifth of the
 // test's instructions). Only the test of the mask differs: the same answers. By
@@ -405,6 +412,75 @@ __attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t 
 }
 #endif
 
+
+// The corners of a cell's box relative to the origin od into cd (dx, dy, dz, n = max
+// |d_i| each; one value on an axis where the box is flat); returns their count.
+int cell_corners(const AABB& box, const double* od, double* cd) {
+  const int nx = box.lo.x < box.hi.x ? 2 : 1, ny = box.lo.y < box.hi.y ? 2 : 1, nz = box.lo.z < box.hi.z ? 2 : 1;
+  int nc = 0;
+  for (int x = 0; x < nx; ++x)
+    for (int y = 0; y < ny; ++y)
+      for (int z = 0; z < nz; ++z) {
+        double* d = cd + 4 * nc++;
+        d[0] = double(x ? box.hi.x : box.lo.x) - od[0];
+        d[1] = double(y ? box.hi.y : box.lo.y) - od[1];
+        d[2] = double(z ? box.hi.z : box.lo.z) - od[2];
+        d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+      }
+  return nc;
+}
+
+// A box flat on one axis (nc == 4 corners cd): the pyramid from the origin p over its
+// rectangle, side planes through p and each rectangle edge (corners in cyclic order 0,
+// 1, 3, 2), the box's side positive. Each plane's value at a point v is the orientation
+// determinant (v - p).((q_k - p) x (q_k+1 - p)), computed in the operations of the
+// direct test's w = d.(B x C), so within the same bound 48 eps |v - p| M^2 (M the larger
+// |coordinate| of the two corners' d; pyr[4f + 3] = 48 eps M^2); a plane is oriented by
+// the determinant at the next corner, certified the same way. False (no plane to use)
+// without that certificate. A point certainly negative for one side plane lies outside
+// the pyramid, which holds every segment from p into the box.
+bool cell_pyramid(const double* cd, int nc, double* pyr) {
+  if (nc != 4) return false;
+  for (int f = 0; f < 4; ++f) {
+    static constexpr int kCyc[4] = {0, 1, 3, 2};
+    const double* d1 = cd + 4 * kCyc[f];
+    const double* d2 = cd + 4 * kCyc[(f + 1) & 3];
+    const double* d3 = cd + 4 * kCyc[(f + 2) & 3];
+    const double nx = d1[1] * d2[2] - d1[2] * d2[1], ny = d1[2] * d2[0] - d1[0] * d2[2],
+                 nz = d1[0] * d2[1] - d1[1] * d2[0];
+    const double m2 = std::max(d1[3], d2[3]) * std::max(d1[3], d2[3]);
+    const double r = d3[0] * nx + d3[1] * ny + d3[2] * nz, er = (48.0 * kEps) * d3[3] * m2;
+    const double sg = r > er ? 1.0 : r < -er ? -1.0 : 0.0;  // the next corner's side positive
+    if (sg == 0.0) return false;
+    pyr[4 * f] = sg * nx;
+    pyr[4 * f + 1] = sg * ny;
+    pyr[4 * f + 2] = sg * nz;
+    pyr[4 * f + 3] = (48.0 * kEps) * m2;
+  }
+  return true;
+}
+
+// Every corner of box b certainly negative for one side plane of the pyramid pyr from
+// od (cell_pyramid): the box, and every triangle inside it, misses every segment from
+// od into the cell. The bound takes m, the largest |coordinate| of any corner's v - od.
+bool box_outside_pyramid(const AABB& b, const double* od, const double* pyr) {
+  double v[8][3], m = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    v[k][0] = double(k & 1 ? b.hi.x : b.lo.x) - od[0];
+    v[k][1] = double(k & 2 ? b.hi.y : b.lo.y) - od[1];
+    v[k][2] = double(k & 4 ? b.hi.z : b.lo.z) - od[2];
+    m = std::max({m, std::abs(v[k][0]), std::abs(v[k][1]), std::abs(v[k][2])});
+  }
+  for (int f = 0; f < 4; ++f) {
+    const double* pl = pyr + 4 * f;
+    const double ep = m * pl[3];
+    bool out = true;
+    for (int k = 0; k < 8 && out; ++k) out = v[k][0] * pl[0] + v[k][1] * pl[1] + v[k][2] * pl[2] < -ep;
+    if (out) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep) {
@@ -460,7 +536,7 @@ bool Traversal::direct_candidates(const ShaftGeometry& g, bool query_leaf) {
     if (over) return false;
     std::sort(direct_query_.begin(), direct_query_.end());
     const size_t n = direct_query_.size(), kp = padded(n);
-    direct_query_box_.assign(6 * kp, 0.0);
+    direct_query_box_.resize(6 * kp);
     for (size_t k = 0; k < n; ++k) {
       const AABB& b = tri_boxes_[direct_query_[k]];
       for (int c = 0; c < 3; ++c) {
@@ -468,6 +544,8 @@ bool Traversal::direct_candidates(const ShaftGeometry& g, bool query_leaf) {
         direct_query_box_[size_t(3 + c) * kp + k] = double(b.hi[c]);
       }
     }
+    for (size_t k = n; k < kp; ++k)  // padding lanes: a box the filter reads and never keeps
+      for (int c = 0; c < 6; ++c) direct_query_box_[size_t(c) * kp + k] = 0.0;
     return true;
   };
   const size_t top = cand_depth_;
@@ -531,7 +609,7 @@ bool Traversal::direct_rays_cands(int r, int l) {
   const size_t k_count = direct_cand_.size();
   if (k_count > size_t(p_.direct_max_candidates)) return false;
   const size_t kp = direct_load_corners();
-  direct_terms_.resize(kTermCount * kp);
+  grow_to(direct_terms_, kTermCount * kp);
   const TreeNode& R = rn(r);
   const TreeNode& L = ln(l);
   const auto& ro = rtree_->order();
@@ -674,11 +752,15 @@ bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
         for (int z = 0; z < nz; ++z) corners[nc++] = Vec3f(x ? b.hi.x : b.lo.x, y ? b.hi.y : b.lo.y, z ? b.hi.z : b.lo.z);
     direct_cand_ = cull_all_;
     cull_back_faces(corners, nc, b);
-    if (direct_cand_.size() > size_t(p_.cell_max_candidates)) return direct_rays_cands(r, l);
+    if (direct_cand_.size() > size_t(p_.cell_max_candidates)) {
+      if (!p_.cell_surfaces) return direct_rays_cands(r, l);
+      cell_surface_receivers(r, l);
+      return true;
+    }
     n_cull_decided_ += double(R.size()) * double(ln(l).size());
   }
   const size_t kp = direct_load_corners();
-  cell_levels_[0].terms.resize(kCellTermCount * kp);
+  grow_to(cell_levels_[0].terms, kCellTermCount * kp);
   cell_levels_[0].count = direct_cand_.size();
   cell_levels_[0].kp = kp;
   cell_levels_[0].tris = direct_cand_;
@@ -793,6 +875,7 @@ void Traversal::flood_closed_surface(uint32_t t0) {
 // face with p strictly in front meets s transversally at a parameter in (0, t0]: a kept
 // candidate (its box meets the shaft) that blocks s whenever F does.
 void Traversal::cull_back_faces(const Vec3f* pts, int np, const AABB& box) {
+  cull_group_.clear();
   for (const CullFace& f : cull_faces_) {
     const AABB& b = closed_[f.surface].box;
     bool drop = box.hi.x < b.lo.x || box.lo.x > b.hi.x || box.hi.y < b.lo.y || box.lo.y > b.hi.y ||
@@ -807,7 +890,54 @@ void Traversal::cull_back_faces(const Vec3f* pts, int np, const AABB& box) {
       drop = v < -bound || (v <= bound && orient3d_exact(mesh_.corner(f.t, 0), mesh_.corner(f.t, 1),
                                                          mesh_.corner(f.t, 2), pts[k]) == Sign::Negative);
     }
-    if (!drop) direct_cand_.push_back(f.t);
+    if (drop) continue;
+    direct_cand_.push_back(f.t);
+    cull_group_.emplace_back(f.surface, f.t);
+  }
+}
+
+// A culled leaf (cull_back_faces) still over cell_max_candidates, receiver by receiver:
+// the kept faces of every closed surface whose box lies certainly outside the pyramid
+// from the receiver p over the light node's box (box_outside_pyramid) are left out too.
+// Such a box holds the whole surface, so each of its faces misses every segment from p
+// into the box, and every certificate over the others holds over all of them. With at
+// most cell_surface_candidates left, p's cells (cell_receiver); else p's relations by
+// Embree rays, as the leaf's were.
+void Traversal::cell_surface_receivers(int r, int l) {
+  const TreeNode& R = rn(r);
+  const TreeNode& L = ln(l);
+  const auto& ro = rtree_->order();
+  const auto& lo = ltree_->order();
+  // The kept faces grouped by surface (cull_surfaces_: the end of each one's run).
+  std::sort(cull_group_.begin(), cull_group_.end());
+  cull_surfaces_.clear();
+  for (size_t g = 0; g < cull_group_.size(); ++g)
+    if (g + 1 == cull_group_.size() || cull_group_[g + 1].first != cull_group_[g].first) cull_surfaces_.push_back(uint32_t(g + 1));
+  for (uint32_t a = R.begin; a < R.end; ++a) {
+    const uint32_t i = ro[a];
+    const Vec3f& p = scene_.receivers[i].p;
+    const double od[3] = {double(p.x), double(p.y), double(p.z)};
+    double cd[4 * 8], pyr[16];
+    const bool use_pyr = cell_pyramid(cd, cell_corners(L.box, od, cd), pyr);
+    direct_cand_ = cull_all_;
+    for (size_t g = 0, g0 = 0; g < cull_surfaces_.size(); g0 = cull_surfaces_[g++]) {
+      const size_t g1 = cull_surfaces_[g];
+      if (use_pyr && box_outside_pyramid(closed_[cull_group_[g0].first].box, od, pyr)) continue;
+      for (size_t k = g0; k < g1; ++k) direct_cand_.push_back(cull_group_[k].second);
+    }
+    if (direct_cand_.size() > size_t(p_.cell_surface_candidates)) {
+      fan_rays(i, lo.data() + L.begin, L.size());
+      n_rays_ += double(L.size());
+      continue;
+    }
+    const size_t kp = direct_load_corners();
+    CellLevel& top = cell_levels_[0];
+    grow_to(top.terms, kCellTermCount * kp);
+    top.count = direct_cand_.size();
+    top.kp = kp;
+    top.tris = direct_cand_;
+    cell_receiver(l, i, kp);
+    n_surface_cull_decided_ += double(L.size());
   }
 }
 
@@ -815,49 +945,12 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   const auto& lo = ltree_->order();
   CellLevel& lev = cell_levels_[depth];
   const size_t kc = lev.count, kp = lev.kp;
-  // The node box's corners (one value on an axis where the box is flat).
-  const AABB& box = ln(c).box;
-  double cd[4 * 8];
-  int nc = 0;
-  if (kc > 0) {
-    const int nx = box.lo.x < box.hi.x ? 2 : 1, ny = box.lo.y < box.hi.y ? 2 : 1, nz = box.lo.z < box.hi.z ? 2 : 1;
-    for (int x = 0; x < nx; ++x)
-      for (int y = 0; y < ny; ++y)
-        for (int z = 0; z < nz; ++z) {
-          double* d = cd + 4 * nc++;
-          d[0] = double(x ? box.hi.x : box.lo.x) - od[0];
-          d[1] = double(y ? box.hi.y : box.lo.y) - od[1];
-          d[2] = double(z ? box.hi.z : box.lo.z) - od[2];
-          d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
-        }
-  }
-  // A box flat on one axis: the pyramid from p over its rectangle, side planes through
-  // p and each rectangle edge (corners in cyclic order 0, 1, 3, 2), the box's side
-  // positive. Each plane's value at a candidate vertex v is the orientation determinant
-  // (v - p).((q_k - p) x (q_k+1 - p)), computed in the operations of the direct test's
-  // w = d.(B x C), so within the same bound 48 eps |v - p| M^2 (M the larger |coordinate|
-  // of the two corners' d); a plane is oriented by the determinant at the next corner,
-  // certified the same way, and without that certificate no plane is used. A triangle
-  // whose three vertices are certainly negative for one side plane misses the pyramid,
-  // which holds every segment from p into the box (cell_classify's pyr).
-  double pyr[16];
-  bool use_pyr = kc > 0 && nc == 4;
-  for (int f = 0; f < 4 && use_pyr; ++f) {
-    static constexpr int kCyc[4] = {0, 1, 3, 2};
-    const double* d1 = cd + 4 * kCyc[f];
-    const double* d2 = cd + 4 * kCyc[(f + 1) & 3];
-    const double* d3 = cd + 4 * kCyc[(f + 2) & 3];
-    const double nx = d1[1] * d2[2] - d1[2] * d2[1], ny = d1[2] * d2[0] - d1[0] * d2[2],
-                 nz = d1[0] * d2[1] - d1[1] * d2[0];
-    const double m2 = std::max(d1[3], d2[3]) * std::max(d1[3], d2[3]);
-    const double r = d3[0] * nx + d3[1] * ny + d3[2] * nz, er = (48.0 * kEps) * d3[3] * m2;
-    const double sg = r > er ? 1.0 : r < -er ? -1.0 : 0.0;  // the next corner's side positive
-    use_pyr = sg != 0.0;
-    pyr[4 * f] = sg * nx;
-    pyr[4 * f + 1] = sg * ny;
-    pyr[4 * f + 2] = sg * nz;
-    pyr[4 * f + 3] = (48.0 * kEps) * m2;
-  }
+  // The node box's corners and, for a flat box, the pyramid over it (cell_pyramid: a
+  // triangle whose three vertices are certainly negative for one side plane misses
+  // every segment from p into the box; cell_classify's pyr).
+  double cd[4 * 8], pyr[16];
+  const int nc = kc > 0 ? cell_corners(ln(c).box, od, cd) : 0;
+  const bool use_pyr = kc > 0 && cell_pyramid(cd, nc, pyr);
   const TreeNode& Q = ln(c);
   n_cells_ += 1;
   cell_out_.resize(kp / 4);
@@ -884,7 +977,7 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   CellLevel& next = cell_levels_[depth + 1];
   CellLevel& cur = cell_levels_[depth];  // emplace_back may have moved it
   const size_t np = (mixed + 3) & ~size_t(3);
-  next.terms.resize(kCellTermCount * np);
+  grow_to(next.terms, kCellTermCount * np);
   next.count = mixed;
   next.kp = np;
   next.tris.clear();

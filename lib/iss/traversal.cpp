@@ -186,6 +186,7 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("cell_shaft_relations", n_cell_decided_);
   st.set("cell_patch_relations", n_cell_patch_decided_);
   st.set("cell_backface_relations", n_cull_decided_);
+  st.set("cell_surface_relations", n_surface_cull_decided_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
   st.set("band_triangles_extracted", n_band_extracted_);

@@ -143,6 +143,14 @@ struct Params {
   // without the faces of closed star-shaped surfaces turned strictly away from every
   // point of the receiver node's box (cull_back_faces), at most that many are left.
   bool cell_backfaces = true;
+  // A culled leaf still over cell_max_candidates takes cells receiver by receiver where,
+  // without the closed surfaces whose box lies outside the pyramid from the receiver
+  // over the light node's box, at most cell_surface_candidates are left
+  // (cell_surface_receivers). Measured on rooms at 1024 receivers (docs/log/
+  // iss-performance.md, thirteenth round): above about 96 candidates a receiver's cells
+  // cost more than its Embree rays.
+  bool cell_surfaces = true;
+  int cell_surface_candidates = 96;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -340,6 +348,7 @@ class Traversal {
   void flood_closed_surface(uint32_t t0);
   void cull_prepare();
   void cull_back_faces(const Vec3f* pts, int np, const AABB& box);
+  void cell_surface_receivers(int r, int l);
   void flood_cell_patch(uint32_t t);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
@@ -450,6 +459,11 @@ class Traversal {
   };
   std::vector<CullFace> cull_faces_;
   double n_cull_decided_ = 0;  // relations of leaves that took cells only after cull_back_faces
+  // cull_back_faces' kept faces as (surface, triangle), and for cell_surface_receivers,
+  // once sorted, the end of each surface's run.
+  std::vector<std::pair<uint32_t, uint32_t>> cull_group_;
+  std::vector<uint32_t> cull_surfaces_;
+  double n_surface_cull_decided_ = 0;  // relations of receivers that took cells only after that
   std::vector<uint8_t> cell_out_;
   std::vector<uint32_t> cell_uncertain_;  // samples of the current receiver left to Embree
   std::vector<uint32_t> direct_query_, direct_cand_;

@@ -303,3 +303,22 @@ TEST(IssLeafRays, CellBackfacesAnswerAsWithoutThemAndTheOracle) {
   };
   expect_option_cases(cases, "cell_backfaces", "cell_backface_relations", "cell_backface_relations");
 }
+
+TEST(IssLeafRays, CellSurfacesAnswerAsWithoutThemAndTheOracle) {
+  // A leaf still over cell_candidates after cell_backfaces takes cells receiver by
+  // receiver where the closed surfaces whose box lies outside the pyramid from the
+  // receiver over the light's box are left out (cell_surfaces). The same checks as for
+  // cell_backfaces: the same shafts, every relation once, no more rays, and every answer
+  // where on and off differ the exact one. Small cell_candidates make the scenes' closed
+  // surfaces exceed it after the node-box cull.
+  const std::vector<LeafCase> cases = {
+      {"rooms", -1, 256, 64, {{"cell_candidates", "64"}}},
+      {"rooms", -1, 256, 64, {{"cell_candidates", "32"}, {"cell_surface_candidates", "32"}, {"cell_depth", "16"}}},
+      {"rooms", 60000, 256, 64, {{"cell_candidates", "96"}, {"cell_surface_candidates", "192"}}},
+      {"columns", 1000, 1024, 64, {{"cell_candidates", "8"}}},
+      {"torus", -1, 256, 16, {{"cell_candidates", "8"}, {"cell_depth", "16"}}},
+      {"random-soup", -1, 256, 16, {{"cell_candidates", "8"}}},
+      {"shared-edge-fan", -1, 256, 16, {{"cell_candidates", "8"}}},
+  };
+  expect_option_cases(cases, "cell_surfaces", "cell_surface_relations", "cell_surface_relations");
+}
