@@ -413,20 +413,29 @@ __attribute__((target("avx2"))) void direct_cull_avx2(const double* box, size_t 
 #endif
 
 
-// The corners of a cell's box relative to the origin od into cd (dx, dy, dz, n = max
-// |d_i| each; one value on an axis where the box is flat); returns their count.
-int cell_corners(const AABB& box, const double* od, double* cd) {
+// The distinct corners of a box into out (one value on an axis where the box is flat, so
+// a flat box has 4); returns their count.
+int distinct_box_corners(const AABB& box, Vec3f* out) {
   const int nx = box.lo.x < box.hi.x ? 2 : 1, ny = box.lo.y < box.hi.y ? 2 : 1, nz = box.lo.z < box.hi.z ? 2 : 1;
   int nc = 0;
   for (int x = 0; x < nx; ++x)
     for (int y = 0; y < ny; ++y)
-      for (int z = 0; z < nz; ++z) {
-        double* d = cd + 4 * nc++;
-        d[0] = double(x ? box.hi.x : box.lo.x) - od[0];
-        d[1] = double(y ? box.hi.y : box.lo.y) - od[1];
-        d[2] = double(z ? box.hi.z : box.lo.z) - od[2];
-        d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
-      }
+      for (int z = 0; z < nz; ++z) out[nc++] = Vec3f(x ? box.hi.x : box.lo.x, y ? box.hi.y : box.lo.y, z ? box.hi.z : box.lo.z);
+  return nc;
+}
+
+// The corners of a cell's box (distinct_box_corners) relative to the origin od into cd
+// (dx, dy, dz, n = max |d_i| each); returns their count.
+int cell_corners(const AABB& box, const double* od, double* cd) {
+  Vec3f q[8];
+  const int nc = distinct_box_corners(box, q);
+  for (int k = 0; k < nc; ++k) {
+    double* d = cd + 4 * k;
+    d[0] = double(q[k].x) - od[0];
+    d[1] = double(q[k].y) - od[1];
+    d[2] = double(q[k].z) - od[2];
+    d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+  }
   return nc;
 }
 
@@ -744,14 +753,9 @@ bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
     // triangles are dropped all or none.
     cull_prepare();
     Vec3f corners[8];
-    int nc = 0;
-    const AABB& b = R.box;
-    const int nx = b.lo.x < b.hi.x ? 2 : 1, ny = b.lo.y < b.hi.y ? 2 : 1, nz = b.lo.z < b.hi.z ? 2 : 1;
-    for (int x = 0; x < nx; ++x)
-      for (int y = 0; y < ny; ++y)
-        for (int z = 0; z < nz; ++z) corners[nc++] = Vec3f(x ? b.hi.x : b.lo.x, y ? b.hi.y : b.lo.y, z ? b.hi.z : b.lo.z);
+    const int nc = distinct_box_corners(R.box, corners);
     direct_cand_ = cull_all_;
-    cull_back_faces(corners, nc, b);
+    cull_back_faces(corners, nc, R.box);
     if (direct_cand_.size() > size_t(p_.cell_max_candidates)) {
       if (!p_.cell_surfaces) return direct_rays_cands(r, l);
       cell_surface_receivers(r, l);

@@ -318,8 +318,8 @@ void Selection::region_surfaces() {
   AABB rbox;
   for (uint32_t i : *gs_.group) rbox.extend(scene_.receivers[i].p);
   const Light& light = scene_.lights[gs_.li];
-  select_region_surfaces(scene_.mesh, *gs_.ctx->closed, *gs_.ctx->surface_trees, gs_.cand, rbox, gs_.wcorners, gs_.nwcorners,
-                         light.polygon.data(), int(light.polygon.size()), sigma_, lf_.origin, gs_.rloc, lf_.poly,
+  select_region_surfaces(scene_.mesh, *gs_.ctx->closed, *gs_.ctx->surface_trees, gs_.cand, rbox, light.polygon.data(),
+                         int(light.polygon.size()), sigma_, lf_.origin, gs_.rloc, lf_.poly,
                          gs_.ctx->silhouette_estimate, gs_.sil, gs_.region_drop, tot_.sil);
   if (gs_.sil.surfaces.empty()) gs_.region_drop.clear();
 }

@@ -143,7 +143,6 @@ int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p
 void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key) {
   nodes.clear();
   order.clear();
-  item_boxes.clear();
   const uint32_t n = uint32_t(boxes.size());
   if (n == 0) return;
   // Stable LSD radix sort of the edges by key, 11 bits a pass.
@@ -161,27 +160,30 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
     for (uint32_t e : order) tmp[count[(key[e] >> shift) & 2047u]++] = e;
     order.swap(tmp);
   }
-  item_boxes.resize(n);
-  for (uint32_t k = 0; k < n; ++k) item_boxes[k] = boxes[order[k]];
+  // The boxes in leaf order for the node boxes, then dropped: the walks take each edge's
+  // box from its faces' corners.
+  thread_local std::vector<AABBd> leaf_boxes;
+  leaf_boxes.resize(n);
+  for (uint32_t k = 0; k < n; ++k) leaf_boxes[k] = boxes[order[k]];
   nodes.reserve(2 * (n / kLeaf) + 2);
-  build_node(0, n);
+  build_node(leaf_boxes, 0, n);
 }
 
 // Node over order[begin, end) and its subtree (left half floor(m / 2)); returns its id.
-uint32_t EdgeTree::build_node(uint32_t begin, uint32_t end) {
+uint32_t EdgeTree::build_node(const std::vector<AABBd>& leaf_boxes, uint32_t begin, uint32_t end) {
   const uint32_t id = uint32_t(nodes.size());
   nodes.emplace_back();
   nodes[id].count = end - begin;
   if (end - begin <= kLeaf) {
-    AABBd b = item_boxes[begin];
-    for (uint32_t k = begin + 1; k < end; ++k) b.extend(item_boxes[k]);
+    AABBd b = leaf_boxes[begin];
+    for (uint32_t k = begin + 1; k < end; ++k) b.extend(leaf_boxes[k]);
     nodes[id].box = b;
     nodes[id].first = begin;
     return id;
   }
   const uint32_t mid = begin + (end - begin) / 2;
-  build_node(begin, mid);
-  const uint32_t right = build_node(mid, end);
+  build_node(leaf_boxes, begin, mid);
+  const uint32_t right = build_node(leaf_boxes, mid, end);
   AABBd b = nodes[id + 1].box;
   b.extend(nodes[right].box);
   nodes[id].box = b;
@@ -272,15 +274,12 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
     }
     se.tree.build(ebox, key);
     node_normal_boxes(se.tree, unit, bad, fi0, fi1, se.node_normals);
-    // The walks take each edge's local box from its taken face's corners (the same box
-    // in any tree), never item_box: its storage goes.
-    se.tree.item_boxes = std::vector<AABBd>();
   }
 }
 
 size_t SurfaceEdges::memory_bytes() const {
   return edges.capacity() * sizeof(Edge) + tree.nodes.capacity() * sizeof(EdgeTree::Node) +
-         tree.order.capacity() * sizeof(uint32_t) + tree.item_boxes.capacity() * sizeof(AABBd) +
+         tree.order.capacity() * sizeof(uint32_t) +
          node_normals.capacity() * sizeof(AABBd);
 }
 
@@ -356,8 +355,8 @@ void SilhouetteGroup::clear() {
 }
 
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
-                            const std::vector<uint32_t>& cand, const AABB& rbox, [[maybe_unused]] const Vec3f* rcorners,
-                            [[maybe_unused]] int nrcorners, const Vec3f* light, int m, float sigma, const Vec3f& origin,
+                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* light, int m,
+                            float sigma, const Vec3f& origin,
                             const std::vector<Vec3d>& rloc, const std::vector<Vec3d>& lpoly, bool estimate,
                             SilhouetteGroup& g, std::vector<uint8_t>& drop, SilhouetteCounters& c) {
   g.clear();

@@ -69,7 +69,6 @@ struct EdgeTree {
   };
   std::vector<Node> nodes;
   std::vector<uint32_t> order;      // leaf order -> edge
-  std::vector<AABBd> item_boxes;    // leaf order
   bool empty() const { return nodes.empty(); }
   size_t node_count() const { return nodes.size(); }
   const Node& node(uint32_t i) const { return nodes[i]; }
@@ -77,12 +76,13 @@ struct EdgeTree {
   uint32_t left(uint32_t i) const { return i + 1; }
   uint32_t right(uint32_t i) const { return nodes[i].first; }
   uint32_t item(uint32_t pos) const { return order[pos]; }
-  const AABBd& item_box(uint32_t pos) const { return item_boxes[pos]; }
-  // Over boxes[e], edges ordered by key[e] (stable: equal keys in index order).
+  // Over boxes[e], edges ordered by key[e] (stable: equal keys in index order). The
+  // nodes hold the boxes; an edge's own box is not kept (the walks take it from the
+  // edge's faces).
   void build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key);
 
  private:
-  uint32_t build_node(uint32_t begin, uint32_t end);
+  uint32_t build_node(const std::vector<AABBd>& leaf_boxes, uint32_t begin, uint32_t end);
 };
 
 // Per closed surface, its edges once each, built once per solve (world coordinates, so
@@ -125,7 +125,7 @@ class SurfaceTrees {
     });
   }
   // Per input triangle of a surface its position in the surfaces' leaf orders, surface
-  // after surface (a spatial order, for the groups' edge trees).
+  // after surface (a spatial order, the surfaces' edge trees' order).
   uint32_t rank(uint32_t t) const { return rank_[t]; }
   // Surface s's edges (the groups' silhouette edges are those of their candidates).
   const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
@@ -194,9 +194,7 @@ struct SilhouetteCounters {
 bool faces_one_side(const AABBd& box, const AABBd& normals, const Vec3d& r);
 
 // Group level: fills g.surfaces and marks the shaft's candidates `cand` (sorted; `drop`
-// receives 1 for each candidate of a region surface). rbox: the receivers' world box
-// (rcorners, nrcorners: its distinct corners, unused: a face with one strict side at
-// every corner has it at every receiver, which the receivers' exact sides find);
+// receives 1 for each candidate of a region surface). rbox: the receivers' world box;
 // light: the light's float polygon; sigma: the receivers' side of its Newell plane;
 // origin: the light's local frame; trees: the surfaces' edge trees.
 // rloc: the group's receivers and lpoly the light's vertices, local. With `estimate`, a
@@ -212,8 +210,8 @@ constexpr size_t kMaxSampledEdges = 64;
 // and point tests (columns' cylinders and rooms' boxes: 1.7x and 2.9x the time).
 constexpr uint32_t kMinRegionTriangles = 1024;
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
-                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* rcorners,
-                            int nrcorners, const Vec3f* light, int m, float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
+                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* light, int m,
+                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
                             const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
                             std::vector<uint8_t>& drop, SilhouetteCounters& c);
 

@@ -84,7 +84,7 @@ TEST(PluckerSilhouetteRegion, NormalConesOnlyWhereEveryFaceAgrees) {
   EXPECT_GT(decided, 100);
 }
 
-// The groups' edge tree: its leaf order is the edges stably sorted by key, every node's
+// The surfaces' edge tree: its leaf order is the edges stably sorted by key, every node's
 // box holds its items' boxes, and a walk pruned by box overlap finds exactly the edges
 // whose own box meets the query (against a scan of every edge).
 TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
@@ -115,10 +115,7 @@ TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
     for (uint32_t i = 0; i < tree.node_count(); ++i) {
       const auto& nd = tree.node(i);
       if (tree.is_leaf(nd)) {
-        for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
-          ASSERT_TRUE(holds(nd.box, tree.item_box(k)));
-          ASSERT_EQ(tree.item_box(k).lo, boxes[tree.item(k)].lo);
-        }
+        for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) ASSERT_TRUE(holds(nd.box, boxes[tree.item(k)]));
       } else {
         ASSERT_EQ(tree.node(tree.left(i)).count + tree.node(tree.right(i)).count, nd.count);
         ASSERT_TRUE(holds(nd.box, tree.node(tree.left(i)).box));
@@ -145,7 +142,7 @@ TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
           continue;
         }
         for (uint32_t k = nd.first; k < nd.first + nd.count; ++k)
-          if (meets(tree.item_box(k))) found.push_back(tree.item(k));
+          if (meets(boxes[tree.item(k)])) found.push_back(tree.item(k));
       }
       for (uint32_t e = 0; e < n; ++e)
         if (meets(boxes[e])) want.push_back(e);
