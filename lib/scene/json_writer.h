@@ -1,4 +1,4 @@
-// Streaming JSON text for the big answer files (results, region oracles): appends
+// Streaming JSON text for big answer files (visgate solve's results): appends
 // straight into one string instead of building an nlohmann document and dumping it. The
 // caller writes the structure (braces, commas, keys that need no escaping) as raw text;
 // every scalar and every key that may need escaping goes through nlohmann's own
