@@ -333,22 +333,13 @@ int SurfaceTrees::segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f
     }
     return true;
   };
-  std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
-  size_t top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const uint32_t i = stack[--top];
-    const auto& nd = bvh.node(i);
-    if (!meets_box(nd.box)) continue;
-    if (!bvh.is_leaf(nd)) {
-      stack[top++] = bvh.left(i);
-      stack[top++] = bvh.right(i);
-      continue;
-    }
-    for (uint32_t item : bvh.leaf_items(nd))
-      if (const int m = triangle_meets(mesh, tris_[size_t(s)][item], r, p); m != 0) return m;
-  }
-  return 0;
+  int m = 0;
+  visit(s, [&](const AABB& b, bool) { return meets_box(b); },
+        [&](uint32_t t) {
+          m = triangle_meets(mesh, t, r, p);
+          return m != 0;
+        });
+  return m;
 }
 
 int SurfaceTrees::triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p) {

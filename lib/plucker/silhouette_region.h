@@ -120,6 +120,23 @@ class SurfaceTrees {
   // world) may_meet(box, leaf) accepts.
   template <class Pred, class F>
   void for_each(int32_t s, Pred&& may_meet, F&& f) const {
+    visit(s, may_meet, [&](uint32_t t) {
+      f(t);
+      return false;
+    });
+  }
+  // Per input triangle of a surface its position in the surfaces' leaf orders, surface
+  // after surface (a spatial order, the surfaces' edge trees' order).
+  uint32_t rank(uint32_t t) const { return rank_[t]; }
+  // Surface s's edges (the groups' silhouette edges are those of their candidates).
+  const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
+  size_t memory_bytes() const;
+
+ private:
+  // f(t) for the triangles of surface s in the leaves reached through nodes that
+  // enter(box, leaf) accepts, in the tree's order, until f returns true.
+  template <class Enter, class F>
+  void visit(int32_t s, Enter&& enter, F&& f) const {
     const std::vector<uint32_t>& tris = tris_[size_t(s)];
     const accel::Bvh<float>& bvh = bvh_[size_t(s)];
     if (bvh.empty()) return;
@@ -130,23 +147,17 @@ class SurfaceTrees {
       const uint32_t i = stack[--top];
       const auto& nd = bvh.node(i);
       const bool leaf = bvh.is_leaf(nd);
-      if (!may_meet(nd.box, leaf)) continue;
+      if (!enter(nd.box, leaf)) continue;
       if (leaf) {
-        for (uint32_t item : bvh.leaf_items(nd)) f(tris[item]);
+        for (uint32_t item : bvh.leaf_items(nd))
+          if (f(tris[item])) return;
         continue;
       }
       stack[top++] = bvh.left(i);
       stack[top++] = bvh.right(i);
     }
   }
-  // Per input triangle of a surface its position in the surfaces' leaf orders, surface
-  // after surface (a spatial order, the surfaces' edge trees' order).
-  uint32_t rank(uint32_t t) const { return rank_[t]; }
-  // Surface s's edges (the groups' silhouette edges are those of their candidates).
-  const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
-  size_t memory_bytes() const;
 
- private:
   std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
   std::vector<std::vector<uint32_t>> tris_;     // per surface: its input triangles
   std::vector<uint32_t> rank_;                  // per input triangle (0 off the surfaces)
