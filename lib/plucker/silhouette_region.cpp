@@ -145,13 +145,24 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
   order.clear();
   const uint32_t n = uint32_t(boxes.size());
   if (n == 0) return;
+  order.resize(n);
+  for (uint32_t e = 0; e < n; ++e) order[e] = e;
+  nodes.reserve(2 * (n / kLeaf) + 2);
+  // Keys already in order (SurfaceTrees gives the edges in rank order): the identity is
+  // the stable order and boxes the leaf order.
+  uint32_t top = 0;
+  bool sorted = true;
+  for (uint32_t e = 0; e < n; ++e) {
+    top = std::max(top, key[e]);
+    sorted = sorted && (e == 0 || key[e - 1] <= key[e]);
+  }
+  if (sorted) {
+    build_node(boxes, 0, n);
+    return;
+  }
   // Stable LSD radix sort of the edges by key, 11 bits a pass.
   thread_local std::vector<uint32_t> tmp;
   thread_local std::vector<uint32_t> count;
-  order.resize(n);
-  for (uint32_t e = 0; e < n; ++e) order[e] = e;
-  uint32_t top = 0;
-  for (uint32_t k : key) top = std::max(top, k);
   tmp.resize(n);
   for (int shift = 0; shift < 32 && (top >> shift) != 0; shift += 11) {
     count.assign(2049, 0u);
@@ -165,7 +176,6 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
   thread_local std::vector<AABBd> leaf_boxes;
   leaf_boxes.resize(n);
   for (uint32_t k = 0; k < n; ++k) leaf_boxes[k] = boxes[order[k]];
-  nodes.reserve(2 * (n / kLeaf) + 2);
   build_node(leaf_boxes, 0, n);
 }
 
@@ -243,7 +253,10 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
         if (cs.neighbors(t)[size_t(j)] == int32_t(u) && m-- == 0) return j;
       return 3;
     };
-    for (uint32_t t : tris) {
+    // The triangles in rank order (the tree's leaf order), so the edges come in the
+    // order of their key and the tree's stable sort leaves them in place.
+    for (uint32_t item : bvh_[s].order()) {
+      const uint32_t t = tris[item];
       const std::array<int32_t, 3>& nb = cs.neighbors(t);
       for (int k = 0; k < 3; ++k) {
         if (nb[size_t(k)] < 0) continue;
@@ -320,22 +333,13 @@ int SurfaceTrees::segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f
     }
     return true;
   };
-  std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
-  size_t top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const uint32_t i = stack[--top];
-    const auto& nd = bvh.node(i);
-    if (!meets_box(nd.box)) continue;
-    if (!bvh.is_leaf(nd)) {
-      stack[top++] = bvh.left(i);
-      stack[top++] = bvh.right(i);
-      continue;
-    }
-    for (uint32_t item : bvh.leaf_items(nd))
-      if (const int m = triangle_meets(mesh, tris_[size_t(s)][item], r, p); m != 0) return m;
-  }
-  return 0;
+  int m = 0;
+  visit(s, [&](const AABB& b, bool) { return meets_box(b); },
+        [&](uint32_t t) {
+          m = triangle_meets(mesh, t, r, p);
+          return m != 0;
+        });
+  return m;
 }
 
 int SurfaceTrees::triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p) {
@@ -716,13 +720,18 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     // A node is entered only when the shadow box of its box's corners (that of every
     // triangle in it: the central projection of a convex set is the hull of its corners'
     // projections, shadow_box's margin covering it as any polygon's) holds an open point.
+    // A leaf passes on the pyramid test alone: its triangles' own shadow boxes decide,
+    // which cost less than the box's eight corners; a triangle the walk reaches only so
+    // meets no point's segment (that point lies in its shadow, so in the leaf box's) and
+    // gives 0 (or -1 with r, p and it in one plane: undecided, shaded exactly).
     for (size_t si = 0; si < g.surfaces.size() && open > 0; ++si)
       trees.for_each(
           g.surfaces[si],
-          [&](const AABB& b) {
+          [&](const AABB& b, bool leaf) {
             if (open == 0) return false;
             const AABBd lb = local_box(b);
             if (box_outside(lb)) return false;
+            if (leaf) return true;
             Vec3d q[8];
             for (int k = 0; k < 8; ++k)
               q[k] = Vec3d((k & 1) ? lb.hi.x : lb.lo.x, (k & 2) ? lb.hi.y : lb.lo.y, (k & 4) ? lb.hi.z : lb.lo.z);

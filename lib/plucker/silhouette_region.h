@@ -38,6 +38,7 @@
 // every other subtraction; every classification is exact.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -115,13 +116,13 @@ class SurfaceTrees {
   int segment_meets(int32_t s, const TriangleSoup& mesh, const Vec3f& r, const SumPoint& p, const Vec3d& pd) const;
   // The same for one triangle t.
   static int triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec3f& r, const SumPoint& p);
-  // f(t) for every triangle of surface s in a leaf reached through boxes (float, world)
-  // that may_meet accepts.
+  // f(t) for every triangle of surface s in a leaf reached through nodes whose box (float,
+  // world) may_meet(box, leaf) accepts.
   template <class Pred, class F>
   void for_each(int32_t s, Pred&& may_meet, F&& f) const {
-    const std::vector<uint32_t>& tris = tris_[size_t(s)];
-    bvh_[size_t(s)].for_each_leaf(may_meet, [&](const accel::Bvh<float>::Node& nd) {
-      for (uint32_t item : bvh_[size_t(s)].leaf_items(nd)) f(tris[item]);
+    visit(s, may_meet, [&](uint32_t t) {
+      f(t);
+      return false;
     });
   }
   // Per input triangle of a surface its position in the surfaces' leaf orders, surface
@@ -132,6 +133,31 @@ class SurfaceTrees {
   size_t memory_bytes() const;
 
  private:
+  // f(t) for the triangles of surface s in the leaves reached through nodes that
+  // enter(box, leaf) accepts, in the tree's order, until f returns true.
+  template <class Enter, class F>
+  void visit(int32_t s, Enter&& enter, F&& f) const {
+    const std::vector<uint32_t>& tris = tris_[size_t(s)];
+    const accel::Bvh<float>& bvh = bvh_[size_t(s)];
+    if (bvh.empty()) return;
+    std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
+    size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const uint32_t i = stack[--top];
+      const auto& nd = bvh.node(i);
+      const bool leaf = bvh.is_leaf(nd);
+      if (!enter(nd.box, leaf)) continue;
+      if (leaf) {
+        for (uint32_t item : bvh.leaf_items(nd))
+          if (f(tris[item])) return;
+        continue;
+      }
+      stack[top++] = bvh.left(i);
+      stack[top++] = bvh.right(i);
+    }
+  }
+
   std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
   std::vector<std::vector<uint32_t>> tris_;     // per surface: its input triangles
   std::vector<uint32_t> rank_;                  // per input triangle (0 off the surfaces)
