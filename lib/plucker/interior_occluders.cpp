@@ -9,6 +9,7 @@
 
 #include "lib/accel/bvh.h"
 #include "lib/geom/predicates.h"
+#include "lib/plucker/silhouette_region.h"
 
 namespace visgate::plucker {
 
@@ -486,29 +487,41 @@ bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3
   return false;
 }
 
-InteriorOccluders::InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra) {
-  std::vector<std::vector<uint32_t>> tris(cs.count());
-  for (uint32_t t = 0; t < scene.mesh.size(); ++t)
-    if (const int32_t s = cs.surface(t); s >= 0) tris[size_t(s)].push_back(t);
+InteriorOccluders::InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra,
+                                     const SurfaceTrees* trees) {
+  // Per surface large enough, its triangles and the hierarchy over their boxes (Builder):
+  // trees' when given (SurfaceTrees builds them with these boxes and this rule).
+  std::vector<std::vector<uint32_t>> own_tris;
+  std::vector<accel::Bvh<float>> own_bvhs;
+  if (!trees) {
+    own_tris.resize(cs.count());
+    for (uint32_t t = 0; t < scene.mesh.size(); ++t)
+      if (const int32_t s = cs.surface(t); s >= 0) own_tris[size_t(s)].push_back(t);
+    own_bvhs.resize(cs.count());
+    for (size_t s = 0; s < cs.count(); ++s) {
+      if (own_tris[s].size() < kMinTriangles) continue;
+      std::vector<AABB> boxes(own_tris[s].size());
+      for (size_t i = 0; i < own_tris[s].size(); ++i)
+        for (int k = 0; k < 3; ++k) boxes[i].extend(scene.mesh.corner(own_tris[s][i], k));
+      own_bvhs[s] = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
+    }
+  }
+  const auto tris_of = [&](size_t s) -> const std::vector<uint32_t>& {
+    return trees ? trees->triangles(int32_t(s)) : own_tris[s];
+  };
+  const auto bvh_of = [&](size_t s) -> const accel::Bvh<float>& {
+    return trees ? trees->hierarchy(int32_t(s)) : own_bvhs[s];
+  };
   light_begin_.push_back(0);
   std::vector<Vec3f> q;
-  // Per surface large enough, the hierarchy over its triangles' boxes (Builder).
-  std::vector<accel::Bvh<float>> bvhs(cs.count());
-  for (size_t s = 0; s < cs.count(); ++s) {
-    if (tris[s].size() < kMinTriangles) continue;
-    std::vector<AABB> boxes(tris[s].size());
-    for (size_t i = 0; i < tris[s].size(); ++i)
-      for (int k = 0; k < 3; ++k) boxes[i].extend(scene.mesh.corner(tris[s][i], k));
-    bvhs[s] = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
-  }
   for (uint32_t li = 0; li < scene.lights.size(); ++li) {
     Vec3d lc(0, 0, 0);
     for (const Vec3f& v : scene.lights[li].polygon) lc = lc + to_double(v);
     lc = lc / double(scene.lights[li].polygon.size());
     for (size_t s = 0; s < cs.count(); ++s) {
-      if (tris[s].size() < kMinTriangles) continue;
+      if (tris_of(s).size() < kMinTriangles) continue;
       const AABB& box = cs.box(int32_t(s));
-      Builder b(scene.mesh, tris[s], bvhs[s], box);
+      Builder b(scene.mesh, tris_of(s), bvh_of(s), box);
       const Vec3d dir = lc - (to_double(box.lo) + to_double(box.hi)) * 0.5;
       std::vector<std::vector<std::array<double, 2>>> shadow;
       std::vector<std::vector<Vec3f>> more;

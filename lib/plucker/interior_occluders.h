@@ -40,6 +40,8 @@
 
 namespace visgate::plucker {
 
+class SurfaceTrees;
+
 class InteriorOccluders {
  public:
   static constexpr uint32_t kMinTriangles = 256;
@@ -50,7 +52,10 @@ class InteriorOccluders {
   // cross-sections leave the first polygon's projection (a non-convex solid: ears,
   // limbs, folds); 0: one polygon as before.
   static constexpr size_t kDefaultExtra = 24;
-  InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra = kDefaultExtra);
+  // `trees`: when given, its per-surface triangle hierarchies are walked instead of
+  // building the same ones again (the same boxes and rule, so the same polygons).
+  InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra = kDefaultExtra,
+                    const SurfaceTrees* trees = nullptr);
 
   struct Entry {
     int32_t surface;

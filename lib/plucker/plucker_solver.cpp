@@ -250,21 +250,6 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     closed_charge.set(closed->memory_bytes());
     if (closed->count() > 0) ctx.closed = &*closed;
   }
-  // Interior occluders of the closed surfaces (interior_occluders.h), once per solve.
-  std::optional<InteriorOccluders> interior;
-  MemoryCharge interior_charge;
-  if (ctx.closed && opt.get_bool("interior", true)) {
-    tt = Clock::now();
-    interior.emplace(scene, *closed, size_t(std::max(0L, opt.get_int("interior_extra", long(InteriorOccluders::kDefaultExtra)))));
-    tree_s += seconds_since(tt);
-    memory.change(int64_t(interior->memory_bytes()));
-    interior_charge.bind(&budget, "interior occluders");
-    interior_charge.set(interior->memory_bytes());
-    if (!interior->entries().empty()) ctx.interior = &*interior;
-  }
-  ctx.cover_nodes = opt.get_bool("cover_nodes", true);
-  ctx.near_merge = opt.get_bool("near_merge", true);
-  ctx.closed_near = opt.get_bool("closed_near", true);
   // Per closed surface a hierarchy for the silhouette regions' segment tests, once per solve.
   std::optional<SurfaceTrees> surface_trees;
   MemoryCharge surface_charge;
@@ -279,6 +264,23 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     surface_charge.set(surface_trees->memory_bytes());
     ctx.surface_trees = &*surface_trees;
   }
+  // Interior occluders of the closed surfaces (interior_occluders.h), once per solve, on the
+  // surface trees' triangle hierarchies when they exist.
+  std::optional<InteriorOccluders> interior;
+  MemoryCharge interior_charge;
+  if (ctx.closed && opt.get_bool("interior", true)) {
+    tt = Clock::now();
+    interior.emplace(scene, *closed, size_t(std::max(0L, opt.get_int("interior_extra", long(InteriorOccluders::kDefaultExtra)))),
+                     surface_trees ? &*surface_trees : nullptr);
+    tree_s += seconds_since(tt);
+    memory.change(int64_t(interior->memory_bytes()));
+    interior_charge.bind(&budget, "interior occluders");
+    interior_charge.set(interior->memory_bytes());
+    if (!interior->entries().empty()) ctx.interior = &*interior;
+  }
+  ctx.cover_nodes = opt.get_bool("cover_nodes", true);
+  ctx.near_merge = opt.get_bool("near_merge", true);
+  ctx.closed_near = opt.get_bool("closed_near", true);
   if (tile <= 0) tile = default_tile(scene, ctx.closed, ctx.interior);
   auto groups = receiver_groups(scene, tile);
   AABB rbox_all;

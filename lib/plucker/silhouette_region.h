@@ -130,6 +130,10 @@ class SurfaceTrees {
   uint32_t rank(uint32_t t) const { return rank_[t]; }
   // Surface s's edges (the groups' silhouette edges are those of their candidates).
   const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
+  // Surface s's input triangles (ascending) and the hierarchy over their boxes (items
+  // index triangles(s); MedianAxis, leaves of 4): InteriorOccluders walks the same one.
+  const std::vector<uint32_t>& triangles(int32_t s) const { return tris_[size_t(s)]; }
+  const accel::Bvh<float>& hierarchy(int32_t s) const { return bvh_[size_t(s)]; }
   size_t memory_bytes() const;
 
  private:

@@ -9,9 +9,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "lib/geom/predicates.h"
 #include "lib/plucker/plucker_solver.h"
+#include "lib/plucker/silhouette_region.h"
 #include "lib/scene/rng.h"
 #include "tests/support/plucker_scenes.h"
 
@@ -120,6 +122,38 @@ TEST(PluckerInteriorOccluders, ScanPolygonsArePlanarConvexAndInside) {
     for (size_t k = 0; k < a.size(); ++k) EXPECT_EQ(to_double(a[k]), to_double(b[k]));
   }
   expect_polygons_inside(*s, cs, io);
+}
+
+// The same polygons whether InteriorOccluders builds its own triangle hierarchies or walks
+// SurfaceTrees' (the solver's default): scan, and a torus beside a sphere (two surfaces
+// with polygons) with further polygons; each also passes the independent inside checks.
+TEST(PluckerInteriorOccluders, SurfaceTreesHierarchiesGiveTheSamePolygons) {
+  auto scan = family_scene("scan", 3, 3000, 16, 4);
+  ASSERT_TRUE(scan.ok());
+  Scene two = light_scene(receiver_square(4, -1.3f, 0.5f), 8, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_torus(two.mesh, Vec3d(-0.5, 0, 1.2), 0.5, 0.2, 48, 24);
+  shapes::add_sphere(two.mesh, Vec3d(0.9, 0.1, 1.0), 0.3, 40, 20);
+  ASSERT_TRUE(finish_scene(two).ok());
+  for (const Scene* s : {&*scan, &two}) {
+    const plucker::ClosedSurfaces cs(s->mesh);
+    const plucker::SurfaceTrees trees(s->mesh, cs);
+    const plucker::InteriorOccluders own(*s, cs), shared(*s, cs, plucker::InteriorOccluders::kDefaultExtra, &trees);
+    ASSERT_GE(own.entries().size(), s->lights.size());
+    ASSERT_EQ(own.entries().size(), shared.entries().size());
+    std::set<int32_t> surfaces;
+    for (const auto& e : own.entries()) surfaces.insert(e.surface);
+    EXPECT_EQ(surfaces.size(), s == &two ? 2u : 1u);
+    for (size_t i = 0; i < own.entries().size(); ++i) {
+      const auto& a = own.entries()[i];
+      const auto& b = shared.entries()[i];
+      EXPECT_EQ(a.surface, b.surface);
+      EXPECT_EQ(a.light, b.light);
+      const auto pa = own.polygon(a), pb = shared.polygon(b);
+      ASSERT_EQ(pa.size(), pb.size()) << i;
+      for (size_t k = 0; k < pa.size(); ++k) EXPECT_EQ(to_double(pa[k]), to_double(pb[k])) << i << " " << k;
+    }
+    expect_polygons_inside(*s, cs, shared);
+  }
 }
 
 // A torus under the light: its centre (the box's) is in the hole, so the first polygon
