@@ -586,11 +586,10 @@ bool ReceiverShading::subtract_merged(const NearPoly& np, uint32_t k, int side_r
         const int32_t k2 = gs_.near_of_tri[size_t(nb)];
         if (k2 <= int32_t(k) || gs_.near_done[size_t(k2)] == serial_) continue;
         const NearPoly& b2 = gs_.near[size_t(k2)];
-        if (!whole(b2)) continue;
-        int jb = -1;  // B's edge b -> a
+        int jb = -1;  // B's edge b -> a (first: the owner's other neighbours fail it, mostly at one compare)
         for (int j = 0; j < 3; ++j)
           if (b2.t[j] == b && b2.t[(j + 1) % 3] == a) jb = j;
-        if (jb < 0) continue;
+        if (jb < 0 || !whole(b2)) continue;
         const Vec3d& d = b2.t[(jb + 2) % 3];
         if (!vertex_ok(d)) continue;
         const Vec3d &prev = poly[(i + n - 1) % n], &next = poly[(i + 2) % n];
