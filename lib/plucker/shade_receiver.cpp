@@ -71,6 +71,29 @@ std::vector<uint8_t>& cover_hint() {
   return h;
 }
 
+// det[x - p, a - p, b - p] strictly positive as side_sign (lines.h) decides it: (x - base)
+// . N > dot_err(x - base, N, err), base = nearest_base(p, a, b, x), with w_i = err_i + 8
+// u_d |N_i| (dot_err's weights, given). The same operations in the same order, so the
+// same answer, with the difference to the base taken from nearest_base's three 1-norms
+// instead of computed again, and the bound (>= 0) left out for a value not above 0.
+[[gnu::always_inline]] inline bool plane_positive(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& x,
+                                                  const Vec3d& nrm, const Vec3d& w) {
+  const Vec3d dp = x - p, da = x - a, db = x - b;
+  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
+  const double np = n1(dp), na = n1(da), nb = n1(db);
+  const Vec3d& d = (np <= na && np <= nb) ? dp : (na <= nb ? da : db);
+  const double s = dot(d, nrm);
+  if (!(s > 0.0)) return false;
+  return s > std::abs(d.x) * w.x + std::abs(d.y) * w.y + std::abs(d.z) * w.z;
+}
+
+// dot_err's weights (lines.h) of a plane's error bound err and normal nrm: w_i = err_i +
+// 8 u_d |nrm_i|, each as dot_err computes it.
+inline Vec3d dot_err_weights(const Vec3d& nrm, const Vec3d& err) {
+  constexpr double k = 8.0 * kUnitRoundoffD;
+  return Vec3d(err.x + k * std::abs(nrm.x), err.y + k * std::abs(nrm.y), err.z + k * std::abs(nrm.z));
+}
+
 class ReceiverShading {
  public:
   ReceiverShading(GroupState& gs, LazyBsp& bsp, size_t gk, BspCounters& near_counters, Totals& tot)
@@ -253,7 +276,7 @@ void ReceiverShading::cover_planes() {
     for (int m = 0; m < o.n; ++m) {
       Vec3d err;
       gs_.cover_n.push_back(edge_plane_normal_err(r_, o.v[m], o.v[(m + 1) % o.n], err));
-      gs_.cover_err.push_back(err);
+      gs_.cover_err.push_back(dot_err_weights(gs_.cover_n.back(), err));  // covered() reads the weights
     }
   }
 }
@@ -280,11 +303,9 @@ bool ReceiverShading::covered(const NearPoly& np) {
     for (int mi = 0; mi < o.n && all; ++mi) {
       const int m = (hint + mi) % o.n;
       const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
-      const Vec3d& err = gs_.cover_err[e + size_t(m)];
-      for (int k = 0; k < 3 && all; ++k) {
-        const Vec3d d = np.t[k] - nearest_base(r_, o.v[m], o.v[(m + 1) % o.n], np.t[k]);
-        all = dot(d, nrm) > dot_err(d, nrm, err);
-      }
+      const Vec3d& w = gs_.cover_err[e + size_t(m)];
+      const Vec3d &a = o.v[m], &b = o.v[m + 1 == o.n ? 0 : m + 1];
+      for (int k = 0; k < 3 && all; ++k) all = plane_positive(r_, a, b, np.t[k], nrm, w);
       if (!all) hint = uint8_t(m);
     }
     if (all) {
@@ -565,11 +586,10 @@ bool ReceiverShading::subtract_merged(const NearPoly& np, uint32_t k, int side_r
         const int32_t k2 = gs_.near_of_tri[size_t(nb)];
         if (k2 <= int32_t(k) || gs_.near_done[size_t(k2)] == serial_) continue;
         const NearPoly& b2 = gs_.near[size_t(k2)];
-        if (!whole(b2)) continue;
-        int jb = -1;  // B's edge b -> a
+        int jb = -1;  // B's edge b -> a (first: the owner's other neighbours fail it, mostly at one compare)
         for (int j = 0; j < 3; ++j)
           if (b2.t[j] == b && b2.t[(j + 1) % 3] == a) jb = j;
-        if (jb < 0) continue;
+        if (jb < 0 || !whole(b2)) continue;
         const Vec3d& d = b2.t[(jb + 2) % 3];
         if (!vertex_ok(d)) continue;
         const Vec3d &prev = poly[(i + n - 1) % n], &next = poly[(i + 2) % n];

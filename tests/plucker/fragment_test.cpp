@@ -201,6 +201,54 @@ TEST(PluckerFragment, UVBoxOfIsTheScalarMinAndMax) {
   }
 }
 
+TEST(PluckerFragment, ClassifyAndSplitTakeTheScalarDotsSigns) {
+  // classify_fragment and split_fragment (their values two lanes at a time where SSE2 is
+  // there) give the answer of the scalar values dot(x - base, n) against the bound, with
+  // bounds equal to some vertex's |value| (a tie stays within the bound), vertices on
+  // the base, and values of both signs; a split's pieces take each vertex of value >= 0
+  // (<= 0) and one crossing per strict sign change.
+  Rng rng(93);
+  std::vector<Vec3d> pos, neg;
+  int both = 0, ties = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    NodePlane pl;
+    const double sc = std::pow(10.0, rng.uniform(-3, 3));
+    pl.base = Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * sc;
+    pl.n = Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    std::vector<Vec3d> poly(rng.below(9));
+    for (Vec3d& p : poly)
+      p = rng.below(6) == 0 ? pl.base : pl.base + Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * sc;
+    std::vector<double> val(poly.size());
+    for (size_t k = 0; k < poly.size(); ++k) val[k] = dot(poly[k] - pl.base, pl.n);
+    pl.bound = poly.empty() || trial % 3 == 0 ? sc * rng.uniform(0, 0.3) : std::abs(val[rng.below(poly.size())]);
+    int cpos = 0, cneg = 0;
+    for (double& v : val) {
+      if (v > pl.bound) ++cpos;
+      else if (v < -pl.bound) ++cneg;
+      else ties += v != 0.0, v = 0.0;
+    }
+    const SplitResult want = cpos == 0 && cneg == 0 ? SplitResult::ZeroArea
+                             : cneg == 0            ? SplitResult::Positive
+                             : cpos == 0            ? SplitResult::Negative
+                                                    : SplitResult::Both;
+    EXPECT_EQ(classify_fragment(pl, poly.data(), int(poly.size())), want) << trial;
+    ASSERT_EQ(split_fragment(pl, poly.data(), int(poly.size()), pos, neg), want) << trial;
+    if (want != SplitResult::Both) continue;
+    ++both;
+    int np = 0, nn = 0;
+    for (size_t k = 0; k < val.size(); ++k) {
+      const double s0 = val[k], s1 = val[(k + 1) % val.size()];
+      const int cross = (s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0);
+      np += (s0 >= 0.0) + cross;
+      nn += (s0 <= 0.0) + cross;
+    }
+    EXPECT_EQ(pos.size(), size_t(np >= 3 ? np : 0)) << trial;
+    EXPECT_EQ(neg.size(), size_t(nn >= 3 ? nn : 0)) << trial;
+  }
+  EXPECT_GT(both, 500);
+  EXPECT_GT(ties, 500);
+}
+
 TEST(PluckerFragment, ShadowBoxIsThePerVertexForm) {
   // shadow_box takes only the two coordinates of each projected vertex and divides the
   // largest spread once: the same floats as projecting the whole vertex and dividing
