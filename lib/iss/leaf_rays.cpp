@@ -1046,9 +1046,11 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   // A light-tree leaf left mixed: each relation by the direct test against the mixed
   // candidates (the others miss every segment into the leaf's box), Embree where the
   // test cannot certify. With cell_groups, a node of more than cell_group_samples
-  // samples first takes a cell at each group of them (cell_group).
+  // samples with at most cell_group_candidates mixed candidates first takes a cell at
+  // each group of that many samples (cell_group).
   const TreeNode& QL = ln(c);
-  if (!p_.cell_groups || QL.size() <= uint32_t(p_.cell_group_samples)) {
+  if (!p_.cell_groups || QL.size() <= uint32_t(p_.cell_group_samples) ||
+      mixed > size_t(p_.cell_group_candidates)) {
     cell_direct(next, lo.data() + QL.begin, QL.size(), od, prefix, i);
     return;
   }

@@ -151,15 +151,17 @@ struct Params {
   // cost more than its Embree rays.
   bool cell_surfaces = true;
   int cell_surface_candidates = 96;
-  // A cell left mixed over more than cell_group_samples samples takes a cell at each
-  // group of that many (cell_group) before the direct test; groups above
-  // cell_group_min samples left mixed take cells at their halves. Measured on rooms at
-  // 1024 receivers (docs/log/iss-performance.md, fourteenth round): groups of 16 decide
-  // a third of the mixed cells' relations for +0.6% instructions; groups of 8 or 4, or
-  // halves, cost more than the direct test they replace.
+  // A cell left mixed over more than cell_group_samples samples with at most
+  // cell_group_candidates mixed candidates takes a cell at each group of that many
+  // samples (cell_group) before the direct test; groups above cell_group_min samples
+  // left mixed take cells at their halves. Measured on rooms at 1024 receivers
+  // (docs/log/iss-performance.md, fourteenth round): groups of 16 on at most 24
+  // candidates cost less than the direct test they replace; on more candidates, or
+  // groups of 8 or 4, or halves, more.
   bool cell_groups = true;
   int cell_group_samples = 16;
   int cell_group_min = 16;
+  int cell_group_candidates = 24;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes

@@ -308,11 +308,11 @@ TEST(IssLeafRays, CellGroupsAnswerAsWithoutThemAndTheOracle) {
   // A cell left mixed takes cells at groups of its samples (cell_groups) before the
   // direct test. It changes only how a cell's relations are decided: the same shafts,
   // every relation once, no more rays, and every answer where on and off differ the
-  // exact one. Small groups and halves down to one sample (cell_group_min 1), a group
-  // size that does not divide the light's samples, and groups below cells of cell_depth
-  // reach the other paths.
+  // exact one. Small groups and halves down to one sample (cell_group_min 1) on every
+  // mixed cell, a group size that does not divide the light's samples, and groups below
+  // cells of cell_depth reach the other paths.
   const std::map<std::string, std::string> small = {
-      {"cell_group_samples", "4"}, {"cell_group_min", "1"}, {"cell_candidates", "64"}};
+      {"cell_group_samples", "4"}, {"cell_group_min", "1"}, {"cell_group_candidates", "1024"}, {"cell_candidates", "64"}};
   const std::vector<LeafCase> cases = {
       {"rooms", -1, 256, 64, {}},
       {"rooms", -1, 256, 64, small},
