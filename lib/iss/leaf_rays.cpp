@@ -236,17 +236,25 @@ struct CellLanes {
   }
 };
 
-template <class Lanes>
+// kSide false (cell_pairs): without the side-of-plane miss, only the w pairs and the
+// block, for the sample groups of cell_group, where the side test decided nothing more
+// on rooms and cost about half of the test.
+template <class Lanes, bool kSide = true>
 __attribute__((always_inline)) inline bool cell_classify_body(const double* t, size_t kp, const double* d, int nc,
                                                               const double* pyr, uint8_t* out) {
   for (size_t k = 0; k < kp; k += 4) {
     CellLanes L(t, kp, k);
-    M4 side = L.apos;
+    M4 side = kSide ? L.apos : ~L.apos;
     // First the misses (the common answer, and all that most candidates need).
     for (int c = 0; c < nc; ++c) {
-      M4 same, beyond;
-      L.step(d, c, same, beyond);
-      side &= same;
+      if constexpr (kSide) {
+        M4 same, beyond;
+        L.step(d, c, same, beyond);
+        side &= same;
+      } else {
+        L.at(d, c);
+        L.keep_signs();
+      }
     }
     M4 miss = (L.apos & (L.bneg | L.cneg)) | (L.bpos & (L.aneg | L.cneg)) | (L.cpos & (L.aneg | L.bneg)) | side;
     if (pyr && !Lanes::all(miss)) {
@@ -307,6 +315,9 @@ void cell_patch_flags_default(const double* t, size_t kp, const double* d, int n
 bool cell_classify_default(const double* t, size_t kp, const double* d, int nc, const double* pyr, uint8_t* out) {
   return cell_classify_body<LanesDefault>(t, kp, d, nc, pyr, out);
 }
+bool cell_pairs_default(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
+  return cell_classify_body<LanesDefault, false>(t, kp, d, nc, nullptr, out);
+}
 
 void direct_terms_default(const double* c, size_t kp, const double* p, double* t) {
   direct_terms_body<false>(c, kp, p, t);
@@ -332,6 +343,10 @@ __attribute__((target("avx2"), flatten)) void direct_classify_avx2(const double*
 __attribute__((target("avx2"), flatten)) bool cell_classify_avx2(const double* t, size_t kp, const double* d, int nc,
                                                                   const double* pyr, uint8_t* out) {
   return cell_classify_body<LanesAvx2>(t, kp, d, nc, pyr, out);
+}
+__attribute__((target("avx2"), flatten)) bool cell_pairs_avx2(const double* t, size_t kp, const double* d, int nc,
+                                                               uint8_t* out) {
+  return cell_classify_body<LanesAvx2, false>(t, kp, d, nc, nullptr, out);
 }
 __attribute__((target("avx2"))) void cell_patch_flags_avx2(const double* t, size_t kp, const double* d, int nc,
                                                             uint8_t* out) {
@@ -372,6 +387,14 @@ bool cell_classify(const double* t, size_t kp, const double* d, int nc, const do
   if (have_avx2()) return cell_classify_avx2(t, kp, d, nc, pyr, out);
 #endif
   return cell_classify_default(t, kp, d, nc, pyr, out);
+}
+
+// cell_classify without the pyramid and the side-of-plane miss.
+bool cell_pairs(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_pairs_avx2(t, kp, d, nc, out);
+#endif
+  return cell_pairs_default(t, kp, d, nc, out);
 }
 
 void cell_patch_flags(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
@@ -424,18 +447,29 @@ int distinct_box_corners(const AABB& box, Vec3f* out) {
   return nc;
 }
 
-// The corners of a cell's box (distinct_box_corners) relative to the origin od into cd
-// (dx, dy, dz, n = max |d_i| each); returns their count.
+// The corners of a cell's box (distinct_box_corners, in its order) relative to the origin
+// od into cd (dx, dy, dz, n = max |d_i| each); returns their count. The differences are
+// taken once per axis, the same values as per corner.
 int cell_corners(const AABB& box, const double* od, double* cd) {
-  Vec3f q[8];
-  const int nc = distinct_box_corners(box, q);
-  for (int k = 0; k < nc; ++k) {
-    double* d = cd + 4 * k;
-    d[0] = double(q[k].x) - od[0];
-    d[1] = double(q[k].y) - od[1];
-    d[2] = double(q[k].z) - od[2];
-    d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+  double v[3][2], a[3][2];
+  int n[3];
+  for (int x = 0; x < 3; ++x) {
+    n[x] = box.lo[x] < box.hi[x] ? 2 : 1;
+    v[x][0] = double(box.lo[x]) - od[x];
+    v[x][1] = double(box.hi[x]) - od[x];
+    a[x][0] = std::abs(v[x][0]);
+    a[x][1] = std::abs(v[x][1]);
   }
+  int nc = 0;
+  for (int x = 0; x < n[0]; ++x)
+    for (int y = 0; y < n[1]; ++y)
+      for (int z = 0; z < n[2]; ++z) {
+        double* d = cd + 4 * nc++;
+        d[0] = v[0][x];
+        d[1] = v[1][y];
+        d[2] = v[2][z];
+        d[3] = std::max(std::max(a[0][x], a[1][y]), a[2][z]);
+      }
   return nc;
 }
 
@@ -1011,24 +1045,108 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   }
   // A light-tree leaf left mixed: each relation by the direct test against the mixed
   // candidates (the others miss every segment into the leaf's box), Embree where the
-  // test cannot certify.
+  // test cannot certify. With cell_groups, a node of more than cell_group_samples
+  // samples with at most cell_group_candidates mixed candidates first takes a cell at
+  // each group of that many samples (cell_group).
   const TreeNode& QL = ln(c);
-  const uint32_t count = QL.size();
+  if (!p_.cell_groups || QL.size() <= uint32_t(p_.cell_group_samples) ||
+      mixed > size_t(p_.cell_group_candidates)) {
+    cell_direct(next, lo.data() + QL.begin, QL.size(), od, prefix, i);
+    return;
+  }
+  cell_samples_.clear();
+  const uint32_t g = uint32_t(p_.cell_group_samples);
+  const std::vector<AABB>& boxes = cell_group_boxes(c);
+  for (uint32_t b = QL.begin, k = 0; b < QL.end; b += g, ++k)
+    cell_group(next, b, std::min(QL.end, b + g), boxes[k], od, i);
+  cell_direct(next, cell_samples_.data(), uint32_t(cell_samples_.size()), od, prefix, i);
+}
+
+// A group of a mixed cell's samples (cell_groups: light-tree order positions b..e of the
+// cell's light node, at most cell_group_samples of them): a cell at `box`, the union of
+// their jitter boxes, which holds every relation's light point, against the cell's mixed
+// candidates lev by cell_pairs (cell_classify's certificates at the box corners, linear
+// in the light point: blocked when one candidate blocks every segment from p into the
+// box, visible when each misses them all; the candidates lev leaves out miss every
+// segment into the whole node box). Else, above cell_group_min samples, its two halves
+// the same way, else its samples go to cell_samples_ for the direct test. A node's order
+// below packet size is order_for_packets' (halves at multiples of 8 on the longest
+// axis), so groups of 8, 16 or 32 from the node's start are cells of the light's grid;
+// any other grouping is as exact, only looser.
+void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od,
+                           uint32_t i) {
+  const auto& lo = ltree_->order();
+  double cd[4 * 8];
+  const int nc = cell_corners(box, od, cd);
+  n_cells_ += 1;
+  cell_out_.resize(lev.kp / 4);
+  const double n = double(e - b);
+  if (cell_pairs(lev.terms.data(), lev.kp, cd, nc, cell_out_.data())) {
+    n_blocked_shaft_ += n;
+    n_cell_decided_ += n;
+    n_group_decided_ += n;
+    return;
+  }
+  bool all_miss = true;
+  for (size_t k = 0; k < lev.count && all_miss; ++k) all_miss = ((cell_out_[k >> 2] >> (k & 3)) & 1) != 0;
+  if (all_miss) {
+    ReceiverResult& rr = result_.receivers[i];
+    for (uint32_t s = b; s < e; ++s) rr.set_visible(light_offset_ + size_t(lo[s]), true);
+    n_empty_ += n;
+    n_cell_decided_ += n;
+    n_group_decided_ += n;
+    return;
+  }
+  if (e - b > uint32_t(p_.cell_group_min)) {
+    const uint32_t m = b + (e - b + 1) / 2;
+    AABB lb, rb;
+    for (uint32_t s = b; s < m; ++s) lb.extend(light_->jitter_boxes[lo[s]]);
+    for (uint32_t s = m; s < e; ++s) rb.extend(light_->jitter_boxes[lo[s]]);
+    cell_group(lev, b, m, lb, od, i);
+    cell_group(lev, m, e, rb, od, i);
+    return;
+  }
+  cell_samples_.insert(cell_samples_.end(), lo.begin() + b, lo.begin() + e);
+}
+
+// The boxes of cell_group's first groups of light node c (cell_group_samples samples each
+// from its start, in light-tree order), once per node: its order stays as it is until
+// the node is split, and then they are taken anew each time.
+const std::vector<AABB>& Traversal::cell_group_boxes(int c) {
+  const TreeNode& Q = ln(c);
+  const bool keep = !Q.split_done();
+  if (keep) {
+    auto it = group_boxes_.find(c);
+    if (it != group_boxes_.end()) return it->second;
+  }
+  const auto& lo = ltree_->order();
+  const uint32_t g = uint32_t(p_.cell_group_samples);
+  std::vector<AABB>& out = keep ? group_boxes_[c] : group_scratch_;
+  out.assign((Q.size() + g - 1) / g, AABB());
+  for (uint32_t s = Q.begin; s < Q.end; ++s) out[(s - Q.begin) / g].extend(light_->jitter_boxes[lo[s]]);
+  return out;
+}
+
+// The direct test per relation of receiver i and the light samples js against the
+// candidates of lev (their first kTermCount term arrays), Embree for what it cannot
+// certify (cell_uncertain_).
+void Traversal::cell_direct(const CellLevel& lev, const uint32_t* js, uint32_t count, const double* od,
+                            uint64_t prefix, uint32_t i) {
   direct_d_.resize(4 * size_t(count));
   direct_out_.resize(count);
   for (uint32_t k = 0; k < count; ++k) {
-    const Vec3f& e = leaf_sample_at(*light_, int(lo[QL.begin + k]), prefix);
+    const Vec3f& e = leaf_sample_at(*light_, int(js[k]), prefix);
     double* d = direct_d_.data() + 4 * size_t(k);
     d[0] = double(e.x) - od[0];
     d[1] = double(e.y) - od[1];
     d[2] = double(e.z) - od[2];
     d[3] = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
   }
-  direct_classify(next.terms.data(), np, direct_d_.data(), count, direct_out_.data());
+  direct_classify(lev.terms.data(), lev.kp, direct_d_.data(), count, direct_out_.data());
   ReceiverResult& rr = result_.receivers[i];
   size_t blocked = 0;
   for (uint32_t k = 0; k < count; ++k) {
-    const uint32_t j = lo[QL.begin + k];
+    const uint32_t j = js[k];
     if (direct_out_[k] == 1) ++blocked;
     else if (direct_out_[k] == 2) rr.set_visible(light_offset_ + size_t(j), true);
     else cell_uncertain_.push_back(j);  // fan_rays counts their blocked ones

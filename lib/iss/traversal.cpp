@@ -113,6 +113,7 @@ void Traversal::run_light(size_t li) {
     bvh_->query_box(PointTree::bounds_of(boxes), cand);
     ltree_ = std::make_unique<PointTree>(std::move(boxes), std::move(centers), tree_leaf, mesh_, tri_boxes_,
                                          &cand, p_.leaf_samples);
+    group_boxes_.clear();
   }
   // COMPUTE-SHADOWS (Figure 4.32), with the triangle array restricted to the
   // triangles whose box may meet the root shaft (triangle_bvh.h) instead of all. The
@@ -187,6 +188,7 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("cell_patch_relations", n_cell_patch_decided_);
   st.set("cell_backface_relations", n_cull_decided_);
   st.set("cell_surface_relations", n_surface_cull_decided_);
+  st.set("cell_group_relations", n_group_decided_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
   st.set("band_triangles_extracted", n_band_extracted_);

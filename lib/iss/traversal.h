@@ -151,6 +151,17 @@ struct Params {
   // cost more than its Embree rays.
   bool cell_surfaces = true;
   int cell_surface_candidates = 96;
+  // A cell left mixed over more than cell_group_samples samples with at most
+  // cell_group_candidates mixed candidates takes a cell at each group of that many
+  // samples (cell_group) before the direct test; groups above cell_group_min samples
+  // left mixed take cells at their halves. Measured on rooms at 1024 receivers
+  // (docs/log/iss-performance.md, fourteenth round): groups of 16 on at most 24
+  // candidates cost less than the direct test they replace; on more candidates, or
+  // groups of 8 or 4, or halves, more.
+  bool cell_groups = true;
+  int cell_group_samples = 16;
+  int cell_group_min = 16;
+  int cell_group_candidates = 24;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -349,6 +360,11 @@ class Traversal {
   void cull_prepare();
   void cull_back_faces(const Vec3f* pts, int np, const AABB& box);
   void cell_surface_receivers(int r, int l);
+  struct CellLevel;
+  void cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od, uint32_t i);
+  const std::vector<AABB>& cell_group_boxes(int c);
+  void cell_direct(const CellLevel& lev, const uint32_t* js, uint32_t count, const double* od, uint64_t prefix,
+                   uint32_t i);
   void flood_cell_patch(uint32_t t);
   bool custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNode& R, const TreeNode& L, const Shaft* sh,
                        const std::vector<uint32_t>* tris);
@@ -466,6 +482,11 @@ class Traversal {
   double n_surface_cull_decided_ = 0;  // relations of receivers that took cells only after that
   std::vector<uint8_t> cell_out_;
   std::vector<uint32_t> cell_uncertain_;  // samples of the current receiver left to Embree
+  std::vector<uint32_t> cell_samples_;  // samples cell_group left to the direct test
+  // cell_group_boxes, per light node of this light (cleared with the light tree).
+  std::unordered_map<int, std::vector<AABB>> group_boxes_;
+  std::vector<AABB> group_scratch_;
+  double n_group_decided_ = 0;  // relations decided by cell_group
   std::vector<uint32_t> direct_query_, direct_cand_;
   std::vector<double> direct_corners_, direct_terms_, direct_query_box_;
   std::vector<int64_t> direct_keep_;

@@ -304,6 +304,30 @@ TEST(IssLeafRays, CellBackfacesAnswerAsWithoutThemAndTheOracle) {
   expect_option_cases(cases, "cell_backfaces", "cell_backface_relations", "cell_backface_relations");
 }
 
+TEST(IssLeafRays, CellGroupsAnswerAsWithoutThemAndTheOracle) {
+  // A cell left mixed takes cells at groups of its samples (cell_groups) before the
+  // direct test. It changes only how a cell's relations are decided: the same shafts,
+  // every relation once, no more rays, and every answer where on and off differ the
+  // exact one. Small groups and halves down to one sample (cell_group_min 1) on every
+  // mixed cell, a group size that does not divide the light's samples, and groups below
+  // cells of cell_depth reach the other paths.
+  const std::map<std::string, std::string> small = {
+      {"cell_group_samples", "4"}, {"cell_group_min", "1"}, {"cell_group_candidates", "1024"}, {"cell_candidates", "64"}};
+  const std::vector<LeafCase> cases = {
+      {"rooms", -1, 256, 64, {}},
+      {"rooms", -1, 256, 64, small},
+      {"rooms", -1, 256, 64, {{"cell_group_samples", "5"}, {"cell_depth", "1"}}},
+      {"rooms", 60000, 256, 64, {{"cell_group_samples", "8"}, {"cell_group_min", "2"}}},
+      {"columns", 1000, 1024, 64, {{"light_split", "off"}, {"cell_group_samples", "8"}, {"cell_group_min", "1"}}},
+      {"torus", -1, 256, 16, small},
+      {"random-soup", -1, 256, 16, small},
+      {"shared-edge-fan", -1, 256, 16, small},
+      {"on-surface", -1, 256, 16, small},
+      {"grid-snapped", -1, 256, 16, small},
+  };
+  expect_option_cases(cases, "cell_groups", "cell_group_relations", "cell_group_relations");
+}
+
 TEST(IssLeafRays, CellSurfacesAnswerAsWithoutThemAndTheOracle) {
   // A leaf still over cell_candidates after cell_backfaces takes cells receiver by
   // receiver where the closed surfaces whose box lies outside the pyramid from the
