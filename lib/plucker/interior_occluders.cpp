@@ -410,7 +410,18 @@ bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
   AABB qb;
   for (const Vec3f& x : q) qb.extend(x);
   bool meets = false;
-  each([&](const AABB& bb) { return !meets && bb.overlaps(qb); }, [&](uint32_t t) {
+  // A node whose box lies strictly on one side of Q's plane (its eight float corners, exact
+  // signs; the half-space is convex) holds only triangles the side test below skips.
+  const auto straddles = [&](const AABB& bb) {
+    const int s0 = o3(q[0], q[1], q[2], bb.lo);
+    if (s0 == 0) return true;
+    for (int k = 1; k < 8; ++k) {
+      const Vec3f x(k & 1 ? bb.hi.x : bb.lo.x, k & 2 ? bb.hi.y : bb.lo.y, k & 4 ? bb.hi.z : bb.lo.z);
+      if (o3(q[0], q[1], q[2], x) != s0) return true;
+    }
+    return false;
+  };
+  each([&](const AABB& bb) { return !meets && bb.overlaps(qb) && straddles(bb); }, [&](uint32_t t) {
     if (meets) return;
     const Vec3f &a = mesh_.corner(t, 0), &b = mesh_.corner(t, 1), &c = mesh_.corner(t, 2);
     AABB tb;
