@@ -86,6 +86,16 @@ class Bvh {
   // leaf(node) for every leaf whose box, and every ancestor's box, passes enter(box).
   template <class Enter, class Leaf>
   void for_each_leaf(Enter&& enter, Leaf&& leaf) const {
+    walk([&](const Box& b, bool) { return enter(b); },
+         [&](const Node& nd) {
+           leaf(nd);
+           return false;
+         });
+  }
+  // for_each_leaf's traversal (the same order) with each node's leafness passed to
+  // enter(box, is_leaf), until leaf(node) returns true.
+  template <class Enter, class Leaf>
+  void walk(Enter&& enter, Leaf&& leaf) const {
     if (nodes_.empty()) return;
     std::array<uint32_t, kMaxStack> stack;
     size_t top = 0;
@@ -93,9 +103,10 @@ class Bvh {
     while (top > 0) {
       const uint32_t i = stack[--top];
       const Node& nd = nodes_[i];
-      if (!enter(nd.box)) continue;
-      if (is_leaf(nd)) {
-        leaf(nd);
+      const bool is_leaf_node = is_leaf(nd);
+      if (!enter(nd.box, is_leaf_node)) continue;
+      if (is_leaf_node) {
+        if (leaf(nd)) return;
         continue;
       }
       stack[top++] = i + 1;

@@ -38,7 +38,6 @@
 // every other subtraction; every classification is exact.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -143,23 +142,11 @@ class SurfaceTrees {
   void visit(int32_t s, Enter&& enter, F&& f) const {
     const std::vector<uint32_t>& tris = tris_[size_t(s)];
     const accel::Bvh<float>& bvh = bvh_[size_t(s)];
-    if (bvh.empty()) return;
-    std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
-    size_t top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const uint32_t i = stack[--top];
-      const auto& nd = bvh.node(i);
-      const bool leaf = bvh.is_leaf(nd);
-      if (!enter(nd.box, leaf)) continue;
-      if (leaf) {
-        for (uint32_t item : bvh.leaf_items(nd))
-          if (f(tris[item])) return;
-        continue;
-      }
-      stack[top++] = bvh.left(i);
-      stack[top++] = bvh.right(i);
-    }
+    bvh.walk(enter, [&](const accel::Bvh<float>::Node& nd) {
+      for (uint32_t item : bvh.leaf_items(nd))
+        if (f(tris[item])) return true;
+      return false;
+    });
   }
 
   std::vector<accel::Bvh<float>> bvh_;          // per surface, items index tris_[s]
