@@ -797,14 +797,22 @@ bool Traversal::cell_rays(int r, int l, const Shaft& sh) {
     }
     n_cull_decided_ += double(R.size()) * double(ln(l).size());
   }
-  const size_t kp = direct_load_corners();
-  grow_to(cell_levels_[0].terms, kCellTermCount * kp);
-  cell_levels_[0].count = direct_cand_.size();
-  cell_levels_[0].kp = kp;
-  cell_levels_[0].tris = direct_cand_;
+  const size_t kp = load_cell_top();
   const auto& ro = rtree_->order();
   for (uint32_t a = R.begin; a < R.end; ++a) cell_receiver(l, ro[a], kp);
   return true;
+}
+
+// direct_cand_'s corners loaded (direct_load_corners) and the candidates made the top
+// cell level; returns its padded count.
+size_t Traversal::load_cell_top() {
+  const size_t kp = direct_load_corners();
+  CellLevel& top = cell_levels_[0];
+  grow_to(top.terms, kCellTermCount * kp);
+  top.count = direct_cand_.size();
+  top.kp = kp;
+  top.tris = direct_cand_;
+  return kp;
 }
 
 void Traversal::cell_receiver(int l, uint32_t i, size_t kp) {
@@ -968,13 +976,7 @@ void Traversal::cell_surface_receivers(int r, int l) {
       n_rays_ += double(L.size());
       continue;
     }
-    const size_t kp = direct_load_corners();
-    CellLevel& top = cell_levels_[0];
-    grow_to(top.terms, kCellTermCount * kp);
-    top.count = direct_cand_.size();
-    top.kp = kp;
-    top.tris = direct_cand_;
-    cell_receiver(l, i, kp);
+    cell_receiver(l, i, load_cell_top());
     n_surface_cull_decided_ += double(L.size());
   }
 }
@@ -1099,11 +1101,8 @@ void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const A
   }
   if (e - b > uint32_t(p_.cell_group_min)) {
     const uint32_t m = b + (e - b + 1) / 2;
-    AABB lb, rb;
-    for (uint32_t s = b; s < m; ++s) lb.extend(light_->jitter_boxes[lo[s]]);
-    for (uint32_t s = m; s < e; ++s) rb.extend(light_->jitter_boxes[lo[s]]);
-    cell_group(lev, b, m, lb, od, i);
-    cell_group(lev, m, e, rb, od, i);
+    cell_group(lev, b, m, jitter_union(b, m), od, i);
+    cell_group(lev, m, e, jitter_union(m, e), od, i);
     return;
   }
   cell_samples_.insert(cell_samples_.end(), lo.begin() + b, lo.begin() + e);
@@ -1119,12 +1118,19 @@ const std::vector<AABB>& Traversal::cell_group_boxes(int c) {
     auto it = group_boxes_.find(c);
     if (it != group_boxes_.end()) return it->second;
   }
-  const auto& lo = ltree_->order();
   const uint32_t g = uint32_t(p_.cell_group_samples);
   std::vector<AABB>& out = keep ? group_boxes_[c] : group_scratch_;
-  out.assign((Q.size() + g - 1) / g, AABB());
-  for (uint32_t s = Q.begin; s < Q.end; ++s) out[(s - Q.begin) / g].extend(light_->jitter_boxes[lo[s]]);
+  out.clear();
+  for (uint32_t b = Q.begin; b < Q.end; b += g) out.push_back(jitter_union(b, std::min(Q.end, b + g)));
   return out;
+}
+
+// The union of the jitter boxes of the light samples at light-tree order positions b..e.
+AABB Traversal::jitter_union(uint32_t b, uint32_t e) const {
+  const auto& lo = ltree_->order();
+  AABB box;
+  for (uint32_t s = b; s < e; ++s) box.extend(light_->jitter_boxes[lo[s]]);
+  return box;
 }
 
 // The direct test per relation of receiver i and the light samples js against the

@@ -363,6 +363,8 @@ class Traversal {
   struct CellLevel;
   void cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od, uint32_t i);
   const std::vector<AABB>& cell_group_boxes(int c);
+  AABB jitter_union(uint32_t b, uint32_t e) const;
+  size_t load_cell_top();
   void cell_direct(const CellLevel& lev, const uint32_t* js, uint32_t count, const double* od, uint64_t prefix,
                    uint32_t i);
   void flood_cell_patch(uint32_t t);
