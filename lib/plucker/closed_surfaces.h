@@ -42,6 +42,14 @@ class ClosedSurfaces {
   const AABB& box(int32_t s) const { return boxes_[size_t(s)]; }
   // Triangles of surface s.
   uint32_t triangles(int32_t s) const { return sizes_[size_t(s)]; }
+  // Per surface its input triangles, ascending.
+  std::vector<std::vector<uint32_t>> triangle_lists() const {
+    std::vector<std::vector<uint32_t>> out(count());
+    for (size_t s = 0; s < count(); ++s) out[s].reserve(sizes_[s]);
+    for (uint32_t t = 0; t < surface_of_.size(); ++t)
+      if (surface_of_[t] >= 0) out[size_t(surface_of_[t])].push_back(t);
+    return out;
+  }
   // +1 when the triangles face outwards (signed volume clearly positive), -1 inwards, 0
   // when the double sum cannot tell. A choice of which crossing side to keep, never a
   // condition of correctness (occluder_selection.cpp).

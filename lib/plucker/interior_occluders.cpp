@@ -500,22 +500,15 @@ bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3
 
 InteriorOccluders::InteriorOccluders(const Scene& scene, const ClosedSurfaces& cs, size_t extra,
                                      const SurfaceTrees* trees) {
-  // Per surface large enough, its triangles and the hierarchy over their boxes (Builder):
-  // trees' when given (SurfaceTrees builds them with these boxes and this rule).
+  // Per surface large enough, its triangles and triangle_hierarchy over them (Builder):
+  // trees' when given.
   std::vector<std::vector<uint32_t>> own_tris;
   std::vector<accel::Bvh<float>> own_bvhs;
   if (!trees) {
-    own_tris.resize(cs.count());
-    for (uint32_t t = 0; t < scene.mesh.size(); ++t)
-      if (const int32_t s = cs.surface(t); s >= 0) own_tris[size_t(s)].push_back(t);
+    own_tris = cs.triangle_lists();
     own_bvhs.resize(cs.count());
-    for (size_t s = 0; s < cs.count(); ++s) {
-      if (own_tris[s].size() < kMinTriangles) continue;
-      std::vector<AABB> boxes(own_tris[s].size());
-      for (size_t i = 0; i < own_tris[s].size(); ++i)
-        for (int k = 0; k < 3; ++k) boxes[i].extend(scene.mesh.corner(own_tris[s][i], k));
-      own_bvhs[s] = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
-    }
+    for (size_t s = 0; s < cs.count(); ++s)
+      if (own_tris[s].size() >= kMinTriangles) own_bvhs[s] = triangle_hierarchy(scene.mesh, own_tris[s]);
   }
   const auto tris_of = [&](size_t s) -> const std::vector<uint32_t>& {
     return trees ? trees->triangles(int32_t(s)) : own_tris[s];

@@ -201,21 +201,17 @@ uint32_t EdgeTree::build_node(const std::vector<AABBd>& leaf_boxes, uint32_t beg
   return id;
 }
 
+accel::Bvh<float> triangle_hierarchy(const TriangleSoup& mesh, const std::vector<uint32_t>& tris) {
+  std::vector<AABB> boxes(tris.size());
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) boxes[i].extend(mesh.corner(tris[i], k));
+  return accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
+}
+
 SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles) {
-  tris_.resize(cs.count());
-  for (uint32_t t = 0; t < mesh.size(); ++t)
-    if (const int32_t s = cs.surface(t); s >= 0) tris_[size_t(s)].push_back(t);
+  tris_ = cs.triangle_lists();
   bvh_.reserve(cs.count());
-  std::vector<AABB> boxes;
-  for (const std::vector<uint32_t>& tris : tris_) {
-    boxes.clear();
-    for (uint32_t t : tris) {
-      AABB b;
-      for (int k = 0; k < 3; ++k) b.extend(mesh.corner(t, k));
-      boxes.push_back(b);
-    }
-    bvh_.emplace_back(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
-  }
+  for (const std::vector<uint32_t>& tris : tris_) bvh_.push_back(triangle_hierarchy(mesh, tris));
   rank_.assign(mesh.size(), 0u);
   uint32_t pos = 0;
   for (size_t s = 0; s < bvh_.size(); ++s)

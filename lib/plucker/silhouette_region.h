@@ -103,6 +103,10 @@ struct SurfaceEdges {
   size_t memory_bytes() const;
 };
 
+// The hierarchy over the boxes of triangles tris (items index tris; MedianAxis, leaves
+// of 4): SurfaceTrees' per surface, and InteriorOccluders' without them.
+accel::Bvh<float> triangle_hierarchy(const TriangleSoup& mesh, const std::vector<uint32_t>& tris);
+
 // Per closed surface, a hierarchy over its triangles for the exact segment test.
 class SurfaceTrees {
  public:
@@ -129,8 +133,8 @@ class SurfaceTrees {
   uint32_t rank(uint32_t t) const { return rank_[t]; }
   // Surface s's edges (the groups' silhouette edges are those of their candidates).
   const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
-  // Surface s's input triangles (ascending) and the hierarchy over their boxes (items
-  // index triangles(s); MedianAxis, leaves of 4): InteriorOccluders walks the same one.
+  // Surface s's input triangles (ascending) and triangle_hierarchy over them:
+  // InteriorOccluders walks the same one.
   const std::vector<uint32_t>& triangles(int32_t s) const { return tris_[size_t(s)]; }
   const accel::Bvh<float>& hierarchy(int32_t s) const { return bvh_[size_t(s)]; }
   size_t memory_bytes() const;
