@@ -440,9 +440,34 @@ bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
   return !meets && inside(inner, q);
 }
 
+// The closed segment x -> f misses the closed float box bb, by exact signs: for some
+// axis, the box's projection along it lies strictly on one side of the segment's
+// projected line (orient2d is linear in the point, so its least and greatest values
+// over the rectangle are at the corners chosen by the signs of the line's direction).
+// False may also mean "cannot tell" (a projected segment of zero length).
+bool segment_misses_box(const Vec3f& x, const Vec3f& f, const AABB& bb) {
+  for (int k = 0; k < 3; ++k) {
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    const float xi = x[i], xj = x[j], fi = f[i], fj = f[j];
+    // orient2d(x, f, c) = (fi - xi)(cj - xj) - (fj - xj)(ci - xi): increasing in cj when
+    // fi > xi, in ci when fj < xj.
+    const float lo_i = fj < xj ? bb.lo[i] : bb.hi[i], lo_j = fi > xi ? bb.lo[j] : bb.hi[j];
+    if (orient2d_exact(xi, xj, fi, fj, lo_i, lo_j) == Sign::Positive) return true;
+    const float hi_i = fj < xj ? bb.hi[i] : bb.lo[i], hi_j = fi > xi ? bb.hi[j] : bb.lo[j];
+    if (orient2d_exact(xi, xj, fi, fj, hi_i, hi_j) == Sign::Negative) return true;
+  }
+  return false;
+}
+
 // Winding number of the surface at x nonzero: signed proper crossings of a segment from
 // x to a float point beyond the box; a segment through an edge or a vertex of a triangle,
 // or lying in a triangle's plane, is not used (the next direction is tried).
+// Nodes whose box the segment misses (segment_misses_box) are not entered: their
+// triangles neither cross nor touch it, so they add nothing to the count nor to
+// cleanness, whatever their planes. (x is on no triangle, Q meeting none, so w(x) is
+// the count along any clean direction: leaving such triangles out can only turn a
+// direction that a far triangle in the segment's plane made unclean into a clean one
+// giving the same w.)
 bool Builder::inside(const Vec3f& x, std::span<const Vec3f> /*q*/) {
   const double ext = max_component(to_double(box_.hi) - to_double(box_.lo));
   // Directions off the axes and off simple ratios (a mesh's vertices often lie on rays
@@ -456,7 +481,7 @@ bool Builder::inside(const Vec3f& x, std::span<const Vec3f> /*q*/) {
     sb.extend(x), sb.extend(f);
     int w = 0;
     bool clean = true;
-    each([&](const AABB& bb) { return clean && bb.overlaps(sb); }, [&](uint32_t t) {
+    each([&](const AABB& bb) { return clean && bb.overlaps(sb) && !segment_misses_box(x, f, bb); }, [&](uint32_t t) {
       if (!clean) return;
       const Vec3f &a = mesh_.corner(t, 0), &b = mesh_.corner(t, 1), &c = mesh_.corner(t, 2);
       AABB tb;
