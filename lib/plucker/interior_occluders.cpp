@@ -23,9 +23,10 @@ int o3(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
 }
 
 // The closed segment p -> q meets the closed triangle (a, b, c), or the test cannot tell
-// (both ends in its plane, or a degenerate triangle): true.
-bool segment_meets_triangle(const Vec3f& p, const Vec3f& q, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-  const int sp = o3(a, b, c, p), sq = o3(a, b, c, q);
+// (both ends in its plane, or a degenerate triangle): true. sp, sq: o3(a, b, c, p) and
+// o3(a, b, c, q).
+bool segment_meets_triangle(const Vec3f& p, const Vec3f& q, int sp, int sq, const Vec3f& a, const Vec3f& b,
+                            const Vec3f& c) {
   if (sp * sq > 0) return false;
   if (sp == 0 && sq == 0) return true;
   // The line meets the plane at one point of the closed segment: inside the closed
@@ -433,9 +434,9 @@ bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
       if (sd == 2) sd = int8_t(o3(q[0], q[1], q[2], mesh_.corner(t, k)));
       return int(sd);
     };
-    const int sa = side(0);
-    if (sa != 0 && sa == side(1) && sa == side(2)) return;
-    meets = polygon_meets_triangle(q, a, b, c);
+    const int sides[3] = {side(0), side(1), side(2)};
+    if (sides[0] != 0 && sides[0] == sides[1] && sides[0] == sides[2]) return;
+    meets = polygon_meets_triangle(q, a, b, c, sides);
   });
   return !meets && inside(inner, q);
 }
@@ -511,15 +512,43 @@ bool Builder::inside(const Vec3f& x, std::span<const Vec3f> /*q*/) {
 }  // namespace
 
 bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const int sides[3] = {o3(q[0], q[1], q[2], a), o3(q[0], q[1], q[2], b), o3(q[0], q[1], q[2], c)};
+  return polygon_meets_triangle(q, a, b, c, sides);
+}
+
+bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3f& b, const Vec3f& c,
+                            const int sides[3]) {
   // Two convex polygons meet iff an edge of one meets the other (the ends of their
-  // common segment lie on their boundaries); Q as the fan of its first corner.
+  // common segment lie on their boundaries).
+  // An edge p -> p' of the triangle: apart when strictly on one side of Q's plane; in the
+  // plane, undecided (meets). Else its line crosses the plane at one point x of the
+  // closed edge, and orient3d(p, p', u, v) for u, v in the plane is orient2d(x, u, v)
+  // times the sign of (p' - p) . n: x lies in the closed Q iff Q's edges (u, v) do not
+  // see the line with strictly opposite signs (their orient2d sum twice Q's area, so
+  // outside Q one is positive and one negative).
   const size_t n = q.size();
   const Vec3f t[3] = {a, b, c};
-  for (int e = 0; e < 3; ++e)
-    for (size_t k = 1; k + 1 < n; ++k)
-      if (segment_meets_triangle(t[e], t[(e + 1) % 3], q[0], q[k], q[k + 1])) return true;
-  for (size_t k = 0; k < n; ++k)
-    if (segment_meets_triangle(q[k], q[(k + 1) % n], a, b, c)) return true;
+  for (int e = 0; e < 3; ++e) {
+    const int sp = sides[e], sq = sides[(e + 1) % 3];
+    if (sp * sq > 0) continue;
+    if (sp == 0 && sq == 0) return true;
+    const Vec3f &p = t[e], &p1 = t[(e + 1) % 3];
+    bool pos = false, neg = false;
+    for (size_t k = 0; k < n && !(pos && neg); ++k) {
+      const int s = o3(p, p1, q[k], q[(k + 1) % n]);
+      pos |= s > 0, neg |= s < 0;
+    }
+    if (!(pos && neg)) return true;
+  }
+  // Q's edges against the triangle, each corner's side of the triangle's plane computed
+  // once.
+  const int s0 = o3(a, b, c, q[0]);
+  int sk = s0;
+  for (size_t k = 0; k < n; ++k) {
+    const int sk1 = k + 1 < n ? o3(a, b, c, q[k + 1]) : s0;
+    if (segment_meets_triangle(q[k], q[(k + 1) % n], sk, sk1, a, b, c)) return true;
+    sk = sk1;
+  }
   return false;
 }
 

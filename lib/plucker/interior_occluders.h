@@ -81,9 +81,14 @@ class InteriorOccluders {
   std::vector<size_t> light_begin_;
 };
 
-// The checks of the polygon Q (world floats, corners in order) against one triangle
-// (a, b, c): true when they meet, closed, or when the exact test cannot tell them apart
-// (Q in the triangle's plane). Exposed for tests.
+// The checks of the polygon Q (world floats, strictly convex, corners in order, in one
+// plane) against one triangle (a, b, c): true when they meet, closed, or when the exact
+// test cannot tell them apart (Q in the triangle's plane, or an edge of the triangle in
+// Q's). Exposed for tests.
 bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3f& b, const Vec3f& c);
+// The same with sides[i] the exact sign (+1, -1, 0) of orient3d(q[0], q[1], q[2], x) for
+// x = a, b, c (the builder keeps them per vertex).
+bool polygon_meets_triangle(std::span<const Vec3f> q, const Vec3f& a, const Vec3f& b, const Vec3f& c,
+                            const int sides[3]);
 
 }  // namespace visgate::plucker

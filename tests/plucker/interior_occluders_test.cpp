@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 
@@ -42,6 +44,86 @@ TEST(PluckerInteriorOccluders, PolygonMeetsTriangleHandWorked) {
   EXPECT_TRUE(plucker::polygon_meets_triangle(q, Vec3f(1, 0.5f, -1), Vec3f(1, 0.5f, 1), Vec3f(2, 0.5f, 0)));
   // A large triangle the square passes through without touching an edge of it.
   EXPECT_TRUE(plucker::polygon_meets_triangle(q, Vec3f(0.5f, -5, -5), Vec3f(0.5f, 5, -5), Vec3f(0.5f, 0, 5)));
+}
+
+// The reference for polygon_meets_triangle: Q as the fan of its first corner, every
+// closed segment (a triangle edge against each fan triangle, each Q edge against the
+// triangle) tested with exact orientations from scratch.
+int exact_o3(const Vec3f& a, const Vec3f& b, const Vec3f& c, const Vec3f& d) {
+  const Sign s = orient3d_exact(a, b, c, d);
+  return s == Sign::Positive ? 1 : (s == Sign::Negative ? -1 : 0);
+}
+bool fan_segment_meets(const Vec3f& p, const Vec3f& q, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const int sp = exact_o3(a, b, c, p), sq = exact_o3(a, b, c, q);
+  if (sp * sq > 0) return false;
+  if (sp == 0 && sq == 0) return true;
+  const int s1 = exact_o3(p, q, a, b), s2 = exact_o3(p, q, b, c), s3 = exact_o3(p, q, c, a);
+  return !((s1 > 0 || s2 > 0 || s3 > 0) && (s1 < 0 || s2 < 0 || s3 < 0));
+}
+bool fan_polygon_meets(const std::vector<Vec3f>& q, const Vec3f t[3]) {
+  for (int e = 0; e < 3; ++e)
+    for (size_t k = 1; k + 1 < q.size(); ++k)
+      if (fan_segment_meets(t[e], t[(e + 1) % 3], q[0], q[k], q[k + 1])) return true;
+  for (size_t k = 0; k < q.size(); ++k)
+    if (fan_segment_meets(q[k], q[(k + 1) % q.size()], t[0], t[1], t[2])) return true;
+  return false;
+}
+
+// Random strictly convex lattice polygons (corners p + i u + j v, exact floats, in order)
+// against random triangles whose corners are often on Q's plane, its corners or its
+// edges' midpoints (the closed and degenerate cases): both forms of
+// polygon_meets_triangle give the fan reference's answer.
+TEST(PluckerInteriorOccluders, PolygonMeetsTriangleMatchesTheFanReference) {
+  Rng rng(17);
+  int met = 0, apart = 0;
+  for (int iter = 0; iter < 4000; ++iter) {
+    const Vec3d p(double(rng.below(9)) - 4, double(rng.below(9)) - 4, double(rng.below(9)) - 4);
+    const Vec3d u(double(rng.below(5)) - 2, double(rng.below(5)) - 2, 2), v(2, double(rng.below(5)) - 2, double(rng.below(5)) - 2);
+    if (length(cross(u, v)) == 0.0) continue;
+    // The strictly convex hull of random lattice points, counter-clockwise.
+    std::vector<std::array<int64_t, 2>> pts;
+    for (int k = 0; k < 3 + int(rng.below(8)); ++k) pts.push_back({int64_t(rng.below(9)) - 4, int64_t(rng.below(9)) - 4});
+    std::sort(pts.begin(), pts.end());
+    pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+    auto cr = [](const std::array<int64_t, 2>& o, const std::array<int64_t, 2>& a, const std::array<int64_t, 2>& b) {
+      return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    };
+    std::vector<std::array<int64_t, 2>> h;
+    for (int pass = 0; pass < 2; ++pass) {
+      const size_t base = h.size();
+      for (size_t i = 0; i < pts.size(); ++i) {
+        const auto& x = pass == 0 ? pts[i] : pts[pts.size() - 1 - i];
+        while (h.size() >= base + 2 && cr(h[h.size() - 2], h.back(), x) <= 0) h.pop_back();
+        h.push_back(x);
+      }
+      h.pop_back();
+    }
+    if (h.size() < 3) continue;
+    std::vector<Vec3f> q;
+    for (const auto& ij : h) q.push_back(Vec3f(p + u * double(ij[0]) + v * double(ij[1])));
+    // Triangle corners: on Q's plane (lattice points, Q's corners, edge midpoints) or off it.
+    auto corner = [&]() {
+      switch (rng.below(7)) {
+        case 0: return Vec3f(p + u * (double(rng.below(13)) - 6) + v * (double(rng.below(13)) - 6));
+        case 1: return q[rng.below(q.size())];
+        case 2: {
+          const size_t k = rng.below(q.size());
+          return Vec3f((to_double(q[k]) + to_double(q[(k + 1) % q.size()])) * 0.5);
+        }
+        default:
+          return Vec3f(float(rng.uniform(-20, 20)), float(rng.uniform(-20, 20)), float(rng.uniform(-20, 20)));
+      }
+    };
+    const Vec3f t[3] = {corner(), corner(), corner()};
+    const bool want = fan_polygon_meets(q, t);
+    const int sides[3] = {exact_o3(q[0], q[1], q[2], t[0]), exact_o3(q[0], q[1], q[2], t[1]),
+                          exact_o3(q[0], q[1], q[2], t[2])};
+    EXPECT_EQ(plucker::polygon_meets_triangle(q, t[0], t[1], t[2]), want) << iter;
+    EXPECT_EQ(plucker::polygon_meets_triangle(q, t[0], t[1], t[2], sides), want) << iter;
+    (want ? met : apart) += 1;
+  }
+  EXPECT_GT(met, 1000);
+  EXPECT_GT(apart, 300);
 }
 
 // Ray parity in double from x along a fixed generic direction: odd inside a closed mesh
