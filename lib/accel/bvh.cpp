@@ -4,7 +4,13 @@
 #include "lib/geom/morton.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <map>
+#include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
@@ -26,6 +32,36 @@ uint32_t subtree_nodes(uint32_t m, uint32_t leaf, std::map<uint32_t, uint32_t>& 
   const uint32_t s = 1 + subtree_nodes(m / 2, leaf, memo) + subtree_nodes(m - m / 2, leaf, memo);
   memo[m] = s;
   return s;
+}
+
+// The componentwise min and max of the centres c of keys [first, last) (not empty),
+// lo = min(lo, c) and hi = max(hi, c) per key in order, as std::min and std::max do.
+// With SSE2 the three coordinates (and the index's bits, unused) in one register:
+// _mm_min_ps(c, lo) is c < lo ? c : lo and _mm_max_ps(c, hi) is c > hi ? c : hi, the
+// same values (no NaN in the boxes; -0 and +0 resolved the same way).
+template <class Key>
+std::pair<Vec3f, Vec3f> centre_bounds(const Key* first, const Key* last) {
+#if defined(__SSE2__)
+  static_assert(sizeof(Key) == 16 && offsetof(Key, c) == 0);
+  __m128 lo = _mm_loadu_ps(first->c), hi = lo;
+  for (const Key* k = first + 1; k < last; ++k) {
+    const __m128 c = _mm_loadu_ps(k->c);
+    lo = _mm_min_ps(c, lo);
+    hi = _mm_max_ps(c, hi);
+  }
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, lo);
+  _mm_store_ps(h, hi);
+  return {Vec3f(l[0], l[1], l[2]), Vec3f(h[0], h[1], h[2])};
+#else
+  Vec3f lo(first->c[0], first->c[1], first->c[2]), hi = lo;
+  for (const Key* k = first + 1; k < last; ++k)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], k->c[a]);
+      hi[a] = std::max(hi[a], k->c[a]);
+    }
+  return {lo, hi};
+#endif
 }
 
 }  // namespace
@@ -108,12 +144,7 @@ Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(r
       if (median) {
         // The axis of the centres' largest spread; ties by index, so the halves depend on
         // the keys only.
-        Vec3f lo(keys[begin].c[0], keys[begin].c[1], keys[begin].c[2]), hi = lo;
-        for (uint32_t i = begin + 1; i < end; ++i)
-          for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], keys[i].c[k]);
-            hi[k] = std::max(hi[k], keys[i].c[k]);
-          }
+        const auto [lo, hi] = centre_bounds(keys.data() + begin, keys.data() + end);
         const int axis = max_axis(hi - lo);
         std::nth_element(keys.begin() + begin, keys.begin() + mid, keys.begin() + end,
                          [axis](const Key& x, const Key& y) {
