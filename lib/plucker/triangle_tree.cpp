@@ -88,12 +88,16 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
     // in t's plane: without one (smooth surfaces: every triangle) t stays alone, and the
     // sorted edge loop below is skipped (same patches; a quarter of a scan solve's
     // hierarchy time went there).
+    // A third vertex that plane_side_filtered (t's normal nn, shared) places off the
+    // plane is not in it; the others by the exact sign.
+    const double s12 = norm1(to_double(b) - to_double(a)) * norm1(to_double(cc) - to_double(a));
     bool coplanar_neighbour = false;
     for (int k = 0; k < 3 && !coplanar_neighbour; ++k) {
       const int32_t nb = pm.triangles[t].neighbors[size_t(k)];
       if (nb < 0 || taken[size_t(nb)]) continue;
       for (uint32_t x : pm.triangles[size_t(nb)].v)
         coplanar_neighbour |= std::find(c.begin(), c.end(), x) == c.end() &&
+                              plane_side_filtered(to_double(a), nn, s12, SumPoint(pos[x])) == 0 &&
                               !is_certain(orient3d_filtered(a, b, cc, SumPoint(pos[x]))) &&
                               to_int(orient3d_exact(a, b, cc, pos[x])) == 0;
     }
