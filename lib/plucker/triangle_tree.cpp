@@ -82,8 +82,6 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
       const Vec3f &p = pos[x], &q = pos[y], &r = pos[z];
       return to_int(orient2d_exact(p[u], p[v], q[u], q[v], r[u], r[v]));
     };
-    const int s = turn(c[0], c[1], c[2]);
-    if (s == 0) continue;
     // The first growth crosses an edge of t to an untaken neighbour with its third vertex
     // in t's plane: without one (smooth surfaces: every triangle) t stays alone, and the
     // sorted edge loop below is skipped (same patches; a quarter of a scan solve's
@@ -102,6 +100,8 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
                               to_int(orient3d_exact(a, b, cc, pos[x])) == 0;
     }
     if (!coplanar_neighbour) continue;
+    const int s = turn(c[0], c[1], c[2]);
+    if (s == 0) continue;
     poly.assign(c.begin(), c.end());
     owner.assign(3, t);
     members.assign(1, t);
