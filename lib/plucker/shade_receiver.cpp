@@ -89,11 +89,12 @@ std::vector<CoverCone>& cover_cones() {
 // u_d |N_i| (dot_err's weights, given). The same operations in the same order, so the
 // same answer, with the difference to the base taken from nearest_base's three 1-norms
 // instead of computed again, and the bound (>= 0) left out for a value not above 0.
-[[gnu::always_inline]] inline bool plane_positive(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& x,
-                                                  const Vec3d& nrm, const Vec3d& w) {
-  const Vec3d dp = x - p, da = x - a, db = x - b;
-  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
-  const double np = n1(dp), na = n1(da), nb = n1(db);
+// dp = x - p and its 1-norm np are given (covered() tries each x against many planes
+// through the same p = r).
+[[gnu::always_inline]] inline bool plane_positive(const Vec3d& dp, double np, const Vec3d& a, const Vec3d& b,
+                                                  const Vec3d& x, const Vec3d& nrm, const Vec3d& w) {
+  const Vec3d da = x - a, db = x - b;
+  const double na = norm1(da), nb = norm1(db);
   const Vec3d& d = (np <= na && np <= nb) ? dp : (na <= nb ? da : db);
   const double s = dot(d, nrm);
   if (!(s > 0.0)) return false;
@@ -347,9 +348,10 @@ CoverCone ReceiverShading::cover_cone(const Occluder& o) const {
 bool ReceiverShading::covered(const NearPoly& np) {
   if (gs_.cover_n.empty()) return false;  // no planes: nothing is taken as covered
   Vec3d d[3];
-  double dd[3];
+  double dd[3], d1[3];
   for (int k = 0; k < 3; ++k) {
     d[k] = np.t[k] - r_;
+    d1[k] = norm1(d[k]);
     dd[k] = dot(d[k], d[k]);
     if (!(dd[k] >= 0x1p-900)) dd[k] = 0.0;  // (u . d)^2 < 0 never holds: not tried
   }
@@ -373,7 +375,7 @@ bool ReceiverShading::covered(const NearPoly& np) {
       const Vec3d& nrm = gs_.cover_n[e + size_t(m)];
       const Vec3d& w = gs_.cover_err[e + size_t(m)];
       const Vec3d &a = o.v[m], &b = o.v[m + 1 == o.n ? 0 : m + 1];
-      for (int k = 0; k < 3 && all; ++k) all = plane_positive(r_, a, b, np.t[k], nrm, w);
+      for (int k = 0; k < 3 && all; ++k) all = plane_positive(d[k], d1[k], a, b, np.t[k], nrm, w);
       if (!all) hint = uint8_t(m);
     }
     if (all) {
