@@ -202,6 +202,50 @@ TEST(Ssv, EmbreeQuadsOnAndOffGiveTheSameAnswers) {
   }
 }
 
+TEST(Ssv, EdgeRaysOnAndOffGiveTheSameRelationsAboveTau) {
+  // edge_rays (ssv_solver.cpp): a receiver and light with more candidate edges than
+  // edge_ray_limit per sample is answered by its rays, and wedge_index=auto takes the
+  // edges when its probe finds most receivers so (foliage). On and off, with every index
+  // and with limits that send some receivers each way, every relation of margin at least
+  // tau outside the oracle's degenerate class gets the oracle's answer, so on and off agree there.
+  struct Case {
+    const char* fam;
+    long tris;
+  };
+  for (const Case c : {Case{"foliage", 1200}, Case{"columns", -1}, Case{"torus", -1}, Case{"random-soup", -1},
+                       Case{"rooms", 7000}}) {
+    const Scene s = family(c.fam, 2, c.tris, 48, 16);
+    const oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+    SolveOptions off;
+    off.opts["edge_rays"] = "off";
+    const SolveResult r_off = make_solver("ssv")->solve(s, off);
+    EXPECT_EQ(r_off.stats.get("edge_ray_receivers"), 0.0) << c.fam;
+    expect_matches_oracle(s, ex, r_off, std::string(c.fam) + " off");
+    for (const char* index : {"auto", "edges", "receivers", "bsp"}) {
+      for (const char* limit : {"1", "0"}) {
+        SolveOptions on;
+        on.opts["wedge_index"] = index;
+        on.opts["edge_ray_limit"] = limit;
+        const SolveResult r = make_solver("ssv")->solve(s, on);
+        const std::string what = std::string(c.fam) + " " + index + " limit " + limit;
+        EXPECT_GT(expect_matches_oracle(s, ex, r, what), 200u) << what;
+        // Limit 0 (at least one candidate): every receiver with a candidate edge is cast.
+        if (std::string(limit) == "0") EXPECT_GT(r.stats.get("edge_ray_receivers"), 0.0) << what;
+        EXPECT_GE(r.stats.get("fallback_relations"), 16.0 * r.stats.get("edge_ray_receivers")) << what;
+      }
+    }
+  }
+  // Foliage below 16 edges per receiver: auto takes the edges for the rays, off keeps
+  // the scattered wedges.
+  const Scene f = family("foliage", 2, 1200, 256, 16);
+  const SolveResult r_on = make_solver("ssv")->solve(f, SolveOptions{});
+  EXPECT_EQ(r_on.stats.get("edge_index"), 1.0);
+  EXPECT_GT(r_on.stats.get("edge_ray_receivers"), 128.0);
+  SolveOptions off;
+  off.opts["edge_rays"] = "off";
+  EXPECT_EQ(make_solver("ssv")->solve(f, off).stats.get("edge_index"), 0.0);
+}
+
 // ---------------------------------------------------------------- exact degeneracies
 
 // quad_scene (samples x, y in {-0.75, -0.25, 0.25, 0.75} at z = 2, receiver at the
