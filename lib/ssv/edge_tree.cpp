@@ -692,13 +692,11 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
   Item stack[64];
   for (uint32_t start : starts) {
     size_t top = 0;
-    stack[top++] = {start, live};
+    stack[top++] = {start, int((1u << n) - 1u)};
     while (top > 0) {
       const Item it = stack[--top];
       const Node& nd = nodes_[it.node];
-      int m = it.mask & live;
-      if (m == 0) continue;
-      m &= ~box_outside8(L, nd.lo, nd.hi, neps);
+      int m = it.mask & live & ~box_outside8(L, nd.lo, nd.hi, neps);
       if (m == 0) continue;
       if (!nd.single) {
         float hmin = -h0;  // facing_prunes' light-plane test: the same for every lane
@@ -709,11 +707,13 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
       if (nd.leaf) {
         const bool active = all_active(nd, N, h0, active_margin);
         const float ext = l1_extent(nd);
+        int pushed = 0;
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
           const Vec3f& a = (*vertices_)[ends_[2 * k]];
           int plus = 0, minus = 0;
           int keep = active ? m & ~edge_facing_class8(L, a, &normals_[6 * size_t(k)], ext, abs_margin, plus, minus) : m;
           if (keep) keep &= ~segment_outside8(L, a, (*vertices_)[ends_[2 * k + 1]], neps);
+          pushed |= keep;
           while (keep) {
             const int lane = __builtin_ctz(unsigned(keep));
             keep &= keep - 1;
@@ -721,7 +721,7 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
           }
         }
         if (limit != SIZE_MAX) {
-          for (int rest = m; rest; rest &= rest - 1) {
+          for (int rest = pushed; rest; rest &= rest - 1) {
             const int lane = __builtin_ctz(unsigned(rest));
             if (outs[lane].size() > limit) live &= ~(1 << lane);
           }
