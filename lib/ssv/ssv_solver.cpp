@@ -178,8 +178,8 @@ class Caster {
   // Embree's low-quality (Morton) build: SSV casts about one reference ray per receiver
   // and light, so the build dominates the caster's cost (answers do not depend on it);
   // paired quads halve its primitives (embree_scene.h; `embree_quads`).
-  Caster(const TriangleSoup& soup, bool quads, raycast::BuildQuality quality = raycast::BuildQuality::low)
-      : robust_(soup, true, true, quality,
+  Caster(const TriangleSoup& soup, bool quads)
+      : robust_(soup, true, true, raycast::BuildQuality::low,
                 quads ? raycast::Primitives::paired_quads : raycast::Primitives::triangles) {}
   bool occluded(const Vec3f& from, const Vec3f& to) const { return robust_.occluded(from, to); }
   bool occluded(const Vec3f& from, const Vec3f& to, float tnear, float tfar) const {
@@ -402,8 +402,8 @@ void cast_all(const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResu
     rr.set_visible(ls.offset + size_t(j), !sc.embree.occluded(r, sample_position(ls.light, j, i)));
 }
 
-// One ray per sample as Embree packets of 16 from the receiver (the edge_rays rule):
-// the same verified rays as cast_all, traced together.
+// One ray per sample from the receiver, 16 at a time (the edge_rays rule): the same
+// verified rays as cast_all, traced as Embree packets (EmbreeScene::occluded_fan).
 void cast_fan(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResult& rr) {
   const Vec3f& r = sc.scene.receivers[i].p;
   const int samples = ls.light.samples;
@@ -958,7 +958,6 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const TriangleSoup& blockers = kept ? *kept : scene.mesh;
   const mesh::PreparedMesh pm = mesh::prepare_mesh(blockers);
   auto t0 = Clock::now();
-
 
   SolveResult result = make_empty_result(scene);
   const std::vector<Edge> edges = mesh_edges(pm);
