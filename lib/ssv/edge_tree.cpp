@@ -482,7 +482,8 @@ inline float l1_extent(const Node& nd) {
 
 void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts,
                     size_t n_starts, uint32_t max_edges, std::vector<uint32_t>* edges,
-                    std::vector<uint32_t>* nodes) const {
+                    std::vector<uint32_t>* nodes, uint32_t cap) const {
+  const size_t limit = cap > 0 ? size_t(cap) : SIZE_MAX;
   const FloatFrustum ff(f, eps);
   // Light plane in float: min height over a box > 2e-6 M means every vertex's frame
   // height (to_local in double) is positive.
@@ -514,6 +515,7 @@ void EdgeTree::walk(const EdgeFrustum& f, const LightFrame& frame, float eps, co
           if (ff.outside(a, (*vertices_)[ends_[2 * k + 1]], eps)) continue;
           edges->push_back(order_[k] | (cls == 2 ? kWeightPlus2 : cls == 3 ? kWeightMinus2 : 0u));
         }
+        if (edges->size() > limit) return;
         continue;
       }
       for (uint32_t k = nd.child + nd.n; k-- > nd.child;) stack[top++] = k;
@@ -675,13 +677,14 @@ __attribute__((target("avx2"))) inline int edge_facing_class8(const LaneFrusta& 
 // leave it, so each lane visits exactly the nodes its own walk visits.
 __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size_t n, const LightFrame& frame,
                                                      float eps, const std::vector<uint32_t>& starts,
-                                                     std::vector<uint32_t>* outs) const {
+                                                     std::vector<uint32_t>* outs, uint32_t cap) const {
   const LaneFrusta L(fs, n, eps);
+  const size_t limit = cap > 0 ? size_t(cap) : SIZE_MAX;
   const __m256 neps = _mm256_set1_ps(-eps);
   const float N[3] = {float(frame.N.x), float(frame.N.y), float(frame.N.z)};
   const float h0 = float(dot(frame.N, frame.origin));
   const float active_margin = float(2e-6 * M_), abs_margin = float(1e-9 * M_);
-  const int all = int((1u << n) - 1u);
+  int live = int((1u << n) - 1u);  // the lanes not yet past the cap
   struct Item {
     uint32_t node;
     int mask;
@@ -689,11 +692,11 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
   Item stack[64];
   for (uint32_t start : starts) {
     size_t top = 0;
-    stack[top++] = {start, all};
+    stack[top++] = {start, int((1u << n) - 1u)};
     while (top > 0) {
       const Item it = stack[--top];
       const Node& nd = nodes_[it.node];
-      int m = it.mask & ~box_outside8(L, nd.lo, nd.hi, neps);
+      int m = it.mask & live & ~box_outside8(L, nd.lo, nd.hi, neps);
       if (m == 0) continue;
       if (!nd.single) {
         float hmin = -h0;  // facing_prunes' light-plane test: the same for every lane
@@ -704,16 +707,25 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
       if (nd.leaf) {
         const bool active = all_active(nd, N, h0, active_margin);
         const float ext = l1_extent(nd);
+        int pushed = 0;
         for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
           const Vec3f& a = (*vertices_)[ends_[2 * k]];
           int plus = 0, minus = 0;
           int keep = active ? m & ~edge_facing_class8(L, a, &normals_[6 * size_t(k)], ext, abs_margin, plus, minus) : m;
           if (keep) keep &= ~segment_outside8(L, a, (*vertices_)[ends_[2 * k + 1]], neps);
+          pushed |= keep;
           while (keep) {
             const int lane = __builtin_ctz(unsigned(keep));
             keep &= keep - 1;
             outs[lane].push_back(order_[k] | ((plus >> lane) & 1 ? kWeightPlus2 : (minus >> lane) & 1 ? kWeightMinus2 : 0u));
           }
+        }
+        if (limit != SIZE_MAX) {
+          for (int rest = pushed; rest; rest &= rest - 1) {
+            const int lane = __builtin_ctz(unsigned(rest));
+            if (outs[lane].size() > limit) live &= ~(1 << lane);
+          }
+          if (live == 0) return;
         }
         continue;
       }
@@ -724,23 +736,23 @@ __attribute__((target("avx2"))) void EdgeTree::walk8(const EdgeFrustum* fs, size
 #endif
 
 void EdgeTree::query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps,
-                           const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs) const {
+                           const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs, uint32_t cap) const {
 #if defined(VISGATE_EDGE_TREE_AVX2) && defined(__SSE2__)
   static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
   if (avx2) {
     for (size_t k = 0; k < n; ++k) outs[k].clear();
     if (empty()) return;
-    for (size_t first = 0; first < n; first += 8) walk8(fs + first, std::min<size_t>(8, n - first), frame, eps, starts, outs + first);
+    for (size_t first = 0; first < n; first += 8) walk8(fs + first, std::min<size_t>(8, n - first), frame, eps, starts, outs + first, cap);
     return;
   }
 #endif
-  for (size_t k = 0; k < n; ++k) query(fs[k], frame, eps, starts, outs[k]);
+  for (size_t k = 0; k < n; ++k) query(fs[k], frame, eps, starts, outs[k], cap);
 }
 
 void EdgeTree::query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
-                     std::vector<uint32_t>& out) const {
+                     std::vector<uint32_t>& out, uint32_t cap) const {
   out.clear();
-  if (!empty()) walk(f, frame, eps, starts.data(), starts.size(), 0, &out, nullptr);
+  if (!empty()) walk(f, frame, eps, starts.data(), starts.size(), 0, &out, nullptr, cap);
 }
 
 void EdgeTree::frontier(const EdgeFrustum& f, const LightFrame& frame, float eps, uint32_t max_edges,

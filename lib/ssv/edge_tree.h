@@ -93,15 +93,18 @@ class EdgeTree {
   // in the walk's order, into `out` (cleared first), from the nodes `starts` (frontier()).
   // `eps`: the frustum tolerance (a distance, at least 4e-6 M: the float tests below
   // err by less than 1e-6 M).
+  // `cap` > 0: the walk stops once `out` holds more than cap candidates (a prefix of the
+  // list, of at most cap + 8); a list of at most cap is the whole list (the solver's
+  // edge_rays rule casts a receiver's rays past the cap, ssv_solver.cpp).
   void query(const EdgeFrustum& f, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
-             std::vector<uint32_t>& out) const;
+             std::vector<uint32_t>& out, uint32_t cap = 0) const;
   // The candidates of several receivers at once: outs[k] gets exactly what
   // query(fs[k], ...) gives (the same node and edge tests, float for float), from one
   // walk that tests up to eight receivers per node (AVX2 lanes; where the processor lacks
   // AVX2, or VISGATE_SSV_NO_AVX2 is set, one query per receiver). Neighbouring receivers
   // visit mostly the same nodes: one visit loads a node once for all of them.
   void query_batch(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps,
-                   const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs) const;
+                   const std::vector<uint32_t>& starts, std::vector<uint32_t>* outs, uint32_t cap = 0) const;
   // The nodes a walk from the root with the receivers' frustum `f` reaches and does not
   // leave, stopping at nodes of at most `max_edges` edges (or leaves): starts for the
   // queries of the receivers in f's box. A node it leaves meets no receiver's frustum, or
@@ -142,9 +145,9 @@ class EdgeTree {
     uint8_t single = 0;    // some edge below has one triangle, or a triangle has no plane
   };
   void walk(const EdgeFrustum& f, const LightFrame& frame, float eps, const uint32_t* starts, size_t n_starts,
-            uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes) const;
+            uint32_t max_edges, std::vector<uint32_t>* edges, std::vector<uint32_t>* nodes, uint32_t cap = 0) const;
   void walk8(const EdgeFrustum* fs, size_t n, const LightFrame& frame, float eps, const std::vector<uint32_t>& starts,
-             std::vector<uint32_t>* outs) const;
+             std::vector<uint32_t>* outs, uint32_t cap) const;
   PopulatedArray<Node> nodes_;       // leaves first, level by level, the root last
   PopulatedArray<uint32_t> order_;  // edges in leaf order
   // Their endpoints (vertex indices), two per edge in leaf order: the leaves' item boxes

@@ -183,6 +183,23 @@ void expect_candidates_hold_brute_force(const Scene& s, const char* what, bool c
       st.tree.query(fs[k], st.frame, eps, root, got);
       EXPECT_EQ(lists[k], got) << what << ": light " << l << " receiver " << k << " of a batch of " << fs.size();
     }
+    // With a cap (edge_rays): a list of at most cap is the whole list, a longer one a
+    // prefix of it of at most cap + 8 (a leaf's edges), batched or not.
+    for (const uint32_t cap : {1u, 5u, 20u}) {
+      std::vector<std::vector<uint32_t>> capped(fs.size());
+      st.tree.query_batch(fs.data(), fs.size(), st.frame, eps, root, capped.data(), cap);
+      for (size_t k = 0; k < fs.size(); ++k) {
+        st.tree.query(fs[k], st.frame, eps, root, got, cap);
+        EXPECT_EQ(capped[k], got) << what << ": cap " << cap << " receiver " << k;
+        if (lists[k].size() <= cap) {
+          EXPECT_EQ(got, lists[k]) << what << ": cap " << cap << " receiver " << k;
+        } else {
+          EXPECT_GT(got.size(), size_t(cap)) << what;
+          EXPECT_LE(got.size(), size_t(cap) + 8) << what;
+          EXPECT_TRUE(std::equal(got.begin(), got.end(), lists[k].begin())) << what << ": cap " << cap;
+        }
+      }
+    }
   }
   if (culls) {
     EXPECT_LT(candidates * 4, pairs) << what << ": the tree culls nothing";
@@ -269,7 +286,9 @@ TEST(SsvEdgeTree, CrossingTrianglesHoldEveryLightPlaneCut) {
 
 TEST(SsvEdgeTree, SolverAnswersEqualTheWedgeIndexes) {
   auto same = [](const Scene& s, const std::string& what) {
+    // The indexes' integration (edge_rays would answer some receivers by rays instead).
     SolveOptions a, b, c;
+    a.opts["edge_rays"] = b.opts["edge_rays"] = c.opts["edge_rays"] = "off";
     a.opts["wedge_index"] = "edges";
     b.opts["wedge_index"] = "receivers";
     c.opts["wedge_index"] = "bsp";
@@ -302,9 +321,13 @@ TEST(SsvEdgeTree, AutoPicksTheEdgesForDenseSmoothMeshes) {
   const SolveOptions o;
   EXPECT_EQ(make_solver("ssv")->solve(family("scan", 4, 8000, 64, 8), o).stats.get("edge_index"), 1.0);
   EXPECT_EQ(make_solver("ssv")->solve(family("columns", 4, -1, 1024, 8), o).stats.get("edge_index"), 0.0);
+  // Its candidates, integrated (edge_rays would cast these receivers: hundreds of edges
+  // for 64 samples).
   const Scene noisy = noisy_scan(30000, 64, 3.0);
-  const SolveResult a = make_solver("ssv")->solve(noisy, o);
-  SolveOptions e;
+  SolveOptions n;
+  n.opts["edge_rays"] = "off";
+  const SolveResult a = make_solver("ssv")->solve(noisy, n);
+  SolveOptions e = n;
   e.opts["wedge_index"] = "receivers";
   const SolveResult b = make_solver("ssv")->solve(noisy, e);
   EXPECT_EQ(a.stats.get("edge_index"), 1.0);

@@ -117,7 +117,7 @@ TEST(Ssv, RandomScenesMatchDirectCountingAwayFromDegeneracy) {
   size_t compared = 0;
   for (uint64_t seed = 21; seed <= 26; ++seed) {
     Scene s = random_scene(seed, 64, 40);
-    SolveResult on = run_ssv(s, true), off = run_ssv(s, false);
+    SolveResult on = run_ssv(s, true, false), off = run_ssv(s, false, false);
     compared += expect_matches_direct(s, on, "regions on");
     expect_matches_direct(s, off, "regions off");
     for (size_t i = 0; i < s.receivers.size(); ++i)
@@ -184,12 +184,16 @@ TEST(Ssv, EmbreeQuadsOnAndOffGiveTheSameAnswers) {
   // embree_quads changes only the primitives of the reference rays' Embree scene: the
   // same bits and fractions on families that pair every triangle (scan, columns' boxes),
   // some (rooms, shared-edge-fan) or none (random-soup; sliver-soup, whose slivers SSV
-  // drops first), and, on one thread, the same count of reference rays.
+  // drops first), and, on one thread, the same count of reference rays. edge_rays is off:
+  // its rays to every sample keep Embree's semantics on degenerate relations (a segment
+  // through a shared edge of shared-edge-fan), which may differ between quads and
+  // triangles; EdgeRaysOnAndOffGiveTheSameRelationsAboveTau holds them to the oracle.
   for (const char* fam : {"scan", "columns", "rooms", "shared-edge-fan", "random-soup", "sliver-soup", "far-origin"}) {
     const Scene s = family(fam, 2, fam[0] == 'r' && fam[1] == 'o' ? 7000 : -1, 100, 16);
     SolveOptions on, off;
     on.opts["embree_quads"] = "on";
     off.opts["embree_quads"] = "off";
+    on.opts["edge_rays"] = off.opts["edge_rays"] = "off";
     on.threads = off.threads = 1;  // reference_rays depends on the threads' order (ThreadState)
     const SolveResult a = make_solver("ssv")->solve(s, on), b = make_solver("ssv")->solve(s, off);
     ASSERT_EQ(a.receivers.size(), b.receivers.size()) << fam;
@@ -200,6 +204,50 @@ TEST(Ssv, EmbreeQuadsOnAndOffGiveTheSameAnswers) {
     EXPECT_EQ(a.stats.get("reference_rays"), b.stats.get("reference_rays")) << fam;
     EXPECT_GT(a.stats.get("reference_rays"), 0.0) << fam;
   }
+}
+
+TEST(Ssv, EdgeRaysOnAndOffGiveTheSameRelationsAboveTau) {
+  // edge_rays (ssv_solver.cpp): a receiver and light with more candidate edges than
+  // edge_ray_limit per sample is answered by its rays, and wedge_index=auto takes the
+  // edges when its probe finds most receivers so (foliage). On and off, with every index
+  // and with limits that send some receivers each way, every relation of margin at least
+  // tau outside the oracle's degenerate class gets the oracle's answer, so on and off agree there.
+  struct Case {
+    const char* fam;
+    long tris;
+  };
+  for (const Case c : {Case{"foliage", 1200}, Case{"columns", -1}, Case{"torus", -1}, Case{"random-soup", -1},
+                       Case{"rooms", 7000}}) {
+    const Scene s = family(c.fam, 2, c.tris, 48, 16);
+    const oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+    SolveOptions off;
+    off.opts["edge_rays"] = "off";
+    const SolveResult r_off = make_solver("ssv")->solve(s, off);
+    EXPECT_EQ(r_off.stats.get("edge_ray_receivers"), 0.0) << c.fam;
+    expect_matches_oracle(s, ex, r_off, std::string(c.fam) + " off");
+    for (const char* index : {"auto", "edges", "receivers", "bsp"}) {
+      for (const char* limit : {"1", "0"}) {
+        SolveOptions on;
+        on.opts["wedge_index"] = index;
+        on.opts["edge_ray_limit"] = limit;
+        const SolveResult r = make_solver("ssv")->solve(s, on);
+        const std::string what = std::string(c.fam) + " " + index + " limit " + limit;
+        EXPECT_GT(expect_matches_oracle(s, ex, r, what), 200u) << what;
+        // Foliage's receivers see far more than 64 edges (the least limit).
+        if (std::string(c.fam) == "foliage") EXPECT_GT(r.stats.get("edge_ray_receivers"), 24.0) << what;
+        EXPECT_GE(r.stats.get("fallback_relations"), 16.0 * r.stats.get("edge_ray_receivers")) << what;
+      }
+    }
+  }
+  // Foliage below 16 edges per receiver: auto takes the edges for the rays, off keeps
+  // the scattered wedges.
+  const Scene f = family("foliage", 2, 1200, 256, 16);
+  const SolveResult r_on = make_solver("ssv")->solve(f, SolveOptions{});
+  EXPECT_EQ(r_on.stats.get("edge_index"), 1.0);
+  EXPECT_GT(r_on.stats.get("edge_ray_receivers"), 128.0);
+  SolveOptions off;
+  off.opts["edge_rays"] = "off";
+  EXPECT_EQ(make_solver("ssv")->solve(f, off).stats.get("edge_index"), 0.0);
 }
 
 // ---------------------------------------------------------------- exact degeneracies

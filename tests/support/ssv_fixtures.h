@@ -21,9 +21,11 @@
 
 namespace visgate::test_support {
 
-inline SolveResult run_ssv(const Scene& s, bool regions) {
+// edge_rays=off: every receiver integrated (tests of the integration's own counts).
+inline SolveResult run_ssv(const Scene& s, bool regions, bool edge_rays = true) {
   SolveOptions o;
   o.opts["silhouette_regions"] = regions ? "on" : "off";
+  if (!edge_rays) o.opts["edge_rays"] = "off";
   return make_solver("ssv")->solve(s, o);
 }
 
