@@ -234,7 +234,9 @@ TEST(Ssv, EdgeRaysOnAndOffGiveTheSameRelationsAboveTau) {
         const std::string what = std::string(c.fam) + " " + index + " limit " + limit;
         EXPECT_GT(expect_matches_oracle(s, ex, r, what), 200u) << what;
         // Foliage's receivers see far more than 64 edges (the least limit).
-        if (std::string(c.fam) == "foliage") EXPECT_GT(r.stats.get("edge_ray_receivers"), 24.0) << what;
+        if (std::string(c.fam) == "foliage") {
+          EXPECT_GT(r.stats.get("edge_ray_receivers"), 24.0) << what;
+        }
         EXPECT_GE(r.stats.get("fallback_relations"), 16.0 * r.stats.get("edge_ray_receivers")) << what;
       }
     }
