@@ -2,7 +2,7 @@
 #include "lib/mesh/prepare.h"
 
 #include <algorithm>
-#include <numeric>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 
@@ -13,58 +13,59 @@ namespace {
 struct PosKey {
   uint32_t x, y, z;
   bool operator==(const PosKey& o) const { return x == o.x && y == o.y && z == o.z; }
-  bool operator<(const PosKey& o) const { return x != o.x ? x < o.x : y != o.y ? y < o.y : z < o.z; }
 };
-struct PosHash {  // validate()
+PosKey pos_key(const Vec3f& v) { return PosKey{canonical_bits(v.x), canonical_bits(v.y), canonical_bits(v.z)}; }
+struct PosHash {
   size_t operator()(const PosKey& k) const {
-    uint64_t h = (uint64_t(k.x) * 0x9E3779B97F4A7C15ull) ^ (uint64_t(k.y) * 0xC2B2AE3D27D4EB4Full) ^
-                 (uint64_t(k.z) * 0x165667B19E3779F9ull);
+    uint64_t h = ((uint64_t(k.x) << 32) | k.y) * 0x9E3779B97F4A7C15ull ^ uint64_t(k.z) * 0xC2B2AE3D27D4EB4Full;
+    h ^= h >> 32;
+    h *= 0x94D049BB133111EBull;
     return size_t(h ^ (h >> 29));
   }
 };
 
+constexpr uint32_t kNone = UINT32_MAX;
+
+// Welded index of every input vertex (kNone when no triangle uses it) and the welded
+// positions. Vertices are visited in order of first use by the triangles; a position
+// gets the next index when it is first met, so the numbering is the first use of each
+// position (Figure 4.1). Positions are found in an open-addressing table of welded
+// indices (linear probing, load <= 1/2, one allocation): expected O(1) per used vertex.
+// Returns the number of used input vertices.
+size_t weld_ids(const TriangleSoup& in, std::vector<Vec3f>& pos, std::vector<uint32_t>& id) {
+  id.assign(in.vertices.size(), kNone);
+  pos.clear();
+  const size_t max_used = std::min(in.vertices.size(), in.triangles.size() * 3);
+  int bits = 4;
+  while ((size_t(1) << bits) < 2 * max_used) ++bits;
+  const size_t mask = (size_t(1) << bits) - 1;
+  std::vector<uint32_t> slot(mask + 1, kNone);  // welded index, or kNone for empty
+  size_t used = 0;
+  for (const auto& t : in.triangles)
+    for (uint32_t old : t) {
+      if (id[old] != kNone) continue;
+      ++used;
+      const Vec3f& v = in.vertices[old];
+      const PosKey key = pos_key(v);
+      size_t h = PosHash{}(key) & mask;
+      while (slot[h] != kNone && !(pos_key(pos[slot[h]]) == key)) h = (h + 1) & mask;
+      if (slot[h] == kNone) {
+        slot[h] = uint32_t(pos.size());
+        pos.push_back(v);
+      }
+      id[old] = slot[h];
+    }
+  return used;
+}
+
 }  // namespace
 
-// Equal positions (canonical bits: -0 and +0 are one) get one index, numbered in order of
-// first use by the triangles. By sorting the used vertices on (position, first use)
-// rather than a hash map of positions: the map allocated a node per vertex, 7% of
-// fuzz_iss's allocations under ASan (2026-12-03), and the numbering is the same.
 size_t weld_vertices(const TriangleSoup& in, std::vector<Vec3f>& pos, std::vector<std::array<uint32_t, 3>>& tris) {
-  // The used vertices in order of first use: rank r is vertex first[r].
-  std::vector<int64_t> remap(in.vertices.size(), -1);
-  std::vector<uint32_t> first;
-  first.reserve(in.vertices.size());
-  for (const auto& t : in.triangles)
-    for (uint32_t old : t)
-      if (remap[old] < 0) {
-        remap[old] = int64_t(first.size());
-        first.push_back(old);
-      }
-  const size_t used = first.size();
-  std::vector<PosKey> key(used);
-  for (size_t r = 0; r < used; ++r) {
-    const Vec3f& v = in.vertices[first[r]];
-    key[r] = PosKey{canonical_bits(v.x), canonical_bits(v.y), canonical_bits(v.z)};
-  }
-  std::vector<uint32_t> by_pos(used);
-  std::iota(by_pos.begin(), by_pos.end(), 0u);
-  std::sort(by_pos.begin(), by_pos.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
-  // rep[r]: the first-used rank of r's position; new indices follow first use.
-  std::vector<uint32_t> rep(used), id(used);
-  for (size_t k = 0; k < used; ++k)
-    rep[by_pos[k]] = k > 0 && key[by_pos[k]] == key[by_pos[k - 1]] ? rep[by_pos[k - 1]] : by_pos[k];
-  pos.clear();
-  for (size_t r = 0; r < used; ++r) {
-    if (rep[r] == r) {
-      id[r] = uint32_t(pos.size());
-      pos.push_back(in.vertices[first[r]]);
-    } else {
-      id[r] = id[rep[r]];
-    }
-  }
+  std::vector<uint32_t> id;
+  const size_t used = weld_ids(in, pos, id);
   tris.resize(in.triangles.size());
   for (size_t t = 0; t < in.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) tris[t][k] = id[size_t(remap[in.triangles[t][k]])];
+    for (int k = 0; k < 3; ++k) tris[t][k] = id[in.triangles[t][k]];
   return used - pos.size();
 }
 
@@ -83,53 +84,80 @@ size_t remove_degenerate(std::vector<std::array<uint32_t, 3>>& tris, std::vector
   return removed;
 }
 
+// Labels follow the order of the undirected edges (smaller vertex, larger vertex), and
+// within an edge the order of (triangle, k). The incidences are bucketed by their
+// smaller vertex (a counting sort: linear), each bucket then sorted on (larger vertex,
+// 3 * triangle + k), all distinct, so any sort gives that one order; buckets hold about
+// six incidences on a manifold mesh.
 void compute_neighbors_and_labels(PreparedMesh& m, PrepareCounts& counts) {
-  // One entry per (triangle, edge): undirected key, then sort to group incidences.
-  struct Inc {
-    uint64_t key;
-    uint32_t tri;
-    uint8_t k;
-    bool forward;  // traverses the edge from the smaller to the larger vertex index
-  };
-  std::vector<Inc> inc;
-  inc.reserve(m.triangles.size() * 3);
-  for (uint32_t t = 0; t < m.triangles.size(); ++t) {
-    auto& tri = m.triangles[t];
+  const size_t n = m.triangles.size();
+  if (n > UINT32_MAX / 3) throw std::length_error("prepare_mesh: more than 2^32 / 3 triangles");
+  size_t nv = 0;
+  for (auto& tri : m.triangles) {
     tri.neighbors = {-1, -1, -1};
-    for (uint8_t k = 0; k < 3; ++k) {
-      uint32_t a = tri.v[k], b = tri.v[(k + 1) % 3];
-      uint64_t key = (uint64_t(std::min(a, b)) << 32) | std::max(a, b);
-      inc.push_back({key, t, k, a < b});
+    nv = std::max(nv, size_t(std::max({tri.v[0], tri.v[1], tri.v[2]})) + 1);
+  }
+  // end[a]: after the scatter, one past the last incidence whose smaller vertex is a.
+  std::vector<uint32_t> end(nv + 1, 0);
+  for (const auto& tri : m.triangles)
+    for (int k = 0; k < 3; ++k) ++end[size_t(std::min(tri.v[k], tri.v[(k + 1) % 3])) + 1];
+  for (size_t a = 0; a < nv; ++a) end[a + 1] += end[a];
+  // Incidence: larger vertex in the high half, 3 * triangle + k in the low half.
+  std::vector<uint64_t> inc(3 * n);
+  for (uint32_t t = 0; t < n; ++t) {
+    const auto& v = m.triangles[t].v;
+    for (uint32_t k = 0; k < 3; ++k) {
+      const uint32_t a = v[k], b = v[(k + 1) % 3];
+      inc[end[std::min(a, b)]++] = (uint64_t(std::max(a, b)) << 32) | (3 * t + k);
     }
   }
-  std::sort(inc.begin(), inc.end(), [](const Inc& x, const Inc& y) {
-    return x.key != y.key ? x.key < y.key : (x.tri != y.tri ? x.tri < y.tri : x.k < y.k);
-  });
   m.is_double_edge.clear();
-  for (size_t i = 0; i < inc.size();) {
-    size_t j = i;
-    while (j < inc.size() && inc[j].key == inc[i].key) ++j;
-    size_t n = j - i;
-    if (n == 2 && inc[i].forward != inc[i + 1].forward) {
-      uint32_t label = uint32_t(m.is_double_edge.size());
-      m.is_double_edge.push_back(1);
-      auto& ta = m.triangles[inc[i].tri];
-      auto& tb = m.triangles[inc[i + 1].tri];
-      ta.edge_labels[inc[i].k] = label;
-      tb.edge_labels[inc[i + 1].k] = label;
-      ta.neighbors[inc[i].k] = int32_t(inc[i + 1].tri);
-      tb.neighbors[inc[i + 1].k] = int32_t(inc[i].tri);
-      ++counts.double_edges;
+  m.is_double_edge.reserve(3 * n);
+  auto use = [&](uint64_t e, uint32_t& t, uint32_t& k) {
+    t = uint32_t(e) / 3;
+    k = uint32_t(e) % 3;
+  };
+  for (size_t a = 0, begin = 0; a < nv; begin = end[a], ++a) {
+    uint64_t* first = inc.data() + begin;
+    uint64_t* last = inc.data() + end[a];
+    if (last - first <= 16) {  // insertion sort: the buckets are small
+      for (uint64_t* p = first + 1; p < last; ++p)
+        for (uint64_t* q = p; q > first && q[-1] > q[0]; --q) std::swap(q[-1], q[0]);
     } else {
-      if (n == 2) ++counts.inconsistent_joins;
-      if (n >= 3) ++counts.nonmanifold_edges;
-      for (size_t q = i; q < j; ++q) {
-        m.triangles[inc[q].tri].edge_labels[inc[q].k] = uint32_t(m.is_double_edge.size());
-        m.is_double_edge.push_back(0);
-        ++counts.single_edges;
-      }
+      std::sort(first, last);
     }
-    i = j;
+    for (uint64_t* i = first; i < last;) {
+      uint64_t* j = i + 1;
+      while (j < last && (*j >> 32) == (*i >> 32)) ++j;
+      const size_t count = size_t(j - i);
+      uint32_t t0, k0, t1, k1;
+      use(i[0], t0, k0);
+      if (count == 2) use(i[1], t1, k1);
+      // Neighbours iff two incidences traverse the edge in opposite directions.
+      auto forward = [&](uint32_t t, uint32_t k) { return m.triangles[t].v[k] < m.triangles[t].v[(k + 1) % 3]; };
+      if (count == 2 && forward(t0, k0) != forward(t1, k1)) {
+        const uint32_t label = uint32_t(m.is_double_edge.size());
+        m.is_double_edge.push_back(1);
+        auto& ta = m.triangles[t0];
+        auto& tb = m.triangles[t1];
+        ta.edge_labels[k0] = label;
+        tb.edge_labels[k1] = label;
+        ta.neighbors[k0] = int32_t(t1);
+        tb.neighbors[k1] = int32_t(t0);
+        ++counts.double_edges;
+      } else {
+        if (count == 2) ++counts.inconsistent_joins;
+        if (count >= 3) ++counts.nonmanifold_edges;
+        for (uint64_t* q = i; q < j; ++q) {
+          uint32_t t, k;
+          use(*q, t, k);
+          m.triangles[t].edge_labels[k] = uint32_t(m.is_double_edge.size());
+          m.is_double_edge.push_back(0);
+          ++counts.single_edges;
+        }
+      }
+      i = j;
+    }
   }
 }
 
@@ -138,16 +166,19 @@ PreparedMesh prepare_mesh(const TriangleSoup& soup, PrepareCounts* counts_out) {
   counts.input_vertices = soup.vertices.size();
   counts.input_triangles = soup.triangles.size();
   PreparedMesh m;
-  std::vector<std::array<uint32_t, 3>> tris;
-  counts.welded_vertices = weld_vertices(soup, m.vertex_pos, tris);
-  std::vector<uint32_t> source(tris.size());
-  for (uint32_t t = 0; t < source.size(); ++t) source[t] = t;
-  counts.degenerate_removed = remove_degenerate(tris, source);
-  m.triangles.resize(tris.size());
-  for (size_t t = 0; t < tris.size(); ++t) {
-    m.triangles[t].v = tris[t];
-    m.triangles[t].source = source[t];
+  std::vector<uint32_t> id;
+  counts.welded_vertices = weld_ids(soup, m.vertex_pos, id);
+  counts.welded_vertices -= m.vertex_pos.size();
+  // Weld, then drop triangles with two equal welded vertices (section 4.2's order).
+  m.triangles.reserve(soup.triangles.size());
+  for (size_t t = 0; t < soup.triangles.size(); ++t) {
+    PreparedTriangle pt;
+    for (int k = 0; k < 3; ++k) pt.v[k] = id[soup.triangles[t][k]];
+    if (pt.v[0] == pt.v[1] || pt.v[1] == pt.v[2] || pt.v[2] == pt.v[0]) continue;
+    pt.source = uint32_t(t);
+    m.triangles.push_back(pt);
   }
+  counts.degenerate_removed = soup.triangles.size() - m.triangles.size();
   compute_neighbors_and_labels(m, counts);
   if (counts_out) *counts_out = counts;
   return m;
