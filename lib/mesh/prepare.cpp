@@ -111,8 +111,10 @@ void compute_neighbors_and_labels(PreparedMesh& m, PrepareCounts& counts) {
       inc[end[std::min(a, b)]++] = (uint64_t(std::max(a, b)) << 32) | (3 * t + k);
     }
   }
-  m.is_double_edge.clear();
-  m.is_double_edge.reserve(3 * n);
+  // At most one label per incidence: written through a cursor, trimmed at the end.
+  m.is_double_edge.assign(3 * n, 0);
+  uint8_t* const flags = m.is_double_edge.data();
+  uint32_t labels = 0;
   auto use = [&](uint64_t e, uint32_t& t, uint32_t& k) {
     t = uint32_t(e) / 3;
     k = uint32_t(e) % 3;
@@ -133,11 +135,13 @@ void compute_neighbors_and_labels(PreparedMesh& m, PrepareCounts& counts) {
       uint32_t t0, k0, t1, k1;
       use(i[0], t0, k0);
       if (count == 2) use(i[1], t1, k1);
-      // Neighbours iff two incidences traverse the edge in opposite directions.
-      auto forward = [&](uint32_t t, uint32_t k) { return m.triangles[t].v[k] < m.triangles[t].v[(k + 1) % 3]; };
+      // Neighbours iff two incidences traverse the edge in opposite directions; forward:
+      // from the smaller vertex a to the larger b (never on a degenerate edge, b == a).
+      const uint32_t b = uint32_t(*i >> 32);
+      auto forward = [&](uint32_t t, uint32_t k) { return b != a && m.triangles[t].v[k] == a; };
       if (count == 2 && forward(t0, k0) != forward(t1, k1)) {
-        const uint32_t label = uint32_t(m.is_double_edge.size());
-        m.is_double_edge.push_back(1);
+        const uint32_t label = labels++;
+        flags[label] = 1;
         auto& ta = m.triangles[t0];
         auto& tb = m.triangles[t1];
         ta.edge_labels[k0] = label;
@@ -151,14 +155,14 @@ void compute_neighbors_and_labels(PreparedMesh& m, PrepareCounts& counts) {
         for (uint64_t* q = i; q < j; ++q) {
           uint32_t t, k;
           use(*q, t, k);
-          m.triangles[t].edge_labels[k] = uint32_t(m.is_double_edge.size());
-          m.is_double_edge.push_back(0);
+          m.triangles[t].edge_labels[k] = labels++;
           ++counts.single_edges;
         }
       }
       i = j;
     }
   }
+  m.is_double_edge.resize(labels);
 }
 
 PreparedMesh prepare_mesh(const TriangleSoup& soup, PrepareCounts* counts_out) {
