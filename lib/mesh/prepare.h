@@ -51,10 +51,13 @@ size_t weld_vertices(const TriangleSoup& in, std::vector<Vec3f>& pos, std::vecto
 // Removes triangles with two equal vertex indices; `source` is filtered alongside.
 // Returns the number removed.
 size_t remove_degenerate(std::vector<std::array<uint32_t, 3>>& tris, std::vector<uint32_t>& source);
-// Fills neighbours, edge labels and double-edge flags; counts what it found.
+// Fills neighbours, edge labels and double-edge flags; counts what it found. Labels
+// follow the order of the undirected edges (smaller index, larger index), then (triangle,
+// k). Throws std::length_error past 2^32 / 3 triangles (the labels are 32-bit).
 void compute_neighbors_and_labels(PreparedMesh& m, PrepareCounts& counts);
 
-// The whole of section 4.2.
+// The whole of section 4.2, in expected time linear in the soup's size (a hash table of
+// positions, a counting sort of the edges).
 PreparedMesh prepare_mesh(const TriangleSoup& soup, PrepareCounts* counts = nullptr);
 
 // Checks every invariant: indices in range, no repeated vertex in a triangle, no two
