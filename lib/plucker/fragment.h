@@ -319,6 +319,16 @@ struct LightPlane {
 // a fragment (two disjoint boxes: disjoint convex sets).
 UVBox shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 
+// shadow_box of the box [lo, hi]'s eight corners, or a box holding it, from two corners
+// and two divisions: every rounded step there (the dot product, the differences, the
+// quotients and products) is monotone in its inputs, so the corners' computed heights lie
+// between the two corners' picked by n's signs, their t between those heights' t, and
+// each corner's u - r_u, a product with t > 0, between the interval products of its
+// extremes; the spread and the largest coordinate are bounded the same way, and the
+// margin is monotone in both. The same UVBox::everything() condition (the largest hp /
+// hr is at one of the two corners).
+UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& r, const Vec3d& lo, const Vec3d& hi);
+
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
 // accepted when >= -bound with the float bound of a 2D orientation (see fragment.cpp).

@@ -715,9 +715,10 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     };
     // A node is entered only when the shadow box of its box's corners (that of every
     // triangle in it: the central projection of a convex set is the hull of its corners'
-    // projections, shadow_box's margin covering it as any polygon's) holds an open point.
+    // projections, shadow_box's margin covering it as any polygon's) holds an open point;
+    // shadow_box_of_box gives that box (or one holding it) from six of the corners' t.
     // A leaf passes on the pyramid test alone: its triangles' own shadow boxes decide,
-    // which cost less than the box's eight corners; a triangle the walk reaches only so
+    // which cost less than the box's corners; a triangle the walk reaches only so
     // meets no point's segment (that point lies in its shadow, so in the leaf box's) and
     // gives 0 (or -1 with r, p and it in one plane: undecided, shaded exactly).
     for (size_t si = 0; si < g.surfaces.size() && open > 0; ++si)
@@ -728,10 +729,7 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
             const AABBd lb = local_box(b);
             if (box_outside(lb)) return false;
             if (leaf) return true;
-            Vec3d q[8];
-            for (int k = 0; k < 8; ++k)
-              q[k] = Vec3d((k & 1) ? lb.hi.x : lb.lo.x, (k & 2) ? lb.hi.y : lb.lo.y, (k & 4) ? lb.hi.z : lb.lo.z);
-            return first_in(shadow_box(lp, r, q, 8)) < g.order.size();
+            return first_in(shadow_box_of_box(lp, r, lb.lo, lb.hi)) < g.order.size();
           },
           [&](uint32_t t) {
             if (open == 0) return;
