@@ -347,27 +347,16 @@ UVBox UVBox::everything() {
 }
 
 UVBox shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
-  const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
-  const double hr = dot(nd, rd) - lp.h0;
-  if (!(std::abs(hr) > 0.0)) return UVBox::everything();
-  const auto fu = axis_member(lp.axes.u), fv = axis_member(lp.axes.v);
+  const ShadowFrame f = ShadowFrame::of(lp, rd);
+  if (!f.bounded) return UVBox::everything();
   double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
   for (size_t k = 0; k < n; ++k) {
-    const Vec3d& p = q[k];
-    double hp = dot(nd, p) - lp.h0;
-    if (!(hp / hr <= 1.0 - 0x1p-10)) return UVBox::everything();
-    double t = hr / (hr - hp);
-    // The two coordinates of rd + (p - rd) t the box uses, each as that sum computes it.
-    const double u = rd.*fu + (p.*fu - rd.*fu) * t, v = rd.*fv + (p.*fv - rd.*fv) * t;
-    ulo = std::min(ulo, u), uhi = std::max(uhi, u), vlo = std::min(vlo, v), vhi = std::max(vhi, v);
-    spread = std::max(spread, std::abs(u - rd.*fu) + std::abs(v - rd.*fv));
+    const ShadowFrame::Vertex x = f.project(lp, q[k]);
+    if (!x.bounded) return UVBox::everything();
+    ulo = std::min(ulo, x.u), uhi = std::max(uhi, x.u), vlo = std::min(vlo, x.v), vhi = std::max(vhi, x.v);
+    spread = std::max(spread, x.spread);
   }
-  // One division: a rounded division by |hr| > 0 is monotone, so the largest quotient is
-  // the largest numerator's (0 for no vertex, as before).
-  spread /= std::abs(hr);
-  double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
-  double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
-  return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+  return f.box(lp, ulo, uhi, vlo, vhi, spread);
 }
 
 UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& rd, const Vec3d& lo, const Vec3d& hi) {
