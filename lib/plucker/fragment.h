@@ -328,7 +328,8 @@ struct ShadowFrame {
     double u = 0.0, v = 0.0, spread = 0.0;
     bool bounded = false;
   };
-  Vec3d nd, rd;
+  Vec3d nd;
+  const Vec3d* r = nullptr;  // the receiver (not copied: the frame lives within r's scope)
   double hr = 0.0;
   double Vec3d::*fu = &Vec3d::x;
   double Vec3d::*fv = &Vec3d::y;
@@ -336,7 +337,7 @@ struct ShadowFrame {
   static ShadowFrame of(const LightPlane& lp, const Vec3d& r) {
     ShadowFrame f;
     f.nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
-    f.rd = r;
+    f.r = &r;
     f.hr = dot(f.nd, r) - lp.h0;
     f.bounded = std::abs(f.hr) > 0.0;
     f.fu = axis_member(lp.axes.u), f.fv = axis_member(lp.axes.v);
@@ -346,6 +347,7 @@ struct ShadowFrame {
     Vertex x;
     const double hp = dot(nd, p) - lp.h0;
     if (!(hp / hr <= 1.0 - 0x1p-10)) return x;
+    const Vec3d& rd = *r;
     const double t = hr / (hr - hp);
     // The two coordinates of rd + (p - rd) t the box uses, each as that sum computes it.
     x.u = rd.*fu + (p.*fu - rd.*fu) * t, x.v = rd.*fv + (p.*fv - rd.*fv) * t;
