@@ -347,24 +347,67 @@ UVBox UVBox::everything() {
 }
 
 UVBox shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
+  const ShadowFrame f = ShadowFrame::of(lp, rd);
+  if (!f.bounded) return UVBox::everything();
+  double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    const ShadowFrame::Vertex x = f.project(lp, q[k]);
+    if (!x.bounded) return UVBox::everything();
+    ulo = std::min(ulo, x.u), uhi = std::max(uhi, x.u), vlo = std::min(vlo, x.v), vhi = std::max(vhi, x.v);
+    spread = std::max(spread, x.spread);
+  }
+  return f.box(lp, ulo, uhi, vlo, vhi, spread);
+}
+
+UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& rd, const Vec3d& lo, const Vec3d& hi) {
   const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
   const double hr = dot(nd, rd) - lp.h0;
   if (!(std::abs(hr) > 0.0)) return UVBox::everything();
-  const auto fu = axis_member(lp.axes.u), fv = axis_member(lp.axes.v);
-  double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
-  for (size_t k = 0; k < n; ++k) {
-    const Vec3d& p = q[k];
-    double hp = dot(nd, p) - lp.h0;
-    if (!(hp / hr <= 1.0 - 0x1p-10)) return UVBox::everything();
-    double t = hr / (hr - hp);
-    // The two coordinates of rd + (p - rd) t the box uses, each as that sum computes it.
-    const double u = rd.*fu + (p.*fu - rd.*fu) * t, v = rd.*fv + (p.*fv - rd.*fv) * t;
-    ulo = std::min(ulo, u), uhi = std::max(uhi, u), vlo = std::min(vlo, v), vhi = std::max(vhi, v);
-    spread = std::max(spread, std::abs(u - rd.*fu) + std::abs(v - rd.*fv));
+  // up: the corner of the largest hp / hr (so of the largest t: both quotients are
+  // monotone in it), each coordinate picked by nd's sign; dn: the opposite corner. A
+  // corner's height is dot(nd, c) - h0 as shadow_box computes it, from the products
+  // n_i c_i of its coordinates (pu for up's, pd for dn's).
+  double up[3], dn[3], pu[3], pd[3];
+  const double n3[3] = {nd.x, nd.y, nd.z}, lo3[3] = {lo.x, lo.y, lo.z}, hi3[3] = {hi.x, hi.y, hi.z};
+  for (int i = 0; i < 3; ++i) {
+    const bool raise = (n3[i] >= 0.0) == (hr > 0.0);
+    up[i] = raise ? hi3[i] : lo3[i];
+    dn[i] = raise ? lo3[i] : hi3[i];
+    pu[i] = n3[i] * up[i];
+    pd[i] = n3[i] * dn[i];
   }
-  // One division: a rounded division by |hr| > 0 is monotone, so the largest quotient is
-  // the largest numerator's (0 for no vertex, as before).
-  spread /= std::abs(hr);
+  const double hup = pu[0] + pu[1] + pu[2] - lp.h0, hdn = pd[0] + pd[1] + pd[2] - lp.h0;
+  // up holds the largest quotient; dn's test catches a NaN in the other coordinates.
+  if (!(hup / hr <= 1.0 - 0x1p-10) || !(hdn / hr <= 1.0 - 0x1p-10)) return UVBox::everything();
+  const int iu = lp.axes.u, iv = lp.axes.v;
+  // t at up with dn's coordinate on axis a, and at dn with up's.
+  const auto t_up_but = [&](int a) {
+    double q[3] = {pu[0], pu[1], pu[2]};
+    q[a] = pd[a];
+    return hr / (hr - (q[0] + q[1] + q[2] - lp.h0));
+  };
+  const auto t_dn_but = [&](int a) {
+    double q[3] = {pd[0], pd[1], pd[2]};
+    q[a] = pu[a];
+    return hr / (hr - (q[0] + q[1] + q[2] - lp.h0));
+  };
+  const double tup = hr / (hr - hup), tdn = hr / (hr - hdn);
+  // The extremes of coordinate a (u or v): among the four corners sharing up's a, the
+  // product (a - r_a) t is monotone in t, so extreme at their largest and least t: at up
+  // and at dn with up's a; among those with dn's a, at up with dn's a and at dn.
+  const auto range = [&](int a, double& mn, double& mx) {
+    const double ra = rd[a], x = up[a] - ra, y = dn[a] - ra;
+    const double c0 = ra + x * tup, c1 = ra + x * t_dn_but(a), c2 = ra + y * tdn, c3 = ra + y * t_up_but(a);
+    mn = std::min(std::min(c0, c1), std::min(c2, c3));
+    mx = std::max(std::max(c0, c1), std::max(c2, c3));
+  };
+  double ulo, uhi, vlo, vhi;
+  range(iu, ulo, uhi);
+  range(iv, vlo, vhi);
+  // The spread's bound: every corner's |u - r_u| and |v - r_v| are at most these.
+  const double spread = (std::max(std::abs(ulo - rd[iu]), std::abs(uhi - rd[iu])) +
+                         std::max(std::abs(vlo - rd[iv]), std::abs(vhi - rd[iv]))) /
+                        std::abs(hr);
   double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
   double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
   return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};

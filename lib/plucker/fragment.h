@@ -319,6 +319,62 @@ struct LightPlane {
 // a fragment (two disjoint boxes: disjoint convex sets).
 UVBox shadow_box(const LightPlane& lp, const Vec3d& r, const Vec3d* q, size_t n);
 
+// shadow_box in steps, for callers that reuse a vertex's projection across polygons
+// (the same floats: shadow_box is this loop). of(): r's height; project(p): p's two
+// coordinates and spread numerator, unbounded when p fails shadow_box's height test;
+// box(): the margin over the extremes and the largest spread numerator.
+struct ShadowFrame {
+  struct Vertex {
+    double u = 0.0, v = 0.0, spread = 0.0;
+    bool bounded = false;
+  };
+  Vec3d nd;
+  const Vec3d* r = nullptr;  // the receiver (not copied: the frame lives within r's scope)
+  double hr = 0.0;
+  double Vec3d::*fu = &Vec3d::x;
+  double Vec3d::*fv = &Vec3d::y;
+  bool bounded = false;  // false: every box is UVBox::everything()
+  static ShadowFrame of(const LightPlane& lp, const Vec3d& r) {
+    ShadowFrame f;
+    f.nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
+    f.r = &r;
+    f.hr = dot(f.nd, r) - lp.h0;
+    f.bounded = std::abs(f.hr) > 0.0;
+    f.fu = axis_member(lp.axes.u), f.fv = axis_member(lp.axes.v);
+    return f;
+  }
+  Vertex project(const LightPlane& lp, const Vec3d& p) const {
+    Vertex x;
+    const double hp = dot(nd, p) - lp.h0;
+    if (!(hp / hr <= 1.0 - 0x1p-10)) return x;
+    const Vec3d& rd = *r;
+    const double t = hr / (hr - hp);
+    // The two coordinates of rd + (p - rd) t the box uses, each as that sum computes it.
+    x.u = rd.*fu + (p.*fu - rd.*fu) * t, x.v = rd.*fv + (p.*fv - rd.*fv) * t;
+    x.spread = std::abs(x.u - rd.*fu) + std::abs(x.v - rd.*fv);
+    x.bounded = true;
+    return x;
+  }
+  UVBox box(const LightPlane& lp, double ulo, double uhi, double vlo, double vhi, double spread) const {
+    // One division: a rounded division by |hr| > 0 is monotone, so the largest quotient is
+    // the largest numerator's (0 for no vertex).
+    spread /= std::abs(hr);
+    const double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
+    const double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
+    return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+  }
+};
+
+// shadow_box of the box [lo, hi]'s eight corners, or a box holding it, from two corners
+// and two divisions: every rounded step there (the dot product, the differences, the
+// quotients and products) is monotone in its inputs, so the corners' computed heights lie
+// between the two corners' picked by n's signs, their t between those heights' t, and
+// each corner's u - r_u, a product with t > 0, between the interval products of its
+// extremes; the spread and the largest coordinate are bounded the same way, and the
+// margin is monotone in both. The same UVBox::everything() condition (the largest hp /
+// hr is at one of the two corners).
+UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& r, const Vec3d& lo, const Vec3d& hi);
+
 // Point in a convex fragment on the light plane (counter-clockwise about the light
 // normal), boundary included: orientation of p against each edge in the 2D frame,
 // accepted when >= -bound with the float bound of a 2D orientation (see fragment.cpp).

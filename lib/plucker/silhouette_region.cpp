@@ -713,11 +713,36 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     auto first_in = [&](const UVBox& sb) {
       return next_in(sb, size_t(std::lower_bound(g.order_u.begin(), g.order_u.end(), sb.ulo) - g.order_u.begin()));
     };
+    // A triangle's shadow box from its vertices' projections (ShadowFrame), each computed
+    // once per receiver (stamped, not cleared): the floats shadow_box computes.
+    const ShadowFrame sf = ShadowFrame::of(lp, r);
+    thread_local std::vector<ShadowFrame::Vertex> vproj;
+    thread_local std::vector<uint32_t> vstamp;
+    thread_local uint32_t vserial = 0;
+    if (vstamp.size() < mesh.vertices.size()) vstamp.resize(mesh.vertices.size(), 0), vproj.resize(mesh.vertices.size());
+    if (++vserial == 0) {
+      std::fill(vstamp.begin(), vstamp.end(), 0u);
+      vserial = 1;
+    }
+    auto triangle_box = [&](uint32_t t) {
+      if (!sf.bounded) return UVBox::everything();
+      double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t vi = mesh.triangles[t][size_t(k)];
+        if (vstamp[vi] != vserial) vstamp[vi] = vserial, vproj[vi] = sf.project(lp, to_local_d(mesh.vertices[vi], origin));
+        const ShadowFrame::Vertex& x = vproj[vi];
+        if (!x.bounded) return UVBox::everything();
+        ulo = std::min(ulo, x.u), uhi = std::max(uhi, x.u), vlo = std::min(vlo, x.v), vhi = std::max(vhi, x.v);
+        spread = std::max(spread, x.spread);
+      }
+      return sf.box(lp, ulo, uhi, vlo, vhi, spread);
+    };
     // A node is entered only when the shadow box of its box's corners (that of every
     // triangle in it: the central projection of a convex set is the hull of its corners'
-    // projections, shadow_box's margin covering it as any polygon's) holds an open point.
+    // projections, shadow_box's margin covering it as any polygon's) holds an open point;
+    // shadow_box_of_box gives that box (or one holding it) from six of the corners' t.
     // A leaf passes on the pyramid test alone: its triangles' own shadow boxes decide,
-    // which cost less than the box's eight corners; a triangle the walk reaches only so
+    // which cost less than the box's corners; a triangle the walk reaches only so
     // meets no point's segment (that point lies in its shadow, so in the leaf box's) and
     // gives 0 (or -1 with r, p and it in one plane: undecided, shaded exactly).
     for (size_t si = 0; si < g.surfaces.size() && open > 0; ++si)
@@ -728,16 +753,11 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
             const AABBd lb = local_box(b);
             if (box_outside(lb)) return false;
             if (leaf) return true;
-            Vec3d q[8];
-            for (int k = 0; k < 8; ++k)
-              q[k] = Vec3d((k & 1) ? lb.hi.x : lb.lo.x, (k & 2) ? lb.hi.y : lb.lo.y, (k & 4) ? lb.hi.z : lb.lo.z);
-            return first_in(shadow_box(lp, r, q, 8)) < g.order.size();
+            return first_in(shadow_box_of_box(lp, r, lb.lo, lb.hi)) < g.order.size();
           },
           [&](uint32_t t) {
             if (open == 0) return;
-            const Vec3d q[3] = {to_local_d(mesh.corner(t, 0), origin), to_local_d(mesh.corner(t, 1), origin),
-                                to_local_d(mesh.corner(t, 2), origin)};
-            const UVBox sb = shadow_box(lp, r, q, 3);
+            const UVBox sb = triangle_box(t);
             if (!sb.overlaps(all)) return;
             for (size_t x = first_in(sb); x < g.order.size(); x = next_in(sb, x + 1)) {
               const uint32_t k = g.order[x];

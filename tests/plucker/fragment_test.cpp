@@ -298,6 +298,42 @@ TEST(PluckerFragment, ShadowBoxIsThePerVertexForm) {
   EXPECT_GT(bounded, 200);
 }
 
+TEST(PluckerFragment, ShadowBoxOfBoxHoldsTheCornersShadowBox) {
+  // shadow_box_of_box against shadow_box of the box's eight corners on random lights
+  // (axis-aligned and Newell planes, some axis-aligned normals), receivers and boxes,
+  // corners behind r or on r's side of the plane included: the same everything()
+  // cases, a box holding the corners' box, and the same box when plane_tol is 0 (the
+  // extremes are the same floats; only the spread's bound may be larger).
+  Rng rng(93);
+  int bounded = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    LightPlane lp;
+    lp.n = Vec3f(float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)));
+    if (trial % 5 == 0) lp.n.x = 0.0f;
+    if (trial % 7 == 0) lp.n.y = 0.0f;
+    lp.plane_tol = trial % 3 == 0 ? 0.0f : float(rng.uniform(0, 1e-3));
+    lp.extent = float(rng.uniform(0.1, 10));
+    lp.axes = UVAxes::from_normal(lp.n);
+    if (trial % 2 == 0) lp.nd = normalize(to_double(lp.n)), lp.h0 = rng.uniform(-1, 1);
+    const double scale = std::pow(10.0, rng.uniform(-3, 3));
+    const Vec3d r(rng.uniform(-1, 1) * scale, rng.uniform(-1, 1) * scale, rng.uniform(-1, 1) * scale);
+    const Vec3d a = r + Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)) * scale;
+    const Vec3d b = a + Vec3d(rng.uniform(0, 1), rng.uniform(0, 1), rng.uniform(0, 1)) * (scale * rng.uniform(0, 1));
+    Vec3d q[8];
+    for (int k = 0; k < 8; ++k) q[k] = Vec3d((k & 1) ? b.x : a.x, (k & 2) ? b.y : a.y, (k & 4) ? b.z : a.z);
+    const UVBox want = shadow_box(lp, r, q, 8), got = shadow_box_of_box(lp, r, a, b);
+    const bool everything = want.uhi == std::numeric_limits<double>::infinity();
+    ASSERT_EQ(everything, got.uhi == std::numeric_limits<double>::infinity()) << trial;
+    if (everything) continue;
+    ++bounded;
+    EXPECT_TRUE(got.ulo <= want.ulo && got.uhi >= want.uhi && got.vlo <= want.vlo && got.vhi >= want.vhi) << trial;
+    if (lp.plane_tol == 0.0f) {
+      EXPECT_TRUE(same_box(got, want)) << trial;
+    }
+  }
+  EXPECT_GT(bounded, 300);
+}
+
 TEST(PluckerFragment, PointInFragmentToleratesANoiseEdge) {
   // A fragment of columns seed 2 (receiver 2330): two computed vertices 1.6e-6 apart make
   // a "noise" edge whose line has a random direction; the sample 1e-3 inside the
