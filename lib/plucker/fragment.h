@@ -365,14 +365,14 @@ struct ShadowFrame {
   }
 };
 
-// shadow_box of the box [lo, hi]'s eight corners, or a box holding it, from two corners
-// and two divisions: every rounded step there (the dot product, the differences, the
-// quotients and products) is monotone in its inputs, so the corners' computed heights lie
-// between the two corners' picked by n's signs, their t between those heights' t, and
-// each corner's u - r_u, a product with t > 0, between the interval products of its
-// extremes; the spread and the largest coordinate are bounded the same way, and the
-// margin is monotone in both. The same UVBox::everything() condition (the largest hp /
-// hr is at one of the two corners).
+// shadow_box of the box [lo, hi]'s eight corners, or a box holding it, from the t of six
+// corners instead of eight projections: every rounded step there (the dot product, the
+// differences, the quotients and products) is monotone in its inputs, so the corners'
+// computed heights lie between those of the two corners picked by n's signs (up, dn),
+// and among the four corners sharing a coordinate u, (u - r_u) t is extreme at their
+// largest and least t (up's and dn's with that u swapped in); the spread and the largest
+// coordinate are bounded by the extremes, and the margin is monotone in both. The same
+// UVBox::everything() condition (the largest hp / hr is at up).
 UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& r, const Vec3d& lo, const Vec3d& hi);
 
 // Point in a convex fragment on the light plane (counter-clockwise about the light
