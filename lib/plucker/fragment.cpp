@@ -349,20 +349,20 @@ UVBox UVBox::everything() {
 UVBox shadow_box(const LightPlane& lp, const Vec3d& rd, const Vec3d* q, size_t n) {
   const ShadowFrame f = ShadowFrame::of(lp, rd);
   if (!f.bounded) return UVBox::everything();
-  double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+  ShadowFrame::Extent e;
   for (size_t k = 0; k < n; ++k) {
     const ShadowFrame::Vertex x = f.project(lp, q[k]);
     if (!x.bounded) return UVBox::everything();
-    ulo = std::min(ulo, x.u), uhi = std::max(uhi, x.u), vlo = std::min(vlo, x.v), vhi = std::max(vhi, x.v);
-    spread = std::max(spread, x.spread);
+    e.add(x);
   }
-  return f.box(lp, ulo, uhi, vlo, vhi, spread);
+  return f.box(lp, e);
 }
 
 UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& rd, const Vec3d& lo, const Vec3d& hi) {
-  const Vec3d nd = (lp.nd.x != 0.0 || lp.nd.y != 0.0 || lp.nd.z != 0.0) ? lp.nd : to_double(lp.n);
-  const double hr = dot(nd, rd) - lp.h0;
-  if (!(std::abs(hr) > 0.0)) return UVBox::everything();
+  const ShadowFrame f = ShadowFrame::of(lp, rd);
+  if (!f.bounded) return UVBox::everything();
+  const Vec3d& nd = f.nd;
+  const double hr = f.hr;
   // up: the corner of the largest hp / hr (so of the largest t: both quotients are
   // monotone in it), each coordinate picked by nd's sign; dn: the opposite corner. A
   // corner's height is dot(nd, c) - h0 as shadow_box computes it, from the products
@@ -401,16 +401,13 @@ UVBox shadow_box_of_box(const LightPlane& lp, const Vec3d& rd, const Vec3d& lo, 
     mn = std::min(std::min(c0, c1), std::min(c2, c3));
     mx = std::max(std::max(c0, c1), std::max(c2, c3));
   };
-  double ulo, uhi, vlo, vhi;
-  range(iu, ulo, uhi);
-  range(iv, vlo, vhi);
+  ShadowFrame::Extent e;
+  range(iu, e.ulo, e.uhi);
+  range(iv, e.vlo, e.vhi);
   // The spread's bound: every corner's |u - r_u| and |v - r_v| are at most these.
-  const double spread = (std::max(std::abs(ulo - rd[iu]), std::abs(uhi - rd[iu])) +
-                         std::max(std::abs(vlo - rd[iv]), std::abs(vhi - rd[iv]))) /
-                        std::abs(hr);
-  double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
-  double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
-  return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+  e.spread = std::max(std::abs(e.ulo - rd[iu]), std::abs(e.uhi - rd[iu])) +
+             std::max(std::abs(e.vlo - rd[iv]), std::abs(e.vhi - rd[iv]));
+  return f.box(lp, e);
 }
 
 bool point_in_fragment(const UVAxes& f, const Vec3d* poly, int n, const Vec3d& p, double slack) {

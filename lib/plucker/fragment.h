@@ -355,13 +355,21 @@ struct ShadowFrame {
     x.bounded = true;
     return x;
   }
-  UVBox box(const LightPlane& lp, double ulo, double uhi, double vlo, double vhi, double spread) const {
+  // The extremes of projected vertices (add) or bounds of them, for box().
+  struct Extent {
+    double ulo = HUGE_VAL, uhi = -HUGE_VAL, vlo = HUGE_VAL, vhi = -HUGE_VAL, spread = 0.0;
+    void add(const Vertex& x) {
+      ulo = std::min(ulo, x.u), uhi = std::max(uhi, x.u), vlo = std::min(vlo, x.v), vhi = std::max(vhi, x.v);
+      spread = std::max(spread, x.spread);
+    }
+  };
+  UVBox box(const LightPlane& lp, const Extent& e) const {
     // One division: a rounded division by |hr| > 0 is monotone, so the largest quotient is
     // the largest numerator's (0 for no vertex).
-    spread /= std::abs(hr);
-    const double mag = std::max({std::abs(ulo), std::abs(uhi), std::abs(vlo), std::abs(vhi), double(lp.extent)});
+    const double spread = e.spread / std::abs(hr);
+    const double mag = std::max({std::abs(e.ulo), std::abs(e.uhi), std::abs(e.vlo), std::abs(e.vhi), double(lp.extent)});
     const double margin = double(lp.plane_tol) * 4.0 * (1.0 + spread) + mag * 0x1p-16;
-    return UVBox{float(ulo - margin), float(uhi + margin), float(vlo - margin), float(vhi + margin)};
+    return UVBox{float(e.ulo - margin), float(e.uhi + margin), float(e.vlo - margin), float(e.vhi + margin)};
   }
 };
 

@@ -726,16 +726,15 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
     }
     auto triangle_box = [&](uint32_t t) {
       if (!sf.bounded) return UVBox::everything();
-      double ulo = std::numeric_limits<double>::infinity(), uhi = -ulo, vlo = ulo, vhi = -ulo, spread = 0.0;
+      ShadowFrame::Extent e;
       for (int k = 0; k < 3; ++k) {
         const uint32_t vi = mesh.triangles[t][size_t(k)];
         if (vstamp[vi] != vserial) vstamp[vi] = vserial, vproj[vi] = sf.project(lp, to_local_d(mesh.vertices[vi], origin));
         const ShadowFrame::Vertex& x = vproj[vi];
         if (!x.bounded) return UVBox::everything();
-        ulo = std::min(ulo, x.u), uhi = std::max(uhi, x.u), vlo = std::min(vlo, x.v), vhi = std::max(vhi, x.v);
-        spread = std::max(spread, x.spread);
+        e.add(x);
       }
-      return sf.box(lp, ulo, uhi, vlo, vhi, spread);
+      return sf.box(lp, e);
     };
     // A node is entered only when the shadow box of its box's corners (that of every
     // triangle in it: the central projection of a convex set is the hull of its corners'
