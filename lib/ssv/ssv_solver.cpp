@@ -364,6 +364,8 @@ struct LightSetup {
   const EdgeTree* edge_tree = nullptr;   // wedge_index=edges: candidates per receiver, no wedges
   // edge_rays: a receiver with more candidates than this is answered by its rays (0: off).
   uint32_t ray_limit = 0;
+  // ray_solve: every receiver is answered by its rays, without candidates (no index).
+  bool all_rays = false;
 };
 
 // Per-scene data: the blocker mesh, its edges and the ray caster.
@@ -568,7 +570,7 @@ void solve_receiver(ThreadState& st, const SceneSetup& sc, const LightSetup& ls,
     st.c.t_ray += seconds_between(a, Clock::now());
     return;
   }
-  if (!integrate_receiver(st, sc, ls, i, pos)) {
+  if (ls.all_rays || !integrate_receiver(st, sc, ls, i, pos)) {
     auto a = Clock::now();
     cast_fan(st, sc, ls, i, rr);
     st.c.fallback += ls.light.samples;
@@ -595,19 +597,28 @@ uint32_t ray_limit(long per_sample, int samples) {
   return uint32_t(std::clamp<int64_t>(int64_t(per_sample) * samples, kMinRayCandidates, int64_t(1) << 31));
 }
 
+// ray_solve=auto: a solve whose probe (below) finds at least kRaySolveNum / kRaySolveDen
+// of its receivers past the ray limit answers every receiver by its rays and builds no
+// index: the capped walk of the cast receivers (foliage 1,024 x 64: 19.6M of 127.2M
+// instructions) and the edge tree's build (4.2M) cost more than the rays of the few
+// receivers below the limit, which see few triangles (their 4,288 rays added 1.0M).
+constexpr size_t kRaySolveNum = 4, kRaySolveDen = 3;
+
 // wedge_index=auto picks the edge hierarchy from this many mesh edges per receiver.
 constexpr double kEdgesPerReceiver = 16.0;
 
-// edge_rays' probe, a cost estimate before any index is built: whether at least half of
-// up to kProbes receivers spread over the scene (receiver order, the lights in turn) have
-// more edges of nonzero weight inside their frustum to L' (EdgeFrustum, double) than the
+// edge_rays' probe, a cost estimate before any index is built: how many of up to kProbes
+// receivers spread over the scene (receiver order, the lights in turn) have more edges of nonzero weight inside their frustum to L' (EdgeFrustum, double) than the
 // ray limit, counted over every k-th edge and scaled by k, where k is a quarter of the
 // smallest limit (a receiver is past it on at least 4 counted edges).
 // It only chooses the index, never an answer.
 constexpr size_t kProbes = 12;
-bool mostly_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edge>& edges, const Scene& scene,
-                       long per_sample) {
-  if (edges.empty() || scene.receivers.empty() || scene.lights.empty()) return false;
+struct ProbeCounts {
+  size_t probes = 0, past = 0;
+};
+ProbeCounts probe_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edge>& edges, const Scene& scene,
+                             long per_sample) {
+  if (edges.empty() || scene.receivers.empty() || scene.lights.empty()) return {};
   uint32_t min_cap = std::numeric_limits<uint32_t>::max();
   for (const Light& light : scene.lights) min_cap = std::min(min_cap, ray_limit(per_sample, light.samples));
   const size_t stride = std::max<size_t>(1, min_cap / 4);
@@ -653,7 +664,7 @@ bool mostly_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edge>& ed
       past += in > cap ? 1 : 0;
     }
   }
-  return probes > 0 && 2 * past >= probes;
+  return {probes, past};
 }
 
 // The edge tree's frontier per batch of at most kEdgeBatch receivers: nodes of at most
@@ -681,6 +692,14 @@ uint32_t frontier_edges(size_t edges, size_t receivers) {
 double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_thread_specific<ThreadState>& states,
                    SolveResult& result, const std::vector<int32_t>& batches, float eps, bool use_region,
                    MemoryCharge& charge) {
+  if (ls.all_rays) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
+      const IeeeFloatMode range_float_mode;
+      ThreadState& st = states.local();
+      for (size_t i = range.begin(); i != range.end(); ++i) solve_receiver(st, sc, ls, i, 0, result);
+    });
+    return 0.0;
+  }
   if (ls.edge_tree) {
     // Batch by batch of the receiver tree: the walk down to the frontier of the batch's
     // receivers is shared by their queries (edge_tree.h).
@@ -951,6 +970,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   std::string index = opt.get("wedge_index", "auto");
   const bool edge_rays = opt.get_bool("edge_rays", true);
   const long edge_ray_limit = std::max(0L, opt.get_int("edge_ray_limit", kEdgeRayLimit));
+  const std::string ray_solve = opt.get("ray_solve", "auto");
 
   auto tp0 = Clock::now();
   size_t slivers = 0;
@@ -991,23 +1011,28 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // of the mesh's edges per light (docs/log/ssv-performance.md, ninth round).
   // With edge_rays, a mesh below that density still takes the edges when the probe finds
   // most receivers past the ray limit (foliage: every leaf above every receiver): their
-  // walks stop at the limit, where the wedges would be built and scattered in full.
-  bool rays_chosen = false;
-  if (index == "auto" && double(edges.size()) < kEdgesPerReceiver * double(scene.receivers.size()) && edge_rays &&
-      mostly_past_limit(pm, edges, scene, edge_ray_limit)) {
-    index = "edges";
-    rays_chosen = true;
+  // walks stop at the limit, where the wedges would be built and scattered in full; when
+  // it finds nearly all past (ray_solve, kRaySolveNum), no index at all: rays for every
+  // receiver.
+  bool rays_chosen = false, rays_only = false;
+  if (index == "auto" && double(edges.size()) < kEdgesPerReceiver * double(scene.receivers.size()) && edge_rays) {
+    const ProbeCounts pc = probe_past_limit(pm, edges, scene, edge_ray_limit);
+    if (pc.probes > 0 && 2 * pc.past >= pc.probes) {
+      index = "edges";
+      rays_chosen = true;
+      rays_only = ray_solve == "auto" && kRaySolveNum * pc.past >= kRaySolveDen * pc.probes;
+    }
   }
   if (index == "auto") index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
   // The edge index marks proven weights in its candidates' top bits (edge_tree.h): a mesh
   // of more edges than those leave (2^30, far beyond any memory budget) takes the wedges.
-  const bool use_edges = index == "edges" && edges.size() <= size_t(EdgeTree::kEdgeMask);
-  const bool use_scatter = index == "receivers" || (index == "edges" && !use_edges);
+  const bool use_edges = !rays_only && index == "edges" && edges.size() <= size_t(EdgeTree::kEdgeMask);
+  const bool use_scatter = !rays_only && (index == "receivers" || (index == "edges" && !use_edges));
   // The triangle planes as an array for the wedge indexes (build_wedges reads every
   // edge's per light); the edge index reads only its candidates' and computes them.
   TrianglePlanes tri_planes;
-  if (!use_edges) tri_planes = triangle_planes(pm);
-  PlaneSource planes{&pm, use_edges ? nullptr : &tri_planes};
+  if (!use_edges && !rays_only) tri_planes = triangle_planes(pm);
+  PlaneSource planes{&pm, use_edges || rays_only ? nullptr : &tri_planes};
 
   std::vector<Vec3d> frame_pos;  // per light, its capacity reused
 
@@ -1027,7 +1052,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   Caster embree(blockers, use_quads);
   const double embree_seconds = seconds_between(tb0, Clock::now());
   auto tc0 = Clock::now();
-  Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges,
+  Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges && !rays_only,
                use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   const SceneSetup sc{scene, embree, edges, eps, pm, tol};
   const ReceiverTree& receiver_tree = cull.tree;
@@ -1089,14 +1114,14 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     root.hi += Vec3f(grow, grow, grow);
     // The wedge indexes read most vertices' frame positions: an array. The edge index
     // computes those of its candidates on use, per thread (FramePositions).
-    frame_pos.resize(all_hidden || use_edges ? 0 : pm.vertex_pos.size());
+    frame_pos.resize(all_hidden || use_edges || rays_only ? 0 : pm.vertex_pos.size());
     for (size_t v = 0; v < frame_pos.size(); ++v) frame_pos[v] = frame.to_local(pm.vertex_pos[v]);
     wedges.clear();
     std::vector<uint32_t> cut_triangles;
     if (!light_fallback && !all_hidden && use_edges) {
       cull.edge_tree.crossing_triangles(edges, frame, crossing);
       cut_triangles = light_plane_cuts(pm, FramePositions(pm.vertex_pos, frame), frame, crossing);
-    } else if (!light_fallback && !all_hidden) {
+    } else if (!light_fallback && !all_hidden && !rays_only) {
       const bool subset = use_shafts && !cull.edge_bvh.empty();
       if (subset) {
         auto tc = Clock::now();
@@ -1116,7 +1141,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
     wedge_charge.bind(&budget, "wedges");
     wedge_charge.set(wedges.capacity() * sizeof(Wedge));
     std::optional<WedgeBsp> bsp;
-    if (!use_scatter && !use_edges) {
+    if (!use_scatter && !use_edges && !rays_only) {
       bsp.emplace(wedges, root, min_node, eps, use_region);
       bsp->set_memory_budget(&budget);
     }
@@ -1127,7 +1152,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                         frame,         light_fallback, wedges,
                         cut_triangles, bsp ? &*bsp : nullptr, &scatter,
                         receiver_tree, strips, occluded, use_edges ? &cull.edge_tree : nullptr,
-                        edge_rays ? ray_limit(edge_ray_limit, light.samples) : 0u};
+                        edge_rays ? ray_limit(edge_ray_limit, light.samples) : 0u, rays_only};
     tbb::enumerable_thread_specific<ThreadState> states([&] {
       ThreadState st(pm, planes, use_edges ? FramePositions(pm.vertex_pos, frame) : FramePositions(frame_pos), frame);
       if (use_edges) {
@@ -1163,9 +1188,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       {"silhouette_regions", use_region ? 1.0 : 0.0},   {"occluder_culling", use_occluders ? 1.0 : 0.0},
       {"occluders", double(cull.occluders.size())},     {"occluded_relations", culled_relations},
       {"hidden_lights", hidden_lights},                 {"occluder_seconds", cull_seconds},
-      {"shaft_culling", use_shafts ? 1.0 : 0.0},        {"wedge_index_bsp", use_scatter || use_edges ? 0.0 : 1.0},
+      {"shaft_culling", use_shafts ? 1.0 : 0.0},        {"wedge_index_bsp", use_scatter || use_edges || rays_only ? 0.0 : 1.0},
       {"scattered_candidates", double(scatter.total_entries())}, {"edges_outside_shafts", edges_outside},
-      {"edge_index", use_edges ? 1.0 : 0.0}};
+      {"edge_index", use_edges ? 1.0 : 0.0},            {"ray_solve", rays_only ? 1.0 : 0.0}};
   for (const auto& [key, value] : culling_stats) s.set(key, value);
   return result;
 }

@@ -241,15 +241,58 @@ TEST(Ssv, EdgeRaysOnAndOffGiveTheSameRelationsAboveTau) {
       }
     }
   }
-  // Foliage below 16 edges per receiver: auto takes the edges for the rays, off keeps
-  // the scattered wedges.
+  // Foliage below 16 edges per receiver: auto takes the edges for the rays (here every
+  // receiver's rays without them: ray_solve), off keeps the scattered wedges.
   const Scene f = family("foliage", 2, 1200, 256, 16);
+  SolveOptions by_receiver;
+  by_receiver.opts["ray_solve"] = "off";
+  EXPECT_EQ(make_solver("ssv")->solve(f, by_receiver).stats.get("edge_index"), 1.0);
   const SolveResult r_on = make_solver("ssv")->solve(f, SolveOptions{});
-  EXPECT_EQ(r_on.stats.get("edge_index"), 1.0);
+  EXPECT_EQ(r_on.stats.get("ray_solve"), 1.0);
   EXPECT_GT(r_on.stats.get("edge_ray_receivers"), 128.0);
   SolveOptions off;
   off.opts["edge_rays"] = "off";
   EXPECT_EQ(make_solver("ssv")->solve(f, off).stats.get("edge_index"), 0.0);
+}
+
+TEST(Ssv, RaySolveAnswersEveryReceiverByRaysAsTheOracle) {
+  // ray_solve=auto (ssv_solver.cpp): when edge_rays' probe finds at least three quarters
+  // of its receivers past the limit (foliage: every leaf above every receiver), no index
+  // is built and every receiver is answered by its verified rays. Held to the oracle,
+  // with ray_solve=off (the receivers below the limit integrated) as a second answer,
+  // on foliage in a dense and a sparse crown, and the decision on scenes it must not take.
+  struct Case {
+    uint64_t seed;
+    long tris;
+  };
+  for (const Case c : {Case{2, 1200}, Case{3, 600}}) {
+    const Scene s = family("foliage", c.seed, c.tris, 256, 16);
+    const oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
+    SolveOptions off;
+    off.opts["ray_solve"] = "off";
+    const SolveResult r_auto = make_solver("ssv")->solve(s, SolveOptions{}), r_off = make_solver("ssv")->solve(s, off);
+    const std::string what = "foliage " + std::to_string(c.seed) + " " + std::to_string(c.tris);
+    EXPECT_EQ(r_auto.stats.get("ray_solve"), 1.0) << what;
+    EXPECT_EQ(r_off.stats.get("ray_solve"), 0.0) << what;
+    EXPECT_EQ(r_auto.stats.get("edge_index"), 0.0) << what;
+    EXPECT_EQ(r_auto.stats.get("queries"), 0.0) << what;
+    // Every receiver by its rays (none grazing or hidden here).
+    EXPECT_EQ(r_auto.stats.get("edge_ray_receivers"), double(s.receivers.size())) << what;
+    EXPECT_EQ(r_auto.stats.get("fallback_relations"), double(s.relation_count())) << what;
+    EXPECT_LT(r_off.stats.get("edge_ray_receivers"), double(s.receivers.size())) << what;
+    EXPECT_GT(expect_matches_oracle(s, ex, r_auto, what + " auto"), 3000u) << what;
+    expect_matches_oracle(s, ex, r_off, what + " off");
+  }
+  // A crown where the probe finds fewer than three quarters past: receiver by receiver.
+  const Scene f = family("foliage", 3, 2000, 128, 16);
+  const SolveResult rf = make_solver("ssv")->solve(f, SolveOptions{});
+  EXPECT_EQ(rf.stats.get("ray_solve"), 0.0);
+  EXPECT_EQ(rf.stats.get("edge_index"), 1.0);
+  expect_matches_oracle(f, oracle::run_relation_oracle(f, 0), rf, "foliage 3 2000");
+  for (const char* fam : {"columns", "rooms", "torus"}) {
+    const Scene s = family(fam, 2, fam[0] == 'r' ? 7000 : -1, 48, 16);
+    EXPECT_EQ(make_solver("ssv")->solve(s, SolveOptions{}).stats.get("ray_solve"), 0.0) << fam;
+  }
 }
 
 // ---------------------------------------------------------------- exact degeneracies
