@@ -672,6 +672,35 @@ ProbeCounts probe_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edg
 // 64 edges beat 16 and 128, by callgrind instructions).
 constexpr uint32_t kFrontierEdges = 64, kEdgeBatch = 8;
 
+// ray_solve's probe on meshes of at least kEdgesPerReceiver edges per receiver, which
+// build the edge tree anyway: the capped walk (the solver's own test) of the receivers
+// probe_past_limit would take, stopping once `max_below` are below the limit (the
+// sampled count over every 16th edge cost bunny 75k 6.2M instructions, 2.5% of its solve,
+// against about 0.5M for these walks). It only chooses, never an answer.
+ProbeCounts tree_probe(const EdgeTree& tree, const Scene& scene, float eps, long per_sample, size_t max_below) {
+  if (tree.empty() || scene.receivers.empty() || scene.lights.empty()) return {};
+  const size_t per_light = std::max<size_t>(2, kProbes / scene.lights.size());
+  const size_t step = std::max<size_t>(1, scene.receivers.size() / per_light);
+  size_t probes = 0, past = 0;
+  std::vector<uint32_t> starts, out;
+  for (size_t l = 0; l < scene.lights.size() && probes < kProbes && probes - past < max_below; ++l) {
+    const LightFrame frame = make_light_frame(scene.lights[l]);
+    if (!frame.usable || double(frame.max_jitter_h) > 1e-5 * frame.extent) continue;
+    const uint32_t cap = ray_limit(per_sample, scene.lights[l].samples);
+    for (size_t i = step / 2; i < scene.receivers.size() && probes < kProbes && probes - past < max_below; i += step) {
+      const Vec3f& r = scene.receivers[i].p;
+      if (grazing_receiver(frame, r)) continue;
+      const EdgeFrustum f(frame, r);
+      tree.frontier(f, frame, eps, std::numeric_limits<uint32_t>::max(), starts);  // the root
+      tree.query(f, frame, eps, starts, out, cap);
+      ++probes;
+      past += out.size() > cap ? 1 : 0;
+    }
+  }
+  return {probes, past};
+}
+
+
 // The frontier's node size for `edges` mesh edges and `receivers` receivers: the largest
 // power of two not above the edges per receiver, at least kFrontierEdges. A denser mesh
 // puts more nodes of a given size in one batch's frustum, and the frontier walk visits
@@ -1015,7 +1044,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // it finds nearly all past (ray_solve, kRaySolveNum), no index at all: rays for every
   // receiver.
   bool rays_chosen = false, rays_only = false;
-  if (index == "auto" && double(edges.size()) < kEdgesPerReceiver * double(scene.receivers.size()) && edge_rays) {
+  const bool auto_index = index == "auto";
+  const bool sparse = double(edges.size()) < kEdgesPerReceiver * double(scene.receivers.size());
+  if (auto_index && sparse && edge_rays) {
     const ProbeCounts pc = probe_past_limit(pm, edges, scene, edge_ray_limit);
     if (pc.probes > 0 && 2 * pc.past >= pc.probes) {
       index = "edges";
@@ -1026,7 +1057,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   if (index == "auto") index = double(edges.size()) >= kEdgesPerReceiver * double(scene.receivers.size()) ? "edges" : "receivers";
   // The edge index marks proven weights in its candidates' top bits (edge_tree.h): a mesh
   // of more edges than those leave (2^30, far beyond any memory budget) takes the wedges.
-  const bool use_edges = !rays_only && index == "edges" && edges.size() <= size_t(EdgeTree::kEdgeMask);
+  bool use_edges = !rays_only && index == "edges" && edges.size() <= size_t(EdgeTree::kEdgeMask);
   const bool use_scatter = !rays_only && (index == "receivers" || (index == "edges" && !use_edges));
   // The triangle planes as an array for the wedge indexes (build_wedges reads every
   // edge's per light); the edge index reads only its candidates' and computes them.
@@ -1036,14 +1067,27 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
 
   std::vector<Vec3d> frame_pos;  // per light, its capacity reused
 
+  auto tc0 = Clock::now();
+  Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges && !rays_only,
+               use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
+  // ray_solve on a dense mesh (the edges by density): the edge tree's probe.
+  if (auto_index && !sparse && use_edges && edge_rays && ray_solve == "auto") {
+    const ProbeCounts pc = tree_probe(cull.edge_tree, scene, eps, edge_ray_limit,
+                                      kProbes - (kRaySolveDen * kProbes + kRaySolveNum - 1) / kRaySolveNum + 1);
+    if (pc.probes > 0 && kRaySolveNum * pc.past >= kRaySolveDen * pc.probes) {
+      rays_only = rays_chosen = true;
+      use_edges = false;
+    }
+  }
+  double cull_seconds = seconds_between(tc0, Clock::now()), culled_relations = 0, hidden_lights = 0;
   // embree_quads=auto: paired quads where the mesh has at least one triangle per receiver
   // and light. The build is linear in the triangles, the rays about one per receiver and
   // light, and a quad leaf tests twice the triangles a ray meets (callgrind, whole solve:
   // scan 75k and 300k, 7 and 29 triangles per receiver and light, -3.8% and -5.5%; CGAL's
   // bunny, 74, -1.1%; rooms, 0.24, -0.1%; columns, 0.6 at 4,096 receivers, +0.6%).
   const std::string quads = opt.get("embree_quads", "auto");
-  // A solve the probe sent to the edges for their rays (above) casts about one ray per
-  // relation instead: triangles trace them faster (foliage, callgrind: the rays 84.3M ->
+  // A solve the probe sent to the edges for their rays (above) or to ray_solve casts about
+  // one ray per relation instead: triangles trace them faster (foliage, callgrind: the rays 84.3M ->
   // 77.9M instructions as triangles).
   const bool use_quads = quads == "on" || (quads == "auto" && !rays_chosen &&
                                            double(blockers.size()) >= double(scene.receivers.size()) *
@@ -1051,14 +1095,10 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   const auto tb0 = Clock::now();
   Caster embree(blockers, use_quads);
   const double embree_seconds = seconds_between(tb0, Clock::now());
-  auto tc0 = Clock::now();
-  Culling cull(scene, pm, edges, planes, use_occluders, use_shafts && !use_edges && !rays_only,
-               use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   const SceneSetup sc{scene, embree, edges, eps, pm, tol};
   const ReceiverTree& receiver_tree = cull.tree;
   const double occluder_bytes = cull.memory_bytes();
   const double occluder_margin = 1e-5 * M;
-  double cull_seconds = seconds_between(tc0, Clock::now()), culled_relations = 0, hidden_lights = 0;
 
   double init_seconds = 0, peak_memory = 0, nodes = 0;
   // Per-light arrays, their capacity reused from light to light.

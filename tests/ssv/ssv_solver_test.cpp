@@ -261,12 +261,13 @@ TEST(Ssv, RaySolveAnswersEveryReceiverByRaysAsTheOracle) {
   // is built and every receiver is answered by its verified rays. Held to the oracle,
   // with ray_solve=off (the receivers below the limit integrated) as a second answer,
   // on foliage in a dense and a sparse crown, and the decision on scenes it must not take.
+  // The last case has 94 edges per receiver: the edges by density, the tree's probe.
   struct Case {
     uint64_t seed;
-    long tris;
+    long tris, receivers;
   };
-  for (const Case c : {Case{2, 1200}, Case{3, 600}}) {
-    const Scene s = family("foliage", c.seed, c.tris, 256, 16);
+  for (const Case c : {Case{2, 1200, 256}, Case{3, 600, 256}, Case{2, 4000, 64}}) {
+    const Scene s = family("foliage", c.seed, c.tris, c.receivers, 16);
     const oracle::RelationOracleResult ex = oracle::run_relation_oracle(s, 0);
     SolveOptions off;
     off.opts["ray_solve"] = "off";
@@ -280,15 +281,16 @@ TEST(Ssv, RaySolveAnswersEveryReceiverByRaysAsTheOracle) {
     EXPECT_EQ(r_auto.stats.get("edge_ray_receivers"), double(s.receivers.size())) << what;
     EXPECT_EQ(r_auto.stats.get("fallback_relations"), double(s.relation_count())) << what;
     EXPECT_LT(r_off.stats.get("edge_ray_receivers"), double(s.receivers.size())) << what;
-    EXPECT_GT(expect_matches_oracle(s, ex, r_auto, what + " auto"), 3000u) << what;
+    EXPECT_EQ(r_off.stats.get("edge_index"), 1.0) << what;
+    EXPECT_GT(expect_matches_oracle(s, ex, r_auto, what + " auto"), s.relation_count() * 3 / 4) << what;
     expect_matches_oracle(s, ex, r_off, what + " off");
   }
   // A crown where the probe finds fewer than three quarters past: receiver by receiver.
-  const Scene f = family("foliage", 3, 2000, 128, 16);
+  const Scene f = family("foliage", 4, 600, 256, 16);
   const SolveResult rf = make_solver("ssv")->solve(f, SolveOptions{});
   EXPECT_EQ(rf.stats.get("ray_solve"), 0.0);
   EXPECT_EQ(rf.stats.get("edge_index"), 1.0);
-  expect_matches_oracle(f, oracle::run_relation_oracle(f, 0), rf, "foliage 3 2000");
+  expect_matches_oracle(f, oracle::run_relation_oracle(f, 0), rf, "foliage 4 600");
   for (const char* fam : {"columns", "rooms", "torus"}) {
     const Scene s = family(fam, 2, fam[0] == 'r' ? 7000 : -1, 48, 16);
     EXPECT_EQ(make_solver("ssv")->solve(s, SolveOptions{}).stats.get("ray_solve"), 0.0) << fam;
