@@ -405,17 +405,25 @@ void cast_all(const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResu
 }
 
 // One ray per sample from the receiver, 16 at a time (the edge_rays rule): the same
-// verified rays as cast_all, traced as Embree packets (EmbreeScene::occluded_fan).
+// verified rays as cast_all, traced as Embree packets (EmbreeScene::occluded_fan). The
+// light points as sample_position's, with the hash prefix taken once per receiver
+// (relation_hash_step); the visible bits, cleared on entry, set 16 at a time.
 void cast_fan(ThreadState& st, const SceneSetup& sc, const LightSetup& ls, size_t i, ReceiverResult& rr) {
   const Vec3f& r = sc.scene.receivers[i].p;
   const int samples = ls.light.samples;
+  const uint64_t prefix = relation_hash_prefix(i, ls.light.seed), jitter = uint64_t(ls.light.jitter);
   st.fan.resize(size_t(samples));
-  for (int j = 0; j < samples; ++j) st.fan[size_t(j)] = sample_position(ls.light, j, i);
+  for (int j = 0; j < samples; ++j)
+    st.fan[size_t(j)] = ls.light.jitter_point(j, int(relation_hash_step(prefix, uint64_t(j)) % jitter));
   for (int j = 0; j < samples; j += 16) {
     const int n = std::min(16, samples - j);
     bool hit[16];
     sc.embree.occluded_fan(r, st.fan.data() + j, n, hit);
-    for (int k = 0; k < n; ++k) rr.set_visible(ls.offset + size_t(j + k), !hit[k]);
+    uint64_t visible = 0;
+    for (int k = 0; k < n; ++k) visible |= uint64_t(!hit[k]) << k;
+    const size_t bit = ls.offset + size_t(j), sh = bit & 63;
+    rr.visible_bits[bit >> 6] |= visible << sh;
+    if (sh + size_t(n) > 64) rr.visible_bits[(bit >> 6) + 1] |= visible >> (64 - sh);
   }
 }
 
