@@ -616,10 +616,11 @@ constexpr size_t kRaySolveNum = 4, kRaySolveDen = 3;
 constexpr double kEdgesPerReceiver = 16.0;
 
 // edge_rays' probe, a cost estimate before any index is built: how many of up to kProbes
-// receivers spread over the scene (receiver order, the lights in turn) have more edges of nonzero weight inside their frustum to L' (EdgeFrustum, double) than the
-// ray limit, counted over every k-th edge and scaled by k, where k is a quarter of the
-// smallest limit (a receiver is past it on at least 4 counted edges).
-// It only chooses the index, never an answer.
+// receivers spread over the scene (receiver order, the lights in turn) have more edges
+// of nonzero weight inside their frustum to L' (EdgeFrustum, double) than the ray limit,
+// counted over every k-th edge and scaled by k, where k is a quarter of the smallest
+// limit (a receiver is past it on at least 4 counted edges). It only chooses the index,
+// never an answer.
 constexpr size_t kProbes = 12;
 struct ProbeCounts {
   size_t probes = 0, past = 0;
@@ -682,9 +683,9 @@ constexpr uint32_t kFrontierEdges = 64, kEdgeBatch = 8;
 
 // ray_solve's probe on meshes of at least kEdgesPerReceiver edges per receiver, which
 // build the edge tree anyway: the capped walk (the solver's own test) of the receivers
-// probe_past_limit would take, stopping once `max_below` are below the limit (the
-// sampled count over every 16th edge cost bunny 75k 6.2M instructions, 2.5% of its solve,
-// against about 0.5M for these walks). It only chooses, never an answer.
+// probe_past_limit would take, from the root, stopping once `max_below` are below the
+// limit (bunny 75k, 1,024 x 64: 1.8M instructions, 0.7% of its solve; the sampled count
+// over every 16th edge cost 6.2M there). It only chooses, never an answer.
 ProbeCounts tree_probe(const EdgeTree& tree, const Scene& scene, float eps, long per_sample, size_t max_below) {
   if (tree.empty() || scene.receivers.empty() || scene.lights.empty()) return {};
   const size_t per_light = std::max<size_t>(2, kProbes / scene.lights.size());
@@ -708,7 +709,6 @@ ProbeCounts tree_probe(const EdgeTree& tree, const Scene& scene, float eps, long
   return {probes, past};
 }
 
-
 // The frontier's node size for `edges` mesh edges and `receivers` receivers: the largest
 // power of two not above the edges per receiver, at least kFrontierEdges. A denser mesh
 // puts more nodes of a given size in one batch's frustum, and the frontier walk visits
@@ -730,7 +730,8 @@ double solve_light(const SceneSetup& sc, const LightSetup& ls, tbb::enumerable_t
                    SolveResult& result, const std::vector<int32_t>& batches, float eps, bool use_region,
                    MemoryCharge& charge) {
   if (ls.all_rays) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, sc.scene.receivers.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
+    const tbb::blocked_range<size_t> all(0, sc.scene.receivers.size(), 8);
+    tbb::parallel_for(all, [&](const tbb::blocked_range<size_t>& range) {
       const IeeeFloatMode range_float_mode;
       ThreadState& st = states.local();
       for (size_t i = range.begin(); i != range.end(); ++i) solve_receiver(st, sc, ls, i, 0, result);
@@ -1080,8 +1081,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   // ray_solve on a dense mesh (the edges by density): the edge tree's probe.
   if (auto_index && !sparse && use_edges && edge_rays && ray_solve == "auto") {
-    const ProbeCounts pc = tree_probe(cull.edge_tree, scene, eps, edge_ray_limit,
-                                      kProbes - (kRaySolveDen * kProbes + kRaySolveNum - 1) / kRaySolveNum + 1);
+    // Past max_below receivers below the limit, three quarters of kProbes are out of reach.
+    const size_t max_below = kProbes - (kRaySolveDen * kProbes + kRaySolveNum - 1) / kRaySolveNum + 1;
+    const ProbeCounts pc = tree_probe(cull.edge_tree, scene, eps, edge_ray_limit, max_below);
     if (pc.probes > 0 && kRaySolveNum * pc.past >= kRaySolveDen * pc.probes) {
       rays_only = rays_chosen = true;
       use_edges = false;
@@ -1094,9 +1096,9 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // scan 75k and 300k, 7 and 29 triangles per receiver and light, -3.8% and -5.5%; CGAL's
   // bunny, 74, -1.1%; rooms, 0.24, -0.1%; columns, 0.6 at 4,096 receivers, +0.6%).
   const std::string quads = opt.get("embree_quads", "auto");
-  // A solve the probe sent to the edges for their rays (above) or to ray_solve casts about
-  // one ray per relation instead: triangles trace them faster (foliage, callgrind: the rays 84.3M ->
-  // 77.9M instructions as triangles).
+  // A solve the probe sent to the edges for their rays (above) or to ray_solve casts
+  // about one ray per relation instead: triangles trace them faster (foliage, callgrind:
+  // the rays 84.3M -> 77.9M instructions as triangles).
   const bool use_quads = quads == "on" || (quads == "auto" && !rays_chosen &&
                                            double(blockers.size()) >= double(scene.receivers.size()) *
                                                                            double(scene.lights.size()));
@@ -1236,7 +1238,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       {"silhouette_regions", use_region ? 1.0 : 0.0},   {"occluder_culling", use_occluders ? 1.0 : 0.0},
       {"occluders", double(cull.occluders.size())},     {"occluded_relations", culled_relations},
       {"hidden_lights", hidden_lights},                 {"occluder_seconds", cull_seconds},
-      {"shaft_culling", use_shafts ? 1.0 : 0.0},        {"wedge_index_bsp", use_scatter || use_edges || rays_only ? 0.0 : 1.0},
+      {"shaft_culling", use_shafts ? 1.0 : 0.0},
+      {"wedge_index_bsp", use_scatter || use_edges || rays_only ? 0.0 : 1.0},
       {"scattered_candidates", double(scatter.total_entries())}, {"edges_outside_shafts", edges_outside},
       {"edge_index", use_edges ? 1.0 : 0.0},            {"ray_solve", rays_only ? 1.0 : 0.0}};
   for (const auto& [key, value] : culling_stats) s.set(key, value);
