@@ -605,12 +605,16 @@ uint32_t ray_limit(long per_sample, int samples) {
   return uint32_t(std::clamp<int64_t>(int64_t(per_sample) * samples, kMinRayCandidates, int64_t(1) << 31));
 }
 
-// ray_solve=auto: a solve whose probe (below) finds at least kRaySolveNum / kRaySolveDen
-// of its receivers past the ray limit answers every receiver by its rays and builds no
-// index: the capped walk of the cast receivers (foliage 1,024 x 64: 19.6M of 127.2M
-// instructions) and the edge tree's build (4.2M) cost more than the rays of the few
-// receivers below the limit, which see few triangles (their 4,288 rays added 1.0M).
-constexpr size_t kRaySolveNum = 4, kRaySolveDen = 3;
+// ray_solve=auto: a solve whose probe (below) finds at least kRaySolveDen / kRaySolveNum
+// (a half) of its receivers past the ray limit answers every receiver by its rays and
+// builds no index: the capped walk of the cast receivers (foliage 1,024 x 64: 19.6M of
+// 127.2M instructions) and the index's build (4.2M) cost more than the rays of the
+// receivers below the limit, which mostly see few triangles (foliage's 67: 4,288 rays,
+// 1.0M). Callgrind, whole solve, every receiver by rays against the receiver rule, with
+// the share of receivers past the limit: foliage 93% -23%, armadillo 94% -33%, bunny 62%
+// -23%, foliage 256 x 64 under a light scaled 0.5 and 0.25 72% -21% and 59% -20%; rooms,
+// none past, +36% (so a probe is needed).
+constexpr size_t kRaySolveNum = 2, kRaySolveDen = 1;
 
 // wedge_index=auto picks the edge hierarchy from this many mesh edges per receiver.
 constexpr double kEdgesPerReceiver = 16.0;
@@ -1049,9 +1053,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // of the mesh's edges per light (docs/log/ssv-performance.md, ninth round).
   // With edge_rays, a mesh below that density still takes the edges when the probe finds
   // most receivers past the ray limit (foliage: every leaf above every receiver): their
-  // walks stop at the limit, where the wedges would be built and scattered in full; when
-  // it finds nearly all past (ray_solve, kRaySolveNum), no index at all: rays for every
-  // receiver.
+  // walks stop at the limit, where the wedges would be built and scattered in full; with
+  // ray_solve (kRaySolveNum) no index at all then: rays for every receiver.
   bool rays_chosen = false, rays_only = false;
   const bool auto_index = index == "auto";
   const bool sparse = double(edges.size()) < kEdgesPerReceiver * double(scene.receivers.size());
@@ -1081,7 +1084,8 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
                use_occluders || use_shafts || use_scatter || use_edges, use_edges, M);
   // ray_solve on a dense mesh (the edges by density): the edge tree's probe.
   if (auto_index && !sparse && use_edges && edge_rays && ray_solve == "auto") {
-    // Past max_below receivers below the limit, three quarters of kProbes are out of reach.
+    // Past max_below receivers below the limit, kRaySolveDen / kRaySolveNum of kProbes
+    // are out of reach.
     const size_t max_below = kProbes - (kRaySolveDen * kProbes + kRaySolveNum - 1) / kRaySolveNum + 1;
     const ProbeCounts pc = tree_probe(cull.edge_tree, scene, eps, edge_ray_limit, max_below);
     if (pc.probes > 0 && kRaySolveNum * pc.past >= kRaySolveDen * pc.probes) {
