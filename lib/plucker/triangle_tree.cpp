@@ -65,12 +65,23 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
 
   std::vector<int32_t> patch_of(mesh.size(), -1);  // by input triangle
   std::vector<uint8_t> taken(n, 0);               // by prepared triangle
+  // lonely[t]: t's search below found no coplanar untaken neighbour. Coplanarity of two
+  // glued triangles is one exact predicate of their four corners (symmetric), and taken
+  // is never undone, so a later t' need not test its lonely lower neighbour again: that
+  // search tested t' (untaken then, as now) and found it off t's plane.
+  std::vector<uint8_t> lonely(n, 0);
   // The growing polygon: vertex ids, and per edge i (poly[i] -> poly[i + 1]) the prepared
   // triangle that has it; its prepared triangles.
   std::vector<uint32_t> poly, owner, members, order;
   for (uint32_t t = 0; t < n; ++t) {
     if (taken[t]) continue;
     const auto& c = pm.triangles[t].v;
+    const auto& nbs = pm.triangles[t].neighbors;
+    auto to_test = [&](int32_t nb) { return nb >= 0 && !taken[size_t(nb)] && !(uint32_t(nb) < t && lonely[size_t(nb)]); };
+    if (!to_test(nbs[0]) && !to_test(nbs[1]) && !to_test(nbs[2])) {
+      lonely[t] = 1;
+      continue;
+    }
     const Vec3f &a = pos[c[0]], &b = pos[c[1]], &cc = pos[c[2]];
     // The dominant axis of t's normal is dropped; t's projected orientation s is then
     // nonzero unless t is degenerate, and every turn of the polygon must have that sign.
@@ -91,15 +102,18 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
     const double s12 = norm1(to_double(b) - to_double(a)) * norm1(to_double(cc) - to_double(a));
     bool coplanar_neighbour = false;
     for (int k = 0; k < 3 && !coplanar_neighbour; ++k) {
-      const int32_t nb = pm.triangles[t].neighbors[size_t(k)];
-      if (nb < 0 || taken[size_t(nb)]) continue;
+      const int32_t nb = nbs[size_t(k)];
+      if (!to_test(nb)) continue;
       for (uint32_t x : pm.triangles[size_t(nb)].v)
         coplanar_neighbour |= std::find(c.begin(), c.end(), x) == c.end() &&
                               plane_side_filtered(to_double(a), nn, s12, SumPoint(pos[x])) == 0 &&
                               !is_certain(orient3d_filtered(a, b, cc, SumPoint(pos[x]))) &&
                               to_int(orient3d_exact(a, b, cc, pos[x])) == 0;
     }
-    if (!coplanar_neighbour) continue;
+    if (!coplanar_neighbour) {
+      lonely[t] = 1;
+      continue;
+    }
     const int s = turn(c[0], c[1], c[2]);
     if (s == 0) continue;
     poly.assign(c.begin(), c.end());
