@@ -243,6 +243,14 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
     fi1.clear();
     key.clear();
     ebox.clear();
+    // A closed surface's triangles have three neighbours each and its halves pair up: 3T / 2
+    // edges (more only where a half finds no partner; the vectors then grow).
+    const size_t edges = (3 * tris.size() + 1) / 2;
+    se.edges.reserve(edges);
+    fi0.reserve(edges);
+    fi1.reserve(edges);
+    key.reserve(edges);
+    ebox.reserve(edges);
     // The m-th half of t toward u (m counted over t's k from 0), or 3.
     auto nth_half = [&](uint32_t t, uint32_t u, int m) -> int {
       for (int j = 0; j < 3; ++j)

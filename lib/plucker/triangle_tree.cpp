@@ -65,23 +65,25 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
 
   std::vector<int32_t> patch_of(mesh.size(), -1);  // by input triangle
   std::vector<uint8_t> taken(n, 0);               // by prepared triangle
+  // lonely[t]: t's search below found no coplanar untaken neighbour. Coplanarity of two
+  // glued triangles is one exact predicate of their four corners (symmetric), and taken
+  // is never undone, so a later t' need not test its lonely lower neighbour again: that
+  // search tested t' (untaken then, as now) and found it off t's plane.
+  std::vector<uint8_t> lonely(n, 0);
   // The growing polygon: vertex ids, and per edge i (poly[i] -> poly[i + 1]) the prepared
   // triangle that has it; its prepared triangles.
   std::vector<uint32_t> poly, owner, members, order;
   for (uint32_t t = 0; t < n; ++t) {
     if (taken[t]) continue;
     const auto& c = pm.triangles[t].v;
+    const auto& nbs = pm.triangles[t].neighbors;
+    auto to_test = [&](int32_t nb) { return nb >= 0 && !taken[size_t(nb)] && !(uint32_t(nb) < t && lonely[size_t(nb)]); };
+    if (!to_test(nbs[0]) && !to_test(nbs[1]) && !to_test(nbs[2])) {
+      lonely[t] = 1;
+      continue;
+    }
     const Vec3f &a = pos[c[0]], &b = pos[c[1]], &cc = pos[c[2]];
-    // The dominant axis of t's normal is dropped; t's projected orientation s is then
-    // nonzero unless t is degenerate, and every turn of the polygon must have that sign.
     const Vec3d nn = cross(to_double(b) - to_double(a), to_double(cc) - to_double(a));
-    const int w = std::abs(nn.x) >= std::abs(nn.y) ? (std::abs(nn.x) >= std::abs(nn.z) ? 0 : 2)
-                                                   : (std::abs(nn.y) >= std::abs(nn.z) ? 1 : 2);
-    const int u = (w + 1) % 3, v = (w + 2) % 3;
-    auto turn = [&](uint32_t x, uint32_t y, uint32_t z) {
-      const Vec3f &p = pos[x], &q = pos[y], &r = pos[z];
-      return to_int(orient2d_exact(p[u], p[v], q[u], q[v], r[u], r[v]));
-    };
     // The first growth crosses an edge of t to an untaken neighbour with its third vertex
     // in t's plane: without one (smooth surfaces: every triangle) t stays alone, and the
     // sorted edge loop below is skipped (same patches; a quarter of a scan solve's
@@ -91,15 +93,31 @@ void TriangleTree::find_patches(const TriangleSoup& mesh, const mesh::PreparedMe
     const double s12 = norm1(to_double(b) - to_double(a)) * norm1(to_double(cc) - to_double(a));
     bool coplanar_neighbour = false;
     for (int k = 0; k < 3 && !coplanar_neighbour; ++k) {
-      const int32_t nb = pm.triangles[t].neighbors[size_t(k)];
-      if (nb < 0 || taken[size_t(nb)]) continue;
-      for (uint32_t x : pm.triangles[size_t(nb)].v)
-        coplanar_neighbour |= std::find(c.begin(), c.end(), x) == c.end() &&
-                              plane_side_filtered(to_double(a), nn, s12, SumPoint(pos[x])) == 0 &&
-                              !is_certain(orient3d_filtered(a, b, cc, SumPoint(pos[x]))) &&
-                              to_int(orient3d_exact(a, b, cc, pos[x])) == 0;
+      const int32_t nb = nbs[size_t(k)];
+      if (!to_test(nb)) continue;
+      // nb holds t's edge k (c[k], c[k + 1]); its third vertex x is in t's plane, and
+      // counts unless it is t's third corner too (nb then has t's three vertices).
+      const auto& nv = pm.triangles[size_t(nb)].v;
+      const uint32_t e0 = c[size_t(k)], e1 = c[size_t((k + 1) % 3)];
+      const uint32_t x = nv[0] != e0 && nv[0] != e1 ? nv[0] : (nv[1] != e0 && nv[1] != e1 ? nv[1] : nv[2]);
+      coplanar_neighbour = x != c[size_t((k + 2) % 3)] && x != e0 && x != e1 &&
+                           plane_side_filtered(to_double(a), nn, s12, SumPoint(pos[x])) == 0 &&
+                           !is_certain(orient3d_filtered(a, b, cc, SumPoint(pos[x]))) &&
+                           to_int(orient3d_exact(a, b, cc, pos[x])) == 0;
     }
-    if (!coplanar_neighbour) continue;
+    if (!coplanar_neighbour) {
+      lonely[t] = 1;
+      continue;
+    }
+    // The dominant axis of t's normal is dropped; t's projected orientation s is then
+    // nonzero unless t is degenerate, and every turn of the polygon must have that sign.
+    const int w = std::abs(nn.x) >= std::abs(nn.y) ? (std::abs(nn.x) >= std::abs(nn.z) ? 0 : 2)
+                                                   : (std::abs(nn.y) >= std::abs(nn.z) ? 1 : 2);
+    const int u = (w + 1) % 3, v = (w + 2) % 3;
+    auto turn = [&](uint32_t x, uint32_t y, uint32_t z) {
+      const Vec3f &p = pos[x], &q = pos[y], &r = pos[z];
+      return to_int(orient2d_exact(p[u], p[v], q[u], q[v], r[u], r[v]));
+    };
     const int s = turn(c[0], c[1], c[2]);
     if (s == 0) continue;
     poly.assign(c.begin(), c.end());

@@ -8,6 +8,8 @@
 
 #include <cmath>
 
+#include "lib/base/union_find.h"
+#include "lib/mesh/prepare.h"
 #include "lib/plucker/local_light.h"
 #include "lib/plucker/triangle_tree.h"
 #include "lib/scene/rng.h"
@@ -46,6 +48,47 @@ TEST(PluckerClosedSurfaces, FindsClosedConsistentComponentsOnly) {
   EXPECT_EQ(plucker::ClosedSurfaces(flipped).count(), 1u);
   EXPECT_EQ(plucker::ClosedSurfaces(flipped).surface(14), -1);
   EXPECT_GE(plucker::ClosedSurfaces(flipped).surface(0), 0);
+}
+
+// The surfaces against an independent reference: union-find over the prepared
+// neighbours, a component closed when no member has an edge without one, ids in the order
+// of the components' smallest prepared triangles. Boxes, tori and an open and a flipped
+// box, their triangles shuffled together so the components interleave in index order.
+TEST(PluckerClosedSurfaces, SurfacesAreTheClosedComponentsInOrderOfTheirFirstTriangle) {
+  TriangleSoup m;
+  for (int i = 0; i < 4; ++i) shapes::add_box(m, Vec3d(2 * i, 0, 0), Vec3d(2 * i + 1, 1, 1));
+  shapes::add_torus(m, Vec3d(0, 4, 0), 0.6, 0.2, 12, 8);
+  shapes::add_torus(m, Vec3d(3, 4, 0), 0.6, 0.2, 10, 6);
+  m.triangles.erase(m.triangles.begin() + 15);       // the second box: open
+  std::swap(m.triangles[30][0], m.triangles[30][1]);  // the third box: one flipped
+  Rng rng(5);
+  for (size_t i = m.triangles.size(); i-- > 1;) std::swap(m.triangles[i], m.triangles[size_t(rng.below(i + 1))]);
+  const mesh::PreparedMesh pm = mesh::prepare_mesh(m);
+  UnionFind uf(pm.triangles.size());
+  for (uint32_t t = 0; t < pm.triangles.size(); ++t)
+    for (const int32_t nb : pm.triangles[t].neighbors)
+      if (nb >= 0) uf.unite(t, uint32_t(nb));
+  std::vector<uint8_t> open(pm.triangles.size(), 0);
+  for (uint32_t t = 0; t < pm.triangles.size(); ++t)
+    for (const int32_t nb : pm.triangles[t].neighbors)
+      if (nb < 0) open[uf.find(t)] = 1;
+  std::vector<int32_t> id(pm.triangles.size(), -1), want(m.size(), -1);
+  int32_t count = 0;
+  for (uint32_t t = 0; t < pm.triangles.size(); ++t) {
+    const uint32_t root = uf.find(t);
+    if (open[root]) continue;
+    if (id[root] < 0) id[root] = count++;
+    want[pm.triangles[t].source] = id[root];
+  }
+  ASSERT_EQ(count, 4);  // three boxes closed, the two tori
+  const plucker::ClosedSurfaces cs(m, pm);
+  ASSERT_EQ(cs.count(), size_t(count));
+  std::vector<uint32_t> sizes(size_t(count), 0);
+  for (uint32_t t = 0; t < m.size(); ++t) {
+    EXPECT_EQ(cs.surface(t), want[t]) << t;
+    if (want[t] >= 0) ++sizes[size_t(want[t])];
+  }
+  for (int32_t s = 0; s < count; ++s) EXPECT_EQ(cs.triangles(s), sizes[size_t(s)]) << s;
 }
 
 TEST(PluckerClosedSurfaces, ScanAnswersMatchEveryTriangleAndTheOracle) {
