@@ -33,9 +33,10 @@ struct Replacement {
 };
 
 // Runs of kRun of the fragments [lo, hi) appended to len and box, each with the union of
-// its fragments' boxes (fragment f's box: box_of(f)).
+// its fragments' boxes (fragment f's box: box_of(f)). Not inlined: FragmentRuns::build
+// runs for every short list too (rooms), where a caller holding this loop pays its setup.
 template <class BoxOf>
-void append_runs(const BoxOf& box_of, size_t lo, size_t hi, std::vector<uint32_t>& len, std::vector<UVBox>& box) {
+[[gnu::noinline]] void append_runs(const BoxOf& box_of, size_t lo, size_t hi, std::vector<uint32_t>& len, std::vector<UVBox>& box) {
   for (size_t c = lo; c < hi; c += FragmentRuns::kRun) {
     const size_t e = std::min(hi, c + FragmentRuns::kRun);
     UVBox u;
