@@ -426,7 +426,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       if (--sp.pending > 0) return;
       if (sp.visible) {
         out_spans_.resize(sp.out_mark);
-        out_spans_.emplace_back(sp.begin, sp.count);
+        out_spans_.emplace_back(sp.begin, sp.count, 0u);
         ++counters_.merged;
       }
       visible = sp.visible;
@@ -500,7 +500,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
         break;
       }
       if (nd.occ_count == 0) {  // line 29: visible class, returned
-        out_spans_.emplace_back(cb, cn);
+        out_spans_.emplace_back(cb, cn, 0u);
         finish(split, true);
         break;
       }
@@ -526,7 +526,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
       }
       if (cover < 0 && candidates_.empty()) {
         ++counters_.lazy_visible;
-        out_spans_.emplace_back(cb, cn);
+        out_spans_.emplace_back(cb, cn, 0u);
         finish(split, true);
         break;
       }
@@ -543,7 +543,7 @@ void LazyBsp::query(const Vec3d& r, const FragmentList& in, FragmentList& out) {
   size_t w = 0;
   for (size_t k = 0; k < out_spans_.size(); ++k) {
     const FragmentList::Span sp = out_spans_[k];
-    out.polys[k] = FragmentList::Span(uint32_t(w), sp.second);
+    out.polys[k] = FragmentList::Span(uint32_t(w), sp.second, uint32_t(k));
     std::copy(work_.data() + sp.first, work_.data() + sp.first + sp.second, out.verts.data() + w);
     w += sp.second;
   }

@@ -83,12 +83,17 @@ struct Occluder {
 // order of the polygons is that of `polys`, not of `verts`.
 struct FragmentList {
   std::vector<Vec3d> verts;
-  // A polygon's place in verts. Trivially copyable (std::pair is not: its assignment is
-  // user-provided), so moving and copying a list of them is a memmove.
+  // A polygon's place in verts, and of its box in a box list kept beside the fragments
+  // (subtract.h): add() gives polygon k box k, so a box list built in the polygons'
+  // order fits; subtract_polygon appends its pieces' boxes and leaves the replaced ones
+  // behind, so a replacement moves these 12 bytes a fragment, not the 32 of a box too.
+  // Trivially copyable (std::pair is not: its assignment is user-provided), so moving
+  // and copying a list of them is a memmove.
   struct Span {
     uint32_t first = 0, second = 0;  // first vertex, count
+    uint32_t box = 0;                // the polygon's box in the box list beside it
     Span() = default;
-    Span(uint32_t f, uint32_t n) : first(f), second(n) {}
+    Span(uint32_t f, uint32_t n, uint32_t b) : first(f), second(n), box(b) {}
   };
   std::vector<Span> polys;
   size_t garbage = 0;  // vertices in verts that no polygon uses
@@ -98,7 +103,7 @@ struct FragmentList {
   const Vec3d* data(size_t k) const { return verts.data() + polys[k].first; }
   int count(size_t k) const { return int(polys[k].second); }
   void add(const Vec3d* p, size_t n) {
-    polys.emplace_back(uint32_t(verts.size()), uint32_t(n));
+    polys.emplace_back(uint32_t(verts.size()), uint32_t(n), uint32_t(polys.size()));
     verts.insert(verts.end(), p, p + n);
   }
   // Drops the fragments from the n-th on (n <= size()); the vertices must be back to

@@ -191,6 +191,8 @@ struct GroupState {
   std::vector<uint32_t> exact_done, patch_at;
   UVBoxGrid sample_grid;  // sample_bits' fragments by cell
   FragmentList frags, tmp;
+  // Fragment k's box is boxes[frags.polys[k].box] (subtract.h): made in the fragments'
+  // order it is boxes[k]; subtract_polygon appends and leaves garbage.
   std::vector<UVBox> boxes, tmp_boxes;
   FragmentRuns runs;  // over frags and boxes (subtract.h)
 

@@ -33,22 +33,24 @@ struct Replacement {
 };
 
 // Runs of kRun of the fragments [lo, hi) appended to len and box, each with the union of
-// its fragments' boxes.
-void append_runs(const std::vector<UVBox>& boxes, size_t lo, size_t hi, std::vector<uint32_t>& len,
-                 std::vector<UVBox>& box) {
+// its fragments' boxes (fragment f's box: box_of(f)). Not inlined: FragmentRuns::build
+// runs for every short list too (rooms), where a caller holding this loop pays its setup.
+template <class BoxOf>
+[[gnu::noinline]] void append_runs(const BoxOf& box_of, size_t lo, size_t hi, std::vector<uint32_t>& len, std::vector<UVBox>& box) {
   for (size_t c = lo; c < hi; c += FragmentRuns::kRun) {
     const size_t e = std::min(hi, c + FragmentRuns::kRun);
     UVBox u;
-    for (size_t f = c; f < e; ++f) u.extend(boxes[f]);
+    for (size_t f = c; f < e; ++f) u.extend(box_of(f));
     len.push_back(uint32_t(e - c));
     box.push_back(u);
   }
 }
 
-// The runs made anew where some grew past 2 kRun (`boxes` the list's): emptied runs
-// dropped, long ones cut into runs of kRun with their boxes' unions (a long run costs
-// every polygon that meets its box a scan of all of it), the others kept.
-void cut_long_runs(FragmentRuns& runs, const std::vector<UVBox>& boxes) {
+// The runs made anew where some grew past 2 kRun (`boxes` the list's, by Span::box):
+// emptied runs dropped, long ones cut into runs of kRun with their boxes' unions (a long
+// run costs every polygon that meets its box a scan of all of it), the others kept.
+void cut_long_runs(FragmentRuns& runs, const FragmentList& frags, const std::vector<UVBox>& boxes) {
+  auto box_of = [&](size_t f) -> const UVBox& { return boxes[frags.polys[f].box]; };
   thread_local std::vector<uint32_t> len;
   thread_local std::vector<UVBox> box;
   len.clear();
@@ -57,7 +59,7 @@ void cut_long_runs(FragmentRuns& runs, const std::vector<UVBox>& boxes) {
   for (size_t j = 0; j < runs.size(); f0 += runs.len[j], ++j) {
     if (runs.len[j] == 0) continue;
     if (runs.len[j] > 2 * FragmentRuns::kRun) {
-      append_runs(boxes, f0, f0 + runs.len[j], len, box);
+      append_runs(box_of, f0, f0 + runs.len[j], len, box);
     } else {
       len.push_back(runs.len[j]);
       box.push_back(runs.box[j]);
@@ -68,22 +70,24 @@ void cut_long_runs(FragmentRuns& runs, const std::vector<UVBox>& boxes) {
 }
 
 // Replaces, for each entry of `repl` (increasing f), fragment f of `frags` (and its box)
-// by the pieces [a, b) (and their boxes), keeping every other fragment's vertices where
-// they are: the same fragments in the same order as copying the list with the pieces in
-// place of each f, without copying the vertices. The spans and boxes between the entries
-// are moved in place, each stretch by the pieces added and fragments dropped before it
-// (memmove; those before the first entry stay). The pieces' vertices go to the end of
-// frags.verts; the replaced fragments' stay there as garbage until more than half of the
-// vertices are, and then the list is written back to back again (same values, same
-// order). The runs follow: each replaced fragment's run grown by its pieces' boxes
-// (pieces of a fragment lie in it up to rounding, so it still holds its fragments') and
-// its length changed, runs grown long cut anew (cut_long_runs).
+// by the pieces [a, b) (and their boxes), keeping every other fragment's vertices and box
+// where they are: the same fragments in the same order as copying the list with the
+// pieces in place of each f, without copying the vertices or the boxes. The spans between
+// the entries are moved in place, each stretch by the pieces added and fragments dropped
+// before it (memmove; those before the first entry stay). The pieces' vertices go to the
+// end of frags.verts and their boxes to the end of `boxes`; the replaced fragments' stay
+// there as garbage until more than half of either is, and then that one is written back
+// in the list's order again (same values). The runs follow: each replaced fragment's run
+// grown by its pieces' boxes (pieces of a fragment lie in it up to rounding, so it still
+// holds its fragments') and its length changed, runs grown long cut anew (cut_long_runs).
 void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, FragmentRuns& runs, const FragmentList& pieces,
                        const std::vector<UVBox>& piece_boxes, const std::vector<Replacement>& repl) {
   using Span = FragmentList::Span;
-  static_assert(std::is_trivially_copyable_v<Span> && std::is_trivially_copyable_v<UVBox>);
+  static_assert(std::is_trivially_copyable_v<Span>);
   const uint32_t base = uint32_t(frags.verts.size());
   frags.verts.insert(frags.verts.end(), pieces.verts.begin(), pieces.verts.end());  // pieces: back to back
+  const uint32_t bbase = uint32_t(boxes.size());
+  boxes.insert(boxes.end(), piece_boxes.begin(), piece_boxes.end());  // piece j's box: bbase + j
   const size_t n = frags.polys.size();
   size_t nn = n;  // the new size
   const bool indexed = runs.size() != 0;
@@ -97,10 +101,7 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, FragmentR
     len = len + (rp.b - rp.a) - 1;
     cut |= len > 2 * FragmentRuns::kRun;
   }
-  if (nn > n) {
-    frags.polys.resize(nn);
-    boxes.resize(nn);
-  }
+  if (nn > n) frags.polys.resize(nn);
   // Stretch k: the fragments after entry k - 1 (from 0 for k = 0) up to entry k (to n for
   // the last), moved by its shift s_k: the pieces added minus the fragments replaced
   // before it (d(k) per entry). Moving those that go left first, from the front, then
@@ -114,14 +115,12 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, FragmentR
     if (hi <= lo) return;
     const size_t to = size_t(int64_t(lo) + sk), len = hi - lo;
     Span* sp = frags.polys.data();
-    UVBox* bp = boxes.data();
     if (len > 8) {
       std::memmove(sp + to, sp + lo, len * sizeof(Span));
-      std::memmove(bp + to, bp + lo, len * sizeof(UVBox));
     } else if (to < lo) {  // a few: copied in the direction that reads before it writes
-      for (size_t i = 0; i < len; ++i) sp[to + i] = sp[lo + i], bp[to + i] = bp[lo + i];
+      for (size_t i = 0; i < len; ++i) sp[to + i] = sp[lo + i];
     } else {
-      for (size_t i = len; i-- > 0;) sp[to + i] = sp[lo + i], bp[to + i] = bp[lo + i];
+      for (size_t i = len; i-- > 0;) sp[to + i] = sp[lo + i];
     }
   };
   int64_t sk = 0;
@@ -135,19 +134,26 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, FragmentR
   }
   for (const Replacement& rp : repl) {  // sk: the shift before rp, from 0
     Span* sp = frags.polys.data() + (int64_t(rp.f) + sk);
-    UVBox* bp = boxes.data() + (int64_t(rp.f) + sk);
-    for (uint32_t j = rp.a; j < rp.b; ++j) {
-      *sp++ = Span(base + pieces.polys[j].first, pieces.polys[j].second);
-      *bp++ = piece_boxes[j];
-    }
+    for (uint32_t j = rp.a; j < rp.b; ++j)
+      *sp++ = Span(base + pieces.polys[j].first, pieces.polys[j].second, bbase + j);
     sk += int64_t(rp.b) - int64_t(rp.a) - 1;
   }
-  if (nn < n) {
-    frags.polys.resize(nn);
-    boxes.resize(nn);
+  if (nn < n) frags.polys.resize(nn);
+  if (boxes.size() > 1024 && boxes.size() > 2 * nn) {  // the live boxes back in the list's order
+    thread_local std::vector<UVBox> live;
+    live.resize(nn);
+    for (size_t k = 0; k < nn; ++k) {
+      live[k] = boxes[frags.polys[k].box];
+      frags.polys[k].box = uint32_t(k);
+    }
+    boxes.swap(live);
   }
-  if (cut) cut_long_runs(runs, boxes);
-  if (!indexed && nn > FragmentRuns::kIndexFrom) runs.build(boxes);
+  if (cut) cut_long_runs(runs, frags, boxes);
+  if (!indexed && nn > FragmentRuns::kIndexFrom) {
+    runs.len.clear();
+    runs.box.clear();
+    append_runs([&](size_t f) -> const UVBox& { return boxes[frags.polys[f].box]; }, 0, nn, runs.len, runs.box);
+  }
   if (frags.garbage > 1024 && 2 * frags.garbage > frags.verts.size()) {
     thread_local std::vector<Vec3d> verts;
     verts.clear();
@@ -167,7 +173,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
                       const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
                       FragmentRuns& runs, FragmentList& pieces, std::vector<UVBox>& piece_boxes,
                       std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
-  VG_DCHECK((runs.size() == 0 || runs.count() == frags.size()) && boxes.size() == frags.size());
+  VG_DCHECK((runs.size() == 0 || runs.count() == frags.size()) && boxes.size() >= frags.size());
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
   // each computed when first needed (a polygon whose shadow misses every fragment mostly
   // needs one: the edge that separates them all). Per thread rather than per call:
@@ -194,6 +200,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
   // once where the run's box misses it (FragmentRuns; the list changes only after the
   // loop below).
   const UVBox* bx = boxes.data();
+  const FragmentList::Span* ps = frags.polys.data();
   // A fragment whose box meets it may still lie on the negative side of one edge plane.
   // Else every edge's class is kept (positive[m]): split_fragment finds the same on the
   // fragment itself (fragment.h), so the walk below skips those edges until its first split.
@@ -226,7 +233,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     f_end = indexed ? f0 + runs.len[j] : frags.size();
     if (indexed && !qbox.overlaps(runs.box[j])) continue;
     for (size_t f = f0;; ++f) {
-      while (f < f_end && !qbox.overlaps(bx[f])) ++f;  // a loop of its own: most boxes miss
+      while (f < f_end && !qbox.overlaps(bx[ps[f].box])) ++f;  // a loop of its own: most boxes miss
       if (f == f_end) break;
       if (edge_misses(f)) continue;
       met = true;
@@ -253,10 +260,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
           case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
           case SplitResult::Both:
             ++c.splits;
-            if (nn != 0) {
-              pieces.add(neg.data(), size_t(nn));
-              piece_boxes.push_back(UVBox::of(axes, neg.data(), nn));
-            }
+            if (nn != 0) pieces.add(neg.data(), size_t(nn));
             if (np == 0) {
               alive = false;
             } else {
@@ -273,9 +277,11 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       // last edge is positive against every edge, stabs q: blocked, dropped.
       if (whole) {
         pieces.truncate(first_piece);
-        piece_boxes.resize(first_piece);
         continue;
       }
+      // The pieces' boxes once they are kept (a fifth of the pieces are taken back).
+      for (size_t k = first_piece; k < pieces.size(); ++k)
+        piece_boxes.push_back(UVBox::of(axes, pieces.data(k), pieces.count(k)));
       repl.push_back({uint32_t(f), uint32_t(first_piece), uint32_t(pieces.size()), uint32_t(j)});
     }
   }
@@ -286,7 +292,8 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
 void FragmentRuns::build(const std::vector<UVBox>& boxes) {
   len.clear();
   box.clear();
-  if (boxes.size() > kIndexFrom) append_runs(boxes, 0, boxes.size(), len, box);
+  if (boxes.size() > kIndexFrom)
+    append_runs([&](size_t f) -> const UVBox& { return boxes[f]; }, 0, boxes.size(), len, box);
 }
 
 size_t FragmentRuns::count() const {

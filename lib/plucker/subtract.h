@@ -38,15 +38,17 @@ struct FragmentRuns {
 // Subtracts the near polygon q (oriented: the receiver on its negative side) from the
 // fragments, in place: bsp(q) walked once (Algorithm 1 lines 17-29 on a tree that is
 // never stored). `qbox` bounds q's shadow on the light (shadow_box); a fragment whose
-// box misses it is disjoint from the shadow and kept whole. `boxes` is parallel to
-// `frags`. Edges with skip[m] set (from q[m] to q[m+1]) are not tested: the caller knows
-// every light line from r is on their inner side (the edge q has at r's own level, see
-// the near-polygon loop in shade_receiver.cpp).
+// box misses it is disjoint from the shadow and kept whole. boxes[frags.polys[k].box]
+// is fragment k's box (FragmentList::Span): a list made by add() with its boxes pushed
+// in the same order fits. Edges with skip[m] set (from q[m] to q[m+1]) are not tested:
+// the caller knows every light line from r is on their inner side (the edge q has at
+// r's own level, see the near-polygon loop in shade_receiver.cpp).
 // Each fragment q's shadow meets is replaced, where it is, by its visible pieces (none
 // when q hides all of it; the fragment itself, unsplit, when q hides none of it); the
 // other fragments, their vertices and boxes stay as they are, uncopied (FragmentList
-// may then hold garbage vertices). `pieces` and `piece_boxes` receive the pieces put in
-// (the boxes bound the new fragments: with the old ones, every current fragment's).
+// may then hold garbage vertices, and `boxes` boxes no fragment uses; the pieces' boxes
+// are appended). `pieces` and `piece_boxes` receive the pieces put in (the boxes bound
+// the new fragments: with the old ones, every current fragment's).
 // `runs` indexes frags (built over `boxes`) and is kept so: runs whose box misses qbox
 // are passed over, replaced fragments' runs are grown by their pieces' boxes and their
 // lengths changed, and runs grown long are cut anew; a list without runs gets them when

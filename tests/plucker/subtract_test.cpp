@@ -168,3 +168,135 @@ TEST(PluckerSubtract, RunIndexVisitsTheFragmentsEveryBoxScanVisits) {
   EXPECT_GT(visible, 1000);
   EXPECT_GT(hidden, 1000);
 }
+
+// The fragment list subtract_polygon keeps (spans moved, vertices and boxes left where
+// they are, appended, and compacted now and then) against the plain way: a new list
+// copied from the old one with each met fragment replaced by its pieces, its boxes made
+// in order. Random sequences of operations: triangles of every size subtracted (from
+// receivers that move, so a list is cut by many planes), and now and then the caller's
+// way of starting over (the list copied with add(), its boxes made in order, the runs
+// built). After each, the same fragments bit for bit and in order, the same return
+// value, and boxes[polys[k].box] is exactly fragment k's box (UVBox::of).
+TEST(PluckerSubtract, FragmentStorageMatchesCopyingTheList) {
+  const std::vector<Vec3d> light = {Vec3d(-1, -1, 2), Vec3d(1, -1, 2), Vec3d(1, 1, 2), Vec3d(-1, 1, 2)};
+  const UVAxes axes = UVAxes::from_normal(Vec3f(0, 0, 1));
+  const LightBounds lb = LightBounds::of(light.data(), int(light.size()));
+  // The plain subtraction (subtract.h's contract): a fragment whose box misses the
+  // shadow's, or which lies on the negative side of an edge plane (or r on the edge's
+  // line), is kept whole; else it is walked through the edges in order, its negative
+  // pieces kept, and replaced by them (what is left after the last edge is hidden), or
+  // kept whole when a later edge finds what is left outside.
+  auto plain = [&](const Vec3d& r, const Vec3d* q, int nq, const UVBox& qbox, FragmentList& frags, bool& met) {
+    FragmentList out;
+    std::vector<Vec3d> pos(64), neg(64);
+    met = false;
+    for (size_t f = 0; f < frags.size(); ++f) {
+      const Vec3d* fp = frags.data(f);
+      const int fn = frags.count(f);
+      std::vector<NodePlane> planes;
+      for (int m = 0; m < nq; ++m) planes.push_back(node_plane(r, q[m], q[(m + 1) % nq], lb));
+      bool keep = !qbox.overlaps(UVBox::of(axes, fp, fn));
+      for (int m = 0; m < nq && !keep; ++m) {
+        const SplitResult s = classify_fragment(planes[size_t(m)], fp, fn);
+        keep = s == SplitResult::Negative || s == SplitResult::OnLine;
+      }
+      if (keep) {
+        out.add(fp, size_t(fn));
+        continue;
+      }
+      met = true;
+      FragmentList mine;
+      std::vector<Vec3d> cur(fp, fp + fn);
+      bool whole = false;
+      for (int m = 0; m < nq; ++m) {
+        int np = 0, nn = 0;
+        const SplitResult s = split_fragment(planes[size_t(m)], cur.data(), int(cur.size()), pos.data(), np,
+                                             neg.data(), nn);
+        if (s == SplitResult::Positive) continue;
+        if (s == SplitResult::Negative || s == SplitResult::OnLine) whole = true;
+        if (s != SplitResult::Both) break;
+        if (nn != 0) mine.add(neg.data(), size_t(nn));
+        cur.assign(pos.data(), pos.data() + np);
+        if (np == 0) break;
+      }
+      if (whole) {
+        out.add(fp, size_t(fn));
+      } else {
+        for (size_t k = 0; k < mine.size(); ++k) out.add(mine.data(k), size_t(mine.count(k)));
+      }
+    }
+    frags = out;
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uc(-1.0, 1.0), uz(0.3, 1.7), u01(0.0, 1.0);
+  FragmentList kept, copied, pieces;
+  std::vector<UVBox> boxes, piece_boxes;
+  FragmentRuns runs;
+  std::vector<Vec3d> cur, pos, neg;
+  BspCounters c;
+  auto restart = [&](const FragmentList& from) {  // the caller's way (shade_receiver.cpp)
+    FragmentList fresh;
+    for (size_t f = 0; f < from.size(); ++f) fresh.add(from.data(f), size_t(from.count(f)));
+    kept = fresh;
+    boxes.clear();
+    for (size_t f = 0; f < kept.size(); ++f) boxes.push_back(UVBox::of(axes, kept.data(f), kept.count(f)));
+    runs.build(boxes);
+  };
+  copied.add(light.data(), light.size());
+  restart(copied);
+  size_t longest = 0, box_compactions = 0, vert_compactions = 0, met_calls = 0;
+  const uint8_t skip[3] = {0, 0, 0};
+  for (int op = 0; op < 6000; ++op) {
+    if (copied.size() == 0 || op % 2000 == 1999) {  // the whole light again, or a fresh copy
+      if (copied.size() == 0) copied.add(light.data(), light.size());
+      restart(copied);
+      continue;
+    }
+    if (u01(rng) < 0.002) {
+      restart(copied);
+      continue;
+    }
+    // A triangle between r and the light: mostly small ones (many fragments), a few large.
+    const Vec3d r(uc(rng) * 0.2, uc(rng) * 0.2, 0.0);
+    const double z = uz(rng), size = u01(rng) < 0.1 ? 0.6 : 0.08;
+    const double cx = r.x + uc(rng) * z / 2, cy = r.y + uc(rng) * z / 2;
+    Vec3d t[3];
+    for (Vec3d& v : t) v = Vec3d(cx + uc(rng) * size * z, cy + uc(rng) * size * z, z);
+    if (dot(cross(t[1] - t[0], t[2] - t[0]), r - t[0]) > 0) std::swap(t[1], t[2]);  // r on the negative side
+    Vec3d s[3];
+    for (int i = 0; i < 3; ++i) s[i] = r + (t[i] - r) * (2.0 / z);
+    UVBox qbox = UVBox::of(axes, s, 3);
+    qbox = UVBox{qbox.ulo - 1e-9, qbox.uhi + 1e-9, qbox.vlo - 1e-9, qbox.vhi + 1e-9};
+    const size_t nb = boxes.size(), nv = kept.verts.size();
+    const bool a = subtract_polygon(r, t, 3, skip, qbox, axes, lb, kept, boxes, runs, pieces, piece_boxes, cur, pos,
+                                    neg, c);
+    box_compactions += boxes.size() < nb;
+    vert_compactions += kept.verts.size() < nv;
+    bool b = false;
+    plain(r, t, 3, qbox, copied, b);
+    met_calls += b;
+    ASSERT_EQ(a, b) << "op " << op;
+    ASSERT_EQ(kept.size(), copied.size()) << "op " << op;
+    ASSERT_EQ(runs.size() == 0 ? kept.size() : runs.count(), kept.size());
+    for (size_t f = 0; f < kept.size(); ++f) {
+      ASSERT_EQ(kept.count(f), copied.count(f)) << "op " << op << " fragment " << f;
+      for (int i = 0; i < kept.count(f); ++i) {
+        ASSERT_EQ(kept.data(f)[i].x, copied.data(f)[i].x);
+        ASSERT_EQ(kept.data(f)[i].y, copied.data(f)[i].y);
+        ASSERT_EQ(kept.data(f)[i].z, copied.data(f)[i].z);
+      }
+      ASSERT_LT(kept.polys[f].box, boxes.size());
+      const UVBox& got = boxes[kept.polys[f].box];
+      const UVBox want = UVBox::of(axes, kept.data(f), kept.count(f));
+      ASSERT_TRUE(got.ulo == want.ulo && got.uhi == want.uhi && got.vlo == want.vlo && got.vhi == want.vhi)
+          << "op " << op << " fragment " << f;
+    }
+    longest = std::max(longest, kept.size());
+  }
+  // The sequences reach what the storage has to get right: long lists (runs), and both
+  // compactions.
+  EXPECT_GT(longest, 300u);
+  EXPECT_GT(met_calls, 1000u);
+  EXPECT_GT(box_compactions, 0u);
+  EXPECT_GT(vert_compactions, 0u);
+}
