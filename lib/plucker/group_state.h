@@ -104,6 +104,7 @@ struct SolveContext {
   bool closed_near = true;  // dense closed surfaces' one-sided triangles per receiver (occluder_selection.cpp)
   // Closed surfaces' shadows as silhouette regions (silhouette_region.h); null: off.
   const SurfaceTrees* surface_trees = nullptr;
+  const TreeSurfaces* tree_surfaces = nullptr;  // with surface_trees: the tree's nodes by surface
   bool silhouette_estimate = true;  // auto: groups whose receivers see many turning edges decline
 };
 
