@@ -85,19 +85,23 @@ void walk_tree(const EdgeTree& tree, Enter&& enter, Item&& item) {
 // candidates: the edge from corner k to k + 1 of face t, its other face u. Each edge is
 // taken as the group's collection takes it, from its lower face when both faces are
 // candidates, else from the candidate face (the half (t, k) with neighbour u exactly
-// when t is a candidate and not both u < t and u a candidate).
-template <class Enter, class Item>
-void walk_group_edges(const SurfaceTrees& trees, SilhouetteGroup& g, Enter&& enter, Item&& item) {
+// when t is a candidate and not both u < t and u a candidate). Only edges whose faces
+// pair(t0, t1) accepts (a test symmetric in the two faces, before their candidacy,
+// which costs tree node tests the first time a face is asked about in the group).
+template <class Enter, class Pair, class Item>
+void walk_group_edges(const SurfaceTrees& trees, SilhouetteGroup& g, Enter&& enter, Pair&& pair, Item&& item) {
   for (const int32_t s : g.surfaces) {
     const SurfaceEdges& se = trees.edges(s);
     walk_tree(
         se.tree, [&](uint32_t i) { return enter(se.tree.node(i).box, se.node_normals[i]); },
         [&](uint32_t k) {
           const SurfaceEdges::Edge& e = se.edges[se.tree.item(k)];
-          const bool c0 = g.candidate(e.t0), c1 = g.candidate(e.t1);
-          if (c0 && !(e.t1 < e.t0 && c1))
+          if (!pair(e.t0, e.t1)) return;
+          // t1's verdict only when it matters (each is decided on demand).
+          const bool c0 = g.candidate(e.t0);
+          if (c0 && (!(e.t1 < e.t0) || !g.candidate(e.t1)))
             item(e.t0, uint32_t(e.k0), e.t1);
-          else if (e.k1 < 3 && c1 && !(e.t0 < e.t1 && c0))
+          else if (e.k1 < 3 && !(e.t0 < e.t1 && c0) && g.candidate(e.t1))
             item(e.t1, uint32_t(e.k1), e.t0);
         });
   }
@@ -369,8 +373,7 @@ void SilhouetteGroup::new_group(size_t triangles, size_t nodes, size_t nsurfaces
 // A node passes when its parent does and node_passes accepts it (the walk reaches it
 // and does not leave it out): the verdict of the walk, which enters a node only through
 // its parent. The chain is at most the tree's depth (kMaxStack).
-bool SilhouetteGroup::candidate(uint32_t t) {
-  if (in_cand[t] == serial) return tri_ok[t] != 0;
+bool SilhouetteGroup::decide(uint32_t t) {
   std::array<uint32_t, accel::Bvh<float>::kMaxStack> chain;
   size_t n = 0;
   uint32_t i = tree_surfaces->leaf_of[t];
@@ -495,6 +498,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
           const AABBd lb = to_local_box(wb, od);
           return meets(lb) && !outside_side(lb) && !faces_one_side(wb, normals, rwd);
         },
+        [](uint32_t, uint32_t) { return true; },
         [&](uint32_t t, uint32_t k, uint32_t u) {
           const Vec3d la = to_local_d(mesh.corner(t, int(k)), origin), lb = to_local_d(mesh.corner(t, int(k + 1) % 3), origin);
           if (!meets(local_edge_box(la, lb))) return;
@@ -598,11 +602,13 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   const Vec3d rwd = to_double(rw), od = to_double(origin);
   walk_group_edges(
       trees, g, [&](const AABBd& wb, const AABBd& normals) { return !faces_one_side(wb, normals, rwd) && !box_outside(to_local_box(wb, od)); },
+      // The faces' sides first: they reject most edges of a leaf the walk reaches (before
+      // their faces' candidacy is decided), and each face's side serves its three edges.
+      [&](uint32_t t0, uint32_t t1) {
+        const int s0 = face_side_r(t0), s1 = face_side_r(t1);
+        return !(s0 != 0 && s0 == s1);
+      },
       [&](uint32_t t, uint32_t k, uint32_t u) {
-        // The faces' sides first: they reject most edges of a leaf the walk reaches, and
-        // each face's side serves its three edges.
-        const int s0 = face_side_r(t), s1 = face_side_r(u);
-        if (s0 != 0 && s0 == s1) return;
         const Vec3f a = mesh.corner(t, int(k)), b = mesh.corner(t, int(k + 1) % 3);
         const Vec3d la = to_local_d(a, origin), lb = to_local_d(b, origin);
         if (box_outside(local_edge_box(la, lb))) return;

@@ -209,9 +209,14 @@ struct SilhouetteGroup {
   std::vector<uint32_t> in_cand, node_stamp;  // stamps
   std::vector<uint8_t> tri_ok, node_ok, counted;  // the verdicts; per triangle the edges counted (bits k)
   uint32_t serial = 0;
-  bool candidate(uint32_t t);
+  bool candidate(uint32_t t) { return in_cand[t] == serial ? tri_ok[t] != 0 : decide(t); }
   // Starts a group: the verdicts above forgotten (serial), sizes for mesh and tree.
   void new_group(size_t triangles, size_t nodes, size_t surfaces);
+
+ private:
+  bool decide(uint32_t t);
+
+ public:
   // Per receiver: the edges used, in the group's edge order (by the face each is taken
   // from, then its k), and their keys (t << 2 | k).
   std::vector<SilEdge> edges;
