@@ -612,7 +612,7 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
         const Vec3f a = mesh.corner(t, int(k)), b = mesh.corner(t, int(k + 1) % 3);
         const Vec3d la = to_local_d(a, origin), lb = to_local_d(b, origin);
         if (box_outside(local_edge_box(la, lb))) return;
-        // silhouette_edges: the group's edges a receiver's walk takes to here, once each.
+        // silhouette_edges: the distinct edges the group's receivers use.
         if (!(g.counted[t] & (1u << k))) g.counted[t] |= uint8_t(1u << k), ++c.edges;
         g.edges.push_back(SilEdge{a, b, la, lb, t, u});
         g.edge_keys.push_back(uint64_t(t) << 2 | k);

@@ -20,8 +20,9 @@
 // so c >= 1 on both sides of their projection and the blocked set does not change there.
 //
 // Per group and light (select_region_surfaces): the surfaces that meet these conditions
-// for every receiver of the group, their candidate triangles left out of the selection
-// and marked (the group's edges are the surface edges with a candidate face).
+// for every receiver of the group, decided before the selection's shaft walk, which
+// leaves their triangles out (the group's edges are the surface edges with a face the
+// walk would list, decided on demand: SilhouetteGroup::candidate).
 // Per receiver (subtract_silhouette_regions): the group's edges whose faces have
 // different exact sides from r (or one with r in its plane) and that may meet the
 // pyramid of r and the light, found in the surfaces' edge trees built once per solve
@@ -238,6 +239,7 @@ struct SilhouetteGroup {
 
 // Counters (plucker_solver.h stats).
 struct SilhouetteCounters {
+  // edges: per group the distinct edges its receivers used (receiver_edges: per receiver).
   uint64_t groups = 0, declined = 0, edges = 0, receiver_edges = 0, pieces = 0, blocked = 0, undecided = 0, dropped = 0;
   uint64_t listed = 0;  // receivers whose pieces were tested triangle by triangle (more than 16)
 };
