@@ -290,9 +290,10 @@ void Selection::candidates() {
     // recorded as skipped ranges, whose triangles the exact path still subtracts.
     std::vector<uint8_t>& covered = gs_.merged;  // per skipped range: 1 covered, 0 a region surface's (scratch until below)
     covered.clear();
-    const std::vector<int32_t>& node_surface = gs_.ctx->tree_surfaces->node_surface;
+    // Set whenever a region surface is (region_surfaces returns early without it).
+    const int32_t* node_surface = sil.surfaces.empty() ? nullptr : gs_.ctx->tree_surfaces->node_surface.data();
     tree.candidates(*shaft_, lf_.origin, cand, gs_.cand_skipped, [&](uint32_t i, const Vec3d& lo, const Vec3d& hi) {
-      if (!sil.surfaces.empty() && node_surface[i] >= 0 && sil.is_region[size_t(node_surface[i])]) {
+      if (node_surface && node_surface[i] >= 0 && sil.is_region[size_t(node_surface[i])]) {
         covered.push_back(0);
         return true;
       }
