@@ -65,7 +65,7 @@ struct Totals {
   uint64_t near_splits = 0;     // splits of the per-receiver subtractions (in bsp.splits too)
   uint64_t interior = 0;        // interior occluders added to trees (interior_occluders.h)
   uint64_t interior_covered = 0;  // candidates left out: every line through them stabs one
-  uint64_t interior_skipped = 0;  // triangles of whole tree nodes left out that way (cover_nodes)
+  uint64_t interior_skipped = 0;  // triangles of whole tree nodes left out that way (cover_nodes; not region surfaces')
   uint64_t near_merged = 0;  // per receiver: near triangles subtracted within another's polygon (shade_receiver.cpp)
   uint64_t closed_near = 0;  // one-sided triangles of dense closed surfaces put in the near list (closed_near)
   uint64_t bsp_nodes_max = 0;
@@ -104,6 +104,7 @@ struct SolveContext {
   bool closed_near = true;  // dense closed surfaces' one-sided triangles per receiver (occluder_selection.cpp)
   // Closed surfaces' shadows as silhouette regions (silhouette_region.h); null: off.
   const SurfaceTrees* surface_trees = nullptr;
+  const TreeSurfaces* tree_surfaces = nullptr;  // with surface_trees: the tree's nodes by surface
   bool silhouette_estimate = true;  // auto: groups whose receivers see many turning edges decline
 };
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 
@@ -69,6 +70,23 @@ int box_side(const Vec3f t[3], const Vec3f* corners, int ncorners) {
   return side;
 }
 
+// Per interior occluder added (interior_occluders): its edges' fans against the light
+// and the receivers' box corners (lines.h EdgeFan), for covered_by_interior.
+struct Cover {
+  int n = 0;
+  EdgeFan light[kMaxOccluderVertices], region[kMaxOccluderVertices];
+  mutable int hint = 0;  // the edge that failed last (covered_by_interior, covered_box)
+};
+
+bool covered_box(const std::vector<Cover>& covers, bool rloc_exact, const Vec3d& lo, const Vec3d& hi);
+
+// The group's shaft and covers (Selection), shared with the receivers' candidate test.
+struct WalkTest {
+  std::optional<Shaft> shaft;
+  std::vector<Cover> covers;
+  bool rloc_exact = false;
+};
+
 // The selection over one group's state; each step one method.
 class Selection {
  public:
@@ -89,10 +107,12 @@ class Selection {
   void working_scale();
   void candidates();
   void closed_surface_culling();
-  void region_surfaces();
+  void region_surfaces(bool use_covers);
   void interior_occluders();
   bool covered_by_interior(const Vec3d* pts, int n) const;
-  bool covered_box(const Vec3d& lo, const Vec3d& hi) const;
+  bool covered_box(const Vec3d& lo, const Vec3d& hi) const {
+    return plucker::covered_box(covers_, gs_.rloc_exact, lo, hi);
+  }
   bool select_patch(int32_t pid, std::span<const uint32_t> tris, const Vec3d tt[3]);
   void select_triangle(uint32_t t, const Vec3d tri[3]);
   bool closed_near(uint32_t t) const;
@@ -111,15 +131,11 @@ class Selection {
   const LocalLight& lf_;
   const float sigma_;
   AABB rbox_;  // the receivers' float box for the shaft (its margin covers the rounding)
-  std::optional<Shaft> shaft_;  // made once the receivers' box is known
-  // Per interior occluder added (interior_occluders): its edges' fans against the light
-  // and the receivers' box corners (lines.h EdgeFan), for covered_by_interior.
-  struct Cover {
-    int n = 0;
-    EdgeFan light[kMaxOccluderVertices], region[kMaxOccluderVertices];
-    mutable int hint = 0;  // the edge that failed last (covered_by_interior, covered_box)
-  };
-  std::vector<Cover> covers_;
+  // What the shaft walk tests per tree node, kept past the selection for the
+  // receivers' candidate test (SilhouetteGroup::node_passes).
+  std::shared_ptr<WalkTest> walk_ = std::make_shared<WalkTest>();
+  std::optional<Shaft>& shaft_ = walk_->shaft;  // made once the receivers' box is known
+  std::vector<Cover>& covers_ = walk_->covers;
   int8_t keep_side_ = 0;  // NearPoly::keep_side of the triangle being selected
 };
 
@@ -258,18 +274,48 @@ NearPoly Selection::make_near(uint32_t t, const Vec3d tri[3], double tmax, const
 void Selection::candidates() {
   std::vector<uint32_t>& cand = gs_.cand;
   const TriangleTree& tree = *gs_.ctx->tree;
-  if (covers_.empty() || !gs_.ctx->cover_nodes) {
+  walk_->rloc_exact = gs_.rloc_exact;
+  const bool use_covers = !covers_.empty() && gs_.ctx->cover_nodes;
+  region_surfaces(use_covers);
+  const SilhouetteGroup& sil = gs_.sil;
+  if (!use_covers && sil.surfaces.empty()) {
     tree.candidates(*shaft_, lf_.origin, cand);
   } else {
     // Whole subtrees whose box is covered (covered_by_interior on its 8 corners: the
     // orientation of lines through a convex set follows from its corners, lines.h) are
     // left out before the closed-surface sides and the per-triangle tests, which cost
     // more per triangle than the box test per node (scan: most of the shaft is covered).
-    tree.candidates(*shaft_, lf_.origin, cand, gs_.cand_skipped,
-                    [&](const Vec3d& lo, const Vec3d& hi) { return covered_box(lo, hi); });
-    for (const TriangleTree::Range& r : gs_.cand_skipped) tot_.interior_skipped += r.count;
+    // So are subtrees of a region surface's triangles alone (region_surfaces): the
+    // receivers ask which of them are candidates when they reach their edges. Both are
+    // recorded as skipped ranges, whose triangles the exact path still subtracts.
+    std::vector<uint8_t>& covered = gs_.merged;  // per skipped range: 1 covered, 0 a region surface's (scratch until below)
+    covered.clear();
+    // Set whenever a region surface is (region_surfaces returns early without it).
+    const int32_t* node_surface = sil.surfaces.empty() ? nullptr : gs_.ctx->tree_surfaces->node_surface.data();
+    tree.candidates(*shaft_, lf_.origin, cand, gs_.cand_skipped, [&](uint32_t i, const Vec3d& lo, const Vec3d& hi) {
+      if (node_surface && node_surface[i] >= 0 && sil.is_region[size_t(node_surface[i])]) {
+        covered.push_back(0);
+        return true;
+      }
+      if (use_covers && covered_box(lo, hi)) {
+        covered.push_back(1);
+        return true;
+      }
+      return false;
+    });
+    for (size_t k = 0; k < covered.size(); ++k)
+      if (covered[k]) tot_.interior_skipped += gs_.cand_skipped[k].count;
   }
-  region_surfaces();
+  // The region surfaces' candidates in leaves shared with other triangles, left out too.
+  gs_.region_drop.clear();
+  if (!sil.surfaces.empty()) {
+    const ClosedSurfaces& cs = *gs_.ctx->closed;
+    gs_.region_drop.assign(cand.size(), 0);
+    for (size_t ci = 0; ci < cand.size(); ++ci) {
+      const int32_t s = cs.surface(cand[ci]);
+      gs_.region_drop[ci] = s >= 0 && sil.is_region[size_t(s)];
+    }
+  }
   closed_surface_culling();
   std::vector<uint8_t>& merged = gs_.merged;  // per candidate: shaded as part of a patch
   merged.assign(cand.size(), 0);
@@ -309,19 +355,31 @@ void Selection::candidates() {
   }
 }
 
-// The closed surfaces shaded per receiver as silhouette regions (silhouette_region.h):
-// their candidates are left out here (region_drop), their silhouette edges kept.
-void Selection::region_surfaces() {
-  gs_.region_drop.clear();
+// The closed surfaces shaded per receiver as silhouette regions (silhouette_region.h),
+// decided before the shaft walk, which leaves their triangles out; their silhouette
+// edges come from the faces the walk would list (SilhouetteGroup::node_passes: the
+// walk's own node test on the same floats, without the region surfaces' skip).
+void Selection::region_surfaces(bool use_covers) {
   gs_.sil.surfaces.clear();
-  if (!gs_.ctx->closed || !gs_.ctx->surface_trees) return;
+  if (!gs_.ctx->closed || !gs_.ctx->surface_trees || !gs_.ctx->tree_surfaces) return;
+  const TriangleTree& tree = *gs_.ctx->tree;
+  SilhouetteGroup& sil = gs_.sil;
+  sil.tree_surfaces = gs_.ctx->tree_surfaces;
+  sil.node_passes = [w = walk_, &tree, origin = lf_.origin, use_covers](uint32_t i) {
+    const auto& nd = tree.bvh().node(i);
+    if (w->shaft->culls_box(nd.box.lo - origin, nd.box.hi - origin)) return false;
+    if (!use_covers) return true;
+    Vec3d lo, hi;
+    tree.local_box(i, to_double(origin), lo, hi);
+    return !plucker::covered_box(w->covers, w->rloc_exact, lo, hi);
+  };
+  sil.new_group(scene_.mesh.size(), tree.node_count(), gs_.ctx->closed->count());
   AABB rbox;
   for (uint32_t i : *gs_.group) rbox.extend(scene_.receivers[i].p);
   const Light& light = scene_.lights[gs_.li];
-  select_region_surfaces(scene_.mesh, *gs_.ctx->closed, *gs_.ctx->surface_trees, gs_.cand, rbox, light.polygon.data(),
+  select_region_surfaces(scene_.mesh, *gs_.ctx->closed, *gs_.ctx->surface_trees, *shaft_, rbox, light.polygon.data(),
                          int(light.polygon.size()), sigma_, lf_.origin, gs_.rloc, lf_.poly,
-                         gs_.ctx->silhouette_estimate, gs_.sil, gs_.region_drop, tot_.sil);
-  if (gs_.sil.surfaces.empty()) gs_.region_drop.clear();
+                         gs_.ctx->silhouette_estimate, sil, tot_.sil);
 }
 
 // Strict side of every point of pts against the plane of the triangle a, b, c (world
@@ -537,7 +595,7 @@ bool Selection::covered_by_interior(const Vec3d* pts, int n) const {
 // a value at nv above the fan's bound taken at D (scale_k D, the bound EdgeFan gives a
 // point at distance D) proves every point of the box strictly positive. Same answer as
 // the 8 corners or a weaker one (undecided counts as not covered).
-bool Selection::covered_box(const Vec3d& lo, const Vec3d& hi) const {
+bool covered_box(const std::vector<Cover>& covers, bool rloc_exact, const Vec3d& lo, const Vec3d& hi) {
   auto positive = [&](const EdgeFan& fan, double sign) {
     const Vec3d dl = lo - fan.a, dh = hi - fan.a;
     const double dmax = std::max(std::abs(dl.x), std::abs(dh.x)) + std::max(std::abs(dl.y), std::abs(dh.y)) +
@@ -549,11 +607,11 @@ bool Selection::covered_box(const Vec3d& lo, const Vec3d& hi) const {
     }
     return true;
   };
-  for (const Cover& cv : covers_) {
+  for (const Cover& cv : covers) {
     bool all = true;
     for (int mi = 0; mi < cv.n && all; ++mi) {
       const int m = (cv.hint + mi) % cv.n;
-      all = positive(cv.light[m], 1.0) || (gs_.rloc_exact && positive(cv.region[m], -1.0));
+      all = positive(cv.light[m], 1.0) || (rloc_exact && positive(cv.region[m], -1.0));
       if (!all) cv.hint = m;
     }
     if (all) return true;

@@ -252,17 +252,20 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   }
   // Per closed surface a hierarchy for the silhouette regions' segment tests, once per solve.
   std::optional<SurfaceTrees> surface_trees;
+  std::optional<TreeSurfaces> tree_surfaces;
   MemoryCharge surface_charge;
   const std::string regions = opt.get("silhouette_regions", "auto");
   ctx.silhouette_estimate = regions != "on";
   if (ctx.closed && regions != "off") {
     tt = Clock::now();
     surface_trees.emplace(scene.mesh, *closed, ctx.silhouette_estimate ? kMinRegionTriangles : 0u);
+    tree_surfaces.emplace(tree, *closed);
     tree_s += seconds_since(tt);
-    memory.change(int64_t(surface_trees->memory_bytes()));
+    memory.change(int64_t(surface_trees->memory_bytes() + tree_surfaces->memory_bytes()));
     surface_charge.bind(&budget, "silhouette regions");
-    surface_charge.set(surface_trees->memory_bytes());
+    surface_charge.set(surface_trees->memory_bytes() + tree_surfaces->memory_bytes());
     ctx.surface_trees = &*surface_trees;
+    ctx.tree_surfaces = &*tree_surfaces;
   }
   // Interior occluders of the closed surfaces (interior_occluders.h), once per solve, on the
   // surface trees' triangle hierarchies when they exist.

@@ -85,19 +85,23 @@ void walk_tree(const EdgeTree& tree, Enter&& enter, Item&& item) {
 // candidates: the edge from corner k to k + 1 of face t, its other face u. Each edge is
 // taken as the group's collection takes it, from its lower face when both faces are
 // candidates, else from the candidate face (the half (t, k) with neighbour u exactly
-// when t is a candidate and not both u < t and u a candidate).
-template <class Enter, class Item>
-void walk_group_edges(const SurfaceTrees& trees, const SilhouetteGroup& g, Enter&& enter, Item&& item) {
+// when t is a candidate and not both u < t and u a candidate). Only edges whose faces
+// pair(t0, t1) accepts (a test symmetric in the two faces, before their candidacy,
+// which costs tree node tests the first time a face is asked about in the group).
+template <class Enter, class Pair, class Item>
+void walk_group_edges(const SurfaceTrees& trees, SilhouetteGroup& g, Enter&& enter, Pair&& pair, Item&& item) {
   for (const int32_t s : g.surfaces) {
     const SurfaceEdges& se = trees.edges(s);
     walk_tree(
         se.tree, [&](uint32_t i) { return enter(se.tree.node(i).box, se.node_normals[i]); },
         [&](uint32_t k) {
           const SurfaceEdges::Edge& e = se.edges[se.tree.item(k)];
-          const bool c0 = g.in_cand[e.t0] == g.serial, c1 = g.in_cand[e.t1] == g.serial;
-          if (c0 && !(e.t1 < e.t0 && c1))
+          if (!pair(e.t0, e.t1)) return;
+          // t1's verdict only when it matters (each is decided on demand).
+          const bool c0 = g.candidate(e.t0);
+          if (c0 && (!(e.t1 < e.t0) || !g.candidate(e.t1)))
             item(e.t0, uint32_t(e.k0), e.t1);
-          else if (e.k1 < 3 && c1 && !(e.t0 < e.t1 && c0))
+          else if (e.k1 < 3 && !(e.t0 < e.t1 && c0) && g.candidate(e.t1))
             item(e.t1, uint32_t(e.k1), e.t0);
         });
   }
@@ -357,21 +361,79 @@ int SurfaceTrees::triangle_meets(const TriangleSoup& mesh, uint32_t t, const Vec
 }
 
 void SilhouetteGroup::clear() {
+  for (const int32_t s : surfaces) is_region[size_t(s)] = 0;
   surfaces.clear();
   edges.clear();
   edge_keys.clear();
 }
 
+void SilhouetteGroup::new_group(size_t triangles, size_t nodes, size_t nsurfaces) {
+  if (in_cand.size() != triangles) in_cand.assign(triangles, 0u), tri_ok.assign(triangles, 0), counted.assign(triangles, 0);
+  if (node_stamp.size() != nodes) node_stamp.assign(nodes, 0u), node_ok.assign(nodes, 0);
+  is_region.assign(nsurfaces, 0);  // GroupState::clear empties `surfaces` alone
+  if (++serial == 0) {
+    std::fill(in_cand.begin(), in_cand.end(), 0u);
+    std::fill(node_stamp.begin(), node_stamp.end(), 0u);
+    serial = 1;
+  }
+}
+
+// A node passes when its parent does and node_passes accepts it (the walk reaches it
+// and does not leave it out): the verdict of the walk, which enters a node only through
+// its parent. The chain is at most the tree's depth (kMaxStack).
+bool SilhouetteGroup::decide(uint32_t t) {
+  std::array<uint32_t, accel::Bvh<float>::kMaxStack> chain;
+  size_t n = 0;
+  uint32_t i = tree_surfaces->leaf_of[t];
+  bool ok = true;
+  while (node_stamp[i] != serial) {
+    chain[n++] = i;
+    if (i == 0) break;
+    i = tree_surfaces->parent[i];
+  }
+  if (node_stamp[i] == serial) ok = node_ok[i] != 0;
+  while (n > 0) {
+    const uint32_t k = chain[--n];
+    ok = ok && node_passes(k);
+    node_stamp[k] = serial;
+    node_ok[k] = uint8_t(ok);
+  }
+  in_cand[t] = serial;
+  tri_ok[t] = uint8_t(ok);
+  counted[t] = 0;
+  return ok;
+}
+
+TreeSurfaces::TreeSurfaces(const TriangleTree& tree, const ClosedSurfaces& cs) {
+  const accel::Bvh<float>& bvh = tree.bvh();
+  const size_t nn = bvh.node_count();
+  node_surface.assign(nn, -1);
+  parent.assign(nn, 0u);
+  leaf_of.assign(bvh.item_count(), 0u);
+  // Pre-order: both children follow their parent, so children are done first backwards.
+  for (size_t i = nn; i-- > 0;) {
+    const auto& nd = bvh.node(uint32_t(i));
+    if (bvh.is_leaf(nd)) {
+      const auto items = bvh.leaf_items(nd);
+      int32_t s = items.empty() ? -1 : cs.surface(items[0]);
+      for (const uint32_t t : items) {
+        leaf_of[t] = uint32_t(i);
+        if (cs.surface(t) != s) s = -1;
+      }
+      node_surface[i] = s;
+      continue;
+    }
+    const uint32_t l = bvh.left(uint32_t(i)), r = bvh.right(uint32_t(i));
+    parent[l] = parent[r] = uint32_t(i);
+    node_surface[i] = node_surface[l] == node_surface[r] ? node_surface[l] : -1;
+  }
+}
+
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
-                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* light, int m,
-                            float sigma, const Vec3f& origin,
-                            const std::vector<Vec3d>& rloc, const std::vector<Vec3d>& lpoly, bool estimate,
-                            SilhouetteGroup& g, std::vector<uint8_t>& drop, SilhouetteCounters& c) {
+                            const Shaft& shaft, const AABB& rbox, const Vec3f* light, int m, float sigma,
+                            const Vec3f& origin, const std::vector<Vec3d>& rloc, const std::vector<Vec3d>& lpoly,
+                            bool estimate, SilhouetteGroup& g, SilhouetteCounters& c) {
   g.clear();
-  drop.assign(cand.size(), 0);
-  // Per surface met: 1 region surface, 2 not (the other surfaces stay on the present path).
-  thread_local std::vector<uint8_t> status;
-  status.assign(cs.count(), 0);
   auto apart = [](const AABB& a, const AABB& b) {
     return a.hi.x < b.lo.x || b.hi.x < a.lo.x || a.hi.y < b.lo.y || b.hi.y < a.lo.y || a.hi.z < b.lo.z ||
            b.hi.z < a.lo.z;
@@ -389,29 +451,14 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
     }
     return true;
   };
-  // The candidates marked per triangle (stamped with the group's serial, not cleared);
-  // the receivers' walks read the marks (walk_group_edges).
-  if (g.in_cand.size() != mesh.size()) g.in_cand.assign(mesh.size(), 0u), g.serial = 0;
-  if (++g.serial == 0) std::fill(g.in_cand.begin(), g.in_cand.end(), 0u), g.serial = 1;
-  for (uint32_t t : cand) g.in_cand[t] = g.serial;
-  // The group's edges (silhouette_edges): each edge of a region surface's candidate once.
-  // A receiver uses those whose faces it does not see from one strict side; a face with
-  // one strict side at every corner of the receivers' box has it at every receiver (a
-  // plane's side is linear), so no box-side filter is needed here.
-  uint64_t edges = 0;
-  for (size_t ci = 0; ci < cand.size(); ++ci) {
-    const uint32_t t = cand[ci];
-    const int32_t s = cs.surface(t);
-    if (s < 0) continue;
-    uint8_t& st = status[size_t(s)];
-    if (st == 0) {
-      st = qualifies(s) ? 1 : 2;
-      if (st == 1) g.surfaces.push_back(s);
-    }
-    if (st != 1) continue;
-    drop[ci] = 1;
-    for (const int32_t u : cs.neighbors(t))
-      if (!(uint32_t(u) < t && g.in_cand[uint32_t(u)] == g.serial)) ++edges;
+  // A surface whose box the shaft culls has no candidate (its tree leaves lie in that
+  // box: culled too). The others are taken whether or not a triangle of theirs is a
+  // candidate: one without any has no edge of the group.
+  for (int32_t s = 0; s < int32_t(cs.count()); ++s) {
+    if (estimate && cs.triangles(s) < kMinRegionTriangles) continue;
+    if (shaft.culls_box(cs.box(s).lo - origin, cs.box(s).hi - origin) || !qualifies(s)) continue;
+    g.surfaces.push_back(s);
+    g.is_region[size_t(s)] = 1;
   }
   if (g.surfaces.empty()) return;
   // The estimate at five receivers spread over the group (its first, quarters and last):
@@ -459,6 +506,7 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
           const AABBd lb = to_local_box(wb, od);
           return meets(lb) && !outside_side(lb) && !faces_one_side(wb, normals, rwd);
         },
+        [](uint32_t, uint32_t) { return true; },
         [&](uint32_t t, uint32_t k, uint32_t u) {
           const Vec3d la = to_local_d(mesh.corner(t, int(k)), origin), lb = to_local_d(mesh.corner(t, int(k + 1) % 3), origin);
           if (!meets(local_edge_box(la, lb))) return;
@@ -473,11 +521,9 @@ void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, 
   if (most > kMaxSampledEdges) {
     ++c.declined;
     g.clear();
-    drop.assign(cand.size(), 0);
     return;
   }
   ++c.groups;
-  c.edges += edges;
 }
 
 bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& trees, SilhouetteGroup& g,
@@ -564,14 +610,18 @@ bool subtract_silhouette_regions(const TriangleSoup& mesh, const SurfaceTrees& t
   const Vec3d rwd = to_double(rw), od = to_double(origin);
   walk_group_edges(
       trees, g, [&](const AABBd& wb, const AABBd& normals) { return !faces_one_side(wb, normals, rwd) && !box_outside(to_local_box(wb, od)); },
+      // The faces' sides first: they reject most edges of a leaf the walk reaches (before
+      // their faces' candidacy is decided), and each face's side serves its three edges.
+      [&](uint32_t t0, uint32_t t1) {
+        const int s0 = face_side_r(t0), s1 = face_side_r(t1);
+        return !(s0 != 0 && s0 == s1);
+      },
       [&](uint32_t t, uint32_t k, uint32_t u) {
-        // The faces' sides first: they reject most edges of a leaf the walk reaches, and
-        // each face's side serves its three edges.
-        const int s0 = face_side_r(t), s1 = face_side_r(u);
-        if (s0 != 0 && s0 == s1) return;
         const Vec3f a = mesh.corner(t, int(k)), b = mesh.corner(t, int(k + 1) % 3);
         const Vec3d la = to_local_d(a, origin), lb = to_local_d(b, origin);
         if (box_outside(local_edge_box(la, lb))) return;
+        // silhouette_edges: the distinct edges the group's receivers use.
+        if (!(g.counted[t] & (1u << k))) g.counted[t] |= uint8_t(1u << k), ++c.edges;
         g.edges.push_back(SilEdge{a, b, la, lb, t, u});
         g.edge_keys.push_back(uint64_t(t) << 2 | k);
       });

@@ -20,8 +20,9 @@
 // so c >= 1 on both sides of their projection and the blocked set does not change there.
 //
 // Per group and light (select_region_surfaces): the surfaces that meet these conditions
-// for every receiver of the group, their candidate triangles left out of the selection
-// and marked (the group's edges are the surface edges with a candidate face).
+// for every receiver of the group, decided before the selection's shaft walk, which
+// leaves their triangles out (the group's edges are the surface edges with a face the
+// walk would list, decided on demand: SilhouetteGroup::candidate).
 // Per receiver (subtract_silhouette_regions): the group's edges whose faces have
 // different exact sides from r (or one with r in its plane) and that may meet the
 // pyramid of r and the light, found in the surfaces' edge trees built once per solve
@@ -39,6 +40,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "lib/accel/bvh.h"
@@ -46,6 +48,7 @@
 #include "lib/plucker/bsp.h"
 #include "lib/plucker/closed_surfaces.h"
 #include "lib/plucker/fragment.h"
+#include "lib/plucker/triangle_tree.h"
 #include "lib/scene/scene.h"
 
 namespace visgate::plucker {
@@ -159,6 +162,22 @@ class SurfaceTrees {
   std::vector<SurfaceEdges> edges_;             // per surface
 };
 
+// Per node of the occluder selection's triangle tree (TriangleTree::bvh()), built once
+// per solve: the closed surface holding every triangle below it (-1: none, or several),
+// its parent (the root's is itself), and per triangle its leaf. The selection leaves a
+// region surface's whole subtrees out of its walk (occluder_selection.cpp), and a
+// receiver asks the walk's verdict on a face only when its edge walk reaches it
+// (SilhouetteGroup::candidate), from the leaf up.
+struct TreeSurfaces {
+  std::vector<int32_t> node_surface;
+  std::vector<uint32_t> parent;
+  std::vector<uint32_t> leaf_of;  // per input triangle
+  TreeSurfaces(const TriangleTree& tree, const ClosedSurfaces& cs);
+  size_t memory_bytes() const {
+    return node_surface.capacity() * sizeof(int32_t) + (parent.capacity() + leaf_of.capacity()) * sizeof(uint32_t);
+  }
+};
+
 // A candidate silhouette edge of a group: a -> b (world floats, as in face f0; local
 // la, lb), shared by faces f0 and f1 (input triangles).
 struct SilEdge {
@@ -178,10 +197,27 @@ struct FacePlane {
 // A group's silhouette data (GroupState::sil).
 struct SilhouetteGroup {
   std::vector<int32_t> surfaces;  // the region surfaces of the group
-  // The group's candidates, marked per input triangle with `serial` (not cleared): a
-  // surface edge is the group's when a face of it is a candidate (SurfaceEdges).
-  std::vector<uint32_t> in_cand;
+  std::vector<uint8_t> is_region;  // per closed surface: 1 when in `surfaces` (reset by clear)
+  // A surface edge is the group's when a face of it is a candidate: a triangle the
+  // selection's shaft walk lists (TriangleTree::candidates), i.e. every node from the
+  // root to its leaf passes the walk's own test, `node_passes` (the shaft does not cull
+  // its box and, with interior occluders, the box is not covered), set by the selection
+  // (the same floats as its walk). Decided on demand, per node and per triangle, and
+  // kept for the group (stamped with `serial`, not cleared): a receiver asks about the
+  // faces its edge walk reaches, not the group about every triangle in its shaft.
+  std::function<bool(uint32_t)> node_passes;
+  const TreeSurfaces* tree_surfaces = nullptr;
+  std::vector<uint32_t> in_cand, node_stamp;  // stamps
+  std::vector<uint8_t> tri_ok, node_ok, counted;  // the verdicts; per triangle the edges counted (bits k)
   uint32_t serial = 0;
+  bool candidate(uint32_t t) { return in_cand[t] == serial ? tri_ok[t] != 0 : decide(t); }
+  // Starts a group: the verdicts above forgotten (serial), sizes for mesh and tree.
+  void new_group(size_t triangles, size_t nodes, size_t surfaces);
+
+ private:
+  bool decide(uint32_t t);
+
+ public:
   // Per receiver: the edges used, in the group's edge order (by the face each is taken
   // from, then its k), and their keys (t << 2 | k).
   std::vector<SilEdge> edges;
@@ -203,6 +239,7 @@ struct SilhouetteGroup {
 
 // Counters (plucker_solver.h stats).
 struct SilhouetteCounters {
+  // edges: per group the distinct edges its receivers used (receiver_edges: per receiver).
   uint64_t groups = 0, declined = 0, edges = 0, receiver_edges = 0, pieces = 0, blocked = 0, undecided = 0, dropped = 0;
   uint64_t listed = 0;  // receivers whose pieces were tested triangle by triangle (more than 16)
 };
@@ -214,10 +251,13 @@ struct SilhouetteCounters {
 // that sign's side.
 bool faces_one_side(const AABBd& box, const AABBd& normals, const Vec3d& r);
 
-// Group level: fills g.surfaces and marks the shaft's candidates `cand` (sorted; `drop`
-// receives 1 for each candidate of a region surface). rbox: the receivers' world box;
-// light: the light's float polygon; sigma: the receivers' side of its Newell plane;
-// origin: the light's local frame; trees: the surfaces' edge trees.
+// Group level: fills g.surfaces (and g.is_region) with the closed surfaces whose box
+// the group's shaft does not cull (shaft in local coordinates about `origin`) and that
+// meet the conditions above; the caller then leaves their triangles out of its
+// candidates (g.node_passes and g.tree_surfaces set and g.new_group called before).
+// rbox: the receivers' world box; light: the light's float polygon; sigma: the
+// receivers' side of its Newell plane; origin: the light's local frame; trees: the
+// surfaces' edge trees.
 // rloc: the group's receivers and lpoly the light's vertices, local. With `estimate`, a
 // group where a few
 // spread receivers each see more than kMaxSampledEdges candidate edges turning near
@@ -231,10 +271,9 @@ constexpr size_t kMaxSampledEdges = 64;
 // and point tests (columns' cylinders and rooms' boxes: 1.7x and 2.9x the time).
 constexpr uint32_t kMinRegionTriangles = 1024;
 void select_region_surfaces(const TriangleSoup& mesh, const ClosedSurfaces& cs, const SurfaceTrees& trees,
-                            const std::vector<uint32_t>& cand, const AABB& rbox, const Vec3f* light, int m,
-                            float sigma, const Vec3f& origin, const std::vector<Vec3d>& rloc,
-                            const std::vector<Vec3d>& lpoly, bool estimate, SilhouetteGroup& g,
-                            std::vector<uint8_t>& drop, SilhouetteCounters& c);
+                            const Shaft& shaft, const AABB& rbox, const Vec3f* light, int m, float sigma,
+                            const Vec3f& origin, const std::vector<Vec3d>& rloc, const std::vector<Vec3d>& lpoly,
+                            bool estimate, SilhouetteGroup& g, SilhouetteCounters& c);
 
 // Per receiver: removes the region surfaces' shadows from `frags` (local coordinates
 // about `origin`). rw: the receiver (world), r: local. pyramid, pyramid_err: the

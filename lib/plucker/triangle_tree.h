@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "lib/accel/bvh.h"
@@ -61,6 +62,20 @@ class TriangleTree {
   template <class Skip>
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out, std::vector<Range>& skipped,
                   Skip&& skip) const;
+  // `skip` may also take the node's index first, skip(i, lo, hi) (nodes as bvh()'s).
+  // The local box candidates gives `skip` for node i (its float box translated to the
+  // frame of `origin`, widened as above).
+  void local_box(uint32_t i, const Vec3d& od, Vec3d& lo, Vec3d& hi) const {
+    // Outward by 2^-50 of the value (at least two ulps, and the subtraction rounds by at
+    // most half of one): cheaper than nextafter, as safe. A zero or subnormal difference
+    // of two doubles is exact.
+    auto down = [](double x) { return x - std::abs(x) * 0x1p-50; };
+    auto up = [](double x) { return x + std::abs(x) * 0x1p-50; };
+    const auto& nd = bvh_.node(i);
+    lo = Vec3d(down(double(nd.box.lo.x) - od.x), down(double(nd.box.lo.y) - od.y), down(double(nd.box.lo.z) - od.z));
+    hi = Vec3d(up(double(nd.box.hi.x) - od.x), up(double(nd.box.hi.y) - od.y), up(double(nd.box.hi.z) - od.z));
+  }
+  const accel::Bvh<float>& bvh() const { return bvh_; }
   // Appends the triangles of r to `out` (in leaf order, not sorted).
   void append_items(const Range& r, std::vector<uint32_t>& out) const {
     const auto order = bvh_.order();
@@ -127,11 +142,6 @@ void TriangleTree::candidates(const Shaft& shaft, const Vec3f& origin, std::vect
   skipped.clear();
   if (bvh_.empty()) return;
   const Vec3d od = to_double(origin);
-  // Outward by 2^-50 of the value (at least two ulps, and the subtraction rounds by at
-  // most half of one): cheaper than nextafter, as safe. A zero or subnormal difference of
-  // two doubles is exact.
-  auto down = [](double x) { return x - std::abs(x) * 0x1p-50; };
-  auto up = [](double x) { return x + std::abs(x) * 0x1p-50; };
   std::array<uint32_t, accel::Bvh<float>::kMaxStack> stack;
   size_t top = 0;
   stack[top++] = 0;
@@ -139,9 +149,14 @@ void TriangleTree::candidates(const Shaft& shaft, const Vec3f& origin, std::vect
     const uint32_t i = stack[--top];
     const auto& nd = bvh_.node(i);
     if (shaft.culls_box(nd.box.lo - origin, nd.box.hi - origin)) continue;
-    const Vec3d lo(down(double(nd.box.lo.x) - od.x), down(double(nd.box.lo.y) - od.y), down(double(nd.box.lo.z) - od.z));
-    const Vec3d hi(up(double(nd.box.hi.x) - od.x), up(double(nd.box.hi.y) - od.y), up(double(nd.box.hi.z) - od.z));
-    if (skip(lo, hi)) {
+    Vec3d lo, hi;
+    local_box(i, od, lo, hi);
+    bool skipped_here = false;
+    if constexpr (std::is_invocable_v<Skip, uint32_t, const Vec3d&, const Vec3d&>)
+      skipped_here = skip(i, lo, hi);
+    else
+      skipped_here = skip(lo, hi);
+    if (skipped_here) {
       uint32_t first = i;  // the leftmost leaf holds the subtree's first position
       while (!bvh_.is_leaf(bvh_.node(first))) first = bvh_.left(first);
       skipped.push_back(Range{bvh_.node(first).first, nd.count});

@@ -13,6 +13,9 @@
 #include <vector>
 
 #include "lib/plucker/plucker_solver.h"
+#include "lib/plucker/shaft.h"
+#include "lib/plucker/triangle_tree.h"
+#include "lib/scene/rng.h"
 #include "lib/scene/shapes.h"
 #include "tests/support/plucker_scenes.h"
 
@@ -261,6 +264,95 @@ TEST(PluckerSilhouetteRegion, ScanAsTheTrianglePath) {
     ASSERT_TRUE(s.ok());
     expect_regions_match(*s);
   }
+}
+
+// SilhouetteGroup::candidate decides from a triangle's leaf up what the shaft walk
+// decides from the root down: against TriangleTree::candidates with a skip predicate
+// (a random cut on the local box and every 11th node, standing for the covered test) on
+// spheres and a soup
+// around them, every triangle's verdict is its listing (kept, not in a skipped range
+// nor under a culled node). And TreeSurfaces names a node's surface exactly when every
+// triangle below it is of that surface.
+TEST(PluckerSilhouetteRegion, CandidateOnDemandIsTheShaftWalksListing) {
+  TriangleSoup m;
+  for (int k = 0; k < 4; ++k) shapes::add_sphere(m, Vec3d(0.9 * k, 0.3 * (k % 2), 1.0 + 0.2 * k), 0.35, 24, 12);
+  Rng rng(3);
+  for (int k = 0; k < 300; ++k) {
+    const Vec3d a(rng.uniform(-0.5, 3.2), rng.uniform(-0.5, 0.8), rng.uniform(0.5, 2.0));
+    const uint32_t v = uint32_t(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), {Vec3f(a), Vec3f(a + Vec3d(0.1, 0.0, 0.02)), Vec3f(a + Vec3d(0.0, 0.1, -0.03))});
+    m.triangles.push_back({v, v + 1, v + 2});
+  }
+  const plucker::ClosedSurfaces cs(m);
+  ASSERT_GE(cs.count(), 2u);
+  const plucker::TriangleTree tree(m);
+  const plucker::TreeSurfaces ts(tree, cs);
+  const accel::Bvh<float>& bvh = tree.bvh();
+  for (uint32_t i = 0; i < bvh.node_count(); ++i) {
+    uint32_t first = i;
+    while (!bvh.is_leaf(bvh.node(first))) first = bvh.left(first);
+    const auto order = bvh.order();
+    const int32_t s0 = cs.surface(order[bvh.node(first).first]);
+    bool same = true;
+    for (uint32_t p = bvh.node(first).first; p < bvh.node(first).first + bvh.node(i).count; ++p)
+      same &= cs.surface(order[p]) == s0;
+    EXPECT_EQ(ts.node_surface[i], same ? s0 : -1) << i;
+  }
+  plucker::SilhouetteGroup g;
+  g.tree_surfaces = &ts;
+  std::vector<uint32_t> cand;
+  std::vector<plucker::TriangleTree::Range> skipped;
+  size_t listed = 0, unlisted = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const Vec3f origin = m.vertices[size_t(rng.below(m.vertices.size()))];
+    auto local_box = [&](double e) {
+      const Vec3d c(rng.uniform(-0.5, 3.2), rng.uniform(-0.5, 0.8), rng.uniform(0.5, 2.0));
+      return AABB{Vec3f(c - Vec3d(e, e, e) - to_double(origin)), Vec3f(c + Vec3d(e, e, e) - to_double(origin))};
+    };
+    const plucker::Shaft shaft(local_box(0.3), local_box(0.6));
+    const double cut = rng.uniform(-2.0, 2.0);
+    // Not monotone in the box (some nodes skipped whose children would not be): the
+    // walk's verdict on a triangle is not its leaf's own.
+    auto skip = [&](uint32_t i, const Vec3d& lo) { return lo.x > cut || i % 11 == 5; };
+    tree.candidates(shaft, origin, cand, skipped,
+                    [&](uint32_t i, const Vec3d& lo, const Vec3d&) { return skip(i, lo); });
+    g.node_passes = [&](uint32_t i) {
+      const auto& nd = bvh.node(i);
+      if (shaft.culls_box(nd.box.lo - origin, nd.box.hi - origin)) return false;
+      Vec3d lo, hi;
+      tree.local_box(i, to_double(origin), lo, hi);
+      return !skip(i, lo);
+    };
+    g.new_group(m.size(), bvh.node_count(), cs.count());
+    // In a random order, so that the cached verdicts are met from every side.
+    std::vector<uint32_t> tris(m.size());
+    for (uint32_t t = 0; t < tris.size(); ++t) tris[t] = t;
+    for (size_t k = tris.size(); k > 1; --k) std::swap(tris[k - 1], tris[size_t(rng.below(k))]);
+    for (uint32_t t : tris) {
+      const bool in = std::binary_search(cand.begin(), cand.end(), t);
+      EXPECT_EQ(g.candidate(t), in) << trial << " " << t;
+      (in ? listed : unlisted) += 1;
+    }
+  }
+  EXPECT_GT(listed, 1000u);
+  EXPECT_GT(unlisted, 1000u);
+}
+
+// A region sphere with open plates (not closed: never region surfaces) between it and
+// the light and beside it, in the same shafts and tree nodes: the selection leaves the
+// sphere's own subtrees out of its walk but lists the plates (mixed nodes are entered).
+// Region oracle, and the same answers as the triangle path.
+TEST(PluckerSilhouetteRegion, RegionSurfaceBesidePlatesInOneShaft) {
+  Scene s = light_scene(receiver_square(8, -1.8f, 0.5f), 32, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_sphere(s.mesh, Vec3d(0.05, 0.02, 1.4), 0.5, 48, 24);  // 2,256 triangles: auto takes it
+  shapes::add_patch(s.mesh, Vec3d(-0.6, -0.7, 2.1), Vec3d(0.5, 0, 0), Vec3d(0, 0.4, 0.05), 3, 2);
+  shapes::add_patch(s.mesh, Vec3d(0.3, 0.1, 0.8), Vec3d(0.3, 0.1, 0), Vec3d(-0.1, 0.6, 0.0), 2, 3);
+  shapes::add_quad(s.mesh, Vec3d(0.6, -0.3, 1.3), Vec3d(0.9, -0.3, 1.3), Vec3d(0.9, 0.2, 1.35), Vec3d(0.6, 0.2, 1.35));
+  ASSERT_TRUE(finish_scene(s).ok());
+  expect_regions_match(s);
+  const SolveResult dflt = run(s);
+  EXPECT_GT(dflt.stats.get("silhouette_groups"), 0.0);
+  expect_region_oracle(s, dflt);
 }
 
 // A closed surface reaching behind the light's plane is not a region surface there: the
