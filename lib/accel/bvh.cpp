@@ -74,6 +74,20 @@ struct Bvh<T>::Key {
   uint32_t idx;
 };
 
+namespace {
+// The median order on axis A: the centre coordinate, ties by item index. The same
+// answers as the run-time-axis `c != c' ? c < c' : idx < idx'` (no NaN: !(y < x) after
+// !(x < y) is equality, -0 == +0 alike), so nth_element makes the same moves; a constant
+// axis and the common case (x < y) first cost about a fifth fewer instructions.
+template <int A>
+struct AxisLess {
+  template <class Key>
+  bool operator()(const Key& x, const Key& y) const {
+    return x.c[A] < y.c[A] || (!(y.c[A] < x.c[A]) && x.idx < y.idx);
+  }
+};
+}  // namespace
+
 template <class T>
 Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(rule.leaf_size) {
   VG_CHECK(rule.leaf_size >= 1);
@@ -146,10 +160,12 @@ Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(r
         // the keys only.
         const auto [lo, hi] = centre_bounds(keys.data() + begin, keys.data() + end);
         const int axis = max_axis(hi - lo);
-        std::nth_element(keys.begin() + begin, keys.begin() + mid, keys.begin() + end,
-                         [axis](const Key& x, const Key& y) {
-                           return x.c[axis] != y.c[axis] ? x.c[axis] < y.c[axis] : x.idx < y.idx;
-                         });
+        Key *b = keys.data() + begin, *m = keys.data() + mid, *e = keys.data() + end;
+        switch (axis) {
+          case 0: std::nth_element(b, m, e, AxisLess<0>()); break;
+          case 1: std::nth_element(b, m, e, AxisLess<1>()); break;
+          default: std::nth_element(b, m, e, AxisLess<2>()); break;
+        }
       }
       const uint32_t left = id + 1, right = left + nodes(mid - begin);
       nd.first = right;
