@@ -74,6 +74,33 @@ struct Bvh<T>::Key {
   uint32_t idx;
 };
 
+namespace {
+// The median order on axis A: the centre coordinate, ties by item index. The same
+// answers as the run-time-axis `c != c' ? c < c' : idx < idx'` (no NaN: !(y < x) after
+// !(x < y) is equality, -0 == +0 alike), so nth_element makes the same moves; a constant
+// axis and the common case (x < y) first cost about a fifth fewer instructions.
+template <int A>
+struct AxisLess {
+  template <class Key>
+  bool operator()(const Key& x, const Key& y) const {
+    return x.c[A] < y.c[A] || (!(y.c[A] < x.c[A]) && x.idx < y.idx);
+  }
+};
+
+// Keys [b, e) split at m: the axis of the centres' largest spread, ties by index, so the
+// halves (and their order) depend on the keys only. Out of line: inlined, the three
+// selections made the Morton rule's recursion (ISS) dearer.
+template <class Key>
+[[gnu::noinline]] void median_split(Key* b, Key* m, Key* e) {
+  const auto [lo, hi] = centre_bounds(b, e);
+  switch (max_axis(hi - lo)) {
+    case 0: std::nth_element(b, m, e, AxisLess<0>()); break;
+    case 1: std::nth_element(b, m, e, AxisLess<1>()); break;
+    default: std::nth_element(b, m, e, AxisLess<2>()); break;
+  }
+}
+}  // namespace
+
 template <class T>
 Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(rule.leaf_size) {
   VG_CHECK(rule.leaf_size >= 1);
@@ -142,14 +169,7 @@ Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(r
       }
       const uint32_t mid = begin + (end - begin) / 2;
       if (median) {
-        // The axis of the centres' largest spread; ties by index, so the halves depend on
-        // the keys only.
-        const auto [lo, hi] = centre_bounds(keys.data() + begin, keys.data() + end);
-        const int axis = max_axis(hi - lo);
-        std::nth_element(keys.begin() + begin, keys.begin() + mid, keys.begin() + end,
-                         [axis](const Key& x, const Key& y) {
-                           return x.c[axis] != y.c[axis] ? x.c[axis] < y.c[axis] : x.idx < y.idx;
-                         });
+        median_split(keys.data() + begin, keys.data() + mid, keys.data() + end);
       }
       const uint32_t left = id + 1, right = left + nodes(mid - begin);
       nd.first = right;

@@ -209,13 +209,18 @@ accel::Bvh<float> triangle_hierarchy(const TriangleSoup& mesh, const std::vector
   std::vector<AABB> boxes(tris.size());
   for (size_t i = 0; i < tris.size(); ++i)
     for (int k = 0; k < 3; ++k) boxes[i].extend(mesh.corner(tris[i], k));
-  return accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MedianAxis, 4, false});
+  return accel::Bvh<float>(boxes, kTriangleHierarchyRule);
 }
 
-SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles) {
+SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles,
+                           const accel::Bvh<float>* mesh_tree) {
   tris_ = cs.triangle_lists();
   bvh_.reserve(cs.count());
-  for (const std::vector<uint32_t>& tris : tris_) bvh_.push_back(triangle_hierarchy(mesh, tris));
+  // A surface's list is ascending and distinct, so one of mesh.size() triangles is 0, 1, ...
+  for (const std::vector<uint32_t>& tris : tris_)
+    bvh_.push_back(mesh_tree && tris.size() == mesh.size() && mesh_tree->item_count() == mesh.size()
+                       ? *mesh_tree
+                       : triangle_hierarchy(mesh, tris));
   rank_.assign(mesh.size(), 0u);
   uint32_t pos = 0;
   for (size_t s = 0; s < bvh_.size(); ++s)

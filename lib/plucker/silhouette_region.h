@@ -108,6 +108,7 @@ struct SurfaceEdges {
 
 // The hierarchy over the boxes of triangles tris (items index tris; MedianAxis, leaves
 // of 4): SurfaceTrees' per surface, and InteriorOccluders' without them.
+inline constexpr accel::BuildRule kTriangleHierarchyRule{accel::Split::MedianAxis, 4, false};
 accel::Bvh<float> triangle_hierarchy(const TriangleSoup& mesh, const std::vector<uint32_t>& tris);
 
 // Per closed surface, a hierarchy over its triangles for the exact segment test.
@@ -115,7 +116,11 @@ class SurfaceTrees {
  public:
   // Edge trees (edges(s)) only for surfaces of at least min_edge_triangles triangles: the
   // others are never region surfaces (kMinRegionTriangles with the estimate).
-  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles = 0);
+  // mesh_tree (optional): triangle_hierarchy over every triangle of the mesh in index
+  // order (TriangleTree's, built by the same rule from the same boxes): a surface that
+  // holds every triangle takes a copy of it, the tree its own build would give.
+  SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles = 0,
+               const accel::Bvh<float>* mesh_tree = nullptr);
   // +1 when the closed segment r -> p meets a triangle of surface s (touching counts),
   // 0 when it meets none, -1 when undecided (r and p both in a triangle's plane). r is
   // outside the surface's box. pd: p rounded to double (world), for the box tests.

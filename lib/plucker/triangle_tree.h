@@ -34,6 +34,8 @@ namespace visgate::plucker {
 
 class TriangleTree {
  public:
+  // SurfaceTrees copies this tree for a surface that holds every triangle: keep the rule
+  // and the boxes those of triangle_hierarchy (silhouette_region.h).
   static constexpr accel::BuildRule kRule{accel::Split::MedianAxis, 4, false};
 
   // `pm`: prepare_mesh(mesh) (its welded neighbours grow the coplanar patches).
@@ -44,6 +46,8 @@ class TriangleTree {
   // whose leaf box is not culled by the shaft; the shaft is in local coordinates
   // relative to `origin`. Callers still test each triangle.
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const;
+  // The hierarchy: items are triangle indices, boxes the triangles' corner boxes.
+  const accel::Bvh<float>& hierarchy() const { return bvh_; }
 
   // A run of triangles of one subtree: positions [begin, begin + count) of the leaf order
   // (a subtree's triangles are contiguous there, lib/accel/bvh.h).

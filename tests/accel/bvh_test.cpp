@@ -303,3 +303,127 @@ TYPED_TEST(BvhTest, AllCentresEqual) {
     EXPECT_EQ(tree_query(t, boxes, pred, r.item_boxes), brute_query(boxes, pred));
   }
 }
+
+namespace {
+
+// The median build of lib/accel/bvh.cpp at 09bde24, kept as the reference: float
+// centres, at each node nth_element on the widest centre axis with the comparison
+// (coordinate, then index) written with a run-time axis, pre-order nodes.
+template <class T>
+struct ReferenceMedianTree {
+  struct Key {
+    float c[3];
+    uint32_t idx;
+  };
+  std::vector<typename Bvh<T>::Node> nodes;
+  std::vector<Key> keys;
+  const Boxes<T>& boxes;
+  uint32_t leaf;
+
+  ReferenceMedianTree(const Boxes<T>& b, uint32_t leaf_size) : boxes(b), leaf(leaf_size) {
+    for (uint32_t i = 0; i < b.size(); ++i) {
+      const Vec3<T> c = b[i].center();
+      keys.push_back(Key{{float(c.x), float(c.y), float(c.z)}, i});
+    }
+    if (!b.empty()) build(0, uint32_t(b.size()));
+  }
+  AABBT<T> build(uint32_t begin, uint32_t end) {
+    const size_t id = nodes.size();
+    nodes.emplace_back();
+    nodes[id].count = end - begin;
+    AABBT<T> box;
+    if (end - begin <= leaf) {
+      for (uint32_t i = begin; i < end; ++i) box.extend(boxes[keys[i].idx]);
+      nodes[id].first = begin;
+    } else {
+      Vec3f lo(keys[begin].c[0], keys[begin].c[1], keys[begin].c[2]), hi = lo;
+      for (uint32_t i = begin + 1; i < end; ++i)
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], keys[i].c[a]);
+          hi[a] = std::max(hi[a], keys[i].c[a]);
+        }
+      const int axis = max_axis(hi - lo);
+      const uint32_t mid = begin + (end - begin) / 2;
+      std::nth_element(keys.begin() + begin, keys.begin() + mid, keys.begin() + end, [axis](const Key& x, const Key& y) {
+        return x.c[axis] != y.c[axis] ? x.c[axis] < y.c[axis] : x.idx < y.idx;
+      });
+      box = build(begin, mid);
+      nodes[id].first = uint32_t(nodes.size());
+      box.extend(build(mid, end));
+    }
+    nodes[id].box = box;
+    return box;
+  }
+};
+
+// Soups whose centres tie often: coordinates on a coarse grid (many equal on one axis,
+// some items with all three equal), a quarter points, some at -0 and +0 (equal keys of
+// different bits), and plain random boxes.
+template <class T>
+Boxes<T> tie_soup(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  Boxes<T> out = test::random_boxes<T>(n / 2, seed, -50.0, 100.0, 5.0);
+  auto grid = [&](int cells) { return T(int(rng() % uint32_t(cells)) - cells / 2); };
+  while (out.size() < n) {
+    switch (rng() % 4) {
+      case 0: {  // a point at the grid, with signed zeros
+        Vec3<T> p(grid(9), grid(9), grid(9));
+        for (int a = 0; a < 3; ++a)
+          if (p[a] == 0 && rng() % 2) p[a] = -T(0);
+        out.push_back(AABBT<T>(p, p));
+        break;
+      }
+      case 1: {  // symmetric about a grid point: the same centre, other boxes
+        const Vec3<T> c(grid(5), grid(5), grid(5));
+        const Vec3<T> h(T(rng() % 7), T(rng() % 7), T(rng() % 7));
+        out.push_back(AABBT<T>(c - h, c + h));
+        break;
+      }
+      case 2:  // a duplicate
+        out.push_back(out[rng() % out.size()]);
+        break;
+      default: {  // flat on one axis
+        AABBT<T> b = test::random_boxes<T>(1, uint32_t(rng()), -20.0, 40.0, 8.0)[0];
+        const int a = int(rng() % 3);
+        b.lo[a] = b.hi[a] = grid(3);
+        out.push_back(b);
+      }
+    }
+  }
+  std::shuffle(out.begin(), out.end(), rng);
+  return out;
+}
+
+}  // namespace
+
+TYPED_TEST(BvhTest, MedianTreeIsTheReferenceBuildNodeByNode) {
+  // Against the kept reference: every node's box, count and right child, and the leaf
+  // order (so the item order within leaves and nodes, which nth_element's moves decide).
+  // Sizes across the parallel grain and subtree (1 << 14, 1 << 15).
+  using T = TypeParam;
+  for (uint32_t leaf : {1u, 4u, 8u})
+    for (size_t n : {size_t(1), size_t(9), size_t(2047), size_t(2048), size_t(2049), size_t(5000), size_t(40000)}) {
+      if (n == 40000 && leaf != 4) continue;
+      for (uint32_t seed : {1u, 2u}) {
+        const Boxes<T> boxes = seed == 1 ? tie_soup<T>(n, seed) : random_boxes<T>(n, seed, -30.0);
+        SCOPED_TRACE("leaf " + std::to_string(leaf) + ", n " + std::to_string(n) + ", seed " + std::to_string(seed));
+        const Bvh<T> t(boxes, BuildRule{Split::MedianAxis, leaf, true});
+        const ReferenceMedianTree<T> ref(boxes, leaf);
+        ASSERT_EQ(t.node_count(), ref.nodes.size());
+        for (uint32_t i = 0; i < ref.nodes.size(); ++i) {
+          const auto &a = t.node(i), &b = ref.nodes[i];
+          ASSERT_EQ(a.count, b.count) << i;
+          ASSERT_EQ(a.first, b.first) << i;
+          for (int k = 0; k < 3; ++k) {
+            ASSERT_EQ(a.box.lo[k], b.box.lo[k]) << i;
+            ASSERT_EQ(a.box.hi[k], b.box.hi[k]) << i;
+          }
+        }
+        for (uint32_t k = 0; k < n; ++k) {
+          ASSERT_EQ(t.item(k), ref.keys[k].idx) << k;
+          const AABBT<T>& b = t.item_box(k);
+          ASSERT_TRUE(b.lo == boxes[ref.keys[k].idx].lo && b.hi == boxes[ref.keys[k].idx].hi) << k;
+        }
+      }
+    }
+}

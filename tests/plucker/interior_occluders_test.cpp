@@ -16,6 +16,7 @@
 #include "lib/geom/predicates.h"
 #include "lib/plucker/plucker_solver.h"
 #include "lib/plucker/silhouette_region.h"
+#include "lib/plucker/triangle_tree.h"
 #include "lib/scene/rng.h"
 #include "tests/support/plucker_scenes.h"
 
@@ -235,6 +236,38 @@ TEST(PluckerInteriorOccluders, SurfaceTreesHierarchiesGiveTheSamePolygons) {
       for (size_t k = 0; k < pa.size(); ++k) EXPECT_EQ(to_double(pa[k]), to_double(pb[k])) << i << " " << k;
     }
     expect_polygons_inside(*s, cs, shared);
+  }
+}
+
+// SurfaceTrees given the triangle tree's hierarchy (the solver's way): a surface holding
+// every triangle (a lone torus) takes it, the others (a torus beside a sphere; scan's
+// ellipsoid beside its ground slab) build their own, and every surface's hierarchy and
+// rank are those of SurfaceTrees built alone (node by node, leaf order).
+TEST(PluckerInteriorOccluders, SurfaceTreesTakeTheTriangleTreeForAWholeMeshSurface) {
+  auto scan = family_scene("scan", 3, 3000, 16, 4);
+  ASSERT_TRUE(scan.ok());
+  Scene one = light_scene(receiver_square(4, -1.3f, 0.5f), 8, Vec3d(0.1, -0.05, 3.0));
+  shapes::add_torus(one.mesh, Vec3d(-0.5, 0, 1.2), 0.5, 0.2, 48, 24);
+  Scene two = one;
+  shapes::add_sphere(two.mesh, Vec3d(0.9, 0.1, 1.0), 0.3, 40, 20);
+  ASSERT_TRUE(finish_scene(one).ok());
+  ASSERT_TRUE(finish_scene(two).ok());
+  for (const Scene* s : {&one, &two, &*scan}) {
+    const plucker::TriangleTree tt(s->mesh);
+    const plucker::ClosedSurfaces cs(s->mesh);
+    const plucker::SurfaceTrees alone(s->mesh, cs), given(s->mesh, cs, 0, &tt.hierarchy());
+    ASSERT_EQ(cs.count(), s == &one ? 1u : 2u);
+    for (int32_t k = 0; k < int32_t(cs.count()); ++k) {
+      const accel::Bvh<float>&a = alone.hierarchy(k), &b = given.hierarchy(k);
+      ASSERT_EQ(a.node_count(), b.node_count());
+      for (uint32_t i = 0; i < a.node_count(); ++i) {
+        ASSERT_EQ(a.node(i).first, b.node(i).first);
+        ASSERT_EQ(a.node(i).count, b.node(i).count);
+        ASSERT_TRUE(a.node(i).box.lo == b.node(i).box.lo && a.node(i).box.hi == b.node(i).box.hi);
+      }
+      ASSERT_TRUE(std::equal(a.order().begin(), a.order().end(), b.order().begin(), b.order().end()));
+    }
+    for (uint32_t t = 0; t < s->mesh.size(); ++t) ASSERT_EQ(alone.rank(t), given.rank(t)) << t;
   }
 }
 
