@@ -147,6 +147,13 @@ constexpr auto kSpread10 = [] {
 
 }  // namespace
 
+Vec3f tree_unit_normal(const Vec3f& a, const Vec3f& b, const Vec3f& c, bool& has_plane) {
+  const Lanes corners[3] = {lanes_load(a), lanes_load(b), lanes_load(c)};
+  Vec3f n;
+  lanes_store(unit_normal(corners, has_plane), &n.x);
+  return n;
+}
+
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
   const size_t E = edges.size();
