@@ -104,6 +104,40 @@ inline void quantize_normal(const Vec3f& n, bool has_plane, int16_t* q) {
 #endif
 }
 
+// triangle_plane(m, t).unit() rounded to float, lane 3 zero, from the corners c (lanes
+// of triangle t's corners in order); has_plane: its nn > 0. SSE2 computes the same double
+// operations in the same order (differences, cross product, the sum of squares x, y then
+// z, sqrt, division, rounding to float), two lanes at a time: the same floats, bit for
+// bit (IEEE arithmetic, no contraction).
+inline Lanes unit_normal(const Lanes* c, bool& has_plane) {
+#if defined(__SSE2__)
+  const __m128d axy = _mm_cvtps_pd(c[0]), az = _mm_cvtps_pd(_mm_movehl_ps(c[0], c[0]));
+  const __m128d uxy = _mm_sub_pd(_mm_cvtps_pd(c[1]), axy), uz = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(c[1], c[1])), az);
+  const __m128d wxy = _mm_sub_pd(_mm_cvtps_pd(c[2]), axy), wz = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(c[2], c[2])), az);
+  // (n.x, n.y) = (u.y w.z - u.z w.y, u.z w.x - u.x w.z); n.z = u.x w.y - u.y w.x.
+  const __m128d nxy = _mm_sub_pd(_mm_mul_pd(_mm_shuffle_pd(uxy, uz, 1), _mm_shuffle_pd(wz, wxy, 0)),
+                                 _mm_mul_pd(_mm_shuffle_pd(uz, uxy, 0), _mm_shuffle_pd(wxy, wz, 1)));
+  const __m128d r = _mm_mul_pd(uxy, _mm_shuffle_pd(wxy, wxy, 1));
+  const __m128d nz = _mm_sub_sd(r, _mm_unpackhi_pd(r, r));
+  const __m128d sq = _mm_mul_pd(nxy, nxy);
+  const __m128d nn = _mm_add_sd(_mm_add_sd(sq, _mm_unpackhi_pd(sq, sq)), _mm_mul_sd(nz, nz));
+  has_plane = _mm_cvtsd_f64(nn) > 0.0;
+  if (!has_plane) return _mm_setzero_ps();
+  const __m128d len = _mm_sqrt_sd(nn, nn);
+  const __m128d len2 = _mm_unpacklo_pd(len, len);
+  return _mm_movelh_ps(_mm_cvtpd_ps(_mm_div_pd(nxy, len2)), _mm_cvtsd_ss(_mm_setzero_ps(), _mm_div_sd(nz, len)));
+#else
+  alignas(16) float f[3][4];
+  for (int v = 0; v < 3; ++v) lanes_store(c[v], f[v]);
+  const Vec3d a(f[0][0], f[0][1], f[0][2]), b(f[1][0], f[1][1], f[1][2]), cc(f[2][0], f[2][1], f[2][2]);
+  TrianglePlane p;
+  p.n = cross(b - a, cc - a);
+  p.nn = dot(p.n, p.n);
+  has_plane = p.nn > 0.0;
+  return lanes_load(Vec3f(p.unit()));
+#endif
+}
+
 // morton_spread10 of every 10-bit value (4 KiB): one load per coordinate.
 constexpr auto kSpread10 = [] {
   std::array<uint32_t, 1024> t{};
@@ -112,6 +146,13 @@ constexpr auto kSpread10 = [] {
 }();
 
 }  // namespace
+
+Vec3f tree_unit_normal(const Vec3f& a, const Vec3f& b, const Vec3f& c, bool& has_plane) {
+  const Lanes corners[3] = {lanes_load(a), lanes_load(b), lanes_load(c)};
+  Vec3f n;
+  lanes_store(unit_normal(corners, has_plane), &n.x);
+  return n;
+}
 
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
@@ -221,15 +262,16 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         if (t < 0) continue;
         Met& e = met[uint32_t(t) & (kMetEntries - 1)];
         if (e.t != t) {  // from its corners: no fresh per-triangle array
-          const TrianglePlane plane = triangle_plane(m, size_t(t));
-          e.t = t;
-          e.leaf = uint32_t(-1);
-          e.no_plane = uint8_t(!(plane.nn > 0.0));  // no plane: never proven weight 0
-          const Vec3f n(plane.unit());
-          quantize_normal(n, plane.nn > 0.0, e.q);
-          e.n = lanes_load(n);
           const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
           for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
+          e.t = t;
+          e.leaf = uint32_t(-1);
+          bool has_plane = false;
+          e.n = unit_normal(e.c, has_plane);
+          e.no_plane = uint8_t(!has_plane);  // no plane: never proven weight 0
+          Vec3f n;
+          lanes_store(e.n, &n.x);
+          quantize_normal(n, has_plane, e.q);
         }
         // A leaf's edges share triangles (about half of its 16 references repeat): each
         // triangle's corners and normal enter its bounds at their first reference, in

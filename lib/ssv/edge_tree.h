@@ -74,6 +74,11 @@ struct EdgeFrustum {
   EdgeFrustum(const LightFrame& frame, const AABBd& receivers);
 };
 
+// The float unit normal the tree's build gives triangle (a, b, c): triangle_plane's
+// unit() rounded to float, computed two lanes at a time (edge_tree.cpp); has_plane: its
+// nn > 0 (else the normal is 0).
+Vec3f tree_unit_normal(const Vec3f& a, const Vec3f& b, const Vec3f& c, bool& has_plane);
+
 class EdgeTree {
  public:
   // A candidate is an edge index, with one of these bits set when the leaf's facing test

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "lib/solver.h"
@@ -231,6 +232,43 @@ TEST(SsvEdgeTree, EveryEdgeThatCanCountIsACandidate) {
     expect_candidates_hold_brute_force(family(fam, 4, -1, 64, 16), fam, false);
   // The leaves' per-edge facing test where it removes most candidates.
   expect_candidates_hold_brute_force(noisy_scan(8000, 64, 3.0), "noisy scan", true);
+}
+
+TEST(SsvEdgeTree, UnitNormalsAreTrianglePlanesRoundedToFloat) {
+  // The build's two-lane normal against triangle_plane(m, t).unit() in scalar double,
+  // bit for bit: random triangles at several scales and offsets, needles, collinear and
+  // repeated corners (no plane: 0).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  size_t planes = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const float scale = std::ldexp(1.0f, int(rng() % 60) - 30), off = std::ldexp(u(rng), int(rng() % 40) - 10);
+    Vec3f c[3];
+    for (Vec3f& v : c) v = Vec3f(off + scale * u(rng), off + scale * u(rng), scale * u(rng));
+    if (i % 5 == 1) c[2] = c[0] + (c[1] - c[0]) * 0.5f;  // collinear (up to rounding)
+    if (i % 5 == 2) c[2] = c[1];                         // repeated corner
+    if (i % 5 == 3) c[2] = c[0] + Vec3f(0.0f, 0.0f, std::ldexp(scale, -20));  // needle
+    TriangleSoup soup;
+    soup.vertices = {c[0], c[1], c[2]};
+    soup.triangles = {{0, 1, 2}};
+    mesh::PreparedMesh m;
+    m.vertex_pos = soup.vertices;
+    m.triangles.resize(1);
+    m.triangles[0].v = {0, 1, 2};
+    const TrianglePlane p = triangle_plane(m, 0);
+    const Vec3f want(p.unit());
+    bool has_plane = false;
+    const Vec3f got = tree_unit_normal(c[0], c[1], c[2], has_plane);
+    ASSERT_EQ(has_plane, p.nn > 0.0) << i;
+    planes += has_plane ? 1 : 0;
+    for (int k = 0; k < 3; ++k) {
+      uint32_t a = 0, b = 0;
+      std::memcpy(&a, &want[k], 4);
+      std::memcpy(&b, &got[k], 4);
+      ASSERT_EQ(a, b) << "triangle " << i << " component " << k;
+    }
+  }
+  EXPECT_GT(planes, 10000u);  // most have a plane (not the repeated corners, nor corners a large offset rounds together)
 }
 
 TEST(SsvEdgeTree, BoxFrustumHoldsEachReceiversFrustum) {
