@@ -255,11 +255,11 @@ TEST(Iss, EmbreeBuildQualityChangesNoAnswer) {
   // Rooms 1024 x 64 with the shafts: about 2.6 Embree rays per leaf-ray triangle, so
   // auto keeps the low build (not upgraded), with medium's answers.
   {
-    FamilyParams rp;
-    rp.seed = 1;
-    rp.receivers = 1024;
-    rp.samples = 64;
-    auto rooms = generate_family("rooms", rp);
+    fp.seed = 1;
+    fp.receivers = 1024;
+    fp.samples = 64;
+    fp.triangles = -1;  // the family's default
+    auto rooms = generate_family("rooms", fp);
     ASSERT_TRUE(rooms.ok());
     const Scene& rs = rooms.value();
     SolveResult a = run_iss(rs, {});
@@ -274,7 +274,10 @@ TEST(Iss, EmbreeBuildQualityChangesNoAnswer) {
       ASSERT_EQ(a.receivers[i].visible_bits, m.receivers[i].visible_bits) << "auto (shafts) receiver " << i;
   }
   // Few relations per triangle: auto builds low.
+  fp.seed = 3;
   fp.receivers = 4;
+  fp.samples = 16;
+  fp.triangles = 3000;
   auto few = generate_family("rooms", fp);
   ASSERT_TRUE(few.ok());
   ASSERT_LE(double(few.value().relation_count()), 7.0 * double(few.value().mesh.size()));
