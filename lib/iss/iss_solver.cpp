@@ -463,8 +463,11 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // The build that cast the rays after the upgrade, if any (low only when never upgraded).
   result.stats.set("embree_build_low", quality == raycast::BuildQuality::low && !tr.embree_upgraded() ? 1.0 : 0.0);
   result.stats.set("embree_upgraded", tr.embree_upgraded() ? 1.0 : 0.0);
-  result.stats.set("embree_rejected_hits", double(es.rejected_hits()));
-  result.stats.set("embree_unverified_hits", double(es.unverified_hits()));
+  // Both builds' rays when the medium one replaced the low one.
+  result.stats.set("embree_rejected_hits",
+                   double(es.rejected_hits()) + (es_medium ? double(es_medium->rejected_hits()) : 0.0));
+  result.stats.set("embree_unverified_hits",
+                   double(es.unverified_hits()) + (es_medium ? double(es_medium->unverified_hits()) : 0.0));
   result.stats.set("nonmanifold_edges_paired", double(paired));
   result.stats.set("leaf_receivers", p.leaf_receivers);
   result.stats.set("leaf_samples", p.leaf_samples);
