@@ -428,21 +428,28 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   // the medium one replaces it when the rays extrapolate past the crossover.
   const bool upgrade = quality_opt == "auto" && quality == raycast::BuildQuality::medium && !p.rays_only;
   if (upgrade) quality = raycast::BuildQuality::low;
-  raycast::EmbreeScene es(leaf_mesh, true, true, quality);
-  std::optional<raycast::EmbreeScene> es_medium;
+  std::optional<raycast::EmbreeScene> es;
+  es.emplace(leaf_mesh, true, true, quality);
+  // The low build's hit counts, kept when the medium one replaces it. The low scene is
+  // released first (no ray is in flight: the traversal is single-threaded), so the two
+  // BVHs are never held at once.
+  size_t low_rejected = 0, low_unverified = 0;
   if (upgrade) {
     const double tris = double(leaf_mesh.size());
     tr.set_embree_upgrade(
         [&]() {
-          es_medium.emplace(leaf_mesh, true, true, raycast::BuildQuality::medium);
-          return &*es_medium;
+          low_rejected = es->rejected_hits();
+          low_unverified = es->unverified_hits();
+          es.reset();
+          es.emplace(leaf_mesh, true, true, raycast::BuildQuality::medium);
+          return &*es;
         },
         tris / 2, kUpgradeRaysPerTriangle * tris, double(scene.relation_count()) - plan.blocked_relations);
   }
   embree_build = std::chrono::duration<double>(Clock::now() - tb).count() - root_plan_seconds;
   const double faults_build = minor_faults();
   const auto t_setup = Clock::now();
-  tr.set_embree(&es);
+  tr.set_embree(&*es);
   for (size_t l = 0; l < scene.lights.size(); ++l)
     if (!plan.blocked[l]) tr.run_light(l);
   auto t1 = Clock::now();
@@ -464,10 +471,8 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   result.stats.set("embree_build_low", quality == raycast::BuildQuality::low && !tr.embree_upgraded() ? 1.0 : 0.0);
   result.stats.set("embree_upgraded", tr.embree_upgraded() ? 1.0 : 0.0);
   // Both builds' rays when the medium one replaced the low one.
-  result.stats.set("embree_rejected_hits",
-                   double(es.rejected_hits()) + (es_medium ? double(es_medium->rejected_hits()) : 0.0));
-  result.stats.set("embree_unverified_hits",
-                   double(es.unverified_hits()) + (es_medium ? double(es_medium->unverified_hits()) : 0.0));
+  result.stats.set("embree_rejected_hits", double(low_rejected + es->rejected_hits()));
+  result.stats.set("embree_unverified_hits", double(low_unverified + es->unverified_hits()));
   result.stats.set("nonmanifold_edges_paired", double(paired));
   result.stats.set("leaf_receivers", p.leaf_receivers);
   result.stats.set("leaf_samples", p.leaf_samples);
