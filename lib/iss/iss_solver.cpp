@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include <sys/resource.h>
 
@@ -34,6 +35,13 @@ double minor_faults() {
 // rays count too: 1.6M of 4.2M relations on columns). Answers do not depend on the
 // quality (embree_scene.h).
 constexpr double kLowBuildRelationsPerTriangle = 7.0;
+// The low build's replacement (Traversal::set_embree_upgrade): after half as many rays
+// as triangles, when the rays extrapolate to 9 per triangle. At that point the low build
+// (about 550 instructions per triangle) is spent and the medium one costs about 2,150
+// per triangle (rooms 1024, callgrind) against 260 more per ray in the low one: the
+// remaining 8 rays per triangle pay for it. Worst case (a scene that upgrades): about
+// 810 instructions per triangle more than medium from the start.
+constexpr double kUpgradeRaysPerTriangle = 9.0;
 raycast::BuildQuality leaf_ray_build_quality(const std::string& opt, const Scene& scene, const TriangleSoup& leaf_mesh) {
   if (opt == "low") return raycast::BuildQuality::low;
   if (opt == "medium") return raycast::BuildQuality::medium;
@@ -301,7 +309,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"auto_rays", "cast a shaft's relations directly once subdividing shafts of its size stops paying (Embree caster)", {"on", "off"}},
       {"split_samples", "light-tree leaf size once a light splits (light_split; default 4)", {}},
       {"split_receivers", "receiver leaf size once a light splits (light_split; default 64)", {}},
-      {"embree_quality", "build quality of the leaf rays' Embree BVH (raycast::BuildQuality): auto takes low when the scene has at most 7 relations per triangle, else medium", {"auto", "low", "medium", "high"}},
+      {"embree_quality", "build quality of the leaf rays' Embree BVH (raycast::BuildQuality): auto takes low when the scene has at most 7 relations per triangle, medium when every light is cast by rays, else low replaced by medium once the rays cast extrapolate to 9 per triangle (stat embree_upgraded)", {"auto", "low", "medium", "high"}},
       {"split_auto_ray_relations", "auto_ray_relations for the shafts of split lights (default 16)", {}},
       {"dense_rays", "with auto_rays (Embree caster), cast every relation of a light whose root shaft holds a dense mesh (8192 triangles and an eighth of the mesh) with fewer than dense_ray_relations relations per triangle there, building no shaft for it; when every light is so, no mesh preparation, hierarchy or tree is built either", {"on", "off"}},
       {"dense_ray_relations", "dense_rays casts a light with fewer relations than this many per triangle of its root shaft (default 3)", {}},
@@ -413,12 +421,35 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
       if (plan.keep[t]) ray_mesh.triangles.push_back(scene.mesh.triangles[t]);
   }
   const TriangleSoup& leaf_mesh = subset ? ray_mesh : scene.mesh;
-  const raycast::BuildQuality quality = leaf_ray_build_quality(opt.get("embree_quality", "auto"), scene, leaf_mesh);
-  raycast::EmbreeScene es(leaf_mesh, true, true, quality);
+  const std::string quality_opt = opt.get("embree_quality", "auto");
+  raycast::BuildQuality quality = leaf_ray_build_quality(quality_opt, scene, leaf_mesh);
+  // Past the relation rule the shafts still decide most relations (rooms 1024 x 64: 20,160
+  // Embree rays, 2.6 per triangle, of 1.77M relations), so the low build goes first and
+  // the medium one replaces it when the rays extrapolate past the crossover.
+  const bool upgrade = quality_opt == "auto" && quality == raycast::BuildQuality::medium && !p.rays_only;
+  if (upgrade) quality = raycast::BuildQuality::low;
+  std::optional<raycast::EmbreeScene> es;
+  es.emplace(leaf_mesh, true, true, quality);
+  // The low build's hit counts, kept when the medium one replaces it. The low scene is
+  // released first (no ray is in flight: the traversal is single-threaded), so the two
+  // BVHs are never held at once.
+  size_t low_rejected = 0, low_unverified = 0;
+  if (upgrade) {
+    const double tris = double(leaf_mesh.size());
+    tr.set_embree_upgrade(
+        [&]() {
+          low_rejected = es->rejected_hits();
+          low_unverified = es->unverified_hits();
+          es.reset();
+          es.emplace(leaf_mesh, true, true, raycast::BuildQuality::medium);
+          return &*es;
+        },
+        tris / 2, kUpgradeRaysPerTriangle * tris, double(scene.relation_count()) - plan.blocked_relations);
+  }
   embree_build = std::chrono::duration<double>(Clock::now() - tb).count() - root_plan_seconds;
   const double faults_build = minor_faults();
   const auto t_setup = Clock::now();
-  tr.set_embree(&es);
+  tr.set_embree(&*es);
   for (size_t l = 0; l < scene.lights.size(); ++l)
     if (!plan.blocked[l]) tr.run_light(l);
   auto t1 = Clock::now();
@@ -436,9 +467,12 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   result.stats.set("time_root_plan", root_plan_seconds);
   result.stats.set("page_faults_setup", faults_build - faults0);
   result.stats.set("page_faults_traversal", faults1 - faults_build);
-  result.stats.set("embree_build_low", quality == raycast::BuildQuality::low ? 1.0 : 0.0);
-  result.stats.set("embree_rejected_hits", double(es.rejected_hits()));
-  result.stats.set("embree_unverified_hits", double(es.unverified_hits()));
+  // The build that cast the rays after the upgrade, if any (low only when never upgraded).
+  result.stats.set("embree_build_low", quality == raycast::BuildQuality::low && !tr.embree_upgraded() ? 1.0 : 0.0);
+  result.stats.set("embree_upgraded", tr.embree_upgraded() ? 1.0 : 0.0);
+  // Both builds' rays when the medium one replaced the low one.
+  result.stats.set("embree_rejected_hits", double(low_rejected + es->rejected_hits()));
+  result.stats.set("embree_unverified_hits", double(low_unverified + es->unverified_hits()));
   result.stats.set("nonmanifold_edges_paired", double(paired));
   result.stats.set("leaf_receivers", p.leaf_receivers);
   result.stats.set("leaf_samples", p.leaf_samples);

@@ -685,7 +685,7 @@ bool Traversal::direct_rays_cands(int r, int l) {
     bool occ = hit;
     if (!hit && !clear) {
       // Not certified: the verified Embree ray of the other path, from the receiver.
-      embree_->occluded_fan(p, q, 1, &occ);
+      leaf_caster(1).occluded_fan(p, q, 1, &occ);
       ++uncertain;
     }
     if (occ) ++blocked;  // bits start blocked: only visible ones are written
@@ -1306,6 +1306,16 @@ void Traversal::cast_rays(int r, int l, const Shaft* sh, const std::vector<uint3
 
 // The standard caster: the receiver's segments to the samples form a coherent fan,
 // traced kFanWidth at a time as one Embree packet (occluded_fan).
+// Decided at most once per ray past min_rays: the rays so far over the relations decided
+// so far estimate the share of the rest (a cost estimate; the answers are the same).
+void Traversal::leaf_caster_upgrade() {
+  const double decided = std::max(1.0, decided_relations());
+  if (embree_rays_ * upgrade_relations_ < upgrade_rays_ * decided) return;
+  embree_ = upgrade_();
+  upgrade_ = nullptr;
+  embree_upgraded_ = true;
+}
+
 void Traversal::fan_rays(uint32_t i, const uint32_t* samples, size_t count) {
   ReceiverResult& rr = result_.receivers[i];
   const Vec3f& rp = scene_.receivers[i].p;
@@ -1316,7 +1326,7 @@ void Traversal::fan_rays(uint32_t i, const uint32_t* samples, size_t count) {
     Vec3f to[kFanWidth];
     bool occ[kFanWidth];
     for (int k = 0; k < n; ++k) to[k] = leaf_sample_at(*light_, int(samples[b0 + size_t(k)]), prefix);
-    embree_->occluded_fan(rp, to, n, occ);
+    leaf_caster(n).occluded_fan(rp, to, n, occ);
     for (int k = 0; k < n; ++k) {
       // Bits start blocked (make_empty_result): only visible ones are written.
       if (!occ[k]) rr.set_visible(light_offset_ + size_t(samples[b0 + size_t(k)]), true);
@@ -1395,14 +1405,14 @@ bool Traversal::custom_occluded(const Vec3f& rpf, const Vec3f& lpf, const TreeNo
     if (misses_slab(s.hull, ax, lo, hi, lo < hi)) continue;
     if (misses_slab(s.box, ax, lo, hi, lo < hi) || s.box.lo[ax] < lo || s.box.hi[ax] > hi) {
       ++n_fallback_;
-      return embree_->occluded(rpf, lpf);
+      return leaf_caster(1).occluded(rpf, lpf);
     }
     if (blocks_ray(ctx_, s, ax, rp, lp)) return true;
   }
   for (const AABBd& gb : sh->ghosts) {
     if (segment_may_hit_box(rp, lp, gb, 0x1p-40 * scale_)) {
       ++n_fallback_;
-      return embree_->occluded(rpf, lpf);
+      return leaf_caster(1).occluded(rpf, lpf);
     }
   }
   return false;

@@ -14,6 +14,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -263,6 +264,19 @@ class Traversal {
   void run_light(size_t li);
 
   void set_embree(const raycast::EmbreeScene* es) { embree_ = es; }
+  // The leaf caster built cheaply (Embree's low build) with a better one on call:
+  // `upgrade` replaces it once the rays cast reach `min_rays` and, extrapolated from the
+  // share of the decided relations they took, would reach `upgrade_rays` over the
+  // `relations` the traversal decides (iss_solver.cpp's embree_quality=auto). The
+  // answers do not depend on the scene's build (embree_scene.h).
+  void set_embree_upgrade(std::function<const raycast::EmbreeScene*()> upgrade, double min_rays, double upgrade_rays,
+                          double relations) {
+    upgrade_ = std::move(upgrade);
+    upgrade_min_rays_ = min_rays;
+    upgrade_rays_ = upgrade_rays;
+    upgrade_relations_ = relations;
+  }
+  bool embree_upgraded() const { return embree_upgraded_; }
   const TriangleBvh& triangle_bvh() const { return *bvh_; }  // over the prepared mesh
   const std::vector<AABB>& triangle_boxes() const { return tri_boxes_; }  // per prepared triangle
   // The blocker probe's candidates for main axis `a` (probe_blocked): the triangles by
@@ -434,6 +448,16 @@ class Traversal {
   size_t light_offset_ = 0;
   std::vector<uint64_t> visible_masks_;  // record_visible's word masks of a light node
   const raycast::EmbreeScene* embree_ = nullptr;
+  // Counts the leaf caster's rays (set_embree_upgrade) and returns the caster to use.
+  const raycast::EmbreeScene& leaf_caster(int rays) {
+    embree_rays_ += double(rays);
+    if (upgrade_ && embree_rays_ >= upgrade_min_rays_) leaf_caster_upgrade();
+    return *embree_;
+  }
+  void leaf_caster_upgrade();
+  std::function<const raycast::EmbreeScene*()> upgrade_;
+  double embree_rays_ = 0, upgrade_min_rays_ = 0, upgrade_rays_ = 0, upgrade_relations_ = 0;
+  bool embree_upgraded_ = false;
   Workspace ws_;
   double times_[kTimerCount] = {};  // in ticks()
   Clock::time_point clock0_ = Clock::now();

@@ -225,7 +225,8 @@ TEST(IssOracle, FamiliesHaveNoMismatchAboveTau) {
 TEST(Iss, EmbreeBuildQualityChangesNoAnswer) {
   // Every quality builds a BVH over the same triangles traced by the same kernel and
   // verified the same way, so the answers are the same bits; auto takes the low build
-  // exactly when the scene has at most 7 relations per triangle.
+  // when the scene has at most 7 relations per triangle, and above that starts low and
+  // upgrades to medium when the rays cast extrapolate to 9 per triangle.
   FamilyParams fp;
   fp.seed = 3;
   fp.receivers = 256;
@@ -237,18 +238,46 @@ TEST(Iss, EmbreeBuildQualityChangesNoAnswer) {
   ASSERT_GT(double(s.relation_count()), 7.0 * double(s.mesh.size())) << "auto is medium here";
   std::map<std::string, std::string> base = {{"auto_rays", "off"}};
   SolveResult ref = run_iss(s, base);
+  // Every relation a ray here: auto builds low, then medium once the rays extrapolate
+  // past 9 per triangle; the medium build casts the rest.
   EXPECT_EQ(ref.stats.get("embree_build_low"), 0.0);
+  EXPECT_EQ(ref.stats.get("embree_upgraded"), 1.0);
   for (const char* q : {"low", "medium", "high"}) {
     auto o = base;
     o["embree_quality"] = q;
     SolveResult r = run_iss(s, o);
     EXPECT_EQ(r.stats.get("embree_build_low"), std::string(q) == "low" ? 1.0 : 0.0);
+    EXPECT_EQ(r.stats.get("embree_upgraded"), 0.0);
     EXPECT_GT(r.stats.get("relations_ray_cast"), 0.0);
     for (size_t i = 0; i < s.receivers.size(); ++i)
       ASSERT_EQ(r.receivers[i].visible_bits, ref.receivers[i].visible_bits) << q << " receiver " << i;
   }
+  // Rooms 1024 x 64 with the shafts: about 2.6 Embree rays per leaf-ray triangle, so
+  // auto keeps the low build (not upgraded), with medium's answers.
+  {
+    fp.seed = 1;
+    fp.receivers = 1024;
+    fp.samples = 64;
+    fp.triangles = -1;  // the family's default
+    auto rooms = generate_family("rooms", fp);
+    ASSERT_TRUE(rooms.ok());
+    const Scene& rs = rooms.value();
+    SolveResult a = run_iss(rs, {});
+    SolveResult m = run_iss(rs, {{"embree_quality", "medium"}});
+    const double embree_rays = a.stats.get("relations_ray_cast") - a.stats.get("direct_ray_relations");
+    EXPECT_GT(embree_rays, 0.0);
+    EXPECT_LT(embree_rays, 4.0 * a.stats.get("leaf_ray_triangles"));
+    EXPECT_GT(double(rs.relation_count()), 7.0 * a.stats.get("leaf_ray_triangles")) << "past the relation rule";
+    EXPECT_EQ(a.stats.get("embree_build_low"), 1.0);
+    EXPECT_EQ(a.stats.get("embree_upgraded"), 0.0);
+    for (size_t i = 0; i < rs.receivers.size(); ++i)
+      ASSERT_EQ(a.receivers[i].visible_bits, m.receivers[i].visible_bits) << "auto (shafts) receiver " << i;
+  }
   // Few relations per triangle: auto builds low.
+  fp.seed = 3;
   fp.receivers = 4;
+  fp.samples = 16;
+  fp.triangles = 3000;
   auto few = generate_family("rooms", fp);
   ASSERT_TRUE(few.ok());
   ASSERT_LE(double(few.value().relation_count()), 7.0 * double(few.value().mesh.size()));
