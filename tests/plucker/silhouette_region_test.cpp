@@ -155,6 +155,41 @@ TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
   }
 }
 
+// build_in_order over float boxes is build over the same boxes in double with keys in
+// order (each key repeated or rising, as SurfaceTrees gives them): the same order, counts,
+// links and node boxes bit for bit, leaves of one to kLeaf edges and boxes of mixed signs.
+TEST(PluckerSilhouetteRegion, EdgeTreeInOrderIsTheKeyedBuild) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> xy(-10.0f, 10.0f), len(0.0f, 1.0f);
+  for (const uint32_t n : {0u, 1u, 4u, 5u, 9u, 100u, 3001u}) {
+    std::vector<AABB> fboxes;
+    std::vector<AABBd> dboxes;
+    std::vector<uint32_t> key;
+    for (uint32_t e = 0; e < n; ++e) {
+      const Vec3f a(xy(rng), xy(rng), xy(rng));
+      AABB b{a, a};
+      b.extend(a + Vec3f(len(rng), len(rng), len(rng)));
+      fboxes.push_back(b);
+      dboxes.push_back(AABBd{Vec3d(b.lo), Vec3d(b.hi)});
+      key.push_back(e / 3);
+    }
+    plucker::EdgeTree keyed, in_order;
+    keyed.build(dboxes, key);
+    in_order.build_in_order(fboxes);
+    ASSERT_EQ(in_order.order, keyed.order);
+    ASSERT_EQ(in_order.node_count(), keyed.node_count());
+    for (uint32_t i = 0; i < keyed.node_count(); ++i) {
+      const auto &a = in_order.node(i), &b = keyed.node(i);
+      ASSERT_EQ(a.first, b.first);
+      ASSERT_EQ(a.count, b.count);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_EQ(a.box.lo[c], b.box.lo[c]);
+        ASSERT_EQ(a.box.hi[c], b.box.hi[c]);
+      }
+    }
+  }
+}
+
 // The surfaces' edge trees (SurfaceEdges, built once per solve): every half-edge (t, k) of
 // every surface triangle is one edge's (t0, k0) or (t1, k1) exactly once, a pair joins
 // two neighbours across the same two corners in opposite directions with t0 < t1, the
