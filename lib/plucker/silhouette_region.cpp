@@ -144,14 +144,19 @@ int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p
   return s != 0 ? s : plane_side_rest(a, b, c, p);
 }
 
-void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key) {
+bool EdgeTree::start(uint32_t n) {
   nodes.clear();
   order.clear();
-  const uint32_t n = uint32_t(boxes.size());
-  if (n == 0) return;
+  if (n == 0) return false;
   order.resize(n);
   for (uint32_t e = 0; e < n; ++e) order[e] = e;
   nodes.reserve(2 * (n / kLeaf) + 2);
+  return true;
+}
+
+void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key) {
+  const uint32_t n = uint32_t(boxes.size());
+  if (!start(n)) return;
   // Keys already in order (SurfaceTrees gives the edges in rank order): the identity is
   // the stable order and boxes the leaf order.
   uint32_t top = 0;
@@ -184,14 +189,8 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
 }
 
 void EdgeTree::build_in_order(const std::vector<AABB>& boxes) {
-  nodes.clear();
-  order.clear();
   const uint32_t n = uint32_t(boxes.size());
-  if (n == 0) return;
-  order.resize(n);
-  for (uint32_t e = 0; e < n; ++e) order[e] = e;
-  nodes.reserve(2 * (n / kLeaf) + 2);
-  build_node(boxes, 0, n);
+  if (start(n)) build_node(boxes, 0, n);
 }
 
 // Node over order[begin, end) and its subtree (left half floor(m / 2)); returns its id.

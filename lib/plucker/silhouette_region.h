@@ -89,6 +89,8 @@ struct EdgeTree {
   void build_in_order(const std::vector<AABB>& boxes);
 
  private:
+  // Empties the tree; for n > 0 sets order to the identity and returns true.
+  bool start(uint32_t n);
   template <class Box>
   uint32_t build_node(const std::vector<Box>& leaf_boxes, uint32_t begin, uint32_t end);
 };
