@@ -30,12 +30,13 @@ int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
 }
 
 // The box of the unit normals of the faces of every node's edges (SurfaceEdges::
-// node_normals; item e's faces: unit[fi0[e]], unit[fi1[e]]), children before parents
-// (pre-order: both children follow their parent). A face whose computed normal n is
-// small next to s12 (|n|_1 <= 2^-20 s12, where n's rounding, a few ulps of s12, could
-// turn it) bounds nothing (bad): its node gets [-1, 1]^3.
+// node_normals; item e's faces: unit[local[edges[e].t0]], unit[local[edges[e].t1]]),
+// children before parents (pre-order: both children follow their parent). A face whose
+// computed normal n is small next to s12 (|n|_1 <= 2^-20 s12, where n's rounding, a few
+// ulps of s12, could turn it) bounds nothing (bad): its node gets [-1, 1]^3.
 void node_normal_boxes(const EdgeTree& tree, const std::vector<Vec3d>& unit, const std::vector<uint8_t>& bad,
-                       const std::vector<uint32_t>& fi0, const std::vector<uint32_t>& fi1, std::vector<AABBd>& out) {
+                       const std::vector<SurfaceEdges::Edge>& edges, const std::vector<uint32_t>& local,
+                       std::vector<AABBd>& out) {
   const AABBd full{Vec3d(-1, -1, -1), Vec3d(1, 1, 1)};
   out.assign(tree.node_count(), AABBd());
   for (size_t i = tree.node_count(); i-- > 0;) {
@@ -48,7 +49,7 @@ void node_normal_boxes(const EdgeTree& tree, const std::vector<Vec3d>& unit, con
     }
     for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
       const uint32_t e = tree.item(k);
-      for (const uint32_t f : {fi0[e], fi1[e]}) {
+      for (const uint32_t f : {local[edges[e].t0], local[edges[e].t1]}) {
         if (bad[f]) {
           b = full;
           break;
@@ -238,7 +239,6 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
   std::vector<uint32_t> local(mesh.size(), 0u);
   std::vector<Vec3d> unit;
   std::vector<uint8_t> bad;
-  std::vector<uint32_t> fi0, fi1;
   std::vector<AABB> ebox;
   for (size_t s = 0; s < bvh_.size(); ++s) {
     const std::vector<uint32_t>& tris = tris_[s];
@@ -254,15 +254,11 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
       else
         unit[i] = fp.n * (1.0 / length(fp.n));
     }
-    fi0.clear();
-    fi1.clear();
     ebox.clear();
     // A closed surface's triangles have three neighbours each and its halves pair up: 3T / 2
     // edges (more only where a half finds no partner; the vectors then grow).
     const size_t edges = (3 * tris.size() + 1) / 2;
     se.edges.reserve(edges);
-    fi0.reserve(edges);
-    fi1.reserve(edges);
     ebox.reserve(edges);
     // The m-th half of t toward u (m counted over t's k from 0), or 3.
     auto nth_half = [&](uint32_t t, uint32_t u, int m) -> int {
@@ -299,12 +295,10 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
         }
         se.edges.push_back(e);
         ebox.push_back(b);
-        fi0.push_back(local[t]);
-        fi1.push_back(local[u]);
       }
     }
     se.tree.build_in_order(ebox);
-    node_normal_boxes(se.tree, unit, bad, fi0, fi1, se.node_normals);
+    node_normal_boxes(se.tree, unit, bad, se.edges, local, se.node_normals);
   }
 }
 
