@@ -30,12 +30,13 @@ int face_side(const TriangleSoup& mesh, const FacePlane& f, const SumPoint& p) {
 }
 
 // The box of the unit normals of the faces of every node's edges (SurfaceEdges::
-// node_normals; item e's faces: unit[fi0[e]], unit[fi1[e]]), children before parents
-// (pre-order: both children follow their parent). A face whose computed normal n is
-// small next to s12 (|n|_1 <= 2^-20 s12, where n's rounding, a few ulps of s12, could
-// turn it) bounds nothing (bad): its node gets [-1, 1]^3.
+// node_normals; item e's faces: unit[local[edges[e].t0]], unit[local[edges[e].t1]]),
+// children before parents (pre-order: both children follow their parent). A face whose
+// computed normal n is small next to s12 (|n|_1 <= 2^-20 s12, where n's rounding, a few
+// ulps of s12, could turn it) bounds nothing (bad): its node gets [-1, 1]^3.
 void node_normal_boxes(const EdgeTree& tree, const std::vector<Vec3d>& unit, const std::vector<uint8_t>& bad,
-                       const std::vector<uint32_t>& fi0, const std::vector<uint32_t>& fi1, std::vector<AABBd>& out) {
+                       const std::vector<SurfaceEdges::Edge>& edges, const std::vector<uint32_t>& local,
+                       std::vector<AABBd>& out) {
   const AABBd full{Vec3d(-1, -1, -1), Vec3d(1, 1, 1)};
   out.assign(tree.node_count(), AABBd());
   for (size_t i = tree.node_count(); i-- > 0;) {
@@ -48,7 +49,7 @@ void node_normal_boxes(const EdgeTree& tree, const std::vector<Vec3d>& unit, con
     }
     for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
       const uint32_t e = tree.item(k);
-      for (const uint32_t f : {fi0[e], fi1[e]}) {
+      for (const uint32_t f : {local[edges[e].t0], local[edges[e].t1]}) {
         if (bad[f]) {
           b = full;
           break;
@@ -144,14 +145,19 @@ int exact_side(const Vec3f& a, const Vec3f& b, const Vec3f& c, const SumPoint& p
   return s != 0 ? s : plane_side_rest(a, b, c, p);
 }
 
-void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key) {
+bool EdgeTree::start(uint32_t n) {
   nodes.clear();
   order.clear();
-  const uint32_t n = uint32_t(boxes.size());
-  if (n == 0) return;
+  if (n == 0) return false;
   order.resize(n);
   for (uint32_t e = 0; e < n; ++e) order[e] = e;
   nodes.reserve(2 * (n / kLeaf) + 2);
+  return true;
+}
+
+void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key) {
+  const uint32_t n = uint32_t(boxes.size());
+  if (!start(n)) return;
   // Keys already in order (SurfaceTrees gives the edges in rank order): the identity is
   // the stable order and boxes the leaf order.
   uint32_t top = 0;
@@ -183,15 +189,21 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
   build_node(leaf_boxes, 0, n);
 }
 
+void EdgeTree::build_in_order(const std::vector<AABB>& boxes) {
+  const uint32_t n = uint32_t(boxes.size());
+  if (start(n)) build_node(boxes, 0, n);
+}
+
 // Node over order[begin, end) and its subtree (left half floor(m / 2)); returns its id.
-uint32_t EdgeTree::build_node(const std::vector<AABBd>& leaf_boxes, uint32_t begin, uint32_t end) {
+template <class Box>
+uint32_t EdgeTree::build_node(const std::vector<Box>& leaf_boxes, uint32_t begin, uint32_t end) {
   const uint32_t id = uint32_t(nodes.size());
   nodes.emplace_back();
   nodes[id].count = end - begin;
   if (end - begin <= kLeaf) {
-    AABBd b = leaf_boxes[begin];
+    Box b = leaf_boxes[begin];
     for (uint32_t k = begin + 1; k < end; ++k) b.extend(leaf_boxes[k]);
-    nodes[id].box = b;
+    nodes[id].box = AABBd{Vec3d(b.lo), Vec3d(b.hi)};
     nodes[id].first = begin;
     return id;
   }
@@ -232,8 +244,7 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
   std::vector<uint32_t> local(mesh.size(), 0u);
   std::vector<Vec3d> unit;
   std::vector<uint8_t> bad;
-  std::vector<uint32_t> fi0, fi1, key;
-  std::vector<AABBd> ebox;
+  std::vector<AABB> ebox;
   for (size_t s = 0; s < bvh_.size(); ++s) {
     const std::vector<uint32_t>& tris = tris_[s];
     SurfaceEdges& se = edges_[s];
@@ -248,17 +259,11 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
       else
         unit[i] = fp.n * (1.0 / length(fp.n));
     }
-    fi0.clear();
-    fi1.clear();
-    key.clear();
     ebox.clear();
     // A closed surface's triangles have three neighbours each and its halves pair up: 3T / 2
     // edges (more only where a half finds no partner; the vectors then grow).
     const size_t edges = (3 * tris.size() + 1) / 2;
     se.edges.reserve(edges);
-    fi0.reserve(edges);
-    fi1.reserve(edges);
-    key.reserve(edges);
     ebox.reserve(edges);
     // The m-th half of t toward u (m counted over t's k from 0), or 3.
     auto nth_half = [&](uint32_t t, uint32_t u, int m) -> int {
@@ -266,8 +271,8 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
         if (cs.neighbors(t)[size_t(j)] == int32_t(u) && m-- == 0) return j;
       return 3;
     };
-    // The triangles in rank order (the tree's leaf order), so the edges come in the
-    // order of their key and the tree's stable sort leaves them in place.
+    // The triangles in rank order (the surface hierarchy's leaf order): the edges come in
+    // the order of their key rank_[t0], the edge tree's leaf order.
     for (uint32_t item : bvh_[s].order()) {
       const uint32_t t = tris[item];
       const std::array<int32_t, 3>& nb = cs.neighbors(t);
@@ -280,26 +285,25 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
         e.t0 = t;
         e.k0 = uint8_t(k);
         e.t1 = u;
-        if (u > t) {
-          e.k1 = uint8_t(nth_half(u, t, m));
-        } else if (u < t && nth_half(u, t, m) < 3) {
-          continue;  // paired from u's side
-        }
-        AABBd b{to_double(mesh.corner(t, k)), to_double(mesh.corner(t, k))};
-        b.extend(to_double(mesh.corner(t, (k + 1) % 3)));
+        // The neighbours are symmetric with their multiplicities (lib/mesh/prepare.h): u
+        // has t as often as t has u, so u's m-th half toward t exists when u < t and this
+        // half is paired from u's side.
+        if (u < t) continue;
+        if (u > t) e.k1 = uint8_t(nth_half(u, t, m));
+        // In float: the double box of the float corners' box is the box of the corners
+        // in double (exact, monotone conversion).
+        AABB b{mesh.corner(t, k), mesh.corner(t, k)};
+        b.extend(mesh.corner(t, (k + 1) % 3));
         if (e.k1 < 3) {
-          b.extend(to_double(mesh.corner(u, e.k1)));
-          b.extend(to_double(mesh.corner(u, (e.k1 + 1) % 3)));
+          b.extend(mesh.corner(u, e.k1));
+          b.extend(mesh.corner(u, (e.k1 + 1) % 3));
         }
         se.edges.push_back(e);
         ebox.push_back(b);
-        key.push_back(rank_[t]);
-        fi0.push_back(local[t]);
-        fi1.push_back(local[u]);
       }
     }
-    se.tree.build(ebox, key);
-    node_normal_boxes(se.tree, unit, bad, fi0, fi1, se.node_normals);
+    se.tree.build_in_order(ebox);
+    node_normal_boxes(se.tree, unit, bad, se.edges, local, se.node_normals);
   }
 }
 

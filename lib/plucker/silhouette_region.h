@@ -83,9 +83,16 @@ struct EdgeTree {
   // nodes hold the boxes; an edge's own box is not kept (the walks take it from the
   // edge's faces).
   void build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key);
+  // The same tree as build(boxes converted to double, key) for keys already in order:
+  // order is the identity and each node's box the double of its float boxes' union
+  // (float -> double is exact and monotone, so the same doubles).
+  void build_in_order(const std::vector<AABB>& boxes);
 
  private:
-  uint32_t build_node(const std::vector<AABBd>& leaf_boxes, uint32_t begin, uint32_t end);
+  // Empties the tree; for n > 0 sets order to the identity and returns true.
+  bool start(uint32_t n);
+  template <class Box>
+  uint32_t build_node(const std::vector<Box>& leaf_boxes, uint32_t begin, uint32_t end);
 };
 
 // Per closed surface, its edges once each, built once per solve (world coordinates, so

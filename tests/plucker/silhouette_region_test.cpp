@@ -90,17 +90,24 @@ TEST(PluckerSilhouetteRegion, NormalConesOnlyWhereEveryFaceAgrees) {
 // The surfaces' edge tree: its leaf order is the edges stably sorted by key, every node's
 // box holds its items' boxes, and a walk pruned by box overlap finds exactly the edges
 // whose own box meets the query (against a scan of every edge).
+// A box at a corner in [-10, 10]^3 with sides in [0, 1].
+template <class T>
+AABBT<T> random_box(std::mt19937& rng) {
+  std::uniform_real_distribution<T> xy(T(-10), T(10)), len(T(0), T(1));
+  const Vec3<T> a(xy(rng), xy(rng), xy(rng));
+  AABBT<T> b{a, a};
+  b.extend(a + Vec3<T>(len(rng), len(rng), len(rng)));
+  return b;
+}
+
 TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> xy(-10.0, 10.0), len(0.0, 1.0);
+  std::uniform_real_distribution<double> xy(-10.0, 10.0);
   for (const uint32_t n : {0u, 1u, 8u, 9u, 100u, 5000u}) {
     std::vector<AABBd> boxes;
     std::vector<uint32_t> key;
     for (uint32_t e = 0; e < n; ++e) {
-      const Vec3d a(xy(rng), xy(rng), xy(rng));
-      AABBd b{a, a};
-      b.extend(a + Vec3d(len(rng), len(rng), len(rng)));
-      boxes.push_back(b);
+      boxes.push_back(random_box<double>(rng));
       key.push_back(uint32_t(rng() % (n / 3 + 1)) * 977u);  // repeated keys, above 2^11 too
     }
     plucker::EdgeTree tree;
@@ -151,6 +158,38 @@ TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
         if (meets(boxes[e])) want.push_back(e);
       std::sort(found.begin(), found.end());
       EXPECT_EQ(found, want);
+    }
+  }
+}
+
+// build_in_order over float boxes is build over the same boxes in double with keys in
+// order (each key repeated or rising, as SurfaceTrees gives them): the same order, counts,
+// links and node boxes bit for bit, leaves of one to kLeaf edges and boxes of mixed signs.
+TEST(PluckerSilhouetteRegion, EdgeTreeInOrderIsTheKeyedBuild) {
+  std::mt19937 rng(5);
+  for (const uint32_t n : {0u, 1u, 4u, 5u, 9u, 100u, 3001u}) {
+    std::vector<AABB> fboxes;
+    std::vector<AABBd> dboxes;
+    std::vector<uint32_t> key;
+    for (uint32_t e = 0; e < n; ++e) {
+      const AABB b = random_box<float>(rng);
+      fboxes.push_back(b);
+      dboxes.push_back(AABBd{Vec3d(b.lo), Vec3d(b.hi)});
+      key.push_back(e / 3);
+    }
+    plucker::EdgeTree keyed, in_order;
+    keyed.build(dboxes, key);
+    in_order.build_in_order(fboxes);
+    ASSERT_EQ(in_order.order, keyed.order);
+    ASSERT_EQ(in_order.node_count(), keyed.node_count());
+    for (uint32_t i = 0; i < keyed.node_count(); ++i) {
+      const auto &a = in_order.node(i), &b = keyed.node(i);
+      ASSERT_EQ(a.first, b.first);
+      ASSERT_EQ(a.count, b.count);
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_EQ(a.box.lo[c], b.box.lo[c]);
+        ASSERT_EQ(a.box.hi[c], b.box.hi[c]);
+      }
     }
   }
 }
