@@ -607,13 +607,10 @@ uint32_t ray_limit(long per_sample, int samples) {
 
 // ray_solve=auto: a solve whose probe (below) finds at least kRaySolveDen / kRaySolveNum
 // (a half) of its receivers past the ray limit answers every receiver by its rays and
-// builds no index: the capped walk of the cast receivers (foliage 1,024 x 64: 19.6M of
-// 127.2M instructions) and the index's build (4.2M) cost more than the rays of the
-// receivers below the limit, which mostly see few triangles (foliage's 67: 4,288 rays,
-// 1.0M). Callgrind, whole solve, every receiver by rays against the receiver rule, with
-// the share of receivers past the limit: foliage 93% -23%, armadillo 94% -33%, bunny 62%
-// -23%, foliage 256 x 64 under a light scaled 0.5 and 0.25 72% -21% and 59% -20%; rooms,
-// none past, +36% (so a probe is needed).
+// builds no index: there the capped walks of the cast receivers and the index's build
+// cost more than the rays of the receivers below the limit (measured from 59% past on
+// foliage, armadillo and bunny; a scene with none past, rooms, pays more by rays, hence
+// the probe: docs/log/ssv-performance.md, nineteenth round).
 constexpr size_t kRaySolveNum = 2, kRaySolveDen = 1;
 
 // wedge_index=auto picks the edge hierarchy from this many mesh edges per receiver.
