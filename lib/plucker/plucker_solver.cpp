@@ -262,7 +262,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     static_assert(TriangleTree::kRule.split == kTriangleHierarchyRule.split &&
                   TriangleTree::kRule.leaf_size == kTriangleHierarchyRule.leaf_size &&
                   TriangleTree::kRule.item_boxes == kTriangleHierarchyRule.item_boxes);
-    surface_trees.emplace(scene.mesh, *closed, ctx.silhouette_estimate ? kMinRegionTriangles : 0u, &tree.hierarchy());
+    surface_trees.emplace(scene.mesh, *closed, ctx.silhouette_estimate ? kMinRegionTriangles : 0u, &tree.bvh());
     tree_surfaces.emplace(tree, *closed);
     tree_s += seconds_since(tt);
     memory.change(int64_t(surface_trees->memory_bytes() + tree_surfaces->memory_bytes()));

@@ -46,8 +46,6 @@ class TriangleTree {
   // whose leaf box is not culled by the shaft; the shaft is in local coordinates
   // relative to `origin`. Callers still test each triangle.
   void candidates(const Shaft& shaft, const Vec3f& origin, std::vector<uint32_t>& out) const;
-  // The hierarchy: items are triangle indices, boxes the triangles' corner boxes.
-  const accel::Bvh<float>& hierarchy() const { return bvh_; }
 
   // A run of triangles of one subtree: positions [begin, begin + count) of the leaf order
   // (a subtree's triangles are contiguous there, lib/accel/bvh.h).
@@ -79,6 +77,7 @@ class TriangleTree {
     lo = Vec3d(down(double(nd.box.lo.x) - od.x), down(double(nd.box.lo.y) - od.y), down(double(nd.box.lo.z) - od.z));
     hi = Vec3d(up(double(nd.box.hi.x) - od.x), up(double(nd.box.hi.y) - od.y), up(double(nd.box.hi.z) - od.z));
   }
+  // The hierarchy: items are triangle indices, boxes the triangles' corner boxes.
   const accel::Bvh<float>& bvh() const { return bvh_; }
   // Appends the triangles of r to `out` (in leaf order, not sorted).
   void append_items(const Range& r, std::vector<uint32_t>& out) const {

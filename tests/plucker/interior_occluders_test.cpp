@@ -255,7 +255,7 @@ TEST(PluckerInteriorOccluders, SurfaceTreesTakeTheTriangleTreeForAWholeMeshSurfa
   for (const Scene* s : {&one, &two, &*scan}) {
     const plucker::TriangleTree tt(s->mesh);
     const plucker::ClosedSurfaces cs(s->mesh);
-    const plucker::SurfaceTrees alone(s->mesh, cs), given(s->mesh, cs, 0, &tt.hierarchy());
+    const plucker::SurfaceTrees alone(s->mesh, cs), given(s->mesh, cs, 0, &tt.bvh());
     ASSERT_EQ(cs.count(), s == &one ? 1u : 2u);
     for (int32_t k = 0; k < int32_t(cs.count()); ++k) {
       const accel::Bvh<float>&a = alone.hierarchy(k), &b = given.hierarchy(k);
