@@ -626,6 +626,28 @@ constexpr size_t kProbes = 12;
 struct ProbeCounts {
   size_t probes = 0, past = 0;
 };
+// The receivers both probes test, and their counts: up to kProbes spread over the scene
+// (receiver order, the lights in turn: the usable ones `take_light` accepts), none
+// grazing; past_limit(frame, light, r) says whether r is past the ray limit. Stops once
+// `max_below` are below it.
+template <class TakeLight, class PastLimit>
+ProbeCounts probe_receivers(const Scene& scene, size_t max_below, TakeLight&& take_light, PastLimit&& past_limit) {
+  const size_t per_light = std::max<size_t>(2, kProbes / scene.lights.size());
+  const size_t step = std::max<size_t>(1, scene.receivers.size() / per_light);
+  ProbeCounts pc;
+  auto more = [&] { return pc.probes < kProbes && pc.probes - pc.past < max_below; };
+  for (size_t l = 0; l < scene.lights.size() && more(); ++l) {
+    const LightFrame frame = make_light_frame(scene.lights[l]);
+    if (!frame.usable || !take_light(frame)) continue;
+    for (size_t i = step / 2; i < scene.receivers.size() && more(); i += step) {
+      const Vec3f& r = scene.receivers[i].p;
+      if (grazing_receiver(frame, r)) continue;
+      pc.past += past_limit(frame, l, r) ? 1 : 0;
+      ++pc.probes;
+    }
+  }
+  return pc;
+}
 ProbeCounts probe_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edge>& edges, const Scene& scene,
                              long per_sample) {
   if (edges.empty() || scene.receivers.empty() || scene.lights.empty()) return {};
@@ -649,32 +671,23 @@ ProbeCounts probe_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edg
     sampled.push_back({to_double(pm.vertex_pos[ed.a]), to_double(pm.vertex_pos[ed.b]), single ? Vec3d(0, 0, 0) : normal(ed.t1),
                        single ? Vec3d(0, 0, 0) : normal(ed.t2), single});
   }
-  const size_t per_light = std::max<size_t>(2, kProbes / scene.lights.size());
-  const size_t step = std::max<size_t>(1, scene.receivers.size() / per_light);
-  size_t probes = 0, past = 0;
-  for (size_t l = 0; l < scene.lights.size() && probes < kProbes; ++l) {
-    const LightFrame frame = make_light_frame(scene.lights[l]);
-    if (!frame.usable) continue;
-    const size_t cap = ray_limit(per_sample, scene.lights[l].samples) / stride;  // in counted edges
-    for (size_t i = step / 2; i < scene.receivers.size() && probes < kProbes; i += step) {
-      const Vec3f& rf = scene.receivers[i].p;
-      if (grazing_receiver(frame, rf)) continue;
-      const EdgeFrustum f(frame, rf);
-      const Vec3d r = to_double(rf);
-      size_t in = 0;
-      for (size_t k = 0; k < sampled.size() && in <= cap; ++k) {
-        const Probe& p = sampled[k];
-        bool outside = false;
-        for (int q = 0; q < f.count && !outside; ++q)
-          outside = dot(f.n[q], p.a) < f.d[q] && dot(f.n[q], p.b) < f.d[q];
-        if (outside) continue;
-        if (p.single || (dot(p.n1, r - p.a) > 0.0) != (dot(p.n2, r - p.a) > 0.0)) ++in;
-      }
-      ++probes;
-      past += in > cap ? 1 : 0;
-    }
-  }
-  return {probes, past};
+  return probe_receivers(
+      scene, kProbes, [](const LightFrame&) { return true; },
+      [&](const LightFrame& frame, size_t l, const Vec3f& rf) {
+        const size_t cap = ray_limit(per_sample, scene.lights[l].samples) / stride;  // in counted edges
+        const EdgeFrustum f(frame, rf);
+        const Vec3d r = to_double(rf);
+        size_t in = 0;
+        for (size_t k = 0; k < sampled.size() && in <= cap; ++k) {
+          const Probe& p = sampled[k];
+          bool outside = false;
+          for (int q = 0; q < f.count && !outside; ++q)
+            outside = dot(f.n[q], p.a) < f.d[q] && dot(f.n[q], p.b) < f.d[q];
+          if (outside) continue;
+          if (p.single || (dot(p.n1, r - p.a) > 0.0) != (dot(p.n2, r - p.a) > 0.0)) ++in;
+        }
+        return in > cap;
+      });
 }
 
 // The edge tree's frontier per batch of at most kEdgeBatch receivers: nodes of at most
@@ -683,31 +696,22 @@ ProbeCounts probe_past_limit(const mesh::PreparedMesh& pm, const std::vector<Edg
 constexpr uint32_t kFrontierEdges = 64, kEdgeBatch = 8;
 
 // ray_solve's probe on meshes of at least kEdgesPerReceiver edges per receiver, which
-// build the edge tree anyway: the capped walk (the solver's own test) of the receivers
-// probe_past_limit would take, from the root, stopping once `max_below` are below the
-// limit (bunny 75k, 1,024 x 64: 1.8M instructions, 0.7% of its solve; the sampled count
-// over every 16th edge cost 6.2M there). It only chooses, never an answer.
+// build the edge tree anyway: the capped walk (the solver's own test) of probe_receivers'
+// receivers on lights of flat jitter, from the root, stopping once `max_below` are below
+// the limit (cheaper there than the sampled count: docs/log/ssv-performance.md, nineteenth
+// round). It only chooses, never an answer.
 ProbeCounts tree_probe(const EdgeTree& tree, const Scene& scene, float eps, long per_sample, size_t max_below) {
   if (tree.empty() || scene.receivers.empty() || scene.lights.empty()) return {};
-  const size_t per_light = std::max<size_t>(2, kProbes / scene.lights.size());
-  const size_t step = std::max<size_t>(1, scene.receivers.size() / per_light);
-  size_t probes = 0, past = 0;
   std::vector<uint32_t> starts, out;
-  for (size_t l = 0; l < scene.lights.size() && probes < kProbes && probes - past < max_below; ++l) {
-    const LightFrame frame = make_light_frame(scene.lights[l]);
-    if (!frame.usable || double(frame.max_jitter_h) > 1e-5 * frame.extent) continue;
-    const uint32_t cap = ray_limit(per_sample, scene.lights[l].samples);
-    for (size_t i = step / 2; i < scene.receivers.size() && probes < kProbes && probes - past < max_below; i += step) {
-      const Vec3f& r = scene.receivers[i].p;
-      if (grazing_receiver(frame, r)) continue;
-      const EdgeFrustum f(frame, r);
-      tree.frontier(f, frame, eps, std::numeric_limits<uint32_t>::max(), starts);  // the root
-      tree.query(f, frame, eps, starts, out, cap);
-      ++probes;
-      past += out.size() > cap ? 1 : 0;
-    }
-  }
-  return {probes, past};
+  return probe_receivers(
+      scene, max_below, [](const LightFrame& frame) { return !(double(frame.max_jitter_h) > 1e-5 * frame.extent); },
+      [&](const LightFrame& frame, size_t l, const Vec3f& r) {
+        const uint32_t cap = ray_limit(per_sample, scene.lights[l].samples);
+        const EdgeFrustum f(frame, r);
+        tree.frontier(f, frame, eps, std::numeric_limits<uint32_t>::max(), starts);  // the root
+        tree.query(f, frame, eps, starts, out, cap);
+        return out.size() > cap;
+      });
 }
 
 // The frontier's node size for `edges` mesh edges and `receivers` receivers: the largest
