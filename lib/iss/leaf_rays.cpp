@@ -1304,10 +1304,8 @@ void Traversal::cast_rays(int r, int l, const Shaft* sh, const std::vector<uint3
   n_rays_blocked_ += double(blocked);
 }
 
-// The standard caster: the receiver's segments to the samples form a coherent fan,
-// traced kFanWidth at a time as one Embree packet (occluded_fan).
-// Decided at most once per ray past min_rays: the rays so far over the relations decided
-// so far estimate the share of the rest (a cost estimate; the answers are the same).
+// Asked at each ray past min_rays until it upgrades: the rays so far over the relations
+// decided so far estimate the share of the rest (a cost estimate; the answers are the same).
 void Traversal::leaf_caster_upgrade() {
   const double decided = std::max(1.0, decided_relations());
   if (embree_rays_ * upgrade_relations_ < upgrade_rays_ * decided) return;
@@ -1316,6 +1314,8 @@ void Traversal::leaf_caster_upgrade() {
   embree_upgraded_ = true;
 }
 
+// The standard caster: the receiver's segments to the samples form a coherent fan,
+// traced kFanWidth at a time as one Embree packet (occluded_fan).
 void Traversal::fan_rays(uint32_t i, const uint32_t* samples, size_t count) {
   ReceiverResult& rr = result_.receivers[i];
   const Vec3f& rp = scene_.receivers[i].p;
