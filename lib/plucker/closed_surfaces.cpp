@@ -36,31 +36,37 @@ ClosedSurfaces::ClosedSurfaces(const TriangleSoup& mesh, const mesh::PreparedMes
     }
     comp_open.push_back(open);
   }
+  // Surface ids in the order of the closed components' first triangles.
   std::vector<int32_t> id(comp_open.size(), -1);
-  std::vector<int32_t> of(mesh.size(), -1);
-  bool any = false;
-  for (uint32_t t = 0; t < n; ++t) {
-    const size_t root = size_t(comp[t]);
-    if (comp_open[root]) continue;
-    if (id[root] < 0) {
-      id[root] = int32_t(boxes_.size());
-      boxes_.emplace_back();
-      sizes_.push_back(0);
-    }
-    const int32_t s = id[root];
-    of[pm.triangles[t].source] = s;
-    for (int k = 0; k < 3; ++k) boxes_[size_t(s)].extend(pm.corner(t, k));
-    ++sizes_[size_t(s)];
-    any = true;
-  }
-  if (!any) return;
-  surface_of_ = std::move(of);
+  int32_t closed = 0;
+  for (size_t c = 0; c < comp_open.size(); ++c)
+    if (!comp_open[c]) id[c] = closed++;
+  if (closed == 0) return;
+  boxes_.resize(size_t(closed));
+  sizes_.assign(size_t(closed), 0);
+  surface_of_.assign(mesh.size(), -1);
   nb_.assign(mesh.size(), {-1, -1, -1});
+  // Sources are increasing, so with no triangle dropped every source is its own index.
+  const bool same_ids = n == mesh.size();
+  // Each welded vertex extends a surface's box once (stamp: the last surface it
+  // extended): extend moves lo (hi) only for a point strictly below (above) it, so a
+  // point met again leaves the box's bits as they are, whatever the order.
+  std::vector<int32_t> stamp(pm.vertex_pos.size(), -1);
   for (uint32_t t = 0; t < n; ++t) {
-    const uint32_t src = pm.triangles[t].source;
-    if (surface_of_[src] < 0) continue;
-    for (int k = 0; k < 3; ++k)
-      nb_[src][size_t(k)] = int32_t(pm.triangles[size_t(pm.triangles[t].neighbors[size_t(k)])].source);
+    const int32_t s = id[size_t(comp[t])];
+    if (s < 0) continue;
+    const mesh::PreparedTriangle& tri = pm.triangles[t];
+    surface_of_[tri.source] = s;
+    ++sizes_[size_t(s)];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = tri.v[size_t(k)];
+      if (stamp[v] != s) {
+        stamp[v] = s;
+        boxes_[size_t(s)].extend(pm.vertex_pos[v]);
+      }
+      const int32_t nb = tri.neighbors[size_t(k)];  // >= 0: the component is closed
+      nb_[tri.source][size_t(k)] = same_ids ? nb : int32_t(pm.triangles[size_t(nb)].source);
+    }
   }
   // Signed volumes about each box's centre, in double, with the sum of the terms'
   // magnitudes as the scale below which the sign is not trusted.

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 
 #include "lib/base/union_find.h"
@@ -89,6 +90,49 @@ TEST(PluckerClosedSurfaces, SurfacesAreTheClosedComponentsInOrderOfTheirFirstTri
     if (want[t] >= 0) ++sizes[size_t(want[t])];
   }
   for (int32_t s = 0; s < count; ++s) EXPECT_EQ(cs.triangles(s), sizes[size_t(s)]) << s;
+}
+
+// Boxes and neighbours against the plain reference: per surface every corner of every
+// triangle extended in triangle order, and per triangle its prepared neighbours' sources.
+// Signed zeros on distinct vertices (extend keeps the first of -0 and +0, so the order
+// decides the bits) and a dropped degenerate triangle (sources shifted) are in the soup.
+TEST(PluckerClosedSurfaces, BoxesAndNeighboursAreEveryCornersAndThePreparedNeighbours) {
+  TriangleSoup m;
+  m.vertices = {Vec3f(5, 5, 5), Vec3f(6, 5, 5)};
+  m.triangles.push_back({0, 1, 0});  // degenerate: dropped, every later source shifts
+  shapes::add_box(m, Vec3d(-1, -1, -1), Vec3d(0, 0, 0));
+  shapes::add_box(m, Vec3d(0, -2, 0), Vec3d(1, 0, 1));
+  shapes::add_torus(m, Vec3d(0, 4, 0), 0.6, 0.2, 12, 8);
+  // The boxes' zero corners: some vertices at -0 (the welding merges none of them).
+  for (size_t v = 2; v < m.vertices.size(); v += 3)
+    for (int k = 0; k < 3; ++k)
+      if (m.vertices[v][k] == 0.0f) m.vertices[v][k] = -0.0f;
+  Rng rng(11);
+  for (size_t i = m.triangles.size(); i-- > 2;) std::swap(m.triangles[i], m.triangles[1 + size_t(rng.below(i))]);
+  const mesh::PreparedMesh pm = mesh::prepare_mesh(m);
+  ASSERT_EQ(pm.triangles.size() + 1, m.size());
+  const plucker::ClosedSurfaces cs(m, pm);
+  ASSERT_EQ(cs.count(), 3u);
+  std::vector<AABB> want(cs.count());
+  for (uint32_t t = 0; t < pm.triangles.size(); ++t) {
+    const uint32_t src = pm.triangles[t].source;
+    const int32_t s = cs.surface(src);
+    ASSERT_GE(s, 0) << src;
+    for (int k = 0; k < 3; ++k) {
+      want[size_t(s)].extend(pm.corner(t, k));
+      EXPECT_EQ(cs.neighbors(src)[size_t(k)], int32_t(pm.triangles[size_t(pm.triangles[t].neighbors[size_t(k)])].source))
+          << src << " " << k;
+    }
+  }
+  auto bits = [](float f) { return std::bit_cast<uint32_t>(f); };
+  bool signed_zero = false;
+  for (size_t s = 0; s < cs.count(); ++s)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(bits(cs.box(int32_t(s)).lo[k]), bits(want[s].lo[k])) << s << " " << k;
+      EXPECT_EQ(bits(cs.box(int32_t(s)).hi[k]), bits(want[s].hi[k])) << s << " " << k;
+      signed_zero = signed_zero || bits(want[s].lo[k]) == bits(-0.0f) || bits(want[s].hi[k]) == bits(-0.0f);
+    }
+  EXPECT_TRUE(signed_zero);  // the soup does reach a -0 bound
 }
 
 TEST(PluckerClosedSurfaces, ScanAnswersMatchEveryTriangleAndTheOracle) {
