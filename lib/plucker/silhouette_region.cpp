@@ -291,13 +291,12 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
         if (u < t) continue;
         if (u > t) e.k1 = uint8_t(nth_half(u, t, m));
         // In float: the double box of the float corners' box is the box of the corners
-        // in double (exact, monotone conversion).
+        // in double (exact, monotone conversion). u's half has the same two welded
+        // points, equal to t's as floats (their bits differ at most in a zero's sign), and
+        // extend moves lo (hi) only for a point strictly below (above) it, so they would
+        // leave the box's bits as t's two corners make them.
         AABB b{mesh.corner(t, k), mesh.corner(t, k)};
         b.extend(mesh.corner(t, (k + 1) % 3));
-        if (e.k1 < 3) {
-          b.extend(mesh.corner(u, e.k1));
-          b.extend(mesh.corner(u, (e.k1 + 1) % 3));
-        }
         se.edges.push_back(e);
         ebox.push_back(b);
       }

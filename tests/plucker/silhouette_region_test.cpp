@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <random>
 #include <vector>
 
@@ -249,6 +250,64 @@ TEST(PluckerSilhouetteRegion, SurfaceEdgesHoldEveryHalfOnce) {
   }
   for (uint32_t t = 0; t < m.size(); ++t)
     for (int k = 0; k < 3; ++k) EXPECT_EQ(seen[3 * t + k], cs.surface(t) >= 0 ? 1 : 0) << t << " " << k;
+}
+
+// Every leaf box of the surfaces' edge trees is, bit for bit, the box of all four corners
+// of its edges (both halves, in float, as the edges were first built: t's two corners,
+// then u's), widened to double. Two boxes with zero coordinates and a sphere, every
+// triangle with corners of its own and each zero's sign drawn at random: the welded
+// halves of an edge then differ in zero signs, and extend's first-met zero decides.
+TEST(PluckerSilhouetteRegion, EdgeLeafBoxesAreTheirEdgesFourCorners) {
+  TriangleSoup w;
+  shapes::add_box(w, Vec3d(-1, -1, -1), Vec3d(0, 0, 0));
+  shapes::add_box(w, Vec3d(0, 0, 0), Vec3d(1, 2, 1));
+  shapes::add_sphere(w, Vec3d(0.05, 0.02, 3), 0.5, 24, 12);
+  TriangleSoup m;
+  Rng rng(3);
+  for (const auto& tri : w.triangles) {
+    std::array<uint32_t, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      Vec3f p = w.vertices[tri[size_t(k)]];
+      for (int c = 0; c < 3; ++c)
+        if (p[c] == 0.0f && rng.below(2) == 0) p[c] = -0.0f;
+      t[size_t(k)] = uint32_t(m.vertices.size());
+      m.vertices.push_back(p);
+    }
+    m.triangles.push_back(t);
+  }
+  const plucker::ClosedSurfaces cs(m);
+  ASSERT_EQ(cs.count(), 3u);
+  const plucker::SurfaceTrees trees(m, cs);
+  auto bits = [](double d) { return std::bit_cast<uint64_t>(d); };
+  size_t leaves = 0, zeros = 0;
+  for (int32_t s = 0; s < int32_t(cs.count()); ++s) {
+    const plucker::SurfaceEdges& se = trees.edges(s);
+    for (uint32_t i = 0; i < se.tree.node_count(); ++i) {
+      const auto& nd = se.tree.node(i);
+      if (!se.tree.is_leaf(nd)) continue;
+      AABB want;
+      for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) {
+        const plucker::SurfaceEdges::Edge& e = se.edges[se.tree.item(k)];
+        ASSERT_LT(e.k1, 3);
+        AABB b{m.corner(e.t0, e.k0), m.corner(e.t0, e.k0)};
+        b.extend(m.corner(e.t0, (e.k0 + 1) % 3));
+        b.extend(m.corner(e.t1, e.k1));
+        b.extend(m.corner(e.t1, (e.k1 + 1) % 3));
+        if (k == nd.first)
+          want = b;
+        else
+          want.extend(b);
+      }
+      ++leaves;
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(bits(nd.box.lo[c]), bits(double(want.lo[c]))) << s << " " << i << " " << c;
+        EXPECT_EQ(bits(nd.box.hi[c]), bits(double(want.hi[c]))) << s << " " << i << " " << c;
+        zeros += (want.lo[c] == 0.0f) + (want.hi[c] == 0.0f);
+      }
+    }
+  }
+  EXPECT_GT(leaves, 20u);
+  EXPECT_GT(zeros, 20u);  // zero bounds, where the signs could differ
 }
 
 // The regions on, auto (the default) and off: the same bits and fractions (up to the
