@@ -279,17 +279,19 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
       for (int k = 0; k < 3; ++k) {
         if (nb[size_t(k)] < 0) continue;
         const uint32_t u = uint32_t(nb[size_t(k)]);
-        int m = 0;  // t's halves toward u before k
-        for (int j = 0; j < k; ++j) m += nb[size_t(j)] == nb[size_t(k)] ? 1 : 0;
+        // The neighbours are symmetric with their multiplicities (lib/mesh/prepare.h): u
+        // has t as often as t has u, so when u < t, u's m-th half toward t (m: t's halves
+        // toward u before k) exists and this half is paired from u's side.
+        if (u < t) continue;
         SurfaceEdges::Edge e;
         e.t0 = t;
         e.k0 = uint8_t(k);
         e.t1 = u;
-        // The neighbours are symmetric with their multiplicities (lib/mesh/prepare.h): u
-        // has t as often as t has u, so u's m-th half toward t exists when u < t and this
-        // half is paired from u's side.
-        if (u < t) continue;
-        if (u > t) e.k1 = uint8_t(nth_half(u, t, m));
+        if (u > t) {
+          int m = 0;
+          for (int j = 0; j < k; ++j) m += nb[size_t(j)] == nb[size_t(k)] ? 1 : 0;
+          e.k1 = uint8_t(nth_half(u, t, m));
+        }
         // In float: the double box of the float corners' box is the box of the corners
         // in double (exact, monotone conversion). u's half has the same two welded
         // points, equal to t's as floats (their bits differ at most in a zero's sign), and
