@@ -34,24 +34,35 @@ uint32_t subtree_nodes(uint32_t m, uint32_t leaf, std::map<uint32_t, uint32_t>& 
   return s;
 }
 
-// The componentwise min and max of the centres c of keys [first, last) (not empty),
-// lo = min(lo, c) and hi = max(hi, c) per key in order, as std::min and std::max do.
-// With SSE2 the three coordinates (and the index's bits, unused) in one register:
-// _mm_min_ps(c, lo) is c < lo ? c : lo and _mm_max_ps(c, hi) is c > hi ? c : hi, the
-// same values (no NaN in the boxes; -0 and +0 resolved the same way).
+// The componentwise min and max of the centres c of keys [first, last) (not empty). Only
+// max_axis(hi - lo) is read, so the values matter and not the sign of a zero bound: a
+// difference with a zero operand is the other operand (or a zero), and max_axis compares
+// -0 and +0 alike. The order of the min/max steps is thus free. With SSE2 the three
+// coordinates (and the index's bits, unused) in one register, the keys read aligned
+// (Key is 16-byte aligned), four per step into two pairs of bounds: about 3
+// instructions a key instead of 9 (the pass is about a quarter of median_split).
 template <class Key>
 std::pair<Vec3f, Vec3f> centre_bounds(const Key* first, const Key* last) {
 #if defined(__SSE2__)
-  static_assert(sizeof(Key) == 16 && offsetof(Key, c) == 0);
-  __m128 lo = _mm_loadu_ps(first->c), hi = lo;
-  for (const Key* k = first + 1; k < last; ++k) {
-    const __m128 c = _mm_loadu_ps(k->c);
-    lo = _mm_min_ps(c, lo);
-    hi = _mm_max_ps(c, hi);
+  static_assert(sizeof(Key) == 16 && alignof(Key) == 16 && offsetof(Key, c) == 0);
+  __m128 lo0 = _mm_load_ps(first->c), hi0 = lo0, lo1 = lo0, hi1 = lo0;
+  const Key* k = first + 1;
+  for (; last - k >= 4; k += 4) {
+    const __m128 c0 = _mm_load_ps(k[0].c), c1 = _mm_load_ps(k[1].c), c2 = _mm_load_ps(k[2].c),
+                 c3 = _mm_load_ps(k[3].c);
+    lo0 = _mm_min_ps(_mm_min_ps(lo0, c0), c2);
+    hi0 = _mm_max_ps(_mm_max_ps(hi0, c0), c2);
+    lo1 = _mm_min_ps(_mm_min_ps(lo1, c1), c3);
+    hi1 = _mm_max_ps(_mm_max_ps(hi1, c1), c3);
+  }
+  for (; k < last; ++k) {
+    const __m128 c = _mm_load_ps(k->c);
+    lo0 = _mm_min_ps(lo0, c);
+    hi0 = _mm_max_ps(hi0, c);
   }
   alignas(16) float l[4], h[4];
-  _mm_store_ps(l, lo);
-  _mm_store_ps(h, hi);
+  _mm_store_ps(l, _mm_min_ps(lo0, lo1));
+  _mm_store_ps(h, _mm_max_ps(hi0, hi1));
   return {Vec3f(l[0], l[1], l[2]), Vec3f(h[0], h[1], h[2])};
 #else
   Vec3f lo(first->c[0], first->c[1], first->c[2]), hi = lo;
@@ -67,9 +78,9 @@ std::pair<Vec3f, Vec3f> centre_bounds(const Key* first, const Key* last) {
 }  // namespace
 
 // The split key: the box centre rounded to float, packed with the item so that the
-// partitioning moves small records in place.
+// partitioning moves small records in place (16 bytes, aligned for centre_bounds).
 template <class T>
-struct Bvh<T>::Key {
+struct alignas(16) Bvh<T>::Key {
   float c[3];
   uint32_t idx;
 };
