@@ -42,7 +42,7 @@ bool segment_meets_box(const Vec3f& p0, const Vec3f& p1, const Vec3f& lo, const 
 // A corner as (x, y, z, 0), read without passing its 12 bytes.
 inline __m128 load_corner(const Vec3f& v) {
   static_assert(sizeof(Vec3f) == 12 && offsetof(Vec3f, y) == 4 && offsetof(Vec3f, z) == 8);
-  const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(&v.x)));
+  const __m128 xy = _mm_castsi128_ps(_mm_loadu_si64(&v.x));  // unaligned 8 bytes
   return _mm_movelh_ps(xy, _mm_load_ss(&v.z));
 }
 #endif
