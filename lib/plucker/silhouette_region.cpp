@@ -218,10 +218,7 @@ uint32_t EdgeTree::build_node(const std::vector<Box>& leaf_boxes, uint32_t begin
 }
 
 accel::Bvh<float> triangle_hierarchy(const TriangleSoup& mesh, const std::vector<uint32_t>& tris) {
-  std::vector<AABB> boxes(tris.size());
-  for (size_t i = 0; i < tris.size(); ++i)
-    for (int k = 0; k < 3; ++k) boxes[i].extend(mesh.corner(tris[i], k));
-  return accel::Bvh<float>(boxes, kTriangleHierarchyRule);
+  return accel::Bvh<float>(triangle_boxes(mesh, &tris), kTriangleHierarchyRule);
 }
 
 SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles,

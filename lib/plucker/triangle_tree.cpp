@@ -3,6 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "lib/geom/predicates.h"
 #include "lib/mesh/prepare.h"
@@ -12,13 +17,6 @@
 namespace visgate::plucker {
 
 namespace {
-
-std::vector<AABB> triangle_boxes(const TriangleSoup& mesh) {
-  std::vector<AABB> box(mesh.size());
-  for (size_t t = 0; t < mesh.size(); ++t)
-    for (int k = 0; k < 3; ++k) box[t].extend(mesh.corner(t, k));
-  return box;
-}
 
 // Whether the segment p0 -> p1 may meet the box [lo, hi]: false only when a separating
 // axis of the two (the box's three axes and the segment direction crossed with each)
@@ -40,7 +38,50 @@ bool segment_meets_box(const Vec3f& p0, const Vec3f& p1, const Vec3f& lo, const 
   return true;
 }
 
+#if defined(__SSE2__)
+// A corner as (x, y, z, 0), read without passing its 12 bytes.
+inline __m128 load_corner(const Vec3f& v) {
+  static_assert(sizeof(Vec3f) == 12 && offsetof(Vec3f, y) == 4 && offsetof(Vec3f, z) == 8);
+  const __m128 xy = _mm_castsi128_ps(_mm_loadu_si64(&v.x));  // unaligned 8 bytes
+  return _mm_movelh_ps(xy, _mm_load_ss(&v.z));
+}
+#endif
+
+// AABB() extended by a, b, c: lo = std::min(lo, x) keeps lo on ties, as _mm_min_ps(x, lo)
+// does (likewise max), and the first extend gives a itself (min(+inf, a) is a): the same
+// bits, zeros' signs included, in about a third of the scalar instructions.
+inline AABB corner_box(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+#if defined(__SSE2__)
+  const __m128 pa = load_corner(a), pb = load_corner(b), pc = load_corner(c);
+  const __m128 lo = _mm_min_ps(pc, _mm_min_ps(pb, pa)), hi = _mm_max_ps(pc, _mm_max_ps(pb, pa));
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, lo);
+  _mm_store_ps(h, hi);
+  AABB box;
+  box.lo = Vec3f(l[0], l[1], l[2]);
+  box.hi = Vec3f(h[0], h[1], h[2]);
+  return box;
+#else
+  AABB box;
+  box.extend(a);
+  box.extend(b);
+  box.extend(c);
+  return box;
+#endif
+}
+
 }  // namespace
+
+std::vector<AABB> triangle_boxes(const TriangleSoup& mesh, const std::vector<uint32_t>* tris) {
+  const size_t n = tris ? tris->size() : mesh.size();
+  std::vector<AABB> box(n);
+  const Vec3f* v = mesh.vertices.data();
+  for (size_t i = 0; i < n; ++i) {
+    const auto& c = mesh.triangles[tris ? (*tris)[i] : i];
+    box[i] = corner_box(v[c[0]], v[c[1]], v[c[2]]);
+  }
+  return box;
+}
 
 TriangleTree::TriangleTree(const TriangleSoup& mesh, const mesh::PreparedMesh& pm) : bvh_(triangle_boxes(mesh), kRule) {
   find_patches(mesh, pm);

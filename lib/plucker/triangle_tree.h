@@ -32,6 +32,11 @@
 
 namespace visgate::plucker {
 
+// The corner boxes of the triangles tris[0], tris[1], ... of mesh (of every triangle in
+// index order when tris is null): per triangle AABB() extended by corners 0, 1 and 2, the
+// same bits (the hierarchies' item boxes, TriangleTree's and triangle_hierarchy's).
+std::vector<AABB> triangle_boxes(const TriangleSoup& mesh, const std::vector<uint32_t>* tris = nullptr);
+
 class TriangleTree {
  public:
   // SurfaceTrees copies this tree for a surface that holds every triangle: keep the rule

@@ -397,7 +397,7 @@ Boxes<T> tie_soup(size_t n, uint32_t seed) {
 }  // namespace
 
 TYPED_TEST(BvhTest, MedianTreeIsTheReferenceBuildNodeByNode) {
-  // Against the kept reference: every node's box, count and right child, and the leaf
+  // Against the kept reference: every node's box (bit for bit), count and right child, and the leaf
   // order (so the item order within leaves and nodes, which nth_element's moves decide).
   // Sizes across the parallel grain and subtree (1 << 14, 1 << 15).
   using T = TypeParam;
@@ -414,9 +414,10 @@ TYPED_TEST(BvhTest, MedianTreeIsTheReferenceBuildNodeByNode) {
           const auto &a = t.node(i), &b = ref.nodes[i];
           ASSERT_EQ(a.count, b.count) << i;
           ASSERT_EQ(a.first, b.first) << i;
+          // Bit for bit: equal values and equal signs (no NaN), so -0 against +0 fails.
           for (int k = 0; k < 3; ++k) {
-            ASSERT_EQ(a.box.lo[k], b.box.lo[k]) << i;
-            ASSERT_EQ(a.box.hi[k], b.box.hi[k]) << i;
+            ASSERT_TRUE(a.box.lo[k] == b.box.lo[k] && std::signbit(a.box.lo[k]) == std::signbit(b.box.lo[k])) << i;
+            ASSERT_TRUE(a.box.hi[k] == b.box.hi[k] && std::signbit(a.box.hi[k]) == std::signbit(b.box.hi[k])) << i;
           }
         }
         for (uint32_t k = 0; k < n; ++k) {

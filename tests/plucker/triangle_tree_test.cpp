@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -242,4 +243,42 @@ TEST(PluckerSelection, CoplanarConvexPatches) {
     EXPECT_EQ(ids.size(), 9u);
     EXPECT_EQ(alone, 0u);
   }
+}
+
+TEST(PluckerSelection, TriangleBoxesAreTheCornerExtendsBitForBit) {
+  // Against AABB() extended by the three corners (the scalar std::min/std::max order):
+  // every coordinate's value and sign, so a tie of -0 and +0 kept the other way fails.
+  // Corners on a small grid with signed zeros (ties on every axis), repeated vertices and
+  // degenerate triangles, plus random floats; the last vertex of the array is used, so a
+  // read past a corner's 12 bytes would show under the sanitizers.
+  std::mt19937 rng(7);
+  TriangleSoup m;
+  auto grid = [&]() {
+    const float f = float(int(rng() % 5u) - 2);
+    return f == 0.0f && rng() % 2 ? -0.0f : f;
+  };
+  for (int i = 0; i < 300; ++i) m.vertices.push_back(Vec3f(grid(), grid(), grid()));
+  std::uniform_real_distribution<float> u(-1e3f, 1e3f);
+  for (int i = 0; i < 100; ++i) m.vertices.push_back(Vec3f(u(rng), u(rng), u(rng)));
+  const uint32_t nv = uint32_t(m.vertices.size());
+  auto vertex = [&]() { return uint32_t(rng() % nv); };
+  for (int i = 0; i < 2000; ++i) m.triangles.push_back({vertex(), i % 7 == 0 ? nv - 1 : vertex(), vertex()});
+  auto same = [](float a, float b) { return a == b && std::signbit(a) == std::signbit(b); };
+  auto expect_box = [&](const AABB& got, uint32_t t) {
+    AABB want;
+    for (int k = 0; k < 3; ++k) want.extend(m.corner(t, k));
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_TRUE(same(got.lo[a], want.lo[a])) << t << " axis " << a;
+      ASSERT_TRUE(same(got.hi[a], want.hi[a])) << t << " axis " << a;
+    }
+  };
+  const std::vector<AABB> all = triangle_boxes(m);
+  ASSERT_EQ(all.size(), m.size());
+  for (uint32_t t = 0; t < m.size(); ++t) expect_box(all[t], t);
+  std::vector<uint32_t> some;
+  for (uint32_t t = 0; t < m.size(); t += 3) some.push_back(t);
+  std::shuffle(some.begin(), some.end(), rng);
+  const std::vector<AABB> part = triangle_boxes(m, &some);
+  ASSERT_EQ(part.size(), some.size());
+  for (size_t i = 0; i < some.size(); ++i) expect_box(part[i], some[i]);
 }
