@@ -1,0 +1,96 @@
+// Shared-origin packet rays for SSV's receivers answered by rays (ray_solve, edge_rays):
+// the up to 64 segments from one receiver p to the light's sample points are walked
+// through a triangle BVH together, in groups of consecutive samples, each group culling
+// the nodes outside its frustum (apex p, around its segments) and testing 8 triangles of
+// a leaf at a time against each of its still-undecided segments.
+//
+// Guarantee: exact where it answers. A segment p q is reported blocked only when some
+// triangle's three edge functions w_e = (q - p) . N_e (N_a = B x C, N_b = C x A,
+// N_c = A x B with A, B, C the corners less p) certainly share one strict sign and the
+// plane crossing t = det / (w_a + w_b + w_c), det = A . (B x C), certainly lies strictly
+// inside (0, 1); reported visible only when every triangle whose leaf its group reaches
+// is certainly missed (two edge functions of strictly opposite signs, or the plane
+// certainly not crossed in (0, 1]) and the frustum culling is conservative. Each sign
+// is certified by Shewchuk's orient3d forward bound (each w_e and det is an orient3d of
+// float differences; see packet_caster.cpp). Every other segment is `undecided`: the
+// caller casts it (the verified Embree ray), so an answer differs from the ray's only
+// where the ray itself misjudges a relation within float rounding of a degeneracy.
+//
+// The AVX2 build of the leaf test (chosen at run time; VISGATE_SSV_NO_AVX2 selects the
+// SSE2 build) performs the same float operations in the same order (no FMA; the build
+// has -ffp-contract=off): the same bits, the same answers.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lib/accel/bvh.h"
+#include "lib/scene/scene.h"
+
+namespace visgate::ssv {
+
+class PacketCaster {
+ public:
+  // Largest coordinate magnitude it accepts (mesh, receivers, light points): products of
+  // three differences stay below 2^9 (2^30)^3 = 2^99, far from float overflow.
+  static constexpr float kCoordinateBound = 0x1p30f;
+  // Segments per group (one frustum and one walk of the BVH).
+  static constexpr int kGroup = 64;
+
+  // `soup` need not outlive the caster (the corners are copied into the leaves).
+  explicit PacketCaster(const TriangleSoup& soup);
+
+  // False when some corner lies beyond kCoordinateBound (or is not finite): cast nothing.
+  bool usable() const { return usable_; }
+
+  // The segments p -> q[k], k < n <= 64: bit k of `blocked` when certainly blocked, of
+  // `undecided` when not decided (neither bit: certainly visible). p and every q[k]
+  // must lie within kCoordinateBound (else every segment comes back undecided).
+  // `order`, a permutation of [0, n), groups the segments: order[0..15] first, and so on
+  // (nearby light points together make narrow groups; any order gives the same answers).
+  void cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, int n, uint64_t& blocked,
+            uint64_t& undecided) const;
+
+  // Work counters of the calls so far on this thread (box tests and leaf tests of a
+  // group), for profiles and tests.
+  struct Counts {
+    uint64_t nodes = 0, leaves = 0;
+  };
+  static Counts& thread_counts();
+
+  // Leaf of up to 8 triangles, corners as 8 lanes per coordinate (a.x, a.y, a.z, b.x,
+  // ..., c.z); unused lanes repeat the last triangle and are masked by `count`.
+  struct alignas(32) Leaf {
+    float v[9][8];
+    uint32_t count;
+  };
+
+ private:
+  accel::Bvh<float> bvh_;
+  std::vector<Leaf> leaves_;
+  std::vector<uint32_t> leaf_of_node_;  // per BVH node: its Leaf (leaves only)
+  bool usable_ = true;
+};
+
+// A group's segments p -> p + d[k], k < kGroup, as the kernels read them: d = fl(q - p),
+// its reciprocals, dmax[i] >= |d[k].i| over the group, and `slab`: the segments whose
+// every |d.i| is at least 2^-60 (the box test's range; the others pass every box).
+struct alignas(32) PacketGroup {
+  float dx[PacketCaster::kGroup], dy[PacketCaster::kGroup], dz[PacketCaster::kGroup];
+  float ix[PacketCaster::kGroup], iy[PacketCaster::kGroup], iz[PacketCaster::kGroup];
+  float dmax[3];
+  uint64_t slab;
+};
+
+// The box test, exposed for tests: the segments of `mask` whose exact segment p q may
+// meet the box [lo, hi] (conservative: never drops one that meets it).
+uint64_t packet_box_test(const Vec3f& lo, const Vec3f& hi, const Vec3f& p, const PacketGroup& g, uint64_t mask);
+
+// The leaf test, exposed for tests: the segments of `active` against the leaf's
+// triangles. Returns the certainly blocked segments; adds to `undecided` the segments
+// neither blocked nor certainly missing every triangle. `bound_scale` multiplies the
+// certification bound (1 in production; tests set 0 to show that the bound matters).
+uint64_t packet_leaf_test(const PacketCaster::Leaf& leaf, const Vec3f& p, const PacketGroup& g, uint64_t active,
+                          uint64_t& undecided, float bound_scale = 1.0f);
+
+}  // namespace visgate::ssv
