@@ -29,8 +29,12 @@ struct PacketWalk {
 #pragma GCC target("avx2")
 namespace avx2_build {
 #define VG_PACKET_MOVEMASK(m) _mm256_movemask_ps(reinterpret_cast<__m256>(m))
+#define VG_MIN8(a, b) _mm256_min_ps(a, b)
+#define VG_MAX8(a, b) _mm256_max_ps(a, b)
 #include "lib/ssv/packet_leaf_kernel.inc"
 #undef VG_PACKET_MOVEMASK
+#undef VG_MIN8
+#undef VG_MAX8
 }  // namespace avx2_build
 #pragma GCC pop_options
 #endif
@@ -45,8 +49,14 @@ namespace default_build {
 #define VG_PACKET_MOVEMASK(m)                                                                            \
   ((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8) | (m[4] & 16) | (m[5] & 32) | (m[6] & 64) | (m[7] & 128))
 #endif
+// minps / maxps lane by lane: a < b ? a : b and a > b ? a : b (the second operand where
+// either is NaN), which the AVX2 build's _mm256_min_ps / _mm256_max_ps compute.
+#define VG_MIN8(a, b) ((a) < (b) ? (a) : (b))
+#define VG_MAX8(a, b) ((a) > (b) ? (a) : (b))
 #include "lib/ssv/packet_leaf_kernel.inc"
 #undef VG_PACKET_MOVEMASK
+#undef VG_MIN8
+#undef VG_MAX8
 }  // namespace default_build
 
 bool use_avx2() {
