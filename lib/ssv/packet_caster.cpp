@@ -18,10 +18,8 @@ namespace {
 
 // What walk_group reads of the caster.
 struct PacketWalk {
-  const accel::Bvh<float>::Node* nodes;
-  uint32_t leaf_size;
+  const PacketCaster::Node* nodes;
   const PacketCaster::Leaf* leaves;
-  const uint32_t* leaf_of_node;
 };
 
 #if defined(VG_SSV_PACKET_AVX2)
@@ -68,8 +66,7 @@ bool use_avx2() {
 #endif
 }
 
-bool within(const Vec3f& v) {
-  const float b = PacketCaster::kCoordinateBound;
+bool within(const Vec3f& v, float b) {
   return std::fabs(v.x) <= b && std::fabs(v.y) <= b && std::fabs(v.z) <= b;  // false for NaN
 }
 
@@ -95,28 +92,37 @@ PacketCaster::Counts& PacketCaster::thread_counts() {
   return counts;
 }
 
-PacketCaster::PacketCaster(const TriangleSoup& soup) {
+PacketCaster::PacketCaster(const TriangleSoup& soup, float bound) : bound_(bound) {
   std::vector<AABB> boxes(soup.size());
   for (size_t t = 0; t < soup.size(); ++t) {
     AABB b;
     for (int k = 0; k < 3; ++k) {
       const Vec3f v = soup.corner(t, k);
-      usable_ = usable_ && within(v);
+      bound_ = std::max(bound_, std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))));
       b.extend(v);
     }
     boxes[t] = b;
   }
+  usable_ = bound_ <= kCoordinateBound;  // false for NaN
   if (!usable_ || boxes.empty()) return;
   // Leaves of at most 8 triangles: one 8-lane test per leaf and segment.
-  bvh_ = accel::Bvh<float>(boxes, accel::BuildRule{accel::Split::MedianAxis, 8, false});
-  leaf_of_node_.assign(bvh_.node_count(), 0);
-  for (uint32_t i = 0; i < bvh_.node_count(); ++i) {
-    const auto& nd = bvh_.node(i);
-    if (!bvh_.is_leaf(nd)) continue;
-    leaf_of_node_[i] = uint32_t(leaves_.size());
+  const accel::Bvh<float> bvh(boxes, accel::BuildRule{accel::Split::MedianAxis, 8, false});
+  // The boxes grown by 2^-19 bound (box_test's error bound); growing them by delta
+  // rounds each bound by at most 2^-24 (bound + delta), so they grow by at least 0.9 delta.
+  const float delta = 0x1p-19f * bound_;
+  nodes_.resize(bvh.node_count());
+  for (uint32_t i = 0; i < bvh.node_count(); ++i) {
+    const auto& nd = bvh.node(i);
+    Node& out = nodes_[i];
+    out.box = AABB(nd.box.lo - Vec3f(delta, delta, delta), nd.box.hi + Vec3f(delta, delta, delta));
+    if (!bvh.is_leaf(nd)) {
+      out.first = bvh.right(i);
+      continue;
+    }
+    out.first = uint32_t(leaves_.size());
     Leaf leaf{};
-    const auto items = bvh_.leaf_items(nd);
-    leaf.count = uint32_t(items.size());
+    const auto items = bvh.leaf_items(nd);
+    leaf.count = out.count = uint32_t(items.size());
     for (int lane = 0; lane < 8; ++lane) {
       const uint32_t t = items[std::min<size_t>(size_t(lane), items.size() - 1)];
       for (int k = 0; k < 3; ++k) {
@@ -132,13 +138,13 @@ void PacketCaster::cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, in
                         uint64_t& undecided) const {
   blocked = 0, undecided = 0;
   const uint64_t all = n >= 64 ? ~uint64_t(0) : (uint64_t(1) << n) - 1;
-  if (!usable_ || !within(p)) {
+  if (!usable_ || !within(p, bound_)) {
     undecided = all;
     return;
   }
-  if (bvh_.empty()) return;
+  if (nodes_.empty()) return;
   Counts counts;
-  const PacketWalk walk{&bvh_.node(0), bvh_.leaf_size(), leaves_.data(), leaf_of_node_.data()};
+  const PacketWalk walk{nodes_.data(), leaves_.data()};
   const bool avx2 = use_avx2();
   for (int g0 = 0; g0 < n; g0 += kGroup) {
     const int m = std::min(kGroup, n - g0);
@@ -146,7 +152,7 @@ void PacketCaster::cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, in
     uint64_t active = 0, undec = 0;
     for (int k = 0; k < m; ++k) {
       const Vec3f& qk = q[order[g0 + k]];
-      if (!within(qk) || qk == p) {
+      if (!within(qk, bound_) || qk == p) {
         undec |= uint64_t(1) << k;  // beyond the bound, or no segment: the caller's ray decides
         continue;
       }

@@ -38,14 +38,17 @@ class PacketCaster {
   static constexpr int kGroup = 64;
 
   // `soup` need not outlive the caster (the corners are copied into the leaves).
-  explicit PacketCaster(const TriangleSoup& soup);
+  // `bound`: the largest coordinate magnitude of the segments' end points to come (the
+  // caster takes the larger of it and the mesh's; a segment beyond it comes back
+  // undecided). The boxes' error bound grows with it.
+  PacketCaster(const TriangleSoup& soup, float bound);
 
-  // False when some corner lies beyond kCoordinateBound (or is not finite): cast nothing.
+  // False when the bound exceeds kCoordinateBound (or is not finite): cast nothing.
   bool usable() const { return usable_; }
 
   // The segments p -> q[k], k < n <= 64: bit k of `blocked` when certainly blocked, of
-  // `undecided` when not decided (neither bit: certainly visible). p and every q[k]
-  // must lie within kCoordinateBound (else every segment comes back undecided).
+  // `undecided` when not decided (neither bit: certainly visible). A segment with an end
+  // point beyond the bound comes back undecided.
   // `order`, a permutation of [0, n), groups the segments: order[0..15] first, and so on
   // (nearby light points together make narrow groups; any order gives the same answers).
   void cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, int n, uint64_t& blocked,
@@ -64,11 +67,20 @@ class PacketCaster {
     float v[9][8];
     uint32_t count;
   };
+  // BVH node in pre-order (the left child of inner node i is i + 1; accel::Bvh's shape,
+  // median splits, leaves of at most 8), its box grown by 2^-19 bound (box_test).
+  struct Node {
+    AABB box;
+    uint32_t first = 0;  // inner: the right child; leaf: its Leaf
+    uint32_t count = 0;  // leaf: its triangles (1 to 8); inner: 0
+  };
+  // Depth of the walk's stack: accel::Bvh halves its items, at most 33 levels.
+  static constexpr size_t kMaxStack = accel::Bvh<float>::kMaxStack;
 
  private:
-  accel::Bvh<float> bvh_;
+  std::vector<Node> nodes_;
   std::vector<Leaf> leaves_;
-  std::vector<uint32_t> leaf_of_node_;  // per BVH node: its Leaf (leaves only)
+  float bound_ = 0.0f;
   bool usable_ = true;
 };
 
@@ -82,8 +94,10 @@ struct alignas(32) PacketGroup {
   uint64_t slab;
 };
 
-// The box test, exposed for tests: the segments of `mask` whose exact segment p q may
-// meet the box [lo, hi] (conservative: never drops one that meets it).
+// The box test, exposed for tests: the segments of `mask` that may meet the box
+// [lo, hi], a box grown by 2^-19 B from the one to test (PacketCaster::Node), B at least
+// every coordinate of the box, p and the q: then no segment p q that meets the
+// original box is dropped.
 uint64_t packet_box_test(const Vec3f& lo, const Vec3f& hi, const Vec3f& p, const PacketGroup& g, uint64_t mask);
 
 // The leaf test, exposed for tests: the segments of `active` against the leaf's

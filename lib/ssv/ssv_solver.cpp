@@ -1175,7 +1175,7 @@ SolveResult SsvSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   Caster embree(blockers, use_quads);
   // packet_rays: the receivers answered by their rays where the probe chose rays.
   std::optional<PacketCaster> packets;
-  if (packet_rays && rays_chosen) packets.emplace(blockers);
+  if (packet_rays && rays_chosen) packets.emplace(blockers, float(M));
   const double embree_seconds = seconds_between(tb0, Clock::now());
   const SceneSetup sc{scene, embree, edges, eps, pm, tol, packets && packets->usable() ? &*packets : nullptr};
   const ReceiverTree& receiver_tree = cull.tree;
