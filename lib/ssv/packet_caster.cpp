@@ -87,11 +87,6 @@ uint64_t packet_box_test(const Vec3f& lo, const Vec3f& hi, const Vec3f& p, const
   return default_build::box_test_entry(lo, hi, p, g, mask);
 }
 
-PacketCaster::Counts& PacketCaster::thread_counts() {
-  static thread_local Counts counts;
-  return counts;
-}
-
 PacketCaster::PacketCaster(const TriangleSoup& soup, float bound) : bound_(bound) {
   std::vector<AABB> boxes(soup.size());
   for (size_t t = 0; t < soup.size(); ++t) {
@@ -143,7 +138,6 @@ void PacketCaster::cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, in
     return;
   }
   if (nodes_.empty()) return;
-  Counts counts;
   const PacketWalk walk{nodes_.data(), leaves_.data()};
   const bool avx2 = use_avx2();
   for (int g0 = 0; g0 < n; g0 += kGroup) {
@@ -172,18 +166,16 @@ void PacketCaster::cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, in
     uint64_t group_blocked;
 #if defined(VG_SSV_PACKET_AVX2)
     if (avx2)
-      group_blocked = avx2_build::walk_group(walk, p, g, active, undec, counts);
+      group_blocked = avx2_build::walk_group(walk, p, g, active, undec);
     else
 #endif
-      group_blocked = default_build::walk_group(walk, p, g, active, undec, counts);
+      group_blocked = default_build::walk_group(walk, p, g, active, undec);
     undec &= ~group_blocked;
     for (int k = 0; k < m; ++k) {
       blocked |= uint64_t(group_blocked >> k & 1u) << order[g0 + k];
       undecided |= uint64_t(undec >> k & 1u) << order[g0 + k];
     }
   }
-  Counts& total = thread_counts();
-  total.nodes += counts.nodes, total.leaves += counts.leaves;
 }
 
 }  // namespace visgate::ssv

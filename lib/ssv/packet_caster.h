@@ -1,22 +1,24 @@
 // Shared-origin packet rays for SSV's receivers answered by rays (ray_solve, edge_rays):
-// the up to 64 segments from one receiver p to the light's sample points are walked
-// through a triangle BVH together, in groups of consecutive samples, each group culling
-// the nodes outside its frustum (apex p, around its segments) and testing 8 triangles of
-// a leaf at a time against each of its still-undecided segments.
+// the up to 64 segments from one receiver p to the light's sample points walk a triangle
+// BVH together, each node with the mask of the segments whose slab test meets its box,
+// each leaf testing its 8 triangles at a time against each of those segments (the edge
+// functions' normals and the plane are computed once per leaf and receiver).
 //
 // Guarantee: exact where it answers. A segment p q is reported blocked only when some
 // triangle's three edge functions w_e = (q - p) . N_e (N_a = B x C, N_b = C x A,
 // N_c = A x B with A, B, C the corners less p) certainly share one strict sign and the
 // plane crossing t = det / (w_a + w_b + w_c), det = A . (B x C), certainly lies strictly
-// inside (0, 1); reported visible only when every triangle whose leaf its group reaches
-// is certainly missed (two edge functions of strictly opposite signs, or the plane
-// certainly not crossed in (0, 1]) and the frustum culling is conservative. Each sign
+// inside (0, 1); reported visible only when every triangle in a leaf whose box the
+// segment may meet is certainly missed (two edge functions of strictly opposite signs,
+// or the crossing certainly outside (0, 1]), the box test being conservative. Each sign
 // is certified by Shewchuk's orient3d forward bound (each w_e and det is an orient3d of
-// float differences; see packet_caster.cpp). Every other segment is `undecided`: the
+// float differences; packet_leaf_kernel.inc). Every other segment is `undecided`: the
 // caller casts it (the verified Embree ray), so an answer differs from the ray's only
 // where the ray itself misjudges a relation within float rounding of a degeneracy.
+// Segments along an edge shared by two triangles stay undecided (neither triangle alone
+// certifies them); foliage: 24 of 65,536.
 //
-// The AVX2 build of the leaf test (chosen at run time; VISGATE_SSV_NO_AVX2 selects the
+// The AVX2 build of the kernels (chosen at run time; VISGATE_SSV_NO_AVX2 selects the
 // SSE2 build) performs the same float operations in the same order (no FMA; the build
 // has -ffp-contract=off): the same bits, the same answers.
 #pragma once
@@ -34,7 +36,7 @@ class PacketCaster {
   // Largest coordinate magnitude it accepts (mesh, receivers, light points): products of
   // three differences stay below 2^9 (2^30)^3 = 2^99, far from float overflow.
   static constexpr float kCoordinateBound = 0x1p30f;
-  // Segments per group (one frustum and one walk of the BVH).
+  // Segments per walk of the BVH (the masks' width).
   static constexpr int kGroup = 64;
 
   // `soup` need not outlive the caster (the corners are copied into the leaves).
@@ -49,17 +51,11 @@ class PacketCaster {
   // The segments p -> q[k], k < n <= 64: bit k of `blocked` when certainly blocked, of
   // `undecided` when not decided (neither bit: certainly visible). A segment with an end
   // point beyond the bound comes back undecided.
-  // `order`, a permutation of [0, n), groups the segments: order[0..15] first, and so on
-  // (nearby light points together make narrow groups; any order gives the same answers).
+  // `order`, a permutation of [0, n), places the segments in the box test's 8-lane runs:
+  // order[0..7] first, and so on (nearby light points together let a run that misses a
+  // box skip it whole; any order gives the same answers).
   void cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, int n, uint64_t& blocked,
             uint64_t& undecided) const;
-
-  // Work counters of the calls so far on this thread (box tests and leaf tests of a
-  // group), for profiles and tests.
-  struct Counts {
-    uint64_t nodes = 0, leaves = 0;
-  };
-  static Counts& thread_counts();
 
   // Leaf of up to 8 triangles, corners as 8 lanes per coordinate (a.x, a.y, a.z, b.x,
   // ..., c.z); unused lanes repeat the last triangle and are masked by `count`.
