@@ -57,14 +57,10 @@ namespace default_build {
 #undef VG_MAX8
 }  // namespace default_build
 
-bool use_avx2() {
 #if defined(VG_SSV_PACKET_AVX2)
-  static const bool avx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
-  return avx2;
-#else
-  return false;
+// The AVX2 build where the processor has it and VISGATE_SSV_NO_AVX2 is unset.
+const bool kPacketAvx2 = avx2_enabled("VISGATE_SSV_NO_AVX2");
 #endif
-}
 
 bool within(const Vec3f& v, float b) {
   return std::fabs(v.x) <= b && std::fabs(v.y) <= b && std::fabs(v.z) <= b;  // false for NaN
@@ -75,14 +71,14 @@ bool within(const Vec3f& v, float b) {
 uint64_t packet_leaf_test(const PacketCaster::Leaf& leaf, const Vec3f& p, const PacketGroup& g, uint64_t active,
                           uint64_t& undecided, float bound_scale) {
 #if defined(VG_SSV_PACKET_AVX2)
-  if (use_avx2()) return avx2_build::leaf_test_entry(leaf, p, g, active, undecided, bound_scale);
+  if (kPacketAvx2) return avx2_build::leaf_test_entry(leaf, p, g, active, undecided, bound_scale);
 #endif
   return default_build::leaf_test_entry(leaf, p, g, active, undecided, bound_scale);
 }
 
 uint64_t packet_box_test(const Vec3f& lo, const Vec3f& hi, const Vec3f& p, const PacketGroup& g, uint64_t mask) {
 #if defined(VG_SSV_PACKET_AVX2)
-  if (use_avx2()) return avx2_build::box_test_entry(lo, hi, p, g, mask);
+  if (kPacketAvx2) return avx2_build::box_test_entry(lo, hi, p, g, mask);
 #endif
   return default_build::box_test_entry(lo, hi, p, g, mask);
 }
@@ -139,7 +135,6 @@ void PacketCaster::cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, in
   }
   if (nodes_.empty()) return;
   const PacketWalk walk{nodes_.data(), leaves_.data()};
-  const bool avx2 = use_avx2();
   for (int g0 = 0; g0 < n; g0 += kGroup) {
     const int m = std::min(kGroup, n - g0);
     PacketGroup g{};
@@ -165,7 +160,7 @@ void PacketCaster::cast(const Vec3f& p, const Vec3f* q, const uint8_t* order, in
     }
     uint64_t group_blocked;
 #if defined(VG_SSV_PACKET_AVX2)
-    if (avx2)
+    if (kPacketAvx2)
       group_blocked = avx2_build::walk_group(walk, p, g, active, undec);
     else
 #endif
