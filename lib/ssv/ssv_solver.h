@@ -79,7 +79,7 @@
 // unclear_relations, ray_disputes, slivers_dropped, the culling's occluders,
 // occluded_relations, hidden_lights, edges_outside_shafts, scattered_candidates,
 // edge_index (1 when the edge hierarchy answered), ray_solve (1 when every receiver was
-// answered by its rays: docs/methods/ssv.md, "Solves by rays") and occluder_seconds, plus prepare_seconds (mesh preparation, excluded from `seconds`).
+// answered by its rays: docs/methods/ssv.md, "Solves by rays"), packet_undecided (segments packet_rays left to the verified ray) and occluder_seconds, plus prepare_seconds (mesh preparation, excluded from `seconds`).
 #pragma once
 
 #include "lib/solver.h"
@@ -97,6 +97,7 @@ class SsvSolver : public Solver {
             {"edge_rays", "answer a receiver and light by one ray per sample (Embree packets, verified hits) when it has more than edge_ray_limit candidate edges per sample: their integration would cost more than the rays; the edge walk stops there", {"on", "off"}},
             {"edge_ray_limit", "edge_rays' limit in candidate edges per sample (default 4)", {}},
             {"ray_solve", "auto (with edge_rays=on and wedge_index=auto): when edge_rays' probe (the sampled count, or the edge tree's capped walk on meshes of at least 16 edges per receiver) finds at least half of its receivers past edge_ray_limit, answer every receiver by its rays (Embree packets, verified hits) without building or walking any index; off: decide receiver by receiver", {"auto", "off"}},
+            {"packet_rays", "answer the receivers that ray_solve or edge_rays give to rays (when the probe chose rays) by shared-origin packets: 16 segments from the receiver walk a triangle BVH together, 8 triangles tested per step with certified signs (packet_caster.h); the segments it cannot certify take the verified Embree ray; off: Embree packets for every segment", {"on", "off"}},
             {"embree_quads", "pair triangles that share an edge into Embree quads for the rays' scene: half the primitives to build, the same answers (embree_scene.h); auto: for meshes of at least one triangle per receiver and light", {"auto", "on", "off"}}};
   }
  protected:
