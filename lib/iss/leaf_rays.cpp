@@ -283,6 +283,88 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
   }
   return false;
 }
+// The same certificates over a box Q from its centre and half extents rather than its
+// corners (cell_box: bx = centre c, half extents h, both relative to p, and the bound
+// factor k). Each w(q) = (q - p).N is affine in q, so over Q it lies within
+// w(c) +- h.|N|: the exact range, the one the corners give, at about the cost of two
+// corners instead of four or eight. Rounding: |w~(c) - w(c)| <= n_c em (the point test's
+// bound, n_c = max |c_i|) and |N~_i - N_i| <= em / 4 (the 15th round's bound on the two
+// products and the difference of N's components), so over Q
+//   |w(q) - w~(c)| <= n_c em + sum_i h_i (|N~_i| + em / 4) = k em + h.|N~| =: th,
+// with h and k inflated by 64 eps (cell_box), which covers the roundings of the
+// differences that give h, of the three products and sums of th, and of the sums of
+// th below. Miss: one pair of w strictly opposite over Q (w~ > th and w~ < -th); with
+// kSide also Q strictly on p's side of the plane: det - sum w has det's strict sign
+// over Q, certified as the corner test does with 3e replaced by T, the bound of sum w
+// over Q from its gradient s = N_a + N_b + N_c: the computed s~ is within 3 em / 4 +
+// 2.1 eps sum |N~| per component, so |sum w(q) - sum w~(c)| <= 3 k em + h.|s~| +
+// 2.1 eps (th_a + th_b + th_c), taken with 8 eps. Block: every w of det's strict sign
+// over Q and |det| + edet + T < sum |w~| (1 - 8 eps) (the crossing parameter inside
+// (0, 1) at every q). The pyramid (pyr) as in cell_classify. Returns and out as
+// cell_classify.
+template <class Lanes, bool kSide>
+__attribute__((always_inline)) inline bool cell_box_body(const double* t, size_t kp, const double* bx,
+                                                         const double* pyr, uint8_t* out) {
+  const double cx = bx[0], cy = bx[1], cz = bx[2], hx = bx[3], hy = bx[4], hz = bx[5], kk = bx[6];
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
+    const V4 tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
+    const V4 tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
+    const V4 wa = cx * tbx + cy * tby + cz * tbz;
+    const V4 wb = cx * tcx + cy * tcy + cz * tcz;
+    const V4 wc = cx * tax + cy * tay + cz * taz;
+    const V4 e = kk * load4(t + kEm * kp + k);
+    const V4 tha = e + (hx * abs4(tbx) + hy * abs4(tby) + hz * abs4(tbz));
+    const V4 thb = e + (hx * abs4(tcx) + hy * abs4(tcy) + hz * abs4(tcz));
+    const V4 thc = e + (hx * abs4(tax) + hy * abs4(tay) + hz * abs4(taz));
+    const M4 apos = wa > tha, aneg = wa < -tha, bpos = wb > thb, bneg = wb < -thb, cpos = wc > thc,
+             cneg = wc < -thc;
+    M4 miss = (apos & (bneg | cneg)) | (bpos & (aneg | cneg)) | (cpos & (aneg | bneg));
+    const V4 det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
+    const M4 pos = det > edet, neg = det < -edet;
+    // The bound of sum w over Q (the plane side and the block): its gradient s = sum N.
+    auto sum_bound = [&]() {
+      const V4 sx = tbx + tcx + tax, sy = tby + tcy + tay, sz = tbz + tcz + taz;
+      return 3.0 * e + (hx * abs4(sx) + hy * abs4(sy) + hz * abs4(sz)) + (8.0 * kEps) * (tha + thb + thc);
+    };
+    if constexpr (kSide) {
+      if (!Lanes::all(miss)) {
+        const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc), T = sum_bound();
+        const V4 dq = det - (wa + wb + wc);
+        miss |= (pos & (dq > edet + T + (4.0 * kEps) * (sum_abs + det))) |
+                (neg & (dq < -(edet + T + (4.0 * kEps) * (sum_abs - det))));
+      }
+    }
+    if (pyr && !Lanes::all(miss)) {
+      const V4 m = load4(t + kM * kp + k);
+      const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
+      const V4 bx2 = load4(t + kVbx * kp + k), by = load4(t + kVby * kp + k), bz = load4(t + kVbz * kp + k);
+      const V4 cx2 = load4(t + kVcx * kp + k), cy2 = load4(t + kVcy * kp + k), cz2 = load4(t + kVcz * kp + k);
+      for (int f = 0; f < 4; ++f) {
+        const double* pl = pyr + 4 * f;
+        const V4 ep = m * pl[3];
+        miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx2 * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
+                ((cx2 * pl[0] + cy2 * pl[1] + cz2 * pl[2]) < -ep);
+      }
+    }
+    const M4 maybe = (pos & apos & bpos & cpos) | (neg & aneg & bneg & cneg);
+    if (Lanes::any(maybe)) {
+      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc), T = sum_bound();
+      const V4 lim = sum_abs - (8.0 * kEps) * sum_abs;
+      const M4 hit = (pos & ((det + edet) + T < lim)) | (neg & ((edet - det) + T < lim));
+      if (Lanes::any(maybe & hit)) return true;
+    }
+    out[k >> 2] = uint8_t((miss[0] & 1) | (miss[1] & 2) | (miss[2] & 4) | (miss[3] & 8));
+  }
+  return false;
+}
+bool cell_box_classify_default(const double* t, size_t kp, const double* bx, const double* pyr, uint8_t* out) {
+  return cell_box_body<LanesDefault, true>(t, kp, bx, pyr, out);
+}
+bool cell_box_pairs_default(const double* t, size_t kp, const double* bx, uint8_t* out) {
+  return cell_box_body<LanesDefault, false>(t, kp, bx, nullptr, out);
+}
+
 // The connected-surface certificate of a mixed cell (Traversal::cell_patch_blocks): per
 // candidate k, out[k] has bit 0 when the candidate's plane certainly separates p from
 // every corner of Q (det of one strict sign, det - sum w of the other at every corner);
@@ -352,6 +434,14 @@ __attribute__((target("avx2"))) void cell_patch_flags_avx2(const double* t, size
                                                             uint8_t* out) {
   cell_patch_flags_body(t, kp, d, nc, out);
 }
+__attribute__((target("avx2"), flatten)) bool cell_box_classify_avx2(const double* t, size_t kp, const double* bx,
+                                                                      const double* pyr, uint8_t* out) {
+  return cell_box_body<LanesAvx2, true>(t, kp, bx, pyr, out);
+}
+__attribute__((target("avx2"), flatten)) bool cell_box_pairs_avx2(const double* t, size_t kp, const double* bx,
+                                                                   uint8_t* out) {
+  return cell_box_body<LanesAvx2, false>(t, kp, bx, nullptr, out);
+}
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
 bool have_avx2() {
@@ -395,6 +485,20 @@ bool cell_pairs(const double* t, size_t kp, const double* d, int nc, uint8_t* ou
   if (have_avx2()) return cell_pairs_avx2(t, kp, d, nc, out);
 #endif
   return cell_pairs_default(t, kp, d, nc, out);
+}
+
+// cell_classify and cell_pairs over a box from its centre (cell_box_body; bx: cell_box).
+bool cell_box_classify(const double* t, size_t kp, const double* bx, const double* pyr, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_box_classify_avx2(t, kp, bx, pyr, out);
+#endif
+  return cell_box_classify_default(t, kp, bx, pyr, out);
+}
+bool cell_box_pairs(const double* t, size_t kp, const double* bx, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_box_pairs_avx2(t, kp, bx, out);
+#endif
+  return cell_box_pairs_default(t, kp, bx, out);
 }
 
 void cell_patch_flags(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
@@ -471,6 +575,28 @@ int cell_corners(const AABB& box, const double* od, double* cd) {
         d[3] = std::max(std::max(a[0][x], a[1][y]), a[2][z]);
       }
   return nc;
+}
+
+// cell_box_body's box terms of `box` from the origin od: bx[0..2] the centre c and
+// bx[3..5] the half extents h, relative to od (the corners' differences as cell_corners
+// takes them), h inflated so that |q_i - od_i - c_i| <= h_i for every q in the box
+// (each difference rounded by at most eps of itself; the 2 eps max(|lo|, |hi|) term
+// covers the box's differences from od should they round), and bx[6] = k = n_c +
+// sum h_i / 4 (n_c = max |c_i|), both by a factor 1 + 64 eps that also covers the
+// roundings of cell_box_body's th (section there).
+void cell_box(const AABB& box, const double* od, double* bx) {
+  constexpr double kUp = 1.0 + 64.0 * kEps;
+  double n = 0.0, hs = 0.0;
+  for (int x = 0; x < 3; ++x) {
+    const double lo = double(box.lo[x]) - od[x], hi = double(box.hi[x]) - od[x];
+    const double c = 0.5 * (lo + hi);
+    const double h = std::max(c - lo, hi - c) * kUp + (2.0 * kEps) * std::max(std::abs(lo), std::abs(hi));
+    bx[x] = c;
+    bx[3 + x] = h;
+    n = std::max(n, std::abs(c));
+    hs += h;
+  }
+  bx[6] = (n + 0.25 * hs) * kUp;
 }
 
 // A box flat on one axis (nc == 4 corners cd): the pyramid from the origin p over its
@@ -988,13 +1114,15 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   // The node box's corners and, for a flat box, the pyramid over it (cell_pyramid: a
   // triangle whose three vertices are certainly negative for one side plane misses
   // every segment from p into the box; cell_classify's pyr).
-  double cd[4 * 8], pyr[16];
+  double cd[4 * 8], pyr[16], bx[7];
   const int nc = kc > 0 ? cell_corners(ln(c).box, od, cd) : 0;
   const bool use_pyr = kc > 0 && cell_pyramid(cd, nc, pyr);
   const TreeNode& Q = ln(c);
   n_cells_ += 1;
   cell_out_.resize(kp / 4);
-  if (kc > 0 && cell_classify(lev.terms.data(), kp, cd, nc, use_pyr ? pyr : nullptr, cell_out_.data())) {
+  if (kc > 0 && p_.cell_centre) cell_box(Q.box, od, bx);
+  if (kc > 0 && (p_.cell_centre ? cell_box_classify(lev.terms.data(), kp, bx, use_pyr ? pyr : nullptr, cell_out_.data())
+                                : cell_classify(lev.terms.data(), kp, cd, nc, use_pyr ? pyr : nullptr, cell_out_.data()))) {
     n_blocked_shaft_ += double(Q.size());  // bits start blocked
     n_cell_decided_ += double(Q.size());
     return;
@@ -1079,11 +1207,17 @@ void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const A
                            uint32_t i) {
   const auto& lo = ltree_->order();
   double cd[4 * 8];
-  const int nc = cell_corners(box, od, cd);
   n_cells_ += 1;
   cell_out_.resize(lev.kp / 4);
   const double n = double(e - b);
-  if (cell_pairs(lev.terms.data(), lev.kp, cd, nc, cell_out_.data())) {
+  bool blocked;
+  if (p_.cell_group_centre) {
+    cell_box(box, od, cd);
+    blocked = cell_box_pairs(lev.terms.data(), lev.kp, cd, cell_out_.data());
+  } else {
+    blocked = cell_pairs(lev.terms.data(), lev.kp, cd, cell_corners(box, od, cd), cell_out_.data());
+  }
+  if (blocked) {
     n_blocked_shaft_ += n;
     n_cell_decided_ += n;
     n_group_decided_ += n;

@@ -163,6 +163,11 @@ struct Params {
   int cell_group_samples = 16;
   int cell_group_min = 16;
   int cell_group_candidates = 24;
+  // Cells' certificates over a box from its centre and half extents (leaf_rays.cpp
+  // cell_box_body) rather than at its corners: the node cells (cell_centre) and the
+  // sample groups (cell_group_centre).
+  bool cell_centre = true;
+  bool cell_group_centre = true;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
