@@ -1187,35 +1187,38 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   cell_samples_.clear();
   const uint32_t g = uint32_t(p_.cell_group_samples);
   const std::vector<AABB>& boxes = cell_group_boxes(c);
+  const size_t h = cell_group_heap_size();
   for (uint32_t b = QL.begin, k = 0; b < QL.end; b += g, ++k)
-    cell_group(next, b, std::min(QL.end, b + g), boxes[k], od, i);
+    cell_group(next, b, std::min(QL.end, b + g), boxes.data() + k * h, 0, od, i);
   cell_direct(next, cell_samples_.data(), uint32_t(cell_samples_.size()), od, prefix, i);
 }
 
 // A group of a mixed cell's samples (cell_groups: light-tree order positions b..e of the
-// cell's light node, at most cell_group_samples of them): a cell at `box`, the union of
-// their jitter boxes, which holds every relation's light point, against the cell's mixed
-// candidates lev by cell_pairs (cell_classify's certificates at the box corners, linear
-// in the light point: blocked when one candidate blocks every segment from p into the
-// box, visible when each misses them all; the candidates lev leaves out miss every
-// segment into the whole node box). Else, above cell_group_min samples, its two halves
-// the same way, else its samples go to cell_samples_ for the direct test. A node's order
-// below packet size is order_for_packets' (halves at multiples of 8 on the longest
-// axis), so groups of 8, 16 or 32 from the node's start are cells of the light's grid;
-// any other grouping is as exact, only looser.
-void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od,
-                           uint32_t i) {
+// cell's light node, at most cell_group_samples of them): a cell at the union of their
+// jitter boxes (heap[node]), which holds every relation's light point, against the
+// cell's mixed candidates lev by cell_pairs (cell_classify's certificates over the box:
+// blocked when one candidate blocks every segment from p into the box, visible when
+// each misses them all; the candidates lev leaves out miss every segment into the whole
+// node box). Else, above cell_group_min samples, its two halves the same way (heap
+// nodes 2 node + 1 and 2 node + 2), else its samples go to cell_samples_ for the direct
+// test. A node's order below packet size is order_for_packets' (halves at multiples of 8
+// on the longest axis), so groups of 8, 16 or 32 from the node's start are cells of the
+// light's grid; any other grouping is as exact, only looser.
+void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB* heap, size_t node,
+                           const double* od, uint32_t i) {
   const auto& lo = ltree_->order();
+  const AABB& box = heap[node];
   double cd[4 * 8];
   n_cells_ += 1;
   cell_out_.resize(lev.kp / 4);
+  uint8_t* out = cell_out_.data();
   const double n = double(e - b);
   bool blocked;
   if (p_.cell_group_centre) {
     cell_box(box, od, cd);
-    blocked = cell_box_pairs(lev.terms.data(), lev.kp, cd, cell_out_.data());
+    blocked = cell_box_pairs(lev.terms.data(), lev.kp, cd, out);
   } else {
-    blocked = cell_pairs(lev.terms.data(), lev.kp, cd, cell_corners(box, od, cd), cell_out_.data());
+    blocked = cell_pairs(lev.terms.data(), lev.kp, cd, cell_corners(box, od, cd), out);
   }
   if (blocked) {
     n_blocked_shaft_ += n;
@@ -1224,7 +1227,7 @@ void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const A
     return;
   }
   bool all_miss = true;
-  for (size_t k = 0; k < lev.count && all_miss; ++k) all_miss = ((cell_out_[k >> 2] >> (k & 3)) & 1) != 0;
+  for (size_t k = 0; k < lev.count && all_miss; ++k) all_miss = ((out[k >> 2] >> (k & 3)) & 1) != 0;
   if (all_miss) {
     ReceiverResult& rr = result_.receivers[i];
     for (uint32_t s = b; s < e; ++s) rr.set_visible(light_offset_ + size_t(lo[s]), true);
@@ -1235,16 +1238,34 @@ void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const A
   }
   if (e - b > uint32_t(p_.cell_group_min)) {
     const uint32_t m = b + (e - b + 1) / 2;
-    cell_group(lev, b, m, jitter_union(b, m), od, i);
-    cell_group(lev, m, e, jitter_union(m, e), od, i);
+    cell_group(lev, b, m, heap, 2 * node + 1, od, i);
+    cell_group(lev, m, e, heap, 2 * node + 2, od, i);
     return;
   }
   cell_samples_.insert(cell_samples_.end(), lo.begin() + b, lo.begin() + e);
 }
 
-// The boxes of cell_group's first groups of light node c (cell_group_samples samples each
-// from its start, in light-tree order), once per node: its order stays as it is until
-// the node is split, and then they are taken anew each time.
+// The size of cell_group's box heap for groups of cell_group_samples samples down to
+// halves of at most cell_group_min: node 0 the group, nodes 2 n + 1 and 2 n + 2 the
+// halves of node n (the first half the larger, so the deepest).
+size_t Traversal::cell_group_heap_size() const {
+  size_t levels = 1;
+  for (uint32_t s = uint32_t(p_.cell_group_samples); s > uint32_t(p_.cell_group_min); s = (s + 1) / 2) ++levels;
+  return (size_t(1) << levels) - 1;
+}
+
+void Traversal::cell_group_fill(uint32_t b, uint32_t e, AABB* heap, size_t node) const {
+  heap[node] = jitter_union(b, e);
+  if (e - b <= uint32_t(p_.cell_group_min)) return;
+  const uint32_t m = b + (e - b + 1) / 2;
+  cell_group_fill(b, m, heap, 2 * node + 1);
+  cell_group_fill(m, e, heap, 2 * node + 2);
+}
+
+// The box heaps (cell_group_heap_size each) of cell_group's first groups of light node c
+// (cell_group_samples samples each from its start, in light-tree order), once per node:
+// its order stays as it is until the node is split, and then they are taken anew each
+// time.
 const std::vector<AABB>& Traversal::cell_group_boxes(int c) {
   const TreeNode& Q = ln(c);
   const bool keep = !Q.split_done();
@@ -1253,9 +1274,11 @@ const std::vector<AABB>& Traversal::cell_group_boxes(int c) {
     if (it != group_boxes_.end()) return it->second;
   }
   const uint32_t g = uint32_t(p_.cell_group_samples);
+  const size_t h = cell_group_heap_size();
   std::vector<AABB>& out = keep ? group_boxes_[c] : group_scratch_;
-  out.clear();
-  for (uint32_t b = Q.begin; b < Q.end; b += g) out.push_back(jitter_union(b, std::min(Q.end, b + g)));
+  out.assign(h * ((Q.size() + g - 1) / g), AABB());
+  for (uint32_t b = Q.begin, k = 0; b < Q.end; b += g, ++k)
+    cell_group_fill(b, std::min(Q.end, b + g), out.data() + k * h, 0);
   return out;
 }
 

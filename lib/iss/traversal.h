@@ -380,7 +380,10 @@ class Traversal {
   void cull_back_faces(const Vec3f* pts, int np, const AABB& box);
   void cell_surface_receivers(int r, int l);
   struct CellLevel;
-  void cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od, uint32_t i);
+  void cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB* heap, size_t node, const double* od,
+                  uint32_t i);
+  size_t cell_group_heap_size() const;
+  void cell_group_fill(uint32_t b, uint32_t e, AABB* heap, size_t node) const;
   const std::vector<AABB>& cell_group_boxes(int c);
   AABB jitter_union(uint32_t b, uint32_t e) const;
   size_t load_cell_top();
