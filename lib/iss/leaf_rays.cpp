@@ -652,6 +652,26 @@ bool box_outside_pyramid(const AABB& b, const double* od, const double* pyr) {
 
 }  // namespace
 
+int cell_certificate(const Vec3f tri[3], const Vec3f& p, const AABB& box, bool centre, bool side) {
+  const size_t kp = 4;
+  double c[9 * kp], t[kCellTermCount * kp], cd[4 * 8], bx[7];
+  for (int v = 0; v < 3; ++v)
+    for (int a = 0; a < 3; ++a)
+      for (size_t k = 0; k < kp; ++k) c[size_t(3 * v + a) * kp + k] = double(tri[v][a]);
+  const double od[3] = {double(p.x), double(p.y), double(p.z)};
+  cell_terms(c, kp, od, t);
+  uint8_t out[1] = {0};
+  bool blocked;
+  if (centre) {
+    cell_box(box, od, bx);
+    blocked = side ? cell_box_classify(t, kp, bx, nullptr, out) : cell_box_pairs(t, kp, bx, out);
+  } else {
+    const int nc = cell_corners(box, od, cd);
+    blocked = side ? cell_classify(t, kp, cd, nc, nullptr, out) : cell_pairs(t, kp, cd, nc, out);
+  }
+  return blocked ? 1 : (out[0] & 1) ? 2 : 0;
+}
+
 void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep) {
   const double* const pl[5] = {g.plane_array(0), g.plane_array(1), g.plane_array(2), g.plane_array(3),
                                g.plane_array(4)};

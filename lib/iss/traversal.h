@@ -46,6 +46,13 @@ extern bool g_validate;
 // keep set on entry, box k passes may_intersect_box iff keep[k] stays set.
 void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep);
 
+// The cells' certificate of one triangle (tri) against every segment from p into box,
+// as the traversal takes it (leaf_rays.cpp): centre true, cell_box_body (side: with the
+// plane-side miss, as node cells; false: as sample groups); centre false, the corners'
+// cell_classify / cell_pairs. 1: blocks every segment, 2: misses every one, 0: neither.
+// For tests.
+int cell_certificate(const Vec3f tri[3], const Vec3f& p, const AABB& box, bool centre, bool side);
+
 using Clock = std::chrono::steady_clock;
 
 // Time breakdown of Table 5.4, one timer per row of the table (plus the blocker probe,
@@ -161,7 +168,7 @@ struct Params {
   // groups of 8 or 4, or halves, more.
   bool cell_groups = true;
   int cell_group_samples = 16;
-  int cell_group_min = 16;
+  int cell_group_min = 4;
   int cell_group_candidates = 24;
   // Cells' certificates over a box from its centre and half extents (leaf_rays.cpp
   // cell_box_body) rather than at its corners: the node cells (cell_centre) and the
