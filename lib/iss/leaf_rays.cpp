@@ -236,6 +236,23 @@ struct CellLanes {
   }
 };
 
+// Lanes k..k+3 whose three vertices (the cell terms) are certainly negative for one side
+// plane of the pyramid pyr (cell_pyramid): those candidates miss every segment into Q.
+__attribute__((always_inline)) inline M4 pyramid_miss(const double* t, size_t kp, size_t k, const double* pyr) {
+  const V4 m = load4(t + kM * kp + k);
+  const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
+  const V4 bx = load4(t + kVbx * kp + k), by = load4(t + kVby * kp + k), bz = load4(t + kVbz * kp + k);
+  const V4 cx = load4(t + kVcx * kp + k), cy = load4(t + kVcy * kp + k), cz = load4(t + kVcz * kp + k);
+  M4 miss = {0, 0, 0, 0};
+  for (int f = 0; f < 4; ++f) {
+    const double* pl = pyr + 4 * f;
+    const V4 ep = m * pl[3];
+    miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
+            ((cx * pl[0] + cy * pl[1] + cz * pl[2]) < -ep);
+  }
+  return miss;
+}
+
 // kSide false (cell_pairs): without the side-of-plane miss, only the w pairs and the
 // block, for the sample groups of cell_group, where the side test decided nothing more
 // on rooms and cost about half of the test.
@@ -257,18 +274,7 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
       }
     }
     M4 miss = (L.apos & (L.bneg | L.cneg)) | (L.bpos & (L.aneg | L.cneg)) | (L.cpos & (L.aneg | L.bneg)) | side;
-    if (pyr && !Lanes::all(miss)) {
-      const V4 m = load4(t + kM * kp + k);
-      const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
-      const V4 bx = load4(t + kVbx * kp + k), by = load4(t + kVby * kp + k), bz = load4(t + kVbz * kp + k);
-      const V4 cx = load4(t + kVcx * kp + k), cy = load4(t + kVcy * kp + k), cz = load4(t + kVcz * kp + k);
-      for (int f = 0; f < 4; ++f) {
-        const double* pl = pyr + 4 * f;
-        const V4 ep = m * pl[3];
-        miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
-                ((cx * pl[0] + cy * pl[1] + cz * pl[2]) < -ep);
-      }
-    }
+    if (pyr && !Lanes::all(miss)) miss |= pyramid_miss(t, kp, k, pyr);
     // A block needs only be certified where every w has det's strict sign at every corner.
     const M4 maybe = (L.pos & L.apos & L.bpos & L.cpos) | (L.neg & L.aneg & L.bneg & L.cneg);
     if (Lanes::any(maybe)) {
@@ -335,18 +341,7 @@ __attribute__((always_inline)) inline bool cell_box_body(const double* t, size_t
                 (neg & (dq < -(edet + T + (4.0 * kEps) * (sum_abs - det))));
       }
     }
-    if (pyr && !Lanes::all(miss)) {
-      const V4 m = load4(t + kM * kp + k);
-      const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
-      const V4 bx2 = load4(t + kVbx * kp + k), by = load4(t + kVby * kp + k), bz = load4(t + kVbz * kp + k);
-      const V4 cx2 = load4(t + kVcx * kp + k), cy2 = load4(t + kVcy * kp + k), cz2 = load4(t + kVcz * kp + k);
-      for (int f = 0; f < 4; ++f) {
-        const double* pl = pyr + 4 * f;
-        const V4 ep = m * pl[3];
-        miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx2 * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
-                ((cx2 * pl[0] + cy2 * pl[1] + cz2 * pl[2]) < -ep);
-      }
-    }
+    if (pyr && !Lanes::all(miss)) miss |= pyramid_miss(t, kp, k, pyr);
     const M4 maybe = (pos & apos & bpos & cpos) | (neg & aneg & bneg & cneg);
     if (Lanes::any(maybe)) {
       const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc), T = sum_bound();
