@@ -295,7 +295,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cell_group_candidates", "cell_groups: the most mixed candidates a cell takes groups with (default 24; more go to the direct test at once)", {}},
       {"cell_centre", "cell_shafts: a cell's certificates over its light node's box from the box's centre and half extents (each w within w(centre) +- h.|grad w|, with its rounding bound) rather than at its corners: the same tests at about half the cost", {"on", "off"}},
       {"cell_group_centre", "cell_groups: the groups' certificates from the group box's centre and half extents rather than its corners (as cell_centre)", {"on", "off"}},
-      {"cell_group_min", "cell_groups: a group left mixed with more samples than this takes cells at its two halves too (default 4)", {}},
+      {"cell_group_min", "cell_groups: a group left mixed with more samples than this takes cells at its two halves too (default 8)", {}},
       {"cell_surface_candidates", "cell_surfaces: the most candidates a receiver takes cells on after that (default 96; more go to Embree rays)", {}},
       {"cell_candidates", "cell_shafts: most candidate triangles of a leaf shaft that cells take (default 192; more go to the direct test or Embree rays)", {}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},

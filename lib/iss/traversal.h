@@ -168,7 +168,7 @@ struct Params {
   // groups of 8 or 4, or halves, more.
   bool cell_groups = true;
   int cell_group_samples = 16;
-  int cell_group_min = 4;
+  int cell_group_min = 8;
   int cell_group_candidates = 24;
   // Cells' certificates over a box from its centre and half extents (leaf_rays.cpp
   // cell_box_body) rather than at its corners: the node cells (cell_centre) and the
