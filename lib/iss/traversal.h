@@ -164,8 +164,9 @@ struct Params {
   // samples (cell_group) before the direct test; groups above cell_group_min samples
   // left mixed take cells at their halves. Measured on rooms at 1024 receivers
   // (docs/log/iss-performance.md, fourteenth round): groups of 16 on at most 24
-  // candidates cost less than the direct test they replace; on more candidates, or
-  // groups of 8 or 4, or halves, more.
+  // candidates cost less than the direct test they replace; on more candidates, more.
+  // With the centre certificates (seventeenth round) halves down to 8 samples pay on
+  // every rooms scene measured; down to 4, not on rooms at 4096 receivers.
   bool cell_groups = true;
   int cell_group_samples = 16;
   int cell_group_min = 8;
@@ -370,10 +371,11 @@ class Traversal {
   // and a full sub-shaft per light split (about 54k instructions on rooms) costs more
   // than the rays it decides. Per receiver of R, the light subtree of L is descended
   // with a shaft from the receiver point to each node box, decided against the leaf
-  // shaft's candidate triangles by the direct test's certified predicates at the box
-  // corners (leaf_rays.cpp cell_classify): blocked when one candidate blocks every
-  // segment into the box, visible when every candidate misses them all, split while
-  // mixed, the mixed light-tree leaves by the direct test per relation and Embree.
+  // shaft's candidate triangles by the direct test's certified predicates over the box
+  // (leaf_rays.cpp cell_classify at its corners, cell_box_body from its centre with
+  // cell_centre): blocked when one candidate blocks every segment into the box,
+  // visible when every candidate misses them all, split while mixed, the mixed
+  // light-tree leaves by the direct test per relation and Embree.
   // Shafts with more than cell_max_candidates go to direct_rays. False (nothing
   // decided) when the candidates are too many to gather or test.
   bool cell_rays(int r, int l, const Shaft& sh);
