@@ -290,10 +290,12 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cell_patches", "cell_shafts: a cell is also blocked by a planar patch of exactly coplanar neighbouring triangles whose plane separates the receiver from the cell, with no boundary edge meeting the cell's segments and one segment through its inside", {"on", "off"}},
       {"cell_backfaces", "cell_shafts: a leaf shaft with more than cell_candidates candidates still gets cells when at most that many are left without the faces of closed star-shaped surfaces turned strictly away from the whole receiver node (a segment from outside such a surface that meets it first crosses a face turned towards its start)", {"on", "off"}},
       {"cell_surfaces", "cell_backfaces: a leaf still over cell_candidates after that takes cells receiver by receiver where at most cell_surface_candidates are left without the closed surfaces whose box lies outside the pyramid from the receiver over the light node's box", {"on", "off"}},
-      {"cell_groups", "cell_shafts: a cell left mixed over more than cell_group_samples samples, with at most cell_group_candidates mixed candidates, takes a cell at each group of that many of them (in light-tree order, the union of their jitter boxes) against its mixed candidates, blocked or visible by the w pairs and the block at the group box's corners; the direct test takes the samples of the groups left mixed", {"on", "off"}},
+      {"cell_groups", "cell_shafts: a cell left mixed over more than cell_group_samples samples, with at most cell_group_candidates mixed candidates, takes a cell at each group of that many of them (in light-tree order, the union of their jitter boxes) against its mixed candidates, blocked or visible by the w pairs and the block over the group box (at its corners, or from its centre with cell_group_centre); the direct test takes the samples of the groups left mixed", {"on", "off"}},
       {"cell_group_samples", "cell_groups: samples per group (default 16)", {}},
       {"cell_group_candidates", "cell_groups: the most mixed candidates a cell takes groups with (default 24; more go to the direct test at once)", {}},
-      {"cell_group_min", "cell_groups: a group left mixed with more samples than this takes cells at its two halves too (default 16)", {}},
+      {"cell_centre", "cell_shafts: a cell's certificates over its light node's box from the box's centre and half extents (each w within w(centre) +- h.|grad w|, with its rounding bound) rather than at its corners: the same tests at about half the cost", {"on", "off"}},
+      {"cell_group_centre", "cell_groups: the groups' certificates from the group box's centre and half extents rather than its corners (as cell_centre)", {"on", "off"}},
+      {"cell_group_min", "cell_groups: a group left mixed with more samples than this takes cells at its two halves too (default 8)", {}},
       {"cell_surface_candidates", "cell_surfaces: the most candidates a receiver takes cells on after that (default 96; more go to Embree rays)", {}},
       {"cell_candidates", "cell_shafts: most candidate triangles of a leaf shaft that cells take (default 192; more go to the direct test or Embree rays)", {}},
       {"ray_queue", "queue the leaf rays of light leaves under 16 samples per receiver node until a full Embree packet is pending", {"on", "off"}},
@@ -349,6 +351,8 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.cell_groups = opt.get_bool("cell_groups", true);
   p.cell_group_samples = int(std::max(1L, opt.get_int("cell_group_samples", p.cell_group_samples)));
   p.cell_group_min = int(std::max(1L, opt.get_int("cell_group_min", p.cell_group_min)));
+  p.cell_centre = opt.get_bool("cell_centre", true);
+  p.cell_group_centre = opt.get_bool("cell_group_centre", true);
   p.cell_group_candidates = int(std::max(0L, opt.get_int("cell_group_candidates", p.cell_group_candidates)));
   p.cell_surface_candidates =
       int(std::max(0L, opt.get_int("cell_surface_candidates", p.cell_surface_candidates)));

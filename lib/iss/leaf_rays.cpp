@@ -236,6 +236,23 @@ struct CellLanes {
   }
 };
 
+// Lanes k..k+3 whose three vertices (the cell terms) are certainly negative for one side
+// plane of the pyramid pyr (cell_pyramid): those candidates miss every segment into Q.
+__attribute__((always_inline)) inline M4 pyramid_miss(const double* t, size_t kp, size_t k, const double* pyr) {
+  const V4 m = load4(t + kM * kp + k);
+  const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
+  const V4 bx = load4(t + kVbx * kp + k), by = load4(t + kVby * kp + k), bz = load4(t + kVbz * kp + k);
+  const V4 cx = load4(t + kVcx * kp + k), cy = load4(t + kVcy * kp + k), cz = load4(t + kVcz * kp + k);
+  M4 miss = {0, 0, 0, 0};
+  for (int f = 0; f < 4; ++f) {
+    const double* pl = pyr + 4 * f;
+    const V4 ep = m * pl[3];
+    miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
+            ((cx * pl[0] + cy * pl[1] + cz * pl[2]) < -ep);
+  }
+  return miss;
+}
+
 // kSide false (cell_pairs): without the side-of-plane miss, only the w pairs and the
 // block, for the sample groups of cell_group, where the side test decided nothing more
 // on rooms and cost about half of the test.
@@ -257,18 +274,7 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
       }
     }
     M4 miss = (L.apos & (L.bneg | L.cneg)) | (L.bpos & (L.aneg | L.cneg)) | (L.cpos & (L.aneg | L.bneg)) | side;
-    if (pyr && !Lanes::all(miss)) {
-      const V4 m = load4(t + kM * kp + k);
-      const V4 ax = load4(t + kVax * kp + k), ay = load4(t + kVay * kp + k), az = load4(t + kVaz * kp + k);
-      const V4 bx = load4(t + kVbx * kp + k), by = load4(t + kVby * kp + k), bz = load4(t + kVbz * kp + k);
-      const V4 cx = load4(t + kVcx * kp + k), cy = load4(t + kVcy * kp + k), cz = load4(t + kVcz * kp + k);
-      for (int f = 0; f < 4; ++f) {
-        const double* pl = pyr + 4 * f;
-        const V4 ep = m * pl[3];
-        miss |= ((ax * pl[0] + ay * pl[1] + az * pl[2]) < -ep) & ((bx * pl[0] + by * pl[1] + bz * pl[2]) < -ep) &
-                ((cx * pl[0] + cy * pl[1] + cz * pl[2]) < -ep);
-      }
-    }
+    if (pyr && !Lanes::all(miss)) miss |= pyramid_miss(t, kp, k, pyr);
     // A block needs only be certified where every w has det's strict sign at every corner.
     const M4 maybe = (L.pos & L.apos & L.bpos & L.cpos) | (L.neg & L.aneg & L.bneg & L.cneg);
     if (Lanes::any(maybe)) {
@@ -283,6 +289,77 @@ __attribute__((always_inline)) inline bool cell_classify_body(const double* t, s
   }
   return false;
 }
+// The same certificates over a box Q from its centre and half extents rather than its
+// corners (cell_box: bx = centre c, half extents h, both relative to p, and the bound
+// factor k). Each w(q) = (q - p).N is affine in q, so over Q it lies within
+// w(c) +- h.|N|: the exact range, the one the corners give, at about the cost of two
+// corners instead of four or eight. Rounding: |w~(c) - w(c)| <= n_c em (the point test's
+// bound, n_c = max |c_i|) and |N~_i - N_i| <= em / 4 (the 15th round's bound on the two
+// products and the difference of N's components), so over Q
+//   |w(q) - w~(c)| <= n_c em + sum_i h_i (|N~_i| + em / 4) = k em + h.|N~| =: th,
+// with h and k inflated by 64 eps (cell_box), which covers the roundings of the
+// differences that give h, of the three products and sums of th, and of the sums of
+// th below. Miss: one pair of w strictly opposite over Q (w~ > th and w~ < -th); with
+// kSide also Q strictly on p's side of the plane: det - sum w has det's strict sign
+// over Q, certified as the corner test does with 3e replaced by T, the bound of sum w
+// over Q from its gradient s = N_a + N_b + N_c: the computed s~ is within 3 em / 4 +
+// 2.1 eps sum |N~| per component, so |sum w(q) - sum w~(c)| <= 3 k em + h.|s~| +
+// 2.1 eps (th_a + th_b + th_c), taken with 8 eps. Block: every w of det's strict sign
+// over Q and |det| + edet + T < sum |w~| (1 - 8 eps) (the crossing parameter inside
+// (0, 1) at every q). The pyramid (pyr) as in cell_classify. Returns and out as
+// cell_classify.
+template <class Lanes, bool kSide>
+__attribute__((always_inline)) inline bool cell_box_body(const double* t, size_t kp, const double* bx,
+                                                         const double* pyr, uint8_t* out) {
+  const double cx = bx[0], cy = bx[1], cz = bx[2], hx = bx[3], hy = bx[4], hz = bx[5], kk = bx[6];
+  for (size_t k = 0; k < kp; k += 4) {
+    const V4 tbx = load4(t + kBcx * kp + k), tby = load4(t + kBcy * kp + k), tbz = load4(t + kBcz * kp + k);
+    const V4 tcx = load4(t + kCax * kp + k), tcy = load4(t + kCay * kp + k), tcz = load4(t + kCaz * kp + k);
+    const V4 tax = load4(t + kAbx * kp + k), tay = load4(t + kAby * kp + k), taz = load4(t + kAbz * kp + k);
+    const V4 wa = cx * tbx + cy * tby + cz * tbz;
+    const V4 wb = cx * tcx + cy * tcy + cz * tcz;
+    const V4 wc = cx * tax + cy * tay + cz * taz;
+    const V4 e = kk * load4(t + kEm * kp + k);
+    const V4 tha = e + (hx * abs4(tbx) + hy * abs4(tby) + hz * abs4(tbz));
+    const V4 thb = e + (hx * abs4(tcx) + hy * abs4(tcy) + hz * abs4(tcz));
+    const V4 thc = e + (hx * abs4(tax) + hy * abs4(tay) + hz * abs4(taz));
+    const M4 apos = wa > tha, aneg = wa < -tha, bpos = wb > thb, bneg = wb < -thb, cpos = wc > thc,
+             cneg = wc < -thc;
+    M4 miss = (apos & (bneg | cneg)) | (bpos & (aneg | cneg)) | (cpos & (aneg | bneg));
+    const V4 det = load4(t + kDet * kp + k), edet = load4(t + kEdet * kp + k);
+    const M4 pos = det > edet, neg = det < -edet;
+    // The bound of sum w over Q (the plane side and the block): its gradient s = sum N.
+    auto sum_bound = [&]() {
+      const V4 sx = tbx + tcx + tax, sy = tby + tcy + tay, sz = tbz + tcz + taz;
+      return 3.0 * e + (hx * abs4(sx) + hy * abs4(sy) + hz * abs4(sz)) + (8.0 * kEps) * (tha + thb + thc);
+    };
+    if constexpr (kSide) {
+      if (!Lanes::all(miss)) {
+        const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc), T = sum_bound();
+        const V4 dq = det - (wa + wb + wc);
+        miss |= (pos & (dq > edet + T + (4.0 * kEps) * (sum_abs + det))) |
+                (neg & (dq < -(edet + T + (4.0 * kEps) * (sum_abs - det))));
+      }
+    }
+    if (pyr && !Lanes::all(miss)) miss |= pyramid_miss(t, kp, k, pyr);
+    const M4 maybe = (pos & apos & bpos & cpos) | (neg & aneg & bneg & cneg);
+    if (Lanes::any(maybe)) {
+      const V4 sum_abs = abs4(wa) + abs4(wb) + abs4(wc), T = sum_bound();
+      const V4 lim = sum_abs - (8.0 * kEps) * sum_abs;
+      const M4 hit = (pos & ((det + edet) + T < lim)) | (neg & ((edet - det) + T < lim));
+      if (Lanes::any(maybe & hit)) return true;
+    }
+    out[k >> 2] = uint8_t((miss[0] & 1) | (miss[1] & 2) | (miss[2] & 4) | (miss[3] & 8));
+  }
+  return false;
+}
+bool cell_box_classify_default(const double* t, size_t kp, const double* bx, const double* pyr, uint8_t* out) {
+  return cell_box_body<LanesDefault, true>(t, kp, bx, pyr, out);
+}
+bool cell_box_pairs_default(const double* t, size_t kp, const double* bx, uint8_t* out) {
+  return cell_box_body<LanesDefault, false>(t, kp, bx, nullptr, out);
+}
+
 // The connected-surface certificate of a mixed cell (Traversal::cell_patch_blocks): per
 // candidate k, out[k] has bit 0 when the candidate's plane certainly separates p from
 // every corner of Q (det of one strict sign, det - sum w of the other at every corner);
@@ -352,6 +429,14 @@ __attribute__((target("avx2"))) void cell_patch_flags_avx2(const double* t, size
                                                             uint8_t* out) {
   cell_patch_flags_body(t, kp, d, nc, out);
 }
+__attribute__((target("avx2"), flatten)) bool cell_box_classify_avx2(const double* t, size_t kp, const double* bx,
+                                                                      const double* pyr, uint8_t* out) {
+  return cell_box_body<LanesAvx2, true>(t, kp, bx, pyr, out);
+}
+__attribute__((target("avx2"), flatten)) bool cell_box_pairs_avx2(const double* t, size_t kp, const double* bx,
+                                                                   uint8_t* out) {
+  return cell_box_body<LanesAvx2, false>(t, kp, bx, nullptr, out);
+}
 // VISGATE_ISS_NO_AVX2 in the environment selects the default build of the kernels (to
 // check it against the AVX2 one on a machine that has both).
 bool have_avx2() {
@@ -395,6 +480,20 @@ bool cell_pairs(const double* t, size_t kp, const double* d, int nc, uint8_t* ou
   if (have_avx2()) return cell_pairs_avx2(t, kp, d, nc, out);
 #endif
   return cell_pairs_default(t, kp, d, nc, out);
+}
+
+// cell_classify and cell_pairs over a box from its centre (cell_box_body; bx: cell_box).
+bool cell_box_classify(const double* t, size_t kp, const double* bx, const double* pyr, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_box_classify_avx2(t, kp, bx, pyr, out);
+#endif
+  return cell_box_classify_default(t, kp, bx, pyr, out);
+}
+bool cell_box_pairs(const double* t, size_t kp, const double* bx, uint8_t* out) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (have_avx2()) return cell_box_pairs_avx2(t, kp, bx, out);
+#endif
+  return cell_box_pairs_default(t, kp, bx, out);
 }
 
 void cell_patch_flags(const double* t, size_t kp, const double* d, int nc, uint8_t* out) {
@@ -473,6 +572,28 @@ int cell_corners(const AABB& box, const double* od, double* cd) {
   return nc;
 }
 
+// cell_box_body's box terms of `box` from the origin od: bx[0..2] the centre c and
+// bx[3..5] the half extents h, relative to od (the corners' differences as cell_corners
+// takes them), h inflated so that |q_i - od_i - c_i| <= h_i for every q in the box
+// (each difference rounded by at most eps of itself; the 2 eps max(|lo|, |hi|) term
+// covers the box's differences from od should they round), and bx[6] = k = n_c +
+// sum h_i / 4 (n_c = max |c_i|), both by a factor 1 + 64 eps that also covers the
+// roundings of cell_box_body's th (section there).
+void cell_box(const AABB& box, const double* od, double* bx) {
+  constexpr double kUp = 1.0 + 64.0 * kEps;
+  double n = 0.0, hs = 0.0;
+  for (int x = 0; x < 3; ++x) {
+    const double lo = double(box.lo[x]) - od[x], hi = double(box.hi[x]) - od[x];
+    const double c = 0.5 * (lo + hi);
+    const double h = std::max(c - lo, hi - c) * kUp + (2.0 * kEps) * std::max(std::abs(lo), std::abs(hi));
+    bx[x] = c;
+    bx[3 + x] = h;
+    n = std::max(n, std::abs(c));
+    hs += h;
+  }
+  bx[6] = (n + 0.25 * hs) * kUp;
+}
+
 // A box flat on one axis (nc == 4 corners cd): the pyramid from the origin p over its
 // rectangle, side planes through p and each rectangle edge (corners in cyclic order 0,
 // 1, 3, 2), the box's side positive. Each plane's value at a point v is the orientation
@@ -525,6 +646,26 @@ bool box_outside_pyramid(const AABB& b, const double* od, const double* pyr) {
 }
 
 }  // namespace
+
+int cell_certificate(const Vec3f tri[3], const Vec3f& p, const AABB& box, bool centre, bool side) {
+  const size_t kp = 4;
+  double c[9 * kp], t[kCellTermCount * kp], cd[4 * 8], bx[7];
+  for (int v = 0; v < 3; ++v)
+    for (int a = 0; a < 3; ++a)
+      for (size_t k = 0; k < kp; ++k) c[size_t(3 * v + a) * kp + k] = double(tri[v][a]);
+  const double od[3] = {double(p.x), double(p.y), double(p.z)};
+  cell_terms(c, kp, od, t);
+  uint8_t out[1] = {0};
+  bool blocked;
+  if (centre) {
+    cell_box(box, od, bx);
+    blocked = side ? cell_box_classify(t, kp, bx, nullptr, out) : cell_box_pairs(t, kp, bx, out);
+  } else {
+    const int nc = cell_corners(box, od, cd);
+    blocked = side ? cell_classify(t, kp, cd, nc, nullptr, out) : cell_pairs(t, kp, cd, nc, out);
+  }
+  return blocked ? 1 : (out[0] & 1) ? 2 : 0;
+}
 
 void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep) {
   const double* const pl[5] = {g.plane_array(0), g.plane_array(1), g.plane_array(2), g.plane_array(3),
@@ -988,13 +1129,15 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   // The node box's corners and, for a flat box, the pyramid over it (cell_pyramid: a
   // triangle whose three vertices are certainly negative for one side plane misses
   // every segment from p into the box; cell_classify's pyr).
-  double cd[4 * 8], pyr[16];
+  double cd[4 * 8], pyr[16], bx[7];
   const int nc = kc > 0 ? cell_corners(ln(c).box, od, cd) : 0;
   const bool use_pyr = kc > 0 && cell_pyramid(cd, nc, pyr);
   const TreeNode& Q = ln(c);
   n_cells_ += 1;
   cell_out_.resize(kp / 4);
-  if (kc > 0 && cell_classify(lev.terms.data(), kp, cd, nc, use_pyr ? pyr : nullptr, cell_out_.data())) {
+  if (kc > 0 && p_.cell_centre) cell_box(Q.box, od, bx);
+  if (kc > 0 && (p_.cell_centre ? cell_box_classify(lev.terms.data(), kp, bx, use_pyr ? pyr : nullptr, cell_out_.data())
+                                : cell_classify(lev.terms.data(), kp, cd, nc, use_pyr ? pyr : nullptr, cell_out_.data()))) {
     n_blocked_shaft_ += double(Q.size());  // bits start blocked
     n_cell_decided_ += double(Q.size());
     return;
@@ -1059,38 +1202,47 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   cell_samples_.clear();
   const uint32_t g = uint32_t(p_.cell_group_samples);
   const std::vector<AABB>& boxes = cell_group_boxes(c);
+  const size_t h = cell_group_heap_size();
   for (uint32_t b = QL.begin, k = 0; b < QL.end; b += g, ++k)
-    cell_group(next, b, std::min(QL.end, b + g), boxes[k], od, i);
+    cell_group(next, b, std::min(QL.end, b + g), boxes.data() + k * h, 0, od, i);
   cell_direct(next, cell_samples_.data(), uint32_t(cell_samples_.size()), od, prefix, i);
 }
 
 // A group of a mixed cell's samples (cell_groups: light-tree order positions b..e of the
-// cell's light node, at most cell_group_samples of them): a cell at `box`, the union of
-// their jitter boxes, which holds every relation's light point, against the cell's mixed
-// candidates lev by cell_pairs (cell_classify's certificates at the box corners, linear
-// in the light point: blocked when one candidate blocks every segment from p into the
-// box, visible when each misses them all; the candidates lev leaves out miss every
-// segment into the whole node box). Else, above cell_group_min samples, its two halves
-// the same way, else its samples go to cell_samples_ for the direct test. A node's order
-// below packet size is order_for_packets' (halves at multiples of 8 on the longest
-// axis), so groups of 8, 16 or 32 from the node's start are cells of the light's grid;
-// any other grouping is as exact, only looser.
-void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od,
-                           uint32_t i) {
+// cell's light node, at most cell_group_samples of them): a cell at the union of their
+// jitter boxes (heap[node]), which holds every relation's light point, against the
+// cell's mixed candidates lev by cell_pairs (cell_classify's certificates over the box:
+// blocked when one candidate blocks every segment from p into the box, visible when
+// each misses them all; the candidates lev leaves out miss every segment into the whole
+// node box). Else, above cell_group_min samples, its two halves the same way (heap
+// nodes 2 node + 1 and 2 node + 2), else its samples go to cell_samples_ for the direct
+// test. A node's order below packet size is order_for_packets' (halves at multiples of 8
+// on the longest axis), so groups of 8, 16 or 32 from the node's start are cells of the
+// light's grid; any other grouping is as exact, only looser.
+void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB* heap, size_t node,
+                           const double* od, uint32_t i) {
   const auto& lo = ltree_->order();
+  const AABB& box = heap[node];
   double cd[4 * 8];
-  const int nc = cell_corners(box, od, cd);
   n_cells_ += 1;
   cell_out_.resize(lev.kp / 4);
+  uint8_t* out = cell_out_.data();
   const double n = double(e - b);
-  if (cell_pairs(lev.terms.data(), lev.kp, cd, nc, cell_out_.data())) {
+  bool blocked;
+  if (p_.cell_group_centre) {
+    cell_box(box, od, cd);
+    blocked = cell_box_pairs(lev.terms.data(), lev.kp, cd, out);
+  } else {
+    blocked = cell_pairs(lev.terms.data(), lev.kp, cd, cell_corners(box, od, cd), out);
+  }
+  if (blocked) {
     n_blocked_shaft_ += n;
     n_cell_decided_ += n;
     n_group_decided_ += n;
     return;
   }
   bool all_miss = true;
-  for (size_t k = 0; k < lev.count && all_miss; ++k) all_miss = ((cell_out_[k >> 2] >> (k & 3)) & 1) != 0;
+  for (size_t k = 0; k < lev.count && all_miss; ++k) all_miss = ((out[k >> 2] >> (k & 3)) & 1) != 0;
   if (all_miss) {
     ReceiverResult& rr = result_.receivers[i];
     for (uint32_t s = b; s < e; ++s) rr.set_visible(light_offset_ + size_t(lo[s]), true);
@@ -1101,16 +1253,34 @@ void Traversal::cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const A
   }
   if (e - b > uint32_t(p_.cell_group_min)) {
     const uint32_t m = b + (e - b + 1) / 2;
-    cell_group(lev, b, m, jitter_union(b, m), od, i);
-    cell_group(lev, m, e, jitter_union(m, e), od, i);
+    cell_group(lev, b, m, heap, 2 * node + 1, od, i);
+    cell_group(lev, m, e, heap, 2 * node + 2, od, i);
     return;
   }
   cell_samples_.insert(cell_samples_.end(), lo.begin() + b, lo.begin() + e);
 }
 
-// The boxes of cell_group's first groups of light node c (cell_group_samples samples each
-// from its start, in light-tree order), once per node: its order stays as it is until
-// the node is split, and then they are taken anew each time.
+// The size of cell_group's box heap for groups of cell_group_samples samples down to
+// halves of at most cell_group_min: node 0 the group, nodes 2 n + 1 and 2 n + 2 the
+// halves of node n (the first half the larger, so the deepest).
+size_t Traversal::cell_group_heap_size() const {
+  size_t levels = 1;
+  for (uint32_t s = uint32_t(p_.cell_group_samples); s > uint32_t(p_.cell_group_min); s = (s + 1) / 2) ++levels;
+  return (size_t(1) << levels) - 1;
+}
+
+void Traversal::cell_group_fill(uint32_t b, uint32_t e, AABB* heap, size_t node) const {
+  heap[node] = jitter_union(b, e);
+  if (e - b <= uint32_t(p_.cell_group_min)) return;
+  const uint32_t m = b + (e - b + 1) / 2;
+  cell_group_fill(b, m, heap, 2 * node + 1);
+  cell_group_fill(m, e, heap, 2 * node + 2);
+}
+
+// The box heaps (cell_group_heap_size each) of cell_group's first groups of light node c
+// (cell_group_samples samples each from its start, in light-tree order), once per node:
+// its order stays as it is until the node is split, and then they are taken anew each
+// time.
 const std::vector<AABB>& Traversal::cell_group_boxes(int c) {
   const TreeNode& Q = ln(c);
   const bool keep = !Q.split_done();
@@ -1119,9 +1289,11 @@ const std::vector<AABB>& Traversal::cell_group_boxes(int c) {
     if (it != group_boxes_.end()) return it->second;
   }
   const uint32_t g = uint32_t(p_.cell_group_samples);
+  const size_t h = cell_group_heap_size();
   std::vector<AABB>& out = keep ? group_boxes_[c] : group_scratch_;
-  out.clear();
-  for (uint32_t b = Q.begin; b < Q.end; b += g) out.push_back(jitter_union(b, std::min(Q.end, b + g)));
+  out.assign(h * ((Q.size() + g - 1) / g), AABB());
+  for (uint32_t b = Q.begin, k = 0; b < Q.end; b += g, ++k)
+    cell_group_fill(b, std::min(Q.end, b + g), out.data() + k * h, 0);
   return out;
 }
 

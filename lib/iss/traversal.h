@@ -46,6 +46,13 @@ extern bool g_validate;
 // keep set on entry, box k passes may_intersect_box iff keep[k] stays set.
 void direct_cull(const double* box, size_t kp, const ShaftGeometry& g, int64_t* keep);
 
+// The cells' certificate of one triangle (tri) against every segment from p into box,
+// as the traversal takes it (leaf_rays.cpp): centre true, cell_box_body (side: with the
+// plane-side miss, as node cells; false: as sample groups); centre false, the corners'
+// cell_classify / cell_pairs. 1: blocks every segment, 2: misses every one, 0: neither.
+// For tests.
+int cell_certificate(const Vec3f tri[3], const Vec3f& p, const AABB& box, bool centre, bool side);
+
 using Clock = std::chrono::steady_clock;
 
 // Time breakdown of Table 5.4, one timer per row of the table (plus the blocker probe,
@@ -157,12 +164,18 @@ struct Params {
   // samples (cell_group) before the direct test; groups above cell_group_min samples
   // left mixed take cells at their halves. Measured on rooms at 1024 receivers
   // (docs/log/iss-performance.md, fourteenth round): groups of 16 on at most 24
-  // candidates cost less than the direct test they replace; on more candidates, or
-  // groups of 8 or 4, or halves, more.
+  // candidates cost less than the direct test they replace; on more candidates, more.
+  // With the centre certificates (seventeenth round) halves down to 8 samples pay on
+  // every rooms scene measured; down to 4, not on rooms at 4096 receivers.
   bool cell_groups = true;
   int cell_group_samples = 16;
-  int cell_group_min = 16;
+  int cell_group_min = 8;
   int cell_group_candidates = 24;
+  // Cells' certificates over a box from its centre and half extents (leaf_rays.cpp
+  // cell_box_body) rather than at its corners: the node cells (cell_centre) and the
+  // sample groups (cell_group_centre).
+  bool cell_centre = true;
+  bool cell_group_centre = true;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -358,10 +371,11 @@ class Traversal {
   // and a full sub-shaft per light split (about 54k instructions on rooms) costs more
   // than the rays it decides. Per receiver of R, the light subtree of L is descended
   // with a shaft from the receiver point to each node box, decided against the leaf
-  // shaft's candidate triangles by the direct test's certified predicates at the box
-  // corners (leaf_rays.cpp cell_classify): blocked when one candidate blocks every
-  // segment into the box, visible when every candidate misses them all, split while
-  // mixed, the mixed light-tree leaves by the direct test per relation and Embree.
+  // shaft's candidate triangles by the direct test's certified predicates over the box
+  // (leaf_rays.cpp cell_classify at its corners, cell_box_body from its centre with
+  // cell_centre): blocked when one candidate blocks every segment into the box,
+  // visible when every candidate misses them all, split while mixed, the mixed
+  // light-tree leaves by the direct test per relation and Embree.
   // Shafts with more than cell_max_candidates go to direct_rays. False (nothing
   // decided) when the candidates are too many to gather or test.
   bool cell_rays(int r, int l, const Shaft& sh);
@@ -375,7 +389,10 @@ class Traversal {
   void cull_back_faces(const Vec3f* pts, int np, const AABB& box);
   void cell_surface_receivers(int r, int l);
   struct CellLevel;
-  void cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB& box, const double* od, uint32_t i);
+  void cell_group(const CellLevel& lev, uint32_t b, uint32_t e, const AABB* heap, size_t node, const double* od,
+                  uint32_t i);
+  size_t cell_group_heap_size() const;
+  void cell_group_fill(uint32_t b, uint32_t e, AABB* heap, size_t node) const;
   const std::vector<AABB>& cell_group_boxes(int c);
   AABB jitter_union(uint32_t b, uint32_t e) const;
   size_t load_cell_top();

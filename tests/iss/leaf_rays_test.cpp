@@ -3,10 +3,14 @@
 // test (direct_rays) answers like the Embree leaf rays and the exact oracle.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
+#include "lib/geom/predicates.h"
+#include "lib/iss/traversal.h"
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "oracle/relation_oracle.h"
@@ -345,4 +349,144 @@ TEST(IssLeafRays, CellSurfacesAnswerAsWithoutThemAndTheOracle) {
       {"shared-edge-fan", -1, 256, 16, {{"cell_candidates", "8"}}},
   };
   expect_option_cases(cases, "cell_surfaces", "cell_surface_relations", "cell_surface_relations");
+}
+
+namespace {
+
+int sgn(Sign s) { return s == Sign::Positive ? 1 : s == Sign::Negative ? -1 : 0; }
+
+// Exact: the open segment (p, q) crosses the open triangle at one point strictly inside
+// it (every edge orientation of one strict sign, p and q strictly on opposite sides).
+bool crosses_strictly(const Vec3f& p, const Vec3f& q, const Vec3f* t) {
+  const int a = sgn(orient3d_exact(p, q, t[0], t[1])), b = sgn(orient3d_exact(p, q, t[1], t[2])),
+            c = sgn(orient3d_exact(p, q, t[2], t[0]));
+  const int sp = sgn(orient3d_exact(t[0], t[1], t[2], p)), sq = sgn(orient3d_exact(t[0], t[1], t[2], q));
+  return a != 0 && a == b && b == c && sp != 0 && sp == -sq;
+}
+
+// Exact, conservative: the closed segment may meet the closed triangle (false only when
+// p and q lie strictly on one side of its plane, or the line passes strictly beside
+// one of its edges, two edge orientations strictly opposite).
+bool may_meet(const Vec3f& p, const Vec3f& q, const Vec3f* t) {
+  const int sp = sgn(orient3d_exact(t[0], t[1], t[2], p)), sq = sgn(orient3d_exact(t[0], t[1], t[2], q));
+  if (sp != 0 && sp == sq) return false;
+  const int a = sgn(orient3d_exact(p, q, t[0], t[1])), b = sgn(orient3d_exact(p, q, t[1], t[2])),
+            c = sgn(orient3d_exact(p, q, t[2], t[0]));
+  return !(std::max({a, b, c}) > 0 && std::min({a, b, c}) < 0);
+}
+
+}  // namespace
+
+TEST(IssLeafRays, CellCentreCertificateHoldsOverTheWholeBox) {
+  // The cells' certificate from the box's centre and half extents (cell_centre,
+  // cell_group_centre: w(c) +- h.|grad w| and its rounding bound) against the exact
+  // orientations at the box's corners, its centre and random points of it: a block must
+  // cross strictly at every one, a miss meet none. Random triangles, origins and boxes
+  // (some flat, some tiny, some on a coarse grid so that segments graze edges and
+  // planes exactly, some single points: a vertex, or within rounding of an edge's plane
+  // through p).
+  // It decides what the corners' certificate decides (the same exact
+  // range of each affine w) up to the rounding bounds' difference.
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), ext(0.0, 0.4);
+  std::uniform_int_distribution<int> grid(-8, 8), pick(0, 3);
+  size_t decided[2] = {0, 0}, corner_decided[2] = {0, 0}, only_corners[2] = {0, 0}, blocks = 0, misses = 0, wrong = 0;
+  for (int it = 0; it < 20000; ++it) {
+    const bool snap = pick(rng) == 0;
+    auto coord = [&](double scale) { return float(snap ? grid(rng) / 8.0 * scale : u(rng) * scale); };
+    Vec3f tri[3];
+    for (auto& v : tri) v = Vec3f(coord(1.0), coord(1.0), coord(1.0));
+    const Vec3f p(coord(2.0), coord(2.0), coord(2.0));
+    AABB box;
+    Vec3f c(coord(2.0), coord(2.0), coord(2.0));
+    const int flat = pick(rng);  // 0..2: that axis flat, 3: none
+    const double tiny = pick(rng) == 0 ? 1e-3 : 1.0;
+    // One box in four a single point: a vertex of the triangle (two w exactly 0, computed
+    // with rounding: only the rounding bounds keep them undecided) or a point next to
+    // the plane through p and an edge (within the float rounding of a point of it).
+    const bool point = !snap && pick(rng) == 0;
+    if (point && pick(rng) < 2) {
+      c = tri[pick(rng) % 3];
+    } else if (point) {
+      const Vec3d A(tri[0]), B(tri[1]), P(p);
+      const double lam = u(rng), mu = u(rng);
+      c = Vec3f(A + (B - A) * lam + (A - P) * mu);
+    }
+    for (int a = 0; a < 3; ++a) {
+      const double h = point || a == flat ? 0.0 : (snap ? 1.0 / 8.0 : ext(rng) * tiny);
+      box.lo[a] = float(c[a] - h);
+      box.hi[a] = float(c[a] + h);
+    }
+    std::vector<Vec3f> qs;
+    for (int k = 0; k < 8; ++k)
+      qs.emplace_back(k & 1 ? box.hi.x : box.lo.x, k & 2 ? box.hi.y : box.lo.y, k & 4 ? box.hi.z : box.lo.z);
+    qs.push_back(c);
+    std::uniform_real_distribution<double> in(0.0, 1.0);
+    for (int k = 0; k < 16; ++k) {
+      Vec3f q;
+      for (int a = 0; a < 3; ++a) q[a] = std::clamp(float(box.lo[a] + in(rng) * (box.hi[a] - box.lo[a])), box.lo[a], box.hi[a]);
+      qs.push_back(q);
+    }
+    for (int side = 0; side < 2; ++side) {
+      const int r = iss::cell_certificate(tri, p, box, true, side == 1);
+      const int rc = iss::cell_certificate(tri, p, box, false, side == 1);
+      decided[side] += r != 0;
+      corner_decided[side] += rc != 0;
+      only_corners[side] += rc != 0 && r == 0;
+      EXPECT_FALSE(r != 0 && rc != 0 && r != rc) << "it " << it;  // both exact: never opposite
+      if (r == 0) continue;
+      (r == 1 ? blocks : misses) += 1;
+      for (const Vec3f& q : qs) {
+        if (q == p) continue;
+        const bool bad = r == 1 ? !crosses_strictly(p, q, tri) : may_meet(p, q, tri);
+        wrong += bad;
+        EXPECT_FALSE(bad) << "it " << it << " side " << side << " certified " << (r == 1 ? "blocked" : "missed");
+        if (bad) break;
+      }
+    }
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(blocks, 200u);
+  EXPECT_GT(misses, 2000u);
+  for (int side = 0; side < 2; ++side) {
+    EXPECT_GT(decided[side], 0u);
+    // At most 1% of the corners' decisions left undecided by the centre.
+    EXPECT_LE(100 * only_corners[side], corner_decided[side]) << "side " << side;
+  }
+}
+
+TEST(IssLeafRays, CellCentreAnswersAsCornersAndTheOracle) {
+  // cell_centre and cell_group_centre change only the arithmetic of the cells'
+  // certificates: the same shafts, every relation decided once, about as many rays as
+  // the corners' (the same exact ranges, other rounding bounds), and every answer where
+  // they differ the exact one.
+  const std::vector<LeafCase> cases = {
+      {"rooms", -1, 256, 64, {}},
+      {"rooms", -1, 256, 64, {{"cell_depth", "16"}, {"cell_candidates", "1024"}}},
+      {"columns", 1000, 1024, 64, {{"light_split", "off"}, {"cell_group_samples", "8"}, {"cell_group_min", "1"}}},
+      {"torus", -1, 256, 16, {{"cell_depth", "16"}}},
+      {"random-soup", -1, 256, 16, {{"cell_depth", "16"}}},
+      {"shared-edge-fan", -1, 256, 16, {{"cell_depth", "16"}}},
+      {"grid-snapped", -1, 256, 16, {{"cell_depth", "16"}, {"cell_group_samples", "4"}, {"cell_group_min", "1"}}},
+  };
+  for (const LeafCase& c : cases) {
+    Scene s = family(c.fam, 5, c.tris, c.recv, c.samples);
+    ASSERT_FALSE(s.receivers.empty()) << c.fam;
+    std::map<std::string, std::string> o = c.opts;
+    SolveResult on = run_iss(s, o);
+    o["cell_centre"] = "off";
+    o["cell_group_centre"] = "off";
+    SolveResult off = run_iss(s, o);
+    const std::string what = std::string(c.fam) + " " + describe(c.opts);
+    EXPECT_EQ(on.stats.get("shafts_built"), off.stats.get("shafts_built")) << what;
+    EXPECT_EQ(on.stats.get("relations_blocked_by_shaft") + on.stats.get("relations_visible_by_empty_shaft") +
+                  on.stats.get("relations_ray_cast"),
+              double(s.relation_count()))
+        << what;
+    EXPECT_LE(on.stats.get("relations_ray_cast"), off.stats.get("relations_ray_cast") * 1.01 + 16) << what;
+    if (std::string(c.fam) == "rooms") {
+      EXPECT_GT(on.stats.get("cell_shaft_relations"), 0.0) << what;
+    }
+    expect_exact_where_they_differ(s, on, off, 1e-5, what);
+  }
 }
