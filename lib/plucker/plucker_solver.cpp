@@ -233,7 +233,9 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
   memory.budget = &budget;
   // The triangle hierarchy for occluder selection, built once (counted as selection).
   Clock::time_point tt = Clock::now();
-  const mesh::PreparedMesh prepared = mesh::prepare_mesh(scene.mesh);  // the tree's patches and the closed surfaces
+  // The tree's patches and the closed surfaces; freed once they are built, so the later
+  // builds reuse its memory instead of faulting in fresh pages.
+  mesh::PreparedMesh prepared = mesh::prepare_mesh(scene.mesh);
   TriangleTree tree(scene.mesh, prepared);
   double tree_s = seconds_since(tt);
   memory.change(int64_t(tree.memory_bytes()));
@@ -250,6 +252,7 @@ SolveResult solve_plucker(const Scene& scene, const SolveOptions& opt, std::vect
     closed_charge.set(closed->memory_bytes());
     if (closed->count() > 0) ctx.closed = &*closed;
   }
+  prepared = mesh::PreparedMesh();
   // Per closed surface a hierarchy for the silhouette regions' segment tests, once per solve.
   std::optional<SurfaceTrees> surface_trees;
   std::optional<TreeSurfaces> tree_surfaces;

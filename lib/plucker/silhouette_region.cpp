@@ -167,7 +167,7 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
     sorted = sorted && (e == 0 || key[e - 1] <= key[e]);
   }
   if (sorted) {
-    build_node(boxes, 0, n);
+    build_node([&](uint32_t k) -> const AABBd& { return boxes[k]; }, 0, n);
     return;
   }
   // Stable LSD radix sort of the edges by key, 11 bits a pass.
@@ -186,30 +186,34 @@ void EdgeTree::build(const std::vector<AABBd>& boxes, const std::vector<uint32_t
   thread_local std::vector<AABBd> leaf_boxes;
   leaf_boxes.resize(n);
   for (uint32_t k = 0; k < n; ++k) leaf_boxes[k] = boxes[order[k]];
-  build_node(leaf_boxes, 0, n);
+  build_node([&](uint32_t k) -> const AABBd& { return leaf_boxes[k]; }, 0, n);
 }
 
 void EdgeTree::build_in_order(const std::vector<AABB>& boxes) {
-  const uint32_t n = uint32_t(boxes.size());
-  if (start(n)) build_node(boxes, 0, n);
+  build_in_order_by(uint32_t(boxes.size()), [&](uint32_t k) -> const AABB& { return boxes[k]; });
+}
+
+template <class BoxAt>
+void EdgeTree::build_in_order_by(uint32_t n, const BoxAt& box_at) {
+  if (start(n)) build_node(box_at, 0, n);
 }
 
 // Node over order[begin, end) and its subtree (left half floor(m / 2)); returns its id.
-template <class Box>
-uint32_t EdgeTree::build_node(const std::vector<Box>& leaf_boxes, uint32_t begin, uint32_t end) {
+template <class BoxAt>
+uint32_t EdgeTree::build_node(const BoxAt& box_at, uint32_t begin, uint32_t end) {
   const uint32_t id = uint32_t(nodes.size());
   nodes.emplace_back();
   nodes[id].count = end - begin;
   if (end - begin <= kLeaf) {
-    Box b = leaf_boxes[begin];
-    for (uint32_t k = begin + 1; k < end; ++k) b.extend(leaf_boxes[k]);
+    auto b = box_at(begin);
+    for (uint32_t k = begin + 1; k < end; ++k) b.extend(box_at(k));
     nodes[id].box = AABBd{Vec3d(b.lo), Vec3d(b.hi)};
     nodes[id].first = begin;
     return id;
   }
   const uint32_t mid = begin + (end - begin) / 2;
-  build_node(leaf_boxes, begin, mid);
-  const uint32_t right = build_node(leaf_boxes, mid, end);
+  build_node(box_at, begin, mid);
+  const uint32_t right = build_node(box_at, mid, end);
   AABBd b = nodes[id + 1].box;
   b.extend(nodes[right].box);
   nodes[id].box = b;
@@ -241,7 +245,6 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
   std::vector<uint32_t> local(mesh.size(), 0u);
   std::vector<Vec3d> unit;
   std::vector<uint8_t> bad;
-  std::vector<AABB> ebox;
   for (size_t s = 0; s < bvh_.size(); ++s) {
     const std::vector<uint32_t>& tris = tris_[s];
     SurfaceEdges& se = edges_[s];
@@ -256,12 +259,10 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
       else
         unit[i] = fp.n * (1.0 / length(fp.n));
     }
-    ebox.clear();
     // A closed surface's triangles have three neighbours each and its halves pair up: 3T / 2
     // edges (more only where a half finds no partner; the vectors then grow).
     const size_t edges = (3 * tris.size() + 1) / 2;
     se.edges.reserve(edges);
-    ebox.reserve(edges);
     // The m-th half of t toward u (m counted over t's k from 0), or 3.
     auto nth_half = [&](uint32_t t, uint32_t u, int m) -> int {
       for (int j = 0; j < 3; ++j)
@@ -289,18 +290,21 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
           for (int j = 0; j < k; ++j) m += nb[size_t(j)] == nb[size_t(k)] ? 1 : 0;
           e.k1 = uint8_t(nth_half(u, t, m));
         }
-        // In float: the double box of the float corners' box is the box of the corners
-        // in double (exact, monotone conversion). u's half has the same two welded
-        // points, equal to t's as floats (their bits differ at most in a zero's sign), and
-        // extend moves lo (hi) only for a point strictly below (above) it, so they would
-        // leave the box's bits as t's two corners make them.
-        AABB b{mesh.corner(t, k), mesh.corner(t, k)};
-        b.extend(mesh.corner(t, (k + 1) % 3));
         se.edges.push_back(e);
-        ebox.push_back(b);
       }
     }
-    se.tree.build_in_order(ebox);
+    // An edge's leaf box, taken by the build when it makes the leaves (no array of them):
+    // in float, whose double is the box of the corners in double (exact, monotone
+    // conversion). u's half has the same two welded points, equal to t's as floats (their
+    // bits differ at most in a zero's sign), and extend moves lo (hi) only for a point
+    // strictly below (above) it, so they would leave the box's bits as t's two corners
+    // make them.
+    se.tree.build_in_order_by(uint32_t(se.edges.size()), [&](uint32_t k) {
+      const SurfaceEdges::Edge& e = se.edges[k];
+      AABB b{mesh.corner(e.t0, e.k0), mesh.corner(e.t0, e.k0)};
+      b.extend(mesh.corner(e.t0, (e.k0 + 1) % 3));
+      return b;
+    });
     node_normal_boxes(se.tree, unit, bad, se.edges, local, se.node_normals);
   }
 }

@@ -87,12 +87,16 @@ struct EdgeTree {
   // order is the identity and each node's box the double of its float boxes' union
   // (float -> double is exact and monotone, so the same doubles).
   void build_in_order(const std::vector<AABB>& boxes);
+  // The same as build_in_order over n float boxes, box_at(k) giving the k-th (defined in
+  // silhouette_region.cpp, its only user: no array of the boxes is written).
+  template <class BoxAt>
+  void build_in_order_by(uint32_t n, const BoxAt& box_at);
 
  private:
   // Empties the tree; for n > 0 sets order to the identity and returns true.
   bool start(uint32_t n);
-  template <class Box>
-  uint32_t build_node(const std::vector<Box>& leaf_boxes, uint32_t begin, uint32_t end);
+  template <class BoxAt>
+  uint32_t build_node(const BoxAt& box_at, uint32_t begin, uint32_t end);
 };
 
 // Per closed surface, its edges once each, built once per solve (world coordinates, so
