@@ -154,6 +154,32 @@ Vec3f tree_unit_normal(const Vec3f& a, const Vec3f& b, const Vec3f& c, bool& has
   return n;
 }
 
+namespace {
+
+// The leaves read the edges in Morton order: a gather from `edges` (16 bytes an edge) and,
+// for each triangle not in the build's cache, from the mesh's triangles (40 bytes), arrays
+// past the private caches on large meshes (scan 300k: 7 MB and 12 MB). Fetching them some
+// edges ahead hides the misses; only timing changes (a prefetch reads no value and cannot
+// fault). Positions past the end fetch the last edge's again: no branch.
+constexpr size_t kEdgeAhead = 16, kTriangleAhead = 8;
+// Inlined: GCC 12 otherwise finds the function free of side effects and drops the call.
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void prefetch_ahead(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const uint32_t* order,
+                           size_t k, size_t E) {
+#if defined(__GNUC__)
+  __builtin_prefetch(&edges[order[std::min(k + kEdgeAhead, E - 1)]]);
+  const Edge& f = edges[order[std::min(k + kTriangleAhead, E - 1)]];
+  __builtin_prefetch(&m.triangles[size_t(f.t1 >= 0 ? f.t1 : 0)]);
+  __builtin_prefetch(&m.triangles[size_t(f.t2 >= 0 ? f.t2 : f.t1 >= 0 ? f.t1 : 0)]);
+#else
+  (void)edges, (void)m, (void)order, (void)k, (void)E;
+#endif
+}
+
+}  // namespace
+
 EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, double M)
     : M_(M) {
   const size_t E = edges.size();
@@ -246,6 +272,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     nd.edges = nd.n;
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
     for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+      prefetch_ahead(edges, m, order_.data(), k, E);
       const Edge& ed = edges[order_[k]];
       ends_[2 * size_t(k)] = ed.a;
       ends_[2 * size_t(k) + 1] = ed.b;
