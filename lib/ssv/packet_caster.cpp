@@ -23,8 +23,14 @@ struct PacketWalk {
 };
 
 #if defined(VG_SSV_PACKET_AVX2)
+// Every function of the AVX2 build gets the avx2 target: GCC by its target pragma, clang
+// (the libFuzzer build), which ignores that pragma, by an attribute on each function.
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx2")
+#endif
 namespace avx2_build {
 #define VG_PACKET_MOVEMASK(m) _mm256_movemask_ps(reinterpret_cast<__m256>(m))
 #define VG_MIN8(a, b) _mm256_min_ps(a, b)
@@ -34,7 +40,11 @@ namespace avx2_build {
 #undef VG_MIN8
 #undef VG_MAX8
 }  // namespace avx2_build
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 #endif
 
 namespace default_build {
