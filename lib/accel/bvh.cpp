@@ -263,6 +263,79 @@ Bvh<T>::Bvh(const std::vector<Box>& boxes, const BuildRule& rule) : leaf_size_(r
   });
 }
 
+template <class T>
+Bvh<T> Bvh<T>::restricted(const Bvh& src, std::span<const uint32_t> keep, const std::function<Box(uint32_t)>& box_of) {
+  Bvh t;
+  t.leaf_size_ = src.leaf_size_;
+  if (src.empty()) return t;
+  VG_CHECK(keep.size() >= src.order_.size());
+  // Kept items per node, children before parents (pre-order: both children follow i).
+  std::vector<uint32_t> kept(src.nodes_.size());
+  for (size_t i = src.nodes_.size(); i-- > 0;) {
+    const Node& nd = src.nodes_[i];
+    if (src.is_leaf(nd)) {
+      uint32_t k = 0;
+      for (uint32_t p = nd.first; p < nd.first + nd.count; ++p) k += keep[src.order_[p]] != kDropped ? 1 : 0;
+      kept[i] = k;
+    } else {
+      kept[i] = kept[i + 1] + kept[nd.first];
+    }
+  }
+  if (kept[0] == 0) return t;
+  t.nodes_.reserve(src.nodes_.size());
+  t.order_.reserve(kept[0]);
+  // Emits src node i (kept[i] > 0, its items at leaf-order positions [pos, pos +
+  // count)) in pre-order; returns the new node's id.
+  auto emit = [&](auto& self, uint32_t i, uint32_t pos) -> uint32_t {
+    const Node& nd = src.nodes_[i];
+    const uint32_t id = uint32_t(t.nodes_.size());
+    if (kept[i] == nd.count) {
+      // Nothing dropped below: src's subtree as it is (pre-order, so its nodes are i up to
+      // its rightmost leaf), its leaves' positions and right children shifted.
+      uint32_t last = i;
+      while (!src.is_leaf(src.nodes_[last])) last = src.nodes_[last].first;
+      const uint32_t first = uint32_t(t.order_.size());
+      t.nodes_.insert(t.nodes_.end(), src.nodes_.begin() + i, src.nodes_.begin() + last + 1);
+      for (size_t k = id; k < t.nodes_.size(); ++k) {
+        Node& x = t.nodes_[k];
+        x.first = t.is_leaf(x) ? x.first - pos + first : x.first - i + id;
+      }
+      t.order_.resize(first + nd.count);
+      for (uint32_t p = 0; p < nd.count; ++p) t.order_[first + p] = keep[src.order_[pos + p]];
+      return id;
+    }
+    if (!src.is_leaf(nd) && kept[i] > t.leaf_size_) {
+      const uint32_t l = i + 1, r = nd.first;
+      if (kept[r] == 0) return self(self, l, pos);
+      if (kept[l] == 0) return self(self, r, pos + src.nodes_[l].count);
+      t.nodes_.emplace_back();
+      self(self, l, pos);
+      const uint32_t right = self(self, r, pos + src.nodes_[l].count);
+      Node& out = t.nodes_[id];
+      out.first = right;
+      out.count = kept[i];
+      BoxUnion<T> box(t.nodes_[id + 1].box);
+      box.add(t.nodes_[right].box);
+      out.box = box.box();
+      return id;
+    }
+    // A leaf that lost items, or a subtree left with at most leaf_size items.
+    t.nodes_.emplace_back();
+    const uint32_t first = uint32_t(t.order_.size());
+    for (uint32_t p = pos; p < pos + nd.count; ++p)
+      if (const uint32_t k = keep[src.order_[p]]; k != kDropped) t.order_.push_back(k);
+    Node& out = t.nodes_[id];
+    out.first = first;
+    out.count = kept[i];
+    BoxUnion<T> box(box_of(t.order_[first]));
+    for (uint32_t p = first + 1; p < first + out.count; ++p) box.add(box_of(t.order_[p]));
+    out.box = box.box();
+    return id;
+  };
+  emit(emit, 0, 0);
+  return t;
+}
+
 template class Bvh<float>;
 template class Bvh<double>;
 

@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -61,6 +62,20 @@ class Bvh {
   Bvh() = default;
   // boxes[i] is item i's box; boxes need not outlive the tree.
   Bvh(const std::vector<Box>& boxes, const BuildRule& rule);
+
+  // The tree restricted to some of its items: keep[item] is the item's index in the new
+  // tree, or kDropped. The leaf order is src's with the dropped items left out; empty
+  // subtrees are pruned, a node left with one nonempty child is replaced by that child,
+  // and a subtree left with at most leaf_size items becomes one leaf (its items in src's
+  // leaf order). A node that keeps all its items keeps its box (the same bits); the
+  // others take the union of their children's new boxes, and a changed leaf the union
+  // of box_of(new item) over its items in order, so every box is still the exact union
+  // (min/max) of its items' boxes when box_of gives the boxes src was built on. The
+  // halving shape above no longer holds (inner nodes have more than leaf_size items,
+  // leaves at most leaf_size, pre-order layout, depth at most src's). Linear in src's
+  // nodes; with nothing dropped, a copy. item_boxes are not kept.
+  static constexpr uint32_t kDropped = UINT32_MAX;
+  static Bvh restricted(const Bvh& src, std::span<const uint32_t> keep, const std::function<Box(uint32_t)>& box_of);
 
   bool empty() const { return nodes_.empty(); }
   size_t node_count() const { return nodes_.size(); }

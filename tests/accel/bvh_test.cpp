@@ -428,3 +428,111 @@ TYPED_TEST(BvhTest, MedianTreeIsTheReferenceBuildNodeByNode) {
       }
     }
 }
+
+namespace {
+
+// Checks `r`, src restricted by `keep`, against brute force: r's leaf order is src's with
+// the dropped items left out (renumbered by keep), every item in one leaf; per node its
+// count is the items below it and its box the componentwise min/max of their boxes
+// (boxes[item], by value); inner nodes have more than leaf_size items and two children
+// (left at i + 1), leaves at most leaf_size.
+template <class T>
+void expect_restriction(const Bvh<T>& src, const Boxes<T>& src_boxes, const std::vector<uint32_t>& keep,
+                        const Bvh<T>& r, const std::string& what) {
+  std::vector<uint32_t> want;
+  for (uint32_t item : src.order())
+    if (keep[item] != Bvh<T>::kDropped) want.push_back(keep[item]);
+  ASSERT_TRUE(std::equal(want.begin(), want.end(), r.order().begin(), r.order().end())) << what;
+  ASSERT_EQ(r.empty(), want.empty()) << what;
+  if (r.empty()) return;
+  std::vector<AABBT<T>> boxes(want.size());
+  for (uint32_t item = 0; item < keep.size(); ++item)
+    if (keep[item] != Bvh<T>::kDropped) boxes[keep[item]] = src_boxes[item];
+  // Each node's leaf-order range, by a walk that derives it from the counts alone.
+  std::vector<uint32_t> seen(want.size(), 0);
+  struct Todo {
+    uint32_t node, pos;
+  };
+  std::vector<Todo> todo = {{0, 0}};
+  size_t visited = 0;
+  while (!todo.empty()) {
+    const Todo d = todo.back();
+    todo.pop_back();
+    ++visited;
+    ASSERT_LT(d.node, r.node_count()) << what;
+    const auto& nd = r.node(d.node);
+    ASSERT_GT(nd.count, 0u) << what;
+    ASSERT_LE(d.pos + nd.count, want.size()) << what;
+    AABBT<T> u;
+    for (uint32_t p = d.pos; p < d.pos + nd.count; ++p) {
+      const AABBT<T>& b = boxes[r.item(p)];
+      for (int a = 0; a < 3; ++a) {
+        u.lo[a] = std::min(u.lo[a], b.lo[a]);
+        u.hi[a] = std::max(u.hi[a], b.hi[a]);
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(nd.box.lo[a], u.lo[a]) << what << " node " << d.node << " axis " << a;
+      ASSERT_EQ(nd.box.hi[a], u.hi[a]) << what << " node " << d.node << " axis " << a;
+    }
+    if (r.is_leaf(nd)) {
+      ASSERT_EQ(nd.first, d.pos) << what;
+      for (uint32_t p = d.pos; p < d.pos + nd.count; ++p) ++seen[p];
+      continue;
+    }
+    const uint32_t l = r.left(d.node), rt = r.right(d.node);
+    ASSERT_EQ(l, d.node + 1) << what;
+    ASSERT_GT(rt, l) << what;
+    ASSERT_EQ(r.node(l).count + r.node(rt).count, nd.count) << what;
+    todo.push_back({l, d.pos});
+    todo.push_back({rt, d.pos + r.node(l).count});
+  }
+  ASSERT_EQ(visited, r.node_count()) << what;
+  for (uint32_t p = 0; p < want.size(); ++p) ASSERT_EQ(seen[p], 1u) << what << " position " << p;
+}
+
+template <class T>
+void check_restrictions() {
+  std::mt19937 rng(7);
+  for (uint32_t leaf : {1u, 4u, 8u})
+    for (size_t n : {1u, 5u, 40u, 1000u, 20000u}) {
+      const Boxes<T> boxes = random_boxes<T>(n, uint32_t(n * 31 + leaf));
+      const Bvh<T> src(boxes, BuildRule{Split::MedianAxis, leaf, false});
+      // Kept shares from nothing to everything, random and in runs (whole subtrees
+      // dropped), and the one item kept.
+      for (double share : {0.0, 0.02, 0.5, 0.9, 0.999, 1.0})
+        for (int runs = 0; runs < 2; ++runs) {
+          std::vector<uint32_t> keep(n, Bvh<T>::kDropped);
+          std::uniform_real_distribution<double> u(0.0, 1.0);
+          uint32_t next = 0;
+          for (size_t i = 0; i < n; ++i) {
+            const bool in = runs ? (double((i * 7919) % n) / double(n) < share) : u(rng) < share;
+            if (in) keep[i] = next++;
+          }
+          std::vector<uint32_t> item_of(next);
+          for (uint32_t i = 0; i < n; ++i)
+            if (keep[i] != Bvh<T>::kDropped) item_of[keep[i]] = i;
+          const Bvh<T> r = Bvh<T>::restricted(src, keep, [&](uint32_t k) { return boxes[item_of.at(k)]; });
+          expect_restriction(src, boxes, keep, r,
+                             "leaf " + std::to_string(leaf) + " n " + std::to_string(n) + " share " +
+                                 std::to_string(share) + " runs " + std::to_string(runs));
+          if (share == 1.0) {
+            ASSERT_EQ(r.node_count(), src.node_count());
+          }
+        }
+      std::vector<uint32_t> one(n, Bvh<T>::kDropped);
+      one[n / 2] = 0;
+      const Bvh<T> r = Bvh<T>::restricted(src, one, [&](uint32_t) { return boxes[n / 2]; });
+      expect_restriction(src, boxes, one, r, "one item");
+      ASSERT_EQ(r.node_count(), 1u);
+    }
+}
+
+}  // namespace
+
+// Bvh::restricted against brute force: the leaf order filtered, every kept item in one
+// leaf, counts and boxes those of the items below each node (exact unions).
+TEST(BvhTest, RestrictedTreeIsTheFilteredLeafOrderWithExactBoxes) {
+  check_restrictions<float>();
+  check_restrictions<double>();
+}
