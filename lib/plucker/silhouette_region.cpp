@@ -230,10 +230,21 @@ SurfaceTrees::SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, u
   tris_ = cs.triangle_lists();
   bvh_.reserve(cs.count());
   // A surface's list is ascending and distinct, so one of mesh.size() triangles is 0, 1, ...
-  for (const std::vector<uint32_t>& tris : tris_)
-    bvh_.push_back(mesh_tree && tris.size() == mesh.size() && mesh_tree->item_count() == mesh.size()
-                       ? *mesh_tree
-                       : triangle_hierarchy(mesh, tris));
+  // and takes the mesh tree as it is; one of most of them takes the mesh tree restricted
+  // to its triangles (item i: tris[i]) instead of a second median build.
+  const bool whole_tree = mesh_tree && mesh_tree->item_count() == mesh.size();
+  for (const std::vector<uint32_t>& tris : tris_) {
+    if (whole_tree && tris.size() == mesh.size()) {
+      bvh_.push_back(*mesh_tree);
+    } else if (whole_tree && uint64_t(tris.size()) * kDerivedDen >= uint64_t(mesh.size()) * kDerivedNum) {
+      std::vector<uint32_t> keep(mesh.size(), accel::Bvh<float>::kDropped);
+      for (uint32_t i = 0; i < tris.size(); ++i) keep[tris[i]] = i;
+      bvh_.push_back(accel::Bvh<float>::restricted(*mesh_tree, keep,
+                                                   [&](uint32_t i) { return triangle_box(mesh, tris[i]); }));
+    } else {
+      bvh_.push_back(triangle_hierarchy(mesh, tris));
+    }
+  }
   rank_.assign(mesh.size(), 0u);
   uint32_t pos = 0;
   for (size_t s = 0; s < bvh_.size(); ++s)

@@ -129,7 +129,12 @@ class SurfaceTrees {
   // others are never region surfaces (kMinRegionTriangles with the estimate).
   // mesh_tree (optional): triangle_hierarchy over every triangle of the mesh in index
   // order (TriangleTree's, built by the same rule from the same boxes): a surface that
-  // holds every triangle takes a copy of it, the tree its own build would give.
+  // holds every triangle takes a copy of it, the tree its own build would give; one that
+  // holds at least kDerivedNum / kDerivedDen of them takes it restricted to its triangles
+  // (accel::Bvh::restricted: a linear pass instead of a median build; another tree than
+  // its own build would give, with boxes still the exact unions of its triangles'). The
+  // other surfaces build their own.
+  static constexpr uint32_t kDerivedNum = 9, kDerivedDen = 10;
   SurfaceTrees(const TriangleSoup& mesh, const ClosedSurfaces& cs, uint32_t min_edge_triangles = 0,
                const accel::Bvh<float>* mesh_tree = nullptr);
   // +1 when the closed segment r -> p meets a triangle of surface s (touching counts),
@@ -152,8 +157,8 @@ class SurfaceTrees {
   uint32_t rank(uint32_t t) const { return rank_[t]; }
   // Surface s's edges (the groups' silhouette edges are those of their candidates).
   const SurfaceEdges& edges(int32_t s) const { return edges_[size_t(s)]; }
-  // Surface s's input triangles (ascending) and triangle_hierarchy over them:
-  // InteriorOccluders walks the same one.
+  // Surface s's input triangles (ascending) and its hierarchy (triangle_hierarchy over
+  // them, or the mesh tree's, above): InteriorOccluders walks the same one.
   const std::vector<uint32_t>& triangles(int32_t s) const { return tris_[size_t(s)]; }
   const accel::Bvh<float>& hierarchy(int32_t s) const { return bvh_[size_t(s)]; }
   size_t memory_bytes() const;

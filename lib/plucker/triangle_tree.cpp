@@ -83,6 +83,11 @@ std::vector<AABB> triangle_boxes(const TriangleSoup& mesh, const std::vector<uin
   return box;
 }
 
+AABB triangle_box(const TriangleSoup& mesh, uint32_t t) {
+  const auto& c = mesh.triangles[t];
+  return corner_box(mesh.vertices[c[0]], mesh.vertices[c[1]], mesh.vertices[c[2]]);
+}
+
 TriangleTree::TriangleTree(const TriangleSoup& mesh, const mesh::PreparedMesh& pm) : bvh_(triangle_boxes(mesh), kRule) {
   find_patches(mesh, pm);
 }

@@ -36,6 +36,8 @@ namespace visgate::plucker {
 // index order when tris is null): per triangle AABB() extended by corners 0, 1 and 2, the
 // same bits (the hierarchies' item boxes, TriangleTree's and triangle_hierarchy's).
 std::vector<AABB> triangle_boxes(const TriangleSoup& mesh, const std::vector<uint32_t>* tris = nullptr);
+// The same box of triangle t alone.
+AABB triangle_box(const TriangleSoup& mesh, uint32_t t);
 
 class TriangleTree {
  public:
