@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "lib/accel/bvh.h"
+#include "tests/support/bvh_walk.h"
 #include "tests/support/random_boxes.h"
 
 using namespace visgate;
@@ -448,23 +449,11 @@ void expect_restriction(const Bvh<T>& src, const Boxes<T>& src_boxes, const std:
   std::vector<AABBT<T>> boxes(want.size());
   for (uint32_t item = 0; item < keep.size(); ++item)
     if (keep[item] != Bvh<T>::kDropped) boxes[keep[item]] = src_boxes[item];
-  // Each node's leaf-order range, by a walk that derives it from the counts alone.
-  std::vector<uint32_t> seen(want.size(), 0);
-  struct Todo {
-    uint32_t node, pos;
-  };
-  std::vector<Todo> todo = {{0, 0}};
-  size_t visited = 0;
-  while (!todo.empty()) {
-    const Todo d = todo.back();
-    todo.pop_back();
-    ++visited;
-    ASSERT_LT(d.node, r.node_count()) << what;
-    const auto& nd = r.node(d.node);
-    ASSERT_GT(nd.count, 0u) << what;
-    ASSERT_LE(d.pos + nd.count, want.size()) << what;
+  // Per node the union of its items' boxes, by value.
+  test::expect_bvh_shape(r, [&](uint32_t i, uint32_t pos) {
+    const auto& nd = r.node(i);
     AABBT<T> u;
-    for (uint32_t p = d.pos; p < d.pos + nd.count; ++p) {
+    for (uint32_t p = pos; p < pos + nd.count; ++p) {
       const AABBT<T>& b = boxes[r.item(p)];
       for (int a = 0; a < 3; ++a) {
         u.lo[a] = std::min(u.lo[a], b.lo[a]);
@@ -472,23 +461,10 @@ void expect_restriction(const Bvh<T>& src, const Boxes<T>& src_boxes, const std:
       }
     }
     for (int a = 0; a < 3; ++a) {
-      ASSERT_EQ(nd.box.lo[a], u.lo[a]) << what << " node " << d.node << " axis " << a;
-      ASSERT_EQ(nd.box.hi[a], u.hi[a]) << what << " node " << d.node << " axis " << a;
+      ASSERT_EQ(nd.box.lo[a], u.lo[a]) << what << " node " << i << " axis " << a;
+      ASSERT_EQ(nd.box.hi[a], u.hi[a]) << what << " node " << i << " axis " << a;
     }
-    if (r.is_leaf(nd)) {
-      ASSERT_EQ(nd.first, d.pos) << what;
-      for (uint32_t p = d.pos; p < d.pos + nd.count; ++p) ++seen[p];
-      continue;
-    }
-    const uint32_t l = r.left(d.node), rt = r.right(d.node);
-    ASSERT_EQ(l, d.node + 1) << what;
-    ASSERT_GT(rt, l) << what;
-    ASSERT_EQ(r.node(l).count + r.node(rt).count, nd.count) << what;
-    todo.push_back({l, d.pos});
-    todo.push_back({rt, d.pos + r.node(l).count});
-  }
-  ASSERT_EQ(visited, r.node_count()) << what;
-  for (uint32_t p = 0; p < want.size(); ++p) ASSERT_EQ(seen[p], 1u) << what << " position " << p;
+  });
 }
 
 template <class T>

@@ -18,6 +18,7 @@
 #include "lib/plucker/silhouette_region.h"
 #include "lib/plucker/triangle_tree.h"
 #include "lib/scene/rng.h"
+#include "tests/support/bvh_walk.h"
 #include "tests/support/plucker_scenes.h"
 
 namespace visgate {
@@ -239,58 +240,36 @@ TEST(PluckerInteriorOccluders, SurfaceTreesHierarchiesGiveTheSamePolygons) {
   }
 }
 
-// Surface k's hierarchy in `trees` against brute force: every triangle of the surface in
-// exactly one leaf and none of another surface (nor any other triangle), inner nodes
-// with two children (left at i + 1) and more than 4 triangles, leaves at most 4, and
-// every node's box the componentwise min/max of its triangles' corners in double (by
-// value). Its rank is its leaf order, surface after surface.
+// Surface k's hierarchy in `trees` against brute force: the shape (test::expect_bvh_shape),
+// every triangle of the surface in exactly one leaf and none of another surface (nor any
+// other triangle), and every node's box the componentwise min/max of its triangles'
+// corners in double (by value). Its rank is its leaf order, surface after surface.
 void expect_surface_hierarchy(const TriangleSoup& mesh, const plucker::ClosedSurfaces& cs,
                               const plucker::SurfaceTrees& trees, int32_t k, uint32_t rank0) {
   const accel::Bvh<float>& b = trees.hierarchy(k);
   const std::vector<uint32_t>& tris = trees.triangles(k);
   ASSERT_FALSE(b.empty());
   std::vector<int> seen(mesh.size(), 0);
-  struct Todo {
-    uint32_t node, pos;
-  };
-  std::vector<Todo> todo = {{0, 0}};
-  size_t visited = 0;
-  while (!todo.empty()) {
-    const Todo d = todo.back();
-    todo.pop_back();
-    ++visited;
-    ASSERT_LT(d.node, b.node_count());
-    const auto& nd = b.node(d.node);
+  test::expect_bvh_shape(b, [&](uint32_t i, uint32_t pos) {
+    const auto& nd = b.node(i);
     Vec3d lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
-    for (uint32_t p = d.pos; p < d.pos + nd.count; ++p) {
+    for (uint32_t p = pos; p < pos + nd.count; ++p) {
       ASSERT_LT(b.item(p), tris.size());
       const uint32_t t = tris[b.item(p)];
       for (int c = 0; c < 3; ++c) {
         const Vec3d v = to_double(mesh.corner(t, c));
         for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
       }
-    }
-    for (int a = 0; a < 3; ++a) {
-      ASSERT_EQ(double(nd.box.lo[a]), lo[a]) << "node " << d.node;
-      ASSERT_EQ(double(nd.box.hi[a]), hi[a]) << "node " << d.node;
-    }
-    if (b.is_leaf(nd)) {
-      ASSERT_GT(nd.count, 0u);
-      ASSERT_EQ(nd.first, d.pos);
-      for (uint32_t p = d.pos; p < d.pos + nd.count; ++p) {
-        const uint32_t t = tris[b.item(p)];
+      if (b.is_leaf(nd)) {
         ++seen[t];
         ASSERT_EQ(trees.rank(t), rank0 + p);
       }
-      continue;
     }
-    ASSERT_GT(nd.count, 4u);
-    ASSERT_EQ(b.left(d.node), d.node + 1);
-    ASSERT_EQ(b.node(d.node + 1).count + b.node(b.right(d.node)).count, nd.count);
-    todo.push_back({d.node + 1, d.pos});
-    todo.push_back({b.right(d.node), d.pos + b.node(d.node + 1).count});
-  }
-  ASSERT_EQ(visited, b.node_count());
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_EQ(double(nd.box.lo[a]), lo[a]) << "node " << i;
+      ASSERT_EQ(double(nd.box.hi[a]), hi[a]) << "node " << i;
+    }
+  });
   for (uint32_t t = 0; t < mesh.size(); ++t) ASSERT_EQ(seen[t], cs.surface(t) == k ? 1 : 0) << t;
 }
 
