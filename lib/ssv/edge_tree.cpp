@@ -187,8 +187,10 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   // Morton order of the edges' midpoints (the sums of their float endpoints), by a
   // stable LSD radix sort of two 15-bit digits (counts of 128 KiB each, in cache): ties
   // stay in index order.
-  AABB bounds;
-  for (const Vec3f& v : m.vertex_pos) bounds.extend(v);
+  // The same floats as AABB::extend point by point (lanes.h), a third of the operations.
+  LanesBox vbox;
+  for (const Vec3f& v : m.vertex_pos) vbox.add(v);
+  const AABB bounds = vbox.box();
   const Vec3f ext = bounds.extent();
   float scale[3];
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
@@ -255,8 +257,11 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   // quantized normal and whether it has a plane), keyed by the triangle, spares the
   // second triangle_plane. An entry holds the very values computed on its first use, and
   // the last leaf that folded them into its bounds.
+  // The corners enter a leaf's bounds as their box (blo, bhi): lanes_min and lanes_max
+  // keep the first of equal values, so folding the box gives the floats, signed zeros
+  // included, that folding the corners one by one in order gives.
   struct Met {
-    Lanes c[3], n;
+    Lanes blo, bhi, n;
     int32_t t;
     uint32_t leaf;
     uint8_t no_plane;
@@ -271,7 +276,8 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
     nd.edges = nd.n;
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
-    for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
+    const uint32_t leaf_end = nd.child + nd.n;  // a local: the stores below may alias nd
+    for (uint32_t k = nd.child; k < leaf_end; ++k) {
       prefetch_ahead(edges, m, order_.data(), k, E);
       const Edge& ed = edges[order_[k]];
       ends_[2 * size_t(k)] = ed.a;
@@ -290,11 +296,14 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         Met& e = met[uint32_t(t) & (kMetEntries - 1)];
         if (e.t != t) {  // from its corners: no fresh per-triangle array
           const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
-          for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
+          Lanes c[3];
+          for (int v = 0; v < 3; ++v) c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
+          e.blo = lanes_min(lanes_min(c[0], c[1]), c[2]);
+          e.bhi = lanes_max(lanes_max(c[0], c[1]), c[2]);
           e.t = t;
           e.leaf = uint32_t(-1);
           bool has_plane = false;
-          e.n = unit_normal(e.c, has_plane);
+          e.n = unit_normal(c, has_plane);
           e.no_plane = uint8_t(!has_plane);  // no plane: never proven weight 0
           Vec3f n;
           lanes_store(e.n, &n.x);
@@ -308,10 +317,8 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         if (e.leaf != uint32_t(j)) {
           e.leaf = uint32_t(j);
           nd.single |= e.no_plane;
-          for (int v = 0; v < 3; ++v) {
-            tlo = lanes_min(tlo, e.c[v]);
-            thi = lanes_max(thi, e.c[v]);
-          }
+          tlo = lanes_min(tlo, e.blo);
+          thi = lanes_max(thi, e.bhi);
           nlo = lanes_min(nlo, e.n);
           nhi = lanes_max(nhi, e.n);
         }
