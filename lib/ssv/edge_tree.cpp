@@ -147,6 +147,32 @@ constexpr auto kSpread10 = [] {
 
 }  // namespace
 
+// A node's six float triples (lo, hi, tlo, thi, nlo, nhi: 18 consecutive floats, then
+// `child`) as lanes. SSE2 loads four floats at each triple (lane 3 reads the next field,
+// don't-care: lanes_min/max and the stores below keep lanes 0-2 only) and stores four at
+// each of the first five, each store's lane 3 overwritten by the next triple's store,
+// the last triple three floats: the same 18 floats as lanes_load/lanes_store, fewer
+// operations.
+template <class Node>
+inline void load_bounds(const Node& nd, Lanes* v) {
+  static_assert(offsetof(Node, nhi) == offsetof(Node, lo) + 15 * sizeof(float));
+#if defined(__SSE2__)
+  for (int i = 0; i < 6; ++i) v[i] = _mm_loadu_ps(nd.lo + 3 * i);
+#else
+  for (int i = 0; i < 6; ++i) v[i] = lanes_load(nd.lo + 3 * i);
+#endif
+}
+template <class Node>
+inline void store_bounds(Node& nd, const Lanes* v) {
+#if defined(__SSE2__)
+  for (int i = 0; i < 5; ++i) _mm_storeu_ps(nd.lo + 3 * i, v[i]);
+  _mm_storel_pi(reinterpret_cast<__m64*>(nd.nhi), v[5]);
+  _mm_store_ss(nd.nhi + 2, _mm_movehl_ps(v[5], v[5]));
+#else
+  for (int i = 0; i < 6; ++i) lanes_store(v[i], nd.lo + 3 * i);
+#endif
+}
+
 Vec3f tree_unit_normal(const Vec3f& a, const Vec3f& b, const Vec3f& c, bool& has_plane) {
   const Lanes corners[3] = {lanes_load(a), lanes_load(b), lanes_load(c)};
   Vec3f n;
@@ -325,8 +351,8 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         if (ed.t2 >= 0) std::memcpy(en + 3 * side, e.q, 3 * sizeof(int16_t));
       }
     }
-    lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
-    lanes_store(nlo, nd.nlo), lanes_store(nhi, nd.nhi);
+    const Lanes leaf_bounds[6] = {lo, hi, tlo, thi, nlo, nhi};
+    store_bounds(nd, leaf_bounds);
   }
   for (size_t first = 0, n = leaves; n > 1; first += n, n = (n + 1) / 2) {
     const size_t up = first + n;
@@ -334,17 +360,20 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       Node& nd = nodes_[up + j];
       nd.child = uint32_t(first + 2 * j);
       nd.n = uint8_t(2 * j + 1 < n ? 2 : 1);
-      Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
+      // Lows by lanes_min, highs by lanes_max, the children in order.
+      Lanes acc[6] = {inf, ninf, inf, ninf, inf, ninf};
       for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
         const Node& o = nodes_[k];
-        lo = lanes_min(lo, lanes_load(o.lo)), hi = lanes_max(hi, lanes_load(o.hi));
-        tlo = lanes_min(tlo, lanes_load(o.tlo)), thi = lanes_max(thi, lanes_load(o.thi));
-        nlo = lanes_min(nlo, lanes_load(o.nlo)), nhi = lanes_max(nhi, lanes_load(o.nhi));
+        Lanes c[6];
+        load_bounds(o, c);
+        for (int i = 0; i < 6; i += 2) {
+          acc[i] = lanes_min(acc[i], c[i]);
+          acc[i + 1] = lanes_max(acc[i + 1], c[i + 1]);
+        }
         nd.single |= o.single;
         nd.edges += o.edges;
       }
-      lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
-      lanes_store(nlo, nd.nlo), lanes_store(nhi, nd.nhi);
+      store_bounds(nd, acc);
     }
   }
 }
