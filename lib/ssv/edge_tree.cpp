@@ -186,21 +186,21 @@ namespace {
 // for each triangle not in the build's cache, from the mesh's triangles (40 bytes), arrays
 // past the private caches on large meshes (scan 300k: 7 MB and 12 MB). Fetching them some
 // edges ahead hides the misses; only timing changes (a prefetch reads no value and cannot
-// fault). Positions past the end fetch the last edge's again: no branch.
+// fault). `order` has kEdgeAhead positions past the end, each the last edge: no clamp.
 constexpr size_t kEdgeAhead = 16, kTriangleAhead = 8;
 // Inlined: GCC 12 otherwise finds the function free of side effects and drops the call.
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 inline void prefetch_ahead(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const uint32_t* order,
-                           size_t k, size_t E) {
+                           size_t k) {
 #if defined(__GNUC__)
-  __builtin_prefetch(&edges[order[std::min(k + kEdgeAhead, E - 1)]]);
-  const Edge& f = edges[order[std::min(k + kTriangleAhead, E - 1)]];
+  __builtin_prefetch(&edges[order[k + kEdgeAhead]]);
+  const Edge& f = edges[order[k + kTriangleAhead]];
   __builtin_prefetch(&m.triangles[size_t(f.t1 >= 0 ? f.t1 : 0)]);
   __builtin_prefetch(&m.triangles[size_t(f.t2 >= 0 ? f.t2 : f.t1 >= 0 ? f.t1 : 0)]);
 #else
-  (void)edges, (void)m, (void)order, (void)k, (void)E;
+  (void)edges, (void)m, (void)order, (void)k;
 #endif
 }
 
@@ -222,7 +222,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
   // Fresh memory is what this build costs (populated.h): the codes and the sort's second
   // buffer share one block, which then holds the leaves' endpoints.
-  PopulatedArray<uint32_t> scratch(2 * E), a(E);
+  PopulatedArray<uint32_t> scratch(2 * E), a(E + kEdgeAhead);  // a: the order, padded for prefetch_ahead
   uint32_t* code = scratch.data();
   uint32_t* b = scratch.data() + E;
   uint32_t* src = a.data();
@@ -265,6 +265,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     for (size_t k = 0; k < E; ++k) dst[cnt[(code[src[k]] >> shift) & kMask]++] = src[k];
     std::swap(src, dst);
   }
+  for (size_t k = E; k < E + kEdgeAhead; ++k) src[k] = src[E - 1];  // src is a again
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
   ends_ = std::move(scratch);  // the codes and b are dead; written with the leaves
@@ -304,7 +305,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
     const uint32_t leaf_end = nd.child + nd.n;  // a local: the stores below may alias nd
     for (uint32_t k = nd.child; k < leaf_end; ++k) {
-      prefetch_ahead(edges, m, order_.data(), k, E);
+      prefetch_ahead(edges, m, order_.data(), k);
       const Edge& ed = edges[order_[k]];
       ends_[2 * size_t(k)] = ed.a;
       ends_[2 * size_t(k) + 1] = ed.b;
