@@ -87,17 +87,18 @@ namespace {
 // The unit normal n times 32767, to nearest (half away from zero; |n| <= 1: no
 // overflow), 0 without a plane, into q[0..3) (q[3] is written too): the scalar
 // v >= 0 ? v + 0.5 : v - 0.5 truncated, four lanes at once.
-inline void quantize_normal(const Vec3f& n, bool has_plane, int16_t* q) {
+// n in lanes 0-2 (lane 3 goes to q[3], which no test reads).
+inline void quantize_normal(Lanes n, bool has_plane, int16_t* q) {
 #if defined(__SSE2__)
   const __m128 zero = _mm_setzero_ps();
-  const __m128 v = has_plane ? _mm_mul_ps(lanes_load(n), _mm_set1_ps(32767.0f)) : zero;
+  const __m128 v = has_plane ? _mm_mul_ps(n, _mm_set1_ps(32767.0f)) : zero;
   const __m128 ge = _mm_cmpge_ps(v, zero);
   const __m128 half = _mm_or_ps(_mm_and_ps(ge, _mm_set1_ps(0.5f)), _mm_andnot_ps(ge, _mm_set1_ps(-0.5f)));
   const __m128i r = _mm_cvttps_epi32(_mm_add_ps(v, half));
   _mm_storel_epi64(reinterpret_cast<__m128i*>(q), _mm_packs_epi32(r, r));
 #else
   for (int c = 0; c < 3; ++c) {
-    const float v = has_plane ? n[c] * 32767.0f : 0.0f;
+    const float v = has_plane ? n.v[c] * 32767.0f : 0.0f;
     q[c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
   }
   q[3] = 0;
@@ -332,9 +333,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
           bool has_plane = false;
           e.n = unit_normal(c, has_plane);
           e.no_plane = uint8_t(!has_plane);  // no plane: never proven weight 0
-          Vec3f n;
-          lanes_store(e.n, &n.x);
-          quantize_normal(n, has_plane, e.q);
+          quantize_normal(e.n, has_plane, e.q);
         }
         // A leaf's edges share triangles (about half of its 16 references repeat): each
         // triangle's corners and normal enter its bounds at their first reference, in
