@@ -305,15 +305,16 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     nd.edges = nd.n;
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
     const uint32_t leaf_end = nd.child + nd.n;  // a local: the stores below may alias nd
+    uint8_t single = 0;                          // likewise, stored after the loop
     for (uint32_t k = nd.child; k < leaf_end; ++k) {
       prefetch_ahead(edges, m, order_.data(), k);
-      const Edge& ed = edges[order_[k]];
+      const Edge ed = edges[order_[k]];  // a copy: the stores below may alias edges
       ends_[2 * size_t(k)] = ed.a;
       ends_[2 * size_t(k) + 1] = ed.b;
       const Lanes va = lanes_load(m.vertex_pos[ed.a]), vb = lanes_load(m.vertex_pos[ed.b]);
       lo = lanes_min(lo, lanes_min(va, vb));
       hi = lanes_max(hi, lanes_max(va, vb));
-      if (ed.t2 < 0) nd.single = 1;
+      if (ed.t2 < 0) single = 1;
       // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
       // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
       // (never proven weight 0) for a single edge or a triangle without a plane.
@@ -342,7 +343,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         // ties (lanes_max likewise).
         if (e.leaf != uint32_t(j)) {
           e.leaf = uint32_t(j);
-          nd.single |= e.no_plane;
+          single |= e.no_plane;
           tlo = lanes_min(tlo, e.blo);
           thi = lanes_max(thi, e.bhi);
           nlo = lanes_min(nlo, e.n);
@@ -351,6 +352,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         if (ed.t2 >= 0) std::memcpy(en + 3 * side, e.q, 3 * sizeof(int16_t));
       }
     }
+    nd.single = single;
     const Lanes leaf_bounds[6] = {lo, hi, tlo, thi, nlo, nhi};
     store_bounds(nd, leaf_bounds);
   }
