@@ -297,6 +297,11 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   };
   std::vector<Met> met(kMetEntries);
   for (Met& e : met) e.t = -1;
+  // Locals: the stores through ends and nrm could otherwise alias the members.
+  const uint32_t* const order = order_.data();
+  uint32_t* const ends = ends_.data();
+  int16_t* const nrm = normals_.data();
+  const Vec3f* const vpos = m.vertex_pos.data();
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     nd.leaf = 1;
@@ -307,18 +312,18 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     const uint32_t leaf_end = nd.child + nd.n;  // a local: the stores below may alias nd
     uint8_t single = 0;                          // likewise, stored after the loop
     for (uint32_t k = nd.child; k < leaf_end; ++k) {
-      prefetch_ahead(edges, m, order_.data(), k);
-      const Edge ed = edges[order_[k]];  // a copy: the stores below may alias edges
-      ends_[2 * size_t(k)] = ed.a;
-      ends_[2 * size_t(k) + 1] = ed.b;
-      const Lanes va = lanes_load(m.vertex_pos[ed.a]), vb = lanes_load(m.vertex_pos[ed.b]);
+      prefetch_ahead(edges, m, order, k);
+      const Edge ed = edges[order[k]];  // a copy: the stores below may alias edges
+      ends[2 * size_t(k)] = ed.a;
+      ends[2 * size_t(k) + 1] = ed.b;
+      const Lanes va = lanes_load(vpos[ed.a]), vb = lanes_load(vpos[ed.b]);
       lo = lanes_min(lo, lanes_min(va, vb));
       hi = lanes_max(hi, lanes_max(va, vb));
       if (ed.t2 < 0) single = 1;
       // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
       // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
       // (never proven weight 0) for a single edge or a triangle without a plane.
-      int16_t* en = &normals_[6 * size_t(k)];  // zero from the PopulatedArray
+      int16_t* en = nrm + 6 * size_t(k);  // zero from the PopulatedArray
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
@@ -326,7 +331,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         if (e.t != t) {  // from its corners: no fresh per-triangle array
           const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
           Lanes c[3];
-          for (int v = 0; v < 3; ++v) c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
+          for (int v = 0; v < 3; ++v) c[v] = lanes_load(vpos[tri.v[v]]);
           e.blo = lanes_min(lanes_min(c[0], c[1]), c[2]);
           e.bhi = lanes_max(lanes_max(c[0], c[1]), c[2]);
           e.t = t;
