@@ -157,20 +157,22 @@ constexpr auto kSpread10 = [] {
 template <class Node>
 inline void load_bounds(const Node& nd, Lanes* v) {
   static_assert(offsetof(Node, nhi) == offsetof(Node, lo) + 15 * sizeof(float));
+  const float* const f[6] = {nd.lo, nd.hi, nd.tlo, nd.thi, nd.nlo, nd.nhi};  // each member: no subscript past one
 #if defined(__SSE2__)
-  for (int i = 0; i < 6; ++i) v[i] = _mm_loadu_ps(nd.lo + 3 * i);
+  for (int i = 0; i < 6; ++i) v[i] = _mm_loadu_ps(f[i]);
 #else
-  for (int i = 0; i < 6; ++i) v[i] = lanes_load(nd.lo + 3 * i);
+  for (int i = 0; i < 6; ++i) v[i] = lanes_load(f[i]);
 #endif
 }
 template <class Node>
 inline void store_bounds(Node& nd, const Lanes* v) {
+  float* const f[6] = {nd.lo, nd.hi, nd.tlo, nd.thi, nd.nlo, nd.nhi};
 #if defined(__SSE2__)
-  for (int i = 0; i < 5; ++i) _mm_storeu_ps(nd.lo + 3 * i, v[i]);
-  _mm_storel_pi(reinterpret_cast<__m64*>(nd.nhi), v[5]);
-  _mm_store_ss(nd.nhi + 2, _mm_movehl_ps(v[5], v[5]));
+  for (int i = 0; i < 5; ++i) _mm_storeu_ps(f[i], v[i]);
+  _mm_storel_pi(reinterpret_cast<__m64*>(f[5]), v[5]);
+  _mm_store_ss(f[5] + 2, _mm_movehl_ps(v[5], v[5]));
 #else
-  for (int i = 0; i < 6; ++i) lanes_store(v[i], nd.lo + 3 * i);
+  for (int i = 0; i < 6; ++i) lanes_store(v[i], f[i]);
 #endif
 }
 
