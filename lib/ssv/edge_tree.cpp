@@ -87,17 +87,18 @@ namespace {
 // The unit normal n times 32767, to nearest (half away from zero; |n| <= 1: no
 // overflow), 0 without a plane, into q[0..3) (q[3] is written too): the scalar
 // v >= 0 ? v + 0.5 : v - 0.5 truncated, four lanes at once.
-inline void quantize_normal(const Vec3f& n, bool has_plane, int16_t* q) {
+// n in lanes 0-2 (lane 3 goes to q[3], which no test reads).
+inline void quantize_normal(Lanes n, bool has_plane, int16_t* q) {
 #if defined(__SSE2__)
   const __m128 zero = _mm_setzero_ps();
-  const __m128 v = has_plane ? _mm_mul_ps(lanes_load(n), _mm_set1_ps(32767.0f)) : zero;
+  const __m128 v = has_plane ? _mm_mul_ps(n, _mm_set1_ps(32767.0f)) : zero;
   const __m128 ge = _mm_cmpge_ps(v, zero);
   const __m128 half = _mm_or_ps(_mm_and_ps(ge, _mm_set1_ps(0.5f)), _mm_andnot_ps(ge, _mm_set1_ps(-0.5f)));
   const __m128i r = _mm_cvttps_epi32(_mm_add_ps(v, half));
   _mm_storel_epi64(reinterpret_cast<__m128i*>(q), _mm_packs_epi32(r, r));
 #else
   for (int c = 0; c < 3; ++c) {
-    const float v = has_plane ? n[c] * 32767.0f : 0.0f;
+    const float v = has_plane ? n.v[c] * 32767.0f : 0.0f;
     q[c] = int16_t(v >= 0.0f ? v + 0.5f : v - 0.5f);
   }
   q[3] = 0;
@@ -147,6 +148,34 @@ constexpr auto kSpread10 = [] {
 
 }  // namespace
 
+// A node's six float triples (lo, hi, tlo, thi, nlo, nhi: 18 consecutive floats, then
+// `child`) as lanes. SSE2 loads four floats at each triple (lane 3 reads the next field,
+// don't-care: lanes_min/max and the stores below keep lanes 0-2 only) and stores four at
+// each of the first five, each store's lane 3 overwritten by the next triple's store,
+// the last triple three floats: the same 18 floats as lanes_load/lanes_store, fewer
+// operations.
+template <class Node>
+inline void load_bounds(const Node& nd, Lanes* v) {
+  static_assert(offsetof(Node, nhi) == offsetof(Node, lo) + 15 * sizeof(float));
+  const float* const f[6] = {nd.lo, nd.hi, nd.tlo, nd.thi, nd.nlo, nd.nhi};  // each member: no subscript past one
+#if defined(__SSE2__)
+  for (int i = 0; i < 6; ++i) v[i] = _mm_loadu_ps(f[i]);
+#else
+  for (int i = 0; i < 6; ++i) v[i] = lanes_load(f[i]);
+#endif
+}
+template <class Node>
+inline void store_bounds(Node& nd, const Lanes* v) {
+  float* const f[6] = {nd.lo, nd.hi, nd.tlo, nd.thi, nd.nlo, nd.nhi};
+#if defined(__SSE2__)
+  for (int i = 0; i < 5; ++i) _mm_storeu_ps(f[i], v[i]);
+  _mm_storel_pi(reinterpret_cast<__m64*>(f[5]), v[5]);
+  _mm_store_ss(f[5] + 2, _mm_movehl_ps(v[5], v[5]));
+#else
+  for (int i = 0; i < 6; ++i) lanes_store(v[i], f[i]);
+#endif
+}
+
 Vec3f tree_unit_normal(const Vec3f& a, const Vec3f& b, const Vec3f& c, bool& has_plane) {
   const Lanes corners[3] = {lanes_load(a), lanes_load(b), lanes_load(c)};
   Vec3f n;
@@ -160,21 +189,21 @@ namespace {
 // for each triangle not in the build's cache, from the mesh's triangles (40 bytes), arrays
 // past the private caches on large meshes (scan 300k: 7 MB and 12 MB). Fetching them some
 // edges ahead hides the misses; only timing changes (a prefetch reads no value and cannot
-// fault). Positions past the end fetch the last edge's again: no branch.
+// fault). `order` has kEdgeAhead positions past the end, each the last edge: no clamp.
 constexpr size_t kEdgeAhead = 16, kTriangleAhead = 8;
 // Inlined: GCC 12 otherwise finds the function free of side effects and drops the call.
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
 inline void prefetch_ahead(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, const uint32_t* order,
-                           size_t k, size_t E) {
+                           size_t k) {
 #if defined(__GNUC__)
-  __builtin_prefetch(&edges[order[std::min(k + kEdgeAhead, E - 1)]]);
-  const Edge& f = edges[order[std::min(k + kTriangleAhead, E - 1)]];
+  __builtin_prefetch(&edges[order[k + kEdgeAhead]]);
+  const Edge& f = edges[order[k + kTriangleAhead]];
   __builtin_prefetch(&m.triangles[size_t(f.t1 >= 0 ? f.t1 : 0)]);
   __builtin_prefetch(&m.triangles[size_t(f.t2 >= 0 ? f.t2 : f.t1 >= 0 ? f.t1 : 0)]);
 #else
-  (void)edges, (void)m, (void)order, (void)k, (void)E;
+  (void)edges, (void)m, (void)order, (void)k;
 #endif
 }
 
@@ -187,14 +216,16 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   // Morton order of the edges' midpoints (the sums of their float endpoints), by a
   // stable LSD radix sort of two 15-bit digits (counts of 128 KiB each, in cache): ties
   // stay in index order.
-  AABB bounds;
-  for (const Vec3f& v : m.vertex_pos) bounds.extend(v);
+  // The same floats as AABB::extend point by point (lanes.h), a third of the operations.
+  LanesBox vbox;
+  for (const Vec3f& v : m.vertex_pos) vbox.add(v);
+  const AABB bounds = vbox.box();
   const Vec3f ext = bounds.extent();
   float scale[3];
   for (int c = 0; c < 3; ++c) scale[c] = ext[c] > 0.0f ? 1023.0f / (2.0f * ext[c]) : 0.0f;
   // Fresh memory is what this build costs (populated.h): the codes and the sort's second
   // buffer share one block, which then holds the leaves' endpoints.
-  PopulatedArray<uint32_t> scratch(2 * E), a(E);
+  PopulatedArray<uint32_t> scratch(2 * E), a(E + kEdgeAhead);  // a: the order, padded for prefetch_ahead
   uint32_t* code = scratch.data();
   uint32_t* b = scratch.data() + E;
   uint32_t* src = a.data();
@@ -237,6 +268,7 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     for (size_t k = 0; k < E; ++k) dst[cnt[(code[src[k]] >> shift) & kMask]++] = src[k];
     std::swap(src, dst);
   }
+  for (size_t k = E; k < E + kEdgeAhead; ++k) src[k] = src[E - 1];  // src is a again
   order_ = std::move(a);
   vertices_ = &m.vertex_pos;
   ends_ = std::move(scratch);  // the codes and b are dead; written with the leaves
@@ -255,8 +287,11 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   // quantized normal and whether it has a plane), keyed by the triangle, spares the
   // second triangle_plane. An entry holds the very values computed on its first use, and
   // the last leaf that folded them into its bounds.
+  // The corners enter a leaf's bounds as their box (blo, bhi): lanes_min and lanes_max
+  // keep the first of equal values, so folding the box gives the floats, signed zeros
+  // included, that folding the corners one by one in order gives.
   struct Met {
-    Lanes c[3], n;
+    Lanes blo, bhi, n;
     int32_t t;
     uint32_t leaf;
     uint8_t no_plane;
@@ -264,6 +299,11 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
   };
   std::vector<Met> met(kMetEntries);
   for (Met& e : met) e.t = -1;
+  // Locals: the stores through ends and nrm could otherwise alias the members.
+  const uint32_t* const order = order_.data();
+  uint32_t* const ends = ends_.data();
+  int16_t* const nrm = normals_.data();
+  const Vec3f* const vpos = m.vertex_pos.data();
   for (size_t j = 0; j < leaves; ++j) {
     Node& nd = nodes_[j];
     nd.leaf = 1;
@@ -271,34 +311,37 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
     nd.n = uint8_t(std::min<size_t>(kLeaf, E - j * kLeaf));
     nd.edges = nd.n;
     Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
-    for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
-      prefetch_ahead(edges, m, order_.data(), k, E);
-      const Edge& ed = edges[order_[k]];
-      ends_[2 * size_t(k)] = ed.a;
-      ends_[2 * size_t(k) + 1] = ed.b;
-      const Lanes va = lanes_load(m.vertex_pos[ed.a]), vb = lanes_load(m.vertex_pos[ed.b]);
+    const uint32_t leaf_end = nd.child + nd.n;  // a local: the stores below may alias nd
+    uint8_t single = 0;                          // likewise, stored after the loop
+    for (uint32_t k = nd.child; k < leaf_end; ++k) {
+      prefetch_ahead(edges, m, order, k);
+      const Edge ed = edges[order[k]];  // a copy: the stores below may alias edges
+      ends[2 * size_t(k)] = ed.a;
+      ends[2 * size_t(k) + 1] = ed.b;
+      const Lanes va = lanes_load(vpos[ed.a]), vb = lanes_load(vpos[ed.b]);
       lo = lanes_min(lo, lanes_min(va, vb));
       hi = lanes_max(hi, lanes_max(va, vb));
-      if (ed.t2 < 0) nd.single = 1;
+      if (ed.t2 < 0) single = 1;
       // The edge's two unit normals for the leaf's per-edge facing test, times 32767 and
       // rounded to integers (12 bytes an edge: fresh memory is what the build costs); 0
       // (never proven weight 0) for a single edge or a triangle without a plane.
-      int16_t* en = &normals_[6 * size_t(k)];  // zero from the PopulatedArray
+      int16_t* en = nrm + 6 * size_t(k);  // zero from the PopulatedArray
       for (int side = 0; side < 2; ++side) {
         const int32_t t = side == 0 ? ed.t1 : ed.t2;
         if (t < 0) continue;
         Met& e = met[uint32_t(t) & (kMetEntries - 1)];
         if (e.t != t) {  // from its corners: no fresh per-triangle array
           const mesh::PreparedTriangle& tri = m.triangles[size_t(t)];
-          for (int v = 0; v < 3; ++v) e.c[v] = lanes_load(m.vertex_pos[tri.v[v]]);
+          Lanes c[3];
+          for (int v = 0; v < 3; ++v) c[v] = lanes_load(vpos[tri.v[v]]);
+          e.blo = lanes_min(lanes_min(c[0], c[1]), c[2]);
+          e.bhi = lanes_max(lanes_max(c[0], c[1]), c[2]);
           e.t = t;
           e.leaf = uint32_t(-1);
           bool has_plane = false;
-          e.n = unit_normal(e.c, has_plane);
+          e.n = unit_normal(c, has_plane);
           e.no_plane = uint8_t(!has_plane);  // no plane: never proven weight 0
-          Vec3f n;
-          lanes_store(e.n, &n.x);
-          quantize_normal(n, has_plane, e.q);
+          quantize_normal(e.n, has_plane, e.q);
         }
         // A leaf's edges share triangles (about half of its 16 references repeat): each
         // triangle's corners and normal enter its bounds at their first reference, in
@@ -307,19 +350,18 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
         // ties (lanes_max likewise).
         if (e.leaf != uint32_t(j)) {
           e.leaf = uint32_t(j);
-          nd.single |= e.no_plane;
-          for (int v = 0; v < 3; ++v) {
-            tlo = lanes_min(tlo, e.c[v]);
-            thi = lanes_max(thi, e.c[v]);
-          }
+          single |= e.no_plane;
+          tlo = lanes_min(tlo, e.blo);
+          thi = lanes_max(thi, e.bhi);
           nlo = lanes_min(nlo, e.n);
           nhi = lanes_max(nhi, e.n);
         }
         if (ed.t2 >= 0) std::memcpy(en + 3 * side, e.q, 3 * sizeof(int16_t));
       }
     }
-    lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
-    lanes_store(nlo, nd.nlo), lanes_store(nhi, nd.nhi);
+    nd.single = single;
+    const Lanes leaf_bounds[6] = {lo, hi, tlo, thi, nlo, nhi};
+    store_bounds(nd, leaf_bounds);
   }
   for (size_t first = 0, n = leaves; n > 1; first += n, n = (n + 1) / 2) {
     const size_t up = first + n;
@@ -327,17 +369,20 @@ EdgeTree::EdgeTree(const std::vector<Edge>& edges, const mesh::PreparedMesh& m, 
       Node& nd = nodes_[up + j];
       nd.child = uint32_t(first + 2 * j);
       nd.n = uint8_t(2 * j + 1 < n ? 2 : 1);
-      Lanes lo = inf, hi = ninf, tlo = inf, thi = ninf, nlo = inf, nhi = ninf;
+      // Lows by lanes_min, highs by lanes_max, the children in order.
+      Lanes acc[6] = {inf, ninf, inf, ninf, inf, ninf};
       for (uint32_t k = nd.child; k < nd.child + nd.n; ++k) {
         const Node& o = nodes_[k];
-        lo = lanes_min(lo, lanes_load(o.lo)), hi = lanes_max(hi, lanes_load(o.hi));
-        tlo = lanes_min(tlo, lanes_load(o.tlo)), thi = lanes_max(thi, lanes_load(o.thi));
-        nlo = lanes_min(nlo, lanes_load(o.nlo)), nhi = lanes_max(nhi, lanes_load(o.nhi));
+        Lanes c[6];
+        load_bounds(o, c);
+        for (int i = 0; i < 6; i += 2) {
+          acc[i] = lanes_min(acc[i], c[i]);
+          acc[i + 1] = lanes_max(acc[i + 1], c[i + 1]);
+        }
         nd.single |= o.single;
         nd.edges += o.edges;
       }
-      lanes_store(lo, nd.lo), lanes_store(hi, nd.hi), lanes_store(tlo, nd.tlo), lanes_store(thi, nd.thi);
-      lanes_store(nlo, nd.nlo), lanes_store(nhi, nd.nhi);
+      store_bounds(nd, acc);
     }
   }
 }
