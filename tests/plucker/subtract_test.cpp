@@ -269,7 +269,7 @@ TEST(PluckerSubtract, FragmentStorageMatchesCopyingTheList) {
     qbox = UVBox{qbox.ulo - 1e-9, qbox.uhi + 1e-9, qbox.vlo - 1e-9, qbox.vhi + 1e-9};
     const size_t nb = boxes.size(), nv = kept.verts.size();
     const bool a = subtract_polygon(r, t, 3, skip, qbox, axes, lb, kept, boxes, runs, pieces, piece_boxes, cur, pos,
-                                    neg, c);
+                                    neg, c, /*defer_cuts=*/false);
     box_compactions += boxes.size() < nb;
     vert_compactions += kept.verts.size() < nv;
     bool b = false;
