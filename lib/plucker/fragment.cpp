@@ -67,7 +67,7 @@ constexpr double kUd = kUnitRoundoffD;
 // ends, not on the direction the edge is walked in (ties broken by the coordinates), so
 // the two polygons sharing an edge get the same point.
 template <class P>
-Vec3d edge_crossing(const P& a, const P& b, double sa, double sb) {
+[[gnu::always_inline]] inline Vec3d edge_crossing(const P& a, const P& b, double sa, double sb) {
   const double aa = std::abs(sa), ab = std::abs(sb);
   bool from_a = aa < ab;
   if (aa == ab) from_a = a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z <= b.z)));
@@ -198,8 +198,8 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const Vec3d* pol
   return SplitResult::Both;
 }
 
-VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane* side0, const NodePlane* side1, const Vec3d* poly,
-                           int n, Vec3d* pos, int& npos, Vec3d* neg, int& nneg, bool& off) {
+VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane& side, const Vec3d* poly, int n,
+                                           Vec3d* pos, int& npos, Vec3d* neg, int& nneg, bool& off) {
   off = false;
   if (pl.on_line) return SplitResult::OnLine;
   double val_buf[kMaxStack];  // NOLINT
@@ -224,7 +224,7 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane*
   if (cpos == 0) return SplitResult::Negative;
   // The pieces as split_fragment makes them, the chord's vertices (those both pieces get)
   // kept aside, at most 4 (more: a fragment with vertices along the plane, not put off),
-  // then tested against the side planes.
+  // then tested against the side plane.
   Vec3d ch[4];
   int p = 0, q = 0, c = 0;
   for (int k = 0; k < n; ++k) {
@@ -242,17 +242,13 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane*
   }
   npos = p >= 3 ? p : 0;
   nneg = q >= 3 ? q : 0;
-  if (c >= 1 && c <= 4 && npos != 0 && nneg != 0) {
-    for (const NodePlane* sp : {side0, side1}) {
-      if (sp == nullptr || sp->on_line) continue;
-      const PlaneValue sv(*sp);
-      bool beyond = true;
-      for (int i = 0; i < c && beyond; ++i) beyond = sv(ch[i]) < -sp->bound;
-      if (beyond) {
-        off = true;
-        npos = nneg = 0;
-        break;
-      }
+  if (c >= 1 && c <= 4 && npos != 0 && nneg != 0 && !side.on_line) {
+    const PlaneValue sv(side);
+    bool beyond = true;
+    for (int i = 0; i < c && beyond; ++i) beyond = sv(ch[i]) < -side.bound;
+    if (beyond) {
+      off = true;
+      npos = nneg = 0;
     }
   }
   return SplitResult::Both;

@@ -220,13 +220,12 @@ inline SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int
 SplitResult split_fragment(const NodePlane& plane, const Vec3d* poly, int n, Vec3d* pos, int& npos, Vec3d* neg,
                            int& nneg);
 // The same, except that a Both split whose chord (the vertices both pieces get: those
-// within the bound of the plane and the edges' crossings) lies beyond one of the side
-// planes given (side0, side1 may be null; every chord vertex below minus the side's
-// bound) is not made: `off` set, no pieces (npos = nneg = 0); a chord of at most 4
-// vertices only. Otherwise `off` false and the result and pieces of split_fragment, bit
-// for bit.
-SplitResult split_fragment(const NodePlane& plane, const NodePlane* side0, const NodePlane* side1, const Vec3d* poly,
-                           int n, Vec3d* pos, int& npos, Vec3d* neg, int& nneg, bool& off);
+// within the bound of the plane and the edges' crossings, at most 4) lies beyond the
+// plane `side` (every chord vertex below minus side's bound) is flagged: `off` set and no
+// pieces (npos = nneg = 0; subtract.cpp puts such a cut off). Otherwise `off` false and
+// the result and pieces of split_fragment, bit for bit.
+SplitResult split_fragment(const NodePlane& plane, const NodePlane& side, const Vec3d* poly, int n, Vec3d* pos,
+                           int& npos, Vec3d* neg, int& nneg, bool& off);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to

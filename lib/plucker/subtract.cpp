@@ -264,11 +264,11 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
         int np = 0, nn = 0;
         SplitResult s;
         bool off = false;
-        if (first && defer_cuts && m + 1 < nq) {
-          // The side planes whose cuts come later: m + 1's, and for m = 0 also the last edge's.
-          const int ml = nq - 1;
-          s = split_fragment(plane(m), skip[m + 1] ? nullptr : &plane(m + 1),
-                             m == 0 && !skip[ml] ? &plane(ml) : nullptr, cp, cn, pos.data(), np, neg.data(), nn, off);
+        if (first && defer_cuts && m + 1 < nq && !skip[m + 1]) {
+          // The side plane of the next edge, whose cut comes later. (Also the previous
+          // edge's where its cut comes later, for m = 0 or a put-off one: more tests, and
+          // more pieces, measured.)
+          s = split_fragment(plane(m), plane(m + 1), cp, cn, pos.data(), np, neg.data(), nn, off);
         } else if (!first && classify_fragment(plane(m), cp, cn) == SplitResult::Positive) {
           s = SplitResult::Positive;  // as split_fragment finds it, without its value array
         } else {
