@@ -221,10 +221,10 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     return false;
   };
   // With defer_cuts, edge m's cut of what is left of a fragment (R) is put off when its
-  // chord (R on m's plane) lies beyond the plane of an edge next to m (split_fragment's
-  // side planes): then no point of R's chord lies on q's edge m itself (q convex: its
-  // edge is the part of m's line inside both neighbours' planes), so the cuts by the
-  // other edges mostly leave R inside m's plane (Positive: no cut) and the piece beyond
+  // chord (R on m's plane) lies beyond the next edge's plane (split_fragment's side
+  // plane): then no point of R's chord lies on q's edge m itself (q convex: its edge is
+  // the part of m's line inside both neighbours' planes), so once the next edge has cut
+  // R, what is left mostly lies inside m's plane (Positive: no cut) and the piece beyond
   // m's line, which q's shadow does not reach there, is not split off. A choice of order
   // only: the put-off cuts are still made, last, and the walk's result holds for any
   // order of q's edges.

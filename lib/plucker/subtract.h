@@ -53,10 +53,10 @@ struct FragmentRuns {
 // are passed over, replaced fragments' runs are grown by their pieces' boxes and their
 // lengths changed, and runs grown long are cut anew; a list without runs gets them when
 // it grows past kIndexFrom.
-// With `defer_cuts` a met fragment's cut by edge m is put off to the end of its walk when
-// the cut's chord lies beyond the plane of an edge next to m (q's edge m does not cross
-// what is left of the fragment there): a fragment q's shadow overlaps at a corner is cut
-// along the two edges that bound the overlap, not also along the lines of the others.
+// With `defer_cuts` a met fragment's cut by edge m (not the last) is put off to the end
+// of its walk when the cut's chord lies beyond the next edge's plane (q's edge m does not
+// cross what is left of the fragment there): a fragment q's shadow overlaps at a corner
+// is cut along the edges that bound the overlap, less often also along the others' lines.
 // The walk through q's edges in another order: the same visible set, as fragments that
 // differ from the in-order walk's by where they are cut and by the rounding of the cut
 // vertices (each within a plane's error bound, fragment.h); c.deferred_cuts counts them.
