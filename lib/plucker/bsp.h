@@ -129,6 +129,7 @@ struct BspCounters {
   uint64_t visits = 0;           // inner nodes a query fragment was classified against (lines 17-27)
   uint64_t list_compactions = 0; // the leaves' list arena compacted (grow_lists)
   uint64_t insert_reused = 0;    // insert_tests answered from an earlier merge of the same occluder (develop)
+  uint64_t deferred_cuts = 0;    // subtract_polygon: cuts put off to the end of a fragment's walk (subtract.h)
 };
 
 class LazyBsp {

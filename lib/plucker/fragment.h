@@ -219,6 +219,13 @@ inline SplitResult classify_fragment(const NodePlane& pl, const Vec3d* poly, int
 // per-vertex capacity checks, no copies of the pieces).
 SplitResult split_fragment(const NodePlane& plane, const Vec3d* poly, int n, Vec3d* pos, int& npos, Vec3d* neg,
                            int& nneg);
+// The same, except that a Both split whose chord (the vertices both pieces get: those
+// within the bound of the plane and the edges' crossings, at most 4) lies beyond the
+// plane `side` (every chord vertex below minus side's bound) is flagged: `off` set and no
+// pieces (npos = nneg = 0; subtract.cpp puts such a cut off). Otherwise `off` false and
+// the result and pieces of split_fragment, bit for bit.
+SplitResult split_fragment(const NodePlane& plane, const NodePlane& side, const Vec3d* poly, int n, Vec3d* pos,
+                           int& npos, Vec3d* neg, int& nneg, bool& off);
 
 // Keeps the part of `poly` where value >= 0 (keep_nonneg) or value <= 0, given one value
 // per vertex of an affine function; the result may be empty. Used to clip occluders to

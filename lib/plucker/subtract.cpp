@@ -172,7 +172,8 @@ void replace_fragments(FragmentList& frags, std::vector<UVBox>& boxes, FragmentR
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
                       const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
                       FragmentRuns& runs, FragmentList& pieces, std::vector<UVBox>& piece_boxes,
-                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c) {
+                      std::vector<Vec3d>& cur, std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c,
+                      bool defer_cuts) {
   VG_DCHECK((runs.size() == 0 || runs.count() == frags.size()) && boxes.size() >= frags.size());
   // The planes through r and q's edges, once for every fragment (fragment.h node_plane),
   // each computed when first needed (a polygon whose shadow misses every fragment mostly
@@ -219,6 +220,14 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
     }
     return false;
   };
+  // With defer_cuts, edge m's cut of what is left of a fragment (R) is put off when its
+  // chord (R on m's plane) lies beyond the next edge's plane (split_fragment's side
+  // plane): then no point of R's chord lies on q's edge m itself (q convex: its edge is
+  // the part of m's line inside both neighbours' planes), so once the next edge has cut
+  // R, what is left mostly lies inside m's plane (Positive: no cut) and the piece beyond
+  // m's line, which q's shadow does not reach there, is not split off. A choice of order
+  // only: the put-off cuts are still made, last, and the walk's result holds for any
+  // order of q's edges.
   bool met = false;  // some fragment not missed
   pieces.clear();
   piece_boxes.clear();
@@ -244,12 +253,27 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
       int cn = frags.count(f);
       const size_t first_piece = pieces.size();
       bool alive = true, whole = false, split = false;  // split: cp is a piece, not the fragment
-      for (int m = 0; m < nq && alive; ++m) {
-        if (skip[m] || (!split && positive[m])) continue;
+      uint32_t deferred = 0;  // bit m: edge m's cut put off to the end (defer_cuts)
+      // Steps 0..nq-1 walk the edges in order, steps nq..2nq-1 the put-off ones again.
+      for (int t = 0; t < 2 * nq && alive; ++t) {
+        const bool first = t < nq;
+        const int m = first ? t : t - nq;
+        if (first ? (skip[m] || (!split && positive[m])) : !(deferred >> m & 1u)) continue;
         if (pos.size() < size_t(2 * cn)) pos.resize(size_t(2 * cn));
         if (neg.size() < size_t(2 * cn)) neg.resize(size_t(2 * cn));
         int np = 0, nn = 0;
-        SplitResult s = split_fragment(plane(m), cp, cn, pos.data(), np, neg.data(), nn);
+        SplitResult s;
+        bool off = false;
+        if (first && defer_cuts && m + 1 < nq && !skip[m + 1]) {
+          // The side plane of the next edge, whose cut comes later. (Also the previous
+          // edge's where its cut comes later, for m = 0 or a put-off one: more tests, and
+          // more pieces, measured.)
+          s = split_fragment(plane(m), plane(m + 1), cp, cn, pos.data(), np, neg.data(), nn, off);
+        } else if (!first && classify_fragment(plane(m), cp, cn) == SplitResult::Positive) {
+          s = SplitResult::Positive;  // as split_fragment finds it, without its value array
+        } else {
+          s = split_fragment(plane(m), cp, cn, pos.data(), np, neg.data(), nn);
+        }
         switch (s) {
           case SplitResult::Positive: break;
           case SplitResult::OnLine: ++c.on_line; [[fallthrough]];
@@ -259,6 +283,11 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
             break;
           case SplitResult::ZeroArea: ++c.zero_area; alive = false; break;
           case SplitResult::Both:
+            if (off) {
+              deferred |= 1u << m;
+              ++c.deferred_cuts;
+              break;
+            }
             ++c.splits;
             if (nn != 0) pieces.add(neg.data(), size_t(nn));
             if (np == 0) {
@@ -271,6 +300,7 @@ bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* ski
             }
             break;
         }
+        if (first && t + 1 == nq && deferred == 0) break;
       }
       // Kept whole: the pieces split off it are taken back (a shadow beside a fragment
       // still cuts it along the planes through q's edges). Else what is left after the

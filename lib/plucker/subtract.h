@@ -53,12 +53,19 @@ struct FragmentRuns {
 // are passed over, replaced fragments' runs are grown by their pieces' boxes and their
 // lengths changed, and runs grown long are cut anew; a list without runs gets them when
 // it grows past kIndexFrom.
+// With `defer_cuts` a met fragment's cut by edge m (not the last) is put off to the end
+// of its walk when the cut's chord lies beyond the next edge's plane (q's edge m does not
+// cross what is left of the fragment there): a fragment q's shadow overlaps at a corner
+// is cut along the edges that bound the overlap, less often also along the others' lines.
+// The walk through q's edges in another order: the same visible set, as fragments that
+// differ from the in-order walk's by where they are cut and by the rounding of the cut
+// vertices (each within a plane's error bound, fragment.h); c.deferred_cuts counts them.
 // Returns false, with nothing changed, when q's shadow misses every fragment (box or
 // edge plane; about half of the calls on columns).
 bool subtract_polygon(const Vec3d& r, const Vec3d* q, int nq, const uint8_t* skip, const UVBox& qbox,
                       const UVAxes& axes, const LightBounds& light, FragmentList& frags, std::vector<UVBox>& boxes,
                       FragmentRuns& runs, FragmentList& pieces, std::vector<UVBox>& piece_boxes, std::vector<Vec3d>& cur,
-                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c);
+                      std::vector<Vec3d>& pos, std::vector<Vec3d>& neg, BspCounters& c, bool defer_cuts = true);
 
 // The exact near-plane path: removes from the fragments (local coordinates relative to
 // `origin`) the light points x whose open segment from rw crosses the triangle tw
