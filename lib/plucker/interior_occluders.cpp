@@ -446,6 +446,7 @@ bool Builder::verify(const std::vector<Vec3f>& q, const Vec3f& inner) {
 // projected line (orient2d is linear in the point, so its least and greatest values
 // over the rectangle are at the corners chosen by the signs of the line's direction).
 // False may also mean "cannot tell" (a projected segment of zero length).
+// Not segment_meets_box negated (triangle_tree.cpp): that one rounds in double with a 2^-40 margin, all six axes.
 bool segment_misses_box(const Vec3f& x, const Vec3f& f, const AABB& bb) {
   for (int k = 0; k < 3; ++k) {
     const int i = (k + 1) % 3, j = (k + 2) % 3;

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "lib/geom/error_bounds.h"
@@ -70,35 +71,23 @@ inline Vec3f edge_plane_normal(const Vec3f& p, const Vec3f& a, const Vec3f& b, f
 // nearly parallel vectors (an edge far from p and nearly in line with it) it is
 // dominated by the product of their long components, which no cross component holds, and
 // would call r "on the line" where the permanents decide.
-inline Vec3f edge_plane_normal_err(const Vec3f& p, const Vec3f& a, const Vec3f& b, Vec3f& err) {
-  Vec3f pa = a - p, pb = b - p, ab = b - a;
-  float na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
-  const Vec3f* u = &pa;
-  const Vec3f* v = &pb;
+// Float (kCrossErr) or double (the same 8 u in double: u_d for u; points in the solver's
+// double local coordinates).
+template <class T>
+inline Vec3<T> edge_plane_normal_err(const Vec3<T>& p, const Vec3<T>& a, const Vec3<T>& b, Vec3<T>& err) {
+  static_assert(std::is_same_v<T, float> || std::is_same_v<T, double>);
+  constexpr T kErr = std::is_same_v<T, float> ? T(kCrossErr) : T(8.0 * kUnitRoundoffD);
+  Vec3<T> pa = a - p, pb = b - p, ab = b - a;
+  T na = norm1(pa), nb = norm1(pb), nab = norm1(ab);
+  const Vec3<T>* u = &pa;
+  const Vec3<T>* v = &pb;
   if (!(nab >= na && nab >= nb)) {
     if (nb >= na) v = &ab;
     else u = &pb, v = &ab;
   }
-  err = Vec3f(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
-              std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
-        kCrossErr;
-  return cross(*u, *v);
-}
-
-// The same in double (points in the solver's double local coordinates): u_d for u.
-inline Vec3d edge_plane_normal_err(const Vec3d& p, const Vec3d& a, const Vec3d& b, Vec3d& err) {
-  Vec3d pa = a - p, pb = b - p, ab = b - a;
-  auto n1 = [](const Vec3d& v) { return std::abs(v.x) + std::abs(v.y) + std::abs(v.z); };
-  double na = n1(pa), nb = n1(pb), nab = n1(ab);
-  const Vec3d* u = &pa;
-  const Vec3d* v = &pb;
-  if (!(nab >= na && nab >= nb)) {
-    if (nb >= na) v = &ab;
-    else u = &pb, v = &ab;
-  }
-  err = Vec3d(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
-              std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
-        (8.0 * kUnitRoundoffD);
+  err = Vec3<T>(std::abs(u->y * v->z) + std::abs(u->z * v->y), std::abs(u->z * v->x) + std::abs(u->x * v->z),
+                std::abs(u->x * v->y) + std::abs(u->y * v->x)) *
+        kErr;
   return cross(*u, *v);
 }
 inline double dot_err(const Vec3d& d, const Vec3d& nrm, const Vec3d& err) {

@@ -79,24 +79,41 @@ struct EdgeTree {
   uint32_t left(uint32_t i) const { return i + 1; }
   uint32_t right(uint32_t i) const { return nodes[i].first; }
   uint32_t item(uint32_t pos) const { return order[pos]; }
-  // Over boxes[e], edges ordered by key[e] (stable: equal keys in index order). The
-  // nodes hold the boxes; an edge's own box is not kept (the walks take it from the
-  // edge's faces).
-  void build(const std::vector<AABBd>& boxes, const std::vector<uint32_t>& key);
-  // The same tree as build(boxes converted to double, key) for keys already in order:
-  // order is the identity and each node's box the double of its float boxes' union
-  // (float -> double is exact and monotone, so the same doubles).
-  void build_in_order(const std::vector<AABB>& boxes);
-  // The same as build_in_order over n float boxes, box_at(k) giving the k-th (defined in
-  // silhouette_region.cpp, its only user: no array of the boxes is written).
+  // Over n boxes in leaf order, box_at(k) giving the k-th (float or double; no array of
+  // them is written): order is the identity, each leaf's box the double of its edges'
+  // boxes' union in order (float -> double is exact and monotone) and each inner box
+  // the union of its children's. The nodes hold the boxes; an edge's own box is not kept
+  // (the walks take it from the edge's faces).
   template <class BoxAt>
-  void build_in_order_by(uint32_t n, const BoxAt& box_at);
+  void build_in_order_by(uint32_t n, const BoxAt& box_at) {
+    if (start(n)) build_node(box_at, 0, n);
+  }
 
  private:
   // Empties the tree; for n > 0 sets order to the identity and returns true.
   bool start(uint32_t n);
+  // Node over order[begin, end) and its subtree (left half floor(m / 2)); returns its id.
   template <class BoxAt>
-  uint32_t build_node(const BoxAt& box_at, uint32_t begin, uint32_t end);
+  uint32_t build_node(const BoxAt& box_at, uint32_t begin, uint32_t end) {
+    const uint32_t id = uint32_t(nodes.size());
+    nodes.emplace_back();
+    nodes[id].count = end - begin;
+    if (end - begin <= kLeaf) {
+      auto b = box_at(begin);
+      for (uint32_t k = begin + 1; k < end; ++k) b.extend(box_at(k));
+      nodes[id].box = AABBd{Vec3d(b.lo), Vec3d(b.hi)};
+      nodes[id].first = begin;
+      return id;
+    }
+    const uint32_t mid = begin + (end - begin) / 2;
+    build_node(box_at, begin, mid);
+    const uint32_t right = build_node(box_at, mid, end);
+    AABBd b = nodes[id + 1].box;
+    b.extend(nodes[right].box);
+    nodes[id].box = b;
+    nodes[id].first = right;
+    return id;
+  }
 };
 
 // Per closed surface, its edges once each, built once per solve (world coordinates, so

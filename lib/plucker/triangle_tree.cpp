@@ -23,6 +23,7 @@ namespace {
 // separates them by more than 2^-40 of the squared scale. The inputs are floats, so the
 // double half-sums and products below carry errors of a few 2^-53 of scale (squared for
 // the cross axes): a false never drops a segment that meets the box.
+// Not segment_misses_box negated (interior_occluders.cpp): that one is exact, cross axes only; both keep every met box.
 bool segment_meets_box(const Vec3f& p0, const Vec3f& p1, const Vec3f& lo, const Vec3f& hi) {
   const Vec3d a = to_double(p0), b = to_double(p1), l = to_double(lo), u = to_double(hi);
   const Vec3d c = (l + u) * 0.5, e = (u - l) * 0.5, h = (b - a) * 0.5, m = (a + b) * 0.5 - c;

@@ -88,58 +88,79 @@ TEST(PluckerSilhouetteRegion, NormalConesOnlyWhereEveryFaceAgrees) {
   EXPECT_GT(decided, 100);
 }
 
-// The surfaces' edge tree: its leaf order is the edges stably sorted by key, every node's
-// box holds its items' boxes, and a walk pruned by box overlap finds exactly the edges
-// whose own box meets the query (against a scan of every edge).
+// The surfaces' edge tree (EdgeTree::build_in_order_by over float boxes, as SurfaceTrees
+// builds it) against a recursion over the shape the header promises: pre-order nodes,
+// the left child of node i at i + 1, the left half floor(m / 2), leaves of 1 to kLeaf
+// edges at their positions in order, order the identity (every edge in exactly one leaf,
+// in order), every node's box equal (==) to the min and max over its edges' boxes taken
+// here; and a walk pruned by box overlap finds exactly the edges whose own box meets the
+// query (against a scan of every edge).
 // A box at a corner in [-10, 10]^3 with sides in [0, 1].
-template <class T>
-AABBT<T> random_box(std::mt19937& rng) {
-  std::uniform_real_distribution<T> xy(T(-10), T(10)), len(T(0), T(1));
-  const Vec3<T> a(xy(rng), xy(rng), xy(rng));
-  AABBT<T> b{a, a};
-  b.extend(a + Vec3<T>(len(rng), len(rng), len(rng)));
+AABB random_box(std::mt19937& rng) {
+  std::uniform_real_distribution<float> xy(-10.0f, 10.0f), len(0.0f, 1.0f);
+  const Vec3f a(xy(rng), xy(rng), xy(rng));
+  AABB b{a, a};
+  b.extend(a + Vec3f(len(rng), len(rng), len(rng)));
   return b;
 }
 
-TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
+// The double min (max) over boxes[begin, end) of their lo (hi).
+AABBd union_of(const std::vector<AABB>& boxes, uint32_t begin, uint32_t end) {
+  AABBd u{Vec3d(boxes[begin].lo), Vec3d(boxes[begin].hi)};
+  for (uint32_t k = begin; k < end; ++k)
+    for (int c = 0; c < 3; ++c) {
+      u.lo[c] = std::min(u.lo[c], double(boxes[k].lo[c]));
+      u.hi[c] = std::max(u.hi[c], double(boxes[k].hi[c]));
+    }
+  return u;
+}
+
+// Checks node i as the node over edges [begin, end); returns its subtree's node count.
+uint32_t expect_edge_subtree(const plucker::EdgeTree& tree, const std::vector<AABB>& boxes, uint32_t i,
+                             uint32_t begin, uint32_t end) {
+  EXPECT_LT(i, tree.node_count());
+  if (i >= tree.node_count()) return 1;
+  const auto& nd = tree.node(i);
+  EXPECT_EQ(nd.count, end - begin) << i;
+  const AABBd want = union_of(boxes, begin, end);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(nd.box.lo[c], want.lo[c]) << i << " " << c;
+    EXPECT_EQ(nd.box.hi[c], want.hi[c]) << i << " " << c;
+  }
+  if (end - begin <= plucker::EdgeTree::kLeaf) {
+    EXPECT_TRUE(tree.is_leaf(nd));
+    EXPECT_EQ(nd.first, begin) << i;
+    return 1;
+  }
+  EXPECT_FALSE(tree.is_leaf(nd));
+  const uint32_t mid = begin + (end - begin) / 2;
+  EXPECT_EQ(tree.left(i), i + 1);
+  const uint32_t left = expect_edge_subtree(tree, boxes, i + 1, begin, mid);
+  EXPECT_EQ(tree.right(i), i + 1 + left) << i;
+  return 1 + left + expect_edge_subtree(tree, boxes, i + 1 + left, mid, end);
+}
+
+TEST(PluckerSilhouetteRegion, EdgeTreeShapeBoxesAndWalk) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> xy(-10.0, 10.0);
-  for (const uint32_t n : {0u, 1u, 8u, 9u, 100u, 5000u}) {
-    std::vector<AABBd> boxes;
-    std::vector<uint32_t> key;
-    for (uint32_t e = 0; e < n; ++e) {
-      boxes.push_back(random_box<double>(rng));
-      key.push_back(uint32_t(rng() % (n / 3 + 1)) * 977u);  // repeated keys, above 2^11 too
-    }
+  for (const uint32_t n : {0u, 1u, 4u, 5u, 8u, 9u, 100u, 3001u}) {
+    std::vector<AABB> boxes;
+    for (uint32_t e = 0; e < n; ++e) boxes.push_back(random_box(rng));
     plucker::EdgeTree tree;
-    tree.build(boxes, key);
-    ASSERT_EQ(tree.order.size(), size_t(n));
+    tree.build_in_order_by(n, [&](uint32_t k) -> const AABB& { return boxes[k]; });
     ASSERT_EQ(tree.empty(), n == 0);
-    for (uint32_t k = 1; k < n; ++k) {
-      const uint32_t x = tree.item(k - 1), y = tree.item(k);
-      ASSERT_TRUE(key[x] < key[y] || (key[x] == key[y] && x < y));
-    }
-    auto holds = [](const AABBd& outer, const AABBd& inner) {
-      return outer.lo.x <= inner.lo.x && outer.lo.y <= inner.lo.y && outer.lo.z <= inner.lo.z &&
-             outer.hi.x >= inner.hi.x && outer.hi.y >= inner.hi.y && outer.hi.z >= inner.hi.z;
-    };
-    for (uint32_t i = 0; i < tree.node_count(); ++i) {
-      const auto& nd = tree.node(i);
-      if (tree.is_leaf(nd)) {
-        for (uint32_t k = nd.first; k < nd.first + nd.count; ++k) ASSERT_TRUE(holds(nd.box, boxes[tree.item(k)]));
-      } else {
-        ASSERT_EQ(tree.node(tree.left(i)).count + tree.node(tree.right(i)).count, nd.count);
-        ASSERT_TRUE(holds(nd.box, tree.node(tree.left(i)).box));
-        ASSERT_TRUE(holds(nd.box, tree.node(tree.right(i)).box));
-      }
-    }
-    for (int q = 0; q < 20 && n > 0; ++q) {
+    ASSERT_EQ(tree.order.size(), size_t(n));
+    for (uint32_t k = 0; k < n; ++k) ASSERT_EQ(tree.item(k), k);
+    if (n == 0) continue;
+    ASSERT_EQ(expect_edge_subtree(tree, boxes, 0, 0, n), tree.node_count());
+    for (int q = 0; q < 20; ++q) {
       const Vec3d c(xy(rng), xy(rng), xy(rng));
       const AABBd query{c, c + Vec3d(3, 3, 3)};
       auto meets = [&](const AABBd& b) {
         return !(b.hi.x < query.lo.x || b.hi.y < query.lo.y || b.hi.z < query.lo.z || b.lo.x > query.hi.x ||
                  b.lo.y > query.hi.y || b.lo.z > query.hi.z);
       };
+      auto edge_meets = [&](uint32_t e) { return meets(AABBd{Vec3d(boxes[e].lo), Vec3d(boxes[e].hi)}); };
       std::vector<uint32_t> found, want;
       std::vector<uint32_t> stack{0};
       while (!stack.empty()) {
@@ -153,44 +174,12 @@ TEST(PluckerSilhouetteRegion, EdgeTreeOrderBoxesAndWalk) {
           continue;
         }
         for (uint32_t k = nd.first; k < nd.first + nd.count; ++k)
-          if (meets(boxes[tree.item(k)])) found.push_back(tree.item(k));
+          if (edge_meets(tree.item(k))) found.push_back(tree.item(k));
       }
       for (uint32_t e = 0; e < n; ++e)
-        if (meets(boxes[e])) want.push_back(e);
+        if (edge_meets(e)) want.push_back(e);
       std::sort(found.begin(), found.end());
       EXPECT_EQ(found, want);
-    }
-  }
-}
-
-// build_in_order over float boxes is build over the same boxes in double with keys in
-// order (each key repeated or rising, as SurfaceTrees gives them): the same order, counts,
-// links and node boxes bit for bit, leaves of one to kLeaf edges and boxes of mixed signs.
-TEST(PluckerSilhouetteRegion, EdgeTreeInOrderIsTheKeyedBuild) {
-  std::mt19937 rng(5);
-  for (const uint32_t n : {0u, 1u, 4u, 5u, 9u, 100u, 3001u}) {
-    std::vector<AABB> fboxes;
-    std::vector<AABBd> dboxes;
-    std::vector<uint32_t> key;
-    for (uint32_t e = 0; e < n; ++e) {
-      const AABB b = random_box<float>(rng);
-      fboxes.push_back(b);
-      dboxes.push_back(AABBd{Vec3d(b.lo), Vec3d(b.hi)});
-      key.push_back(e / 3);
-    }
-    plucker::EdgeTree keyed, in_order;
-    keyed.build(dboxes, key);
-    in_order.build_in_order(fboxes);
-    ASSERT_EQ(in_order.order, keyed.order);
-    ASSERT_EQ(in_order.node_count(), keyed.node_count());
-    for (uint32_t i = 0; i < keyed.node_count(); ++i) {
-      const auto &a = in_order.node(i), &b = keyed.node(i);
-      ASSERT_EQ(a.first, b.first);
-      ASSERT_EQ(a.count, b.count);
-      for (int c = 0; c < 3; ++c) {
-        ASSERT_EQ(a.box.lo[c], b.box.lo[c]);
-        ASSERT_EQ(a.box.hi[c], b.box.hi[c]);
-      }
     }
   }
 }

@@ -75,15 +75,23 @@ AABB random_local_box(Rng& rng, const AABB& sb, const Vec3f& origin, double emin
   return AABB(Vec3f(c - e) - origin, Vec3f(c + e) - origin);
 }
 
+// A random-soup scene of n triangles moved far from the world origin (the shafts' local
+// frames then matter).
+Scene far_soup(uint64_t seed, int n) {
+  auto scene = family_scene("random-soup", seed, n, -1);
+  EXPECT_TRUE(scene.ok());
+  Scene s = scene.ok() ? *scene : Scene{};
+  for (Vec3f& v : s.mesh.vertices) v = Vec3f(to_double(v) + Vec3d(1e5, -3e5, 2e5));
+  return s;
+}
+
 }  // namespace
 
 TEST(PluckerSelection, TriangleTreeKeepsEveryTriangleTheShaftKeeps) {
   // TriangleTree::candidates (triangle_tree.h) returns, in increasing order, a superset of
   // the triangles Shaft::culls keeps, for shafts in local frames far from the world origin.
-  auto scene = family_scene("random-soup", 4, 600, -1);
-  ASSERT_TRUE(scene.ok());
-  Scene s = *scene;
-  for (Vec3f& v : s.mesh.vertices) v = Vec3f(to_double(v) + Vec3d(1e5, -3e5, 2e5));
+  const Scene s = far_soup(4, 600);
+  ASSERT_GT(s.mesh.size(), 0u);
   TriangleTree tree(s.mesh);
   Rng rng(6);
   std::vector<uint32_t> cand;
@@ -110,10 +118,8 @@ TEST(PluckerSelection, TriangleTreeSkippedSubtreesHoldTheirTrianglesAndMissNone)
   // down), and every skipped triangle's vertices lie in the local box the predicate
   // accepted for it, compared exactly (long double holds v - origin here: 64-bit
   // mantissas and exponents a few apart).
-  auto scene = family_scene("random-soup", 5, 800, -1);
-  ASSERT_TRUE(scene.ok());
-  Scene s = *scene;
-  for (Vec3f& v : s.mesh.vertices) v = Vec3f(to_double(v) + Vec3d(1e5, -3e5, 2e5));
+  const Scene s = far_soup(5, 800);
+  ASSERT_GT(s.mesh.size(), 0u);
   TriangleTree tree(s.mesh);
   Rng rng(8);
   std::vector<uint32_t> plain, cand, back;
