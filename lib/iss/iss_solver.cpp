@@ -295,6 +295,7 @@ std::vector<OptionSpec> IssSolver::options() const {
       {"cell_group_candidates", "cell_groups: the most mixed candidates a cell takes groups with (default 24; more go to the direct test at once)", {}},
       {"cell_centre", "cell_shafts: a cell's certificates over its light node's box from the box's centre and half extents (each w within w(centre) +- h.|grad w|, with its rounding bound) rather than at its corners: the same tests at about half the cost", {"on", "off"}},
       {"cell_group_centre", "cell_groups: the groups' certificates from the group box's centre and half extents rather than its corners (as cell_centre)", {"on", "off"}},
+      {"cell_cache", "cell_shafts: a receiver's node cell first tries the four candidates whose vector last blocked a node cell of this light (a triangle that certainly blocks every segment into the light node's box decides the cell whatever the other candidates are); stat cell_cache_relations", {"on", "off"}},
       {"cell_group_min", "cell_groups: a group left mixed with more samples than this takes cells at its two halves too (default 8)", {}},
       {"cell_surface_candidates", "cell_surfaces: the most candidates a receiver takes cells on after that (default 96; more go to Embree rays)", {}},
       {"cell_candidates", "cell_shafts: most candidate triangles of a leaf shaft that cells take (default 192; more go to the direct test or Embree rays)", {}},
@@ -353,6 +354,7 @@ SolveResult IssSolver::solve_scene(const Scene& scene, const SolveOptions& opt) 
   p.cell_group_min = int(std::max(1L, opt.get_int("cell_group_min", p.cell_group_min)));
   p.cell_centre = opt.get_bool("cell_centre", true);
   p.cell_group_centre = opt.get_bool("cell_group_centre", true);
+  p.cell_cache = opt.get_bool("cell_cache", true);
   p.cell_group_candidates = int(std::max(0L, opt.get_int("cell_group_candidates", p.cell_group_candidates)));
   p.cell_surface_candidates =
       int(std::max(0L, opt.get_int("cell_surface_candidates", p.cell_surface_candidates)));
