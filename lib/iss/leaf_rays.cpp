@@ -959,13 +959,18 @@ size_t Traversal::load_cell_top() {
 void Traversal::cell_receiver(int l, uint32_t i, size_t kp) {
   const Vec3f& p = scene_.receivers[i].p;
   const double od[3] = {double(p.x), double(p.y), double(p.z)};
-  if (p_.cell_cache && cell_cache_ok_ && cell_cache_blocks(ln(l).box, od)) {
-    const double n = double(ln(l).size());  // bits start blocked
-    n_cells_ += 1;
-    n_blocked_shaft_ += n;
-    n_cell_decided_ += n;
-    n_cell_cache_decided_ += n;
-    return;
+  if (p_.cell_cache && cell_cache_ok_) {
+    if (cell_cache_blocks(ln(l).box, od)) {
+      const double n = double(ln(l).size());  // bits start blocked
+      n_cells_ += 1;
+      n_blocked_shaft_ += n;
+      n_cell_decided_ += n;
+      n_cell_cache_decided_ += n;
+      return;
+    }
+    // Tried again only after a node cell blocks anew (cell_cache_store): a run of
+    // receivers behind one wall ends at its first miss.
+    cell_cache_ok_ = false;
   }
   if (cell_levels_[0].count > 0) cell_terms(direct_corners_.data(), kp, od, cell_levels_[0].terms.data());
   cell_uncertain_.clear();
