@@ -564,11 +564,7 @@ class Traversal {
     std::vector<uint32_t> tris;
     std::vector<double> box;  // the triangles' boxes, SoA (direct_candidates)
   };
-  // kCandUp 8 rather than 4: more leaves filter a list made higher up instead of
-  // querying the hierarchy (rooms 1024 -2.4M of 312.5M, columns 4096 x 256 -2.5M of
-  // 789M; 12 and more, or a larger kCandQueryMax, cost more: docs/log/
-  // iss-performance.md, eighteenth round).
-  static constexpr size_t kCandUp = 8, kCandQueryMax = 1024, kDirectChunk = 16384;
+  static constexpr size_t kCandUp = 4, kCandQueryMax = 1024, kDirectChunk = 16384;
   std::vector<CandLevel> cand_stack_;
   size_t cand_depth_ = 0;
   std::array<AutoRayBucket, 64> auto_buckets_{}, split_buckets_{};
