@@ -959,6 +959,19 @@ size_t Traversal::load_cell_top() {
 void Traversal::cell_receiver(int l, uint32_t i, size_t kp) {
   const Vec3f& p = scene_.receivers[i].p;
   const double od[3] = {double(p.x), double(p.y), double(p.z)};
+  if (p_.cell_cache && cell_cache_ok_) {
+    if (cell_cache_blocks(ln(l).box, od)) {
+      const double n = double(ln(l).size());  // bits start blocked
+      n_cells_ += 1;
+      n_blocked_shaft_ += n;
+      n_cell_decided_ += n;
+      n_cell_cache_decided_ += n;
+      return;
+    }
+    // Tried again only after a node cell blocks anew (cell_cache_store): a run of
+    // receivers behind one wall ends at its first miss.
+    cell_cache_ok_ = false;
+  }
   if (cell_levels_[0].count > 0) cell_terms(direct_corners_.data(), kp, od, cell_levels_[0].terms.data());
   cell_uncertain_.clear();
   cell_descend(l, 0, i, od, relation_hash_prefix(i, light_->seed));
@@ -1135,11 +1148,19 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   const TreeNode& Q = ln(c);
   n_cells_ += 1;
   cell_out_.resize(kp / 4);
+  // The kernels write one byte of miss bits (at most 15) per vector they finish and
+  // return at the first vector with a block: the first byte left at 0xff names it.
+  const bool cache = depth == 0 && p_.cell_cache;
+  if (cache) std::fill(cell_out_.begin(), cell_out_.end(), uint8_t(0xff));
   if (kc > 0 && p_.cell_centre) cell_box(Q.box, od, bx);
   if (kc > 0 && (p_.cell_centre ? cell_box_classify(lev.terms.data(), kp, bx, use_pyr ? pyr : nullptr, cell_out_.data())
                                 : cell_classify(lev.terms.data(), kp, cd, nc, use_pyr ? pyr : nullptr, cell_out_.data()))) {
     n_blocked_shaft_ += double(Q.size());  // bits start blocked
     n_cell_decided_ += double(Q.size());
+    if (cache) {
+      const auto v = std::find(cell_out_.begin(), cell_out_.end(), uint8_t(0xff));
+      if (v != cell_out_.end()) cell_cache_store(lev, size_t(v - cell_out_.begin()));
+    }
     return;
   }
   auto is_mixed = [&](size_t k) { return ((cell_out_[k >> 2] >> (k & 3)) & 1) == 0; };
@@ -1206,6 +1227,35 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
   for (uint32_t b = QL.begin, k = 0; b < QL.end; b += g, ++k)
     cell_group(next, b, std::min(QL.end, b + g), boxes.data() + k * h, 0, od, i);
   cell_direct(next, cell_samples_.data(), uint32_t(cell_samples_.size()), od, prefix, i);
+}
+
+// cell_cache: the candidate vector `vec` of lev (four lanes, those past its count
+// repeating the last candidate, as load_cell_top pads them) as the light's cached
+// blockers.
+void Traversal::cell_cache_store(const CellLevel& lev, size_t vec) {
+  for (size_t j = 0; j < 4; ++j) {
+    const uint32_t t = lev.tris[std::min(4 * vec + j, lev.count - 1)];
+    for (int v = 0; v < 3; ++v) {
+      const Vec3f& x = mesh_.corner(t, v);
+      for (int a = 0; a < 3; ++a) cell_cache_c_[size_t(3 * v + a) * 4 + j] = double(x[a]);
+    }
+  }
+  cell_cache_ok_ = true;
+}
+
+// The node cell's block certificate (cell_descend's, at the box's corners or from its
+// centre) for the cached vector alone: a triangle that certainly crosses every segment
+// from od into the box blocks every relation of the cell, whatever the other
+// candidates are, so the cached triangles need not be among this leaf's.
+bool Traversal::cell_cache_blocks(const AABB& box, const double* od) {
+  double t[kCellTermCount * 4], cd[4 * 8], bx[7];
+  uint8_t out[1];
+  cell_terms(cell_cache_c_, 4, od, t);
+  if (p_.cell_centre) {
+    cell_box(box, od, bx);
+    return cell_box_classify(t, 4, bx, nullptr, out);
+  }
+  return cell_classify(t, 4, cd, cell_corners(box, od, cd), nullptr, out);
 }
 
 // A group of a mixed cell's samples (cell_groups: light-tree order positions b..e of the

@@ -101,6 +101,7 @@ void Traversal::run_light(size_t li) {
   light_work_ = 0;
   trial_ = {};
   in_trial_ = false;
+  cell_cache_ok_ = false;
   light_mode_ = p_.light_split_always ? LightMode::Split : p_.light_split_auto ? LightMode::Trial : LightMode::Whole;
   split_now_ = light_mode_ == LightMode::Split;
   const int tree_leaf = p_.light_split_auto || p_.light_split_always ? std::min(p_.leaf_samples, p_.split_samples) : p_.leaf_samples;
@@ -189,6 +190,7 @@ void Traversal::finish_stats(Stats& st) const {
   st.set("cell_backface_relations", n_cull_decided_);
   st.set("cell_surface_relations", n_surface_cull_decided_);
   st.set("cell_group_relations", n_group_decided_);
+  st.set("cell_cache_relations", n_cell_cache_decided_);
   st.set("lights_split", n_split_lights_);
   st.set("cluster_patches", n_cluster_patches_);
   st.set("band_triangles_extracted", n_band_extracted_);

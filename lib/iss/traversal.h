@@ -176,6 +176,11 @@ struct Params {
   // sample groups (cell_group_centre).
   bool cell_centre = true;
   bool cell_group_centre = true;
+  // Receivers of one leaf are neighbours, and a wall that hides the whole light from one
+  // usually hides it from the next: a node cell first tries the four candidates of the
+  // vector that last blocked a node cell of this light (cell_receiver), one vector's
+  // terms and certificate instead of every candidate's.
+  bool cell_cache = true;
   // Initial shafts from pre-merged clusters (surface_clusters.h). The first initial
   // shaft over at least cluster_min_triangles triangles, and an eighth of the mesh,
   // builds them (once per solve); from then on every initial shaft uses them. On scenes
@@ -524,6 +529,13 @@ class Traversal {
   std::vector<uint32_t> cull_surfaces_;
   double n_surface_cull_decided_ = 0;  // relations of receivers that took cells only after that
   std::vector<uint8_t> cell_out_;
+  // cell_cache: the corners (SoA, 9 x 4 lanes) of the candidate vector that last blocked
+  // a node cell of this light; valid when cell_cache_ok_ (cleared per light).
+  double cell_cache_c_[9 * 4] = {};
+  bool cell_cache_ok_ = false;
+  double n_cell_cache_decided_ = 0;  // relations blocked by the cached vector
+  bool cell_cache_blocks(const AABB& box, const double* od);
+  void cell_cache_store(const CellLevel& lev, size_t vec);
   std::vector<uint32_t> cell_uncertain_;  // samples of the current receiver left to Embree
   std::vector<uint32_t> cell_samples_;  // samples cell_group left to the direct test
   // cell_group_boxes, per light node of this light (cleared with the light tree).

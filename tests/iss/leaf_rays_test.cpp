@@ -455,6 +455,26 @@ TEST(IssLeafRays, CellCentreCertificateHoldsOverTheWholeBox) {
   }
 }
 
+TEST(IssLeafRays, CellCacheAnswersAsWithoutItAndTheOracle) {
+  // The cached vector (cell_cache) blocks a receiver's node cell by the node cells' own
+  // certificate over the light node's box, before the leaf's candidates are read: the
+  // same shafts, every relation once, no more rays, on rooms some cells decided by it,
+  // and every answer where on and off differ the exact one. With the corners
+  // (cell_centre=off) the cache takes the corner certificate.
+  const std::map<std::string, std::string> deep = {{"cell_depth", "16"}, {"cell_candidates", "1024"}};
+  const std::vector<LeafCase> cases = {
+      {"rooms", -1, 256, 64, {}},
+      {"rooms", -1, 256, 64, {{"cell_centre", "off"}, {"cell_group_centre", "off"}}},
+      {"rooms", -1, 256, 64, deep},
+      {"columns", 1000, 1024, 64, {{"light_split", "off"}}},
+      {"torus", -1, 256, 16, deep},
+      {"random-soup", -1, 256, 16, deep},
+      {"shared-edge-fan", -1, 256, 16, deep},
+      {"grid-snapped", -1, 256, 16, deep},
+  };
+  EXPECT_GT(expect_option_cases(cases, "cell_cache", "cell_cache_relations", "cell_cache_relations"), 0.0);
+}
+
 TEST(IssLeafRays, CellCentreAnswersAsCornersAndTheOracle) {
   // cell_centre and cell_group_centre change only the arithmetic of the cells'
   // certificates: the same shafts, every relation decided once, about as many rays as

@@ -1,6 +1,12 @@
 // lib/iss/shaft_construction.cpp: the blocker probe before the initial shaft (paper 000 section 4.8).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "lib/iss/shaft.h"
+#include "lib/scene/exact_transform.h"
 #include "lib/scene/families.h"
 #include "lib/scene/shapes.h"
 #include "lib/solver.h"
@@ -95,4 +101,57 @@ TEST(IssDenseRays, DenseLightsCastEqualShaftsAndOracle) {
       EXPECT_GT(on.stats.get("shafts_built"), 0.0);
     }
   }
+}
+
+TEST(IssDenseRays, EarlyStopCastsTheLightsOfTheWholeEstimate) {
+  // dense_ray_lights (iss_solver.cpp) stops a light's estimate at the first chunk after
+  // which even every untested sample in its root shaft could not make it dense. The
+  // lights it casts must be those of the whole estimate, computed here from its rule
+  // alone: every n / 4096-th triangle of the unit copy, its box against the root shaft
+  // (receivers' box to the light's jitter boxes, may_intersect_box), the count scaled to
+  // the mesh, dense when at least max(8192, n / 8) and above relations / k. Thresholds k
+  // on both sides of the lights' ratios (scan 20k: 63-100% of the samples in a light's
+  // shaft, so at 1024 x 64 k = 4 stops some lights' estimates part way and casts others).
+  // The stat counts the lights cast, so only scenes whose lights are all traversed.
+  struct Case {
+    Scene scene;
+    std::vector<long> ks;
+  };
+  std::vector<Case> cases;
+  cases.push_back({test_support::family("scan", 1, 20000, 64, 8), {1, 2, 3, 8}});
+  cases.push_back({test_support::family("scan", 1, 20000, 1024, 64), {1, 2, 3, 4, 6, 8}});
+  cases.push_back({test_support::family("scan", 1, 20000, 1024, 32), {1, 2, 3, 4}});
+  size_t mixed = 0;
+  for (const Case& c : cases) {
+    const Scene u = scaled_scene(c.scene, unit_scale_exponent(c.scene));
+    const size_t n = u.mesh.size();
+    ASSERT_GE(n, 8192u) << u.name;
+    AABB b = u.bounds(), rbox;
+    double scale = 0;
+    for (int k = 0; k < 3; ++k) scale = std::max({scale, std::abs(double(b.lo[k])), std::abs(double(b.hi[k]))});
+    for (const Receiver& r : u.receivers) rbox.extend(r.p);
+    const size_t step = std::max<size_t>(1, n / 4096);
+    const double need = double(std::max<size_t>(8192, n / 8));
+    for (long k : c.ks) {
+      size_t expected = 0;
+      for (const Light& light : u.lights) {
+        AABB lbox;
+        for (const AABB& jb : light.jitter_boxes) lbox.extend(jb);
+        if (rbox.overlaps(lbox) || iss::choose_main_axis(rbox, lbox).axis < 0) continue;
+        const iss::ShaftGeometry g(rbox, lbox, iss::MainAxis{}, scale);
+        size_t hits = 0, tested = 0;
+        for (size_t t = 0; t < n; t += step, ++tested) {
+          AABB tb;
+          for (int v = 0; v < 3; ++v) tb.extend(u.mesh.vertices[u.mesh.triangles[t][v]]);
+          hits += g.may_intersect_box(iss::to_double(tb));
+        }
+        const double in_shaft = double(hits) * double(n) / double(tested);
+        expected += in_shaft >= need && double(u.receivers.size()) * double(light.samples) < double(k) * in_shaft;
+      }
+      SolveResult r = run_iss(c.scene, {{"dense_ray_relations", std::to_string(k)}});
+      EXPECT_EQ(r.stats.get("dense_ray_lights"), double(expected)) << u.name << " k=" << k;
+      mixed += expected > 0 && expected < u.lights.size();
+    }
+  }
+  EXPECT_GT(mixed, 0u);  // some threshold casts some lights and not others
 }
