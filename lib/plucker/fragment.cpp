@@ -151,8 +151,12 @@ SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, std::v
   return s;
 }
 
-VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, Vec3d* pos, int& npos,
-                                           Vec3d* neg, int& nneg) {
+namespace {
+// split_fragment's steps; with kSide, the flag of the overload below against *side.
+template <bool kSide>
+[[gnu::always_inline]] VG_SCALAR_LOOPS inline SplitResult split_pieces(const NodePlane& pl, const NodePlane* side,
+                                                                       const Vec3d* poly, int n, Vec3d* pos, int& npos,
+                                                                       Vec3d* neg, int& nneg, bool& off) {
   // det[x - r, a - r, b - r] = (x - base) . N = side(line(r, x), line(a, b)) (node_plane).
   // Query point on the node's line: N vanishes within its error bound.
   if (pl.on_line) return SplitResult::OnLine;
@@ -180,51 +184,8 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const Vec3d* pol
 
   // Line 25: L cap p+ and L cap p-; vertices on the plane go to both, edges crossing
   // strictly get one vertex, interpolated in double and rounded once, shared by both
-  // pieces.
-  int p = 0, q = 0;
-  for (int k = 0; k < n; ++k) {
-    int k1 = (k + 1 == n) ? 0 : k + 1;
-    double s0 = val[k], s1 = val[k1];
-    if (s0 >= 0.0) pos[p++] = poly[k];
-    if (s0 <= 0.0) neg[q++] = poly[k];
-    if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
-      Vec3d x = edge_crossing(poly[k], poly[k1], s0, s1);
-      pos[p++] = x;
-      neg[q++] = x;
-    }
-  }
-  npos = p >= 3 ? p : 0;
-  nneg = q >= 3 ? q : 0;
-  return SplitResult::Both;
-}
-
-VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane& side, const Vec3d* poly, int n,
-                                           Vec3d* pos, int& npos, Vec3d* neg, int& nneg, bool& off) {
-  off = false;
-  if (pl.on_line) return SplitResult::OnLine;
-  double val_buf[kMaxStack];  // NOLINT
-  double* val = val_buf;
-  if (n > kMaxStack) {
-    thread_local std::vector<double> val_heap;
-    val_heap.resize(size_t(n));
-    val = val_heap.data();
-  }
-  int cpos = 0, cneg = 0;
-  const PlaneValue value(pl);
-  const double bound = pl.bound;
-  for (int k = 0; k < n; ++k) {  // as split_fragment
-    double s = value(poly[k]);
-    if (s > bound) ++cpos;
-    else if (s < -bound) ++cneg;
-    else s = 0.0;
-    val[k] = s;
-  }
-  if (cneg == 0 && cpos == 0) return SplitResult::ZeroArea;
-  if (cneg == 0) return SplitResult::Positive;
-  if (cpos == 0) return SplitResult::Negative;
-  // The pieces as split_fragment makes them, the chord's vertices (those both pieces get)
-  // kept aside, at most 4 (more: a fragment with vertices along the plane, not put off),
-  // then tested against the side plane.
+  // pieces. With kSide the chord's vertices (those both pieces get) are kept aside, at
+  // most 4 (more: a fragment with vertices along the plane, not put off).
   Vec3d ch[4];
   int p = 0, q = 0, c = 0;
   for (int k = 0; k < n; ++k) {
@@ -232,26 +193,39 @@ VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane&
     double s0 = val[k], s1 = val[k1];
     if (s0 >= 0.0) pos[p++] = poly[k];
     if (s0 <= 0.0) neg[q++] = poly[k];
-    if (s0 == 0.0) ch[c & 3] = poly[k], ++c;
+    if (kSide && s0 == 0.0) ch[c & 3] = poly[k], ++c;
     if ((s0 > 0.0 && s1 < 0.0) || (s0 < 0.0 && s1 > 0.0)) {
       Vec3d x = edge_crossing(poly[k], poly[k1], s0, s1);
       pos[p++] = x;
       neg[q++] = x;
-      ch[c & 3] = x, ++c;
+      if (kSide) ch[c & 3] = x, ++c;
     }
   }
   npos = p >= 3 ? p : 0;
   nneg = q >= 3 ? q : 0;
-  if (c >= 1 && c <= 4 && npos != 0 && nneg != 0 && !side.on_line) {
-    const PlaneValue sv(side);
+  if (kSide && c >= 1 && c <= 4 && npos != 0 && nneg != 0 && !side->on_line) {
+    const PlaneValue sv(*side);
     bool beyond = true;
-    for (int i = 0; i < c && beyond; ++i) beyond = sv(ch[i]) < -side.bound;
+    for (int i = 0; i < c && beyond; ++i) beyond = sv(ch[i]) < -side->bound;
     if (beyond) {
       off = true;
       npos = nneg = 0;
     }
   }
   return SplitResult::Both;
+}
+}  // namespace
+
+VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const Vec3d* poly, int n, Vec3d* pos, int& npos,
+                                           Vec3d* neg, int& nneg) {
+  bool off = false;
+  return split_pieces<false>(pl, nullptr, poly, n, pos, npos, neg, nneg, off);
+}
+
+VG_SCALAR_LOOPS SplitResult split_fragment(const NodePlane& pl, const NodePlane& side, const Vec3d* poly, int n,
+                                           Vec3d* pos, int& npos, Vec3d* neg, int& nneg, bool& off) {
+  off = false;
+  return split_pieces<true>(pl, &side, poly, n, pos, npos, neg, nneg, off);
 }
 
 namespace {
