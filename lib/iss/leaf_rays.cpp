@@ -772,16 +772,26 @@ bool Traversal::direct_candidates(const ShaftGeometry& g, bool query_leaf) {
 // The corners of direct_cand_ into direct_corners_ (9 SoA arrays ax..cz of kp each);
 // returns kp, the count padded to a multiple of 4 (at least 4). Lanes past the
 // candidates repeat the last one: a repeated triangle changes no answer.
+namespace {
+// The corners of tris[min(first + k, count - 1)] for k < kp (count > 0) into out as 9 x kp
+// doubles, coordinate a of corner v at (3 v + a) kp + k: the lanes past the list repeat
+// its last triangle.
+template <class Mesh>
+void load_corner_lanes(const Mesh& mesh, const uint32_t* tris, size_t count, size_t first, size_t kp, double* out) {
+  for (size_t k = 0; k < kp; ++k) {
+    const uint32_t t = tris[std::min(first + k, count - 1)];
+    for (int v = 0; v < 3; ++v) {
+      const Vec3f& x = mesh.corner(t, v);
+      for (int a = 0; a < 3; ++a) out[size_t(3 * v + a) * kp + k] = double(x[a]);
+    }
+  }
+}
+}  // namespace
+
 size_t Traversal::direct_load_corners() {
   const size_t k_count = direct_cand_.size(), kp = std::max<size_t>(4, (k_count + 3) & ~size_t(3));
   direct_corners_.resize(9 * kp);
-  for (size_t k = 0; k < kp && k_count > 0; ++k) {
-    const uint32_t t = direct_cand_[std::min(k, k_count - 1)];
-    for (int v = 0; v < 3; ++v) {
-      const Vec3f& x = mesh_.corner(t, v);
-      for (int a = 0; a < 3; ++a) direct_corners_[size_t(3 * v + a) * kp + k] = double(x[a]);
-    }
-  }
+  if (k_count > 0) load_corner_lanes(mesh_, direct_cand_.data(), k_count, 0, kp, direct_corners_.data());
   return kp;
 }
 
@@ -1233,13 +1243,7 @@ void Traversal::cell_descend(int c, size_t depth, uint32_t i, const double* od, 
 // repeating the last candidate, as load_cell_top pads them) as the light's cached
 // blockers.
 void Traversal::cell_cache_store(const CellLevel& lev, size_t vec) {
-  for (size_t j = 0; j < 4; ++j) {
-    const uint32_t t = lev.tris[std::min(4 * vec + j, lev.count - 1)];
-    for (int v = 0; v < 3; ++v) {
-      const Vec3f& x = mesh_.corner(t, v);
-      for (int a = 0; a < 3; ++a) cell_cache_c_[size_t(3 * v + a) * 4 + j] = double(x[a]);
-    }
-  }
+  load_corner_lanes(mesh_, lev.tris.data(), lev.count, 4 * vec, 4, cell_cache_c_);
   cell_cache_ok_ = true;
 }
 
