@@ -73,20 +73,16 @@ inline AABB corner_box(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
 
 }  // namespace
 
-std::vector<AABB> triangle_boxes(const TriangleSoup& mesh, const std::vector<uint32_t>* tris) {
-  const size_t n = tris ? tris->size() : mesh.size();
-  std::vector<AABB> box(n);
-  const Vec3f* v = mesh.vertices.data();
-  for (size_t i = 0; i < n; ++i) {
-    const auto& c = mesh.triangles[tris ? (*tris)[i] : i];
-    box[i] = corner_box(v[c[0]], v[c[1]], v[c[2]]);
-  }
-  return box;
-}
-
 AABB triangle_box(const TriangleSoup& mesh, uint32_t t) {
   const auto& c = mesh.triangles[t];
   return corner_box(mesh.vertices[c[0]], mesh.vertices[c[1]], mesh.vertices[c[2]]);
+}
+
+std::vector<AABB> triangle_boxes(const TriangleSoup& mesh, const std::vector<uint32_t>* tris) {
+  const size_t n = tris ? tris->size() : mesh.size();
+  std::vector<AABB> box(n);
+  for (size_t i = 0; i < n; ++i) box[i] = triangle_box(mesh, tris ? (*tris)[i] : uint32_t(i));
+  return box;
 }
 
 TriangleTree::TriangleTree(const TriangleSoup& mesh, const mesh::PreparedMesh& pm) : bvh_(triangle_boxes(mesh), kRule) {
